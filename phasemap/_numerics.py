@@ -1,0 +1,140 @@
+"""Shared numerical conventions of the point functions: tolerances, statuses, row layout.
+
+Every model's ``point(v, out)`` fills one row of ``out`` per candidate branch.
+The row layout and the status codes below are the contract between the models,
+:func:`phasemap.classify` and the grid evaluator; they are plain integers so that
+numba kernels can use them without Python objects.
+
+Ties
+----
+A computed quantity is compared with zero through a tolerance that scales with
+the magnitude of the terms it was built from: ``|q| <= TOL * scale``.  Where a
+comparison decides a boundary, the tie goes to the side listed here (and in each
+model's docstring):
+
+* the static-friction limit ``|F| <= f |N|`` is inclusive: ties go to **stick**;
+* a slip (or roll, or turn) branch that *starts* from zero relative velocity in
+  direction ``s`` needs ``s * acceleration > 0`` strictly: ties go to **stick**;
+* a one-sided contact needs ``N >= 0``: a vanishing normal reaction (grazing
+  contact) is **kept**, not lost;
+* a two-sided contact split on ``sgn N`` counts ``N = 0`` in the ``N >= 0``
+  branch, so the frictionless solution is counted once;
+* a coefficient of the senior derivative within tolerance of zero is
+  **singular**.
+
+A relative velocity counts as zero when ``|v| <= TOL * v_ref``, with ``v_ref``
+the model's natural velocity scale (for example ``sqrt(g / l)``), so that grid
+axes built with ``numpy.linspace`` through zero hit the stick branch.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+#: Relative tolerance of every zero test on a computed quantity.
+TOL = 1e-12
+
+# Row layout of ``out[branch, :]``.  Accelerations follow from FIRST_ACC on,
+# then the reactions; each model declares how many of each it has.
+STATUS = 0
+SINGULAR = 1
+COEF = 2
+FIRST_ACC = 3
+
+# Branch statuses (mirrored by :class:`phasemap.model.BranchStatus`).
+ABSENT = 0
+ADMISSIBLE = 1
+INADMISSIBLE = 2
+CONTACT_LOST = 3
+NO_SOLUTION = 4
+CONTINUUM = 5
+
+# Solvability codes (mirrored by :class:`phasemap.model.Solvability`).
+N_NONE = 0
+N_UNIQUE = 1
+N_TWO = 2
+N_CONTINUUM = 3
+N_THREE_OR_MORE = 4
+
+
+@njit(cache=True)
+def is_zero(q, scale):
+    """True where ``q`` vanishes relative to the magnitude ``scale`` of its terms."""
+    return abs(q) <= TOL * scale
+
+
+@njit(cache=True)
+def sign_of(x):
+    """+1.0 for x > 0, -1.0 for x < 0, 0.0 at zero."""
+    if x > 0.0:
+        return 1.0
+    if x < 0.0:
+        return -1.0
+    return 0.0
+
+
+@njit(cache=True)
+def clear(out):
+    """Mark every candidate branch absent, with NaN accelerations and reactions."""
+    for b in range(out.shape[0]):
+        out[b, STATUS] = ABSENT
+        out[b, SINGULAR] = 0.0
+        for j in range(COEF, out.shape[1]):
+            out[b, j] = np.nan
+
+
+@njit(cache=True)
+def restrict_affine(q0, dq, lo, hi):
+    """Intersect the open interval ``(lo, hi)`` with ``{a : q0 + dq * a >= 0}``.
+
+    Used for a continuum of solutions (a singular branch whose equation is
+    satisfied by every acceleration ``a``): the reactions are affine in ``a`` and
+    the admissible family is the set where they keep their required sign.
+    """
+    if dq > 0.0:
+        lo = max(lo, -q0 / dq)
+    elif dq < 0.0:
+        hi = min(hi, -q0 / dq)
+    elif q0 < 0.0:
+        hi = lo  # empty
+    return lo, hi
+
+
+@njit(cache=True)
+def summarize(out, stick):
+    """Reduce the branch rows of one point to the four per-point answers.
+
+    Returns ``(n_solutions, stagnation, contact_lost, singular)``:
+
+    * ``n_solutions``: 0 none, 1 unique, 2 two, 3 continuum (any admissible
+      family of solutions), 4 three or more isolated solutions;
+    * ``stagnation``: the stick branch (row ``stick``; -1 when the model has
+      none) is admissible;
+    * ``contact_lost``: some branch solves the equations and its own sign
+      assumptions but needs a one-sided contact to pull;
+    * ``singular``: the coefficient of the senior derivative of some
+      candidate branch vanishes.
+    """
+    n = 0
+    continuum = False
+    lost = False
+    singular = False
+    for b in range(out.shape[0]):
+        st = out[b, STATUS]
+        if st == ADMISSIBLE:
+            n += 1
+        elif st == CONTINUUM:
+            continuum = True
+        elif st == CONTACT_LOST:
+            lost = True
+        if out[b, SINGULAR] != 0.0:
+            singular = True
+    if continuum:
+        code = N_CONTINUUM
+    elif n >= 3:
+        code = N_THREE_OR_MORE
+    else:
+        code = n
+    stagnation = stick >= 0 and out[stick, STATUS] == ADMISSIBLE
+    return code, stagnation, lost, singular

@@ -1,0 +1,143 @@
+"""Point-wise solvability and stagnation: :func:`classify`.
+
+A thin Python wrapper over each model's jitted ``point`` function and the
+shared :func:`phasemap._numerics.summarize`, which the grid evaluator calls too.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+
+from . import _numerics as nx
+from .model import BranchStatus, Model, Solvability
+from .models import get_model
+
+
+@dataclass(frozen=True)
+class Branch:
+    """One candidate branch at one state: its status, accelerations and reactions."""
+
+    name: str
+    status: BranchStatus
+    singular: bool
+    coefficient: float
+    accelerations: Mapping[str, float]
+    reactions: Mapping[str, float]
+
+    @property
+    def admissible(self) -> bool:
+        return self.status in (BranchStatus.ADMISSIBLE, BranchStatus.CONTINUUM)
+
+
+@dataclass(frozen=True)
+class Classification:
+    """The answer of :func:`classify` at one point of state and parameter space.
+
+    Attributes
+    ----------
+    n_solutions:
+        0 none, 1 unique, 2 two, 3 continuum, 4 three or more isolated solutions
+        (see :class:`Solvability`).
+    stagnation:
+        the relative velocity is zero and the stick branch is admissible.
+    contact_lost:
+        some branch solves the equations but needs a one-sided contact to pull.
+    singular:
+        the coefficient of the senior derivative of some candidate branch vanishes.
+    branches:
+        the admissible branches (including a continuum), in the model's order.
+    candidates:
+        every branch that applies at this state, with its :class:`BranchStatus`.
+    """
+
+    model: str
+    values: Mapping[str, float]
+    n_solutions: int
+    stagnation: bool
+    contact_lost: bool
+    singular: bool
+    branches: tuple[Branch, ...]
+    candidates: tuple[Branch, ...]
+
+    @property
+    def solvability(self) -> Solvability:
+        return Solvability(self.n_solutions)
+
+    def __str__(self) -> str:
+        vals = ", ".join(f"{k}={v:g}" for k, v in self.values.items())
+        lines = [
+            f"{self.model}({vals})",
+            f"  n_solutions = {self.n_solutions} ({self.solvability.message})",
+            f"  stagnation = {self.stagnation}, contact_lost = {self.contact_lost}, "
+            f"singular = {self.singular}",
+        ]
+        for b in self.candidates:
+            nums = ", ".join(f"{k}={v:.6g}" for k, v in {**b.accelerations, **b.reactions}.items())
+            lines.append(f"  {b.name:<10} {b.status.name.lower():<12} {nums}")
+        return "\n".join(lines)
+
+
+def classify(model: str | Model, **values: float) -> Classification:
+    """Count the solutions for the senior derivatives at one state.
+
+    Parameters
+    ----------
+    model:
+        a model name (see ``phasemap.MODELS``) or a :class:`Model`.
+    **values:
+        state variables and parameters by name; missing names take the model's
+        defaults (``phasemap.MODELS[name].defaults``).
+
+    Raises
+    ------
+    ValueError
+        for an unknown model or variable, a non-finite value, or a value outside
+        the model's domain (for example a negative length).
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> phasemap.classify("ladder", phi=1.2, omega=0.0, f=0.3).n_solutions
+    1
+    >>> phasemap.classify("hinge_pendulum", phi=0.05, omega=0.0).stagnation
+    True
+    """
+    m = get_model(model)
+    for k, val in values.items():
+        if np.ndim(val) != 0:
+            raise ValueError(f"{m.name}: {k} must be a scalar for classify(); "
+                             "use a Scene for arrays of values")
+    full = m.complete(values)
+    v = m.input_vector(full)
+    out = np.empty((len(m.branches), m.n_fields))
+    m.point(v, out)
+    n, stagnation, lost, singular = nx.summarize(out, m.stick_branch)
+    candidates = tuple(_branch(m, b, out[b]) for b in range(len(m.branches))
+                       if out[b, nx.STATUS] != nx.ABSENT)
+    return Classification(
+        model=m.name,
+        values={k: float(x) for k, x in full.items()},
+        n_solutions=int(n),
+        stagnation=bool(stagnation),
+        contact_lost=bool(lost),
+        singular=bool(singular),
+        branches=tuple(b for b in candidates if b.admissible),
+        candidates=candidates,
+    )
+
+
+def _branch(m: Model, b: int, row: np.ndarray) -> Branch:
+    na = len(m.accelerations)
+    acc = row[nx.FIRST_ACC:nx.FIRST_ACC + na]
+    rea = row[nx.FIRST_ACC + na:]
+    return Branch(
+        name=m.branches[b],
+        status=BranchStatus(int(row[nx.STATUS])),
+        singular=bool(row[nx.SINGULAR]),
+        coefficient=float(row[nx.COEF]),
+        accelerations={v.name: float(x) for v, x in zip(m.accelerations, acc)},
+        reactions={v.name: float(x) for v, x in zip(m.reactions, rea)},
+    )

@@ -1,0 +1,224 @@
+"""The model contract: what one mechanical system tells the rest of phasemap.
+
+A model is one module under :mod:`phasemap.models` that builds a :class:`Model`.
+Everything else (``classify``, the grid evaluator, the atlas writer, the CLI)
+reads only this object, so a fifth system needs one new module and one line in
+:mod:`phasemap.models`.
+
+For developers
+--------------
+A new model provides:
+
+``state``, ``params``
+    :class:`Variable` tuples: name, UDUNITS units, long name, default and the
+    domain (bounds, open or closed).  ``params`` must include ``m`` when the
+    reactions scale with the mass.
+``derived``
+    :class:`Derived` inputs that depend on one name only (``sin(phi)``...).
+    Callers compute them once per value, which is how the grid evaluator
+    hoists per-axis work out of its inner loop.
+``branches``, ``stick_branch``
+    the names of the candidate branches, and the row of the stick branch.
+``accelerations``, ``reactions``, ``coefficient``
+    :class:`Variable` descriptions of the numbers a branch row carries.
+``velocity``
+    the state name whose zero activates the stick branch.
+``point(v, out)``
+    a ``numba.njit(cache=True)`` function.  ``v`` holds the values of
+    ``inputs`` (state, params, derived) in that order; ``out`` has one row per
+    branch laid out as in :mod:`phasemap._numerics` (status, singular flag,
+    coefficient, accelerations, reactions).  It must not allocate.
+``check``
+    optional cross-variable domain check on (possibly array) values; raises
+    :class:`ValueError`.
+
+Everything else just works.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field
+from typing import Callable, Mapping
+
+import numpy as np
+
+from . import _numerics as nx
+
+
+class BranchStatus(enum.IntEnum):
+    """What one candidate branch is at one state."""
+
+    ABSENT = nx.ABSENT
+    ADMISSIBLE = nx.ADMISSIBLE
+    INADMISSIBLE = nx.INADMISSIBLE
+    CONTACT_LOST = nx.CONTACT_LOST
+    NO_SOLUTION = nx.NO_SOLUTION
+    CONTINUUM = nx.CONTINUUM
+
+    @property
+    def message(self) -> str:
+        return _STATUS_MESSAGES[self]
+
+
+_STATUS_MESSAGES = {
+    BranchStatus.ABSENT: "does not apply at this state",
+    BranchStatus.ADMISSIBLE: "solves the equations and satisfies its own assumptions",
+    BranchStatus.INADMISSIBLE: "violates its own sign or friction-limit assumption",
+    BranchStatus.CONTACT_LOST: "solves the equations but needs a one-sided contact to pull",
+    BranchStatus.NO_SOLUTION: "has no acceleration that solves the equations",
+    BranchStatus.CONTINUUM: "is solved by a whole family of accelerations",
+}
+
+
+class Solvability(enum.IntEnum):
+    """How many solutions the motion equations have for the senior derivatives."""
+
+    NONE = nx.N_NONE
+    UNIQUE = nx.N_UNIQUE
+    TWO = nx.N_TWO
+    CONTINUUM = nx.N_CONTINUUM
+    THREE_OR_MORE = nx.N_THREE_OR_MORE
+
+    @property
+    def message(self) -> str:
+        return _SOLVABILITY_MESSAGES[self]
+
+
+_SOLVABILITY_MESSAGES = {
+    Solvability.NONE: "no solution: the motion equations are inconsistent (Painleve paradox)",
+    Solvability.UNIQUE: "a unique solution",
+    Solvability.TWO: "two solutions: indeterminacy, determinism fails",
+    Solvability.CONTINUUM: "a continuum of solutions",
+    Solvability.THREE_OR_MORE: "three or more isolated solutions",
+}
+
+
+@dataclass(frozen=True)
+class Variable:
+    """A named scalar: state variable, parameter, acceleration or reaction."""
+
+    name: str
+    units: str
+    long_name: str
+    symbol: str = ""
+    default: float | None = None
+    lower: float = -math.inf
+    upper: float = math.inf
+    lower_open: bool = False
+    upper_open: bool = False
+
+    def domain_text(self) -> str:
+        lo = "(" if self.lower_open else "["
+        hi = ")" if self.upper_open else "]"
+        return f"{lo}{_fmt(self.lower)}, {_fmt(self.upper)}{hi}"
+
+    def check(self, model: str, value) -> None:
+        """Raise ValueError unless every element of ``value`` is finite and in the domain."""
+        a = np.asarray(value, dtype=float)
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"{model}: {self.name} must be finite, got {_show(a)}")
+        too_low = a <= self.lower if self.lower_open else a < self.lower
+        too_high = a >= self.upper if self.upper_open else a > self.upper
+        if np.any(too_low) or np.any(too_high):
+            bad = a[too_low | too_high] if a.ndim else a
+            raise ValueError(
+                f"{model}: {self.name} = {_show(bad)} is outside its domain "
+                f"{self.domain_text()} ({self.long_name}, {self.units})"
+            )
+
+
+@dataclass(frozen=True)
+class Derived:
+    """An input computed from one other input, once per value (e.g. sin(phi))."""
+
+    name: str
+    source: str
+    func: Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class Model:
+    """One mechanical system: its variables, branches and jitted point function."""
+
+    name: str
+    title: str
+    citation: str
+    state: tuple[Variable, ...]
+    params: tuple[Variable, ...]
+    derived: tuple[Derived, ...]
+    branches: tuple[str, ...]
+    stick_branch: int
+    accelerations: tuple[Variable, ...]
+    reactions: tuple[Variable, ...]
+    coefficient: Variable
+    velocity: str
+    point: Callable = field(repr=False)
+    check: Callable[[Mapping[str, object]], None] | None = field(default=None, repr=False)
+
+    # -- names -------------------------------------------------------------
+    @property
+    def names(self) -> tuple[str, ...]:
+        """State then parameter names: what a user may set or sweep."""
+        return tuple(v.name for v in self.state + self.params)
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        """The layout of the point function's input vector ``v``."""
+        return self.names + tuple(d.name for d in self.derived)
+
+    @property
+    def variables(self) -> dict[str, Variable]:
+        return {v.name: v for v in self.state + self.params}
+
+    @property
+    def defaults(self) -> dict[str, float]:
+        return {v.name: float(v.default) for v in self.state + self.params}
+
+    @property
+    def n_fields(self) -> int:
+        return nx.FIRST_ACC + len(self.accelerations) + len(self.reactions)
+
+    # -- validation --------------------------------------------------------
+    def complete(self, values: Mapping[str, object]) -> dict[str, object]:
+        """Validate user values (scalars or arrays) and fill in the defaults.
+
+        Raises ValueError naming the model and the variable for an unknown
+        name, a non-finite value or a value outside the domain.
+        """
+        unknown = [k for k in values if k not in self.variables]
+        if unknown:
+            raise ValueError(
+                f"{self.name}: unknown variable {unknown[0]!r}; "
+                f"allowed: {', '.join(self.names)}"
+            )
+        full: dict[str, object] = self.defaults
+        full.update(values)
+        for name, var in self.variables.items():
+            var.check(self.name, full[name])
+        if self.check is not None:
+            self.check(full)
+        return full
+
+    def input_vector(self, values: Mapping[str, float]) -> np.ndarray:
+        """The point function's ``v`` for complete scalar values."""
+        v = np.empty(len(self.inputs))
+        for i, name in enumerate(self.names):
+            v[i] = float(values[name])
+        for j, d in enumerate(self.derived):
+            v[len(self.names) + j] = d.func(float(values[d.source]))
+        return v
+
+
+def _fmt(x: float) -> str:
+    if math.isinf(x):
+        return "inf" if x > 0 else "-inf"
+    return f"{x:g}"
+
+
+def _show(a: np.ndarray) -> str:
+    flat = np.ravel(a)
+    if flat.size == 1:
+        return f"{flat[0]:g}"
+    return f"[{', '.join(f'{x:g}' for x in flat[:3])}{', ...' if flat.size > 3 else ''}]"

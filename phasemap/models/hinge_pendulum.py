@@ -1,0 +1,184 @@
+r"""Pendulum with dry friction in its hinge (Lapshin 2021, Fig. 4).
+
+Setup
+-----
+Point mass m on a weightless rod of length l, hinge O at the origin, phi from
+the downward vertical.  The hinge friction moment is M = -delta |R| sgn(phi'),
+with R the hinge reaction force and delta a length (29).  The hinge is
+two-sided: it can push and pull.
+
+Derivation (cross-referenced to the paper's equations)
+------------------------------------------------------
+Angular momentum about O (30): m l^2 phi'' = -m g l sin phi + M.  Newton's law
+for the mass along the normal (towards O) and the tangent:
+
+    m l phi'^2 = R_n - m g cos phi,   m l phi'' = R_t - m g sin phi.
+
+The paper prints the tangential equation with -m g l sin phi (a spurious l;
+erratum); (31) itself is right.  With Q_n = l phi'^2 + g cos phi and
+u = l phi'' + g sin phi, |R| = m sqrt(Q_n^2 + u^2) and, for sigma = sgn(phi'),
+
+    l u = -delta sigma sqrt(Q_n^2 + u^2).                                     (32)
+
+Squaring gives (l^2 - delta^2) u^2 = delta^2 Q_n^2 (33), whose coefficient
+l^2 - delta^2 is the coefficient of the senior derivative.  Every root of (33)
+is tested against (32), which needs sgn u = -sigma:
+
+* delta < l: u = -sigma delta |Q_n| / sqrt(l^2 - delta^2), one root (34); the
+  other root of (33) is extraneous.
+* delta = l (singular): (32) holds iff Q_n = 0, and then for every u with
+  sigma u <= 0: a continuum.  Otherwise no solution.
+* delta > l: (32) has the single solution u = 0 where Q_n = 0 (the hinge
+  reaction vanishes, so does friction), and no solution anywhere else.  The
+  paper says only "no solution for delta >= l".
+
+Rest (stick branch, phi' = phi'' = 0): |R| = m g and the moment needed is
+m g l sin phi, so rest is possible iff l |sin phi| <= delta, ties to rest.  For
+delta < l this is the paper's |tan phi| <= delta / sqrt(l^2 - delta^2) (35);
+for delta >= l it holds at every angle.
+
+Weightless case g = 0: phi'' = -sigma k phi'^2, k = delta/sqrt(l^2 - delta^2)
+(36), solved by omega = omega0/(1 + omega0 k t).
+
+Branches: ``turn+``, ``turn-`` and ``stick``.  From rest a turn branch in
+direction sigma needs sigma phi'' > 0 strictly.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .._numerics import (
+    ADMISSIBLE,
+    COEF,
+    CONTINUUM,
+    FIRST_ACC,
+    INADMISSIBLE,
+    NO_SOLUTION,
+    SINGULAR,
+    STATUS,
+    TOL,
+    clear,
+    is_zero,
+)
+from ..model import Derived, Model, Variable
+
+TURN_POS, TURN_NEG, STICK = 0, 1, 2
+PHI_DDOT = FIRST_ACC
+R_NORMAL = FIRST_ACC + 1
+R_TANGENT = FIRST_ACC + 2
+
+
+@njit(cache=True)
+def _turn(row, sigma, from_rest, omega, delta, l, g, m, sp, cp):
+    """Fill one turning branch (direction sigma): the admissible root of (32)."""
+    w2 = omega * omega
+    qn = l * w2 + g * cp
+    qn_scale = l * w2 + g * abs(cp)
+    coef = l * l - delta * delta
+    row[COEF] = coef
+    if is_zero(coef, l * l + delta * delta):
+        row[SINGULAR] = 1.0
+        if not is_zero(qn, qn_scale):
+            row[STATUS] = NO_SOLUTION
+            return
+        # Every u with sigma u <= 0 solves (32); from rest phi'' = (u - g sin phi)/l
+        # must also have the sign sigma, possible iff sigma g sin phi < 0.
+        if from_rest and not (-sigma * g * sp > TOL * g):
+            row[STATUS] = INADMISSIBLE
+        else:
+            row[STATUS] = CONTINUUM
+        return
+    if coef > 0.0:
+        u = -sigma * delta * abs(qn) / math.sqrt(coef)
+    elif is_zero(qn, qn_scale):
+        u = 0.0
+    else:
+        row[STATUS] = NO_SOLUTION
+        return
+    a = (u - g * sp) / l
+    row[PHI_DDOT] = a
+    row[R_NORMAL] = m * qn
+    row[R_TANGENT] = m * u
+    if from_rest and not (sigma * a > TOL * (abs(u) + g * abs(sp)) / l):
+        row[STATUS] = INADMISSIBLE
+    else:
+        row[STATUS] = ADMISSIBLE
+
+
+@njit(cache=True)
+def _stick(row, delta, l, g, m, sp, cp):
+    """Fill the stick branch: rest is possible iff l |sin phi| <= delta (35)."""
+    if g * (delta - l * abs(sp)) >= -TOL * g * (delta + l * abs(sp)):
+        row[STATUS] = ADMISSIBLE
+        row[PHI_DDOT] = 0.0
+        row[R_NORMAL] = m * g * cp
+        row[R_TANGENT] = m * g * sp
+    else:
+        row[STATUS] = INADMISSIBLE
+
+
+@njit(cache=True)
+def point(v, out):
+    """Classify one state. ``v`` = (phi, omega, delta, l, g, m, sin phi, cos phi)."""
+    omega, delta, l, g, m, sp, cp = v[1], v[2], v[3], v[4], v[5], v[6], v[7]
+    clear(out)
+    if is_zero(omega, math.sqrt(g / l)):
+        _turn(out[TURN_POS], 1.0, True, 0.0, delta, l, g, m, sp, cp)
+        _turn(out[TURN_NEG], -1.0, True, 0.0, delta, l, g, m, sp, cp)
+        _stick(out[STICK], delta, l, g, m, sp, cp)
+    elif omega > 0.0:
+        _turn(out[TURN_POS], 1.0, False, omega, delta, l, g, m, sp, cp)
+    else:
+        _turn(out[TURN_NEG], -1.0, False, omega, delta, l, g, m, sp, cp)
+
+
+MODEL = Model(
+    name="hinge_pendulum",
+    title="Mathematical pendulum with dry friction in its hinge",
+    citation="Lapshin V.V. (2021), Herald of the Bauman Moscow State Technical University, "
+    "Series Natural Sciences, no. 6 (99), pp. 4-16, Fig. 4, eq. (29)-(36). "
+    "doi:10.18698/1812-3368-2021-6-4-16",
+    state=(
+        Variable("phi", "rad", "angle of the rod from the downward vertical", "\\varphi", 0.0),
+        Variable("omega", "rad s-1", "angular velocity of the rod", "\\omega", 0.0),
+    ),
+    params=(
+        Variable("delta", "m", "hinge friction coefficient (a length)", "\\delta", 0.1, 0.0),
+        Variable("l", "m", "length of the rod", "l", 1.0, 0.0, lower_open=True),
+        Variable("g", "m s-2", "gravitational acceleration", "g", 9.81, 0.0),
+        Variable("m", "kg", "mass of the bob", "m", 1.0, 0.0, lower_open=True),
+    ),
+    derived=(Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos)),
+    branches=("turn+", "turn-", "stick"),
+    stick_branch=STICK,
+    accelerations=(
+        Variable("phi_ddot", "rad s-2", "angular acceleration of the rod", "\\ddot\\varphi"),
+    ),
+    reactions=(
+        Variable("R_n", "N", "hinge reaction along the rod, towards the hinge", "R_n"),
+        Variable("R_t", "N", "hinge reaction across the rod", "R_\\tau"),
+    ),
+    coefficient=Variable("coef", "m2", "coefficient l^2 - delta^2 of the squared equation (33)",
+                         "l^2-\\delta^2"),
+    velocity="omega",
+    point=point,
+)
+
+
+def weightless_motion(t, phi0, omega0, delta, l):
+    """Exact motion of the weightless pendulum (g = 0), delta < l, from (36).
+
+    Returns (phi, omega) at times ``t``: omega = omega0 / (1 + k |omega0| t) and
+    phi = phi0 + sgn(omega0) ln(1 + k |omega0| t) / k, k = delta / sqrt(l^2 - delta^2);
+    for delta = 0, uniform rotation.
+    """
+    t = np.asarray(t, dtype=float)
+    k = delta / math.sqrt(l * l - delta * delta)
+    if k == 0.0 or omega0 == 0.0:
+        return phi0 + omega0 * t, np.full_like(t, omega0)
+    grow = 1.0 + k * abs(omega0) * t
+    return phi0 + math.copysign(1.0, omega0) * np.log(grow) / k, omega0 / grow

@@ -1,0 +1,222 @@
+r"""Ladder: a homogeneous bar against a rough wall and a rough floor (Lapshin 2021, Fig. 1).
+
+Setup
+-----
+Bar of length 2l and mass m, inertia m l^2/3 about its centre C.  Floor y = 0,
+wall x = 0, phi the angle from the vertical, phi in [0, pi/2]:
+C = (l sin phi, l cos phi), bottom end on the floor at (2l sin phi, 0), top end
+on the wall at (0, 2l cos phi).  The counter-clockwise rotation rate is phi_dot.
+Both contacts are one-sided (N_floor >= 0, N_wall >= 0), with the same friction
+coefficient f.
+
+Derivation (cross-referenced to the paper's equations)
+------------------------------------------------------
+Let s = sgn(phi_dot).  For s = +1 the bottom end slides away from the wall and
+the top end slides down, so friction acts in -x at the floor and +y at the
+wall; s = -1 reverses both.  Momentum of C and angular momentum about C:
+
+    m xc'' = N_wall - s f N_floor,        m yc'' = -m g + N_floor + s f N_wall,
+    (m l^2/3) phi'' = (N_floor - s f N_wall) l sin phi - (N_wall + s f N_floor) l cos phi,
+
+with the twice-differentiated constraints (7)
+xc'' = l cos phi phi'' - l sin phi phi'^2, yc'' = -l sin phi phi'' - l cos phi phi'^2.
+Solving the first two for the reactions (as printed after (7)) and using the
+identities (g + yc'') sin phi - xc'' cos phi = g sin phi - l phi'' and
+xc'' sin phi + (g + yc'') cos phi = g cos phi - l phi'^2 gives
+
+    2 l (2 - f^2) phi'' = 3 [2 s f l phi'^2 - 2 s f g cos phi + (1 - f^2) g sin phi].   (8)
+
+The paper prints (8) and the line above it without the length l (erratum).
+The coefficient 2 - f^2 vanishes at f = sqrt 2: there (8) has no solution unless
+its right side vanishes too (a continuum).
+
+First integral.  With u = omega^2 and phi'' = u'/2, on a stage of constant s,
+u' - lam u = A sin phi + B cos phi with lam = 6 s f/(2 - f^2), so
+u = c e^{lam phi} + a sin phi + b cos phi with
+
+    a = -6 s f g (5 - 4 f^2) / (l (4 + 32 f^2 + f^4)),
+    b = -3 g (2 - 15 f^2 + f^4) / (l (4 + 32 f^2 + f^4)).
+
+The paper prints b with -7 f^2 instead of -15 f^2 and omits l (errata).
+
+Rest (the stick branch, phi' = phi'' = 0).  The static problem has four
+reactions and three equations; it is solvable with |F| <= f N at both ends iff
+
+    2 f cos phi - (1 - f^2) sin phi >= 0,   i.e.  phi <= 2 arctan f,
+
+(the classical tan phi <= 2f/(1 - f^2) for f < 1; the whole range for f >= 1).
+Ties go to rest.  The reactions at rest are statically indeterminate; phasemap
+reports the ones at which both ends are equally close to slipping (friction
+ratio tan(phi/2) at both): N_floor = m g cos^2(phi/2), N_wall = m g sin(phi)/2.
+
+Branches: ``slide+`` (phi increasing), ``slide-`` and ``stick``.  At phi' = 0 a
+slide branch starting in direction s needs s phi'' > 0 strictly.  At phi = 0 or
+pi/2 one end has zero sliding velocity; phasemap keeps s = sgn(phi') there (the
+limit from inside the range).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .._numerics import (
+    ADMISSIBLE,
+    COEF,
+    CONTACT_LOST,
+    CONTINUUM,
+    FIRST_ACC,
+    INADMISSIBLE,
+    NO_SOLUTION,
+    SINGULAR,
+    STATUS,
+    TOL,
+    clear,
+    is_zero,
+    restrict_affine,
+)
+from ..model import Derived, Model, Variable
+
+# Row indices and field indices of this model.
+SLIDE_POS, SLIDE_NEG, STICK = 0, 1, 2
+PHI_DDOT = FIRST_ACC
+N_FLOOR = FIRST_ACC + 1
+N_WALL = FIRST_ACC + 2
+
+
+@njit(cache=True)
+def _slide(row, s, from_rest, omega, f, l, g, m, sp, cp):
+    """Fill one slide branch (direction s) from (8) and the reactions."""
+    d = 2.0 - f * f
+    row[COEF] = d
+    w2 = omega * omega
+    rhs = 3.0 * (2.0 * s * f * l * w2 - 2.0 * s * f * g * cp + (1.0 - f * f) * g * sp)
+    rhs_scale = 3.0 * (2.0 * f * l * w2 + 2.0 * f * g * abs(cp) + abs(1.0 - f * f) * g * sp)
+    # The reactions are affine in phi'': N = N0 + dN * phi''.
+    inv = m / (1.0 + f * f)
+    xdd0, dxdd = -l * sp * w2, l * cp
+    ydd0, dydd = -l * cp * w2, -l * sp
+    nf0, dnf = inv * (g + ydd0 - s * f * xdd0), inv * (dydd - s * f * dxdd)
+    nw0, dnw = inv * (xdd0 + s * f * (g + ydd0)), inv * (dxdd + s * f * dydd)
+    if is_zero(d, 2.0 + f * f):
+        row[SINGULAR] = 1.0
+        if not is_zero(rhs, rhs_scale):
+            row[STATUS] = NO_SOLUTION
+            return
+        lo, hi = -np.inf, np.inf
+        if from_rest:
+            if s > 0.0:
+                lo = 0.0
+            else:
+                hi = 0.0
+        lo, hi = restrict_affine(nf0, dnf, lo, hi)
+        lo, hi = restrict_affine(nw0, dnw, lo, hi)
+        row[STATUS] = CONTINUUM if lo < hi else CONTACT_LOST
+        return
+    a = rhs / (2.0 * l * d)
+    nf = nf0 + dnf * a
+    nw = nw0 + dnw * a
+    row[PHI_DDOT] = a
+    row[N_FLOOR] = nf
+    row[N_WALL] = nw
+    if from_rest and not (s * a > TOL * rhs_scale / (2.0 * l * abs(d))):
+        row[STATUS] = INADMISSIBLE
+        return
+    n_scale = inv * (g + l * w2 + l * abs(a)) * (1.0 + f)
+    if nf < -TOL * n_scale or nw < -TOL * n_scale:
+        row[STATUS] = CONTACT_LOST
+    else:
+        row[STATUS] = ADMISSIBLE
+
+
+@njit(cache=True)
+def _stick(row, f, g, m, sp, cp):
+    """Fill the stick branch: rest is possible iff phi <= 2 arctan f."""
+    margin = g * (2.0 * f * cp - (1.0 - f * f) * sp)
+    scale = g * (2.0 * f * abs(cp) + abs(1.0 - f * f) * sp)
+    if margin >= -TOL * scale:
+        row[STATUS] = ADMISSIBLE
+        row[PHI_DDOT] = 0.0
+        row[N_FLOOR] = 0.5 * m * g * (1.0 + cp)
+        row[N_WALL] = 0.5 * m * g * sp
+    else:
+        row[STATUS] = INADMISSIBLE
+
+
+@njit(cache=True)
+def point(v, out):
+    """Classify one state. ``v`` = (phi, omega, f, l, g, m, sin phi, cos phi)."""
+    omega, f, l, g, m, sp, cp = v[1], v[2], v[3], v[4], v[5], v[6], v[7]
+    clear(out)
+    if is_zero(omega, math.sqrt(g / l)):
+        _slide(out[SLIDE_POS], 1.0, True, 0.0, f, l, g, m, sp, cp)
+        _slide(out[SLIDE_NEG], -1.0, True, 0.0, f, l, g, m, sp, cp)
+        _stick(out[STICK], f, g, m, sp, cp)
+    elif omega > 0.0:
+        _slide(out[SLIDE_POS], 1.0, False, omega, f, l, g, m, sp, cp)
+    else:
+        _slide(out[SLIDE_NEG], -1.0, False, omega, f, l, g, m, sp, cp)
+
+
+MODEL = Model(
+    name="ladder",
+    title="Homogeneous bar (ladder) against a rough wall and a rough floor",
+    citation="Lapshin V.V. (2021), Herald of the Bauman Moscow State Technical University, "
+    "Series Natural Sciences, no. 6 (99), pp. 4-16, Fig. 1, eq. (6)-(8). "
+    "doi:10.18698/1812-3368-2021-6-4-16",
+    state=(
+        Variable("phi", "rad", "angle of the bar from the vertical", "\\varphi", math.pi / 4,
+                 0.0, math.pi / 2),
+        Variable("omega", "rad s-1", "angular velocity of the bar", "\\omega", 0.0),
+    ),
+    params=(
+        Variable("f", "1", "sliding friction coefficient at the floor and the wall", "f", 0.3,
+                 0.0),
+        Variable("l", "m", "half length of the bar", "l", 1.0, 0.0, lower_open=True),
+        Variable("g", "m s-2", "gravitational acceleration", "g", 9.81, 0.0),
+        Variable("m", "kg", "mass of the bar", "m", 1.0, 0.0, lower_open=True),
+    ),
+    derived=(Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos)),
+    branches=("slide+", "slide-", "stick"),
+    stick_branch=STICK,
+    accelerations=(
+        Variable("phi_ddot", "rad s-2", "angular acceleration of the bar", "\\ddot\\varphi"),
+    ),
+    reactions=(
+        Variable("N_floor", "N", "normal reaction of the floor", "N_1"),
+        Variable("N_wall", "N", "normal reaction of the wall", "N_2"),
+    ),
+    coefficient=Variable("coef", "1", "coefficient 2 - f^2 of the angular acceleration",
+                         "2-f^2"),
+    velocity="omega",
+    point=point,
+)
+
+
+@njit(cache=True)
+def first_integral_coefficients(s, f, l, g):
+    """(lam, a, b) of omega^2 = c e^{lam phi} + a sin phi + b cos phi on a stage of sign s.
+
+    Valid for f != sqrt 2; ``s`` is the sign of omega on the stage.
+    """
+    d = 2.0 - f * f
+    q = 4.0 + 32.0 * f * f + f ** 4
+    lam = 6.0 * s * f / d
+    a = -6.0 * s * f * g * (5.0 - 4.0 * f * f) / (l * q)
+    b = -3.0 * g * (2.0 - 15.0 * f * f + f ** 4) / (l * q)
+    return lam, a, b
+
+
+@njit(cache=True)
+def omega_squared(phi, phi0, omega0, f, l, g):
+    """omega^2(phi) on the sliding stage through (phi0, omega0), omega0 != 0.
+
+    The constant is carried as (omega0^2 - a sin phi0 - b cos phi0) e^{lam (phi - phi0)},
+    which never forms e^{lam phi} or e^{-lam phi0} on their own.
+    """
+    s = 1.0 if omega0 > 0.0 else -1.0
+    lam, a, b = first_integral_coefficients(s, f, l, g)
+    c0 = omega0 * omega0 - a * math.sin(phi0) - b * math.cos(phi0)
+    return c0 * math.exp(lam * (phi - phi0)) + a * math.sin(phi) + b * math.cos(phi)
