@@ -8,7 +8,10 @@ numba kernels can use them without Python objects.
 Ties
 ----
 A computed quantity is compared with zero through a tolerance that scales with
-the magnitude of the terms it was built from: ``|q| <= TOL * scale``.  Where a
+the magnitude of the terms it was built from: ``|q| <= TOL * scale``.  In a
+scale, sin and cos factors count as 1: their rounding error is absolute, so a
+term such as ``g cos(phi)`` at ``phi = pi/2`` is zero to within ``eps * g``,
+not ``eps * g |cos(phi)|``.  Where a
 comparison decides a boundary, the tie goes to the side listed here (and in each
 model's docstring):
 

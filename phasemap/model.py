@@ -116,7 +116,10 @@ class Variable:
 
     def check(self, model: str, value) -> None:
         """Raise ValueError unless every element of ``value`` is finite and in the domain."""
-        a = np.asarray(value, dtype=float)
+        try:
+            a = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"{model}: {self.name} must be a number, got {value!r}") from None
         if not np.all(np.isfinite(a)):
             raise ValueError(f"{model}: {self.name} must be finite, got {_show(a)}")
         too_low = a <= self.lower if self.lower_open else a < self.lower

@@ -57,7 +57,7 @@ def test_ladder_against_unreduced_newton_euler():
         c = phasemap.classify("ladder", phi=phi, omega=omega, f=f, l=l, g=g, m=m)
         scale = m * g
         expected, lost = {}, False
-        for s, name in ((1.0, "slide+"), (-1.0, "slide-")):
+        for s, name in ((1.0, "slide_pos"), (-1.0, "slide_neg")):
             if omega != 0.0 and s * omega < 0:
                 continue
             r = ref.ladder_slip(phi, omega, f, l, g, m, s)
@@ -95,7 +95,7 @@ def test_wheel_against_unreduced_newton_euler():
         if not _far_from_singular(c):
             continue
         expected, lost = {}, False
-        for s, name in ((1.0, "roll+"), (-1.0, "roll-")):
+        for s, name in ((1.0, "roll_pos"), (-1.0, "roll_neg")):
             if omega != 0.0 and s * omega < 0:
                 continue
             sol = ref.wheel_roll(phi, omega, delta, r, l, rho, g, m, s)
@@ -124,7 +124,7 @@ def test_wheel_against_unreduced_newton_euler():
 def test_elliptic_pendulum_against_two_particle_newton():
     rng = np.random.default_rng(3)
     checked = at_rest = 0
-    names = {(1, 1): "slide+/N+", (1, -1): "slide+/N-", (-1, 1): "slide-/N+", (-1, -1): "slide-/N-"}
+    names = {(1, 1): "slide_pos_Npos", (1, -1): "slide_pos_Nneg", (-1, 1): "slide_neg_Npos", (-1, -1): "slide_neg_Nneg"}
     seen = set()
     while checked < N_STATES:
         f = rng.choice([rng.uniform(0, 2.8), rng.uniform(2.9, 10)])
@@ -171,7 +171,7 @@ def test_hinge_pendulum_against_unsquared_equation():
         omega = 0.0 if rng.random() < 1 / 3 else rng.normal() * 2 * math.sqrt(g / l)
         c = phasemap.classify("hinge_pendulum", phi=phi, omega=omega, delta=delta, l=l, g=g, m=m)
         expected = {}
-        for s, name in ((1.0, "turn+"), (-1.0, "turn-")):
+        for s, name in ((1.0, "turn_pos"), (-1.0, "turn_neg")):
             if omega != 0.0 and s * omega < 0:
                 continue
             roots = ref.hinge_roots(phi, omega, delta, l, g, m, s)

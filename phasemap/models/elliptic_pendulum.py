@@ -33,8 +33,9 @@ Q = g + l cos phi phi'^2 and lambda_k = 1 + sin^2 phi - k f sin phi cos phi (26)
 The paper prints (23) without m and (24) with a stray factor "g sin phi" after
 k f g (1 + cos^2 phi) (errata); (25) and (26) are right.
 
-Branches.  For x' != 0 with sigma = sgn x', the branch "N > 0" has k = sigma
-and the branch "N < 0" has k = -sigma; each is admissible iff its N has the
+Branches.  For x' != 0 with sigma = sgn x', the branch ``slide_pos_Npos`` (or
+``slide_neg_Npos``) assumes N > 0, so k = sigma, and ``slide_pos_Nneg`` (or
+``slide_neg_Nneg``) assumes N < 0, so k = -sigma; each is admissible iff its N has the
 assumed sign.  N = 0 (Q = 0: no friction) is counted once, in the N > 0 branch.
 At x' = 0 the stick branch (x'' = 0) gives l phi'' = -g sin phi / 2,
 N = m (g (1 + cos^2 phi) + 2 l cos phi phi'^2), F = -m sin phi (g cos phi + 2 l phi'^2),
@@ -87,9 +88,9 @@ def _slide(row, sigma, rho, from_rest, omega, f, l, g, m, sp, cp):
     lam = 1.0 + sp * sp - k * f * sp * cp
     row[COEF] = lam
     q = g + l * cp * w2
-    q_scale = g + l * abs(cp) * w2
+    q_scale = g + l * w2
     q_zero = is_zero(q, q_scale)
-    if is_zero(lam, 1.0 + sp * sp + f * abs(sp * cp)):
+    if is_zero(lam, 2.0 + f):
         row[SINGULAR] = 1.0
         if not q_zero:
             row[STATUS] = NO_SOLUTION
@@ -120,8 +121,7 @@ def _slide(row, sigma, rho, from_rest, omega, f, l, g, m, sp, cp):
         row[STATUS] = INADMISSIBLE
         return
     if from_rest:
-        x_scale = (2.0 * l * w2 * (abs(sp) + f * abs(cp)) + f * g * (1.0 + cp * cp)
-                   + g * abs(sp * cp)) / abs(lam)
+        x_scale = (2.0 * l * w2 * (1.0 + f) + 2.0 * f * g + g) / abs(lam)
         if not (sigma * xdd > TOL * x_scale):
             row[STATUS] = INADMISSIBLE
             return
@@ -134,8 +134,7 @@ def _stick(row, omega, f, l, g, m, sp, cp):
     w2 = omega * omega
     n = m * (g * (1.0 + cp * cp) + 2.0 * l * cp * w2)
     fr = -m * sp * (g * cp + 2.0 * l * w2)
-    scale = m * (abs(sp) * (g * abs(cp) + 2.0 * l * w2) + f * (g * (1.0 + cp * cp)
-                                                                + 2.0 * l * abs(cp) * w2))
+    scale = m * (1.0 + f) * (2.0 * g + 2.0 * l * w2)
     row[X_DDOT] = 0.0
     row[PHI_DDOT] = -0.5 * g * sp / l
     row[N_NORMAL] = n
@@ -184,7 +183,7 @@ MODEL = Model(
                  lower_open=True),
     ),
     derived=(Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos)),
-    branches=("slide+/N+", "slide+/N-", "slide-/N+", "slide-/N-", "stick"),
+    branches=("slide_pos_Npos", "slide_pos_Nneg", "slide_neg_Npos", "slide_neg_Nneg", "stick"),
     stick_branch=STICK,
     accelerations=(
         Variable("x_ddot", "m s-2", "acceleration of the slider", "\\ddot x"),

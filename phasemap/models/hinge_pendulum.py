@@ -40,7 +40,7 @@ for delta >= l it holds at every angle.
 Weightless case g = 0: phi'' = -sigma k phi'^2, k = delta/sqrt(l^2 - delta^2)
 (36), solved by omega = omega0/(1 + omega0 k t).
 
-Branches: ``turn+``, ``turn-`` and ``stick``.  From rest a turn branch in
+Branches: ``turn_pos``, ``turn_neg`` and ``stick``.  From rest a turn branch in
 direction sigma needs sigma phi'' > 0 strictly.
 """
 
@@ -77,7 +77,7 @@ def _turn(row, sigma, from_rest, omega, delta, l, g, m, sp, cp):
     """Fill one turning branch (direction sigma): the admissible root of (32)."""
     w2 = omega * omega
     qn = l * w2 + g * cp
-    qn_scale = l * w2 + g * abs(cp)
+    qn_scale = l * w2 + g
     coef = l * l - delta * delta
     row[COEF] = coef
     if is_zero(coef, l * l + delta * delta):
@@ -103,7 +103,7 @@ def _turn(row, sigma, from_rest, omega, delta, l, g, m, sp, cp):
     row[PHI_DDOT] = a
     row[R_NORMAL] = m * qn
     row[R_TANGENT] = m * u
-    if from_rest and not (sigma * a > TOL * (abs(u) + g * abs(sp)) / l):
+    if from_rest and not (sigma * a > TOL * (abs(u) + g) / l):
         row[STATUS] = INADMISSIBLE
     else:
         row[STATUS] = ADMISSIBLE
@@ -112,7 +112,7 @@ def _turn(row, sigma, from_rest, omega, delta, l, g, m, sp, cp):
 @njit(cache=True)
 def _stick(row, delta, l, g, m, sp, cp):
     """Fill the stick branch: rest is possible iff l |sin phi| <= delta (35)."""
-    if g * (delta - l * abs(sp)) >= -TOL * g * (delta + l * abs(sp)):
+    if g * (delta - l * abs(sp)) >= -TOL * g * (delta + l):
         row[STATUS] = ADMISSIBLE
         row[PHI_DDOT] = 0.0
         row[R_NORMAL] = m * g * cp
@@ -153,7 +153,7 @@ MODEL = Model(
         Variable("m", "kg", "mass of the bob", "m", 1.0, 0.0, lower_open=True),
     ),
     derived=(Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos)),
-    branches=("turn+", "turn-", "stick"),
+    branches=("turn_pos", "turn_neg", "stick"),
     stick_branch=STICK,
     accelerations=(
         Variable("phi_ddot", "rad s-2", "angular acceleration of the rod", "\\ddot\\varphi"),

@@ -49,7 +49,7 @@ Ties go to rest.  The reactions at rest are statically indeterminate; phasemap
 reports the ones at which both ends are equally close to slipping (friction
 ratio tan(phi/2) at both): N_floor = m g cos^2(phi/2), N_wall = m g sin(phi)/2.
 
-Branches: ``slide+`` (phi increasing), ``slide-`` and ``stick``.  At phi' = 0 a
+Branches: ``slide_pos`` (phi increasing), ``slide_neg`` and ``stick``.  At phi' = 0 a
 slide branch starting in direction s needs s phi'' > 0 strictly.  At phi = 0 or
 pi/2 one end has zero sliding velocity; phasemap keeps s = sgn(phi') there (the
 limit from inside the range).
@@ -93,7 +93,7 @@ def _slide(row, s, from_rest, omega, f, l, g, m, sp, cp):
     row[COEF] = d
     w2 = omega * omega
     rhs = 3.0 * (2.0 * s * f * l * w2 - 2.0 * s * f * g * cp + (1.0 - f * f) * g * sp)
-    rhs_scale = 3.0 * (2.0 * f * l * w2 + 2.0 * f * g * abs(cp) + abs(1.0 - f * f) * g * sp)
+    rhs_scale = 3.0 * (2.0 * f * l * w2 + 2.0 * f * g + abs(1.0 - f * f) * g)
     # The reactions are affine in phi'': N = N0 + dN * phi''.
     inv = m / (1.0 + f * f)
     xdd0, dxdd = -l * sp * w2, l * cp
@@ -135,7 +135,7 @@ def _slide(row, s, from_rest, omega, f, l, g, m, sp, cp):
 def _stick(row, f, g, m, sp, cp):
     """Fill the stick branch: rest is possible iff phi <= 2 arctan f."""
     margin = g * (2.0 * f * cp - (1.0 - f * f) * sp)
-    scale = g * (2.0 * f * abs(cp) + abs(1.0 - f * f) * sp)
+    scale = g * (2.0 * f + abs(1.0 - f * f))
     if margin >= -TOL * scale:
         row[STATUS] = ADMISSIBLE
         row[PHI_DDOT] = 0.0
@@ -179,7 +179,7 @@ MODEL = Model(
         Variable("m", "kg", "mass of the bar", "m", 1.0, 0.0, lower_open=True),
     ),
     derived=(Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos)),
-    branches=("slide+", "slide-", "stick"),
+    branches=("slide_pos", "slide_neg", "stick"),
     stick_branch=STICK,
     accelerations=(
         Variable("phi_ddot", "rad s-2", "angular acceleration of the bar", "\\ddot\\varphi"),

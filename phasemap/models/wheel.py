@@ -39,7 +39,7 @@ ties to rest.  For delta >= l this holds at every angle.
 First integral.  With u = omega^2 and phi'' = u'/2 on a stage of constant sigma:
 bracket(phi) u' + 2 l (r sin phi + delta sigma cos phi) u = -2 g l sin phi - 2 delta sigma g.
 
-Branches: ``roll+``, ``roll-`` and ``stick``.  From rest a roll branch in
+Branches: ``roll_pos``, ``roll_neg`` and ``stick``.  From rest a roll branch in
 direction sigma needs sigma phi'' > 0 strictly.
 """
 
@@ -78,10 +78,10 @@ def _roll(row, sigma, from_rest, omega, delta, r, l, rho, g, m, sp, cp):
     """Fill one rolling branch (direction sigma) from (13) and the no-bounce condition."""
     w2 = omega * omega
     coef = rho * rho + r * r + l * l - 2.0 * r * l * cp + delta * sigma * l * sp
-    coef_scale = rho * rho + r * r + l * l + 2.0 * r * l * abs(cp) + delta * l * abs(sp)
+    coef_scale = rho * rho + r * r + l * l + 2.0 * r * l + delta * l
     row[COEF] = coef
     rhs = -l * (r * sp + delta * sigma * cp) * w2 - g * l * sp - delta * sigma * g
-    rhs_scale = l * (r * abs(sp) + delta * abs(cp)) * w2 + g * l * abs(sp) + delta * g
+    rhs_scale = l * (r + delta) * w2 + g * l + delta * g
     n0, dn = m * (g + l * cp * w2), m * l * sp
     if is_zero(coef, coef_scale):
         row[SINGULAR] = 1.0
@@ -114,7 +114,7 @@ def _roll(row, sigma, from_rest, omega, delta, r, l, rho, g, m, sp, cp):
 @njit(cache=True)
 def _stick(row, delta, l, g, m, sp):
     """Fill the stick branch: rest is possible iff l |sin phi| <= delta (15)."""
-    if g * (delta - l * abs(sp)) >= -TOL * g * (delta + l * abs(sp)):
+    if g * (delta - l * abs(sp)) >= -TOL * g * (delta + l):
         row[STATUS] = ADMISSIBLE
         row[PHI_DDOT] = 0.0
         row[N_NORMAL] = m * g
@@ -170,7 +170,7 @@ MODEL = Model(
         Variable("m", "kg", "mass of the disc", "m", 1.0, 0.0, lower_open=True),
     ),
     derived=(Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos)),
-    branches=("roll+", "roll-", "stick"),
+    branches=("roll_pos", "roll_neg", "stick"),
     stick_branch=STICK,
     accelerations=(
         Variable("phi_ddot", "rad s-2", "angular acceleration of the disc", "\\ddot\\varphi"),

@@ -1,0 +1,42 @@
+"""The README's examples and the docstring examples run as written."""
+
+from __future__ import annotations
+
+import doctest
+import pathlib
+import subprocess
+import sys
+
+import importlib
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+def test_readme_examples():
+    result = doctest.testfile(str(ROOT / "README.md"), module_relative=False,
+                              optionflags=doctest.NORMALIZE_WHITESPACE)
+    assert result.attempted >= 8 and result.failed == 0
+
+
+def test_docstring_examples():
+    result = doctest.testmod(importlib.import_module("phasemap.classify"))
+    assert result.attempted >= 2 and result.failed == 0
+
+
+def test_readme_quick_start_has_exactly_two_commands():
+    text = (ROOT / "README.md").read_text()
+    block = text.split("## Quick start", 1)[1].split("```bash", 1)[1].split("```", 1)[0]
+    commands = [line for line in block.splitlines() if line.strip()]
+    assert len(commands) == 2
+    assert "pytest" in commands[1] and "pytest" in (ROOT / ".ci" / "run").read_text()
+
+
+def test_cli_table_and_errors():
+    run = [sys.executable, "-m", "phasemap.cli"]
+    out = subprocess.run(run + ["table"], capture_output=True, text=True, check=True).stdout
+    assert "0 none" in out and "2 two" in out and out.count("\n") >= 13
+    bad = subprocess.run(run + ["classify", "ladder", "phi=9"], capture_output=True, text=True)
+    assert bad.returncode == 2
+    assert bad.stderr.strip() == ("phasemap: error: ladder: phi = 9 is outside its domain "
+                                  "[0, 1.5708] (angle of the bar from the vertical, rad)")
+    assert "Traceback" not in bad.stderr
