@@ -10,6 +10,11 @@ from ._version import __version__
 
 EPILOG = """\
 examples:
+  phasemap atlas elliptic_pendulum --set xdot=1 -o elliptic.nc
+  phasemap atlas ladder --axis phi=0:1.5708:1024 --axis f=0:3:1024 --set omega=0 -o ladder.nc
+  phasemap atlas wheel --axis phi=-3.1416:3.1416:400 --axis delta=0:1:400 \\
+                       --layers n_solutions,stagnation,phi_ddot_roll_pos -o wheel.nc
+  phasemap info elliptic.nc                         axes, fixed values, cells per class
   phasemap table                                    the paper's key states, classified
   phasemap models                                   models, variables, units and defaults
   phasemap classify elliptic_pendulum phi=0.8 xdot=-1 f=4
@@ -46,6 +51,23 @@ def main(argv: list[str] | None = None) -> int:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.add_parser("table", help="classify the seed paper's key states (the default)")
     sub.add_parser("models", help="list the models with their variables, units and defaults")
+    p = sub.add_parser(
+        "atlas", help="map solvability and stagnation over a grid into a netCDF atlas",
+        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Without --axis, the model's default map is drawn (see phasemap models).")
+    p.add_argument("model")
+    p.add_argument("--axis", action="append", default=[], metavar="NAME=START:STOP:COUNT",
+                   help="an axis of COUNT values from START to STOP (repeat for more axes)")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="fix a state variable or parameter (repeatable)")
+    p.add_argument("--layers", metavar="A,B", help="layers to compute (default: n_solutions, "
+                   "plus stagnation where the relative velocity is zero)")
+    p.add_argument("--chunk-cells", type=int, default=1 << 24, metavar="N",
+                   help="above N cells, compute and write block by block with bounded memory "
+                   "(default %(default)s)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.nc")
+    p = sub.add_parser("info", help="summarise an atlas: axes, fixed values, cells per class")
+    p.add_argument("path")
     p = sub.add_parser("classify", help="classify one state: phasemap classify MODEL name=value ...",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("model")
@@ -56,6 +78,12 @@ def main(argv: list[str] | None = None) -> int:
             print(_table())
         elif args.command == "models":
             print(_models())
+        elif args.command == "atlas":
+            print(_atlas(args))
+        elif args.command == "info":
+            from .atlas import describe_atlas
+
+            print(describe_atlas(args.path))
         elif args.command == "classify":
             from .classify import classify
 
@@ -77,6 +105,68 @@ def _parse_values(items: list[str]) -> dict[str, float]:
         except ValueError:
             raise ValueError(f"{name}: {text!r} is not a number") from None
     return values
+
+
+def _parse_axis(item: str) -> tuple[str, object]:
+    import numpy as np
+
+    name, sep, text = item.partition("=")
+    parts = text.split(":")
+    if not sep or not name or len(parts) != 3:
+        raise ValueError(f"--axis expects NAME=START:STOP:COUNT, got {item!r}")
+    try:
+        start, stop = float(parts[0]), float(parts[1])
+    except ValueError:
+        raise ValueError(f"--axis {name}: START and STOP must be numbers, got {text!r}") from None
+    try:
+        count = int(parts[2])
+    except ValueError:
+        raise ValueError(f"--axis {name}: COUNT must be a whole number, got {parts[2]!r}") from None
+    if count < 1:
+        raise ValueError(f"--axis {name}: COUNT must be at least 1, got {count}")
+    if not (math.isfinite(start) and math.isfinite(stop)):
+        raise ValueError(f"--axis {name}: START and STOP must be finite, got {text!r}")
+    return name, np.linspace(start, stop, count)
+
+
+def _atlas(args) -> str:
+    import pathlib
+
+    from .atlas import write_atlas
+    from .models import get_model
+    from .scene import Scene
+
+    model = get_model(args.model)
+    out = pathlib.Path(args.output)
+    if not out.parent.resolve().is_dir():
+        raise ValueError(f"output folder {str(out.parent)!r} does not exist")
+    if out.is_dir():
+        raise ValueError(f"output {str(out)!r} is a folder; give a file name such as atlas.nc")
+    axes = dict(_parse_axis(a) for a in args.axis)
+    if len(axes) != len(args.axis):
+        raise ValueError("each --axis name may be given once")
+    fixed = _parse_values(args.set)
+    if not axes:  # the model's default map, less the names the user fixed
+        import numpy as np
+
+        axes = {n: np.linspace(*spec) for n, spec in model.default_axes.items() if n not in fixed}
+        if not axes:
+            raise ValueError(f"{model.name}: every default axis is fixed; give an --axis")
+    if args.chunk_cells < 1:
+        raise ValueError(f"--chunk-cells must be at least 1, got {args.chunk_cells}")
+    layers = [x.strip() for x in args.layers.split(",") if x.strip()] if args.layers else None
+    scene = Scene(model, axes=axes, fixed=fixed, layers=layers)
+    if scene.size > args.chunk_cells:
+        from dask.diagnostics import ProgressBar
+
+        first = next(iter(scene.axes))
+        rows = max(1, args.chunk_cells // (scene.size // scene.axes[first].size))
+        ds = scene.compute(chunks={first: rows})
+        with ProgressBar(minimum=1.0):
+            write_atlas(ds, out)
+    else:
+        write_atlas(scene.compute(progress=True), out)
+    return f"wrote {out} ({scene.size} cells, layers {', '.join(scene.layers)})"
 
 
 def _table() -> str:

@@ -31,6 +31,9 @@ A new model provides:
 ``check``
     optional cross-variable domain check on (possibly array) values; raises
     :class:`ValueError`.
+``default_axes``
+    optional ``{name: (start, stop, count)}``: the map ``phasemap atlas MODEL``
+    draws when no axis is given.
 
 Everything else just works.
 """
@@ -159,6 +162,8 @@ class Model:
     velocity: str
     point: Callable = field(repr=False)
     check: Callable[[Mapping[str, object]], None] | None = field(default=None, repr=False)
+    #: A map worth drawing first: ``{name: (start, stop, count)}`` for the CLI's defaults.
+    default_axes: Mapping[str, tuple[float, float, int]] = field(default_factory=dict)
 
     # -- names -------------------------------------------------------------
     @property

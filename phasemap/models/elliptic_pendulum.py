@@ -198,4 +198,5 @@ MODEL = Model(
                          "\\lambda"),
     velocity="xdot",
     point=point,
+    default_axes={"phi": (-math.pi, math.pi, 512), "f": (0.0, 6.0, 512)},
 )

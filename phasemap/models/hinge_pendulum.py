@@ -166,6 +166,7 @@ MODEL = Model(
                          "l^2-\\delta^2"),
     velocity="omega",
     point=point,
+    default_axes={"phi": (-math.pi, math.pi, 512), "delta": (0.0, 1.5, 512)},
 )
 
 

@@ -192,6 +192,7 @@ MODEL = Model(
                          "2-f^2"),
     velocity="omega",
     point=point,
+    default_axes={"phi": (0.0, math.pi / 2, 512), "f": (0.0, 3.0, 512)},
 )
 
 

@@ -184,6 +184,7 @@ MODEL = Model(
                          " of the angular acceleration", "J"),
     velocity="omega",
     point=point,
+    default_axes={"phi": (-math.pi, math.pi, 512), "delta": (0.0, 1.0, 512)},
     check=_check,
 )
 

@@ -1,0 +1,479 @@
+"""Atlases on disk: CF-compliant netCDF writing, atomically, and a human summary.
+
+An *atlas* is the :class:`xarray.Dataset` that ``Scene.compute()`` returns:
+
+* one to four dimension coordinates named after model variables (``phi``,
+  ``f``...), float64, 1-D, possibly non-uniform, with ``units`` (UDUNITS
+  spelling) and ``long_name``;
+* data variables over all those dimensions: categorical int8 layers
+  (``n_solutions``, ``stagnation``, ``contact_lost``, ``singular``) carrying
+  ``flag_values``, ``flag_meanings`` and ``long_name`` but no ``units``, and
+  float layers carrying ``units`` and ``long_name``, NaN where undefined;
+* global provenance attributes: ``Conventions``, ``title``, ``source``,
+  ``history``, ``phasemap_model``, ``phasemap_version``, ``phasemap_scene``
+  (JSON), ``phasemap_fixed_<name>`` and ``date_created``.
+
+Metadata is data and lives in ``.attrs``; serialisation (compression,
+chunking, ``_FillValue``) lives only in the ``encoding`` that
+:func:`cf_encoding` builds and :func:`write_atlas` hands to ``to_netcdf``.
+Every atlas survives a netCDF round trip unchanged (``identical``).
+
+``Conventions`` is ``CF-1.8`` (:data:`CONVENTIONS`): cfchecker 4.1.0, the
+newest on PyPI and the independent checker used by the tests, knows CF
+versions up to 1.8 and reports an error for any later version string.  An
+atlas uses nothing introduced after CF-1.8.
+
+Writing is atomic: :func:`atomic_path` yields a temporary file in the
+destination folder, fsyncs it and renames it onto the destination only on
+success, so a reader never sees a half-written atlas and an interrupted write
+leaves an existing file untouched.  A chunk-by-chunk writer that opens
+``netCDF4.Dataset`` itself reuses it::
+
+    with atomic_path("atlas.nc") as tmp:
+        with netCDF4.Dataset(tmp, "w") as nc:
+            ...  # close the file before the block ends
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime as _dt
+import math
+import os
+import pathlib
+import tempfile
+from typing import Iterator, Mapping
+
+import numpy as np
+import xarray as xr
+
+from ._version import __version__
+
+__all__ = [
+    "CHUNK_BYTES",
+    "CONVENTIONS",
+    "atomic_path",
+    "cf_encoding",
+    "describe_atlas",
+    "open_atlas",
+    "write_atlas",
+]
+
+#: The CF version every atlas declares (see the module docstring for why 1.8).
+CONVENTIONS = "CF-1.8"
+
+#: Upper bound on the uncompressed size of one netCDF chunk of a layer.
+CHUNK_BYTES = 1 << 20
+
+#: Attributes that are serialisation, which belong in ``encoding``.
+_ENCODING_KEYS = ("_FillValue", "missing_value", "scale_factor", "add_offset",
+                  "dtype", "chunksizes", "zlib", "complevel", "shuffle", "contiguous")
+
+#: Layers are read in slabs of at most this many bytes by :func:`describe_atlas`.
+_SLAB_BYTES = 16 << 20
+
+
+# --------------------------------------------------------------------------- writing
+
+
+def cf_encoding(ds: xr.Dataset, chunks: Mapping[str, int] | None = None, *,
+                complevel: int = 4) -> dict[str, dict]:
+    """The per-variable ``encoding`` that :func:`write_atlas` passes to ``to_netcdf``.
+
+    Parameters
+    ----------
+    ds:
+        an atlas.
+    chunks:
+        netCDF chunk length per dimension name; missing dimensions take the
+        default, every length is clipped to the dimension's size.  By default a
+        layer's chunk starts from its dask chunk (or its whole shape) and the
+        longest side is halved until one chunk holds at most
+        :data:`CHUNK_BYTES` uncompressed.
+    complevel:
+        zlib level, 1 (fast) to 9 (small).
+
+    Returns
+    -------
+    dict
+        ``{name: {...}}`` for every variable.  Data variables get
+        ``zlib``, ``complevel``, ``shuffle`` and ``chunksizes``; integer
+        (categorical) layers and coordinates get ``_FillValue: None`` (no fill
+        value attribute), float layers ``_FillValue: NaN``.
+    """
+    if not 1 <= int(complevel) <= 9:
+        raise ValueError(f"complevel must be between 1 and 9, got {complevel}")
+    chunks = dict(chunks or {})
+    for dim, n in chunks.items():
+        if dim not in ds.dims:
+            raise ValueError(f"chunks: {dim!r} is not a dimension of the atlas "
+                             f"(dimensions: {', '.join(map(str, ds.dims))})")
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ValueError(f"chunks: {dim}={n!r} must be a positive integer")
+    encoding: dict[str, dict] = {}
+    for name in ds.coords:
+        encoding[str(name)] = {"_FillValue": None}
+    for name, var in ds.data_vars.items():
+        enc: dict = {"_FillValue": _fill_value(var.dtype)}
+        if var.ndim > 0:
+            start = _dask_chunk_shape(var) or var.shape
+            start = tuple(max(1, min(int(chunks.get(d, c)), n))
+                          for d, c, n in zip(var.dims, start, var.shape))
+            fixed = {i for i, d in enumerate(var.dims) if d in chunks}
+            shape = _default_chunks(start, var.dtype.itemsize, fixed=fixed)
+            enc.update(zlib=True, complevel=int(complevel), shuffle=True,
+                       chunksizes=shape)
+        encoding[str(name)] = enc
+    return encoding
+
+
+def write_atlas(ds: xr.Dataset, path: str | os.PathLike, *, complevel: int = 4,
+                chunks: Mapping[str, int] | None = None) -> pathlib.Path:
+    """Write an atlas to a netCDF-4 file, atomically, and return its path.
+
+    ``Conventions``, ``date_created``, ``history``, ``source`` and
+    ``phasemap_version`` are added when missing; every attribute already there
+    is kept (integer ``flag_values`` are stored in their layer's dtype, as CF
+    requires).  The caller's Dataset is not modified.  A dask-backed atlas is
+    computed chunk by chunk while it is written, never loaded whole.
+
+    Raises
+    ------
+    ValueError
+        before anything is computed or written, if the destination folder does
+        not exist, or if the atlas carries attributes netCDF cannot store
+        (bools, None) or serialisation keys in ``.attrs``.
+    """
+    if not isinstance(ds, xr.Dataset):
+        raise TypeError(f"write_atlas needs an xarray.Dataset, got {type(ds).__name__}")
+    path = _destination(path)
+    out = _prepare(ds)
+    encoding = cf_encoding(out, chunks, complevel=complevel)
+    with atomic_path(path) as tmp:
+        out.to_netcdf(tmp, mode="w", format="NETCDF4", engine="netcdf4", encoding=encoding)
+    return path
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike) -> Iterator[pathlib.Path]:
+    """Yield a temporary path next to ``path``; move it onto ``path`` on success.
+
+    The temporary file (``.<name>.<random>.part`` in the destination folder,
+    so the final rename never crosses file systems) exists, empty, when the
+    block starts; the block overwrites it and must close it.  On a normal exit
+    the file is fsynced, given the permissions a new file would get from the
+    umask, and renamed over ``path`` with :func:`os.replace`.  On any
+    exception, ``KeyboardInterrupt`` included, it is removed and ``path`` is
+    left as it was.
+
+    Raises
+    ------
+    ValueError
+        if the destination folder does not exist or ``path`` is a folder.
+    """
+    path = _destination(path)
+    fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    os.close(fd)
+    tmp = pathlib.Path(name)
+    try:
+        yield tmp
+        with open(tmp, "rb") as fh:
+            os.fsync(fh.fileno())
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+        raise
+    _fsync_folder(path.parent)
+
+
+def _destination(path: str | os.PathLike) -> pathlib.Path:
+    path = pathlib.Path(os.path.expanduser(os.fspath(path)))
+    folder = path.parent
+    if not folder.is_dir():
+        raise ValueError(f"cannot write {path}: folder {folder} does not exist")
+    if path.is_dir():
+        raise ValueError(f"cannot write {path}: it is a folder")
+    return path
+
+
+def _prepare(ds: xr.Dataset) -> xr.Dataset:
+    """A shallow copy of ``ds`` ready to write: no stale encoding, provenance filled in."""
+    problems = []
+    for where, attrs in [("global", ds.attrs)] + [(str(k), v.attrs) for k, v in ds.variables.items()]:
+        for key, value in attrs.items():
+            if isinstance(value, (bool, np.bool_)) or value is None:
+                problems.append(f"{where} attribute {key}={value!r} (netCDF stores no "
+                                f"{'bools' if value is not None else 'None'}; use 0/1 or a string)")
+            elif where != "global" and key in _ENCODING_KEYS:
+                problems.append(f"{where} attribute {key} is serialisation; "
+                                "put it in .encoding, not .attrs")
+    if problems:
+        raise ValueError("cannot write this atlas: " + "; ".join(problems))
+    out = ds.drop_encoding()
+    for name, var in out.variables.items():
+        var.attrs = dict(var.attrs)
+        if "flag_values" in var.attrs and np.issubdtype(var.dtype, np.integer):
+            var.attrs["flag_values"] = _flag_values(str(name), var.attrs["flag_values"], var.dtype)
+    now = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0)
+    stamp = now.strftime("%Y-%m-%dT%H:%M:%SZ")
+    defaults = {
+        "Conventions": CONVENTIONS,
+        "source": f"phasemap {__version__}",
+        "phasemap_version": __version__,
+        "date_created": stamp,
+        "history": f"{stamp} written by phasemap {__version__} (phasemap.atlas.write_atlas)",
+    }
+    out.attrs = {**ds.attrs, **{k: v for k, v in defaults.items() if k not in ds.attrs}}
+    return out
+
+
+def _flag_values(name: str, values, dtype: np.dtype) -> np.ndarray:
+    arr = np.atleast_1d(np.asarray(values))
+    info = np.iinfo(dtype)
+    if arr.ndim != 1 or not np.issubdtype(arr.dtype, np.integer) or \
+            arr.min() < info.min or arr.max() > info.max:
+        raise ValueError(f"{name}: flag_values {values!r} must be integers that fit in {dtype}")
+    return arr.astype(dtype)
+
+
+def _fill_value(dtype: np.dtype):
+    return dtype.type(np.nan) if np.issubdtype(dtype, np.floating) else None
+
+
+def _dask_chunk_shape(var: xr.Variable | xr.DataArray) -> tuple[int, ...] | None:
+    chunks = var.chunks
+    if not chunks:
+        return None
+    return tuple(max(c) if len(c) else 1 for c in chunks)
+
+
+def _default_chunks(shape: tuple[int, ...], itemsize: int, limit: int = CHUNK_BYTES,
+                    fixed: set[int] = frozenset()) -> tuple[int, ...]:
+    """Halve the longest free side of ``shape`` until a chunk holds at most ``limit`` bytes.
+
+    Sides whose index is in ``fixed`` (chosen by the caller) are never changed.
+    Halving keeps power-of-two (dask) chunk lengths exact divisors, so netCDF
+    chunks tile the dask chunks they are written from.
+    """
+    chunk = [max(1, int(n)) for n in shape]
+    free = [i for i in range(len(chunk)) if i not in fixed]
+    while free and math.prod(chunk) * itemsize > limit:
+        i = max(free, key=lambda j: chunk[j])
+        if chunk[i] == 1:
+            break
+        chunk[i] = -(-chunk[i] // 2)
+    return tuple(chunk)
+
+
+def _umask() -> int:
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _fsync_folder(folder: pathlib.Path) -> None:
+    """Make the rename durable; not every platform can open a folder."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+# --------------------------------------------------------------------------- reading
+
+
+def open_atlas(path: str | os.PathLike, **kwargs) -> xr.Dataset:
+    """Open an atlas file lazily, checking that it is one.
+
+    Keyword arguments go to :func:`xarray.open_dataset`.  Close the result (or
+    use it in a ``with`` block) when done.
+
+    Raises
+    ------
+    ValueError
+        with a one-line message if the file does not exist, is not netCDF, or
+        is not a phasemap atlas.
+    """
+    path = pathlib.Path(os.path.expanduser(os.fspath(path)))
+    if not path.is_file():
+        raise ValueError(f"{path}: no such file")
+    kwargs.setdefault("engine", "netcdf4")
+    kwargs.setdefault("decode_times", False)
+    kwargs.setdefault("decode_timedelta", False)
+    try:
+        ds = xr.open_dataset(path, **kwargs)
+    except Exception as err:  # netCDF4 and HDF5 raise a variety of types
+        reason = " ".join(str(err).split()) or type(err).__name__
+        raise ValueError(f"{path}: not a readable netCDF file ({reason})") from None
+    try:
+        _check_is_atlas(ds, str(path))
+    except ValueError:
+        ds.close()
+        raise
+    return ds
+
+
+def describe_atlas(path_or_ds: str | os.PathLike | xr.Dataset) -> str:
+    """A human summary of an atlas, as ``phasemap info`` prints it.
+
+    It names the model, the axes (size, range, units, uniform or not), the
+    fixed values, every layer with its units, and for each categorical layer
+    the count and percentage of cells in each class, then the version and time
+    that made the atlas.  Layers are read in slabs, so a large file is never
+    loaded whole.
+
+    Raises
+    ------
+    ValueError
+        if the file does not exist, is not netCDF or is not a phasemap atlas.
+    """
+    if isinstance(path_or_ds, xr.Dataset):
+        _check_is_atlas(path_or_ds, "dataset")
+        return _describe(path_or_ds, "(in memory)")
+    with open_atlas(path_or_ds) as ds:
+        try:
+            return _describe(ds, str(path_or_ds))
+        except (OSError, RuntimeError) as err:  # a damaged file opens but fails to read
+            reason = " ".join(str(err).split()) or type(err).__name__
+            raise ValueError(f"{path_or_ds}: cannot read the atlas ({reason})") from None
+
+
+def _check_is_atlas(ds: xr.Dataset, where: str) -> None:
+    if "phasemap_model" not in ds.attrs:
+        raise ValueError(f"{where}: not a phasemap atlas (no phasemap_model global attribute)")
+    if not ds.data_vars:
+        raise ValueError(f"{where}: not a phasemap atlas (no layers)")
+
+
+def _describe(ds: xr.Dataset, where: str) -> str:
+    a = ds.attrs
+    dims = [str(d) for d in ds.dims]
+    cells = math.prod(ds.sizes[d] for d in dims)
+    lines = [f"phasemap atlas {where}"]
+    if "title" in a:
+        lines.append(f"  title     {a['title']}")
+    lines.append(f"  model     {a['phasemap_model']}")
+    lines.append(f"  cells     {cells} = " + " x ".join(f"{ds.sizes[d]} {d}" for d in dims))
+    lines.append(f"  made by   phasemap {a.get('phasemap_version', '?')}, "
+                 f"{a.get('date_created', 'creation time unknown')}")
+    if "Conventions" in a:
+        lines.append(f"  follows   {a['Conventions']}")
+
+    lines.append("axes")
+    rows = []
+    for d in dims:
+        if d in ds.coords:
+            x = np.asarray(ds[d].values, dtype=float)
+            attrs = ds[d].attrs
+            rng = f"[{x.min():.6g}, {x.max():.6g}]" if x.size else "[]"
+            rows.append((d, str(x.size), rng, attrs.get("units", "?"), _spacing(x),
+                         attrs.get("long_name", "")))
+        else:
+            rows.append((d, str(ds.sizes[d]), "(no coordinate)", "", "", ""))
+    lines += _table(rows)
+
+    fixed = {k[len("phasemap_fixed_"):]: v for k, v in a.items() if k.startswith("phasemap_fixed_")}
+    lines.append("fixed values")
+    if fixed:
+        lines += _table([(k, "=", _number(v)) for k, v in fixed.items()])
+    else:
+        lines.append("  (none)")
+
+    lines.append("layers")
+    for name, var in ds.data_vars.items():
+        attrs = var.attrs
+        if "flag_meanings" in attrs:
+            lines.append(f"  {name} ({var.dtype}, categorical): {attrs.get('long_name', '')}")
+            lines += _class_lines(var, cells)
+        else:
+            defined = _count_finite(var) if np.issubdtype(var.dtype, np.floating) else cells
+            pct = 100.0 * defined / cells if cells else 0.0
+            lines.append(f"  {name} ({var.dtype}, {attrs.get('units', 'no units')}): "
+                         f"{attrs.get('long_name', '')}; defined on {defined} cells ({pct:.1f}%)")
+    return "\n".join(lines)
+
+
+def _number(value) -> str:
+    try:
+        return f"{float(np.squeeze(value)):.6g}"
+    except (TypeError, ValueError):
+        return str(value)
+
+
+def _spacing(x: np.ndarray) -> str:
+    if x.size < 2:
+        return "single value"
+    step = np.diff(x)
+    mean = (x[-1] - x[0]) / (x.size - 1)
+    scale = max(abs(mean), np.finfo(float).tiny)
+    if np.all(np.abs(step - mean) <= 1e-6 * scale):
+        return f"uniform, step {mean:.6g}"
+    return f"non-uniform, steps {np.abs(step).min():.3g} to {np.abs(step).max():.3g}"
+
+
+def _class_lines(var: xr.DataArray, cells: int) -> list[str]:
+    meanings = str(var.attrs["flag_meanings"]).split()
+    values = np.atleast_1d(np.asarray(var.attrs.get("flag_values", np.arange(len(meanings)))))
+    counts: dict[int, int] = {}
+    for block in _slabs(var):
+        if block.dtype == np.int8:  # the usual case: one pass, no sort
+            c = np.bincount(block.view(np.uint8).ravel(), minlength=256)
+            v = np.arange(256, dtype=np.uint8).view(np.int8)
+            v, c = v[c > 0], c[c > 0]
+        else:
+            v, c = np.unique(block, return_counts=True)
+        for value, count in zip(v.tolist(), c.tolist()):
+            counts[value] = counts.get(value, 0) + count
+    rows = []
+    for value, meaning in zip(values.tolist(), meanings):
+        n = counts.pop(value, 0)
+        rows.append(("  " + meaning, str(value), str(n), f"{_pct(n, cells)}%"))
+    for value, n in sorted(counts.items(), key=lambda kv: str(kv[0])):
+        rows.append(("  (unlisted)", str(value), str(n), f"{_pct(n, cells)}%"))
+    return _table(rows, right=(1, 2, 3))
+
+
+def _pct(n: int, cells: int) -> str:
+    return f"{100.0 * n / cells:.2f}" if cells else "0.00"
+
+
+def _count_finite(var: xr.DataArray) -> int:
+    return sum(int(np.count_nonzero(np.isfinite(block))) for block in _slabs(var))
+
+
+def _slabs(var: xr.DataArray) -> Iterator[np.ndarray]:
+    """The values of ``var`` in slabs along its first dimension, each about :data:`_SLAB_BYTES`."""
+    if var.ndim == 0:
+        yield np.asarray(var.values)
+        return
+    per_row = max(1, var.size // max(var.shape[0], 1)) * var.dtype.itemsize
+    step = max(1, _SLAB_BYTES // per_row)
+    dim = var.dims[0]
+    for start in range(0, var.shape[0], step):
+        yield np.asarray(var.isel({dim: slice(start, start + step)}).values)
+
+
+def _table(rows: list[tuple[str, ...]], right: tuple[int, ...] = ()) -> list[str]:
+    if not rows:
+        return []
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    out = []
+    for r in rows:
+        cells = [c.rjust(w) if i in right else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths))]
+        out.append(("  " + "  ".join(cells)).rstrip())
+    return out

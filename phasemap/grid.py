@@ -1,0 +1,169 @@
+"""The grid evaluator: one parallel numba kernel per model over any N-D grid.
+
+``make_grid_kernel(model)`` binds the model's jitted ``point`` function and
+the shared ``summarize`` into one ``@njit(parallel=True, cache=True)`` kernel,
+cached per model in memory and on disk.  Parameter values, axes and the choice of layers are runtime
+arguments, so the kernel compiles once per model, never per value.
+
+Layout
+------
+Cells are taken in C order.  ``prange`` runs over blocks of ``BLOCK`` cells;
+each block allocates its scratch (the input vector ``v`` and the branch rows
+``out``) once, unravels its first cell and then steps a multi-index counter.
+Per-axis work (the model's derived inputs such as sin(phi)) is computed once
+per axis value, outside the kernel, and only copied in the inner loop.
+"""
+
+from __future__ import annotations
+
+import types
+
+import numpy as np
+from numba import njit, prange
+
+from . import _numerics as nx
+from .layers import Layer
+from .model import Model
+
+BLOCK = 2048
+_KERNELS: dict[str, object] = {}
+
+# Compile-time structure of the model being compiled.  The template below reads
+# these as globals; make_grid_kernel gives each model a copy of the template
+# with its own globals.  (Closure cells holding dispatchers defeat numba's
+# on-disk cache, whose key pickles closure contents; globals are not in the key.)
+POINT = None
+STICK = -1
+N_BRANCHES = 0
+N_FIELDS = 0
+
+
+def make_grid_kernel(model: Model):
+    """The parallel grid kernel of ``model``: compiled once, cached in memory and on disk."""
+    kernel = _KERNELS.get(model.name)
+    if kernel is None:
+        scope = dict(_kernel_template.__globals__)
+        scope.update(POINT=model.point, STICK=model.stick_branch,
+                     N_BRANCHES=len(model.branches), N_FIELDS=model.n_fields)
+        fn = types.FunctionType(_kernel_template.__code__, scope, f"grid_kernel_{model.name}")
+        fn.__qualname__ = fn.__name__  # one on-disk cache index per model
+        fn.__doc__ = _kernel_template.__doc__
+        kernel = _KERNELS[model.name] = njit(parallel=True, cache=True)(fn)
+    return kernel
+
+
+@njit(cache=True)
+def _set_axis(v, d, i, axis_slot, axis_values, deriv_slot, deriv_values):
+    """Put value ``i`` of axis ``d`` and its precomputed derived inputs into ``v``."""
+    v[axis_slot[d]] = axis_values[d, i]
+    for k in range(deriv_slot.shape[1]):
+        if deriv_slot[d, k] >= 0:
+            v[deriv_slot[d, k]] = deriv_values[d, k, i]
+
+
+def _kernel_template(base, shape, axis_slot, axis_values, deriv_slot, deriv_values,
+                     want, req_branch, req_col, req_adm, summary, fields):
+    """Classify every cell of the grid; write the wanted summaries and branch fields.
+
+    ``summary`` is int8 (4, ncells) (n_solutions, stagnation, contact_lost,
+    singular; rows written where ``want``), ``fields`` float64 (nreq, ncells)
+    with column ``req_col[q]`` of branch ``req_branch[q]`` (NaN unless the branch
+    is admissible, or unless it applies when ``req_adm[q]`` is False).
+    """
+    ndim = shape.shape[0]
+    ncells = 1
+    for d in range(ndim):
+        ncells *= shape[d]
+    nblocks = (ncells + BLOCK - 1) // BLOCK
+    nreq = req_branch.shape[0]
+    for blk in prange(nblocks):
+        v = base.copy()
+        out = np.empty((N_BRANCHES, N_FIELDS))
+        idx = np.empty(ndim, dtype=np.int64)
+        start = blk * BLOCK
+        stop = min(start + BLOCK, ncells)
+        rem = start
+        for d in range(ndim - 1, -1, -1):
+            idx[d] = rem % shape[d]
+            rem //= shape[d]
+        for d in range(ndim):
+            _set_axis(v, d, idx[d], axis_slot, axis_values, deriv_slot, deriv_values)
+        for cell in range(start, stop):
+            POINT(v, out)
+            n, stag, lost, sing = nx.summarize(out, STICK)
+            if want[0]:
+                summary[0, cell] = n
+            if want[1]:
+                summary[1, cell] = stag
+            if want[2]:
+                summary[2, cell] = lost
+            if want[3]:
+                summary[3, cell] = sing
+            for q in range(nreq):
+                b = req_branch[q]
+                st = out[b, nx.STATUS]
+                if st == nx.ADMISSIBLE or (not req_adm[q] and st != nx.ABSENT):
+                    fields[q, cell] = out[b, req_col[q]]
+                else:
+                    fields[q, cell] = np.nan
+            # step the multi-index; refresh only the axes that changed
+            d = ndim - 1
+            while d >= 0:
+                idx[d] += 1
+                if idx[d] < shape[d]:
+                    _set_axis(v, d, idx[d], axis_slot, axis_values, deriv_slot, deriv_values)
+                    break
+                idx[d] = 0
+                _set_axis(v, d, 0, axis_slot, axis_values, deriv_slot, deriv_values)
+                d -= 1
+
+
+def evaluate(model: Model, axes: dict[str, np.ndarray], fixed: dict[str, float],
+             layers: list[Layer]) -> dict[str, np.ndarray]:
+    """Evaluate ``layers`` over the grid spanned by ``axes`` (validated values).
+
+    ``axes`` maps names to 1-D float arrays (in dimension order), ``fixed`` the
+    remaining names to floats.  Returns one array of shape ``grid`` per layer.
+    """
+    names = list(axes)
+    shape = np.array([len(axes[n]) for n in names], dtype=np.int64)
+    slot = {n: i for i, n in enumerate(model.inputs)}
+    base = np.zeros(len(model.inputs))
+    for n, x in fixed.items():
+        base[slot[n]] = x
+    by_source: dict[str, list] = {}
+    for d in model.derived:
+        by_source.setdefault(d.source, []).append(d)
+        if d.source in fixed:
+            base[slot[d.name]] = d.func(float(fixed[d.source]))
+    length = int(shape.max()) if len(shape) else 1
+    nd = max((len(v) for v in by_source.values()), default=0)
+    axis_values = np.zeros((len(names), length))
+    deriv_slot = np.full((len(names), max(nd, 1)), -1, dtype=np.int64)
+    deriv_values = np.zeros((len(names), max(nd, 1), length))
+    for i, n in enumerate(names):
+        axis_values[i, :shape[i]] = axes[n]
+        for k, d in enumerate(by_source.get(n, [])):
+            deriv_slot[i, k] = slot[d.name]
+            deriv_values[i, k, :shape[i]] = d.func(np.asarray(axes[n], dtype=float))
+    ncells = int(np.prod(shape))
+    want = np.array([any(l.name == s for l in layers) for s in
+                     ("n_solutions", "stagnation", "contact_lost", "singular")])
+    summary = np.zeros((4, ncells), dtype=np.int8) if want.any() else np.zeros((4, 0), np.int8)
+    field_layers = [l for l in layers if not l.is_summary]
+    fields = np.empty((len(field_layers), ncells))
+    make_grid_kernel(model)(
+        base, shape, np.array([slot[n] for n in names], dtype=np.int64), axis_values,
+        deriv_slot, deriv_values, want,
+        np.array([l.branch for l in field_layers], dtype=np.int64),
+        np.array([l.column for l in field_layers], dtype=np.int64),
+        np.array([l.admissible_only for l in field_layers]), summary, fields)
+    grid = tuple(int(s) for s in shape)
+    result = {}
+    for l in layers:
+        if l.is_summary:
+            result[l.name] = summary[("n_solutions", "stagnation", "contact_lost",
+                                      "singular").index(l.name)].reshape(grid)
+        else:
+            result[l.name] = fields[field_layers.index(l)].reshape(grid)
+    return result

@@ -1,0 +1,93 @@
+"""The registry of atlas layers: one truth for the evaluator, the writer and the plots.
+
+A layer's metadata (dtype, units, long_name, flags) is data.  The grid
+evaluator reads ``kind``, ``branch`` and ``column`` to know what to write, the
+Scene copies ``attrs`` onto the Dataset, and the netCDF writer and the plots
+read those attrs back.
+
+Layers of a model:
+
+* ``n_solutions`` (int8 flags 0-4: none unique two continuum three_or_more);
+* ``stagnation``, ``contact_lost``, ``singular`` (int8 flags 0/1: no yes);
+* for each branch B, each senior derivative and reaction X: ``X_B`` (float64,
+  NaN where the branch is not admissible);
+* for each non-stick branch B: ``coef_B``, the coefficient of the senior
+  derivative (NaN where the branch does not apply).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import numpy as np
+
+from . import _numerics as nx
+from .model import Model, Solvability
+
+SUMMARY = ("n_solutions", "stagnation", "contact_lost", "singular")
+YES_NO = {"flag_values": np.array([0, 1], dtype=np.int8), "flag_meanings": "no yes"}
+
+
+@dataclass(frozen=True)
+class Layer:
+    """One atlas variable: what it is, how it is stored, where the kernel finds it."""
+
+    name: str
+    dtype: str
+    long_name: str
+    units: str | None = None
+    flag_values: tuple[int, ...] | None = None
+    flag_meanings: str | None = None
+    branch: int = -1  # field layers: the branch row ...
+    column: int = -1  # ... and the column of out[branch] to copy
+    admissible_only: bool = True  # NaN unless the branch is admissible
+
+    @property
+    def is_summary(self) -> bool:
+        return self.branch < 0
+
+    @property
+    def attrs(self) -> dict:
+        attrs: dict = {"long_name": self.long_name}
+        if self.flag_values is not None:
+            attrs["flag_values"] = np.array(self.flag_values, dtype=np.int8)
+            attrs["flag_meanings"] = self.flag_meanings
+        if self.units is not None:
+            attrs["units"] = self.units
+        return attrs
+
+
+_REGISTRIES: dict[str, dict[str, Layer]] = {}
+
+
+def _registry(model: Model) -> dict[str, Layer]:
+    if model.name in _REGISTRIES:
+        return _REGISTRIES[model.name]
+    layers = {
+        "n_solutions": Layer(
+            "n_solutions", "int8", "number of solutions of the motion equations for the senior "
+            "derivatives", flag_values=tuple(int(s) for s in Solvability),
+            flag_meanings=" ".join(s.name.lower() for s in Solvability)),
+        "stagnation": Layer("stagnation", "int8", "zero relative velocity and the stick branch "
+                            "is admissible", flag_values=(0, 1), flag_meanings="no yes"),
+        "contact_lost": Layer("contact_lost", "int8", "a branch needs a one-sided contact to pull",
+                              flag_values=(0, 1), flag_meanings="no yes"),
+        "singular": Layer("singular", "int8", "the coefficient of the senior derivative vanishes",
+                          flag_values=(0, 1), flag_meanings="no yes"),
+    }
+    for b, branch in enumerate(model.branches):
+        for j, var in enumerate(model.accelerations + model.reactions):
+            name = f"{var.name}_{branch}"
+            layers[name] = Layer(name, "float64", f"{var.long_name}, branch {branch}",
+                                 units=var.units, branch=b, column=nx.FIRST_ACC + j)
+        if b != model.stick_branch:
+            name = f"coef_{branch}"
+            layers[name] = Layer(name, "float64", f"{model.coefficient.long_name}, branch {branch}",
+                                 units=model.coefficient.units, branch=b, column=nx.COEF,
+                                 admissible_only=False)
+    _REGISTRIES[model.name] = layers
+    return layers
+
+
+def layers_for(model: Model) -> dict[str, Layer]:
+    """Every layer a model offers, by name, in a stable order."""
+    return dict(_registry(model))

@@ -1,0 +1,236 @@
+"""Scenes: one study's choice of system, axes, fixed values and layers.
+
+A :class:`Scene` validates its inputs up front (in Python, never inside numba),
+decides which layers it needs, and computes exactly those, eagerly with numpy
+arrays or lazily with dask.  The result is a self-describing
+:class:`xarray.Dataset`: an atlas.
+
+>>> import numpy as np, phasemap
+>>> scene = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 4),
+...                                        "f": [0.1, 0.5, 1.0]}, fixed={"omega": 0.0})
+>>> scene.layers
+('n_solutions', 'stagnation')
+>>> ds = scene.compute()
+>>> ds.n_solutions.dims, int(ds.stagnation.sum())
+(('phi', 'f'), 8)
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+from typing import Mapping, Sequence
+
+import numpy as np
+import xarray as xr
+
+from . import _numerics as nx
+from ._version import __version__
+from .atlas import CONVENTIONS
+from .grid import evaluate
+from .layers import layers_for
+from .model import Model
+from .models import get_model
+
+#: Cells per slab of an eager computation with a progress bar.
+SLAB_CELLS = 1 << 21
+
+
+class Scene:
+    """A grid over some of a model's names, with the others fixed.
+
+    Parameters
+    ----------
+    model:
+        model name or :class:`phasemap.Model`.
+    axes:
+        ``{name: values}`` for 1 or more state or parameter names, each a
+        non-empty 1-D sequence of finite values inside the variable's domain
+        (uniform or not).  The Dataset's dimensions follow this order.
+    fixed:
+        values for other names; names neither on an axis nor fixed take the
+        model's defaults.
+    layers:
+        the layer names to compute (see :func:`phasemap.layers_for`).  The
+        default is ``n_solutions``, plus ``stagnation`` when the model's
+        relative velocity is zero on an axis value or in the fixed values.
+
+    Raises
+    ------
+    ValueError
+        for an unknown model, variable or layer, a name both on an axis and
+        fixed, an empty, multi-dimensional or non-finite axis, or a value
+        outside the model's domain.
+    """
+
+    def __init__(self, model: str | Model, axes: Mapping[str, Sequence[float]],
+                 fixed: Mapping[str, float] | None = None,
+                 layers: Sequence[str] | None = None):
+        self.model = get_model(model)
+        m = self.model
+        if not axes:
+            raise ValueError(f"{m.name}: a scene needs at least one axis; "
+                             f"choose from {', '.join(m.names)}")
+        fixed = dict(fixed or {})
+        both = set(axes) & set(fixed)
+        if both:
+            raise ValueError(f"{m.name}: {sorted(both)[0]!r} is both an axis and fixed")
+        self.axes: dict[str, np.ndarray] = {}
+        for name, values in axes.items():
+            if name not in m.variables:
+                raise ValueError(f"{m.name}: unknown variable {name!r}; "
+                                 f"allowed: {', '.join(m.names)}")
+            try:
+                a = np.asarray(values, dtype=float)
+            except (TypeError, ValueError):
+                raise ValueError(f"{m.name}: axis {name} must be numbers") from None
+            if a.ndim != 1 or a.size == 0:
+                raise ValueError(f"{m.name}: axis {name} must be a non-empty 1-D sequence, "
+                                 f"got shape {a.shape}")
+            self.axes[name] = a
+        for name, value in fixed.items():
+            if np.ndim(value) != 0:
+                raise ValueError(f"{m.name}: fixed value {name} must be a scalar")
+        # Validate every value, with the axes broadcast as an open mesh so that
+        # cross-variable checks (the wheel's l <= r) see every combination.
+        mesh = {n: a.reshape([-1 if i == j else 1 for j in range(len(self.axes))])
+                for i, (n, a) in enumerate(self.axes.items())}
+        full = m.complete({**fixed, **mesh})
+        self.fixed: dict[str, float] = {n: float(v) for n, v in full.items() if n not in self.axes}
+        registry = layers_for(m)
+        if layers is None:
+            layers = ["n_solutions"] + (["stagnation"] if self._velocity_can_be_zero() else [])
+        layers = list(dict.fromkeys(layers))
+        for name in layers:
+            if name not in registry:
+                raise ValueError(f"{m.name}: unknown layer {name!r}; available: "
+                                 f"{', '.join(registry)}")
+        if not layers:
+            raise ValueError(f"{m.name}: a scene needs at least one layer")
+        self.layers: tuple[str, ...] = tuple(layers)
+
+    # ------------------------------------------------------------------
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(a.size for a in self.axes.values())
+
+    @property
+    def size(self) -> int:
+        return int(np.prod(self.shape))
+
+    def _velocity_can_be_zero(self) -> bool:
+        name = self.model.velocity
+        values = self.axes.get(name)
+        if values is None:
+            return self.fixed[name] == 0.0
+        return bool(np.any(np.abs(values) <= nx.TOL * max(1.0, float(np.max(np.abs(values))))))
+
+    def spec(self) -> dict:
+        """A JSON-ready description, enough to recompute the atlas (see :meth:`from_spec`)."""
+        axes = {}
+        for name, a in self.axes.items():
+            if a.size > 1 and np.allclose(a, np.linspace(a[0], a[-1], a.size), rtol=0, atol=0):
+                axes[name] = {"start": a[0], "stop": a[-1], "count": int(a.size)}
+            else:
+                axes[name] = a.tolist()
+        return {"model": self.model.name, "axes": axes, "fixed": self.fixed,
+                "layers": list(self.layers)}
+
+    @classmethod
+    def from_spec(cls, spec: Mapping) -> "Scene":
+        axes = {}
+        for name, a in spec["axes"].items():
+            axes[name] = (np.linspace(a["start"], a["stop"], a["count"]) if isinstance(a, dict)
+                          else np.asarray(a, dtype=float))
+        return cls(spec["model"], axes=axes, fixed=spec["fixed"], layers=spec["layers"])
+
+    def __repr__(self) -> str:
+        axes = ", ".join(f"{n}[{a.size}]" for n, a in self.axes.items())
+        return f"Scene({self.model.name!r}, axes=({axes}), layers={list(self.layers)})"
+
+    # ------------------------------------------------------------------
+    def compute(self, chunks: int | Mapping[str, int] | None = None,
+                progress: bool = False) -> xr.Dataset:
+        """Evaluate the scene's layers and return the atlas.
+
+        With ``chunks`` (cells per axis, as an int for every axis or a mapping)
+        the Dataset is dask-backed and each block runs the same numba kernel
+        when computed, locally or on a ``dask.distributed`` cluster.  Without,
+        it is computed now; ``progress=True`` shows a progress bar on grids
+        that take more than about a second.
+        """
+        if chunks is not None:
+            return self._lazy(chunks)
+        return self._dataset(self._eager(progress))
+
+    def _eager(self, progress: bool) -> dict[str, np.ndarray]:
+        reg = layers_for(self.model)
+        wanted = [reg[n] for n in self.layers]
+        first, rest = next(iter(self.axes)), self.size // len(self.axes[next(iter(self.axes))])
+        step = max(1, SLAB_CELLS // max(rest, 1))
+        n0 = self.axes[first].size
+        if not progress or n0 <= step:
+            return evaluate(self.model, self.axes, self.fixed, wanted)
+        from tqdm.auto import tqdm
+
+        out = {l.name: np.empty(self.shape, dtype=l.dtype) for l in wanted}
+        with tqdm(total=self.size, unit="cell", unit_scale=True, delay=1.0,
+                  desc=f"{self.model.name} atlas") as bar:
+            for i in range(0, n0, step):
+                part = dict(self.axes)
+                part[first] = self.axes[first][i:i + step]
+                for name, arr in evaluate(self.model, part, self.fixed, wanted).items():
+                    out[name][i:i + step] = arr
+                bar.update(part[first].size * rest)
+        return out
+
+    def _lazy(self, chunks) -> xr.Dataset:
+        import dask.array as da
+
+        if isinstance(chunks, int):
+            chunks = {n: chunks for n in self.axes}
+        unknown = set(chunks) - set(self.axes)
+        if unknown:
+            raise ValueError(f"{self.model.name}: chunks name {sorted(unknown)[0]!r}, "
+                             f"which is not an axis")
+        sizes = tuple(int(chunks.get(n, a.size)) for n, a in self.axes.items())
+        if any(c < 1 for c in sizes):
+            raise ValueError(f"{self.model.name}: chunk sizes must be >= 1, got {sizes}")
+        reg = layers_for(self.model)
+        template = self._dataset({
+            n: da.empty(self.shape, dtype=reg[n].dtype, chunks=sizes) for n in self.layers})
+        return xr.map_blocks(_compute_block, template, kwargs={"spec": self.spec()},
+                             template=template)
+
+    def _dataset(self, arrays: Mapping[str, object]) -> xr.Dataset:
+        m, reg = self.model, layers_for(self.model)
+        dims = tuple(self.axes)
+        coords = {}
+        for name, a in self.axes.items():
+            var = m.variables[name]
+            coords[name] = xr.Variable(name, a, {"units": var.units, "long_name": var.long_name})
+        data_vars = {n: xr.Variable(dims, arrays[n], reg[n].attrs) for n in self.layers}
+        now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+        attrs = {
+            "Conventions": CONVENTIONS,
+            "title": f"phasemap atlas: {m.title}",
+            "source": f"phasemap {__version__}",
+            "history": f"{now} created by phasemap {__version__}",
+            "references": m.citation,
+            "phasemap_model": m.name,
+            "phasemap_version": __version__,
+            "phasemap_scene": json.dumps(self.spec()),
+            "date_created": now,
+        }
+        for name, value in self.fixed.items():
+            attrs[f"phasemap_fixed_{name}"] = value
+        return xr.Dataset(data_vars, coords, attrs)
+
+
+def _compute_block(block: xr.Dataset, spec: Mapping) -> xr.Dataset:
+    """Compute one dask block: the scene restricted to the block's coordinates."""
+    axes = {n: block[n].values for n in spec["axes"]}
+    scene = Scene(spec["model"], axes=axes, fixed=spec["fixed"], layers=spec["layers"])
+    ds = scene.compute()
+    return ds.assign_attrs(block.attrs)
+
