@@ -61,13 +61,13 @@ N_CONTINUUM = 3
 N_THREE_OR_MORE = 4
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def is_zero(q, scale):
     """True where ``q`` vanishes relative to the magnitude ``scale`` of its terms."""
     return abs(q) <= TOL * scale
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def sign_of(x):
     """+1.0 for x > 0, -1.0 for x < 0, 0.0 at zero."""
     if x > 0.0:
@@ -77,17 +77,22 @@ def sign_of(x):
     return 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def clear(out):
-    """Mark every candidate branch absent, with NaN accelerations and reactions."""
+    """Mark every candidate branch absent and not singular.
+
+    Only the status and the singular flag are reset: a branch row's numbers
+    are meaningful only where a model writes them, which it does for the
+    coefficient of every branch that applies and for every field of an
+    admissible branch.  Readers look no further (``classify`` pre-fills NaN
+    so that the numbers a model leaves unset show as NaN).
+    """
     for b in range(out.shape[0]):
         out[b, STATUS] = ABSENT
         out[b, SINGULAR] = 0.0
-        for j in range(COEF, out.shape[1]):
-            out[b, j] = np.nan
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def restrict_affine(q0, dq, lo, hi):
     """Intersect the open interval ``(lo, hi)`` with ``{a : q0 + dq * a >= 0}``.
 
@@ -104,7 +109,7 @@ def restrict_affine(q0, dq, lo, hi):
     return lo, hi
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def summarize(out, stick):
     """Reduce the branch rows of one point to the four per-point answers.
 

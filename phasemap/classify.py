@@ -112,7 +112,7 @@ def classify(model: str | Model, **values: float) -> Classification:
                              "use a Scene for arrays of values")
     full = m.complete(values)
     v = m.input_vector(full)
-    out = np.empty((len(m.branches), m.n_fields))
+    out = np.full((len(m.branches), m.n_fields), np.nan)
     m.point(v, out)
     n, stagnation, lost, singular = nx.summarize(out, m.stick_branch)
     candidates = tuple(_branch(m, b, out[b]) for b in range(len(m.branches))

@@ -80,7 +80,7 @@ N_NORMAL = FIRST_ACC + 2
 F_FRICTION = FIRST_ACC + 3
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _slide(row, sigma, rho, from_rest, omega, f, l, g, m, sp, cp):
     """Fill the slide branch with slider direction sigma and assumed sgn N = rho."""
     k = sigma * rho
@@ -128,7 +128,7 @@ def _slide(row, sigma, rho, from_rest, omega, f, l, g, m, sp, cp):
     row[STATUS] = ADMISSIBLE
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _stick(row, omega, f, l, g, m, sp, cp):
     """Fill the stick branch of the slider (x' = x'' = 0)."""
     w2 = omega * omega
@@ -145,7 +145,7 @@ def _stick(row, omega, f, l, g, m, sp, cp):
         row[STATUS] = INADMISSIBLE
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def point(v, out):
     """Classify one state. ``v`` = (phi, omega, xdot, f, l, g, m, sin phi, cos phi)."""
     omega, xdot, f, l, g, m, sp, cp = v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]

@@ -72,7 +72,7 @@ R_NORMAL = FIRST_ACC + 1
 R_TANGENT = FIRST_ACC + 2
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _turn(row, sigma, from_rest, omega, delta, l, g, m, sp, cp):
     """Fill one turning branch (direction sigma): the admissible root of (32)."""
     w2 = omega * omega
@@ -109,7 +109,7 @@ def _turn(row, sigma, from_rest, omega, delta, l, g, m, sp, cp):
         row[STATUS] = ADMISSIBLE
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _stick(row, delta, l, g, m, sp, cp):
     """Fill the stick branch: rest is possible iff l |sin phi| <= delta (35)."""
     if g * (delta - l * abs(sp)) >= -TOL * g * (delta + l):
@@ -121,7 +121,7 @@ def _stick(row, delta, l, g, m, sp, cp):
         row[STATUS] = INADMISSIBLE
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def point(v, out):
     """Classify one state. ``v`` = (phi, omega, delta, l, g, m, sin phi, cos phi)."""
     omega, delta, l, g, m, sp, cp = v[1], v[2], v[3], v[4], v[5], v[6], v[7]

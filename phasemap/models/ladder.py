@@ -86,7 +86,7 @@ N_FLOOR = FIRST_ACC + 1
 N_WALL = FIRST_ACC + 2
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _slide(row, s, from_rest, omega, f, l, g, m, sp, cp):
     """Fill one slide branch (direction s) from (8) and the reactions."""
     d = 2.0 - f * f
@@ -131,7 +131,7 @@ def _slide(row, s, from_rest, omega, f, l, g, m, sp, cp):
         row[STATUS] = ADMISSIBLE
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _stick(row, f, g, m, sp, cp):
     """Fill the stick branch: rest is possible iff phi <= 2 arctan f."""
     margin = g * (2.0 * f * cp - (1.0 - f * f) * sp)
@@ -145,7 +145,7 @@ def _stick(row, f, g, m, sp, cp):
         row[STATUS] = INADMISSIBLE
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def point(v, out):
     """Classify one state. ``v`` = (phi, omega, f, l, g, m, sin phi, cos phi)."""
     omega, f, l, g, m, sp, cp = v[1], v[2], v[3], v[4], v[5], v[6], v[7]
@@ -196,7 +196,7 @@ MODEL = Model(
 )
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def first_integral_coefficients(s, f, l, g):
     """(lam, a, b) of omega^2 = c e^{lam phi} + a sin phi + b cos phi on a stage of sign s.
 
@@ -210,7 +210,7 @@ def first_integral_coefficients(s, f, l, g):
     return lam, a, b
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def omega_squared(phi, phi0, omega0, f, l, g):
     """omega^2(phi) on the sliding stage through (phi0, omega0), omega0 != 0.
 

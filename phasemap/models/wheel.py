@@ -73,7 +73,7 @@ N_NORMAL = FIRST_ACC + 1
 F_TANGENT = FIRST_ACC + 2
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _roll(row, sigma, from_rest, omega, delta, r, l, rho, g, m, sp, cp):
     """Fill one rolling branch (direction sigma) from (13) and the no-bounce condition."""
     w2 = omega * omega
@@ -111,7 +111,7 @@ def _roll(row, sigma, from_rest, omega, delta, r, l, rho, g, m, sp, cp):
         row[STATUS] = ADMISSIBLE
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _stick(row, delta, l, g, m, sp):
     """Fill the stick branch: rest is possible iff l |sin phi| <= delta (15)."""
     if g * (delta - l * abs(sp)) >= -TOL * g * (delta + l):
@@ -123,7 +123,7 @@ def _stick(row, delta, l, g, m, sp):
         row[STATUS] = INADMISSIBLE
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def point(v, out):
     """Classify one state. ``v`` = (phi, omega, delta, r, l, rho, g, m, sin phi, cos phi)."""
     omega, delta, r, l, rho, g, m = v[1], v[2], v[3], v[4], v[5], v[6], v[7]
@@ -189,7 +189,7 @@ MODEL = Model(
 )
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def omega_squared_slope(phi, u, sigma, delta, r, l, rho, g):
     """d(omega^2)/d(phi) at (phi, u = omega^2) on a rolling stage of sign sigma.
 
