@@ -93,6 +93,16 @@ def clear(out):
 
 
 @njit(cache=True, error_model="numpy")
+def start_interval(from_rest, s):
+    """Open interval of accelerations a branch may take: ``s * a > 0`` when it starts from rest."""
+    if not from_rest:
+        return -np.inf, np.inf
+    if s > 0.0:
+        return 0.0, np.inf
+    return -np.inf, 0.0
+
+
+@njit(cache=True, error_model="numpy")
 def restrict_affine(q0, dq, lo, hi):
     """Intersect the open interval ``(lo, hi)`` with ``{a : q0 + dq * a >= 0}``.
 

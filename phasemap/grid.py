@@ -16,6 +16,9 @@ per axis value, outside the kernel, and only copied in the inner loop.
 
 from __future__ import annotations
 
+import hashlib
+import pathlib
+import sys
 import types
 
 import numpy as np
@@ -45,11 +48,25 @@ def make_grid_kernel(model: Model):
         scope = dict(_kernel_template.__globals__)
         scope.update(POINT=model.point, STICK=model.stick_branch,
                      N_BRANCHES=len(model.branches), N_FIELDS=model.n_fields)
-        fn = types.FunctionType(_kernel_template.__code__, scope, f"grid_kernel_{model.name}")
-        fn.__qualname__ = fn.__name__  # one on-disk cache index per model
+        name = f"grid_kernel_{model.name}_{_source_hash(model)}"
+        fn = types.FunctionType(_kernel_template.__code__, scope, name)
+        fn.__qualname__ = name  # one on-disk cache index per model and model source
         fn.__doc__ = _kernel_template.__doc__
         kernel = _KERNELS[model.name] = njit(parallel=True, cache=True)(fn)
     return kernel
+
+
+def _source_hash(model: Model) -> str:
+    """Hash of the sources compiled into a model's kernel.
+
+    numba invalidates a cached function when its own file changes, not when a
+    function it calls does; naming the kernel after the model's source keeps a
+    changed model from loading a stale kernel.
+    """
+    h = hashlib.sha256()
+    for module in (sys.modules[model.point.py_func.__module__], nx):
+        h.update(pathlib.Path(module.__file__).read_bytes())
+    return h.hexdigest()[:12]
 
 
 @njit(cache=True)

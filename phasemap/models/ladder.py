@@ -76,6 +76,7 @@ from .._numerics import (
     clear,
     is_zero,
     restrict_affine,
+    start_interval,
 )
 from ..model import Derived, Model, Variable
 
@@ -105,12 +106,7 @@ def _slide(row, s, from_rest, omega, f, l, g, m, sp, cp):
         if not is_zero(rhs, rhs_scale):
             row[STATUS] = NO_SOLUTION
             return
-        lo, hi = -np.inf, np.inf
-        if from_rest:
-            if s > 0.0:
-                lo = 0.0
-            else:
-                hi = 0.0
+        lo, hi = start_interval(from_rest, s)
         lo, hi = restrict_affine(nf0, dnf, lo, hi)
         lo, hi = restrict_affine(nw0, dnw, lo, hi)
         row[STATUS] = CONTINUUM if lo < hi else CONTACT_LOST

@@ -64,6 +64,7 @@ from .._numerics import (
     clear,
     is_zero,
     restrict_affine,
+    start_interval,
 )
 from ..model import Derived, Model, Variable
 
@@ -88,12 +89,7 @@ def _roll(row, sigma, from_rest, omega, delta, r, l, rho, g, m, sp, cp):
         if not is_zero(rhs, rhs_scale):
             row[STATUS] = NO_SOLUTION
             return
-        lo, hi = -np.inf, np.inf
-        if from_rest:
-            if sigma > 0.0:
-                lo = 0.0
-            else:
-                hi = 0.0
+        lo, hi = start_interval(from_rest, sigma)
         lo, hi = restrict_affine(n0, dn, lo, hi)
         row[STATUS] = CONTINUUM if lo < hi else CONTACT_LOST
         return
