@@ -11,8 +11,8 @@ arrays or lazily with dask.  The result is a self-describing
 >>> scene.layers
 ('n_solutions', 'stagnation')
 >>> ds = scene.compute()
->>> ds.n_solutions.dims, int(ds.stagnation.sum())
-(('phi', 'f'), 8)
+>>> ds.n_solutions.dims, int(ds.stagnation.sum())   # rest iff phi <= 2 arctan f: 1 + 2 + 4
+(('phi', 'f'), 7)
 """
 
 from __future__ import annotations

@@ -7,6 +7,8 @@ import pathlib
 import subprocess
 import sys
 
+import pytest
+
 import importlib
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -18,8 +20,9 @@ def test_readme_examples():
     assert result.attempted >= 8 and result.failed == 0
 
 
-def test_docstring_examples():
-    result = doctest.testmod(importlib.import_module("phasemap.classify"))
+@pytest.mark.parametrize("module", ["phasemap.classify", "phasemap.scene"])
+def test_docstring_examples(module):
+    result = doctest.testmod(importlib.import_module(module))
     assert result.attempted >= 2 and result.failed == 0
 
 
