@@ -68,16 +68,6 @@ def is_zero(q, scale):
 
 
 @njit(cache=True, error_model="numpy")
-def sign_of(x):
-    """+1.0 for x > 0, -1.0 for x < 0, 0.0 at zero."""
-    if x > 0.0:
-        return 1.0
-    if x < 0.0:
-        return -1.0
-    return 0.0
-
-
-@njit(cache=True, error_model="numpy")
 def clear(out):
     """Mark every candidate branch absent and not singular.
 

@@ -54,6 +54,7 @@ __all__ = [
     "CONVENTIONS",
     "atomic_path",
     "cf_encoding",
+    "destination",
     "describe_atlas",
     "open_atlas",
     "write_atlas",
@@ -146,7 +147,7 @@ def write_atlas(ds: xr.Dataset, path: str | os.PathLike, *, complevel: int = 4,
     """
     if not isinstance(ds, xr.Dataset):
         raise TypeError(f"write_atlas needs an xarray.Dataset, got {type(ds).__name__}")
-    path = _destination(path)
+    path = destination(path)
     out = _prepare(ds)
     encoding = cf_encoding(out, chunks, complevel=complevel)
     with atomic_path(path) as tmp:
@@ -171,7 +172,7 @@ def atomic_path(path: str | os.PathLike) -> Iterator[pathlib.Path]:
     ValueError
         if the destination folder does not exist or ``path`` is a folder.
     """
-    path = _destination(path)
+    path = destination(path)
     fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
     os.close(fd)
     tmp = pathlib.Path(name)
@@ -188,7 +189,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[pathlib.Path]:
     _fsync_folder(path.parent)
 
 
-def _destination(path: str | os.PathLike) -> pathlib.Path:
+def destination(path: str | os.PathLike) -> pathlib.Path:
+    """``path`` as a Path, checked writable in principle: its folder exists, it is no folder."""
     path = pathlib.Path(os.path.expanduser(os.fspath(path)))
     folder = path.parent
     if not folder.is_dir():

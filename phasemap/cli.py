@@ -130,18 +130,12 @@ def _parse_axis(item: str) -> tuple[str, object]:
 
 
 def _atlas(args) -> str:
-    import pathlib
-
-    from .atlas import write_atlas
+    from .atlas import destination, write_atlas
     from .models import get_model
     from .scene import Scene
 
     model = get_model(args.model)
-    out = pathlib.Path(args.output)
-    if not out.parent.resolve().is_dir():
-        raise ValueError(f"output folder {str(out.parent)!r} does not exist")
-    if out.is_dir():
-        raise ValueError(f"output {str(out)!r} is a folder; give a file name such as atlas.nc")
+    out = destination(args.output)  # before any work: the folder exists, out is no folder
     axes = dict(_parse_axis(a) for a in args.axis)
     if len(axes) != len(args.axis):
         raise ValueError("each --axis name may be given once")

@@ -25,7 +25,7 @@ import numpy as np
 from numba import njit, prange
 
 from . import _numerics as nx
-from .layers import Layer
+from .layers import SUMMARY, Layer
 from .model import Model
 
 BLOCK = 2048
@@ -79,11 +79,12 @@ def _set_axis(v, d, i, axis_slot, axis_values, deriv_slot, deriv_values):
 
 
 def _kernel_template(base, shape, axis_slot, axis_values, deriv_slot, deriv_values,
-                     want, req_branch, req_col, req_adm, summary, fields):
+                     summary_row, req_branch, req_col, req_adm, summary, fields):
     """Classify every cell of the grid; write the wanted summaries and branch fields.
 
-    ``summary`` is int8 (4, ncells) (n_solutions, stagnation, contact_lost,
-    singular; rows written where ``want``), ``fields`` float64 (nreq, ncells)
+    ``summary`` is int8 (nsummary, ncells): n_solutions, stagnation,
+    contact_lost and singular go to row ``summary_row[k]`` (k in that order),
+    or nowhere where it is -1.  ``fields`` is float64 (nreq, ncells)
     with column ``req_col[q]`` of branch ``req_branch[q]`` (NaN unless the branch
     is admissible, or unless it applies when ``req_adm[q]`` is False).
     """
@@ -108,14 +109,14 @@ def _kernel_template(base, shape, axis_slot, axis_values, deriv_slot, deriv_valu
         for cell in range(start, stop):
             POINT(v, out)
             n, stag, lost, sing = nx.summarize(out, STICK)
-            if want[0]:
-                summary[0, cell] = n
-            if want[1]:
-                summary[1, cell] = stag
-            if want[2]:
-                summary[2, cell] = lost
-            if want[3]:
-                summary[3, cell] = sing
+            if summary_row[0] >= 0:
+                summary[summary_row[0], cell] = n
+            if summary_row[1] >= 0:
+                summary[summary_row[1], cell] = stag
+            if summary_row[2] >= 0:
+                summary[summary_row[2], cell] = lost
+            if summary_row[3] >= 0:
+                summary[summary_row[3], cell] = sing
             for q in range(nreq):
                 b = req_branch[q]
                 st = out[b, nx.STATUS]
@@ -164,23 +165,18 @@ def evaluate(model: Model, axes: dict[str, np.ndarray], fixed: dict[str, float],
             deriv_slot[i, k] = slot[d.name]
             deriv_values[i, k, :shape[i]] = d.func(np.asarray(axes[n], dtype=float))
     ncells = int(np.prod(shape))
-    want = np.array([any(l.name == s for l in layers) for s in
-                     ("n_solutions", "stagnation", "contact_lost", "singular")])
-    summary = np.zeros((4, ncells), dtype=np.int8) if want.any() else np.zeros((4, 0), np.int8)
+    summary_layers = [l.name for l in layers if l.is_summary]
+    summary_row = np.array([summary_layers.index(k) if k in summary_layers else -1
+                            for k in SUMMARY], dtype=np.int64)
+    summary = np.empty((len(summary_layers), ncells), dtype=np.int8)
     field_layers = [l for l in layers if not l.is_summary]
     fields = np.empty((len(field_layers), ncells))
     make_grid_kernel(model)(
         base, shape, np.array([slot[n] for n in names], dtype=np.int64), axis_values,
-        deriv_slot, deriv_values, want,
+        deriv_slot, deriv_values, summary_row,
         np.array([l.branch for l in field_layers], dtype=np.int64),
         np.array([l.column for l in field_layers], dtype=np.int64),
         np.array([l.admissible_only for l in field_layers]), summary, fields)
     grid = tuple(int(s) for s in shape)
-    result = {}
-    for l in layers:
-        if l.is_summary:
-            result[l.name] = summary[("n_solutions", "stagnation", "contact_lost",
-                                      "singular").index(l.name)].reshape(grid)
-        else:
-            result[l.name] = fields[field_layers.index(l)].reshape(grid)
-    return result
+    return {l.name: (summary[summary_layers.index(l.name)] if l.is_summary
+                     else fields[field_layers.index(l)]).reshape(grid) for l in layers}

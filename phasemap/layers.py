@@ -24,7 +24,6 @@ from . import _numerics as nx
 from .model import Model, Solvability
 
 SUMMARY = ("n_solutions", "stagnation", "contact_lost", "singular")
-YES_NO = {"flag_values": np.array([0, 1], dtype=np.int8), "flag_meanings": "no yes"}
 
 
 @dataclass(frozen=True)

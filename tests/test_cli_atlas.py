@@ -70,7 +70,7 @@ def test_block_by_block_writing_equals_the_eager_atlas(tmp_path):
     (["atlas", "ladder", "--set", "f=-1", "-o", "x.nc"], "f = -1 is outside its domain"),
     (["atlas", "ladder", "--set", "f=abc", "-o", "x.nc"], "'abc' is not a number"),
     (["atlas", "ladder", "--layers", "nope", "-o", "x.nc"], "unknown layer 'nope'"),
-    (["atlas", "ladder", "-o", "missing/x.nc"], "output folder 'missing' does not exist"),
+    (["atlas", "ladder", "-o", "missing/x.nc"], "folder missing does not exist"),
     (["info", "missing.nc"], "no such file"),
 ])
 def test_bad_input_one_line_error_and_no_file(tmp_path, args, message):
