@@ -16,25 +16,19 @@ per axis value, outside the kernel, and only copied in the inner loop.
 
 from __future__ import annotations
 
-import hashlib
-import pathlib
-import sys
-import types
-
 import numpy as np
 from numba import njit, prange
 
 from . import _numerics as nx
+from ._compile import specialize
 from .layers import SUMMARY, Layer
 from .model import Model
 
 BLOCK = 2048
-_KERNELS: dict[str, object] = {}
 
-# Compile-time structure of the model being compiled.  The template below reads
-# these as globals; make_grid_kernel gives each model a copy of the template
-# with its own globals.  (Closure cells holding dispatchers defeat numba's
-# on-disk cache, whose key pickles closure contents; globals are not in the key.)
+# Compile-time structure of the model being compiled: the template below reads
+# these as globals, and :func:`phasemap._compile.specialize` gives each model a
+# copy of the template with its own.
 POINT = None
 STICK = -1
 N_BRANCHES = 0
@@ -43,30 +37,9 @@ N_FIELDS = 0
 
 def make_grid_kernel(model: Model):
     """The parallel grid kernel of ``model``: compiled once, cached in memory and on disk."""
-    kernel = _KERNELS.get(model.name)
-    if kernel is None:
-        scope = dict(_kernel_template.__globals__)
-        scope.update(POINT=model.point, STICK=model.stick_branch,
-                     N_BRANCHES=len(model.branches), N_FIELDS=model.n_fields)
-        name = f"grid_kernel_{model.name}_{_source_hash(model)}"
-        fn = types.FunctionType(_kernel_template.__code__, scope, name)
-        fn.__qualname__ = name  # one on-disk cache index per model and model source
-        fn.__doc__ = _kernel_template.__doc__
-        kernel = _KERNELS[model.name] = njit(parallel=True, cache=True)(fn)
-    return kernel
-
-
-def _source_hash(model: Model) -> str:
-    """Hash of the sources compiled into a model's kernel.
-
-    numba invalidates a cached function when its own file changes, not when a
-    function it calls does; naming the kernel after the model's source keeps a
-    changed model from loading a stale kernel.
-    """
-    h = hashlib.sha256()
-    for module in (sys.modules[model.point.py_func.__module__], nx):
-        h.update(pathlib.Path(module.__file__).read_bytes())
-    return h.hexdigest()[:12]
+    return specialize(_kernel_template, model, "grid_kernel", parallel=True,
+                      POINT=model.point, STICK=model.stick_branch,
+                      N_BRANCHES=len(model.branches), N_FIELDS=model.n_fields)
 
 
 @njit(cache=True)
@@ -136,12 +109,13 @@ def _kernel_template(base, shape, axis_slot, axis_values, deriv_slot, deriv_valu
                 d -= 1
 
 
-def evaluate(model: Model, axes: dict[str, np.ndarray], fixed: dict[str, float],
-             layers: list[Layer]) -> dict[str, np.ndarray]:
-    """Evaluate ``layers`` over the grid spanned by ``axes`` (validated values).
+def pack_axes(model: Model, axes: dict[str, np.ndarray], fixed: dict[str, float]):
+    """The runtime layout of a grid, shared by every grid-shaped kernel.
 
-    ``axes`` maps names to 1-D float arrays (in dimension order), ``fixed`` the
-    remaining names to floats.  Returns one array of shape ``grid`` per layer.
+    Returns ``(base, shape, axis_slot, axis_values, deriv_slot, deriv_values)``:
+    the input vector with the fixed values and their derived inputs, the grid
+    shape, the input slot of each axis, the axis values (padded to one length),
+    and per axis the slots and precomputed values of its derived inputs.
     """
     names = list(axes)
     shape = np.array([len(axes[n]) for n in names], dtype=np.int64)
@@ -164,6 +138,19 @@ def evaluate(model: Model, axes: dict[str, np.ndarray], fixed: dict[str, float],
         for k, d in enumerate(by_source.get(n, [])):
             deriv_slot[i, k] = slot[d.name]
             deriv_values[i, k, :shape[i]] = d.func(np.asarray(axes[n], dtype=float))
+    axis_slot = np.array([slot[n] for n in names], dtype=np.int64)
+    return base, shape, axis_slot, axis_values, deriv_slot, deriv_values
+
+
+def evaluate(model: Model, axes: dict[str, np.ndarray], fixed: dict[str, float],
+             layers: list[Layer]) -> dict[str, np.ndarray]:
+    """Evaluate ``layers`` over the grid spanned by ``axes`` (validated values).
+
+    ``axes`` maps names to 1-D float arrays (in dimension order), ``fixed`` the
+    remaining names to floats.  Returns one array of shape ``grid`` per layer.
+    """
+    packed = pack_axes(model, axes, fixed)
+    shape = packed[1]
     ncells = int(np.prod(shape))
     summary_layers = [l.name for l in layers if l.is_summary]
     summary_row = np.array([summary_layers.index(k) if k in summary_layers else -1
@@ -172,8 +159,7 @@ def evaluate(model: Model, axes: dict[str, np.ndarray], fixed: dict[str, float],
     field_layers = [l for l in layers if not l.is_summary]
     fields = np.empty((len(field_layers), ncells))
     make_grid_kernel(model)(
-        base, shape, np.array([slot[n] for n in names], dtype=np.int64), axis_values,
-        deriv_slot, deriv_values, summary_row,
+        *packed, summary_row,
         np.array([l.branch for l in field_layers], dtype=np.int64),
         np.array([l.column for l in field_layers], dtype=np.int64),
         np.array([l.admissible_only for l in field_layers]), summary, fields)

@@ -12,7 +12,13 @@ Layers of a model:
 * for each branch B, each senior derivative and reaction X: ``X_B`` (float64,
   NaN where the branch is not admissible);
 * for each non-stick branch B: ``coef_B``, the coefficient of the senior
-  derivative (NaN where the branch does not apply).
+  derivative (NaN where the branch does not apply);
+* for models with dynamics, the fate layers of a grid of initial conditions
+  (each cell integrated in time by :func:`phasemap.simulate`'s integrator):
+  ``fate`` (int8 flags, how the motion ends: see :class:`phasemap.Event`),
+  ``n_reversals``, ``t_final`` (when the motion ended), ``t_rest`` (NaN
+  unless it stopped in a stagnation zone) and, where rest freezes the whole
+  state, the final positions ``phi_rest``... (NaN unless at rest).
 """
 
 from __future__ import annotations
@@ -21,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _numerics as nx
+from . import events as ev
 from .model import Model, Solvability
 
 SUMMARY = ("n_solutions", "stagnation", "contact_lost", "singular")
@@ -39,16 +46,17 @@ class Layer:
     branch: int = -1  # field layers: the branch row ...
     column: int = -1  # ... and the column of out[branch] to copy
     admissible_only: bool = True  # NaN unless the branch is admissible
+    fate: bool = False  # computed by integrating from each cell (see phasemap.integrate)
 
     @property
     def is_summary(self) -> bool:
-        return self.branch < 0
+        return self.branch < 0 and not self.fate
 
     @property
     def attrs(self) -> dict:
         attrs: dict = {"long_name": self.long_name}
         if self.flag_values is not None:
-            attrs["flag_values"] = np.array(self.flag_values, dtype=np.int8)
+            attrs["flag_values"] = np.array(self.flag_values, dtype=self.dtype)
             attrs["flag_meanings"] = self.flag_meanings
         if self.units is not None:
             attrs["units"] = self.units
@@ -83,6 +91,22 @@ def _registry(model: Model) -> dict[str, Layer]:
             layers[name] = Layer(name, "float64", f"{model.coefficient.long_name}, branch {branch}",
                                  units=model.coefficient.units, branch=b, column=nx.COEF,
                                  admissible_only=False)
+    if model.dynamics is not None:
+        layers["fate"] = Layer("fate", "int8", "how the motion from this initial state ends",
+                               flag_values=ev.FATE_VALUES, flag_meanings=ev.FATE_MEANINGS,
+                               fate=True)
+        layers["n_reversals"] = Layer("n_reversals", "int32", "number of reversals of the "
+                                      "relative velocity", units="1", fate=True)
+        layers["t_final"] = Layer("t_final", "float64", "time at which the motion ended (the "
+                                  "horizon if still moving)", units="s", fate=True)
+        layers["t_rest"] = Layer("t_rest", "float64", "time to rest in a stagnation zone",
+                                 units="s", fate=True)
+        if model.dynamics.stick_is_rest:
+            for c in model.dynamics.coordinates:
+                var = model.variables[c[0]]
+                layers[f"{c[0]}_rest"] = Layer(f"{c[0]}_rest", "float64",
+                                               f"{var.long_name} at rest", units=var.units,
+                                               fate=True)
     _REGISTRIES[model.name] = layers
     return layers
 

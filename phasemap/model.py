@@ -34,6 +34,9 @@ A new model provides:
 ``default_axes``
     optional ``{name: (start, stop, count)}``: the map ``phasemap atlas MODEL``
     draws when no axis is given.
+``dynamics``
+    optional :class:`Dynamics`: what :func:`phasemap.simulate` and the fate
+    maps need to move the system in time (two more small jitted functions).
 
 Everything else just works.
 """
@@ -145,6 +148,39 @@ class Derived:
 
 
 @dataclass(frozen=True)
+class Dynamics:
+    """How a model moves: what the time integrator needs beyond ``point``.
+
+    ``coordinates``
+        ``(position, velocity, acceleration)`` name triples, one per degree of
+        freedom.  The integrated vector is the positions, then the velocities.
+        A position that is not a model input (the elliptic pendulum's slider
+        position ``x``) is described in ``positions``.
+    ``branch(v, b, row)``
+        a jitted function that fills ``row`` for branch ``b`` *along its
+        stage*: the slip direction is the branch's own, whatever the sign of
+        the velocity in ``v``, so that the right-hand side stays smooth across
+        the trial points of a step that overshoots a velocity zero.
+    ``derive(v)``
+        a jitted function that fills the derived inputs of ``v`` (sin phi ...)
+        from its state and parameters, in the order of ``Model.derived``.
+    ``directions``
+        per branch, the sign of the relative velocity on its stage
+        (+1, -1, or 0 for the stick branch).
+    ``stick_is_rest``
+        the stick branch freezes the whole state (one degree of freedom), so
+        reaching it ends the motion.
+    """
+
+    coordinates: tuple[tuple[str, str, str], ...]
+    branch: Callable = field(repr=False)
+    derive: Callable = field(repr=False)
+    directions: tuple[float, ...]
+    positions: tuple[Variable, ...] = ()
+    stick_is_rest: bool = True
+
+
+@dataclass(frozen=True)
 class Model:
     """One mechanical system: its variables, branches and jitted point function."""
 
@@ -164,6 +200,8 @@ class Model:
     check: Callable[[Mapping[str, object]], None] | None = field(default=None, repr=False)
     #: A map worth drawing first: ``{name: (start, stop, count)}`` for the CLI's defaults.
     default_axes: Mapping[str, tuple[float, float, int]] = field(default_factory=dict)
+    #: How the model moves in time (None: classification and maps only).
+    dynamics: Dynamics | None = field(default=None, repr=False)
 
     # -- names -------------------------------------------------------------
     @property

@@ -25,15 +25,22 @@ import numpy as np
 import xarray as xr
 
 from . import _numerics as nx
+from . import events as ev
 from ._version import __version__
 from .atlas import CONVENTIONS
 from .grid import evaluate
+from .integrate import run_fate_map
 from .layers import layers_for
 from .model import Model
 from .models import get_model
+from .simulate import Options
 
 #: Cells per slab of an eager computation with a progress bar.
 SLAB_CELLS = 1 << 21
+#: Cells per slab of an eager fate map with a progress bar (each cell is a trajectory).
+FATE_SLAB_CELLS = 1 << 14
+#: Default relative tolerance of a fate map's trajectories.
+FATE_RTOL = 1e-6
 
 
 class Scene:
@@ -54,6 +61,28 @@ class Scene:
         the layer names to compute (see :func:`phasemap.layers_for`).  The
         default is ``n_solutions``, plus ``stagnation`` when the model's
         relative velocity is zero on an axis value or in the fixed values.
+        The fate layers (``fate``, ``n_reversals``, ``t_final``, ``t_rest``,
+        ``phi_rest``) integrate the motion from every cell, taken as an
+        initial state: a fate map, the dry-friction counterpart of basins of
+        attraction.
+    options:
+        integrator settings of the fate layers, as for
+        :func:`phasemap.simulate`: ``t_end`` (default 10 s), ``rtol`` (1e-6: enough
+        to tell the outcomes apart and place the rest angles to ~1e-6 rad),
+        ``atol``, ``max_step``, ``max_steps``, ``max_events``.
+
+    Examples
+    --------
+    A fate map of the hinge pendulum over initial angle and velocity:
+
+    >>> import numpy as np, phasemap
+    >>> fates = phasemap.Scene("hinge_pendulum", axes={"phi": np.linspace(-3, 3, 7),
+    ...                        "omega": [0.0, 2.0]}, layers=["fate", "phi_rest"],
+    ...                        options={"t_end": 30.0}).compute()
+    >>> fates.fate.attrs["flag_meanings"].split()[0]
+    'rest'
+    >>> bool((fates.fate == phasemap.Event.REST).all())   # all stop within 30 s
+    True
 
     Raises
     ------
@@ -65,7 +94,8 @@ class Scene:
 
     def __init__(self, model: str | Model, axes: Mapping[str, Sequence[float]],
                  fixed: Mapping[str, float] | None = None,
-                 layers: Sequence[str] | None = None):
+                 layers: Sequence[str] | None = None,
+                 options: Mapping[str, float] | None = None):
         self.model = get_model(model)
         m = self.model
         if not axes:
@@ -108,6 +138,13 @@ class Scene:
         if not layers:
             raise ValueError(f"{m.name}: a scene needs at least one layer")
         self.layers: tuple[str, ...] = tuple(layers)
+        known = set(Options().as_dict())
+        unknown = set(options or {}) - known
+        if unknown:
+            raise ValueError(f"{m.name}: unknown integrator option {sorted(unknown)[0]!r}; "
+                             f"allowed: {', '.join(sorted(known))}")
+        self.options = Options(**{"rtol": FATE_RTOL, **dict(options or {})}).checked(m.name)
+        self._fate = any(registry[n].fate for n in self.layers)
 
     # ------------------------------------------------------------------
     @property
@@ -133,8 +170,11 @@ class Scene:
                 axes[name] = {"start": a[0], "stop": a[-1], "count": int(a.size)}
             else:
                 axes[name] = a.tolist()
-        return {"model": self.model.name, "axes": axes, "fixed": self.fixed,
+        spec = {"model": self.model.name, "axes": axes, "fixed": self.fixed,
                 "layers": list(self.layers)}
+        if self._fate:
+            spec["options"] = self.options.as_dict()
+        return spec
 
     @classmethod
     def from_spec(cls, spec: Mapping) -> "Scene":
@@ -142,7 +182,8 @@ class Scene:
         for name, a in spec["axes"].items():
             axes[name] = (np.linspace(a["start"], a["stop"], a["count"]) if isinstance(a, dict)
                           else np.asarray(a, dtype=float))
-        return cls(spec["model"], axes=axes, fixed=spec["fixed"], layers=spec["layers"])
+        return cls(spec["model"], axes=axes, fixed=spec["fixed"], layers=spec["layers"],
+                   options=spec.get("options"))
 
     def __repr__(self) -> str:
         axes = ", ".join(f"{n}[{a.size}]" for n, a in self.axes.items())
@@ -169,8 +210,10 @@ class Scene:
         first, rest = next(iter(self.axes)), self.size // len(self.axes[next(iter(self.axes))])
         step = max(1, SLAB_CELLS // max(rest, 1))
         n0 = self.axes[first].size
+        if self._fate:  # a trajectory per cell: slabs of a few thousand cells
+            step = max(1, FATE_SLAB_CELLS // max(rest, 1))
         if not progress or n0 <= step:
-            return evaluate(self.model, self.axes, self.fixed, wanted)
+            return self._evaluate(self.axes, wanted)
         from tqdm.auto import tqdm
 
         out = {l.name: np.empty(self.shape, dtype=l.dtype) for l in wanted}
@@ -179,10 +222,33 @@ class Scene:
             for i in range(0, n0, step):
                 part = dict(self.axes)
                 part[first] = self.axes[first][i:i + step]
-                for name, arr in evaluate(self.model, part, self.fixed, wanted).items():
+                for name, arr in self._evaluate(part, wanted).items():
                     out[name][i:i + step] = arr
                 bar.update(part[first].size * rest)
         return out
+
+    def _evaluate(self, axes: dict[str, np.ndarray], wanted: list) -> dict[str, np.ndarray]:
+        """The wanted layers over ``axes``: classification by the grid kernel, fates by
+        integrating from each cell."""
+        result = {}
+        maps = [l for l in wanted if not l.fate]
+        if maps:
+            result.update(evaluate(self.model, axes, self.fixed, maps))
+        if self._fate:
+            m, o = self.model, self.options
+            dyn = m.dynamics
+            # positions that are not model inputs (the slider's x) start at 0
+            y0 = np.zeros(2 * len(dyn.coordinates))
+            fate, n_rev, t_final, pos = run_fate_map(
+                m, axes, self.fixed, y0, o.t_end, o.rtol, o.atol, o.max_step, o.max_steps,
+                o.max_events)
+            rest = fate == ev.REST
+            fates = {"fate": fate, "n_reversals": n_rev, "t_final": t_final,
+                     "t_rest": np.where(rest, t_final, np.nan)}
+            for j, c in enumerate(dyn.coordinates):
+                fates[f"{c[0]}_rest"] = pos[j]
+            result.update({l.name: fates[l.name] for l in wanted if l.fate})
+        return result
 
     def _lazy(self, chunks) -> xr.Dataset:
         import dask.array as da

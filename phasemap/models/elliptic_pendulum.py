@@ -71,7 +71,7 @@ from .._numerics import (
     clear,
     is_zero,
 )
-from ..model import Derived, Model, Variable
+from ..model import Derived, Dynamics, Model, Variable
 
 SLIDE_POS_NPOS, SLIDE_POS_NNEG, SLIDE_NEG_NPOS, SLIDE_NEG_NNEG, STICK = 0, 1, 2, 3, 4
 X_DDOT = FIRST_ACC
@@ -164,6 +164,26 @@ def point(v, out):
         _slide(out[SLIDE_NEG_NNEG], -1.0, -1.0, False, omega, f, l, g, m, sp, cp)
 
 
+
+@njit(cache=True, error_model="numpy")
+def branch(v, b, row):
+    """Fill branch ``b`` along its stage: the slider direction and sgn N are the branch's."""
+    omega, f, l, g, m, sp, cp = v[1], v[3], v[4], v[5], v[6], v[7], v[8]
+    if b == STICK:
+        _stick(row, omega, f, l, g, m, sp, cp)
+    else:
+        sigma = 1.0 if b <= SLIDE_POS_NNEG else -1.0
+        rho = 1.0 if b == SLIDE_POS_NPOS or b == SLIDE_NEG_NPOS else -1.0
+        _slide(row, sigma, rho, False, omega, f, l, g, m, sp, cp)
+
+
+@njit(cache=True, error_model="numpy")
+def derive(v):
+    """Fill sin phi and cos phi."""
+    v[7] = math.sin(v[0])
+    v[8] = math.cos(v[0])
+
+
 MODEL = Model(
     name="elliptic_pendulum",
     title="Painleve's elliptic pendulum: slider on a rough two-sided guide with a pendulum",
@@ -198,5 +218,10 @@ MODEL = Model(
                          "\\lambda"),
     velocity="xdot",
     point=point,
+    dynamics=Dynamics(
+        coordinates=(("x", "xdot", "x_ddot"), ("phi", "omega", "phi_ddot")),
+        branch=branch, derive=derive, directions=(1.0, 1.0, -1.0, -1.0, 0.0),
+        positions=(Variable("x", "m", "position of the slider along the guide", "x", 0.0),),
+        stick_is_rest=False),
     default_axes={"phi": (-math.pi, math.pi, 512), "f": (0.0, 6.0, 512)},
 )

@@ -64,7 +64,7 @@ from .._numerics import (
     clear,
     is_zero,
 )
-from ..model import Derived, Model, Variable
+from ..model import Derived, Dynamics, Model, Variable
 
 TURN_POS, TURN_NEG, STICK = 0, 1, 2
 PHI_DDOT = FIRST_ACC
@@ -136,6 +136,24 @@ def point(v, out):
         _turn(out[TURN_NEG], -1.0, False, omega, delta, l, g, m, sp, cp)
 
 
+
+@njit(cache=True, error_model="numpy")
+def branch(v, b, row):
+    """Fill branch ``b`` along its stage: turning direction +1, -1, or stick."""
+    omega, delta, l, g, m, sp, cp = v[1], v[2], v[3], v[4], v[5], v[6], v[7]
+    if b == STICK:
+        _stick(row, delta, l, g, m, sp, cp)
+    else:
+        _turn(row, 1.0 if b == TURN_POS else -1.0, False, omega, delta, l, g, m, sp, cp)
+
+
+@njit(cache=True, error_model="numpy")
+def derive(v):
+    """Fill sin phi and cos phi."""
+    v[6] = math.sin(v[0])
+    v[7] = math.cos(v[0])
+
+
 MODEL = Model(
     name="hinge_pendulum",
     title="Mathematical pendulum with dry friction in its hinge",
@@ -166,6 +184,8 @@ MODEL = Model(
                          "l^2-\\delta^2"),
     velocity="omega",
     point=point,
+    dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),), branch=branch,
+                      derive=derive, directions=(1.0, -1.0, 0.0)),
     default_axes={"phi": (-math.pi, math.pi, 512), "delta": (0.0, 1.5, 512)},
 )
 

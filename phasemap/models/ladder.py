@@ -78,7 +78,7 @@ from .._numerics import (
     restrict_affine,
     start_interval,
 )
-from ..model import Derived, Model, Variable
+from ..model import Derived, Dynamics, Model, Variable
 
 # Row indices and field indices of this model.
 SLIDE_POS, SLIDE_NEG, STICK = 0, 1, 2
@@ -156,6 +156,24 @@ def point(v, out):
         _slide(out[SLIDE_NEG], -1.0, False, omega, f, l, g, m, sp, cp)
 
 
+
+@njit(cache=True, error_model="numpy")
+def branch(v, b, row):
+    """Fill branch ``b`` along its stage: slide direction +1, -1, or stick."""
+    omega, f, l, g, m, sp, cp = v[1], v[2], v[3], v[4], v[5], v[6], v[7]
+    if b == STICK:
+        _stick(row, f, g, m, sp, cp)
+    else:
+        _slide(row, 1.0 if b == SLIDE_POS else -1.0, False, omega, f, l, g, m, sp, cp)
+
+
+@njit(cache=True, error_model="numpy")
+def derive(v):
+    """Fill sin phi and cos phi."""
+    v[6] = math.sin(v[0])
+    v[7] = math.cos(v[0])
+
+
 MODEL = Model(
     name="ladder",
     title="Homogeneous bar (ladder) against a rough wall and a rough floor",
@@ -188,6 +206,8 @@ MODEL = Model(
                          "2-f^2"),
     velocity="omega",
     point=point,
+    dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),), branch=branch,
+                      derive=derive, directions=(1.0, -1.0, 0.0)),
     default_axes={"phi": (0.0, math.pi / 2, 512), "f": (0.0, 3.0, 512)},
 )
 

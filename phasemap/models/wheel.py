@@ -66,7 +66,7 @@ from .._numerics import (
     restrict_affine,
     start_interval,
 )
-from ..model import Derived, Model, Variable
+from ..model import Derived, Dynamics, Model, Variable
 
 ROLL_POS, ROLL_NEG, STICK = 0, 1, 2
 PHI_DDOT = FIRST_ACC
@@ -144,6 +144,25 @@ def _check(values) -> None:
         )
 
 
+
+@njit(cache=True, error_model="numpy")
+def branch(v, b, row):
+    """Fill branch ``b`` along its stage: rolling direction +1, -1, or stick."""
+    omega, delta, r, l, rho, g, m = v[1], v[2], v[3], v[4], v[5], v[6], v[7]
+    sp, cp = v[8], v[9]
+    if b == STICK:
+        _stick(row, delta, l, g, m, sp)
+    else:
+        _roll(row, 1.0 if b == ROLL_POS else -1.0, False, omega, delta, r, l, rho, g, m, sp, cp)
+
+
+@njit(cache=True, error_model="numpy")
+def derive(v):
+    """Fill sin phi and cos phi."""
+    v[8] = math.sin(v[0])
+    v[9] = math.cos(v[0])
+
+
 MODEL = Model(
     name="wheel",
     title="Disc with a displaced centre of mass, rolling with rolling friction",
@@ -180,6 +199,8 @@ MODEL = Model(
                          " of the angular acceleration", "J"),
     velocity="omega",
     point=point,
+    dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),), branch=branch,
+                      derive=derive, directions=(1.0, -1.0, 0.0)),
     default_axes={"phi": (-math.pi, math.pi, 512), "delta": (0.0, 1.0, 512)},
     check=_check,
 )

@@ -1,0 +1,49 @@
+"""Per-model kernels from module-level templates, cached in memory and on disk.
+
+A template is a plain Python function that reads the model's jitted functions
+and its compile-time layout from *globals* (``POINT``, ``N_BRANCHES`` ...).
+:func:`specialize` gives each model a copy of the template with its own
+globals and compiles it once.  Closures would be simpler, but numba's on-disk
+cache key pickles closure cells, and dispatchers pickle with a per-process
+identity, so a closure kernel recompiles in every process; globals are not in
+the key.  The copy is named after a hash of every source compiled into it,
+because numba invalidates a cached function when its own file changes, not
+when a function it calls does.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import pathlib
+import sys
+import types
+
+from numba import njit
+
+from . import _numerics as nx
+from .model import Model
+
+_CACHE: dict[tuple[str, str], object] = {}
+
+
+def specialize(template, model: Model, kind: str, parallel: bool = False, **constants):
+    """The template compiled for ``model`` with ``constants`` as its globals."""
+    key = (kind, model.name)
+    kernel = _CACHE.get(key)
+    if kernel is None:
+        scope = dict(template.__globals__)
+        scope.update(constants)
+        name = f"{kind}_{model.name}_{source_hash(model, sys.modules[template.__module__])}"
+        fn = types.FunctionType(template.__code__, scope, name)
+        fn.__qualname__ = name  # one on-disk cache index per model and source
+        fn.__doc__ = template.__doc__
+        kernel = _CACHE[key] = njit(parallel=parallel, cache=True, error_model="numpy")(fn)
+    return kernel
+
+
+def source_hash(model: Model, *modules) -> str:
+    """Hash of the model's module, the shared numerics and ``modules``."""
+    h = hashlib.sha256()
+    for module in (sys.modules[model.point.py_func.__module__], nx, *modules):
+        h.update(pathlib.Path(module.__file__).read_bytes())
+    return h.hexdigest()[:12]

@@ -1,0 +1,109 @@
+"""What happens along a motion: the named events of trajectories and phase curves.
+
+One enumeration serves the time integrator (:func:`phasemap.simulate`), the
+first-integral tracer (:func:`phasemap.phase_curve`) and the fate maps, in
+the manner of diffrax's ``RESULTS``: named members with messages, never magic
+integers.  The numba kernels use the plain integer values below.
+
+Events that continue the motion:
+
+* ``start``: the motion begins on the branch ``classify()`` finds admissible;
+* ``reversal``: the relative velocity reached zero and the motion went on in
+  the opposite direction;
+* ``stick``: the relative velocity reached zero and the stick branch took over
+  while other coordinates keep moving (the elliptic pendulum's slider);
+* ``slip``: the stick branch stopped being admissible and a slip began;
+* ``switch``: another branch took over without a velocity zero (the sign of
+  the elliptic pendulum's two-sided guide reaction changed).
+
+Events that end it (the *fate*):
+
+* ``rest``: stopped in a stagnation zone, for good;
+* ``contact_lost``: a one-sided contact would have to pull; the body leaves it
+  and the model no longer applies;
+* ``no_solution``: a state with no solution for the accelerations (Painleve
+  inconsistency): the model predicts no motion from here;
+* ``indeterminate``: a state with two or more solutions: the model cannot say
+  which motion follows, and the tracer does not choose;
+* ``continuum``: a whole family of accelerations solves the equations;
+* ``singular``: the coefficient of the senior derivative reached zero (the
+  accelerations grow without bound on the way);
+* ``horizon``: still moving at the end of the time or angle range asked for;
+* ``max_events``: the number of events or stages asked for ran out;
+* ``step_failure``: the step size fell below what double precision resolves
+  (reported with the state reached; never silently continued).
+"""
+
+from __future__ import annotations
+
+import enum
+
+START = 0
+REVERSAL = 1
+STICK = 2
+SLIP = 3
+SWITCH = 4
+REST = 5
+CONTACT_LOST = 6
+NO_SOLUTION = 7
+INDETERMINATE = 8
+CONTINUUM = 9
+SINGULAR = 10
+HORIZON = 11
+MAX_EVENTS = 12
+STEP_FAILURE = 13
+
+#: The first terminal event: codes >= FIRST_FATE end a motion.
+FIRST_FATE = REST
+
+
+class Event(enum.IntEnum):
+    """A named event of a motion; members from ``REST`` on end it."""
+
+    START = START
+    REVERSAL = REVERSAL
+    STICK = STICK
+    SLIP = SLIP
+    SWITCH = SWITCH
+    REST = REST
+    CONTACT_LOST = CONTACT_LOST
+    NO_SOLUTION = NO_SOLUTION
+    INDETERMINATE = INDETERMINATE
+    CONTINUUM = CONTINUUM
+    SINGULAR = SINGULAR
+    HORIZON = HORIZON
+    MAX_EVENTS = MAX_EVENTS
+    STEP_FAILURE = STEP_FAILURE
+
+    @property
+    def terminal(self) -> bool:
+        return self >= FIRST_FATE
+
+    @property
+    def message(self) -> str:
+        return _MESSAGES[self]
+
+
+_MESSAGES = {
+    Event.START: "the motion starts on the unique admissible branch",
+    Event.REVERSAL: "the relative velocity reached zero and the motion reversed",
+    Event.STICK: "the relative velocity reached zero and the contact sticks",
+    Event.SLIP: "the stick branch became inadmissible and slip began",
+    Event.SWITCH: "another branch took over (sign of a two-sided reaction changed)",
+    Event.REST: "stopped in a stagnation zone",
+    Event.CONTACT_LOST: "a one-sided contact would have to pull: the body leaves it",
+    Event.NO_SOLUTION: "no solution for the accelerations (Painleve inconsistency)",
+    Event.INDETERMINATE: "two or more solutions for the accelerations: the motion is not "
+                         "determined",
+    Event.CONTINUUM: "a continuum of solutions for the accelerations",
+    Event.SINGULAR: "the coefficient of the senior derivative reached zero",
+    Event.HORIZON: "still moving at the end of the requested range",
+    Event.MAX_EVENTS: "the requested number of events or stages ran out",
+    Event.STEP_FAILURE: "the step size fell below double-precision resolution",
+}
+
+#: The fates as CF flags: values and space-separated meanings.
+FATE_VALUES = tuple(int(e) for e in Event if e.terminal)
+FATE_MEANINGS = " ".join(e.name.lower() for e in Event if e.terminal)
+EVENT_VALUES = tuple(int(e) for e in Event)
+EVENT_MEANINGS = " ".join(e.name.lower() for e in Event)

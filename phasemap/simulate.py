@@ -1,0 +1,242 @@
+"""Trajectories in time: :func:`simulate`.
+
+A thin Python wrapper over the model's jitted integrator
+(:mod:`phasemap.integrate`): it validates the input, runs the integrator and
+returns a self-describing :class:`xarray.Dataset`.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+from dataclasses import dataclass
+from typing import Mapping, Sequence
+
+import numpy as np
+import xarray as xr
+
+from . import events as ev
+from ._version import __version__
+from .atlas import CONVENTIONS
+from .integrate import kernels
+from .model import Model, Variable
+from .models import get_model
+
+#: Tolerances tighter than this cannot be met in double precision.
+RTOL_MIN = 1e-14
+
+
+@dataclass(frozen=True)
+class Options:
+    """Integrator settings shared by :func:`simulate` and the fate maps."""
+
+    t_end: float = 10.0
+    rtol: float = 1e-8
+    atol: float | None = None
+    max_step: float = math.inf
+    max_steps: int = 1_000_000
+    max_events: int = 10_000
+
+    def checked(self, model: str) -> "Options":
+        """Validated copy (``atol`` defaults to ``rtol``); ValueError on bad values."""
+        def bad(name, value, what):
+            raise ValueError(f"{model}: {name} must be {what}, got {value!r}")
+
+        for name in ("t_end", "rtol", "max_step"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, float, np.floating, np.integer)) or isinstance(
+                    value, bool) or not value > 0:
+                bad(name, value, "a positive number")
+        if not math.isfinite(self.t_end):
+            bad("t_end", self.t_end, "finite")
+        if not RTOL_MIN <= self.rtol <= 0.1:
+            bad("rtol", self.rtol, f"in [{RTOL_MIN:g}, 0.1] (tighter is below double-precision "
+                "resolution)")
+        atol = self.rtol if self.atol is None else self.atol
+        if not isinstance(atol, (int, float, np.floating)) or not (0 < atol < math.inf):
+            bad("atol", atol, "a positive number")
+        for name in ("max_steps", "max_events"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < 1:
+                bad(name, value, "a positive integer")
+        return Options(float(self.t_end), float(self.rtol), float(atol), float(self.max_step),
+                       int(self.max_steps), int(self.max_events))
+
+    def as_dict(self) -> dict:
+        return {"t_end": self.t_end, "rtol": self.rtol, "atol": self.atol,
+                "max_step": self.max_step, "max_steps": self.max_steps,
+                "max_events": self.max_events}
+
+
+def integrated_variables(model: Model) -> list[Variable]:
+    """The integrated state: positions, then velocities (with their descriptions)."""
+    dyn = _dynamics(model)
+    known = {**model.variables, **{p.name: p for p in dyn.positions}}
+    return ([known[c[0]] for c in dyn.coordinates] + [known[c[1]] for c in dyn.coordinates])
+
+
+def _dynamics(model: Model):
+    if model.dynamics is None:
+        raise ValueError(f"{model.name}: this model has no dynamics; it can be classified and "
+                         "mapped but not integrated in time")
+    return model.dynamics
+
+
+def split_values(model: Model, values: Mapping[str, float]):
+    """Validate ``values``: model variables (complete) and extra positions (default 0)."""
+    dyn = _dynamics(model)
+    extra = {p.name: p for p in dyn.positions}
+    mine = {k: v for k, v in values.items() if k not in extra}
+    positions = {}
+    for name, var in extra.items():
+        value = values.get(name, var.default)
+        var.check(model.name, value)
+        positions[name] = float(value)
+    try:
+        full = model.complete(mine)
+    except ValueError as exc:
+        if "unknown variable" in str(exc) and extra:
+            raise ValueError(f"{exc}, {', '.join(extra)}") from None
+        raise
+    return full, positions
+
+
+def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
+             atol: float | None = None, max_step: float = math.inf,
+             t_eval: Sequence[float] | None = None, max_steps: int = 1_000_000,
+             max_events: int = 10_000, **values: float) -> xr.Dataset:
+    """Integrate the motion from an initial state, with exact stick and slip.
+
+    Parameters
+    ----------
+    model:
+        a model name or :class:`phasemap.Model` with dynamics (all four
+        built-in models).
+    t_end:
+        the time horizon (s).
+    rtol, atol:
+        relative and absolute tolerances of the Dormand-Prince 5(4) steps
+        (``atol`` defaults to ``rtol``); ``rtol`` in [1e-14, 0.1].
+    max_step:
+        largest step (s); lower it to resolve short excursions between steps.
+    t_eval:
+        sorted times in [0, t_end] at which to report the state (from the
+        dense output).  Default: every accepted step and every event.
+    max_steps, max_events:
+        limits after which the motion ends with ``max_events``.
+    **values:
+        initial state and parameters by name (``phasemap models`` lists them);
+        missing names take the model's defaults.  The elliptic pendulum also
+        takes the slider position ``x`` (default 0).
+
+    Returns
+    -------
+    xarray.Dataset
+        coordinate ``t``; the state variables by name (positions, then
+        velocities); ``branch``, the active branch; and an events table on
+        dimension ``event``: ``event_t``, ``event_kind`` (see
+        :class:`phasemap.Event`), ``event_branch`` (the branch after the
+        event) and the state at each event.  The first event is ``start`` (or
+        the fate, when the motion cannot start); the last is the fate.
+        ``attrs["end_reason"]`` names the fate, ``attrs["end_message"]``
+        explains it.
+
+    Raises
+    ------
+    ValueError
+        for an unknown model or variable, a value outside its domain, or bad
+        integrator settings.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> ds = phasemap.simulate("hinge_pendulum", t_end=10.0, phi=1.0, omega=0.0, delta=0.1)
+    >>> ds.attrs["end_reason"], int(ds.attrs["n_reversals"])
+    ('rest', 3)
+    >>> abs(float(ds.phi[-1])) <= 0.1                  # rest needs l |sin phi| <= delta
+    True
+    """
+    m = get_model(model)
+    opts = Options(t_end, rtol, atol, max_step, max_steps, max_events).checked(m.name)
+    for k, val in values.items():
+        if np.ndim(val) != 0:
+            raise ValueError(f"{m.name}: {k} must be a scalar for simulate(); "
+                             "use phasemap.fate_map for grids of initial conditions")
+    full, positions = split_values(m, values)
+    if t_eval is None:
+        te = np.empty(0)
+    else:
+        te = np.asarray(t_eval, dtype=float)
+        if te.ndim != 1 or not np.all(np.isfinite(te)) or np.any(np.diff(te) < 0) or (
+                te.size and (te[0] < 0 or te[-1] > opts.t_end)):
+            raise ValueError(f"{m.name}: t_eval must be a sorted 1-D sequence of times in "
+                             f"[0, t_end = {opts.t_end:g}]")
+    integrate, _ = kernels(m)
+    names = [v.name for v in integrated_variables(m)]
+    y0 = np.array([positions[n] if n in positions else float(full[n]) for n in names])
+    v = m.input_vector(full)
+    (fate, t, y, n_rev, n_steps, ts, ys, ms, _, ev_t, ev_kind, ev_y, ev_mode, _, y_eval,
+     _) = integrate(v, y0, opts.t_end, opts.rtol, opts.atol, opts.max_step, opts.max_steps,
+                    opts.max_events, t_eval is None, te)
+    if t_eval is not None:
+        ts = te[:len(y_eval)]
+        ys = y_eval
+        at = np.searchsorted(ev_t, ts, side="right") - 1
+        ms = ev_mode[np.maximum(at, 0)]
+    return _dataset(m, full, positions, opts, names, int(fate), int(n_rev), int(n_steps),
+                    ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode)
+
+
+def _dataset(m: Model, full, positions, opts: Options, names, fate, n_rev, n_steps, ts, ys,
+             ms, ev_t, ev_kind, ev_y, ev_mode) -> xr.Dataset:
+    variables = integrated_variables(m)
+    branch_values = np.arange(-1, len(m.branches), dtype=np.int8)
+    branch_attrs = {"long_name": "active branch of the friction law",
+                    "flag_values": branch_values,
+                    "flag_meanings": " ".join(["none", *m.branches])}
+    kind_attrs = {"long_name": "kind of event", "flag_values": np.array(ev.EVENT_VALUES,
+                                                                        dtype=np.int8),
+                  "flag_meanings": ev.EVENT_MEANINGS}
+    data = {
+        "branch": xr.Variable("t", np.asarray(ms, dtype=np.int8), branch_attrs),
+        "event_t": xr.Variable("event", ev_t, {"long_name": "time of the event",
+                                               "units": "s"}),
+        "event_kind": xr.Variable("event", ev_kind.astype(np.int8), kind_attrs),
+        "event_branch": xr.Variable("event", ev_mode.astype(np.int8),
+                                    {**branch_attrs,
+                                     "long_name": "active branch after the event"}),
+    }
+    for j, var in enumerate(variables):
+        attrs = {"long_name": var.long_name, "units": var.units}
+        data[var.name] = xr.Variable("t", ys[:, j], attrs)
+        data[f"event_{var.name}"] = xr.Variable(
+            "event", ev_y[:, j], {"long_name": f"{var.long_name} at the event",
+                                  "units": var.units})
+    now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    fate_event = ev.Event(fate)
+    attrs = {
+        "Conventions": CONVENTIONS,
+        "title": f"phasemap trajectory: {m.title}",
+        "source": f"phasemap {__version__}",
+        "history": f"{now} created by phasemap.simulate {__version__}",
+        "references": m.citation,
+        "phasemap_kind": "trajectory",
+        "phasemap_model": m.name,
+        "phasemap_version": __version__,
+        "date_created": now,
+        "end_reason": fate_event.name.lower(),
+        "end_message": fate_event.message,
+        "n_reversals": np.int32(n_rev),
+        "n_steps": np.int64(n_steps),
+        "integrator": "Dormand-Prince 5(4), dense output of order 4, events by classification",
+    }
+    for k, value in opts.as_dict().items():
+        attrs[f"phasemap_{k}"] = value
+    for name in m.names:
+        key = "initial" if name in {v.name for v in m.state} else "fixed"
+        attrs[f"phasemap_{key}_{name}"] = float(full[name])
+    for name, value in positions.items():
+        attrs[f"phasemap_initial_{name}"] = value
+    coords = {"t": xr.Variable("t", np.asarray(ts, dtype=float),
+                               {"long_name": "time", "units": "s"})}
+    return xr.Dataset(data, coords, attrs)
