@@ -1,0 +1,90 @@
+"""The ``ds.phasemap`` accessor: what an atlas is, its model, and its figure.
+
+Importing this module registers the accessor on every :class:`xarray.Dataset`
+(``import phasemap`` does it).  phasemap never subclasses ``Dataset``:
+
+>>> import numpy as np, phasemap, phasemap.accessor
+>>> ds = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 30)},
+...                     fixed={"omega": 0.0}).compute()
+>>> ds.phasemap.kind, ds.phasemap.model.name
+('profile', 'ladder')
+>>> fig = ds.phasemap.plot()                 # a matplotlib Figure
+
+The figures, their style and how a kind is recognised are described in
+:mod:`phasemap.plot`, which is imported (with matplotlib) on first use, so
+registering the accessor costs nothing.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+from typing import TYPE_CHECKING, Sequence
+
+import xarray as xr
+
+from .model import Model
+from .models import get_model
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = ["PhasemapAccessor"]
+
+
+@xr.register_dataset_accessor("phasemap")
+class PhasemapAccessor:
+    """``ds.phasemap``: the atlas's kind, its model, and the figure that suits it."""
+
+    def __init__(self, ds: xr.Dataset):
+        self._ds = ds
+
+    @property
+    def kind(self) -> str:
+        """``"map"``, ``"profile"``, ``"fate"``, ``"phase_curve"`` or ``"trajectory"``.
+
+        See :func:`phasemap.plot.atlas_kind`; ValueError for a Dataset that is
+        not a phasemap atlas.
+        """
+        from .plot import atlas_kind
+
+        return atlas_kind(self._ds)
+
+    @property
+    def model(self) -> Model:
+        """The :class:`phasemap.Model` named by the ``phasemap_model`` global attribute.
+
+        Raises ValueError if there is no such attribute or it names no model.
+        """
+        name = self._ds.attrs.get("phasemap_model")
+        if name is None:
+            raise ValueError("not a phasemap atlas: no phasemap_model global attribute")
+        return get_model(name)
+
+    def plot(self, layer: str | Sequence[str] | None = None, ax=None,
+             size: str | float = "one_column", **kw) -> Figure:
+        """Draw the figure that suits this dataset's kind and return the Figure.
+
+        ``layer``, ``ax`` (an Axes, or a list for several panels), ``size``
+        (``"one_column"``, ``"two_column"`` or a width in inches) and other
+        keywords are those of :func:`phasemap.plot.plot`.
+        """
+        from .plot import plot
+
+        return plot(self._ds, layer, ax=ax, size=size, **kw)
+
+    def savefig(self, path_stem: str | os.PathLike, layer: str | Sequence[str] | None = None,
+                *, dpi: int = 300, **kw) -> tuple[pathlib.Path, pathlib.Path]:
+        """Draw :meth:`plot` and write it as ``<stem>.pdf`` and ``<stem>.png``; return both paths.
+
+        The figure is closed afterwards.  Keywords other than ``dpi`` go to :meth:`plot`.
+        """
+        import matplotlib.pyplot as plt
+
+        from .plot import save_figure
+
+        fig = self.plot(layer, **kw)
+        try:
+            return save_figure(fig, path_stem, dpi=dpi)
+        finally:
+            plt.close(fig)

@@ -1,0 +1,1207 @@
+r"""Figures in one publication style: atlas maps, profiles, fate maps, phase curves,
+trajectories and work-precision diagrams.
+
+Every figure function draws inside :func:`style`, an rc context (the global
+``matplotlib.rcParams`` are never changed), and returns the
+:class:`matplotlib.figure.Figure`.  Given ``ax=`` (an Axes, or a list of Axes
+for a figure of several panels) it draws there instead and returns that
+Axes' figure.  :func:`plot` (and the accessor ``ds.phasemap.plot()``, see
+:mod:`phasemap.accessor`) picks the right function from the data:
+
+==============  ===========================================  ============================
+kind            how it is recognised                         figure
+==============  ===========================================  ============================
+``map``         a 2-D atlas from ``Scene.compute()``         :func:`map_figure`
+``profile``     a 1-D atlas                                  :func:`profile_figure`
+``fate``        a ``fate`` layer                             :func:`fate_figure`
+``phase_curve`` global attribute ``phasemap_kind``           :func:`phase_curve_figure`
+``trajectory``  global attribute ``phasemap_kind``           :func:`trajectory_figure`
+==============  ===========================================  ============================
+
+:func:`work_precision_figure` draws a benchmark table, and :func:`save_figure`
+writes a figure as vector PDF and 300 dpi PNG.
+
+>>> import numpy as np, phasemap
+>>> ds = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 30),
+...                                     "f": np.linspace(0, 1, 20)}, fixed={"omega": 0.0}).compute()
+>>> phasemap.plot.atlas_kind(ds)
+'map'
+>>> fig = phasemap.plot.plot(ds)             # n_solutions, stagnation hatched
+>>> fig.axes[0].get_xlabel()
+'$\\varphi$ (rad)'
+
+The style
+---------
+* Widths for papers: ``size="one_column"`` (3.5 in) or ``"two_column"``
+  (7.2 in), or a width in inches; each kind chooses its height.
+* 8 pt DejaVu Sans with matching mathtext, embedded as TrueType in PDFs.
+* No top or right spines, no grid, no titles inside the axes; frameless
+  legends outside the axes, above them.
+* Categories: the Okabe-Ito palette (:data:`OKABE_ITO`), one colour per
+  meaning in every figure (:data:`CATEGORY_COLOURS`): a Painleve
+  inconsistency is vermillion whether it is ``none`` in an ``n_solutions``
+  map or ``no_solution`` in a fate map, indeterminacy is blue, rest is green;
+  the ordinary class (``unique``, ``no``) is pale grey.  Only the categories
+  present are drawn and listed.
+* Overlays on a map: ``stagnation`` hatched ``////`` with a solid outline,
+  ``contact_lost`` hatched ``\\\\`` in blue with a dashed outline,
+  ``singular`` cells as black dots.
+* Continuous layers: Paul Tol's *sunset* (:data:`SUNSET`; diverging,
+  centred on zero) when the data has both signs, viridis otherwise, with a
+  colour bar limited to the 2nd-98th percentiles (``robust=True``; arrows
+  mark data beyond, such as an acceleration that grows without bound near a
+  singular state); NaN (an inadmissible branch, a motion that did not come
+  to rest) is left blank.  Counts (``n_reversals``) get one colour per value.
+* Motions: black curves; events marked by kind (:data:`EVENT_MARKERS`, fates
+  in the colours of the fate map), the terminal one larger and edged.
+* Axis labels from the model's symbols and UDUNITS units, as mathtext:
+  ``$\varphi$ (rad)``, ``$\omega$ (rad s$^{-1}$)``, ``$f$`` for a
+  dimensionless quantity; angles in rad spanning at least pi are ticked in
+  multiples of pi.  Names the model does not know fall back to
+  ``long_name (units)`` (a one- or two-letter name is taken as a symbol).
+
+For developers
+--------------
+A new kind of figure needs: a ``<kind>_figure(ds, ..., ax=None, size=...)``
+function that opens ``with style():``, gets its axes from :func:`_axes` and
+its labels from :func:`axis_label`, takes category colours from
+:func:`category_colour` and puts legends above with :func:`_legend_above`; a
+rule in :func:`atlas_kind`; and a line in :func:`plot`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import pathlib
+import re
+from typing import Mapping, Sequence
+
+import matplotlib as mpl
+import matplotlib.colors as mcolors
+import numpy as np
+import xarray as xr
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+from matplotlib.ticker import FuncFormatter, MaxNLocator, MultipleLocator
+
+from . import events as _events
+from ._version import __version__
+from .atlas import atomic_path, destination
+from .model import Model
+from .models import get_model
+
+__all__ = [
+    "CATEGORY_COLOURS",
+    "EVENT_MARKERS",
+    "KINDS",
+    "OKABE_ITO",
+    "SIZES",
+    "STYLE",
+    "SUNSET",
+    "atlas_kind",
+    "axis_label",
+    "category_colour",
+    "fate_figure",
+    "format_units",
+    "map_figure",
+    "phase_curve_figure",
+    "plot",
+    "profile_figure",
+    "save_figure",
+    "style",
+    "trajectory_figure",
+    "work_precision_figure",
+]
+
+# --------------------------------------------------------------------------- style
+
+#: Figure widths in inches for a journal's one-column and two-column figures.
+SIZES = {"one_column": 3.5, "two_column": 7.2}
+
+#: Okabe & Ito (2008), "Color Universal Design": distinguishable with any
+#: common colour-vision deficiency.
+OKABE_ITO = {
+    "black": "#000000",
+    "orange": "#E69F00",
+    "sky_blue": "#56B4E9",
+    "bluish_green": "#009E73",
+    "yellow": "#F0E442",
+    "blue": "#0072B2",
+    "vermillion": "#D55E00",
+    "reddish_purple": "#CC79A7",
+}
+_OI = OKABE_ITO
+#: The ordinary class (a unique solution, a flag that is off): out of the way.
+PALE_GREY = "#DDDDDD"
+GREY = "#999999"
+
+#: One colour per category meaning, the same in every figure.
+CATEGORY_COLOURS = {
+    # n_solutions
+    "none": _OI["vermillion"],
+    "unique": PALE_GREY,
+    "two": _OI["blue"],
+    "continuum": _OI["reddish_purple"],
+    "three_or_more": _OI["orange"],
+    # yes/no flags
+    "no": PALE_GREY,
+    # fates (the terminal events)
+    "rest": _OI["bluish_green"],
+    "contact_lost": _OI["sky_blue"],
+    "no_solution": _OI["vermillion"],
+    "indeterminate": _OI["blue"],
+    "singular": _OI["black"],
+    "horizon": _OI["yellow"],
+    "max_events": GREY,
+    "step_failure": _OI["orange"],
+}
+
+#: The colour of ``yes`` in a yes/no layer, by layer.
+FLAG_COLOURS = {
+    "stagnation": _OI["bluish_green"],
+    "contact_lost": _OI["sky_blue"],
+    "singular": _OI["black"],
+}
+
+#: Colours for anything else, in order (methods of a benchmark, unknown categories).
+CYCLE = [_OI[k] for k in ("blue", "orange", "bluish_green", "vermillion", "reddish_purple",
+                          "sky_blue", "black", "yellow")]
+
+#: Paul Tol's diverging *sunset* scheme (https://personal.sron.nl/~pault/); NaN blank.
+SUNSET = mcolors.LinearSegmentedColormap.from_list("phasemap_sunset", [
+    "#364B9A", "#4A7BB7", "#6EA6CD", "#98CAE1", "#C2E4EF", "#EAECCC",
+    "#FEDA8B", "#FDB366", "#F67E4B", "#DD3D2D", "#A50026"])
+SEQUENTIAL = "viridis"
+
+#: Event markers, by event name: (marker, face colour).  Events that end a
+#: motion are filled, larger and edged in black; the others are small.
+EVENT_MARKERS = {
+    "start": ("o", "white"),
+    "reversal": ("o", _OI["black"]),
+    "stick": ("s", _OI["bluish_green"]),
+    "slip": ("^", _OI["orange"]),
+    "switch": ("d", _OI["reddish_purple"]),
+    "rest": ("s", _OI["bluish_green"]),
+    "contact_lost": ("^", _OI["sky_blue"]),
+    "no_solution": ("X", _OI["vermillion"]),
+    "indeterminate": ("P", _OI["blue"]),
+    "continuum": ("*", _OI["reddish_purple"]),
+    "singular": ("D", _OI["black"]),
+    "horizon": (">", _OI["yellow"]),
+    "max_events": ("h", GREY),
+    "step_failure": ("v", _OI["orange"]),
+}
+_TERMINAL = {e.name.lower() for e in _events.Event if e.terminal}
+
+#: Markers for the lines of a work-precision diagram, in order.
+MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*"]
+
+_FONT = 8.0
+#: The rcParams every figure is drawn with (applied with :func:`style`).
+STYLE: dict = {
+    "font.family": "sans-serif",
+    "font.sans-serif": ["DejaVu Sans"],
+    "mathtext.fontset": "dejavusans",
+    "font.size": _FONT,
+    "axes.labelsize": _FONT,
+    "axes.titlesize": _FONT,
+    "axes.titlelocation": "left",
+    "axes.titlepad": 3.0,
+    "xtick.labelsize": _FONT,
+    "ytick.labelsize": _FONT,
+    "legend.fontsize": _FONT,
+    "legend.title_fontsize": _FONT,
+    "figure.titlesize": _FONT,
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+    "axes.grid": False,
+    "axes.linewidth": 0.6,
+    "axes.labelpad": 2.0,
+    "axes.unicode_minus": True,
+    "axes.formatter.use_mathtext": True,
+    "axes.formatter.limits": (-3, 4),
+    "axes.prop_cycle": mpl.cycler(color=CYCLE),
+    "xtick.direction": "out",
+    "ytick.direction": "out",
+    "xtick.major.size": 3.0,
+    "ytick.major.size": 3.0,
+    "xtick.minor.size": 1.5,
+    "ytick.minor.size": 1.5,
+    "xtick.major.width": 0.6,
+    "ytick.major.width": 0.6,
+    "xtick.minor.width": 0.5,
+    "ytick.minor.width": 0.5,
+    "xtick.major.pad": 2.0,
+    "ytick.major.pad": 2.0,
+    "lines.linewidth": 1.0,
+    "lines.markersize": 4.0,
+    "patch.linewidth": 0.5,
+    "hatch.linewidth": 0.5,
+    "hatch.color": _OI["black"],
+    "legend.frameon": False,
+    "legend.handlelength": 1.2,
+    "legend.handleheight": 0.8,
+    "legend.handletextpad": 0.4,
+    "legend.columnspacing": 1.0,
+    "legend.borderaxespad": 0.2,
+    "legend.borderpad": 0.0,
+    "legend.labelspacing": 0.3,
+    "image.cmap": SEQUENTIAL,
+    "figure.dpi": 150,
+    "figure.facecolor": "white",
+    "figure.constrained_layout.use": True,
+    "figure.constrained_layout.h_pad": 0.02,
+    "figure.constrained_layout.w_pad": 0.02,
+    "figure.constrained_layout.hspace": 0.03,
+    "figure.constrained_layout.wspace": 0.03,
+    "savefig.dpi": 300,
+    "savefig.facecolor": "white",
+    "pdf.fonttype": 42,
+    "ps.fonttype": 42,
+    "svg.fonttype": "none",
+}
+
+KINDS = ("map", "profile", "fate", "phase_curve", "trajectory")
+
+#: Layers drawn over a map rather than as the map itself.
+OVERLAYS = ("stagnation", "contact_lost", "singular")
+
+
+def style() -> contextlib.AbstractContextManager:
+    """The rc context every figure function draws in: ``with phasemap.plot.style(): ...``."""
+    return mpl.rc_context(STYLE)
+
+
+# --------------------------------------------------------------------------- labels
+
+
+def format_units(units: str | None) -> str:
+    """UDUNITS units as mathtext: ``"rad s-1"`` -> ``"rad s$^{-1}$"``; ``"1"`` -> ``""``."""
+    if units is None:
+        return ""
+    units = str(units).strip()
+    if units in ("", "1"):
+        return ""
+    out = []
+    for token in units.split():
+        m = re.fullmatch(r"([A-Za-z]+)(-?\d+)", token)
+        if m and m.group(2) != "1":
+            out.append(f"{m.group(1)}$^{{{m.group(2)}}}$")
+        else:
+            out.append(m.group(1) if m else token)
+    return " ".join(out)
+
+
+def _square_units(units: str | None) -> str | None:
+    """``"rad s-1"`` -> ``"rad2 s-2"``."""
+    if units is None or str(units).strip() in ("", "1"):
+        return units
+    out = []
+    for token in str(units).split():
+        m = re.fullmatch(r"([A-Za-z]+)(-?\d+)?", token)
+        if not m:
+            return f"({units})2"
+        out.append(f"{m.group(1)}{2 * int(m.group(2) or 1)}")
+    return " ".join(out)
+
+
+def _with_units(text: str, units: str | None) -> str:
+    u = format_units(units)
+    return f"{text} ({u})" if u else text
+
+
+def _model_or_none(ds: xr.Dataset) -> Model | None:
+    try:
+        return get_model(ds.attrs.get("phasemap_model"))
+    except ValueError:
+        return None
+
+
+def _symbol_and_units(ds: xr.Dataset, name: str) -> tuple[str, str | None] | None:
+    """The mathtext symbol (without $) and units of ``name``, if the model knows it."""
+    model = _model_or_none(ds)
+    if model is None:
+        return None
+    if name in model.variables:
+        v = model.variables[name]
+        return v.symbol or v.name, v.units
+    for var in model.accelerations + model.reactions:
+        for branch in model.branches:
+            if name == f"{var.name}_{branch}":
+                return rf"{var.symbol}\ [\mathrm{{{_math_words(branch)}}}]", var.units
+    for branch in model.branches:
+        if name == f"coef_{branch}":
+            c = model.coefficient
+            return rf"{c.symbol}\ [\mathrm{{{_math_words(branch)}}}]", c.units
+    head, _, moment = name.rpartition("_")  # phi_rest, omega_end: the value at a moment
+    if head in model.variables and moment in _MOMENTS:
+        v = model.variables[head]
+        return rf"{v.symbol}_{{\mathrm{{{moment}}}}}", v.units
+    return None
+
+
+#: Suffixes that name a variable's value at a moment of a motion (``phi_rest``).
+_MOMENTS = ("rest", "start", "end", "final", "initial", "min", "max")
+
+
+def _math_words(text: str) -> str:
+    return text.replace("_", r"\ ")
+
+
+def axis_label(ds: xr.Dataset, name: str) -> str:
+    r"""The axis label of variable or coordinate ``name`` of ``ds``, as mathtext.
+
+    From the model's :class:`~phasemap.Variable` when it knows the name
+    (``"$\varphi$ (rad)"``, ``"$f$"`` for units ``1``), including a branch's
+    fields (``"$\ddot\varphi\ [\mathrm{slide\ pos}]$ (rad s$^{-2}$)"``) and a
+    variable at a moment (``phi_rest``: ``"$\varphi_{\mathrm{rest}}$ (rad)"``);
+    otherwise from the variable's attributes: ``"$t$ (s)"`` for a one- or
+    two-letter name, else ``"Long name (units)"``.
+    """
+    known = _symbol_and_units(ds, name)
+    if known is not None:
+        symbol, units = known
+        return _with_units(f"${symbol}$", units)
+    attrs = ds[name].attrs if name in ds.variables else {}
+    units = attrs.get("units")
+    if re.fullmatch(r"[A-Za-z]{1,2}", name):
+        return _with_units(f"${name}$", units)
+    text = str(attrs.get("long_name", name.replace("_", " ")))
+    return _with_units(text[:1].upper() + text[1:], units)
+
+
+def _squared_label(ds: xr.Dataset, name: str) -> str:
+    known = _symbol_and_units(ds, name)
+    if known is not None:
+        symbol, units = known
+    else:
+        symbol, units = name, ds[name].attrs.get("units")
+    return _with_units(f"${symbol}^2$", _square_units(units))
+
+
+def _meaning_text(meaning: str) -> str:
+    return meaning.replace("_", " ")
+
+
+# --------------------------------------------------------------------------- kinds
+
+
+def _is_categorical(var: xr.DataArray) -> bool:
+    return "flag_values" in var.attrs and "flag_meanings" in var.attrs
+
+
+def _flags(var: xr.DataArray) -> tuple[list[int], list[str]]:
+    values = [int(v) for v in np.atleast_1d(np.asarray(var.attrs["flag_values"])).ravel()]
+    meanings = str(var.attrs["flag_meanings"]).split()
+    if len(values) != len(meanings):
+        raise ValueError(f"layer {var.name!r}: {len(values)} flag_values but "
+                         f"{len(meanings)} flag_meanings")
+    return values, meanings
+
+
+def atlas_kind(ds: xr.Dataset) -> str:
+    """Which figure suits ``ds``: one of :data:`KINDS`.
+
+    The global attribute ``phasemap_kind`` decides first (``"atlas"`` there
+    means: decide from the dimensions); then a ``fate`` layer makes a fate
+    map; otherwise the dimensions of the first categorical layer (or of the
+    first layer, if none is categorical) make a ``profile`` (1-D) or a
+    ``map`` (2-D).
+
+    Raises
+    ------
+    ValueError
+        if ``ds`` is not a Dataset, carries neither ``phasemap_kind`` nor
+        ``phasemap_model``, has no layers, names an unknown kind, or is an
+        atlas of 3 or more dimensions (select a 2-D slice first).
+    """
+    if not isinstance(ds, xr.Dataset):
+        raise ValueError(f"not a phasemap atlas: expected an xarray.Dataset, "
+                         f"got {type(ds).__name__}")
+    kind = ds.attrs.get("phasemap_kind")
+    if kind is not None and kind != "atlas":
+        if kind not in KINDS:
+            raise ValueError(f"unknown phasemap_kind {kind!r}; known kinds: {', '.join(KINDS)}")
+        return str(kind)
+    if kind is None and "phasemap_model" not in ds.attrs:
+        raise ValueError("not a phasemap atlas: no phasemap_model or phasemap_kind "
+                         "global attribute")
+    if not ds.data_vars:
+        raise ValueError("not a phasemap atlas: it has no layers (data variables)")
+    if "fate" in ds.data_vars:
+        return "fate"
+    var = _first_layer(ds)
+    if var.ndim == 1:
+        return "profile"
+    if var.ndim == 2:
+        return "map"
+    dims = ", ".join(map(str, var.dims))
+    raise ValueError(f"a {var.ndim}-D atlas ({dims}) has no single figure: select a 1-D or 2-D "
+                     f"slice first, e.g. ds.isel({var.dims[-1]}=0)")
+
+
+def _first_layer(ds: xr.Dataset) -> xr.DataArray:
+    for var in ds.data_vars.values():
+        if _is_categorical(var):
+            return var
+    return next(iter(ds.data_vars.values()))
+
+
+def _layer(ds: xr.Dataset, name: str) -> xr.DataArray:
+    if not isinstance(name, str) or name not in ds.data_vars:
+        raise ValueError(f"unknown layer {name!r}; this dataset has: "
+                         f"{', '.join(map(str, ds.data_vars))}")
+    return ds[name]
+
+
+def _require(ds: xr.Dataset, names: Sequence[str], kind: str) -> None:
+    missing = [n for n in names if n not in ds.variables]
+    if missing:
+        raise ValueError(f"not a {kind} dataset: missing {', '.join(missing)}")
+
+
+# --------------------------------------------------------------------------- dispatch
+
+
+def plot(ds: xr.Dataset, layer: str | Sequence[str] | None = None, *, ax=None,
+         size: str | float = "one_column", **kw) -> Figure:
+    """The right figure for ``ds`` (see :func:`atlas_kind`); returns the Figure.
+
+    ``layer`` picks what is drawn: for a map, the layer (default
+    ``n_solutions``); for a profile, one layer or a list (default: every
+    categorical layer); for a fate dataset, ``fate`` (the default) draws
+    :func:`fate_figure`, any other layer a plain :func:`map_figure` (a
+    1-D fate dataset is drawn as a profile); for a trajectory, the states
+    to draw.  Phase curves take no layer.  Other
+    keywords go to the figure function.
+    """
+    kind = atlas_kind(ds)
+    if kind == "map":
+        return map_figure(ds, layer, ax=ax, size=size, **kw)
+    if kind == "profile":
+        return profile_figure(ds, layer, ax=ax, size=size, **kw)
+    if kind == "fate":
+        if ds["fate"].ndim == 1:  # fates along one line of initial states
+            return profile_figure(ds, layer or "fate", ax=ax, size=size, **kw)
+        if layer in (None, "fate"):
+            return fate_figure(ds, ax=ax, size=size, **kw)
+        return map_figure(ds, layer, ax=ax, size=size, **kw)
+    if kind == "phase_curve":
+        if layer is not None:
+            raise ValueError(f"a phase curve has no layers to choose; got layer={layer!r}")
+        return phase_curve_figure(ds, ax=ax, size=size, **kw)
+    return trajectory_figure(ds, states=layer, ax=ax, size=size, **kw)
+
+
+# --------------------------------------------------------------------------- figure plumbing
+
+
+def _width(size: str | float) -> float:
+    if isinstance(size, str):
+        if size not in SIZES:
+            raise ValueError(f"unknown size {size!r}; use one of {', '.join(SIZES)} "
+                             "or a width in inches")
+        return SIZES[size]
+    try:
+        width = float(size)
+    except (TypeError, ValueError):
+        raise ValueError(f"size must be one of {', '.join(SIZES)} or a width in inches, "
+                         f"got {size!r}") from None
+    if not math.isfinite(width) or width <= 0:
+        raise ValueError(f"size must be a positive width in inches, got {size!r}")
+    return width
+
+
+def _axes(ax, n: int, figsize: tuple[float, float], what: str, **subplots) -> list[Axes]:
+    """``n`` axes: new ones in a new figure, or the caller's ``ax`` (one Axes or a list)."""
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        fig = plt.figure(figsize=figsize, layout="constrained")
+        grid = subplots.pop("grid", (n, 1))
+        axes = fig.subplots(*grid, squeeze=False, **subplots).ravel().tolist()
+        return axes[:n]
+    axes = [ax] if isinstance(ax, Axes) else list(ax)
+    if len(axes) != n or not all(isinstance(a, Axes) for a in axes):
+        raise ValueError(f"{what} draws {n} panel{'s' if n > 1 else ''}: pass "
+                         f"{'one Axes' if n == 1 else f'a list of {n} Axes'} as ax, or ax=None")
+    return axes
+
+
+def _ncols(labels: Sequence[str], width: float) -> int:
+    """How many legend columns of ``labels`` fit in ``width`` inches, rows balanced."""
+    em = _FONT / 72.0
+    rc = mpl.rcParams
+    column = (rc["legend.handlelength"] + rc["legend.handletextpad"] + rc["legend.columnspacing"]
+              + 0.58 * max(len(s) for s in labels)) * em
+    ncols = max(1, min(len(labels), int(width // column)))
+    rows = -(-len(labels) // ncols)
+    return -(-len(labels) // rows)
+
+
+def _legend_above(ax: Axes, handles: list, labels: list[str] | None = None):
+    """A frameless legend centred above ``ax``, in as many columns as fit its width."""
+    if labels is None:
+        labels = [h.get_label() for h in handles]
+    if not handles:
+        return None
+    width = ax.figure.get_figwidth() * ax.get_position().width * 0.95
+    return ax.legend(handles, labels, loc="lower center", bbox_to_anchor=(0.5, 1.02),
+                     ncols=_ncols(labels, width), borderaxespad=0.0)
+
+
+def _coord(ds: xr.Dataset, dim: str) -> np.ndarray:
+    if dim in ds.coords:
+        return np.asarray(ds[dim].values, dtype=float)
+    return np.arange(ds.sizes[dim], dtype=float)
+
+
+def _angle_ticks(ax: Axes, axis: str, lo: float, hi: float) -> None:
+    """Tick an angle axis in rad at multiples of pi/4, pi/2 or pi when it spans pi or more."""
+    span = hi - lo
+    if not (math.isfinite(span) and span >= math.pi * 0.99):
+        return
+    quarters = 1 if span < 1.5 * math.pi else 2 if span <= 4.5 * math.pi else 4
+    step = quarters * math.pi / 4
+
+    def fmt(x, _pos):
+        k = round(x / (math.pi / 4))
+        if k == 0:
+            return "0"
+        sign = "-" if k < 0 else ""
+        k = abs(k)
+        g = math.gcd(k, 4)
+        num, den = k // g, 4 // g
+        head = r"\pi" if num == 1 else rf"{num}\pi"
+        return f"${sign}{head}$" if den == 1 else f"${sign}{head}/{den}$"
+
+    target = ax.xaxis if axis == "x" else ax.yaxis
+    target.set_major_locator(MultipleLocator(step))
+    target.set_major_formatter(FuncFormatter(fmt))
+
+
+def _label_axis(ax: Axes, ds: xr.Dataset, axis: str, name: str, values=None) -> None:
+    (ax.set_xlabel if axis == "x" else ax.set_ylabel)(axis_label(ds, name))
+    units = ds[name].attrs.get("units") if name in ds.variables else None
+    known = _symbol_and_units(ds, name)
+    if known is not None:
+        units = known[1]
+    if units == "rad" and values is not None and np.size(values):
+        finite = np.asarray(values, dtype=float)
+        finite = finite[np.isfinite(finite)]
+        if finite.size:
+            _angle_ticks(ax, axis, float(finite.min()), float(finite.max()))
+
+
+def category_colour(meaning: str, layer: str | None = None, used: Sequence[str] = ()) -> str:
+    """The colour of category ``meaning`` of ``layer``: the same in every figure."""
+    if meaning == "yes" and layer in FLAG_COLOURS:
+        return FLAG_COLOURS[layer]
+    if meaning in CATEGORY_COLOURS:
+        return CATEGORY_COLOURS[meaning]
+    for colour in CYCLE:
+        if colour not in used:
+            return colour
+    return CYCLE[len(used) % len(CYCLE)]
+
+
+def _patch(colour: str, label: str) -> Patch:
+    light = colour.upper() in (PALE_GREY, _OI["yellow"].upper(), "WHITE", "#FFFFFF")
+    return Patch(facecolor=colour, edgecolor=GREY if light else colour, linewidth=0.4,
+                 label=label)
+
+
+# --------------------------------------------------------------------------- maps
+
+
+def _grid(ds: xr.Dataset, var: xr.DataArray, x: str | None) -> tuple[str, str]:
+    if var.ndim != 2:
+        raise ValueError(f"layer {var.name!r} has {var.ndim} dimension(s) "
+                         f"({', '.join(map(str, var.dims))}); a map needs 2")
+    dims = [str(d) for d in var.dims]
+    if x is None:
+        x = dims[0]
+    if x not in dims:
+        raise ValueError(f"x={x!r} is not a dimension of {var.name!r} ({', '.join(dims)})")
+    y = dims[1] if x == dims[0] else dims[0]
+    return x, y
+
+
+def _edges(c: np.ndarray) -> np.ndarray:
+    """Cell edges around centres ``c`` (midpoints, half a cell beyond the ends)."""
+    if c.size == 1:
+        return np.array([c[0] - 0.5, c[0] + 0.5])
+    mid = 0.5 * (c[1:] + c[:-1])
+    return np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
+
+
+def _draw_categorical(ax: Axes, xc, yc, codes: np.ndarray, var: xr.DataArray,
+                      all_categories: bool = False) -> list[Patch]:
+    """A categorical layer (rows y, columns x) in its category colours; the legend handles."""
+    values, meanings = _flags(var)
+    present = [(v, m) for v, m in zip(values, meanings) if all_categories or np.any(codes == v)]
+    if not present:
+        present = list(zip(values, meanings))
+    colours: list[str] = []
+    for _, m in present:
+        colours.append(category_colour(m, str(var.name), used=colours))
+    index = np.full(codes.shape, -1, dtype=np.int16)
+    for i, (v, _) in enumerate(present):
+        index[codes == v] = i
+    cmap = mcolors.ListedColormap(colours)
+    norm = mcolors.BoundaryNorm(np.arange(len(present) + 1) - 0.5, len(present))
+    ax.pcolormesh(_edges(xc), _edges(yc), np.ma.masked_less(index, 0), cmap=cmap, norm=norm,
+                  shading="flat", rasterized=True, linewidth=0)
+    return [_patch(c, _meaning_text(m)) for c, (_, m) in zip(colours, present)]
+
+
+def _draw_continuous(ax: Axes, xc, yc, data: np.ndarray, label: str, *, robust: bool = True,
+                     location: str = "right"):
+    """A float or count layer (rows y, columns x) with a colour bar; NaN left blank.
+
+    With ``robust`` the colour limits are the 2nd and 98th percentiles (a
+    branch's acceleration grows without bound near a singular state), and
+    the colour bar's ends show arrows where the data goes beyond them.
+    """
+    data = np.asarray(data)
+    finite = data[np.isfinite(data)] if data.dtype.kind == "f" else data.ravel()
+    lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+    integer = data.dtype.kind in "iu"
+    vlo, vhi = lo, hi
+    if robust and not integer and finite.size:
+        vlo, vhi = (float(v) for v in np.percentile(finite, [2.0, 98.0]))
+    if integer and hi - lo <= 16:
+        cmap = mpl.colormaps[SEQUENTIAL].resampled(int(hi - lo) + 1)
+        norm = mcolors.BoundaryNorm(np.arange(lo, hi + 2) - 0.5, cmap.N)
+    elif lo < 0 < hi:
+        cmap, m = SUNSET, max(-vlo, vhi, np.finfo(float).tiny)
+        norm = mcolors.Normalize(-m, m)
+    else:
+        cmap = mpl.colormaps[SEQUENTIAL]
+        norm = mcolors.Normalize(vlo, vhi if vhi > vlo else vlo + 1.0)
+    below, above = lo < norm.vmin, hi > norm.vmax
+    extend = "both" if below and above else "min" if below else "max" if above else "neither"
+    cmap = cmap.with_extremes(bad=(0, 0, 0, 0))
+    mesh = ax.pcolormesh(_edges(xc), _edges(yc), np.ma.masked_invalid(data.astype(float)),
+                         cmap=cmap, norm=norm, shading="flat", rasterized=True, linewidth=0)
+    cbar = ax.figure.colorbar(mesh, ax=ax, location=location, aspect=30, pad=0.02,
+                              fraction=0.05, extend=extend, extendfrac=0.04)
+    cbar.outline.set_linewidth(0.5)
+    cbar.ax.tick_params(width=0.6, length=2.5)
+    cbar.set_label(label)
+    if integer:
+        cbar.locator = MaxNLocator(integer=True)
+        cbar.update_ticks()
+    return cbar
+
+
+def _mask_overlay(ax: Axes, xc, yc, mask: np.ndarray, *, hatch: str, colour: str,
+                  linestyle: str, label: str) -> Patch | None:
+    """Hatch the cells where ``mask`` (rows y, columns x) holds, and outline them."""
+    if not mask.any():
+        return None
+    xe, ye = _edges(xc), _edges(yc)
+    # contour on a grid padded to the cell edges, so the hatched region ends where the cells do
+    xp = np.concatenate([[xe[0]], xc, [xe[-1]]])
+    yp = np.concatenate([[ye[0]], yc, [ye[-1]]])
+    z = np.pad(mask.astype(float), 1, mode="edge")
+    filled = ax.contourf(xp, yp, z, levels=[0.5, 1.5], colors="none", hatches=[hatch])
+    filled.set_hatchcolor(colour)
+    filled.set_edgecolor("none")
+    if not mask.all():
+        ax.contour(xp, yp, z, levels=[0.5], colors=[colour], linewidths=0.6,
+                   linestyles=linestyle)
+    return Patch(facecolor="none", edgecolor=colour, hatch=hatch, linewidth=0.6,
+                 linestyle=linestyle, label=label)
+
+
+def _overlays(ax: Axes, ds: xr.Dataset, main: str, x: str, y: str, xc, yc) -> list:
+    handles = []
+    styles = {"stagnation": ("////", _OI["black"], "solid"),
+              "contact_lost": ("\\\\\\\\", _OI["blue"], "dashed")}
+    for name, (hatch, colour, ls) in styles.items():
+        if name == main or name not in ds.data_vars or set(ds[name].dims) != {x, y}:
+            continue
+        mask = np.asarray(ds[name].transpose(y, x).values) == 1
+        h = _mask_overlay(ax, xc, yc, mask, hatch=hatch, colour=colour, linestyle=ls,
+                          label=_meaning_text(name))
+        if h is not None:
+            handles.append(h)
+    if main != "singular" and "singular" in ds.data_vars and set(ds.singular.dims) == {x, y}:
+        mask = np.asarray(ds.singular.transpose(y, x).values) == 1
+        if mask.any():
+            jj, ii = np.nonzero(mask)
+            ax.plot(xc[ii], yc[jj], ls="none", marker="o", ms=1.5, mew=0, color=_OI["black"],
+                    rasterized=True)
+            handles.append(Line2D([], [], ls="none", marker="o", ms=2.5, mew=0,
+                                  color=_OI["black"], label="singular"))
+    return handles
+
+
+def _default_map_layer(ds: xr.Dataset) -> str:
+    if "n_solutions" in ds.data_vars:
+        return "n_solutions"
+    for name, var in ds.data_vars.items():
+        if _is_categorical(var) and name not in OVERLAYS:
+            return str(name)
+    return str(_first_layer(ds).name)
+
+
+def map_figure(ds: xr.Dataset, layer: str | None = None, *, x: str | None = None, ax=None,
+               size: str | float = "one_column", overlays: bool = True,
+               all_categories: bool = False, robust: bool = True) -> Figure:
+    """A 2-D map of one layer of an atlas.
+
+    A categorical layer (``flag_values``/``flag_meanings``; default
+    ``n_solutions``) is drawn in its category colours with a legend above
+    the axes listing the categories present (all of them with
+    ``all_categories=True``).  A float layer gets a colour map and a colour
+    bar: diverging and centred on zero when the data has both signs, limited
+    to the 2nd-98th percentiles with ``robust`` (arrows on the colour bar show
+    data beyond); NaN cells are left blank.  With ``overlays`` the ``stagnation`` cells are
+    hatched and outlined, ``contact_lost`` cells hatched the other way in
+    blue with a dashed outline, and ``singular`` cells dotted, when the atlas
+    has those layers.  ``x`` names the dimension along the x axis (default:
+    the layer's first).
+    """
+    if layer is None:
+        atlas_kind(ds)  # a clear error for what is not an atlas at all
+        layer = _default_map_layer(ds)
+    var = _layer(ds, layer)
+    xdim, ydim = _grid(ds, var, x)
+    width = _width(size)
+    height = width * (0.86 if width < 5 else 0.55)
+    with style():
+        (a,) = _axes(ax, 1, (width, height), "map_figure")
+        xc, yc = _coord(ds, xdim), _coord(ds, ydim)
+        data = np.asarray(var.transpose(ydim, xdim).values)
+        handles = []
+        if _is_categorical(var):
+            handles = _draw_categorical(a, xc, yc, data, var, all_categories)
+        else:
+            _draw_continuous(a, xc, yc, data, axis_label(ds, layer), robust=robust)
+        if overlays:
+            handles += _overlays(a, ds, layer, xdim, ydim, xc, yc)
+        _label_axis(a, ds, "x", xdim, _edges(xc))
+        _label_axis(a, ds, "y", ydim, _edges(yc))
+        xe, ye = _edges(xc), _edges(yc)
+        a.set_xlim(xe[0], xe[-1])
+        a.set_ylim(ye[0], ye[-1])
+        _legend_above(a, handles)
+    return a.figure
+
+
+# --------------------------------------------------------------------------- profiles
+
+
+def profile_figure(ds: xr.Dataset, layers: str | Sequence[str] | None = None, *, ax=None,
+                   size: str | float = "one_column") -> Figure:
+    """A 1-D atlas: each layer against the axis, one panel per layer, sharing x.
+
+    A categorical layer is a step plot whose y ticks are its categories (all
+    of them, so profiles of one layer read alike); a float layer is a line.
+    Each panel is named above its top left corner (the layer, or the
+    symbol and units of a float layer).  The default is every categorical
+    layer, ``n_solutions`` first.
+    """
+    if layers is None:
+        atlas_kind(ds)
+        layers = [str(n) for n, v in ds.data_vars.items() if _is_categorical(v)] or \
+            [str(_first_layer(ds).name)]
+    elif isinstance(layers, str):
+        layers = [layers]
+    variables = [_layer(ds, n) for n in layers]
+    for var in variables:
+        if var.ndim != 1:
+            raise ValueError(f"layer {var.name!r} has {var.ndim} dimensions; a profile needs 1")
+    dim = str(variables[0].dims[0])
+    if any(str(v.dims[0]) != dim for v in variables):
+        raise ValueError("a profile's layers must share one dimension")
+    rows = [len(_flags(v)[0]) if _is_categorical(v) else 5 for v in variables]
+    heights = [0.12 + 0.15 * r for r in rows]
+    width = _width(size)
+    with style():
+        axes = _axes(ax, len(variables), (width, 0.4 + sum(h + 0.2 for h in heights)),
+                     "profile_figure", sharex=True, gridspec_kw={"height_ratios": heights})
+        xc = _coord(ds, dim)
+        for a, var in zip(axes, variables):
+            data = np.asarray(var.values)
+            if _is_categorical(var):
+                values, meanings = _flags(var)
+                a.step(xc, data.astype(float), where="mid", color=_OI["black"], lw=1.0)
+                a.set_yticks(values, [_meaning_text(m) for m in meanings])
+                a.set_ylim(min(values) - 0.5, max(values) + 0.5)
+                a.set_title(_layer_title(var))
+            else:
+                a.plot(xc, data, color=_OI["black"])
+                a.set_title(axis_label(ds, str(var.name)))
+            if a is not axes[-1]:
+                a.tick_params(axis="x", labelbottom=False)
+        _label_axis(axes[-1], ds, "x", dim, xc)
+        if xc.size > 1:
+            axes[-1].set_xlim(xc.min(), xc.max())
+    return axes[0].figure
+
+
+def _layer_title(var: xr.DataArray) -> str:
+    name = {"n_solutions": "number of solutions"}.get(str(var.name), str(var.name))
+    name = name.replace("_", " ")
+    return name[:1].upper() + name[1:]
+
+
+# --------------------------------------------------------------------------- fate maps
+
+
+def fate_figure(ds: xr.Dataset, *, extra: str | None = None, x: str | None = None, ax=None,
+                size: str | float = "one_column", robust: bool = True) -> Figure:
+    """A fate map: what becomes of each initial state, in the fate colours.
+
+    The categories present in ``fate`` (rest, contact lost, no solution...)
+    are listed above the map.  ``extra`` adds a second panel with another
+    layer of the dataset, such as ``phi_rest`` (the rest angle, blank where
+    the motion did not come to rest), ``n_reversals`` or ``t_rest``, with its
+    colour bar above it: beside the fate map at two-column width (sharing
+    the y axis), below it at one-column width (sharing the x axis).
+    """
+    atlas_kind(ds)
+    fate = _layer(ds, "fate")
+    if not _is_categorical(fate):
+        raise ValueError("layer 'fate' needs flag_values and flag_meanings")
+    xdim, ydim = _grid(ds, fate, x)
+    width = _width(size)
+    wide = width >= 5
+    extra_var = None
+    if extra is not None:
+        extra_var = _layer(ds, extra)
+        _grid(ds, extra_var, xdim)
+    if extra_var is None:
+        figsize, grid, share = (width, width * (0.86 if not wide else 0.55)), (1, 1), {}
+    elif wide:
+        figsize, grid, share = (width, width * 0.5), (1, 2), {"sharey": True}
+    else:
+        figsize, grid, share = (width, width * 1.75), (2, 1), {"sharex": True}
+    with style():
+        axes = _axes(ax, grid[0] * grid[1], figsize, "fate_figure", grid=grid,
+                     **share)
+        xc, yc = _coord(ds, xdim), _coord(ds, ydim)
+        xe, ye = _edges(xc), _edges(yc)
+        handles = _draw_categorical(axes[0], xc, yc,
+                                    np.asarray(fate.transpose(ydim, xdim).values), fate)
+        if extra_var is not None:
+            data = np.asarray(extra_var.transpose(ydim, xdim).values)
+            _draw_continuous(axes[1], xc, yc, data, axis_label(ds, extra), robust=robust,
+                             location="top")
+        for i, a in enumerate(axes):
+            if not (i == 0 and "sharex" in share):
+                _label_axis(a, ds, "x", xdim, xe)
+            else:
+                a.tick_params(axis="x", labelbottom=False)
+            if not (i == 1 and "sharey" in share):
+                _label_axis(a, ds, "y", ydim, ye)
+            else:
+                a.tick_params(axis="y", labelleft=False)
+            a.set_xlim(xe[0], xe[-1])
+            a.set_ylim(ye[0], ye[-1])
+        _legend_above(axes[0], handles)
+    return axes[0].figure
+
+
+# --------------------------------------------------------------------------- motions
+
+
+def _event_flags(var: xr.DataArray) -> dict[int, str]:
+    if _is_categorical(var):
+        values, meanings = _flags(var)
+    else:
+        values, meanings = list(_events.EVENT_VALUES), _events.EVENT_MEANINGS.split()
+    return dict(zip(values, meanings))
+
+
+def _event_style(name: str) -> dict:
+    marker, colour = EVENT_MARKERS.get(name, ("o", GREY))
+    if name in _TERMINAL:
+        return {"marker": marker, "ms": 6.5 if marker != "*" else 8.5, "mfc": colour,
+                "mec": _OI["black"], "mew": 0.6, "ls": "none", "zorder": 5, "clip_on": False}
+    hollow = name in ("start", "stick", "slip", "switch")
+    return {"marker": marker, "ms": 3.5, "mfc": "white" if hollow else colour,
+            "mec": _OI["black"] if name == "start" else colour, "mew": 0.8, "ls": "none",
+            "zorder": 4, "clip_on": False}
+
+
+def _event_handles(names: Sequence[str]) -> list[Line2D]:
+    order = {n: i for i, n in enumerate(EVENT_MARKERS)}
+    return [Line2D([], [], label=_meaning_text(n), **_event_style(n))
+            for n in sorted(set(names), key=lambda n: order.get(n, len(order)))]
+
+
+def _zero_line(ax: Axes, values: np.ndarray) -> None:
+    finite = values[np.isfinite(values)]
+    if finite.size and finite.min() < 0 < finite.max():
+        ax.axhline(0.0, color=PALE_GREY, lw=0.6, zorder=0)
+
+
+def phase_curve_figure(ds: xr.Dataset, *, squared: bool = False, ax=None,
+                       size: str | float = "one_column") -> Figure:
+    r"""A phase curve: :math:`\omega` (:math:`\omega^2` with ``squared``) against :math:`\varphi`.
+
+    Each stage is drawn separately (no line joins one stage's end to the next
+    one's start); each stage end is marked by its reason (reversal, rest,
+    contact lost...), the terminal one larger and edged; the start is an
+    open circle.  The legend above lists the reasons present.
+
+    Needs ``phi``, ``omega`` and the stage of each point (``point_stage``, as
+    :func:`phasemap.phase_curve` writes it, or ``stage``) on dimension
+    ``point``, and ``stage_end_reason`` (Event flags), ``stage_end_phi``,
+    ``stage_end_omega`` on dimension ``stage``.  ``omega_squared`` is used for
+    the squared plot when present.
+    """
+    _require(ds, ("phi", "omega", "stage_end_reason", "stage_end_phi", "stage_end_omega"),
+             "phase curve")
+    stage_of_point = next((n for n in ("point_stage", "stage") if n in ds.variables
+                           and ds[n].dims == ds.phi.dims), None)
+    if stage_of_point is None:
+        raise ValueError("not a phase curve dataset: missing point_stage (the stage of "
+                         "each point)")
+    width = _width(size)
+    figsize = (width, width * (0.78 if width < 5 else 0.45))
+    phi, omega = np.asarray(ds.phi.values, float), np.asarray(ds.omega.values, float)
+    stage = np.asarray(ds[stage_of_point].values)
+    if squared:
+        y = (np.asarray(ds.omega_squared.values, float) if "omega_squared" in ds.variables
+             else omega ** 2)
+    else:
+        y = omega
+    with style():
+        (a,) = _axes(ax, 1, figsize, "phase_curve_figure")
+        for s in np.unique(stage):
+            sel = stage == s
+            a.plot(phi[sel], y[sel], color=_OI["black"], lw=1.0, zorder=3)
+        if phi.size:
+            a.plot(phi[:1], y[:1], **_event_style("start"))
+        flags = _event_flags(ds.stage_end_reason)
+        reasons = np.asarray(ds.stage_end_reason.values)
+        end_phi = np.asarray(ds.stage_end_phi.values, float)
+        end_y = np.asarray(ds.stage_end_omega.values, float)
+        end_y = end_y ** 2 if squared else end_y
+        names = ["start"] if phi.size else []
+        for code in np.unique(reasons):
+            name = flags.get(int(code), f"event {int(code)}")
+            sel = reasons == code
+            a.plot(end_phi[sel], end_y[sel], **_event_style(name))
+            names.append(name)
+        if not squared:
+            _zero_line(a, y)
+        _label_axis(a, ds, "x", "phi", phi)
+        a.set_ylabel(_squared_label(ds, "omega") if squared else axis_label(ds, "omega"))
+        _legend_above(a, _event_handles(names))
+    return a.figure
+
+
+def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = None,
+                      phase_plane: bool = False, ax=None,
+                      size: str | float = "one_column") -> Figure:
+    r"""A trajectory: each state against time, one panel per state, events marked.
+
+    Each event after the start is marked on every state's curve by its kind
+    (reversal, stick, rest...), the terminal event larger and edged, with a
+    dashed vertical line at its time across the panels; the legend above
+    lists the kinds present.  ``states`` picks and orders the states
+    (default: every state variable on dimension ``t``).  With
+    ``phase_plane=True``, one panel of :math:`\omega` against
+    :math:`\varphi` (or ``states=(x, y)``) instead, where the start is marked
+    too.
+
+    Needs a coordinate ``t`` and state variables on it (categorical
+    variables such as the active ``branch`` are not states); events, when
+    any, as ``event_t``, ``event_kind`` (Event flags) and ``event_<state>`` on
+    dimension ``event``.
+    """
+    _require(ds, ("t",), "trajectory")
+    available = [str(n) for n, v in ds.data_vars.items()
+                 if v.dims == ("t",) and not _is_categorical(v)]
+    if states is None:
+        states = ["phi", "omega"] if phase_plane else available
+    elif isinstance(states, str):
+        states = [states]
+    states = list(states)
+    for name in states:
+        if name not in available:
+            raise ValueError(f"unknown state {name!r}; this trajectory has: "
+                             f"{', '.join(available)}")
+    if phase_plane and len(states) != 2:
+        raise ValueError(f"a phase plane needs two states, got {states}")
+    if not states:
+        raise ValueError("this trajectory has no state variables on dimension 't'")
+    t = _coord(ds, "t")
+    has_events = "event_kind" in ds.variables and "event_t" in ds.variables
+    if has_events:
+        flags = _event_flags(ds.event_kind)
+        kinds = [flags.get(int(k), f"event {int(k)}") for k in np.asarray(ds.event_kind.values)]
+        t_ev = np.asarray(ds.event_t.values, float)
+    else:
+        kinds, t_ev = [], np.array([])
+    width = _width(size)
+    with style():
+        if phase_plane:
+            (a,) = _axes(ax, 1, (width, width * (0.78 if width < 5 else 0.45)),
+                         "trajectory_figure")
+            xs, ys = (np.asarray(ds[s].values, float) for s in states)
+            a.plot(xs, ys, color=_OI["black"], lw=1.0, zorder=3)
+            _mark_events(a, ds, kinds, states[0], states[1], start=True)
+            _zero_line(a, ys)
+            _label_axis(a, ds, "x", states[0], xs)
+            _label_axis(a, ds, "y", states[1], ys)
+            axes = [a]
+        else:
+            per = 0.95 if width < 5 else 1.1
+            axes = _axes(ax, len(states), (width, 0.55 + per * len(states)),
+                         "trajectory_figure", sharex=True)
+            terminal = [tt for tt, k in zip(t_ev, kinds) if k in _TERMINAL]
+            for a, name in zip(axes, states):
+                values = np.asarray(ds[name].values, float)
+                a.plot(t, values, color=_OI["black"], lw=1.0, zorder=3)
+                _mark_events(a, ds, kinds, "t", name)
+                for tt in terminal:
+                    a.axvline(tt, color=GREY, lw=0.6, ls="--", zorder=1)
+                _label_axis(a, ds, "y", name, values)
+                if a is not axes[-1]:
+                    a.tick_params(axis="x", labelbottom=False)
+            _label_axis(axes[-1], ds, "x", "t")
+            if t.size > 1:
+                axes[-1].set_xlim(t.min(), t.max())
+            if len(axes) > 1:
+                axes[0].figure.align_ylabels(axes)
+        shown = [k for k in kinds if phase_plane or k != "start"]
+        _legend_above(axes[0], _event_handles(shown))
+    return axes[0].figure
+
+
+def _mark_events(ax: Axes, ds: xr.Dataset, kinds: list[str], xname: str, yname: str,
+                 start: bool = False) -> None:
+    """Mark each event at its (x, y), styled by kind; ``start`` too if asked."""
+    if not kinds:
+        return
+    xkey = "event_t" if xname == "t" else f"event_{xname}"
+    ykey = f"event_{yname}"
+    if xkey not in ds.variables or ykey not in ds.variables:
+        return
+    xs, ys = np.asarray(ds[xkey].values, float), np.asarray(ds[ykey].values, float)
+    kinds_arr = np.asarray(kinds)
+    for name in dict.fromkeys(kinds):
+        if name == "start" and not start:
+            continue
+        sel = kinds_arr == name
+        ax.plot(xs[sel], ys[sel], **_event_style(name))
+
+
+# --------------------------------------------------------------------------- benchmarks
+
+_WP_KEYS = ("method", "system", "tol", "error_final", "error_l2", "seconds")
+
+
+def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final", ax=None,
+                          size: str | float = "two_column") -> Figure:
+    """A work-precision diagram: error against run time, log-log, as in DiffEqDevTools.
+
+    ``table`` is a list of dicts with keys ``method``, ``system``, ``tol``,
+    ``error_final``, ``error_l2`` and ``seconds``, one per (method, system,
+    tolerance).  One panel per system (in order of appearance, titled with
+    its name), one line per method (same colour and marker in every panel),
+    points joined in order of tolerance.  ``error`` picks ``error_final`` or
+    ``error_l2``.  Points whose error or time is not positive and finite
+    cannot be drawn on log axes and are left out.
+    """
+    if error not in ("error_final", "error_l2"):
+        raise ValueError(f"error must be 'error_final' or 'error_l2', got {error!r}")
+    rows = list(table)
+    if not rows:
+        raise ValueError("work_precision_figure: the table is empty")
+    for i, row in enumerate(rows):
+        missing = [k for k in _WP_KEYS if k not in row]
+        if missing:
+            raise ValueError(f"work_precision_figure: row {i} lacks {', '.join(missing)}")
+    systems = list(dict.fromkeys(str(r["system"]) for r in rows))
+    methods = list(dict.fromkeys(str(r["method"]) for r in rows))
+    width = _width(size)
+    ncols = min(len(systems), 4 if width >= 5 else 2)
+    nrows = -(-len(systems) // ncols)
+    spare = ax is None and nrows * ncols > len(systems)
+    panel_h = (width / ncols) * (0.8 if width >= 5 else 0.85)
+    top = 0.0 if spare else 0.3
+    with style():
+        axes = _axes(ax, nrows * ncols if spare else len(systems),
+                     (width, top + 0.1 + panel_h * nrows), "work_precision_figure",
+                     grid=(nrows, ncols))
+        if spare:
+            axes, spares = axes[:len(systems)], axes[len(systems):]
+        handles = {}
+        for i, (a, system) in enumerate(zip(axes, systems)):
+            for j, method in enumerate(methods):
+                pts = sorted(((float(r["tol"]), float(r["seconds"]), float(r[error]))
+                              for r in rows if str(r["system"]) == system
+                              and str(r["method"]) == method), reverse=True)
+                pts = [p for p in pts if all(math.isfinite(v) and v > 0 for v in p[1:])]
+                if not pts:
+                    continue
+                _, secs, errs = zip(*pts)
+                (line,) = a.plot(secs, errs, color=CYCLE[j % len(CYCLE)],
+                                 marker=MARKERS[j % len(MARKERS)], ms=3.5, lw=1.0,
+                                 label=method)
+                handles.setdefault(method, line)
+            a.set_xscale("log")
+            a.set_yscale("log")
+            a.set_title(system.replace("_", " "))
+            if ax is not None or i % ncols == 0:
+                a.set_ylabel("Error at the final time" if error == "error_final"
+                             else "$L_2$ error along the motion")
+            if ax is not None or i + ncols >= len(systems):
+                a.set_xlabel("Run time (s)")
+        fig = axes[0].figure
+        lines = [handles[m] for m in methods if m in handles]
+        if spare:
+            for extra in spares[1:]:
+                extra.remove()
+            spares[0].set_axis_off()
+            spares[0].legend(lines, [ln.get_label() for ln in lines], loc="center")
+        elif ax is None:
+            labels = [ln.get_label() for ln in lines]
+            fig.legend(lines, labels, loc="outside upper center",
+                       ncols=_ncols(labels, width * 0.95))
+        else:
+            _legend_above(axes[0], lines)
+    return axes[0].figure
+
+
+# --------------------------------------------------------------------------- files
+
+
+def save_figure(fig: Figure, stem: str | os.PathLike, *, dpi: int = 300
+                ) -> tuple[pathlib.Path, pathlib.Path]:
+    """Write ``fig`` as ``<stem>.pdf`` (vector, fonts embedded) and ``<stem>.png`` (``dpi``).
+
+    A ``.pdf`` or ``.png`` suffix on ``stem`` is dropped.  Each file is
+    written atomically (see :func:`phasemap.atlas.atomic_path`).  Returns the
+    two paths, PDF first.
+
+    Raises
+    ------
+    ValueError
+        if the folder does not exist.
+    """
+    stem = pathlib.Path(os.path.expanduser(os.fspath(stem)))
+    if stem.suffix.lower() in (".pdf", ".png"):
+        stem = stem.with_suffix("")
+    paths = []
+    with style():
+        for fmt in ("pdf", "png"):
+            path = destination(stem.with_name(stem.name + "." + fmt))
+            meta = ({"Creator": f"phasemap {__version__}"} if fmt == "pdf"
+                    else {"Software": f"phasemap {__version__}"})
+            with atomic_path(path) as tmp:
+                fig.savefig(tmp, format=fmt, dpi=dpi, metadata=meta)
+            paths.append(path)
+    return paths[0], paths[1]

@@ -1,0 +1,662 @@
+"""Figures and the ``ds.phasemap`` accessor.
+
+Map and profile atlases are computed by ``Scene`` on tiny grids and read
+back from netCDF, as a study would; fate maps, phase curves and trajectories
+are synthetic datasets in the formats their producers write.  Every figure is
+drawn and saved as PNG and PDF with warnings turned into errors.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+import xarray as xr
+from matplotlib.contour import ContourSet
+
+import phasemap
+import phasemap.accessor  # registers ds.phasemap
+from phasemap import events
+from phasemap import plot as pplot
+
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    yield
+    plt.close("all")
+
+
+# --------------------------------------------------------------------------- data
+
+
+def _roundtrip(ds: xr.Dataset, path) -> xr.Dataset:
+    phasemap.write_atlas(ds, path)
+    with xr.open_dataset(path) as opened:
+        return opened.load()
+
+
+@pytest.fixture(scope="module")
+def elliptic_map(tmp_path_factory) -> xr.Dataset:
+    """n_solutions over (phi, f) with the slider moving left: none, unique and two."""
+    ds = phasemap.Scene("elliptic_pendulum",
+                        axes={"phi": np.linspace(-3.14, 3.14, 60), "f": np.linspace(0, 6, 40)},
+                        fixed={"xdot": -1.0},
+                        layers=["n_solutions", "singular", "phi_ddot_slide_neg_Npos"]).compute()
+    return _roundtrip(ds, tmp_path_factory.mktemp("atlas") / "elliptic.nc")
+
+
+@pytest.fixture(scope="module")
+def ladder_map(tmp_path_factory) -> xr.Dataset:
+    """The ladder at rest over (phi, f): a stagnation zone phi <= 2 arctan f."""
+    ds = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 50),
+                                        "f": np.linspace(0, 1.2, 30)},
+                        fixed={"omega": 0.0}).compute()
+    return _roundtrip(ds, tmp_path_factory.mktemp("atlas") / "ladder.nc")
+
+
+@pytest.fixture(scope="module")
+def wheel_map(tmp_path_factory) -> xr.Dataset:
+    """The wheel over (phi, omega): contact lost at high speed, stagnation at omega = 0."""
+    ds = phasemap.Scene("wheel", axes={"phi": np.linspace(-3.14, 3.14, 61),
+                                       "omega": np.linspace(-8, 8, 41)},
+                        layers=["n_solutions", "stagnation", "contact_lost"]).compute()
+    return _roundtrip(ds, tmp_path_factory.mktemp("atlas") / "wheel.nc")
+
+
+@pytest.fixture(scope="module")
+def hinge_profile(tmp_path_factory) -> xr.Dataset:
+    """The hinge pendulum at rest along phi: a 1-D atlas with a stagnation zone."""
+    ds = phasemap.Scene("hinge_pendulum", axes={"phi": np.linspace(-3.14, 3.14, 81)},
+                        fixed={"omega": 0.0, "delta": 0.3}).compute()
+    return _roundtrip(ds, tmp_path_factory.mktemp("atlas") / "hinge.nc")
+
+
+def fate_dataset() -> xr.Dataset:
+    """A synthetic fate map of the hinge pendulum over (phi, omega)."""
+    phi = np.linspace(-np.pi, np.pi, 48)
+    omega = np.linspace(-6.0, 6.0, 36)
+    P, W = np.meshgrid(phi, omega, indexing="ij")
+    energy = W ** 2 / 2 + 9.81 * (1 - np.cos(P))
+    fate = np.full(P.shape, events.HORIZON, np.int8)
+    fate[energy < 25.0] = events.REST
+    fate[(energy >= 25.0) & (energy < 27.0)] = events.NO_SOLUTION
+    fate[np.abs(W) > 5.5] = events.CONTACT_LOST
+    rest = fate == events.REST
+    phi_rest = np.where(rest, 0.3 * np.tanh(P + 0.2 * W), np.nan)
+    n_rev = np.where(rest, np.floor(energy / 5.0), 0).astype(np.int32)
+    t_rest = np.where(rest, 0.5 + energy / 10.0, np.nan)
+    dims = ("phi", "omega")
+    return xr.Dataset(
+        {
+            "fate": (dims, fate, {"long_name": "how the motion ends",
+                                  "flag_values": np.array(events.FATE_VALUES, np.int8),
+                                  "flag_meanings": events.FATE_MEANINGS}),
+            "phi_rest": (dims, phi_rest, {"long_name": "angle at rest", "units": "rad"}),
+            "n_reversals": (dims, n_rev, {"long_name": "number of reversals", "units": "1"}),
+            "t_rest": (dims, t_rest, {"long_name": "time to rest", "units": "s"}),
+        },
+        coords={"phi": ("phi", phi, {"units": "rad", "long_name": "angle of the rod"}),
+                "omega": ("omega", omega, {"units": "rad s-1",
+                                           "long_name": "angular velocity of the rod"})},
+        attrs={"Conventions": "CF-1.8", "phasemap_model": "hinge_pendulum",
+               "phasemap_fixed_delta": 0.1},
+    )
+
+
+def phase_curve_dataset(terminal=events.REST, stage_name="point_stage") -> xr.Dataset:
+    """A synthetic phase curve in the format of ``phasemap.phase_curve``.
+
+    Half-ellipses of decaying amplitude joined at reversals, then rest.  The
+    brief's older format names the per-point stage index ``stage``
+    (``stage_name="stage"``), with no stage coordinate.
+    """
+    amplitudes = [2.0, 1.5, 1.0, 0.6]
+    phis, omegas, stages = [], [], []
+    end_reason, end_phi, end_omega = [], [], []
+    for k, (a, b) in enumerate(zip(amplitudes[:-1], amplitudes[1:])):
+        sign = 1 if k % 2 == 0 else -1
+        s = np.linspace(0, np.pi, 40)
+        centre, half = sign * (a - b) / 2, (a + b) / 2
+        phi = centre + sign * half * np.cos(s)
+        omega = -sign * 3.0 * half * np.sin(s)
+        phis.append(phi)
+        omegas.append(omega)
+        stages.append(np.full(s.size, k, np.int32))
+        end_reason.append(events.REVERSAL if k < len(amplitudes) - 2 else terminal)
+        end_phi.append(phi[-1])
+        end_omega.append(omega[-1])
+    omega = np.concatenate(omegas)
+    ds = xr.Dataset(
+        {
+            "phi": ("point", np.concatenate(phis), {"units": "rad", "long_name": "angle"}),
+            "omega": ("point", omega, {"units": "rad s-1", "long_name": "angular velocity"}),
+            "omega_squared": ("point", omega ** 2, {"units": "rad2 s-2"}),
+            stage_name: ("point", np.concatenate(stages), {"long_name": "stage index"}),
+            "stage_end_reason": ("stage", np.array(end_reason, np.int8),
+                                 {"long_name": "why the stage ends",
+                                  "flag_values": np.array(events.EVENT_VALUES, np.int8),
+                                  "flag_meanings": events.EVENT_MEANINGS}),
+            "stage_end_phi": ("stage", np.array(end_phi), {"units": "rad"}),
+            "stage_end_omega": ("stage", np.array(end_omega), {"units": "rad s-1"}),
+        },
+        attrs={"phasemap_kind": "phase_curve", "phasemap_model": "hinge_pendulum"},
+    )
+    if stage_name != "stage":
+        ds = ds.assign_coords(stage=("stage", np.arange(len(end_reason), dtype=np.int32)))
+    return ds
+
+
+def trajectory_dataset() -> xr.Dataset:
+    """A synthetic elliptic-pendulum trajectory: the slider sticks, slips, then no solution."""
+    t = np.linspace(0.0, 4.0, 400)
+    phi = 0.8 * np.cos(3.0 * t) * np.exp(-0.2 * t)
+    omega = np.gradient(phi, t)
+    xdot = np.where(t < 1.0, 1.0 - t, np.where(t < 2.0, 0.0, -0.5 * (t - 2.0)))
+    x = np.concatenate([[0.0], np.cumsum(0.5 * (xdot[1:] + xdot[:-1]) * np.diff(t))])
+    ev_t = np.array([0.0, 1.0, 2.0, 1.05, 3.3])
+    ev_kind = np.array([events.START, events.STICK, events.SLIP, events.REVERSAL,
+                        events.NO_SOLUTION], np.int8)
+    order = np.argsort(ev_t)
+    ev_t, ev_kind = ev_t[order], ev_kind[order]
+    state = {"phi": phi, "omega": omega, "x": x, "xdot": xdot}
+    units = {"phi": "rad", "omega": "rad s-1", "x": "m", "xdot": "m s-1"}
+    names = {"phi": "angle of the bar", "omega": "angular velocity of the bar",
+             "x": "position of the slider", "xdot": "velocity of the slider"}
+    data = {k: ("t", v, {"units": units[k], "long_name": names[k]}) for k, v in state.items()}
+    data["branch"] = ("t", np.where(xdot > 0, 0, np.where(xdot < 0, 2, 4)).astype(np.int8),
+                      {"long_name": "active branch of the friction law",
+                       "flag_values": np.arange(-1, 5, dtype=np.int8),
+                       "flag_meanings": "none slide_pos_Npos slide_pos_Nneg slide_neg_Npos "
+                                        "slide_neg_Nneg stick"})
+    data["event_t"] = ("event", ev_t, {"units": "s", "long_name": "time of the event"})
+    data["event_kind"] = ("event", ev_kind, {"long_name": "kind of event",
+                                             "flag_values": np.array(events.EVENT_VALUES, np.int8),
+                                             "flag_meanings": events.EVENT_MEANINGS})
+    for k, v in state.items():
+        data[f"event_{k}"] = ("event", np.interp(ev_t, t, v), {"units": units[k]})
+    return xr.Dataset(data, coords={"t": ("t", t, {"units": "s", "long_name": "time"})},
+                      attrs={"phasemap_kind": "trajectory", "phasemap_model": "elliptic_pendulum"})
+
+
+def work_precision_table() -> list[dict]:
+    rows = []
+    for system in ("ladder", "hinge_pendulum", "elliptic_pendulum"):
+        for j, method in enumerate(("phasemap", "solve_ivp RK45", "solve_ivp DOP853")):
+            for tol in (1e-4, 1e-6, 1e-8, 1e-10):
+                err = tol * (10.0 ** j) * 3
+                rows.append({"method": method, "system": system, "tol": tol,
+                             "error_final": err, "error_l2": err / 3,
+                             "seconds": 1e-3 * (1 + j) * (1e-4 / tol) ** (0.2 / (1 + j))})
+    rows.append({"method": "phasemap", "system": "ladder", "tol": 1e-12, "error_final": 0.0,
+                 "error_l2": 0.0, "seconds": 0.01})  # exact: cannot be drawn on log axes
+    return rows
+
+
+def _roundtrip_plain(ds: xr.Dataset, path) -> xr.Dataset:
+    ds.to_netcdf(path)
+    with xr.open_dataset(path) as opened:
+        return opened.load()
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def render(fig, tmp_path, name="fig"):
+    """Draw and save as PNG and PDF with every warning an error."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fig.canvas.draw()
+        pdf, png = pplot.save_figure(fig, tmp_path / name)
+    assert pdf.suffix == ".pdf" and png.suffix == ".png"
+    assert pdf.stat().st_size > 0 and png.stat().st_size > 0
+    assert pdf.read_bytes()[:5] == b"%PDF-"
+    return pdf, png
+
+
+def quiet(func, *args, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        return func(*args, **kw)
+
+
+def legend_texts(ax) -> list[str]:
+    legend = ax.get_legend()
+    assert legend is not None, "no legend"
+    return [t.get_text() for t in legend.get_texts()]
+
+
+def present_meanings(var: xr.DataArray) -> list[str]:
+    values = np.asarray(var.attrs["flag_values"]).tolist()
+    meanings = var.attrs["flag_meanings"].split()
+    here = set(np.unique(var.values).tolist())
+    return [m.replace("_", " ") for v, m in zip(values, meanings) if v in here]
+
+
+def assert_legend_outside(fig, ax):
+    """The legend sits above the axes and inside the figure, clear of the data."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    legend = ax.get_legend().get_window_extent(renderer)
+    axes = ax.get_window_extent(renderer)
+    assert legend.y0 >= axes.y1 - 1.0, "the legend overlaps the axes"
+    assert legend.x0 >= -1.0 and legend.x1 <= fig.bbox.width + 1.0, "the legend is cut off"
+    assert legend.y1 <= fig.bbox.height + 1.0, "the legend is cut off"
+
+
+# --------------------------------------------------------------------------- kinds
+
+
+def test_the_accessor_picks_the_kind_of_each_dataset(elliptic_map, hinge_profile, tmp_path):
+    fate = _roundtrip_plain(fate_dataset(), tmp_path / "fate.nc")
+    curve = _roundtrip_plain(phase_curve_dataset(), tmp_path / "curve.nc")
+    traj = _roundtrip_plain(trajectory_dataset(), tmp_path / "traj.nc")
+    assert elliptic_map.phasemap.kind == "map"
+    assert hinge_profile.phasemap.kind == "profile"
+    assert fate.phasemap.kind == "fate"
+    assert curve.phasemap.kind == "phase_curve"
+    assert traj.phasemap.kind == "trajectory"
+    assert elliptic_map.phasemap.model is phasemap.get_model("elliptic_pendulum")
+    assert fate.phasemap.model.name == "hinge_pendulum"
+    # a slice of a 2-D atlas is a profile; a float-only atlas is judged by its first layer
+    assert elliptic_map.isel(f=5).phasemap.kind == "profile"
+    assert elliptic_map[["phi_ddot_slide_neg_Npos"]].phasemap.kind == "map"
+
+
+def test_the_accessor_draws_the_figure_of_each_kind(elliptic_map, hinge_profile):
+    fig = elliptic_map.phasemap.plot()  # map: categorical mesh and legend
+    assert isinstance(fig, matplotlib.figure.Figure)
+    assert legend_texts(fig.axes[0]) == present_meanings(elliptic_map.n_solutions)
+    fig = hinge_profile.phasemap.plot()  # profile: one step panel per categorical layer
+    assert len(fig.axes) == 2
+    assert [t.get_text() for t in fig.axes[0].get_yticklabels()] == \
+        ["none", "unique", "two", "continuum", "three or more"]
+    fig = fate_dataset().phasemap.plot()
+    assert legend_texts(fig.axes[0]) == present_meanings(fate_dataset().fate)
+    fig = phase_curve_dataset().phasemap.plot()
+    assert legend_texts(fig.axes[0]) == ["start", "reversal", "rest"]
+    fig = trajectory_dataset().phasemap.plot()
+    assert len(fig.axes) == 4
+    assert legend_texts(fig.axes[0]) == ["reversal", "stick", "slip", "no solution"]
+
+
+# --------------------------------------------------------------------------- maps
+
+
+def test_map_legend_lists_the_categories_present_above_the_axes(elliptic_map, tmp_path):
+    fig = quiet(elliptic_map.phasemap.plot, overlays=False)
+    ax = fig.axes[0]
+    assert set(np.unique(elliptic_map.n_solutions.values)) == {0, 1, 2}
+    assert legend_texts(ax) == ["none", "unique", "two"]
+    colours = [matplotlib.colors.to_hex(p.get_facecolor())
+               for p in ax.get_legend().get_patches()]
+    assert colours == [pplot.CATEGORY_COLOURS[m].lower() for m in ("none", "unique", "two")]
+    assert_legend_outside(fig, ax)
+    assert ax.get_title() == "" and not ax.xaxis.get_gridlines()[0].get_visible()
+    assert not ax.spines["top"].get_visible() and not ax.spines["right"].get_visible()
+    render(fig, tmp_path)
+
+
+def test_map_axis_labels_carry_symbols_and_units(elliptic_map):
+    ax = elliptic_map.phasemap.plot().axes[0]
+    assert ax.get_xlabel() == r"$\varphi$ (rad)"
+    assert ax.get_ylabel() == "$f$"  # dimensionless: no units
+    ticks = [t.get_text() for t in ax.get_xticklabels()]
+    assert r"$\pi$" in ticks and r"$-\pi/2$" in ticks
+
+
+def test_stagnation_is_hatched_and_outlined(ladder_map, tmp_path):
+    fig = ladder_map.phasemap.plot()
+    ax = fig.axes[0]
+    contours = [c for c in ax.collections if isinstance(c, ContourSet)]
+    assert [c.hatches for c in contours if c.filled] == [["////"]]
+    assert [c.levels.tolist() for c in contours if not c.filled] == [[0.5]], \
+        "no outline around the stagnation zone"
+    assert legend_texts(ax) == ["unique", "stagnation"]
+    assert ax.get_legend().get_patches()[-1].get_hatch() == "////"
+    render(fig, tmp_path)
+
+
+def test_stagnation_everywhere_draws_hatching_without_an_outline(tmp_path):
+    ds = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 12),
+                                        "f": np.linspace(1.0, 2.0, 8)},
+                        fixed={"omega": 0.0}).compute()
+    assert int(ds.stagnation.min()) == 1
+    fig = quiet(pplot.map_figure, ds)
+    contours = [c for c in fig.axes[0].collections if isinstance(c, ContourSet)]
+    assert [(c.filled, c.hatches) for c in contours] == [(True, ["////"])]
+    render(fig, tmp_path)
+
+
+def test_contact_lost_is_overlaid_distinctly(wheel_map, tmp_path):
+    fig = quiet(wheel_map.phasemap.plot, size="two_column")
+    ax = fig.axes[0]
+    assert fig.get_figwidth() == pytest.approx(7.2)
+    texts = legend_texts(ax)
+    assert texts[-2:] == ["stagnation", "contact lost"]
+    patches = ax.get_legend().get_patches()
+    assert patches[-1].get_hatch() != patches[-2].get_hatch()
+    assert ax.get_ylabel() == r"$\omega$ (rad s$^{-1}$)"
+    assert_legend_outside(fig, ax)
+    render(fig, tmp_path)
+
+
+def test_singular_cells_are_dotted(tmp_path):
+    ds = phasemap.Scene("hinge_pendulum", axes={"phi": np.linspace(-3, 3, 30),
+                                                "delta": np.linspace(0, 1.5, 31)},
+                        fixed={"omega": 1.0}, layers=["n_solutions", "singular"]).compute()
+    ds = _roundtrip(ds, tmp_path / "hinge.nc")
+    assert int(ds.singular.sum()) == 30  # the row delta = l
+    fig = quiet(ds.phasemap.plot)
+    ax = fig.axes[0]
+    assert legend_texts(ax) == ["none", "unique", "singular"]
+    dots = [l for l in ax.lines if l.get_marker() == "o"]
+    assert len(dots) == 1 and len(dots[0].get_xdata()) == 30
+    np.testing.assert_allclose(dots[0].get_ydata(), 1.0)
+    assert ax.get_ylabel() == r"$\delta$ (m)"
+    render(fig, tmp_path)
+
+
+def test_float_layer_gets_a_diverging_colour_bar(elliptic_map, tmp_path):
+    data = elliptic_map.phi_ddot_slide_neg_Npos.values
+    assert np.nanmin(data) < 0 < np.nanmax(data) and np.isnan(data).any()
+    fig = quiet(elliptic_map.phasemap.plot, "phi_ddot_slide_neg_Npos")
+    ax, cbar_ax = fig.axes
+    mesh = ax.collections[0]
+    assert mesh.cmap.name == "phasemap_sunset"
+    assert mesh.norm.vmin == pytest.approx(-mesh.norm.vmax)
+    assert r"\ddot\varphi" in cbar_ax.get_ylabel() and "rad s$^{-2}$" in cbar_ax.get_ylabel()
+    render(fig, tmp_path)
+
+
+def test_one_column_size_and_legible_fonts(elliptic_map):
+    fig = elliptic_map.phasemap.plot()
+    assert fig.get_figwidth() == pytest.approx(3.5)
+    ax = fig.axes[0]
+    sizes = [ax.xaxis.label.get_fontsize(), ax.yaxis.label.get_fontsize()]
+    sizes += [t.get_fontsize() for t in ax.get_xticklabels() + ax.get_legend().get_texts()]
+    assert all(8 <= s <= 9 for s in sizes)
+
+
+def test_style_is_local_to_the_figure(elliptic_map):
+    before = dict(matplotlib.rcParams)
+    elliptic_map.phasemap.plot()
+    assert dict(matplotlib.rcParams) == before
+
+
+def test_map_into_a_given_axes(elliptic_map):
+    fig, ax = plt.subplots()
+    out = elliptic_map.phasemap.plot(ax=ax)
+    assert out is fig and ax.get_xlabel() == r"$\varphi$ (rad)"
+    with pytest.raises(ValueError, match="draws 2 panels"):
+        trajectory_dataset().phasemap.plot(["phi", "omega"], ax=ax)
+
+
+def test_coordinate_unknown_to_the_model_falls_back_to_long_name_and_units(tmp_path):
+    ds = phasemap.Scene("hinge_pendulum", axes={"phi": np.linspace(-3, 3, 20),
+                                                "delta": np.linspace(0, 1.4, 15)},
+                        fixed={"omega": 0.0}).compute()
+    ratio = (ds.delta / ds.attrs["phasemap_fixed_l"]).values
+    attrs = {"units": "1", "long_name": "friction length over rod length"}
+    ds = ds.assign_coords(delta_l=("delta", ratio, attrs))
+    ds = ds.swap_dims(delta="delta_l").drop_vars("delta")
+    ax = quiet(pplot.map_figure, ds).axes[0]
+    assert ax.get_ylabel() == "Friction length over rod length"
+    ds["delta_l"].attrs["units"] = "m m-1"
+    assert pplot.axis_label(ds, "delta_l") == "Friction length over rod length (m m$^{-1}$)"
+
+
+def test_units_as_mathtext():
+    assert pplot.format_units("rad s-1") == "rad s$^{-1}$"
+    assert pplot.format_units("m2") == "m$^{2}$"
+    assert pplot.format_units("1") == "" and pplot.format_units(None) == ""
+    assert pplot.format_units("kg m s-2") == "kg m s$^{-2}$"
+
+
+# --------------------------------------------------------------------------- profiles
+
+
+def test_profile_is_a_step_plot_per_categorical_layer(hinge_profile, tmp_path):
+    fig = quiet(hinge_profile.phasemap.plot)
+    top, bottom = fig.axes
+    assert [t.get_text() for t in bottom.get_yticklabels()] == ["no", "yes"]
+    line = bottom.lines[0]
+    assert line.get_drawstyle() == "steps-mid"
+    np.testing.assert_array_equal(line.get_ydata(), hinge_profile.stagnation.values)
+    assert bottom.get_xlabel() == r"$\varphi$ (rad)"
+    assert top.get_xlabel() == ""
+    render(fig, tmp_path)
+
+
+def test_profile_of_one_float_layer(tmp_path):
+    ds = phasemap.Scene("ladder", axes={"f": np.linspace(0.0, 1.0, 25)},
+                        fixed={"phi": 0.7, "omega": 0.5},
+                        layers=["n_solutions", "phi_ddot_slide_pos"]).compute()
+    fig = quiet(ds.phasemap.plot, "phi_ddot_slide_pos")
+    assert fig.axes[0].get_title(loc="left") == \
+        r"$\ddot\varphi\ [\mathrm{slide\ pos}]$ (rad s$^{-2}$)"
+    assert fig.axes[0].get_xlabel() == "$f$"
+    render(fig, tmp_path)
+
+
+# --------------------------------------------------------------------------- fate maps
+
+
+def test_fate_map_lists_only_the_fates_present(tmp_path):
+    ds = _roundtrip_plain(fate_dataset(), tmp_path / "fate.nc")
+    fig = quiet(ds.phasemap.plot)
+    assert legend_texts(fig.axes[0]) == ["rest", "contact lost", "no solution", "horizon"]
+    assert_legend_outside(fig, fig.axes[0])
+    render(fig, tmp_path)
+
+
+@pytest.mark.parametrize("extra, size", [("phi_rest", "one_column"), ("phi_rest", "two_column"),
+                                         ("n_reversals", "one_column"), ("t_rest", "two_column")])
+def test_fate_map_with_a_second_panel(extra, size, tmp_path):
+    fig = quiet(fate_dataset().phasemap.plot, extra=extra, size=size)
+    _, extra_ax, cbar_ax = fig.axes
+    assert extra_ax.get_xlabel() == r"$\varphi$ (rad)"
+    assert cbar_ax.get_xlabel() == pplot.axis_label(fate_dataset(), extra)  # colour bar on top
+    if extra == "phi_rest":
+        assert cbar_ax.get_xlabel() == r"$\varphi_{\mathrm{rest}}$ (rad)"
+    if extra == "n_reversals":
+        ticks = cbar_ax.get_xticks()
+        assert np.allclose(ticks, np.round(ticks))
+    render(fig, tmp_path)
+
+
+def test_fates_along_a_line_are_a_profile(tmp_path):
+    ds = fate_dataset().isel(omega=3)
+    assert ds.phasemap.kind == "fate"
+    fig = quiet(ds.phasemap.plot)
+    (ax,) = fig.axes
+    assert ax.lines[0].get_drawstyle() == "steps-mid"
+    assert [t.get_text() for t in ax.get_yticklabels()] == \
+        [m.replace("_", " ") for m in events.FATE_MEANINGS.split()]
+    render(fig, tmp_path)
+
+
+def test_other_layer_of_a_fate_dataset_is_a_plain_map():
+    fig = fate_dataset().phasemap.plot("t_rest")
+    assert len(fig.axes) == 2 and fig.axes[1].get_ylabel() == "Time to rest (s)"
+
+
+# --------------------------------------------------------------------------- motions
+
+
+@pytest.mark.parametrize("squared, stage_name", [(False, "point_stage"), (True, "point_stage"),
+                                                (False, "stage")])
+def test_phase_curve_marks_stage_ends_by_reason(squared, stage_name, tmp_path):
+    ds = _roundtrip_plain(phase_curve_dataset(stage_name=stage_name), tmp_path / "curve.nc")
+    fig = quiet(ds.phasemap.plot, squared=squared)
+    ax = fig.axes[0]
+    curves = [l for l in ax.lines if l.get_marker() == "None" and l.get_color() == "#000000"]
+    assert len(curves) == ds.sizes["stage"]  # one line per stage: no joins across stages
+    assert ax.get_xlabel() == r"$\varphi$ (rad)"
+    assert ax.get_ylabel() == (r"$\omega^2$ (rad$^{2}$ s$^{-2}$)" if squared
+                               else r"$\omega$ (rad s$^{-1}$)")
+    markers = {l.get_label(): l for l in ax.get_legend().legend_handles}
+    assert markers["rest"].get_markersize() > markers["reversal"].get_markersize()
+    assert_legend_outside(fig, ax)
+    render(fig, tmp_path)
+
+
+def test_trajectory_marks_events_and_the_terminal_one(tmp_path):
+    ds = _roundtrip_plain(trajectory_dataset(), tmp_path / "traj.nc")
+    fig = quiet(ds.phasemap.plot)
+    axes = fig.axes
+    assert [a.get_ylabel() for a in axes] == [
+        r"$\varphi$ (rad)", r"$\omega$ (rad s$^{-1}$)", "$x$ (m)", r"$\dot x$ (m s$^{-1}$)"]
+    assert axes[-1].get_xlabel() == "$t$ (s)"
+    for a in axes:  # the terminal event (no solution at t = 3.3) as a dashed line in every panel
+        dashed = [l for l in a.lines if l.get_linestyle() == "--"]
+        assert len(dashed) == 1 and dashed[0].get_xdata()[0] == pytest.approx(3.3)
+    markers = {l.get_label(): l for l in axes[0].get_legend().legend_handles}
+    assert markers["no solution"].get_markersize() > markers["stick"].get_markersize()
+    assert_legend_outside(fig, axes[0])
+    render(fig, tmp_path)
+
+
+def test_trajectory_phase_plane(tmp_path):
+    fig = quiet(trajectory_dataset().phasemap.plot, phase_plane=True)
+    ax = fig.axes[0]
+    assert ax.get_xlabel() == r"$\varphi$ (rad)" and ax.get_ylabel() == r"$\omega$ (rad s$^{-1}$)"
+    assert legend_texts(ax) == ["start", "reversal", "stick", "slip", "no solution"]
+    render(fig, tmp_path)
+    fig = quiet(trajectory_dataset().phasemap.plot, ["xdot", "x"], phase_plane=True)
+    assert fig.axes[0].get_xlabel() == r"$\dot x$ (m s$^{-1}$)"
+
+
+def test_figures_of_the_real_producers(tmp_path):
+    """phasemap.phase_curve and phasemap.simulate write what these figures read."""
+    phase = pytest.importorskip("phasemap.phase")
+    simulate = pytest.importorskip("phasemap.simulate")
+    curve = _roundtrip(phase.phase_curve("hinge_pendulum", phi=2.5, omega=0.0, delta=0.1),
+                       tmp_path / "curve.nc")
+    assert curve.phasemap.kind == "phase_curve"
+    fig = quiet(curve.phasemap.plot)
+    texts = legend_texts(fig.axes[0])
+    assert texts[0] == "start" and texts[-1] == curve.attrs["end_reason"].replace("_", " ")
+    render(fig, tmp_path, "curve")
+    motion = _roundtrip(simulate.simulate("elliptic_pendulum", t_end=3.0, phi=1.0, omega=0.0,
+                                          xdot=1.0, f=0.5), tmp_path / "motion.nc")
+    assert motion.phasemap.kind == "trajectory"
+    fig = quiet(motion.phasemap.plot)
+    assert sorted(a.get_ylabel() for a in fig.axes) == sorted(
+        [r"$\varphi$ (rad)", r"$\omega$ (rad s$^{-1}$)", "$x$ (m)", r"$\dot x$ (m s$^{-1}$)"])
+    assert legend_texts(fig.axes[0])[-1] == motion.attrs["end_reason"].replace("_", " ")
+    render(fig, tmp_path, "motion")
+
+
+# --------------------------------------------------------------------------- benchmarks
+
+
+@pytest.mark.parametrize("size", ["one_column", "two_column"])
+def test_work_precision_one_panel_per_system_one_line_per_method(size, tmp_path):
+    fig = quiet(pplot.work_precision_figure, work_precision_table(), size=size)
+    axes = [a for a in fig.axes if a.axison]
+    assert [a.get_title(loc="left") for a in axes] == \
+        ["ladder", "hinge pendulum", "elliptic pendulum"]
+    for a in axes:
+        assert a.get_xscale() == "log" and a.get_yscale() == "log"
+        assert [l.get_label() for l in a.lines] == \
+            ["phasemap", "solve_ivp RK45", "solve_ivp DOP853"]
+        assert len(a.lines[0].get_xdata()) == 4  # the zero-error row is left out
+    # two columns: one legend above the panels; one column: in the free fourth slot
+    legend = fig.legends[0] if size == "two_column" else fig.axes[-1].get_legend()
+    assert not (size == "one_column" and fig.axes[-1].axison)
+    assert [t.get_text() for t in legend.get_texts()] == \
+        ["phasemap", "solve_ivp RK45", "solve_ivp DOP853"]
+    render(fig, tmp_path)
+    fig = quiet(pplot.work_precision_figure, work_precision_table(), error="error_l2")
+    assert fig.axes[0].get_ylabel() == "$L_2$ error along the motion"
+
+
+def test_work_precision_bad_table():
+    with pytest.raises(ValueError, match="empty"):
+        pplot.work_precision_figure([])
+    with pytest.raises(ValueError, match="row 0 lacks seconds"):
+        pplot.work_precision_figure([{"method": "a", "system": "b", "tol": 1.0,
+                                      "error_final": 1.0, "error_l2": 1.0}])
+    with pytest.raises(ValueError, match="error must be"):
+        pplot.work_precision_figure(work_precision_table(), error="error_max")
+
+
+# --------------------------------------------------------------------------- files
+
+
+def test_savefig_writes_pdf_and_png(elliptic_map, tmp_path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        pdf, png = elliptic_map.phasemap.savefig(tmp_path / "elliptic.pdf")
+    assert (pdf.name, png.name) == ("elliptic.pdf", "elliptic.png")
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    from matplotlib.image import imread
+    width = imread(png).shape[1]
+    assert width == pytest.approx(3.5 * 300, abs=2)
+    assert not plt.get_fignums()  # savefig closes the figure it made
+    assert not list(tmp_path.glob(".*.part"))
+
+
+def test_save_figure_into_a_missing_folder(tmp_path):
+    fig = phase_curve_dataset().phasemap.plot()
+    with pytest.raises(ValueError, match="does not exist"):
+        pplot.save_figure(fig, tmp_path / "missing" / "fig")
+
+
+# --------------------------------------------------------------------------- docs
+
+
+@pytest.mark.parametrize("module", ["phasemap.plot", "phasemap.accessor"])
+def test_docstring_examples(module):
+    import doctest
+    import importlib
+
+    result = doctest.testmod(importlib.import_module(module))
+    assert result.attempted >= 2 and result.failed == 0
+
+
+# --------------------------------------------------------------------------- bad input
+
+
+def test_a_dataset_that_is_not_an_atlas():
+    ds = xr.Dataset({"a": ("x", np.arange(3))})
+    with pytest.raises(ValueError, match="not a phasemap atlas"):
+        _ = ds.phasemap.kind
+    with pytest.raises(ValueError, match="not a phasemap atlas"):
+        ds.phasemap.plot()
+    with pytest.raises(ValueError, match="no phasemap_model"):
+        _ = ds.phasemap.model
+    with pytest.raises(ValueError, match="not a phasemap atlas"):
+        pplot.plot(np.zeros(3))
+    with pytest.raises(ValueError, match="no layers"):
+        _ = xr.Dataset(attrs={"phasemap_model": "ladder"}).phasemap.kind
+
+
+def test_bad_layer_kind_size_and_shape(elliptic_map):
+    with pytest.raises(ValueError, match="unknown layer 'N_nope'; this dataset has: n_solutions"):
+        elliptic_map.phasemap.plot("N_nope")
+    with pytest.raises(ValueError, match="unknown phasemap_kind 'movie'"):
+        _ = elliptic_map.assign_attrs(phasemap_kind="movie").phasemap.kind
+    with pytest.raises(ValueError, match="unknown size 'poster'"):
+        elliptic_map.phasemap.plot(size="poster")
+    with pytest.raises(ValueError, match="positive width"):
+        elliptic_map.phasemap.plot(size=-1.0)
+    cube = elliptic_map.expand_dims(omega=[0.0, 1.0], axis=2)
+    with pytest.raises(ValueError, match=r"3-D atlas .* select a 1-D or 2-D slice"):
+        cube.phasemap.plot()
+    with pytest.raises(ValueError, match="not a phase curve dataset: missing point_stage"):
+        phase_curve_dataset().drop_vars("point_stage").phasemap.plot()
+    with pytest.raises(ValueError, match="not a phase curve dataset: missing stage_end_phi"):
+        phase_curve_dataset().drop_vars("stage_end_phi").phasemap.plot()
+    with pytest.raises(ValueError, match="phase curve has no layers"):
+        phase_curve_dataset().phasemap.plot("phi")
+    with pytest.raises(ValueError, match="unknown state 'y'"):
+        trajectory_dataset().phasemap.plot("y")
+    with pytest.raises(ValueError, match="x='omega' is not a dimension"):
+        elliptic_map.phasemap.plot(x="omega")
