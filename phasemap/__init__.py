@@ -6,10 +6,15 @@ The public API is re-exported here explicitly.
 from ._version import __version__
 from .atlas import describe_atlas, open_atlas, write_atlas
 from .classify import Branch, Classification, classify
+from .events import Event
 from .layers import Layer, layers_for
-from .model import BranchStatus, Derived, Model, Solvability, Variable
+from .model import BranchStatus, Derived, Dynamics, Model, Solvability, Variable
 from .models import MODELS, get_model
+from .phase import phase_curve
 from .scene import Scene
+from .simulate import simulate
+from . import accessor as _accessor  # noqa: F401  (registers Dataset.phasemap)
+from . import plot
 
 __all__ = [
     "MODELS",
@@ -17,6 +22,8 @@ __all__ = [
     "BranchStatus",
     "Classification",
     "Derived",
+    "Dynamics",
+    "Event",
     "Layer",
     "Model",
     "Scene",
@@ -28,5 +35,8 @@ __all__ = [
     "get_model",
     "layers_for",
     "open_atlas",
+    "phase_curve",
+    "plot",
+    "simulate",
     "write_atlas",
 ]

@@ -10,10 +10,16 @@ from ._version import __version__
 
 EPILOG = """\
 examples:
+  phasemap tour                                     every study, quick, into ./phasemap-out
+  phasemap tour --full --out results                full resolution (minutes)
   phasemap atlas elliptic_pendulum --set xdot=1 -o elliptic.nc
   phasemap atlas ladder --axis phi=0:1.5708:1024 --axis f=0:3:1024 --set omega=0 -o ladder.nc
   phasemap atlas wheel --axis phi=-3.1416:3.1416:400 --axis delta=0:1:400 \\
                        --layers n_solutions,stagnation,phi_ddot_roll_pos -o wheel.nc
+  phasemap atlas hinge_pendulum --axis phi=-3:3:200 --axis omega=-6:6:200 \
+                       --layers fate,phi_rest,n_reversals --option t_end=30 -o fates.nc
+  phasemap simulate hinge_pendulum phi=2.5 omega=0 --t-end 20 -o swing.nc
+  phasemap simulate elliptic_pendulum phi=1 xdot=1 f=0.3 --t-end 5
   phasemap info elliptic.nc                         axes, fixed values, cells per class
   phasemap table                                    the paper's key states, classified
   phasemap models                                   models, variables, units and defaults
@@ -50,6 +56,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--version", action="version", version=f"phasemap {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.add_parser("table", help="classify the seed paper's key states (the default)")
+    p = sub.add_parser(
+        "tour", help="run every study (quick) and list the atlases and figures it wrote",
+        description="Runs the scripts in studies/ (found next to the installed package or in "
+        "./studies) in quick mode, prints each study's claims table, then where every figure "
+        "is.")
+    p.add_argument("--out", default="phasemap-out", metavar="DIR",
+                   help="folder for atlases and figures (default %(default)s)")
+    p.add_argument("--full", action="store_true", help="full resolution (minutes, not seconds)")
+    p.add_argument("--studies", metavar="DIR", help="folder of the study scripts "
+                   "(default: the repository's studies/)")
+    p.add_argument("--only", metavar="A,B", help="run only these studies")
     sub.add_parser("models", help="list the models with their variables, units and defaults")
     p = sub.add_parser(
         "atlas", help="map solvability and stagnation over a grid into a netCDF atlas",
@@ -62,10 +79,24 @@ def main(argv: list[str] | None = None) -> int:
                    help="fix a state variable or parameter (repeatable)")
     p.add_argument("--layers", metavar="A,B", help="layers to compute (default: n_solutions, "
                    "plus stagnation where the relative velocity is zero)")
+    p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
+                   help="integrator setting of the fate layers: t_end, rtol, atol, max_step, "
+                   "max_steps, max_events (repeatable)")
     p.add_argument("--chunk-cells", type=int, default=1 << 24, metavar="N",
                    help="above N cells, compute and write block by block with bounded memory "
                    "(default %(default)s)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.nc")
+    p = sub.add_parser(
+        "simulate", help="integrate a motion in time: phasemap simulate MODEL name=value ...",
+        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("model")
+    p.add_argument("values", nargs="*", metavar="NAME=VALUE",
+                   help="initial state and parameters (defaults: phasemap models)")
+    p.add_argument("--t-end", type=float, default=10.0, metavar="T", help="horizon in s "
+                   "(default %(default)s)")
+    p.add_argument("--rtol", type=float, default=1e-8, help="relative tolerance "
+                   "(default %(default)s)")
+    p.add_argument("-o", "--output", metavar="OUT.nc", help="write the trajectory as netCDF")
     p = sub.add_parser("info", help="summarise an atlas: axes, fixed values, cells per class")
     p.add_argument("path")
     p = sub.add_parser("classify", help="classify one state: phasemap classify MODEL name=value ...",
@@ -76,10 +107,17 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command in (None, "table"):
             print(_table())
+        elif args.command == "tour":
+            from .tour import tour
+
+            return tour(args.out, full=args.full, studies=args.studies,
+                        only=args.only.split(",") if args.only else None)
         elif args.command == "models":
             print(_models())
         elif args.command == "atlas":
             print(_atlas(args))
+        elif args.command == "simulate":
+            print(_simulate(args))
         elif args.command == "info":
             from .atlas import describe_atlas
 
@@ -149,7 +187,13 @@ def _atlas(args) -> str:
     if args.chunk_cells < 1:
         raise ValueError(f"--chunk-cells must be at least 1, got {args.chunk_cells}")
     layers = [x.strip() for x in args.layers.split(",") if x.strip()] if args.layers else None
-    scene = Scene(model, axes=axes, fixed=fixed, layers=layers)
+    options = _parse_values(args.option)
+    for name in ("max_steps", "max_events"):
+        if name in options:
+            if options[name] != int(options[name]):
+                raise ValueError(f"--option {name} must be a whole number")
+            options[name] = int(options[name])
+    scene = Scene(model, axes=axes, fixed=fixed, layers=layers, options=options)
     if scene.size > args.chunk_cells:
         from dask.diagnostics import ProgressBar
 
@@ -161,6 +205,33 @@ def _atlas(args) -> str:
     else:
         write_atlas(scene.compute(progress=True), out)
     return f"wrote {out} ({scene.size} cells, layers {', '.join(scene.layers)})"
+
+
+def _simulate(args) -> str:
+    from .atlas import destination, write_atlas
+    from .events import Event
+    from .simulate import integrated_variables, simulate
+    from .models import get_model
+
+    model = get_model(args.model)
+    out = destination(args.output) if args.output else None
+    ds = simulate(model, args.t_end, rtol=args.rtol, **_parse_values(args.values))
+    names = [v.name for v in integrated_variables(model)]
+    rows = [("t (s)", "event", "branch after", *names)]
+    meanings = ["none", *model.branches]
+    for i in range(ds.sizes["event"]):
+        e = ds.isel(event=i)
+        rows.append((f"{float(e.event_t):.6g}", Event(int(e.event_kind)).name.lower(),
+                     meanings[int(e.event_branch) + 1],
+                     *(f"{float(e[f'event_{n}']):.6g}" for n in names)))
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    lines = ["  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]
+    lines.append(f"{ds.attrs['end_reason']}: {ds.attrs['end_message']} "
+                 f"({int(ds.attrs['n_steps'])} steps, {ds.sizes['t']} saved points)")
+    if out is not None:
+        write_atlas(ds, out)
+        lines.append(f"wrote {out}")
+    return "\n".join(lines)
 
 
 def _table() -> str:

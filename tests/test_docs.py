@@ -20,7 +20,8 @@ def test_readme_examples():
     assert result.attempted >= 8 and result.failed == 0
 
 
-@pytest.mark.parametrize("module", ["phasemap.classify", "phasemap.scene"])
+@pytest.mark.parametrize("module", ["phasemap.classify", "phasemap.scene", "phasemap.simulate",
+                                    "phasemap.phase", "phasemap.plot", "phasemap.study"])
 def test_docstring_examples(module):
     result = doctest.testmod(importlib.import_module(module))
     assert result.attempted >= 2 and result.failed == 0
