@@ -91,3 +91,55 @@ def test_models_lists_names_units_and_defaults():
     assert r.returncode == 0
     for word in ("ladder", "wheel", "elliptic_pendulum", "hinge_pendulum", "rad s-1", "delta"):
         assert word in r.stdout
+
+
+def test_simulate_prints_events_and_writes_the_trajectory(tmp_path):
+    out = tmp_path / "swing.nc"
+    r = run("simulate", "hinge_pendulum", "phi=2.5", "omega=0", "--t-end", "20", "-o", str(out))
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[0].split()[:4] == ["t", "(s)", "event", "branch"]
+    kinds = [line.split()[1] for line in lines[1:] if line[:1].isdigit()]
+    assert kinds[0] == "start" and kinds[-1] == "rest" and set(kinds[1:-1]) == {"reversal"}
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["phasemap_kind"] == "trajectory" and ds.attrs["end_reason"] == "rest"
+        assert len(kinds) == ds.sizes["event"]
+        assert abs(float(ds.phi[-1])) <= 0.1 + 1e-12  # inside l |sin phi| <= delta
+
+
+def test_fate_atlas_takes_integrator_options(tmp_path):
+    out = tmp_path / "fates.nc"
+    r = run("atlas", "hinge_pendulum", "--axis", "phi=-3:3:9", "--axis", "omega=-4:4:5",
+            "--layers", "fate,t_final", "--option", "t_end=0.5", "-o", str(out))
+    assert r.returncode == 0, r.stderr
+    with xr.open_dataset(out) as ds:
+        assert float(ds.t_final.max()) <= 0.5
+        assert '"t_end": 0.5' in ds.attrs["phasemap_scene"]
+        assert int((ds.fate == 11).sum()) > 0  # horizon: still moving after 0.5 s
+    bad = run("atlas", "hinge_pendulum", "--layers", "fate", "--option", "t_stop=3", "-o",
+              str(tmp_path / "x.nc"))
+    assert bad.returncode == 2 and "unknown integrator option 't_stop'" in bad.stderr
+
+
+def test_simulate_bad_input_is_one_line(tmp_path):
+    r = run("simulate", "wheel", "--t-end", "-1")
+    assert r.returncode == 2 and r.stderr.strip() == (
+        "phasemap: error: wheel: t_end must be a positive number, got -1.0")
+
+
+def test_tour_runs_the_studies_it_finds(tmp_path):
+    studies = tmp_path / "studies"
+    studies.mkdir()
+    (studies / "ladder.py").write_text(
+        "import pathlib\n"
+        "from phasemap.study import Claim, arguments\n"
+        "def main(argv=None):\n"
+        "    args = arguments('fake study', argv)\n"
+        "    (args.out / 'ladder_fig.png').write_bytes(b'')\n"
+        "    return [Claim('quick is passed', 'yes', str(args.quick), 'agrees')]\n")
+    r = run("tour", "--studies", str(studies), "--out", str(tmp_path / "out"))
+    assert r.returncode == 0, r.stderr
+    assert "[1/1] ladder (quick)" in r.stdout and "verdicts: 1 agrees" in r.stdout
+    assert str(tmp_path / "out" / "ladder_fig.png") in r.stdout
+    missing = run("tour", "--studies", str(tmp_path / "nowhere"))
+    assert missing.returncode == 2 and "no study scripts found" in missing.stderr
