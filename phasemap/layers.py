@@ -111,6 +111,8 @@ def _registry(model: Model) -> dict[str, Layer]:
     return layers
 
 
-def layers_for(model: Model) -> dict[str, Layer]:
-    """Every layer a model offers, by name, in a stable order."""
-    return dict(_registry(model))
+def layers_for(model: str | Model) -> dict[str, Layer]:
+    """Every layer a model (a name or a :class:`Model`) offers, by name, in a stable order."""
+    from .models import get_model
+
+    return dict(_registry(get_model(model)))

@@ -549,7 +549,7 @@ def _legend_above(ax: Axes, handles: list, labels: list[str] | None = None):
         labels = [h.get_label() for h in handles]
     if not handles:
         return None
-    width = ax.figure.get_figwidth() * ax.get_position().width * 0.95
+    width = ax.get_figure(root=True).get_figwidth() * ax.get_position().width * 0.95
     return ax.legend(handles, labels, loc="lower center", bbox_to_anchor=(0.5, 1.02),
                      ncols=_ncols(labels, width), borderaxespad=0.0)
 

@@ -181,8 +181,14 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     if t_eval is not None:
         ts = te[:len(y_eval)]
         ys = y_eval
-        at = np.searchsorted(ev_t, ts, side="right") - 1
-        ms = ev_mode[np.maximum(at, 0)]
+        # the branch at t: the one after the last event at or before t that
+        # started a stage (a terminal event at t_end ends no stage before it)
+        started = ev_mode >= 0
+        if started.any():
+            at = np.searchsorted(ev_t[started], ts, side="right") - 1
+            ms = ev_mode[started][np.maximum(at, 0)]
+        else:
+            ms = np.full(len(ts), -1.0)
     return _dataset(m, full, positions, opts, names, int(fate), int(n_rev), int(n_steps),
                     ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode)
 

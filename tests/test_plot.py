@@ -660,3 +660,17 @@ def test_bad_layer_kind_size_and_shape(elliptic_map):
         trajectory_dataset().phasemap.plot("y")
     with pytest.raises(ValueError, match="x='omega' is not a dimension"):
         elliptic_map.phasemap.plot(x="omega")
+
+
+def test_figures_draw_into_subfigures():
+    import matplotlib.pyplot as plt
+
+    ds = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 20),
+                                        "f": np.linspace(0, 1, 10)}, fixed={"omega": 0.0}).compute()
+    root = plt.figure(figsize=(7.2, 3))
+    left, right = root.subfigures(1, 2)
+    phasemap.plot.map_figure(ds, ax=left.subplots())
+    phasemap.plot.profile_figure(ds.isel(f=0), "n_solutions", ax=right.subplots())
+    root.canvas.draw()
+    assert root.legends or any(a.get_legend() for sub in (left, right) for a in sub.axes)
+    plt.close(root)
