@@ -1,0 +1,445 @@
+r"""Study: the pendulum with dry friction in its hinge (Lapshin 2021, Fig. 4, eq. (29)-(36)).
+
+A point mass m on a weightless rod of length l; the hinge friction moment is
+M = -delta |R| sgn(omega) (29), with R the hinge reaction and delta a length.
+Squaring the implicit equation (32) gives (33), whose coefficient of the
+senior derivative is l^2 - delta^2.  This study measures, with l = 1 m (so
+the delta axes read delta/l):
+
+* the stagnation zone over (phi, delta/l) at rest against the paper's (35),
+  |tan phi| <= delta / sqrt(l^2 - delta^2), and its equivalent l |sin phi| <= delta,
+  which holds for delta >= l too;
+* solvability for delta > l in motion: no solution except on the curve
+  l omega^2 + g cos phi = 0, where the hinge reaction vanishes and the free
+  motion l phi'' = -g sin phi is the unique solution (a continuum at delta = l);
+  and the two solutions at rest at phi = +-pi/2 for delta > l;
+* phase curves (phasemap.phase_curve) from several amplitudes, swings decaying
+  to rest inside the zone;
+* the weightless pendulum g = 0 (phasemap.simulate) against its exact solution (36);
+* a fate map over the initial state (phi0, omega0).
+
+    python studies/hinge_pendulum.py [--quick] [--out DIR]
+
+Writes atlases (.nc) and figures (.pdf, .png) prefixed ``hinge_pendulum_``
+and ends with a table of the claims checked, measured value beside the paper's.
+"""
+
+from __future__ import annotations
+
+import math
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.colors import to_hex
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+
+import phasemap
+from phasemap import plot as pplot
+from phasemap import study
+from phasemap.models.hinge_pendulum import weightless_motion
+from phasemap.study import Claim, verdict
+
+NAME = "hinge_pendulum"
+MODEL = phasemap.get_model(NAME)
+G = MODEL.variables["g"].default
+L = 1.0
+#: delta of the phase curves, the fate map and the weightless motion.
+DELTA = MODEL.variables["delta"].default
+DELTA_WEIGHTLESS = 0.3
+#: Angular velocity of the (phi, delta) map in motion, and delta of the (phi, omega) map.
+OMEGA_MOVING = 2.0
+DELTA_ABOVE = 1.5
+#: Initial states of the phase curves: (phi0, omega0).
+SWINGS = ((1.0, 0.0), (2.0, 0.0), (3.0, 0.0), (0.0, 8.0))
+#: Initial states of the weightless motions: (phi0, omega0).
+WEIGHTLESS = ((0.0, 5.0), (1.0, -3.0))
+#: Time horizon of the fate map (s).
+T_FATE = 40.0
+DELTA_LABEL = r"$\delta/l$  ($l$ = 1 m)"
+ZONE = pplot.OKABE_ITO["bluish_green"]
+#: Colours of the phase curves: the Okabe-Ito ones that are not the zone's green.
+CURVE_COLOURS = [pplot.OKABE_ITO[k] for k in ("blue", "orange", "vermillion", "reddish_purple")]
+
+
+def free_angle(omega):
+    """The angles in (-pi, pi] where l omega^2 + g cos phi = 0 (the hinge reaction vanishes)."""
+    c = -L * omega ** 2 / G
+    return () if abs(c) > 1 else (-math.acos(c), math.acos(c))
+
+
+def _signed(x):
+    """``x`` for a label, with a typographic minus."""
+    return f"{x:g}".replace("-", "\u2212")
+
+
+def zone_35(phi, delta):
+    """The paper's (35) for delta < l: |tan phi| <= delta / sqrt(l^2 - delta^2)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.abs(np.tan(phi)) <= delta / np.sqrt(L * L - delta * delta)
+
+
+# --------------------------------------------------------------------------- measurements
+
+
+def delta_axis(quick):
+    """delta/l from 0 to 1.5 with delta = l exactly on the grid."""
+    d = np.linspace(0.0, 1.5 * L, 151 if quick else 601)
+    assert np.any(d == L)
+    return d
+
+
+def phi_axis(quick, extra=()):
+    """phi in [-pi, pi] plus ``extra`` angles exactly."""
+    return np.unique(np.r_[np.linspace(-math.pi, math.pi, 361 if quick else 1441), list(extra)])
+
+
+def rest_map(quick, out, files):
+    """Solvability and stagnation over (phi, delta/l) at rest, phi = +-pi/2 on the grid."""
+    phi = phi_axis(quick, (math.pi / 2, -math.pi / 2))
+    ds = phasemap.Scene(NAME, axes={"phi": phi, "delta": delta_axis(quick)},
+                        fixed={"omega": 0.0, "l": L},
+                        layers=["n_solutions", "stagnation", "singular"]).compute()
+    files.append(study.save_atlas(ds, out, f"{NAME}_rest", NAME))
+    return ds
+
+
+def moving_maps(quick, out, files):
+    """Solvability in motion: over (phi, delta/l) at omega = 2, (phi, omega) at delta/l = 1.5."""
+    angles = free_angle(OMEGA_MOVING)
+    by_delta = phasemap.Scene(
+        NAME, axes={"phi": phi_axis(quick, angles), "delta": delta_axis(quick)},
+        fixed={"omega": OMEGA_MOVING, "l": L},
+        layers=["n_solutions", "singular", "phi_ddot_turn_pos", "R_n_turn_pos"]).compute()
+    files.append(study.save_atlas(by_delta, out, f"{NAME}_moving_phi_delta", NAME))
+    n_om = 200 if quick else 800  # even: omega = 0 (rest) is not on this grid
+    by_omega = phasemap.Scene(
+        NAME, axes={"phi": phi_axis(quick), "omega": np.linspace(-6.0, 6.0, n_om)},
+        fixed={"delta": DELTA_ABOVE, "l": L}, layers=["n_solutions"]).compute()
+    files.append(study.save_atlas(by_omega, out, f"{NAME}_phi_omega_delta_above_l", NAME))
+    return by_delta, by_omega
+
+
+def phase_curves(out, files):
+    """Phase curves from each of SWINGS at delta/l = 0.1, to their fate."""
+    curves = []
+    for i, (phi0, omega0) in enumerate(SWINGS):
+        ds = phasemap.phase_curve(NAME, phi=phi0, omega=omega0, delta=DELTA, l=L)
+        files.append(study.save_atlas(ds, out, f"{NAME}_phase_curve_{i}", NAME))
+        curves.append(ds)
+    return curves
+
+
+def weightless(out, files):
+    """The weightless pendulum (g = 0) from each of WEIGHTLESS, tightly integrated."""
+    t_end = 10.0
+    runs = []
+    for i, (phi0, omega0) in enumerate(WEIGHTLESS):
+        ds = phasemap.simulate(NAME, t_end=t_end, rtol=1e-10, phi=phi0, omega=omega0,
+                               delta=DELTA_WEIGHTLESS, l=L, g=0.0)
+        files.append(study.save_atlas(ds, out, f"{NAME}_weightless_{i}", NAME))
+        runs.append(ds)
+    return runs
+
+
+def fate_map(quick, out, files):
+    """Fate, rest angle and number of swings from every (phi0, omega0) of a grid."""
+    n = 61 if quick else 241
+    ds = phasemap.Scene(NAME, axes={"phi": np.linspace(-math.pi, math.pi, n),
+                                    "omega": np.linspace(-9.0, 9.0, n)},
+                        fixed={"delta": DELTA, "l": L},
+                        layers=["fate", "phi_rest", "n_reversals"],
+                        options={"t_end": T_FATE}).compute(progress=not quick)
+    files.append(study.save_atlas(ds, out, f"{NAME}_fates", NAME))
+    return ds
+
+
+# --------------------------------------------------------------------------- figures
+
+
+def _zone_bands(ax, lo, hi, delta):
+    """Shade l |sin phi| <= delta around every multiple of pi in [lo, hi]."""
+    half = math.asin(min(delta / L, 1.0))
+    for k in range(math.floor(lo / math.pi) - 1, math.ceil(hi / math.pi) + 2):
+        ax.axvspan(k * math.pi - half, k * math.pi + half, color=ZONE, alpha=0.18, lw=0,
+                   zorder=0)
+
+
+def _replace_legend(ax, handles, ncols=None):
+    if ax.get_legend() is not None:
+        ax.get_legend().remove()
+    labels = [h.get_label() for h in handles]
+    ax.legend(handles, labels, loc="lower center", bbox_to_anchor=(0.5, 1.02), borderaxespad=0,
+              ncols=ncols or len(handles))
+
+
+def figure_rest(ds):
+    """Stagnation over (phi, delta/l) with the closed-form boundary l |sin phi| = delta."""
+    with pplot.style():
+        fig = pplot.map_figure(ds, "stagnation", x="phi", overlays=False)
+        ax = fig.axes[0]
+        phi = np.linspace(-math.pi, math.pi, 2001)
+        ax.plot(phi, L * np.abs(np.sin(phi)), color="black", lw=1.0)
+        ax.axhline(L, color="black", lw=0.8, ls=(0, (3.0, 1.5)))
+        ax.set_ylabel(DELTA_LABEL)
+        leg = ax.get_legend()
+        cats = list(leg.legend_handles)
+        for h, t in zip(cats, leg.get_texts()):
+            h.set_label({"yes": "rest possible", "no": "no rest"}.get(t.get_text(), t.get_text()))
+        handles = cats + [
+            Line2D([], [], color="black", lw=1.0, label=r"$l|\sin\varphi| = \delta$, i.e. (35)"),
+            Line2D([], [], color="black", lw=0.8, ls=(0, (3.0, 1.5)),
+                   label=r"$\delta = l$: singular")]
+        _replace_legend(ax, handles, ncols=2)
+    return fig
+
+
+def figure_moving(by_delta, by_omega):
+    """No solution for delta > l, except where l omega^2 + g cos phi = 0."""
+    free = pplot.OKABE_ITO["yellow"]
+    cont = pplot.CATEGORY_COLOURS["continuum"]
+    with pplot.style():
+        fig, axes = plt.subplots(1, 2, figsize=(pplot.SIZES["two_column"], 3.0),
+                                 layout="constrained")
+        pplot.map_figure(by_delta, "n_solutions", x="phi", ax=axes[0])
+        pplot.map_figure(by_omega, "n_solutions", x="phi", ax=axes[1])
+        handles = {}
+        for ax in axes:
+            leg = ax.get_legend()
+            for h, t in zip(leg.legend_handles, leg.get_texts()):
+                h.set_label(t.get_text())
+                handles.setdefault(t.get_text(), h)
+            leg.remove()
+        ax = axes[0]
+        angles = free_angle(OMEGA_MOVING)
+        for a in angles:
+            ax.plot([a, a], [L, by_delta.delta.values[-1]], color=free, lw=1.6,
+                    solid_capstyle="butt")
+        ax.plot(angles, [L] * len(angles), ls="none", marker="*", ms=8, mfc=cont, mec="black",
+                mew=0.5, zorder=6, clip_on=False)
+        ax.set_ylabel(DELTA_LABEL)
+        ax.set_title(rf"$\omega$ = {OMEGA_MOVING:g} rad s$^{{-1}}$")
+        ax = axes[1]
+        for lo, hi in ((-math.pi, -math.pi / 2), (math.pi / 2, math.pi)):
+            phi = np.linspace(lo, hi, 1001)
+            w = np.sqrt(np.maximum(-G * np.cos(phi) / L, 0.0))
+            ax.plot(phi, w, color=free, lw=1.6)
+            ax.plot(phi, -w, color=free, lw=1.6)
+        ax.set_title(rf"$\delta/l$ = {DELTA_ABOVE / L:g}")
+        # the continuum is two cells: marked by stars rather than a patch nobody can see
+        cats = [handles[k] for k in ("none", "unique", "singular") if k in handles]
+        items = cats + [
+            Line2D([], [], color=free, lw=1.6,
+                   label=r"$l\omega^2 + g\cos\varphi = 0$: unique ($R = 0$)"),
+            Line2D([], [], ls="none", marker="*", ms=8, mfc=cont, mec="black", mew=0.5,
+                   label=r"continuum ($\delta = l$ on that curve)")]
+        fig.legend(items, [h.get_label() for h in items], loc="outside upper center",
+                   ncols=len(items))
+    return fig
+
+
+def figure_phase(curves):
+    with pplot.style():
+        fig, ax = plt.subplots(figsize=(pplot.SIZES["two_column"], 3.0), layout="constrained")
+        starts = []
+        for i, ds in enumerate(curves):
+            before = len(ax.lines)
+            pplot.phase_curve_figure(ds, ax=ax)
+            colour = CURVE_COLOURS[i % len(CURVE_COLOURS)]
+            for line in ax.lines[before:]:
+                # the curve is black and drawn with a line; the markers and zero line stay
+                if line.get_linestyle() != "None" and to_hex(line.get_color()) == "#000000":
+                    line.set_color(colour)
+            phi0, omega0 = SWINGS[i]
+            starts.append(Line2D([], [], color=colour, lw=1.0,
+                                 label=rf"$\varphi_0$ = {phi0:g}, $\omega_0$ = {omega0:g}"))
+        lo = min(float(ds.phi.min()) for ds in curves)
+        hi = max(float(ds.phi.max()) for ds in curves)
+        pad = 0.1
+        ax.set_xlim(lo - pad, hi + pad)
+        _zone_bands(ax, lo - pad, hi + pad, DELTA)
+        ax.set_xlabel(r"$\varphi$ (rad)")
+        leg = ax.get_legend()
+        events = list(leg.legend_handles)
+        for h, t in zip(events, leg.get_texts()):
+            h.set_label(t.get_text())
+        zone = Patch(color=ZONE, alpha=0.18, lw=0,
+                     label=rf"stagnation zone (35), $\delta/l$ = {DELTA / L:g}")
+        _replace_legend(ax, starts + events + [zone], ncols=4)
+    return fig
+
+
+def figure_weightless(runs):
+    colours = [pplot.OKABE_ITO["vermillion"], pplot.OKABE_ITO["blue"]]
+    with pplot.style():
+        fig, axes = plt.subplots(3, 1, figsize=(pplot.SIZES["one_column"], 3.9), sharex=True,
+                                 layout="constrained")
+        worst = 0.0
+        for ds, (phi0, omega0), colour in zip(runs, WEIGHTLESS, colours):
+            t = ds.t.values
+            tt = np.linspace(0.0, t[-1], 400)
+            p, w = weightless_motion(tt, phi0, omega0, DELTA_WEIGHTLESS, L)
+            axes[0].plot(tt, p, color=colour, lw=2.4, alpha=0.4, solid_capstyle="butt")
+            axes[1].plot(tt, w, color=colour, lw=2.4, alpha=0.4, solid_capstyle="butt")
+            every = max(1, t.size // 25)
+            dots = {"ls": "none", "marker": "o", "ms": 2.2, "mfc": "white", "mec": "black",
+                    "mew": 0.6}
+            axes[0].plot(t[::every], ds.phi.values[::every], **dots)
+            axes[1].plot(t[::every], ds.omega.values[::every], **dots)
+            pe, we = weightless_motion(t, phi0, omega0, DELTA_WEIGHTLESS, L)
+            err = np.maximum(np.abs(ds.phi.values - pe), np.abs(ds.omega.values - we))
+            worst = max(worst, float(err.max()))
+            axes[2].semilogy(t[1:], err[1:], color=colour, lw=0.9)
+        axes[0].set_ylabel(r"$\varphi$ (rad)")
+        axes[1].set_ylabel(r"$\omega$ (rad s$^{-1}$)")
+        axes[2].set_ylabel(r"max($|\Delta\varphi|, |\Delta\omega|$)")
+        axes[2].set_ylim(worst * 1e-3, worst * 5)
+        axes[2].set_xlabel(r"$t$ (s)")
+        axes[2].set_xlim(0.0, max(float(ds.t[-1]) for ds in runs))
+        fig.align_ylabels(axes)
+        handles = [Line2D([], [], color=c, lw=2.4, alpha=0.4,
+                          label=rf"exact (36), $\omega_0$ = {_signed(w0)} rad s$^{{-1}}$")
+                   for c, (_, w0) in zip(colours, WEIGHTLESS)]
+        handles.append(Line2D([], [], ls="none", marker="o", ms=2.5, mfc="white", mec="black",
+                              label=r"simulate, $g$ = 0 (every few steps)"))
+        axes[0].legend(handles, [h.get_label() for h in handles], loc="lower center",
+                       bbox_to_anchor=(0.5, 1.02), borderaxespad=0, ncols=1)
+    return fig
+
+
+def figure_fates(ds):
+    """The fate of every initial state, where it comes to rest, and after how many swings."""
+    with pplot.style():
+        fig, axes = plt.subplots(1, 3, figsize=(pplot.SIZES["two_column"], 2.9), sharey=True,
+                                 layout="constrained")
+        pplot.fate_figure(ds, extra="phi_rest", ax=list(axes[:2]), size="two_column")
+        pplot.map_figure(ds, "n_reversals", x="phi", ax=axes[2])
+        for ax in axes[1:]:
+            ax.set_ylabel("")
+    return fig
+
+
+# --------------------------------------------------------------------------- the study
+
+
+def main(argv=None) -> list[Claim]:
+    args = study.arguments(__doc__, argv)
+    out, quick = args.out, args.quick
+    files, claims = [], []
+
+    # 1. the stagnation zone at rest
+    rest = rest_map(quick, out, files)
+    phi = rest.phi.values[:, None]
+    delta = rest.delta.values[None, :]
+    stag = rest.stagnation.transpose("phi", "delta").values == 1
+    below = np.broadcast_to(delta < L, stag.shape)
+    paper = zone_35(phi, delta) & below
+    # on the boundary l |sin phi| = delta (to rounding) phasemap ties to rest
+    tie = np.abs(L * np.abs(np.sin(phi)) - delta) <= 1e-12 * (L + delta)
+    bad = int(((stag != paper) & ~tie)[below].sum())
+    claims.append(Claim(
+        "stagnation zone (35), delta < l", "|tan phi| <= delta/sqrt(l^2 - delta^2)",
+        f"rest on {int(stag[below].sum())}/{int(below.sum())} cells, {bad} differ from (35) "
+        f"({int((tie & below).sum())} ties: rest)",
+        verdict(bad == 0 and stag[below].any())))
+    above = np.broadcast_to(delta >= L, stag.shape)
+    claims.append(Claim(
+        "stagnation zone for delta >= l", "(35) needs delta < l",
+        f"l|sin phi| <= delta: rest at every angle, {int(stag[above].sum())}/"
+        f"{int(above.sum())} cells",
+        verdict(bool(stag[above].all()) and above.any(), "finding")))
+    n = rest.n_solutions.transpose("phi", "delta").values
+    cols = [int(np.flatnonzero(rest.phi.values == s * math.pi / 2)[0]) for s in (1, -1)]
+    strictly = rest.delta.values > L
+    two = int(sum((n[c, strictly] == 2).sum() for c in cols))
+    claims.append(Claim(
+        "delta > l, rest at phi = +-pi/2", "(no solution for delta >= l)",
+        f"two solutions (rest, free fall with R = 0) on {two}/{2 * int(strictly.sum())} cells",
+        verdict(two == 2 * strictly.sum() > 0, "finding")))
+
+    # 2. in motion: delta > l
+    by_delta, by_omega = moving_maps(quick, out, files)
+    n = by_delta.n_solutions.transpose("phi", "delta").values
+    phis, deltas = by_delta.phi.values, by_delta.delta.values
+    on = np.isin(phis, free_angle(OMEGA_MOVING))
+    strictly = deltas > L
+    none_off = int((n[~on][:, strictly] == 0).sum())
+    unique_on = int((n[on][:, strictly] == 1).sum())
+    acc = by_delta.phi_ddot_turn_pos.transpose("phi", "delta").values[on][:, strictly]
+    free_acc = -G * np.sin(phis[on])[:, None] / L
+    acc_err = float(np.nanmax(np.abs(acc - free_acc))) if np.isfinite(acc).all() else math.inf
+    ok = (none_off == (~on).sum() * strictly.sum() and unique_on == on.sum() * strictly.sum()
+          and acc_err <= 1e-12 * G)
+    claims.append(Claim(
+        "delta > l: no solution (after (33))", "no solution for delta >= l",
+        f"omega = {OMEGA_MOVING:g}: none on {none_off} cells, unique on l omega^2 + g cos phi = 0 "
+        f"({unique_on}: phi'' = -g sin phi / l, error {acc_err:.1g})",
+        verdict(ok, "erratum")))
+    at_l = int(np.flatnonzero(deltas == L)[0])
+    singular = by_delta.singular.transpose("phi", "delta").values[:, at_l] == 1
+    cont_on = int((n[on, at_l] == 3).sum())
+    none_at_l = int((n[~on, at_l] == 0).sum())
+    claims.append(Claim(
+        "delta = l in motion (singular)", "no solution for delta >= l",
+        f"singular on {int(singular.sum())}/{singular.size} cells; continuum on the curve "
+        f"({cont_on}/{int(on.sum())}), none elsewhere ({none_at_l}/{int((~on).sum())})",
+        verdict(bool(singular.all()) and cont_on == on.sum() and none_at_l == (~on).sum(),
+                "finding")))
+    n_om = by_omega.n_solutions.transpose("phi", "omega").values
+    moving = by_omega.omega.values != 0.0
+    qn = L * by_omega.omega.values[None, :] ** 2 + G * np.cos(by_omega.phi.values)[:, None]
+    off = (np.abs(qn) > 1e-9 * G) & moving[None, :]
+    claims.append(Claim(
+        f"delta/l = {DELTA_ABOVE:g} over (phi, omega)", "no solution for delta >= l",
+        f"none on {int((n_om[off] == 0).sum())}/{int(off.sum())} moving cells off the curve",
+        verdict(bool((n_om[off] == 0).all()) and off.any())))
+
+    # 3. phase curves: swings decay to rest inside the zone
+    curves = phase_curves(out, files)
+    ends = [(ds.attrs["end_reason"], float(ds.stage_end_phi[-1])) for ds in curves]
+    at_rest = [p for r, p in ends if r == "rest"]
+    worst = max(L * abs(math.sin(p)) for p in at_rest) if at_rest else math.inf
+    swings = sum(int(ds.sizes["stage"]) for ds in curves)
+    claims.append(Claim(
+        "falling into (35) with omega = 0, the pendulum stops", "stops in the zone",
+        f"{len(at_rest)}/{len(curves)} phase curves end at rest after {swings} stages; "
+        f"max l|sin phi_rest| = {worst:.4f} <= delta = {DELTA:g}",
+        verdict(len(at_rest) == len(curves) and worst <= DELTA)))
+
+    # 4. weightless pendulum against (36)
+    runs = weightless(out, files)
+    errors = []
+    for ds, (phi0, omega0) in zip(runs, WEIGHTLESS):
+        p, w = weightless_motion(ds.t.values, phi0, omega0, DELTA_WEIGHTLESS, L)
+        errors += [float(np.abs(ds.phi.values - p).max()), float(np.abs(ds.omega.values - w).max())]
+    keep = all(ds.attrs["end_reason"] == "horizon" and ds.attrs["n_reversals"] == 0
+               for ds in runs)
+    claims.append(Claim(
+        "g = 0: omega = omega0/(1 + omega0 k t) (36)", "exact solution (36)",
+        f"simulate (rtol 1e-10, 10 s): max error {max(errors):.1e}; direction kept",
+        verdict(max(errors) < 1e-7 and keep)))
+
+    # 5. fate map: rest in the lower or the upper part of the zone
+    fates = fate_map(quick, out, files)
+    rest_cells = fates.fate.values == phasemap.Event.REST
+    phi_rest = fates.phi_rest.values[rest_cells]
+    worst = float(np.max(L * np.abs(np.sin(phi_rest)))) if phi_rest.size else math.inf
+    upper = int((np.cos(phi_rest) < 0).sum())
+    claims.append(Claim(
+        "every motion ends at rest in the zone", "stops in (35), near bottom and top",
+        f"rest from {int(rest_cells.sum())}/{rest_cells.size} states within {T_FATE:g} s, "
+        f"{upper} at the top; max l|sin phi_rest| = {worst:.4f}",
+        verdict(bool(rest_cells.all()) and worst <= DELTA and 0 < upper < rest_cells.sum())))
+
+    files += study.save_figure(figure_rest(rest), out, f"{NAME}_rest")
+    files += study.save_figure(figure_moving(by_delta, by_omega), out, f"{NAME}_moving")
+    files += study.save_figure(figure_phase(curves), out, f"{NAME}_phase_curves")
+    files += study.save_figure(figure_weightless(runs), out, f"{NAME}_weightless")
+    files += study.save_figure(figure_fates(fates), out, f"{NAME}_fates")
+
+    study.finish("Pendulum with hinge friction", claims, files)
+    return claims
+
+
+if __name__ == "__main__":
+    main()

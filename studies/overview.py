@@ -1,0 +1,99 @@
+"""Overview: error against run time of every solver, and a fate map of the wheel.
+
+Two figures a reader of the paper meets first:
+
+* **work-precision**: for the weightless hinge pendulum (exact reference, eq.
+  (36)) and the hinge pendulum swinging to rest through reversals (tight
+  reference), the error at the final time against the run time per
+  trajectory, for phasemap's compiled integrator, its first-integral tracer
+  and scipy's ``solve_ivp`` driven stage by stage (``benchmarks/
+  work_precision.py`` runs every system at every tolerance);
+* **fate map**: how the wheel's motion from each initial (phi, omega) ends:
+  at rest in a stagnation zone after so many reversals, or bouncing off the
+  floor (contact lost, condition (12)).
+
+    python studies/overview.py [--quick] [--out DIR]
+
+Ends with a table of the claims checked.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+import phasemap
+from phasemap import workprecision as wp
+from phasemap.study import Claim, arguments, finish, save_atlas, save_figure, verdict
+
+NAME = "overview"
+
+
+def main(argv=None) -> list[Claim]:
+    args = arguments(__doc__, argv)
+    out, files, claims = args.out, [], []
+
+    # -- work-precision ------------------------------------------------------
+    if args.quick:
+        tolerances, methods, repeats = (1e-4, 1e-7, 1e-10), ("phasemap", "DOP853",
+                                                               "phase_curve"), 1
+    else:
+        tolerances, methods, repeats = wp.DEFAULT_TOLERANCES, wp.DEFAULT_METHODS, 3
+    rows = []
+    for name in ("hinge_weightless", "hinge_pendulum"):
+        rows += wp.work_precision(wp.PROBLEMS[name], tolerances=tolerances, methods=methods,
+                                  repeats=repeats, min_time=0.005 if args.quick else 0.02,
+                                  budget=2.0 if args.quick else 10.0)
+    fig = phasemap.plot.work_precision_figure([r for r in rows if not r.get("skipped")])
+    files += save_figure(fig, out, f"{NAME}_work_precision")
+    (out / f"{NAME}_work_precision.md").write_text(wp.report(rows) + "\n")
+    files.append(out / f"{NAME}_work_precision.md")
+
+    for name in ("hinge_weightless", "hinge_pendulum"):
+        mine = [r for r in rows if r["system"] == name and r["method"] == "phasemap"
+                and not r.get("skipped")]
+        best = min(r["error_final"] for r in mine)
+        tight = min(r["tol"] for r in mine)
+        claims.append(Claim(f"{name}: phasemap integrator converges (error at rtol {tight:g})",
+                            "-", f"{best:.1e}", verdict(best < 1e3 * tight, "finding")))
+        level = 1e-6
+        ratio, rival = wp.equal_error_ratio(rows, name, level)
+        if math.isfinite(ratio):
+            print(f"{name}: at error {level:g} the compiled integrator is {ratio:.0f}x faster "
+                  f"per trajectory than the best solve_ivp method ({rival})")
+    weightless = [r for r in rows if r["system"] == "hinge_weightless"
+                  and r["method"] == "phasemap" and not r.get("skipped")]
+    claims.append(Claim("weightless hinge pendulum follows (36) exactly",
+                        "omega = omega0/(1 + k|omega0| t)",
+                        f"error {min(r['error_final'] for r in weightless):.1e}",
+                        verdict(min(r["error_final"] for r in weightless) < 1e-8)))
+
+    # -- fate map of the wheel -------------------------------------------------
+    n = 60 if args.quick else 400
+    scene = phasemap.Scene("wheel", axes={"phi": np.linspace(-math.pi, math.pi, n),
+                                          "omega": np.linspace(-8.0, 8.0, n)},
+                           fixed={"delta": 0.05},
+                           layers=["fate", "phi_rest", "n_reversals", "t_rest"],
+                           options={"t_end": 60.0})
+    fates = scene.compute(progress=True)
+    files.append(save_atlas(fates, out, f"{NAME}_wheel_fates", NAME))
+    fig = phasemap.plot.fate_figure(fates, extra="n_reversals", size="two_column")
+    files += save_figure(fig, out, f"{NAME}_wheel_fates")
+
+    rest = fates.fate == phasemap.Event.REST
+    p = scene.fixed
+    inside = np.abs(np.sin(fates.phi_rest.where(rest))) * p["l"] <= p["delta"] * (1 + 1e-9)
+    claims.append(Claim("wheel stops only inside its stagnation zones (15)",
+                        "l |sin phi| <= delta", f"{int(inside.sum())} of {int(rest.sum())} rest "
+                        "cells inside", verdict(bool(inside.sum() == rest.sum()))))
+    kinds = sorted({phasemap.Event(int(k)).name.lower() for k in np.unique(fates.fate)})
+    claims.append(Claim("every motion ends at rest or in a bounce within 60 s",
+                        "-", ", ".join(kinds),
+                        verdict(set(kinds) <= {"rest", "contact_lost"}, "finding")))
+    finish("overview", claims, files)
+    return claims
+
+
+if __name__ == "__main__":
+    main()

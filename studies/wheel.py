@@ -1,0 +1,453 @@
+"""Study: the wheel with a displaced centre of mass (Lapshin 2021, Fig. 2, eq. (10)-(15)).
+
+A disc of radius r rolls without slip; its centre of mass is l from the
+centre, J_c = m rho^2, and a rolling-friction couple delta N opposes the
+rotation.  Fixed throughout: r = 1 m, l = 0.5 m, rho = 0.5 m, g = 9.81 m s-2,
+m = 1 kg (phasemap's defaults), so delta/l = 2 delta.  This study
+
+* maps the stagnation zones (15), l |sin phi| <= delta, over (phi, delta/l) and
+  checks that for delta >= l they cover every angle;
+* follows phase curves at delta/l = 0.1 (damped oscillations that stop in the
+  zone near the lowest position) and at delta/l = 1.2 (the disc moves one way
+  and stops at the first zero of omega: no reversal), with a time integration
+  beside them;
+* maps the bounce condition (12), N < 0, over (phi, omega) and compares it with
+  N from an unreduced Newton-Euler solve, the paper's condition after (13) and
+  the printed (13) (a sign erratum);
+* maps the fate of every initial state (phi0, omega0) at both delta/l;
+* measures where the bracket of (13) can vanish (the Painleve analogue), sharper
+  than the README's bound.
+
+    python studies/wheel.py [--quick] [--out DIR]
+
+Writes ``wheel_*.nc`` atlases and ``wheel_*.pdf``/``.png`` figures, and ends
+with the table of the claims checked, measured value beside the paper's.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import xarray as xr
+
+import phasemap
+from phasemap import plot as pplot
+from phasemap.study import Claim, arguments, finish, save_atlas, save_figure, verdict
+
+STUDY = "wheel"
+G = 9.81
+#: The fixed parameters of the study (phasemap's defaults for the wheel).
+FIXED = {"r": 1.0, "l": 0.5, "rho": 0.5, "g": G, "m": 1.0}
+L = FIXED["l"]
+#: delta/l of the oscillating regime and of the one-way regime.
+LOW, HIGH = 0.1, 1.2
+#: Initial states (phi0, omega0) of the phase portraits, per delta/l.
+STARTS = {LOW: [(2.0, 0.0), (-1.0, 5.0)],
+          HIGH: [(-3.0, 2.0), (-2.0, 4.0), (-1.0, 5.5), (1.0, -3.0), (2.5, -4.0), (0.5, -6.0)]}
+#: Time horizon of the fate maps (s): every motion at delta/l = 0.1 has ended by then.
+T_END = 30.0
+
+
+def main(argv=None) -> list[Claim]:
+    args = arguments(__doc__, argv)
+    out = args.out
+    files, claims = [], []
+    n_phi, n_delta, n_omega, n_fate = (241, 151, 200, 60) if args.quick else \
+        (1441, 601, 800, 241)
+
+    # -- stagnation zones (15) over (phi, delta/l) ----------------------------------
+    stag = phasemap.Scene(
+        "wheel", axes={"phi": np.linspace(-math.pi, math.pi, n_phi),
+                       "delta": L * np.linspace(0.0, 1.5, n_delta)},
+        fixed={"omega": 0.0, **FIXED}, layers=["stagnation", "n_solutions"]).compute()
+    files.append(save_atlas(stag, out, "wheel_stagnation", STUDY))
+    claims += stagnation_claims(stag)
+
+    # -- phase portraits: damped oscillation (delta < l), one way (delta >= l) -----
+    curves = {k: [phasemap.phase_curve("wheel", phi=p, omega=w, delta=k * L, **FIXED)
+                  for p, w in STARTS[k]] for k in (LOW, HIGH)}
+    runs = {k: phasemap.simulate("wheel", t_end=T_END, rtol=1e-10, phi=p, omega=w,
+                                 delta=k * L, **FIXED)
+            for k, (p, w) in ((LOW, STARTS[LOW][0]), (HIGH, STARTS[HIGH][1]))}
+    claims += portrait_claims(curves, runs)
+    files += save_figure(portrait_figure(curves, runs[LOW]), out, "wheel_portraits")
+
+    # -- the bounce condition (12) over (phi, omega) ----------------------------------
+    omega = np.linspace(-8.0, 8.0, n_omega)  # an even count: omega = 0 is not on the grid
+    bounce = phasemap.Scene(
+        "wheel", axes={"phi": np.linspace(-math.pi, math.pi, n_phi), "omega": omega},
+        fixed={"delta": LOW * L, **FIXED}, layers=["n_solutions", "contact_lost"]).compute()
+    files.append(save_atlas(bounce, out, "wheel_bounce", STUDY))
+    normal = bounce_normals(bounce)
+    claims += bounce_claims(bounce, normal)
+    files += save_figure(maps_figure(stag, bounce, normal), out, "wheel_maps")
+
+    # -- fate maps over (phi0, omega0) -------------------------------------------------
+    fates = {}
+    for k, name in ((LOW, "wheel_fates"), (HIGH, "wheel_fates_one_way")):
+        fates[k] = phasemap.Scene(
+            "wheel", axes={"phi": np.linspace(-math.pi, math.pi, n_fate),
+                           "omega": np.linspace(-8.0, 8.0, n_fate)},
+            fixed={"delta": k * L, **FIXED}, layers=["fate", "phi_rest", "n_reversals"],
+            options={"t_end": T_END}).compute()
+        files.append(save_atlas(fates[k], out, name, STUDY))
+    claims += fate_claims(fates)
+    files += save_figure(fates_figure(fates), out, "wheel_fates")
+
+    # -- where the bracket of (13) vanishes ---------------------------------------
+    sing = singular_atlas(n_phi, n_delta)
+    files.append(save_atlas(sing, out, "wheel_singular", STUDY))
+    claims += singular_claims(sing)
+
+    finish("wheel study", claims, files)
+    return claims
+
+
+# --------------------------------------------------------------------------- stagnation
+
+
+def stagnation_claims(ds: xr.Dataset) -> list[Claim]:
+    phi, delta = ds.phi.values[:, None], ds.delta.values[None, :]
+    stag = ds.stagnation.transpose("phi", "delta").values == 1
+    margin = delta - L * np.abs(np.sin(phi))
+    tie = np.abs(margin) <= 1e-12 * (delta + L)
+    expect = margin >= 0.0
+    wrong = int(np.count_nonzero((stag != expect) & ~tie))
+    high = ds.delta.values >= L
+    all_rest = bool(stag[:, high].all())
+    unique = bool((ds.n_solutions == 1).all())
+    ties_rest = bool(stag[tie].all())
+    return [
+        Claim("wheel: stagnation zone (15)", "|sin phi| <= delta/l",
+              f"stagnation layer = (l|sin phi| <= delta) in {stag.size - wrong} of {stag.size} "
+              f"cells ({int(tie.sum())} ties to rest); unique at rest: "
+              f"{'yes' if unique else 'no'}", verdict(wrong == 0 and unique and ties_rest)),
+        Claim("wheel: delta >= l, zone (15) covers all positions", "yes",
+              f"every phi at rest in all {int(high.sum())} rows delta/l = "
+              f"{ds.delta.values[high][0] / L:.2f}...{ds.delta.values[high][-1] / L:.2f}",
+              verdict(all_rest and high.any())),
+    ]
+
+
+def _per_l(ds: xr.Dataset) -> xr.Dataset:
+    """A copy for plotting with delta/l on the delta axis."""
+    return ds.assign_coords(delta=ds.delta / L)
+
+
+def maps_figure(stag: xr.Dataset, bounce: xr.Dataset, n: dict):
+    """(a) the zones (15) over (phi, delta/l) at rest; (b) the bounce region (12)."""
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    oi = pplot.OKABE_ITO
+    width = pplot.SIZES["two_column"]
+    with pplot.style():
+        fig, (a, b) = plt.subplots(1, 2, figsize=(width, 0.46 * width), layout="constrained")
+        pplot.map_figure(_per_l(stag), "stagnation", x="phi", ax=a)
+        pp = np.linspace(-math.pi, math.pi, 721)
+        a.plot(pp, np.abs(np.sin(pp)), color=oi["black"], lw=0.8, ls="--")
+        a.axhline(1.0, color=oi["black"], lw=0.6, ls=":")
+        a.set_ylabel(r"$\delta/l$")
+        a.set_title(r"(a) at rest, $\omega$ = 0", loc="left", pad=30)
+        _relabel_legend(a, {"no": "rest impossible", "yes": "rest possible"}, [
+            (Line2D([], [], color=oi["black"], lw=0.8, ls="--"), r"$|\sin\varphi| = \delta/l$"),
+            (Line2D([], [], color=oi["black"], lw=0.6, ls=":"), r"$\delta = l$")])
+
+        pplot.map_figure(bounce, "contact_lost", x="phi", ax=b)
+        phi, w = bounce.phi.values, bounce.omega.values
+        b.contour(phi, w, n["unreduced"].T, levels=[0.0], colors=[oi["black"]],
+                  linewidths=0.8)
+        b.contour(phi, w, n["printed_13"].T, levels=[0.0], colors=[oi["vermillion"]],
+                  linewidths=0.9, linestyles="dashed")
+        b.set_title(rf"(b) bounce (12), $\delta/l$ = {LOW:g}", loc="left", pad=30)
+        _relabel_legend(b, {"no": "N ≥ 0", "yes": "N < 0: contact lost"}, [
+            (Line2D([], [], color=oi["black"], lw=0.8), "N = 0, Newton–Euler"),
+            (Line2D([], [], color=oi["vermillion"], lw=0.9, ls="--"), "N = 0, (13) as printed")])
+        fig.suptitle(f"r = {FIXED['r']:g} m, l = {L:g} m, ρ = {FIXED['rho']:g} m",
+                     x=0.99, ha="right")
+    return fig
+
+
+def _relabel_legend(ax, names: dict, extra: list) -> None:
+    """Rename the entries of the legend above ``ax`` and append ``extra`` (handle, label)."""
+    legend = ax.get_legend()
+    handles = list(legend.legend_handles) + [h for h, _ in extra]
+    labels = [names.get(t.get_text(), t.get_text()) for t in legend.get_texts()]
+    labels += [t for _, t in extra]
+    legend.remove()
+    ax.legend(handles, labels, loc="lower center", bbox_to_anchor=(0.5, 1.02), ncols=2)
+
+
+# --------------------------------------------------------------------------- portraits
+
+
+def _in_zone(phi: float, delta_per_l: float) -> bool:
+    return abs(math.sin(phi)) <= delta_per_l + 1e-12
+
+
+def portrait_claims(curves, runs) -> list[Claim]:
+    claims = []
+    low = curves[LOW]
+    ok = all(pc.attrs["end_reason"] == "rest" and int(pc.n_reversals) >= 1
+             and _in_zone(float(pc.stage_end_phi[-1]), LOW)
+             and math.cos(float(pc.stage_end_phi[-1])) > 0 for pc in low)
+    ends = ", ".join(f"{float(pc.stage_end_phi[-1]):.3f}" for pc in low)
+    revs = ", ".join(str(int(pc.n_reversals)) for pc in low)
+    claims.append(Claim(
+        f"wheel, delta/l = {LOW:g}: damped oscillation, stop near the lowest position",
+        "stop in zone (15), cos phi > 0",
+        f"{len(low)} phase curves: reversals {revs}; rest at phi = {ends} (cos > 0, "
+        f"|sin| <= {LOW:g})", verdict(ok)))
+    # the phase curve against the time integration from the same state
+    pc, tr = low[0], runs[LOW]
+    d_phi = abs(float(pc.stage_end_phi[-1]) - float(tr.event_phi[-1]))
+    same = tr.attrs["end_reason"] == "rest" and int(tr.n_reversals) == int(pc.n_reversals)
+    claims.append(Claim(
+        f"wheel, delta/l = {LOW:g}: phase curve = time integration", "-",
+        f"both {int(pc.n_reversals)} reversals, rest angles {d_phi:.0e} rad apart "
+        f"(simulate, rtol 1e-10)", verdict(same and d_phi < 1e-6)))
+
+    high = curves[HIGH]
+    one_way = all(pc.attrs["end_reason"] == "rest" and int(pc.n_reversals) == 0
+                  and int(pc.sizes["stage"]) == 1 for pc in high)
+    tr = runs[HIGH]
+    sign = np.sign(tr.omega.values[tr.omega.values != 0.0])
+    one_way_t = tr.attrs["end_reason"] == "rest" and int(tr.n_reversals) == 0 and \
+        np.all(sign == sign[0])
+    claims.append(Claim(
+        f"wheel, delta/l = {HIGH:g} >= 1: moves one way, stops at the first omega = 0",
+        "no change of the sign of omega",
+        f"{len(high)} phase curves: one stage each, rest, 0 reversals; time integration: "
+        f"omega keeps its sign, rest at t = {float(tr.event_t[-1]):.3f} s",
+        verdict(one_way and one_way_t)))
+    return claims
+
+
+def portrait_figure(curves, run: xr.Dataset):
+    """Phase portraits at delta/l = 0.1 and 1.2, and phi(t) of the first curve at 0.1."""
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
+
+    green = pplot.OKABE_ITO["bluish_green"]
+    width = pplot.SIZES["two_column"]
+    with pplot.style():
+        fig, axes = plt.subplot_mosaic([["a", "b"], ["c", "c"]], figsize=(width, 0.68 * width),
+                                       layout="constrained", height_ratios=[1.6, 1.0])
+        handles: dict[str, object] = {}
+        for key, ratio in (("a", LOW), ("b", HIGH)):
+            ax = axes[key]
+            lo = min(float(pc.phi.min()) for pc in curves[ratio]) - 0.3
+            hi = max(float(pc.phi.max()) for pc in curves[ratio]) + 0.3
+            pp = np.linspace(lo, hi, 4000)
+            zone = np.where(np.abs(np.sin(pp)) <= ratio, 0.0, np.nan)
+            ax.plot(pp, zone, color=green, lw=4.0, alpha=0.5, solid_capstyle="butt",
+                    zorder=1)
+            for pc in curves[ratio]:
+                pplot.phase_curve_figure(pc, ax=ax)
+                _collect_legend(ax, handles)
+            ax.set_xlim(lo, hi)
+            ax.set_title(rf"({key}) $\delta/l$ = {ratio:g}"
+                         + (" < 1: damped oscillation" if ratio < 1 else
+                            r" $\geq$ 1: one way only"))
+        ax = axes["c"]
+        pplot.trajectory_figure(run, states="phi", ax=ax)
+        _collect_legend(ax, handles)
+        half = math.asin(LOW)
+        ax.axhspan(-half, half, color=green, alpha=0.3, lw=0, zorder=0)
+        ax.set_title(rf"(c) the motion of (a) from $\varphi_0$ = {STARTS[LOW][0][0]:g}, "
+                     rf"$\omega_0$ = {STARTS[LOW][0][1]:g} in time (simulate)")
+        handles[r"zone (15): $|\sin\varphi| \leq \delta/l$"] = Patch(
+            facecolor=green, alpha=0.5, lw=0)
+        fig.legend(list(handles.values()), list(handles), loc="outside upper center",
+                   ncols=len(handles))
+    return fig
+
+
+def _collect_legend(ax, handles: dict) -> None:
+    """Move the legend a figure function put above ``ax`` into ``handles`` (by label)."""
+    legend = ax.get_legend()
+    if legend is None:
+        return
+    for h, t in zip(legend.legend_handles, legend.get_texts()):
+        handles.setdefault(t.get_text(), h)
+    legend.remove()
+
+
+# --------------------------------------------------------------------------- bounce (12)
+
+
+def _unreduced_normal(phi, omega, delta, r, l, rho, g, m):
+    """N from momentum and angular momentum about C, unreduced (omega != 0).
+
+    Unknowns z = (phi'', F, N), sigma = sgn omega, (10) and (11):
+      m ((r - l cos phi) phi'' + l sin phi omega^2) = F
+      m (l sin phi phi'' + l cos phi omega^2) = N - m g
+      m rho^2 phi'' = -delta sigma N - F (r - l cos phi) - N l sin phi
+    """
+    phi, omega = np.broadcast_arrays(np.asarray(phi, float), np.asarray(omega, float))
+    s, c, sigma = np.sin(phi), np.cos(phi), np.sign(omega)
+    one, zero = np.ones_like(phi), np.zeros_like(phi)
+    A = np.stack([np.stack([m * (r - l * c), -one, zero], -1),
+                  np.stack([m * l * s, zero, -one], -1),
+                  np.stack([m * rho * rho * one, r - l * c, delta * sigma + l * s], -1)], -2)
+    b = np.stack([-m * l * s * omega ** 2, -m * g - m * l * c * omega ** 2, zero], -1)
+    z = np.linalg.solve(A, b[..., None])[..., 0]
+    return z[..., 2]
+
+
+def bounce_normals(ds: xr.Dataset) -> dict[str, np.ndarray]:
+    """N/m over the bounce atlas: unreduced, the paper's condition after (13), printed (13)."""
+    p = {k: float(ds.attrs[f"phasemap_fixed_{k}"]) for k in ("delta", "r", "l", "rho", "g", "m")}
+    delta, r, l, rho, g, m = (p[k] for k in ("delta", "r", "l", "rho", "g", "m"))
+    phi, w = ds.phi.values[:, None], ds.omega.values[None, :]
+    s, c, sigma = np.sin(phi), np.cos(phi), np.sign(w)
+    bracket = rho ** 2 + r ** 2 + l ** 2 - 2 * r * l * c + delta * l * s * sigma
+    # the paper's condition after (13) puts phi'' = -[l (r s + delta c sigma) w^2 + g l s
+    # + delta g sigma] / bracket into (12), i.e. into N/m = g + l (s phi'' + c w^2)
+    centrifugal = l * (r * s + delta * c * sigma) * w ** 2
+    acc_paper = -(centrifugal + g * l * s + delta * g * sigma) / bracket
+    # (13) as printed: + l (r s + delta c sigma) w^2 on the right
+    acc_printed = (centrifugal - g * l * s - delta * g * sigma) / bracket
+    return {
+        "unreduced": _unreduced_normal(phi, w, delta, r, l, rho, g, m) / m,
+        "paper_12": g + l * (s * acc_paper + c * w ** 2),
+        "printed_13": g + l * (s * acc_printed + c * w ** 2),
+        "scale": g + l * w ** 2 + l * np.abs(acc_paper),
+    }
+
+
+def bounce_claims(ds: xr.Dataset, n: dict) -> list[Claim]:
+    lost = ds.contact_lost.transpose("phi", "omega").values == 1
+    ref = n["unreduced"] < 0
+    tie = np.abs(n["unreduced"]) <= 1e-9 * n["scale"]
+    mism = {k: int(np.count_nonzero(((n[k] < 0) != ref) & ~tie)) for k in ("paper_12",
+                                                                             "printed_13")}
+    mine = int(np.count_nonzero((lost != ref) & ~tie))
+    area = 100.0 * ref.mean()
+    return [
+        Claim("wheel: no-bounce condition (12) after substituting (13)",
+              "min[-(...)/(...) sin phi + cos phi phi'^2] >= -g/l",
+              f"N < 0 on {area:.1f} % of (phi, omega); phasemap's contact_lost and the "
+              f"paper's condition differ from the unreduced solve in {mine} and "
+              f"{mism['paper_12']} cells", verdict(mine == 0 and mism["paper_12"] == 0)),
+        Claim("wheel (13): sign of the omega^2 term", "+l(r sin phi + delta cos phi sgn)phi'^2",
+              f"printed sign puts N < 0 wrongly in {mism['printed_13']} cells "
+              f"({100 * mism['printed_13'] / ref.size:.1f} %); the minus sign in 0",
+              verdict(mism["printed_13"] > 0 and mism["paper_12"] == 0, "erratum")),
+    ]
+
+
+# --------------------------------------------------------------------------- fates
+
+
+def fate_claims(fates) -> list[Claim]:
+    claims = []
+    ds = fates[LOW]
+    fate = ds.fate.values
+    rest = fate == phasemap.Event.REST
+    phi_rest = ds.phi_rest.values[rest]
+    n_rev = ds.n_reversals.values[rest]
+    inside = bool(np.all(L * np.abs(np.sin(phi_rest)) <= LOW * L * (1 + 1e-9)))
+    after = n_rev >= 1
+    lowest = bool(np.all(np.cos(phi_rest[after]) > 0))
+    upper = int(np.count_nonzero(np.cos(phi_rest[~after]) < 0))
+    claims.append(Claim(
+        f"wheel fate map, delta/l = {LOW:g}: stops after a reversal", "near the lowest position",
+        f"{int(after.sum())} of {int(rest.sum())} rest cells reversed first: all in zone (15) "
+        f"with cos phi > 0; {upper} stopped at the first zero in the upper zone",
+        verdict(inside and lowest and after.any())))
+    p = FIXED
+    texts, ok = [], True
+    for k in (LOW, HIGH):
+        f = fates[k].fate.values
+        counts = {e.name.lower(): int(np.count_nonzero(f == e)) for e in phasemap.Event
+                  if np.any(f == e)}
+        ok = ok and set(counts) <= {"rest", "contact_lost"}
+        texts.append(f"{k:g}: " + ", ".join(f"{n} {v}" for n, v in counts.items()))
+    bound = p["rho"] ** 2 + (p["r"] - p["l"]) ** 2 - HIGH * L * p["l"]
+    claims.append(Claim(
+        "wheel fate maps: no Painleve state on any motion",
+        "no solution only where the bracket of (13) vanishes",
+        "bracket >= rho^2 + (r - l)^2 - delta l >= "
+        f"{bound:.2f} m2 > 0; fates at delta/l = " + "; ".join(texts), verdict(ok)))
+
+    ds = fates[HIGH]
+    never = int(ds.n_reversals.max()) == 0
+    rest = ds.fate.values == phasemap.Event.REST
+    claims.append(Claim(
+        f"wheel fate map, delta/l = {HIGH:g}: no reversal from any initial state",
+        "moves one way (delta >= l)",
+        f"n_reversals = 0 in all {ds.fate.size} cells; {int(rest.sum())} come to rest",
+        verdict(never)))
+    return claims
+
+
+def fates_figure(fates):
+    """Fate and rest angle over (phi0, omega0), a row per delta/l."""
+    import matplotlib.pyplot as plt
+
+    width = pplot.SIZES["two_column"]
+    with pplot.style():
+        fig, axes = plt.subplots(2, 2, figsize=(width, 0.95 * width), layout="constrained")
+        for row, k in zip(axes, (LOW, HIGH)):
+            pplot.fate_figure(fates[k], extra="phi_rest", ax=list(row), size="two_column")
+            legend = row[0].get_legend()
+            row[0].legend(legend.legend_handles, [t.get_text() for t in legend.get_texts()],
+                          loc="lower center", bbox_to_anchor=(0.5, 1.02),
+                          ncols=len(legend.legend_handles),
+                          title=rf"$\delta/l$ = {k:g}: "
+                          + ("damped oscillations" if k < 1 else "one way only"))
+    return fig
+
+
+# --------------------------------------------------------------------------- the bracket of (13)
+
+#: Parameters where the bracket can vanish with delta < l: a heavy rim, l = r.
+SINGULAR_FIXED = {"r": 1.0, "l": 1.0, "rho": 0.3, "g": G, "m": 1.0, "omega": 1.0}
+
+
+def singular_atlas(n_phi: int, n_delta: int) -> xr.Dataset:
+    return phasemap.Scene(
+        "wheel", axes={"phi": np.linspace(-math.pi, math.pi, n_phi),
+                       "delta": np.linspace(0.0, 1.0, n_delta)},
+        fixed=SINGULAR_FIXED, layers=["n_solutions", "coef_roll_pos"]).compute()
+
+
+def singular_claims(ds: xr.Dataset) -> list[Claim]:
+    p = SINGULAR_FIXED
+    r, l, rho = p["r"], p["l"], p["rho"]
+    total = rho ** 2 + r ** 2 + l ** 2
+    # min over phi of total - 2 r l cos phi - delta l |sin phi| is total - l sqrt(4 r^2 + delta^2)
+    sharp = math.sqrt((total / l) ** 2 - 4 * r * r)
+    readme = (rho ** 2 + (r - l) ** 2) / l
+    delta = ds.delta.values
+    reaches = (ds.coef_roll_pos.min("phi") <= 0.0).values
+    first = float(delta[np.argmax(reaches)]) if reaches.any() else math.inf
+    step = delta[1] - delta[0]
+    claims = [Claim(
+        f"wheel: bracket of (13) can vanish (r = l = {r:g}, rho = {rho:g})",
+        "(not stated); README: needs delta l >= rho^2 + (r-l)^2",
+        f"first at delta = {first:.4f} on the grid; sharp: l sqrt(4r^2 + delta^2) >= "
+        f"rho^2 + r^2 + l^2, delta >= {sharp:.4f} (README bound {readme:.2f})",
+        verdict(sharp <= first <= sharp + step, "finding"))]
+    # the paper: (13) has no solution where the bracket vanishes (unless its right side does)
+    d = 0.8
+    phi0 = -math.atan2(d, 2 * r)  # the bracket's minimum over phi (omega > 0)
+
+    def bracket(x):
+        return total - 2 * r * l * math.cos(x) + d * l * math.sin(x)
+
+    from scipy.optimize import brentq
+
+    phi_zero = brentq(bracket, phi0, 0.0, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+    c = phasemap.classify("wheel", phi=phi_zero, delta=d, **{**p, "omega": 1.0})
+    claims.append(Claim(
+        "wheel: (13) has no solution where its bracket vanishes", "no solution (Painleve)",
+        f"at phi = {phi_zero:.4f}, delta = {d:g}, omega = 1: n_solutions = {c.n_solutions}, "
+        f"singular = {c.singular}", verdict(c.n_solutions == 0 and c.singular)))
+    return claims
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,116 @@
+"""The elliptic-pendulum and hinge-pendulum studies run in quick mode and check what they claim."""
+
+from __future__ import annotations
+
+import importlib.util
+import pathlib
+import warnings
+
+import pytest
+import xarray as xr
+
+import phasemap
+
+STUDIES = pathlib.Path(__file__).resolve().parents[1] / "studies"
+
+#: The verdict each claim must get, in the order the study checks them.
+EXPECTED = {
+    "elliptic_pendulum": [
+        ("unique solution for f <= 2 (27)", "sharper"),
+        ("xdot > 0, lambda_1 < 0 (28)", "agrees"),
+        ("xdot < 0, lambda_1 < 0 (28)", "agrees"),
+        ("lambda_k = 0 bounds the paradox regions", "agrees"),
+        ("lambda = 0 (text after (28))", "erratum"),
+        ("Q = g + l cos(phi) omega^2 < 0, f = 4", "finding"),
+        ("a motion from a unique state hits a paradox", "finding"),
+        ("at v = 0 sliding can cease (after (5))", "agrees"),
+    ],
+    "hinge_pendulum": [
+        ("stagnation zone (35), delta < l", "agrees"),
+        ("stagnation zone for delta >= l", "finding"),
+        ("delta > l, rest at phi = +-pi/2", "finding"),
+        ("delta > l: no solution (after (33))", "erratum"),
+        ("delta = l in motion (singular)", "finding"),
+        ("delta/l = 1.5 over (phi, omega)", "agrees"),
+        ("falling into (35) with omega = 0, the pendulum stops", "agrees"),
+        ("g = 0: omega = omega0/(1 + omega0 k t) (36)", "agrees"),
+        ("every motion ends at rest in the zone", "agrees"),
+    ],
+}
+
+#: Files each study must write (stems; every figure as .pdf and .png).
+ATLASES = {
+    "elliptic_pendulum": ["threshold_right", "threshold_left", "lambda_zero", "phi_omega_right",
+                          "phi_omega_left", "paradox_motion", "stick_slip"],
+    "hinge_pendulum": ["rest", "moving_phi_delta", "phi_omega_delta_above_l", "phase_curve_0",
+                       "weightless_0", "weightless_1", "fates"],
+}
+FIGURES = {
+    "elliptic_pendulum": ["phi_f", "phi_omega", "paradox_motion", "stick_slip"],
+    "hinge_pendulum": ["rest", "moving", "phase_curves", "weightless", "fates"],
+}
+
+
+def load(name):
+    spec = importlib.util.spec_from_file_location(f"study_{name}", STUDIES / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module", params=sorted(EXPECTED))
+def run(request, tmp_path_factory):
+    """Run one study in quick mode, warnings as errors; (name, claims, printed, folder)."""
+    name = request.param
+    out = tmp_path_factory.mktemp(name)
+    module = load(name)
+    import contextlib
+    import io
+
+    printed = io.StringIO()
+    with warnings.catch_warnings(), contextlib.redirect_stdout(printed):
+        warnings.simplefilter("error")
+        claims = module.main(["--quick", "--out", str(out)])
+    return name, claims, printed.getvalue(), out
+
+
+def test_claims_and_verdicts(run):
+    name, claims, printed, _ = run
+    assert [(c.claim, c.verdict) for c in claims] == EXPECTED[name]
+    assert "DISAGREES" not in printed
+    # the printed table: a header, a rule, then one row per claim ending in its verdict
+    lines = printed.splitlines()
+    head = next(i for i, line in enumerate(lines) if line.startswith("claim ") and
+                line.rstrip().endswith("verdict"))
+    rows = lines[head + 2:head + 2 + len(claims)]
+    for claim, row in zip(claims, rows):
+        assert row.startswith(claim.claim) and row.rstrip().endswith(claim.verdict), row
+        assert claim.paper in row and claim.measured in row
+
+
+def test_atlases_carry_provenance(run):
+    name, _, printed, out = run
+    for stem in ATLASES[name]:
+        path = out / f"{name}_{stem}.nc"
+        assert str(path) in printed
+        with xr.open_dataset(path) as ds:
+            assert ds.attrs["phasemap_model"] == name
+            assert ds.attrs["phasemap_version"] == phasemap.__version__
+            assert ds.attrs["phasemap_study"] == name
+    if name == "elliptic_pendulum":  # the threshold atlases span the paper's 2 and 2 sqrt 2
+        with xr.open_dataset(out / f"{name}_threshold_right.nc") as ds:
+            assert float(ds.f.min()) <= 2.0 and float(ds.f.max()) >= 2.9
+    else:  # delta = l exactly is on the rest map's axis
+        with xr.open_dataset(out / f"{name}_rest.nc") as ds:
+            assert float(ds.attrs["phasemap_fixed_l"]) in ds.delta.values
+
+
+def test_figures_written(run):
+    name, _, printed, out = run
+    for stem in FIGURES[name]:
+        pdf, png = out / f"{name}_{stem}.pdf", out / f"{name}_{stem}.png"
+        assert pdf.read_bytes()[:5] == b"%PDF-"
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert str(pdf) in printed and str(png) in printed
+    # every file in the folder carries the study's prefix
+    assert all(p.name.startswith(f"{name}_") for p in out.iterdir())

@@ -1,0 +1,122 @@
+"""The ladder and wheel studies run in quick mode, write their files and check what they claim.
+
+Each study runs once per module (about 10 s each), in a temporary folder, with
+every warning an error, so the figures render without warnings.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.util
+import io
+import pathlib
+import warnings
+
+import pytest
+import xarray as xr
+
+from phasemap.study import VERDICTS
+
+STUDIES = pathlib.Path(__file__).resolve().parents[1] / "studies"
+
+#: Files each study writes, by stem: which suffixes.
+FILES = {
+    "ladder": {"ladder_solvability": ("nc", "pdf", "png"),
+               "ladder_portraits": ("nc", "pdf", "png"),
+               "ladder_errata": ("nc",),
+               "ladder_first_integral": ("pdf", "png")},
+    "wheel": {"wheel_stagnation": ("nc",), "wheel_bounce": ("nc",),
+              "wheel_maps": ("pdf", "png"), "wheel_portraits": ("pdf", "png"),
+              "wheel_fates": ("nc", "pdf", "png"), "wheel_fates_one_way": ("nc",),
+              "wheel_singular": ("nc",)},
+}
+
+#: The verdict expected of each claim, in the order the study checks them (claim prefix).
+EXPECTED = {
+    "ladder": [
+        ("ladder: coefficient 2 - f^2 of (8) vanishes", "agrees"),
+        ("ladder: at f = sqrt 2 (8) has no solution", "agrees"),
+        ("ladder: (8) solvable for phi'' when f != sqrt 2", "agrees"),
+        ("ladder: static zone at omega = 0, f < 1", "finding"),
+        ("ladder: static zone at omega = 0, f >= 1", "finding"),
+        ("ladder: the phase curves stop only in the static zone", "finding"),
+        ("ladder (8) at l = 0.5", "erratum"),
+        ("ladder N1, N2 after (7) at m = 2", "erratum"),
+        ("ladder first integral, b", "erratum"),
+        ("ladder first integral, a and b", "erratum"),
+        ("ladder: (8) has a first integral", "agrees"),
+    ],
+    "wheel": [
+        ("wheel: stagnation zone (15)", "agrees"),
+        ("wheel: delta >= l, zone (15) covers all positions", "agrees"),
+        ("wheel, delta/l = 0.1: damped oscillation", "agrees"),
+        ("wheel, delta/l = 0.1: phase curve = time integration", "agrees"),
+        ("wheel, delta/l = 1.2 >= 1: moves one way", "agrees"),
+        ("wheel: no-bounce condition (12)", "agrees"),
+        ("wheel (13): sign of the omega^2 term", "erratum"),
+        ("wheel fate map, delta/l = 0.1: stops after a reversal", "agrees"),
+        ("wheel fate maps: no Painleve state on any motion", "agrees"),
+        ("wheel fate map, delta/l = 1.2: no reversal", "agrees"),
+        ("wheel: bracket of (13) can vanish", "finding"),
+        ("wheel: (13) has no solution where its bracket vanishes", "agrees"),
+    ],
+}
+
+
+def load(name):
+    spec = importlib.util.spec_from_file_location(f"study_{name}", STUDIES / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module", params=["ladder", "wheel"])
+def run(request, tmp_path_factory):
+    """(name, folder, claims, printed output) of one quick run, warnings as errors."""
+    name = request.param
+    out = tmp_path_factory.mktemp(name)
+    printed = io.StringIO()
+    with warnings.catch_warnings(), contextlib.redirect_stdout(printed):
+        warnings.simplefilter("error")
+        claims = load(name).main(["--quick", "--out", str(out)])
+    return name, out, claims, printed.getvalue()
+
+
+def test_files(run):
+    name, out, _, printed = run
+    expected = {f"{stem}.{ext}" for stem, exts in FILES[name].items() for ext in exts}
+    assert {p.name for p in out.iterdir()} == expected
+    for file in expected:
+        assert str(out / file) in printed  # finish() lists every file written
+    for stem, exts in FILES[name].items():
+        if "nc" in exts:
+            with xr.open_dataset(out / f"{stem}.nc") as ds:
+                assert ds.attrs["phasemap_study"] == name
+                assert ds.attrs["phasemap_model"] == name
+                assert ds.attrs["phasemap_version"]
+                assert ds.data_vars
+        if "pdf" in exts:
+            assert (out / f"{stem}.pdf").read_bytes()[:5] == b"%PDF-"
+            assert (out / f"{stem}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_verdicts(run):
+    name, _, claims, printed = run
+    assert all(c.verdict in VERDICTS for c in claims)
+    got = [(c.claim, c.verdict) for c in claims]
+    assert len(got) == len(EXPECTED[name]), got
+    for (claim, verdict), (prefix, expected) in zip(got, EXPECTED[name]):
+        assert claim.startswith(prefix), (claim, prefix)
+        assert verdict == expected, (claim, verdict, [c for c in claims if c.claim == claim])
+    assert "DISAGREES" not in printed
+
+
+def test_claims_table_printed(run):
+    """The table printed at the end has a row per claim: measured beside paper, verdict."""
+    _, _, claims, printed = run
+    table = printed[printed.index("claim "):]
+    header = table.splitlines()[0].split()
+    assert header == ["claim", "paper", "measured", "verdict"]
+    for c in claims:
+        row = next(line for line in table.splitlines() if line.startswith(c.claim))
+        assert c.paper in row and c.measured in row and row.rstrip().endswith(c.verdict)
