@@ -39,7 +39,7 @@ def test_cli_table_and_errors():
     run = [sys.executable, "-m", "phasemap.cli"]
     out = subprocess.run(run + ["table"], capture_output=True, text=True, check=True).stdout
     assert "0 none" in out and "2 two" in out and out.count("\n") >= 13
-    assert "phasemap atlas" in (ROOT / "README.md").read_text().split("```bash")[1].split("\n")[1]
+    assert "phasemap tour" in (ROOT / "README.md").read_text().split("```bash")[1].split("\n")[1]
     bad = subprocess.run(run + ["classify", "ladder", "phi=9"], capture_output=True, text=True)
     assert bad.returncode == 2
     assert bad.stderr.strip() == ("phasemap: error: ladder: phi = 9 is outside its domain "

@@ -1,0 +1,40 @@
+"""The overview study (work-precision and a wheel fate map) runs in quick mode."""
+
+from __future__ import annotations
+
+import importlib.util
+import pathlib
+import warnings
+
+import xarray as xr
+
+import phasemap
+
+STUDIES = pathlib.Path(__file__).resolve().parents[1] / "studies"
+
+
+def test_overview_quick(tmp_path, capsys):
+    spec = importlib.util.spec_from_file_location("overview", STUDIES / "overview.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        claims = module.main(["--quick", "--out", str(tmp_path)])
+    assert [c.verdict for c in claims] == ["finding", "finding", "agrees", "agrees", "finding"]
+    printed = capsys.readouterr().out
+    assert "verdict" in printed and "DISAGREES" not in printed
+    for stem in ("overview_work_precision", "overview_wheel_fates"):
+        assert (tmp_path / f"{stem}.pdf").stat().st_size > 0
+        assert (tmp_path / f"{stem}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    table = (tmp_path / "overview_work_precision.md").read_text()
+    assert "| hinge_weightless | phasemap |" in table and "| hinge_pendulum | DOP853 |" in table
+    with xr.open_dataset(tmp_path / "overview_wheel_fates.nc") as ds:
+        assert ds.attrs["phasemap_study"] == "overview" and ds.phasemap.kind == "fate"
+        assert set(np_unique(ds.fate)) <= {int(phasemap.Event.REST),
+                                           int(phasemap.Event.CONTACT_LOST)}
+
+
+def np_unique(a):
+    import numpy as np
+
+    return np.unique(a.values).tolist()
