@@ -31,7 +31,11 @@ Events that end it (the *fate*):
 * ``horizon``: still moving at the end of the time or angle range asked for;
 * ``max_events``: the number of events or stages asked for ran out;
 * ``step_failure``: the step size fell below what double precision resolves
-  (reported with the state reached; never silently continued).
+  (reported with the state reached; never silently continued);
+* ``stiff``: the motion is stiff here (typically a coefficient of the senior
+  derivative is close to zero, such as the ladder's 2 - f^2 for f near sqrt
+  2), and the explicit integrator stops instead of crawling; the
+  first-integral tracer :func:`phasemap.phase_curve` handles such cases.
 """
 
 from __future__ import annotations
@@ -52,6 +56,7 @@ SINGULAR = 10
 HORIZON = 11
 MAX_EVENTS = 12
 STEP_FAILURE = 13
+STIFF = 14
 
 #: The first terminal event: codes >= FIRST_FATE end a motion.
 FIRST_FATE = REST
@@ -74,6 +79,7 @@ class Event(enum.IntEnum):
     HORIZON = HORIZON
     MAX_EVENTS = MAX_EVENTS
     STEP_FAILURE = STEP_FAILURE
+    STIFF = STIFF
 
     @property
     def terminal(self) -> bool:
@@ -100,6 +106,8 @@ _MESSAGES = {
     Event.HORIZON: "still moving at the end of the requested range",
     Event.MAX_EVENTS: "the requested number of events or stages ran out",
     Event.STEP_FAILURE: "the step size fell below double-precision resolution",
+    Event.STIFF: "the motion is stiff here (a coefficient of the senior derivative near "
+                 "zero): the explicit integrator stops; phase_curve handles such cases",
 }
 
 #: The fates as CF flags: values and space-separated meanings.

@@ -253,6 +253,8 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
     h = 0.0
     h_prev_ok = True
     flickers = 0
+    stiff_hits = 0  # Hairer's stiffness detection: consecutive steps with h |lambda| > 3.25
+    calm = 0
     if fate < 0:
         RHS(v, y, mode, row, k1)
         # Initial step (Hairer's hinit): from the scaled sizes of y and y'.
@@ -318,6 +320,26 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
             h *= fac
             h_prev_ok = False
             continue
+        # -- accepted: stiffness detection (Hairer's dopri5) ------------------
+        # h |lambda| ~ h ||f(y1) - f(y6)|| / ||y1 - y6||, y6 the sixth stage's point;
+        # beyond the stability boundary (3.25) for 15 accepted steps the motion
+        # is stiff here (a coefficient of the senior derivative near zero) and an
+        # explicit method would crawl: stop and say so.
+        num = 0.0
+        den = 0.0
+        for i in range(ny):
+            num += (k7[i] - k6[i]) ** 2
+            den += (y1[i] - yt[i]) ** 2
+        if den > 0.0 and h * np.sqrt(num / den) > 3.25:
+            calm = 0
+            stiff_hits += 1
+            if stiff_hits >= 15:
+                fate = ev.STIFF
+                break
+        else:
+            calm += 1
+            if calm >= 6:
+                stiff_hits = 0
         # -- accepted: dense output coefficients ---------------------------
         for i in range(ny):
             dy = y1[i] - y[i]

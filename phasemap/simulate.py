@@ -166,7 +166,10 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     if t_eval is None:
         te = np.empty(0)
     else:
-        te = np.asarray(t_eval, dtype=float)
+        try:
+            te = np.asarray(t_eval, dtype=float)
+        except (TypeError, ValueError):
+            te = np.array([np.nan])
         if te.ndim != 1 or not np.all(np.isfinite(te)) or np.any(np.diff(te) < 0) or (
                 te.size and (te[0] < 0 or te[-1] > opts.t_end)):
             raise ValueError(f"{m.name}: t_eval must be a sorted 1-D sequence of times in "
