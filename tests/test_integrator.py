@@ -1,0 +1,391 @@
+"""The time integrator (phasemap.integrate through phasemap.simulate) against independent solutions.
+
+References are written here from the models' docstring derivations, not
+imported from phasemap: the weightless hinge pendulum's closed form (36), and
+scipy's DOP853 at rtol 1e-12 on the equations of motion, stage by stage, with
+its own events.  Kernels are compiled once per model (numba's on-disk cache
+keeps them between runs).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+from conftest import cfchecks
+from scipy.integrate import solve_ivp
+
+import phasemap
+
+G = 9.81
+
+
+def all_finite(ds: xr.Dataset) -> bool:
+    return all(np.isfinite(ds[v].values).all() for v in ds.variables
+               if ds[v].dtype.kind == "f")
+
+
+def kinds(ds: xr.Dataset) -> list[str]:
+    return [phasemap.Event(int(k)).name.lower() for k in ds.event_kind.values]
+
+
+# ------------------------------------------------------ independent references
+def weightless(t, phi0, omega0, delta, l):
+    """Eq. (36): phi'' = -sgn(omega) k omega^2, k = delta / sqrt(l^2 - delta^2)."""
+    k = delta / math.sqrt(l * l - delta * delta)
+    grow = 1.0 + k * abs(omega0) * t
+    return phi0 + math.copysign(1.0, omega0) * np.log(grow) / k, omega0 / grow
+
+
+def hinge_rhs(delta, l, g):
+    """l phi'' = u - g sin phi with l u = -sigma delta sqrt(Q_n^2 + u^2), Q_n = l w^2 + g cos phi,
+    solved for u: u = -sigma delta |Q_n| / sqrt(l^2 - delta^2)."""
+    k = delta / math.sqrt(l * l - delta * delta)
+
+    def rhs(t, y, sigma):
+        phi, w = y
+        qn = l * w * w + g * math.cos(phi)
+        return [w, (-sigma * k * abs(qn) - g * math.sin(phi)) / l]
+    return rhs
+
+
+def wheel_rhs(delta, r, l, rho, g):
+    """B phi'' = -l (r sin phi + delta sigma cos phi) w^2 - g l sin phi - delta sigma g,
+    B = rho^2 + r^2 + l^2 - 2 r l cos phi + delta sigma l sin phi (momentum of C and
+    angular momentum about C with the rolling constraint)."""
+    def rhs(t, y, sigma):
+        phi, w = y
+        s, c = math.sin(phi), math.cos(phi)
+        b = rho * rho + r * r + l * l - 2 * r * l * c + delta * sigma * l * s
+        return [w, (-l * (r * s + delta * sigma * c) * w * w - g * l * s - delta * sigma * g) / b]
+    return rhs
+
+
+def staged_reference(rhs, phi0, omega0, t_end, l, delta, rtol=1e-12):
+    """Stage-by-stage DOP853: rest where l |sin phi| <= delta at a velocity zero (both
+    systems), else the motion restarts towards the falling side, sigma = -sgn(sin phi)."""
+    t, y = 0.0, [phi0, omega0]
+    sigma = math.copysign(1.0, omega0) if omega0 != 0.0 else -math.copysign(1.0, math.sin(phi0))
+    stages, reversals = [], []
+    while True:
+        def zero(t, y, sigma):
+            return sigma * y[1]
+        zero.terminal, zero.direction = True, -1
+        sol = solve_ivp(rhs, (t, t_end), y, method="DOP853", rtol=rtol, atol=rtol,
+                        events=zero, dense_output=True, args=(sigma,))
+        if sol.status == 0:
+            stages.append((t, t_end, sol.sol))
+            return dict(fate="horizon", t=t_end, phi=sol.y[0, -1], reversals=reversals,
+                        stages=stages)
+        t_ev, phi = sol.t_events[0][0], sol.y_events[0][0][0]
+        stages.append((t, t_ev, sol.sol))
+        t, y = t_ev, [phi, 0.0]
+        if l * abs(math.sin(phi)) <= delta:
+            return dict(fate="rest", t=t, phi=phi, reversals=reversals, stages=stages)
+        reversals.append(t)
+        sigma = -math.copysign(1.0, math.sin(phi))
+
+
+def reference_states(ref, times):
+    out = []
+    for t in times:
+        if t >= ref["t"]:
+            out.append([ref["phi"], 0.0] if ref["fate"] == "rest" else [np.nan, np.nan])
+            continue
+        for t0, t1, sol in ref["stages"]:
+            if t0 <= t <= t1:
+                out.append(sol(t))
+                break
+    return np.array(out)
+
+
+# --------------------------------------------------------------- closed form
+def test_weightless_hinge_pendulum_matches_the_exact_solution():
+    # A Dormand-Prince step keeps its local error below rtol |y| + atol (|y| <= 10 here),
+    # and the motion is contractive in omega (omega' = -k omega^2), so the global error
+    # stays within a few hundred local errors over the ~160 steps: about 1e-10 x 10 x 10.
+    # 1e-8 is the bound with a margin; measured 3e-10.
+    t = np.linspace(0.0, 10.0, 201)
+    for omega0 in (5.0, -3.0):
+        ds = phasemap.simulate("hinge_pendulum", 10.0, rtol=1e-10, t_eval=t, phi=0.5,
+                               omega=omega0, delta=0.3, g=0.0)
+        phi, omega = weightless(t, 0.5, omega0, 0.3, 1.0)
+        assert ds.attrs["end_reason"] == "horizon"
+        assert np.max(np.abs(ds.phi.values - phi)) < 1e-8
+        assert np.max(np.abs(ds.omega.values - omega)) < 1e-8
+        # the saved steps (no t_eval) are on the solution too
+        steps = phasemap.simulate("hinge_pendulum", 10.0, rtol=1e-10, phi=0.5, omega=omega0,
+                                  delta=0.3, g=0.0)
+        phi, omega = weightless(steps.t.values, 0.5, omega0, 0.3, 1.0)
+        assert np.max(np.abs(steps.phi.values - phi)) < 1e-8
+
+
+def test_dense_output_is_as_accurate_as_the_steps():
+    # t_eval states come from the continuous extension (order 4): between the steps they
+    # must be as accurate as at the steps (a wrong dense coefficient made them O(h)).
+    t = np.linspace(0.0, 10.0, 1001)
+    for rtol, bound in ((1e-6, 1e-4), (1e-9, 1e-7)):
+        ds = phasemap.simulate("hinge_pendulum", 10.0, rtol=rtol, t_eval=t, phi=0.0, omega=5.0,
+                               delta=0.3, g=0.0)
+        phi, omega = weightless(t, 0.0, 5.0, 0.3, 1.0)
+        assert np.max(np.abs(ds.phi.values - phi)) < bound, rtol
+
+
+# ------------------------------------------------- through reversals, to rest
+CASES = {
+    "hinge_pendulum": dict(values=dict(phi=2.5, omega=0.0, delta=0.05), t_end=20.0,
+                           rhs=hinge_rhs(0.05, 1.0, G), l=1.0, delta=0.05),
+    "wheel": dict(values=dict(phi=2.0, omega=0.0, delta=0.05), t_end=20.0,
+                  rhs=wheel_rhs(0.05, 1.0, 0.5, 0.5, G), l=0.5, delta=0.05),
+}
+
+
+@pytest.fixture(scope="module")
+def references():
+    return {name: staged_reference(c["rhs"], c["values"]["phi"], c["values"]["omega"],
+                                   c["t_end"], c["l"], c["delta"])
+            for name, c in CASES.items()}
+
+
+@pytest.mark.parametrize("model", list(CASES))
+def test_reversals_and_rest_match_an_independent_solution(model, references):
+    case, ref = CASES[model], references[model]
+    assert len(ref["reversals"]) >= 3 and ref["fate"] == "rest"
+    t = np.linspace(0.0, case["t_end"], 401)
+    # rtol 1e-11: the hinge's acceleration has a kink where Q_n = l w^2 + g cos phi = 0,
+    # where one step can add ~300 rtol (3e-8 at rtol 1e-10); 1e-7 keeps a wide margin here
+    ds = phasemap.simulate(model, case["t_end"], rtol=1e-11, t_eval=t, **case["values"])
+    assert ds.attrs["end_reason"] == "rest"
+    assert int(ds.attrs["n_reversals"]) == len(ref["reversals"])
+    ev_t = ds.event_t.values[np.array(kinds(ds)) == "reversal"]
+    np.testing.assert_allclose(ev_t, ref["reversals"], rtol=0, atol=1e-7)
+    phi_rest = float(ds.event_phi[-1])
+    assert case["l"] * abs(math.sin(phi_rest)) <= case["delta"]  # inside the stagnation zone
+    assert abs(phi_rest - ref["phi"]) < 1e-7
+    assert abs(float(ds.event_t[-1]) - ref["t"]) < 1e-7
+    want = reference_states(ref, t)
+    assert np.max(np.abs(ds.phi.values - want[:, 0])) < 1e-7
+    assert np.max(np.abs(ds.omega.values - want[:, 1])) < 1e-7
+    assert float(ds.event_omega[-1]) == 0.0 and all(ds.omega.values[t > ref["t"]] == 0.0)
+
+
+@pytest.mark.parametrize("rtol", [1e-6, 1e-9, 1e-12])
+def test_first_velocity_zero_located_to_the_tolerance(rtol):
+    rhs = hinge_rhs(0.05, 1.0, G)
+
+    def zero(t, y, sigma):
+        return sigma * y[1]
+    zero.terminal, zero.direction = True, -1
+    ref = solve_ivp(rhs, (0.0, 5.0), [2.5, 0.0], method="DOP853", rtol=1e-13, atol=1e-13,
+                    events=zero, args=(-1.0,))
+    t_ref = ref.t_events[0][0]
+    ds = phasemap.simulate("hinge_pendulum", 5.0, rtol=rtol, phi=2.5, omega=0.0, delta=0.05)
+    t_ev = float(ds.event_t[1])
+    assert kinds(ds)[1] == "reversal"
+    assert abs(t_ev - t_ref) <= 10.0 * rtol * max(1.0, t_ref)
+    # the classification just before the event is the old branch, just after the new one
+    before = ds.isel(t=int(np.searchsorted(ds.t.values, t_ev)) - 1)
+    assert float(before.t) < t_ev
+    c = phasemap.classify("hinge_pendulum", phi=float(before.phi), omega=float(before.omega),
+                          delta=0.05)
+    assert [b.name for b in c.branches] == ["turn_neg"]
+    after = phasemap.simulate("hinge_pendulum", 5.0, rtol=rtol, phi=2.5, omega=0.0, delta=0.05,
+                              t_eval=[t_ev + 1e-6])
+    c = phasemap.classify("hinge_pendulum", phi=float(after.phi[0]), omega=float(after.omega[0]),
+                          delta=0.05)
+    assert [b.name for b in c.branches] == ["turn_pos"]
+    assert int(ds.event_branch[1]) == phasemap.MODELS["hinge_pendulum"].branches.index("turn_pos")
+
+
+# ------------------------------------------------------------ stick and slip
+def test_elliptic_pendulum_sticks_exactly_and_slips_at_the_friction_limit():
+    f = 0.3
+    ds = phasemap.simulate("elliptic_pendulum", 10.0, rtol=1e-10, phi=1.0, omega=0.0,
+                           xdot=0.5, f=f)
+    m = phasemap.MODELS["elliptic_pendulum"]
+    stick = m.branches.index("stick")
+    k = kinds(ds)
+    assert k.count("stick") >= 3 and k.count("slip") >= 3
+    # every stick stage: slider velocity exactly 0.0, position exactly constant
+    branch = ds.branch.values
+    edges = np.flatnonzero(np.diff(np.r_[0, (branch == stick).astype(int), 0]))
+    assert len(edges) >= 6
+    for start, stop in zip(edges[::2], edges[1::2]):
+        block = ds.isel(t=slice(start, stop))
+        assert np.all(block.xdot.values == 0.0)
+        assert np.all(block.x.values == block.x.values[0])
+    # each slip starts where |F| = f |N|: the stick branch has just become inadmissible
+    for i in np.flatnonzero(np.array(k) == "slip"):
+        state = {n: float(ds[f"event_{n}"][i]) for n in ("phi", "omega", "xdot")}
+        assert state["xdot"] == 0.0
+        c = phasemap.classify("elliptic_pendulum", f=f, **state)
+        row = next(b for b in c.candidates if b.name == "stick")
+        margin = abs(row.reactions["F"]) - f * abs(row.reactions["N"])
+        assert row.status == phasemap.BranchStatus.INADMISSIBLE
+        assert 0.0 < margin <= 1e-9 * G  # ~0: located to the model's 1e-12 tie tolerance
+        assert c.n_solutions == 1
+
+
+# --------------------------------------------------------------- extreme cases
+R2 = math.sqrt(2.0)
+
+
+@pytest.mark.parametrize("f, phi, omega, ends", [
+    (R2 - 1e-9, 0.3, -0.5, {"rest"}),
+    (R2 + 1e-9, 0.5, -4.0, {"contact_lost"}),
+    (R2, 0.3, 0.5, {"singular"}),
+])
+def test_ladder_with_f_near_sqrt2(f, phi, omega, ends):
+    ds = phasemap.simulate("ladder", 1.0, rtol=1e-10, phi=phi, omega=omega, f=f)
+    assert all_finite(ds)
+    assert ds.attrs["end_reason"] in ends
+
+
+def test_ladder_just_above_sqrt2_stops_clearly_when_the_stage_is_stiff():
+    # f = sqrt2 + 1e-9 makes the stage stiff: a boundary layer of width ~1e-10 rad, then
+    # N_wall < 0 on the slow manifold at phi = 0.49999999297 (found by phase_curve).  At
+    # rtol 1e-10 simulate finds it too.  At rtol 1e-8 explicit steps sit at the stability
+    # limit off the manifold and never see the contact loss; they used to crawl to
+    # max_steps (10^6 steps, t = 3.6e-4 s).  Hairer's stiffness test now stops the run
+    # within a few dozen steps with end_reason 'stiff', which says why.
+    tight = phasemap.simulate("ladder", 1.0, rtol=1e-10, phi=0.5, omega=-4.0, f=R2 + 1e-9)
+    assert tight.attrs["end_reason"] == "contact_lost"
+    assert abs(float(tight.event_phi[-1]) - 0.49999999297) < 1e-8
+    loose = phasemap.simulate("ladder", 1.0, rtol=1e-8, phi=0.5, omega=-4.0, f=R2 + 1e-9)
+    assert loose.attrs["end_reason"] in {"contact_lost", "stiff"}
+    assert int(loose.attrs["n_steps"]) < 1000 and all_finite(loose)
+    assert "phase_curve" in phasemap.Event.STIFF.message
+
+
+@pytest.mark.parametrize("delta", [1.0 - 1e-12, 1.0])
+def test_hinge_with_delta_at_l_cannot_start(delta):
+    ds = phasemap.simulate("hinge_pendulum", 1.0, phi=1.0, omega=2.0, delta=delta)
+    assert all_finite(ds)
+    assert ds.attrs["end_reason"] in {"singular", "no_solution"}
+    assert float(ds.event_t[-1]) == 0.0 and int(ds.attrs["n_steps"]) == 0
+
+
+def test_elliptic_pendulum_near_lambda_zero_never_continues_silently():
+    f = 3.0  # > 2 sqrt 2: lambda_+ = 1 + s^2 - f s c vanishes at tan(phi) = 1/2 and 1
+    root = math.atan(0.5)
+    for phi, xdot in ((root, 0.5), (root + 1e-8, 0.5), (root + 1e-8, -0.5)):
+        ds = phasemap.simulate("elliptic_pendulum", 2.0, phi=phi, omega=0.0, xdot=xdot, f=f)
+        assert all_finite(ds)
+        assert ds.attrs["end_reason"] in {"singular", "no_solution", "indeterminate"}
+        assert float(ds.event_t[-1]) == 0.0
+    # sliding into lambda_- = 1 + s^2 + f s c = 0 (phi = 3 pi / 4): stops there
+    ds = phasemap.simulate("elliptic_pendulum", 5.0, rtol=1e-10, phi=0.9, omega=-3.0,
+                           xdot=50.0, f=f)
+    assert all_finite(ds) and ds.attrs["end_reason"] == "singular"
+    phi = float(ds.event_phi[-1])
+    assert abs(1 + math.sin(phi) ** 2 + f * math.sin(phi) * math.cos(phi)) < 1e-8
+
+
+def test_extreme_initial_velocities():
+    ds = phasemap.simulate("hinge_pendulum", 1.0, rtol=1e-10, t_eval=np.linspace(0, 1, 11),
+                           phi=0.0, omega=1e6, delta=0.3, g=0.0)
+    phi, omega = weightless(ds.t.values, 0.0, 1e6, 0.3, 1.0)
+    assert all_finite(ds) and ds.attrs["end_reason"] == "horizon"
+    assert np.max(np.abs(ds.phi.values - phi)) < 1e-8            # phi reaches 40 rad
+    assert np.max(np.abs(ds.omega.values - omega)) < 1e-8 * 1e6  # relative to omega0
+    tiny = phasemap.simulate("hinge_pendulum", 1.0, phi=0.0, omega=1e-300, delta=0.3, g=0.0)
+    assert all_finite(tiny) and tiny.attrs["end_reason"] == "horizon"
+    assert float(tiny.phi[-1]) == pytest.approx(1e-300, rel=1e-12)
+    # with gravity 1e-300 rad/s is zero for the model: the same motion as from rest
+    a = phasemap.simulate("hinge_pendulum", 5.0, phi=1.0, omega=1e-300)
+    b = phasemap.simulate("hinge_pendulum", 5.0, phi=1.0, omega=0.0)
+    assert a.attrs["end_reason"] == b.attrs["end_reason"]
+    assert float(a.event_phi[-1]) == float(b.event_phi[-1])
+    # an overflowing omega^2 never reaches the user as inf or NaN
+    huge = phasemap.simulate("hinge_pendulum", 1.0, phi=1.0, omega=1e300)
+    assert all_finite(huge)
+    assert huge.attrs["end_reason"] in {"step_failure", "singular"}
+
+
+def test_tolerance_at_the_edge_of_double_precision():
+    ds = phasemap.simulate("hinge_pendulum", 10.0, rtol=1e-14, t_eval=np.linspace(0, 10, 51),
+                           phi=0.0, omega=5.0, delta=0.3, g=0.0)
+    phi, omega = weightless(ds.t.values, 0.0, 5.0, 0.3, 1.0)
+    assert ds.attrs["end_reason"] == "horizon"
+    assert np.max(np.abs(ds.phi.values - phi)) < 1e-12
+    with pytest.raises(ValueError, match=r"rtol must be in \[1e-14, 0.1\]"):
+        phasemap.simulate("hinge_pendulum", 1.0, rtol=1e-15)
+
+
+# ---------------------------------------------------------------- bad input
+@pytest.mark.parametrize("kwargs, words", [
+    (dict(zeta=1.0), "unknown variable 'zeta'"),
+    (dict(phi=math.nan), "phi must be finite"),
+    (dict(omega=math.inf), "omega must be finite"),
+    (dict(t_end=0.0), "t_end must be a positive number"),
+    (dict(t_end=-2.0), "t_end must be a positive number"),
+    (dict(t_end=math.inf), "t_end must be finite"),
+    (dict(t_eval=[0.0, 2.0, 1.0]), "t_eval must be a sorted 1-D sequence"),
+    (dict(t_eval=[0.0, 20.0]), "t_eval must be a sorted 1-D sequence"),
+    (dict(t_eval=[-1.0, 1.0]), "t_eval must be a sorted 1-D sequence"),
+    (dict(t_eval=[[0.0, 1.0]]), "t_eval must be a sorted 1-D sequence"),
+    (dict(t_eval=[0.0, math.nan]), "t_eval must be a sorted 1-D sequence"),
+    (dict(t_eval=["soon"]), "hinge_pendulum: t_eval"),
+])
+def test_bad_input_raises_a_clear_value_error(kwargs, words):
+    kwargs = dict(kwargs)
+    t_end = kwargs.pop("t_end", 10.0)
+    with pytest.raises(ValueError, match=words):
+        phasemap.simulate("hinge_pendulum", t_end, **kwargs)
+
+
+# ----------------------------------------------------------------- fate map
+def test_hinge_fate_map_rests_in_the_stagnation_zone_and_round_trips(tmp_path):
+    delta, l = 0.1, 1.0
+    scene = phasemap.Scene("hinge_pendulum",
+                           axes={"phi": np.linspace(-3.0, 3.0, 13), "omega": [-4.0, 0.0, 2.5]},
+                           fixed={"delta": delta},
+                           layers=["fate", "n_reversals", "t_final", "t_rest", "phi_rest"],
+                           options={"t_end": 30.0})
+    ds = scene.compute()
+    rest = ds.fate.values == phasemap.Event.REST
+    assert rest.sum() >= 30
+    assert np.all(l * np.abs(np.sin(ds.phi_rest.values[rest])) <= delta * (1 + 1e-12))
+    assert np.array_equal(np.isnan(ds.t_rest.values), ~rest)
+    assert np.array_equal(np.isnan(ds.phi_rest.values), ~rest)
+    assert np.all(ds.t_rest.values[rest] == ds.t_final.values[rest])
+    # the same cell by simulate
+    i, j = np.argwhere(rest & (ds.n_reversals.values > 0))[0]
+    one = phasemap.simulate("hinge_pendulum", 30.0, rtol=1e-6, phi=float(ds.phi[i]),
+                            omega=float(ds.omega[j]), delta=delta)
+    assert one.attrs["end_reason"] == "rest"
+    assert float(one.event_phi[-1]) == float(ds.phi_rest[i, j])
+    assert int(one.attrs["n_reversals"]) == int(ds.n_reversals[i, j])
+    path = phasemap.write_atlas(ds, tmp_path / "fates.nc")
+    with xr.open_dataset(path) as back:
+        back.load()
+    assert back.identical(ds)
+    report = cfchecks(path, tmp_path)
+    assert "ERRORS detected: 0" in report and "WARNINGS given: 0" in report, report
+
+
+# ------------------------------------------------------- work-precision API
+def test_scipy_stage_driver_and_work_precision_rows():
+    import phasemap.workprecision as wp
+
+    staged = wp.solve_ivp_staged("hinge_pendulum", 20.0, method="DOP853", rtol=1e-10,
+                                 t_eval=np.linspace(0, 20, 41), phi=2.5, omega=0.0, delta=0.05)
+    ds = phasemap.simulate("hinge_pendulum", 20.0, rtol=1e-10, t_eval=np.linspace(0, 20, 41),
+                           phi=2.5, omega=0.0, delta=0.05)
+    assert staged.fate == ds.attrs["end_reason"] == "rest"
+    assert staged.n_reversals == int(ds.attrs["n_reversals"]) == 12
+    assert [e[1] for e in staged.events] == kinds(ds)
+    np.testing.assert_allclose([e[0] for e in staged.events], ds.event_t.values, atol=1e-7)
+    np.testing.assert_allclose(staged.y, np.column_stack([ds.phi, ds.omega]), atol=1e-7)
+    rows = wp.work_precision("ladder", tolerances=[1e-6, 1e-9], methods=["phasemap", "RK45"],
+                             repeats=1, min_time=0.0)
+    assert {(r["method"], r["tol"]) for r in rows} == {(m, t) for m in ("phasemap", "RK45")
+                                                      for t in (1e-6, 1e-9)}
+    for r in rows:
+        assert r["same_fate"] and r["fate"] == "contact_lost"
+        assert 0 < r["error_final"] < 1e3 * r["tol"] and r["seconds"] > 0
+    assert "speed-up" in wp.report(rows)
+    with pytest.raises(ValueError, match="unknown method"):
+        wp.work_precision("ladder", tolerances=[1e-6], methods=["Euler"])
