@@ -131,7 +131,7 @@ def cases() -> list[Case]:
     for eps in (1e-3, 1e-6, 1e-9):
         f = R2 + eps
         err, reason = against_curve("ladder", phi=0.5, omega=-4.0, f=f)
-        for rtol in ((1e-10, 1e-8) if eps == 1e-9 else (1e-10,)):
+        for rtol in ((1e-10, 1e-8, 1e-4) if eps == 1e-9 else (1e-10,)):
             out.append(Case("ladder f -> sqrt2", f"f = sqrt2 + {eps:g}, phi 0.5, omega -4",
                             "ladder", 1.0, dict(phi=0.5, omega=-4.0, f=f), rtol=rtol,
                             expect=(reason,), stops=("step_failure", "stiff"), error=err,
@@ -294,8 +294,8 @@ def table(rows) -> str:
              "reference | verdict |",
              "|---|---|---:|---|---|---:|---:|---:|---:|---|---|"]
     for r in rows:
-        err = "-" if not math.isfinite(r["error"]) and not math.isinf(r["error"]) else (
-            f"{r['error']:.1e}")
+        err = ("other end" if math.isinf(r["error"]) else "-" if math.isnan(r["error"])
+               else f"{r['error']:.1e}")
         tgt = "-" if not math.isfinite(r["target"]) else f"{r['target']:.0e}"
         lines.append(f"| {r['group']} | {r['name']} | {r['rtol']:.0e} | {r['end']} | "
                      f"{'yes' if r['finite'] else '**no**'} | {err} | {tgt} | {r['steps']} | "

@@ -56,9 +56,10 @@ function and :func:`phasemap._numerics.summarize`, which is what
 exactly 0) it decides rest, stick, reversal or another fate; where the
 classification at the event still admits the running branch (a tie within the
 model's 1e-12 tolerances), the state is advanced by Euler steps of
-10^k * 2 eps max(1, t) (k = 1..9) until it does not, and the step is then
-bisected to the first state that does not, much as the numba integrator
-probes past a tie.  Then ``solve_ivp`` restarts on the next stage; its setup
+10^k * 2 eps max(1, t) (k = 1..9) to the first state that is decided (a
+unique solution on another branch), refined by bisection, as the numba
+integrator probes past a tie; a state that stays undecided past the tie is a
+genuine paradox and its classification is the fate.  Then ``solve_ivp`` restarts on the next stage; its setup
 cost at every restart is part of what is measured.  Implicit methods (Radau,
 LSODA) get no Jacobian (none is available in closed form), so they
 difference it numerically, as ``solve_ivp`` does by default.
@@ -513,27 +514,44 @@ class _Driver:
                 y[self.vel] = 0.0
             n, adm, lost, sing = self.classify(y)
             if not vel_zero and n == 1 and adm == mode:
-                # a tie at the event: probe just past it along the stage, then bisect
-                # to the first state whose classification differs
+                # a tie at the event: probe just past it along the stage for the first
+                # state that is decided (unique and another branch), then bisect to it;
+                # without one, the first state off the stage (a genuine paradox)
                 f0 = np.asarray(fun(t, y), dtype=float)
-                good = 0.0
+
+                def off(c):
+                    return not (c[0] == 1 and c[1] == mode)
+
+                def decided(c):
+                    return c[0] == 1 and c[1] != mode
+
+                def first(lo, hi, found, pred):
+                    for _ in range(60):  # the earliest dt in (lo, hi] with pred
+                        mid = 0.5 * (lo + hi)
+                        if mid in (lo, hi):
+                            break
+                        probe = self.classify(y + mid * f0)
+                        if pred(probe):
+                            hi, found = mid, probe
+                        else:
+                            lo = mid
+                    return hi, found
+
+                prev, first_off, chosen = 0.0, None, None
                 for k in range(1, 10):
                     dt = 10.0 ** k * 2.0 * _EPS * max(1.0, abs(t))
                     found = self.classify(y + dt * f0)
-                    if not (found[0] == 1 and found[1] == mode):
-                        for _ in range(60):
-                            mid = 0.5 * (good + dt)
-                            if mid in (good, dt):
-                                break
-                            probe = self.classify(y + mid * f0)
-                            if probe[0] == 1 and probe[1] == mode:
-                                good = mid
-                            else:
-                                dt, found = mid, probe
-                        n, adm, lost, sing = found
-                        t, y = t + dt, y + dt * f0
+                    if off(found) and first_off is None:
+                        first_off = (prev, dt, found)
+                    if decided(found):
+                        chosen = first(prev, dt, found, decided)
                         break
-                    good = dt
+                    prev = dt
+                if chosen is None and first_off is not None:
+                    chosen = first(*first_off, off)
+                if chosen is not None:
+                    dt, (n, adm, lost, sing) = chosen
+                    t, y = t + dt, y + dt * f0
             new_mode = -1
             if n == 1:
                 new_mode = adm
