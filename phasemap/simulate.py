@@ -161,7 +161,7 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     for k, val in values.items():
         if np.ndim(val) != 0:
             raise ValueError(f"{m.name}: {k} must be a scalar for simulate(); "
-                             "use phasemap.fate_map for grids of initial conditions")
+                             "for grids of initial conditions use a Scene with fate layers")
     full, positions = split_values(m, values)
     if t_eval is None:
         te = np.empty(0)

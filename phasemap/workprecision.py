@@ -110,7 +110,7 @@ import statistics
 import time
 import warnings
 from dataclasses import dataclass, field
-from typing import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -452,6 +452,50 @@ class _Driver:
             return ev.CONTINUUM
         return ev.INDETERMINATE
 
+    def past_tie(self, fun, t, y, mode, here):
+        """The state just past a tie at an event, and its classification.
+
+        Probe along the stage for the first state that is decided (unique, on
+        another branch) and bisect to it; without one, the first state off the
+        stage (a genuine paradox); without that, the event state itself.
+        """
+        f0 = np.asarray(fun(t, y), dtype=float)
+
+        def off(c):
+            return not (c[0] == 1 and c[1] == mode)
+
+        def decided(c):
+            return c[0] == 1 and c[1] != mode
+
+        def first(lo, hi, found, pred):
+            for _ in range(60):  # the earliest dt in (lo, hi] with pred
+                mid = 0.5 * (lo + hi)
+                if mid in (lo, hi):
+                    break
+                probe = self.classify(y + mid * f0)
+                if pred(probe):
+                    hi, found = mid, probe
+                else:
+                    lo = mid
+            return hi, found
+
+        prev, first_off, chosen = 0.0, None, None
+        for k in range(1, 10):
+            dt = 10.0 ** k * 2.0 * _EPS * max(1.0, abs(t))
+            found = self.classify(y + dt * f0)
+            if off(found) and first_off is None:
+                first_off = (prev, dt, found)
+            if decided(found):
+                chosen = first(prev, dt, found, decided)
+                break
+            prev = dt
+        if chosen is None and first_off is not None:
+            chosen = first(*first_off, off)
+        if chosen is None:
+            return t, y, here
+        dt, found = chosen
+        return t + dt, y + dt * f0, found
+
     def run(self, method: str, rtol: float, atol: float, t_end: float, t_eval: np.ndarray,
             dense: bool = False, max_events: int = 10_000, h_max: float = math.inf) -> Staged:
         from scipy.integrate import solve_ivp
@@ -514,44 +558,7 @@ class _Driver:
                 y[self.vel] = 0.0
             n, adm, lost, sing = self.classify(y)
             if not vel_zero and n == 1 and adm == mode:
-                # a tie at the event: probe just past it along the stage for the first
-                # state that is decided (unique and another branch), then bisect to it;
-                # without one, the first state off the stage (a genuine paradox)
-                f0 = np.asarray(fun(t, y), dtype=float)
-
-                def off(c):
-                    return not (c[0] == 1 and c[1] == mode)
-
-                def decided(c):
-                    return c[0] == 1 and c[1] != mode
-
-                def first(lo, hi, found, pred):
-                    for _ in range(60):  # the earliest dt in (lo, hi] with pred
-                        mid = 0.5 * (lo + hi)
-                        if mid in (lo, hi):
-                            break
-                        probe = self.classify(y + mid * f0)
-                        if pred(probe):
-                            hi, found = mid, probe
-                        else:
-                            lo = mid
-                    return hi, found
-
-                prev, first_off, chosen = 0.0, None, None
-                for k in range(1, 10):
-                    dt = 10.0 ** k * 2.0 * _EPS * max(1.0, abs(t))
-                    found = self.classify(y + dt * f0)
-                    if off(found) and first_off is None:
-                        first_off = (prev, dt, found)
-                    if decided(found):
-                        chosen = first(prev, dt, found, decided)
-                        break
-                    prev = dt
-                if chosen is None and first_off is not None:
-                    chosen = first(*first_off, off)
-                if chosen is not None:
-                    dt, (n, adm, lost, sing) = chosen
-                    t, y = t + dt, y + dt * f0
+                t, y, (n, adm, lost, sing) = self.past_tie(fun, t, y, mode, (n, adm, lost, sing))
             new_mode = -1
             if n == 1:
                 new_mode = adm
