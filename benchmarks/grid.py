@@ -152,10 +152,14 @@ def timed(fn, *args):
     return time.perf_counter() - t, result
 
 
-def cold_start(empty_cache: bool) -> float:
-    code = ("import time; t=time.perf_counter(); import numpy as np, phasemap; "
-            "phasemap.Scene('ladder', axes={'phi': np.linspace(0, 1, 8)}).compute(); "
-            "print(time.perf_counter()-t)")
+GRID_START = ("import time; t=time.perf_counter(); import numpy as np, phasemap; "
+              "phasemap.Scene('ladder', axes={'phi': np.linspace(0, 1, 8)}).compute(); "
+              "print(time.perf_counter()-t)")
+
+
+def cold_start(empty_cache: bool, code: str = GRID_START) -> float:
+    """Seconds ``code`` (which prints its own timing last) takes in a fresh process,
+    with numba's on-disk cache as it is or empty."""
     env = dict(os.environ)
     with tempfile.TemporaryDirectory() as tmp:
         if empty_cache:

@@ -26,9 +26,7 @@ import math
 import os
 import pathlib
 import statistics
-import subprocess
 import sys
-import tempfile
 import time
 
 import numba
@@ -38,7 +36,7 @@ import phasemap
 import phasemap.workprecision as wp
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from grid import machine, write_section  # noqa: E402
+from grid import cold_start, machine, write_section  # noqa: E402
 
 HERE = pathlib.Path(__file__).resolve().parent
 LEVELS = (1e-3, 1e-5, 1e-7, 1e-9, 1e-11)
@@ -53,24 +51,16 @@ def fate_scene(n: int) -> phasemap.Scene:
                           layers=FATE_LAYERS, options=FATE_OPTIONS)
 
 
-def cold_start(empty_cache: bool) -> float:
-    """Seconds for a fresh process to import phasemap and compute a 4 x 4 wheel fate map."""
-    code = ("import time; t = time.perf_counter(); import sys; sys.path.insert(0, %r); "
-            "import work_precision as w; w.fate_scene(4).compute(); "
-            "print(time.perf_counter() - t)" % str(HERE))
-    env = dict(os.environ)
-    with tempfile.TemporaryDirectory() as tmp:
-        if empty_cache:
-            env["NUMBA_CACHE_DIR"] = tmp
-        out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
-                             text=True, check=True)
-    return float(out.stdout.strip().splitlines()[-1])
+#: A fresh process imports phasemap and computes a 4 x 4 wheel fate map.
+FATE_START = ("import time; t = time.perf_counter(); import sys; sys.path.insert(0, %r); "
+              "import work_precision as w; w.fate_scene(4).compute(); "
+              "print(time.perf_counter() - t)" % str(HERE))
 
 
 def fate_map(side: int, small: int) -> dict:
     """Time the wheel's fate map: cold start, threads on a small map, the big map once."""
     fate_scene(4).compute()
-    cold = (cold_start(False), cold_start(True))
+    cold = (cold_start(False, FATE_START), cold_start(True, FATE_START))
     threads_all = numba.config.NUMBA_NUM_THREADS
     per_thread = {}
     for threads in (1, threads_all):

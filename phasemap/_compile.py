@@ -21,6 +21,7 @@ import types
 from numba import njit
 
 from . import _numerics as nx
+from . import events
 from .model import Model
 
 _CACHE: dict[tuple[str, str], object] = {}
@@ -42,8 +43,8 @@ def specialize(template, model: Model, kind: str, parallel: bool = False, **cons
 
 
 def source_hash(model: Model, *modules) -> str:
-    """Hash of the model's module, the shared numerics and ``modules``."""
+    """Hash of the model's module, the shared numerics and events, and ``modules``."""
     h = hashlib.sha256()
-    for module in (sys.modules[model.point.py_func.__module__], nx, *modules):
+    for module in (sys.modules[model.point.py_func.__module__], nx, events, *modules):
         h.update(pathlib.Path(module.__file__).read_bytes())
     return h.hexdigest()[:12]

@@ -42,6 +42,10 @@ from __future__ import annotations
 
 import enum
 
+from numba import njit
+
+from . import _numerics as nx
+
 START = 0
 REVERSAL = 1
 STICK = 2
@@ -60,6 +64,24 @@ STIFF = 14
 
 #: The first terminal event: codes >= FIRST_FATE end a motion.
 FIRST_FATE = REST
+
+
+@njit(cache=True)
+def fate_without_unique(n, lost, singular):
+    """The fate at a state whose classification is not unique (``n`` != 1).
+
+    No solution is ``contact_lost`` where a branch needs a one-sided contact
+    to pull, ``singular`` where the senior-derivative coefficient vanishes,
+    else ``no_solution``; a continuum is ``continuum``; two or more isolated
+    solutions are ``indeterminate``.
+    """
+    if n == nx.N_NONE:
+        if lost:
+            return CONTACT_LOST
+        return SINGULAR if singular else NO_SOLUTION
+    if n == nx.N_CONTINUUM:
+        return CONTINUUM
+    return INDETERMINATE
 
 
 class Event(enum.IntEnum):

@@ -230,12 +230,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
     kind = ev.START
     if n != 1:
         mode = -1
-        if n == 0:
-            kind = ev.CONTACT_LOST if lost else (ev.SINGULAR if sing else ev.NO_SOLUTION)
-        elif n == nx.N_CONTINUUM:
-            kind = ev.CONTINUUM
-        else:
-            kind = ev.INDETERMINATE
+        kind = ev.fate_without_unique(n, lost, sing)
     elif mode == STICK and STICK_IS_REST:
         kind = ev.REST
     evs, n_ev = _push(evs, n_ev, t, kind, mode, y)
@@ -469,12 +464,8 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
             else:
                 kind = ev.SINGULAR  # same branch, its coefficient changed sign
                 new_mode = -1
-        elif n == 0:
-            kind = ev.CONTACT_LOST if lost else (ev.SINGULAR if sing else ev.NO_SOLUTION)
-        elif n == nx.N_CONTINUUM:
-            kind = ev.CONTINUUM
         else:
-            kind = ev.INDETERMINATE
+            kind = ev.fate_without_unique(n, lost, sing)
         if kind == ev.REST or new_mode < 0:
             fate = kind
             break

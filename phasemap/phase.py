@@ -642,13 +642,6 @@ def _classify(m: Model, values: dict, phi: float, omega: float) -> np.ndarray:
     return out
 
 
-def _directions(m: Model) -> tuple[float, ...]:
-    dyn = getattr(m, "dynamics", None)
-    if dyn is not None:
-        return tuple(dyn.directions)
-    return (1.0, -1.0, 0.0)
-
-
 def _at_rest(m: Model, values: dict, phi: float):
     """Classify the rest state (phi, 0): ('go', sigma) or ('stop', Event code)."""
     out = _classify(m, values, phi, 0.0)
@@ -657,7 +650,7 @@ def _at_rest(m: Model, values: dict, phi: float):
         if stagnation:
             return "stop", ev.REST
         row = int(np.flatnonzero(out[:, nx.STATUS] == nx.ADMISSIBLE)[0])
-        return "go", _directions(m)[row]
+        return "go", m.dynamics.directions[row]
     if singular and n in (nx.N_NONE, nx.N_CONTINUUM):
         return "stop", ev.SINGULAR
     if n == nx.N_NONE:
@@ -679,7 +672,7 @@ def _moving(m: Model, values: dict, phi: float, omega: float):
     if out[row, nx.SINGULAR] != 0.0:
         return "stop", ev.SINGULAR
     if status == nx.ADMISSIBLE:
-        return "go", _directions(m)[row]
+        return "go", m.dynamics.directions[row]
     if status == nx.CONTACT_LOST:
         return "stop", ev.CONTACT_LOST
     return "stop", ev.NO_SOLUTION

@@ -91,6 +91,17 @@ def save_figure(fig, out: pathlib.Path, name: str) -> list[pathlib.Path]:
     return paths
 
 
+def collect_legend(ax, handles: dict) -> None:
+    """Move the legend a figure function put above ``ax`` into ``handles`` (by label),
+    so that a figure of several panels can show one legend for all."""
+    legend = ax.get_legend()
+    if legend is None:
+        return
+    for h, t in zip(legend.legend_handles, legend.get_texts()):
+        handles.setdefault(t.get_text(), h)
+    legend.remove()
+
+
 def finish(title: str, claims: Sequence[Claim], files: Sequence[pathlib.Path]) -> None:
     """Print the files written and the claims table."""
     print(f"{title}: wrote {len(files)} files")

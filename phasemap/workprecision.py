@@ -443,15 +443,6 @@ class _Driver:
             e.direction = -1.0
         return fun, events
 
-    @staticmethod
-    def kind_of(n, lost, sing):
-        """The fate of a state without a unique solution."""
-        if n == 0:
-            return ev.CONTACT_LOST if lost else (ev.SINGULAR if sing else ev.NO_SOLUTION)
-        if n == nx.N_CONTINUUM:
-            return ev.CONTINUUM
-        return ev.INDETERMINATE
-
     def past_tie(self, fun, t, y, mode, here):
         """The state just past a tie at an event, and its classification.
 
@@ -514,7 +505,7 @@ class _Driver:
         n, mode, lost, sing = self.classify(y)
         fate = None
         if n != 1:
-            fate = self.kind_of(n, lost, sing)
+            fate = int(ev.fate_without_unique(n, lost, sing))
             mode = -1
         elif mode == stick and dyn.stick_is_rest:
             fate = ev.REST
@@ -574,7 +565,7 @@ class _Driver:
                 else:
                     kind = ev.SWITCH
             else:
-                kind = self.kind_of(n, lost, sing)
+                kind = int(ev.fate_without_unique(n, lost, sing))
             if kind == ev.REST or new_mode < 0:
                 fate = kind
                 break
@@ -735,10 +726,6 @@ def _methods_for(p: Problem, methods):
     keep = []
     for method in methods:
         if method == "phase_curve":
-            try:
-                from .phase import phase_curve  # noqa: F401
-            except ImportError:  # the tracer is not available
-                continue
             if len(m.dynamics.coordinates) != 1:  # phase curves of 1-DOF models only
                 continue
         elif method not in ("phasemap", "simulate") + SCIPY_METHODS:

@@ -33,7 +33,8 @@ import xarray as xr
 
 import phasemap
 from phasemap import plot as pplot
-from phasemap.study import Claim, arguments, finish, save_atlas, save_figure, verdict
+from phasemap.study import (Claim, arguments, collect_legend, finish, save_atlas, save_figure,
+                            verdict)
 
 STUDY = "ladder"
 SQRT2 = math.sqrt(2.0)
@@ -190,7 +191,7 @@ def solvability_figure(atlas: xr.Dataset):
         handles: dict[str, object] = {}
         for k, (ax, w) in enumerate(zip(axes, OMEGAS)):
             pplot.map_figure(atlas.sel(omega=w), "n_solutions", x="phi", ax=ax)
-            _collect_legend(ax, handles)
+            collect_legend(ax, handles)
             if w == 0.0:
                 ff = np.linspace(0.0, 1.0, 200)
                 ax.plot(2 * np.arctan(ff), ff, color=pplot.OKABE_ITO["bluish_green"], lw=1.4,
@@ -210,16 +211,6 @@ def solvability_figure(atlas: xr.Dataset):
         fig.legend([handles[k] for k in keys], keys, loc="outside upper center",
                    ncols=len(keys))
     return fig
-
-
-def _collect_legend(ax, handles: dict) -> None:
-    """Move the legend a figure function put above ``ax`` into ``handles`` (by label)."""
-    legend = ax.get_legend()
-    if legend is None:
-        return
-    for h, t in zip(legend.legend_handles, legend.get_texts()):
-        handles.setdefault(t.get_text(), h)
-    legend.remove()
 
 
 # --------------------------------------------------------------------------- phase portraits
@@ -269,7 +260,7 @@ def portrait_figure(regions: xr.Dataset, curves):
             _hatch(ax, reg.phi.values, u, mask, blue)
             for pc in curves[f]:
                 pplot.phase_curve_figure(pc, squared=True, ax=ax)
-                _collect_legend(ax, handles)
+                collect_legend(ax, handles)
             _, a, b = _coefficients(f, 1.0, corrected=True)
             pp = np.linspace(0.0, math.pi / 2, 200)
             ax.plot(pp, a * np.sin(pp) + b * np.cos(pp), color=pplot.GREY, lw=0.8, ls=":",

@@ -33,7 +33,8 @@ import xarray as xr
 
 import phasemap
 from phasemap import plot as pplot
-from phasemap.study import Claim, arguments, finish, save_atlas, save_figure, verdict
+from phasemap.study import (Claim, arguments, collect_legend, finish, save_atlas, save_figure,
+                            verdict)
 
 STUDY = "wheel"
 G = 9.81
@@ -245,14 +246,14 @@ def portrait_figure(curves, run: xr.Dataset):
                     zorder=1)
             for pc in curves[ratio]:
                 pplot.phase_curve_figure(pc, ax=ax)
-                _collect_legend(ax, handles)
+                collect_legend(ax, handles)
             ax.set_xlim(lo, hi)
             ax.set_title(rf"({key}) $\delta/l$ = {ratio:g}"
                          + (" < 1: damped oscillation" if ratio < 1 else
                             r" $\geq$ 1: one way only"))
         ax = axes["c"]
         pplot.trajectory_figure(run, states="phi", ax=ax)
-        _collect_legend(ax, handles)
+        collect_legend(ax, handles)
         half = math.asin(LOW)
         ax.axhspan(-half, half, color=green, alpha=0.3, lw=0, zorder=0)
         ax.set_title(rf"(c) the motion of (a) from $\varphi_0$ = {STARTS[LOW][0][0]:g}, "
@@ -262,16 +263,6 @@ def portrait_figure(curves, run: xr.Dataset):
         fig.legend(list(handles.values()), list(handles), loc="outside upper center",
                    ncols=len(handles))
     return fig
-
-
-def _collect_legend(ax, handles: dict) -> None:
-    """Move the legend a figure function put above ``ax`` into ``handles`` (by label)."""
-    legend = ax.get_legend()
-    if legend is None:
-        return
-    for h, t in zip(legend.legend_handles, legend.get_texts()):
-        handles.setdefault(t.get_text(), h)
-    legend.remove()
 
 
 # --------------------------------------------------------------------------- bounce (12)

@@ -41,3 +41,17 @@ def cfchecks(path, folder) -> str:
     report = run.stdout + run.stderr
     assert run.returncode == 0, report
     return report
+
+
+def assert_atlas_round_trip(ds, folder, name: str = "atlas.nc") -> str:
+    """Write ``ds`` with ``write_atlas``; it must read back identical and pass cfchecks cleanly."""
+    import phasemap
+    import xarray as xr
+
+    path = phasemap.write_atlas(ds, folder / name)
+    with xr.open_dataset(path) as back:
+        back.load()
+    xr.testing.assert_identical(back, ds)
+    report = cfchecks(path, folder)
+    assert "ERRORS detected: 0" in report and "WARNINGS given: 0" in report, report
+    return report

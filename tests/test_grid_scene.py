@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 import xarray as xr
-from conftest import cfchecks
+from conftest import assert_atlas_round_trip
 
 import phasemap
 from phasemap import _numerics as nx
@@ -200,13 +200,7 @@ def test_atlas_of_each_model_round_trips_and_passes_cfchecks(model, tmp_path):
     scene = phasemap.Scene(model, axes={n: np.linspace(*spec[:2], 9)
                                         for n, spec in m.default_axes.items()},
                            layers=list(phasemap.layers_for(m)))
-    ds = scene.compute()
-    path = phasemap.write_atlas(ds, tmp_path / f"{model}.nc")
-    with xr.open_dataset(path) as back:
-        back.load()
-    assert back.identical(ds)
-    report = cfchecks(path, tmp_path)
-    assert "ERRORS detected: 0" in report and "WARNINGS given: 0" in report, report
+    assert_atlas_round_trip(scene.compute(), tmp_path, f"{model}.nc")
 
 
 def test_summary_codes_match_the_enumerations():

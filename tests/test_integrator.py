@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 import xarray as xr
-from conftest import cfchecks
+from conftest import assert_atlas_round_trip
 from scipy.integrate import solve_ivp
 
 import phasemap
@@ -358,12 +358,7 @@ def test_hinge_fate_map_rests_in_the_stagnation_zone_and_round_trips(tmp_path):
     assert one.attrs["end_reason"] == "rest"
     assert float(one.event_phi[-1]) == float(ds.phi_rest[i, j])
     assert int(one.attrs["n_reversals"]) == int(ds.n_reversals[i, j])
-    path = phasemap.write_atlas(ds, tmp_path / "fates.nc")
-    with xr.open_dataset(path) as back:
-        back.load()
-    assert back.identical(ds)
-    report = cfchecks(path, tmp_path)
-    assert "ERRORS detected: 0" in report and "WARNINGS given: 0" in report, report
+    assert_atlas_round_trip(ds, tmp_path, "fates.nc")
 
 
 # ------------------------------------------------------- work-precision API

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
-import xarray as xr
 
 import phasemap
-from conftest import cfchecks
+from conftest import assert_atlas_round_trip
 
 
 def test_branch_at_requested_times_including_t_end():
@@ -27,11 +26,7 @@ def test_branch_at_requested_times_including_t_end():
 
 def test_trajectory_is_a_cf_netcdf_that_round_trips(tmp_path):
     ds = phasemap.simulate("wheel", 20.0, phi=2.0, omega=0.0, delta=0.02)
-    path = phasemap.write_atlas(ds, tmp_path / "wheel.nc")
-    with xr.open_dataset(path) as back:
-        xr.testing.assert_identical(back.load(), ds)
-    report = cfchecks(path, tmp_path)
-    assert "ERRORS detected: 0" in report and "WARNINGS given: 0" in report
+    assert_atlas_round_trip(ds, tmp_path, "wheel.nc")
 
 
 def test_layers_for_takes_a_name_or_a_model():
