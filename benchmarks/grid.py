@@ -1,12 +1,22 @@
-"""Grid throughput: cells per second of the numba kernel against two reference points.
+"""Grid throughput: cells per second of the numba kernel against three reference points.
 
 For each model, a 2-D map over (phi, f), or (phi, delta) where there is no f,
-at a moving state (the relative velocity is not zero), layer ``n_solutions``:
+at a moving state (the relative velocity is not zero), layer ``n_solutions``
+(and, in a second table, all four summary layers at once):
 
-* **numba**: ``phasemap.Scene(...).compute()``'s kernel, through ``grid.evaluate``;
+* **numba**: ``phasemap.Scene(...).compute()``'s kernel, through ``grid.evaluate``
+  (the generated kernel of :mod:`phasemap._codegen`);
+* **previous kernel**: the kernel phasemap had before the per-point contract
+  was rebuilt (issue 9): one out-of-line ``point(v, out)`` call per cell into
+  heap scratch rows, then the array-based ``summarize``; it runs here on the
+  generated ``point``, so it computes exactly the same classification;
 * **numpy**: the same classification written with NumPy whole-array operations
   (for this benchmark only; checked cell by cell against the kernel);
-* **write bound**: a ``prange`` numba kernel that only writes the int8 output.
+* **store loop**: a kernel with the generated kernel's loop structure (prange
+  over the outer axis, the inner axis read from its array) whose body only
+  stores an int8 computed from the inner value: the roofline of a kernel that
+  must read its axis and write int8.  (A memset is faster still, and says
+  nothing about a kernel that classifies.)
 
 Compilation is excluded (every kernel is warmed first) and reported separately
 as cold start: a fresh process importing phasemap and classifying one tiny
@@ -34,8 +44,10 @@ import numpy as np
 from numba import njit, prange
 
 import phasemap
-from phasemap.grid import evaluate
-from phasemap.layers import layers_for
+from phasemap import _numerics as nx
+from phasemap._compile import specialize
+from phasemap.grid import evaluate, pack_axes
+from phasemap.layers import SUMMARY, layers_for
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TOL = 1e-12
@@ -64,7 +76,8 @@ def numpy_ladder(phi, f, omega, l, g, m):
     tol = TOL * inv * (g + l * w2 + l * np.abs(a)) * (1.0 + f)
     ok = (nf >= -tol) & (nw >= -tol)
     n = np.where(singular, np.where(np.abs(rhs) <= TOL * rhs_scale, 3, 0), ok)
-    return n.astype(np.int8)
+    lost = ~singular & ~ok
+    return n.astype(np.int8), lost.astype(np.int8), singular.astype(np.int8)
 
 
 def numpy_wheel(phi, delta, omega, r, l, rho, g, m):
@@ -78,7 +91,8 @@ def numpy_wheel(phi, delta, omega, r, l, rho, g, m):
     n_normal = m * (g + l * (sp * a + cp * w2))
     ok = n_normal >= -TOL * m * (g + l * w2 + l * np.abs(a))
     rhs_zero = np.abs(rhs) <= TOL * (l * (r + delta) * w2 + g * l + delta * g)
-    return np.where(singular, np.where(rhs_zero, 3, 0), ok).astype(np.int8)
+    n = np.where(singular, np.where(rhs_zero, 3, 0), ok).astype(np.int8)
+    return n, (~singular & ~ok).astype(np.int8), singular.astype(np.int8)
 
 
 def numpy_elliptic(phi, f, omega, xdot, l, g, m):
@@ -88,6 +102,7 @@ def numpy_elliptic(phi, f, omega, xdot, l, g, m):
     q_zero = np.abs(q) <= TOL * (g + l * w2)
     n = np.zeros(np.broadcast_shapes(sp.shape, np.shape(f)), dtype=np.int8)
     cont = np.zeros(n.shape, dtype=bool)
+    sing = np.zeros(n.shape, dtype=bool)
     for rho in (1.0, -1.0):
         k = sigma * rho
         lam = 1.0 + sp * sp - k * f * sp * cp
@@ -95,7 +110,8 @@ def numpy_elliptic(phi, f, omega, xdot, l, g, m):
         ok = (q_zero | (q * lam > 0)) if rho > 0 else (~q_zero & (q * lam < 0))
         n += (~singular & ok).astype(np.int8)
         cont |= singular & q_zero
-    return np.where(cont, 3, n).astype(np.int8)
+        sing |= singular
+    return np.where(cont, 3, n).astype(np.int8), np.zeros(n.shape, np.int8), sing.astype(np.int8)
 
 
 def numpy_hinge(phi, delta, omega, l, g, m):
@@ -105,7 +121,8 @@ def numpy_hinge(phi, delta, omega, l, g, m):
     singular = np.abs(coef) <= TOL * (l * l + delta * delta)
     qn_zero = np.abs(l * w2 + g * cp) <= TOL * (l * w2 + g)
     n = np.where(coef > 0, 1, np.where(qn_zero, 1, 0))
-    return np.where(singular, np.where(qn_zero, 3, 0), n).astype(np.int8)
+    n = np.where(singular, np.where(qn_zero, 3, 0), n).astype(np.int8)
+    return n, np.zeros(n.shape, np.int8), np.broadcast_to(singular, n.shape).astype(np.int8)
 
 
 NUMPY = {"ladder": numpy_ladder, "wheel": numpy_wheel, "elliptic_pendulum": numpy_elliptic,
@@ -113,12 +130,84 @@ NUMPY = {"ladder": numpy_ladder, "wheel": numpy_wheel, "elliptic_pendulum": nump
 
 
 @njit(parallel=True, cache=True)
-def write_bound(out):
-    """The hardware bound for an int8 map: a kernel that only writes its output."""
-    n0, n1 = out.shape
+def store_loop(base, outer_values, inner_values, out):
+    """The roofline: the generated kernel's loop structure, storing an int8 per cell."""
+    n0 = outer_values.shape[0]
+    n1 = inner_values.shape[0]
     for i in prange(n0):
+        v = base.copy()
+        v[0] = outer_values[i]
+        x = v[0]
         for j in range(n1):
-            out[i, j] = (i + j) & 3
+            out[i * n1 + j] = np.int8(inner_values[j] > x)
+
+
+# The previous grid kernel (before issue 9), kept here as the baseline column.
+POINT = None
+STICK = -1
+N_BRANCHES = 0
+N_FIELDS = 0
+BLOCK = 2048
+
+
+@njit(cache=True)
+def _set_axis(v, d, i, axis_slot, axis_values, deriv_slot, deriv_values):
+    v[axis_slot[d]] = axis_values[d, i]
+    for k in range(deriv_slot.shape[1]):
+        if deriv_slot[d, k] >= 0:
+            v[deriv_slot[d, k]] = deriv_values[d, k, i]
+
+
+def _previous_template(base, shape, axis_slot, axis_values, deriv_slot, deriv_values, summary):
+    """The previous kernel's loop, n_solutions only: blocks of cells, out-of-line calls."""
+    ndim = shape.shape[0]
+    ncells = 1
+    for d in range(ndim):
+        ncells *= shape[d]
+    nblocks = (ncells + BLOCK - 1) // BLOCK
+    for blk in prange(nblocks):
+        v = base.copy()
+        out = np.empty((N_BRANCHES, N_FIELDS))
+        idx = np.empty(ndim, dtype=np.int64)
+        start = blk * BLOCK
+        stop = min(start + BLOCK, ncells)
+        rem = start
+        for d in range(ndim - 1, -1, -1):
+            idx[d] = rem % shape[d]
+            rem //= shape[d]
+        for d in range(ndim):
+            _set_axis(v, d, idx[d], axis_slot, axis_values, deriv_slot, deriv_values)
+        for cell in range(start, stop):
+            POINT(v, out)
+            n, stag, lost, sing = nx.summarize(out, STICK)
+            summary[cell] = n
+            d = ndim - 1
+            while d >= 0:
+                idx[d] += 1
+                if idx[d] < shape[d]:
+                    _set_axis(v, d, idx[d], axis_slot, axis_values, deriv_slot, deriv_values)
+                    break
+                idx[d] = 0
+                _set_axis(v, d, 0, axis_slot, axis_values, deriv_slot, deriv_values)
+                d -= 1
+
+
+def run_previous(model, n):
+    m, axes, fixed = scene_args(model, n)
+    kernel = specialize(_previous_template, m, "benchmark_previous_grid", parallel=True,
+                        POINT=m.point, STICK=m.stick_branch, N_BRANCHES=len(m.branches),
+                        N_FIELDS=m.n_fields)
+    out = np.empty(n * n, dtype=np.int8)
+    kernel(*pack_axes(m, axes, fixed), out)
+    return out.reshape(n, n)
+
+
+def run_store(model, n):
+    m, axes, fixed = scene_args(model, n)
+    names = list(axes)
+    out = np.empty(n * n, dtype=np.int8)
+    store_loop(np.zeros(len(m.inputs)), axes[names[0]], axes[names[1]], out)
+    return out
 
 
 # ------------------------------------------------------------------ runs -----
@@ -133,17 +222,24 @@ def scene_args(model, n):
     return m, axes, full
 
 
-def run_numba(model, n):
+def run_numba(model, n, layers=("n_solutions",)):
     m, axes, fixed = scene_args(model, n)
-    return evaluate(m, axes, fixed, [layers_for(m)["n_solutions"]])["n_solutions"]
+    reg = layers_for(m)
+    got = evaluate(m, axes, fixed, [reg[k] for k in layers])
+    return got["n_solutions"] if len(layers) == 1 else got
 
 
-def run_numpy(model, n):
+def run_numpy(model, n, all_layers=False):
+    """The NumPy reference: n_solutions, or (n_solutions, contact_lost, singular)."""
     m, axes, fixed = scene_args(model, n)
     name2 = CASES[model][0]
     args = {k: v for k, v in fixed.items()}
     args[name2] = axes[name2][None, :]
-    return NUMPY[model](axes["phi"], **args)
+    res = NUMPY[model](axes["phi"], **args)
+    if not all_layers:
+        return res[0]
+    # stagnation is identically 0 at a moving state; NumPy still stores it
+    return res[0], np.zeros(res[0].shape, np.int8), res[1], res[2]
 
 
 def timed(fn, *args):
@@ -164,6 +260,7 @@ def cold_start(empty_cache: bool, code: str = GRID_START) -> float:
     with tempfile.TemporaryDirectory() as tmp:
         if empty_cache:
             env["NUMBA_CACHE_DIR"] = tmp
+            env["PHASEMAP_CACHE_DIR"] = os.path.join(tmp, "kernels")
         out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                              text=True, check=True)
     return float(out.stdout.strip().splitlines()[-1])
@@ -192,58 +289,89 @@ def main():
     args = ap.parse_args()
 
     threads_all = numba.config.NUMBA_NUM_THREADS
-    rows = []
+    rows, rows4 = [], []
     for model in CASES:
         run_numba(model, 16)  # compile / load
+        run_numba(model, 16, SUMMARY)
+        run_previous(model, 16)
+        run_store(model, 16)
         for n in args.sizes:
             ref = run_numpy(model, n) if n <= args.numpy_max else None
             got = run_numba(model, n)
+            prev = run_previous(model, n)
+            assert np.array_equal(prev, got), f"{model} {n}: previous and new kernels differ"
             if ref is not None:
                 mismatch = int((ref != got).sum())
                 assert mismatch == 0, f"{model} {n}: NumPy and numba differ in {mismatch} cells"
-            out = np.empty((n, n), dtype=np.int8)
-            write_bound(out)
-            times = {"numba1": [], "numbaN": [], "numpy": [], "bound1": [], "boundN": []}
+                ref4 = run_numpy(model, n, True)
+                got4 = run_numba(model, n, SUMMARY)
+                for name, r in zip(SUMMARY, ref4):
+                    assert np.array_equal(r, got4[name]), f"{model} {n}: {name} differs"
+            keys = ["numba1", "numbaN", "prevN", "numpy", "storeN", "all4N", "numpy4"]
+            times = {k: [] for k in keys}
             for _ in range(args.repeat):  # alternate the methods within the run
                 numba.set_num_threads(1)
                 times["numba1"].append(timed(run_numba, model, n)[0])
-                times["bound1"].append(timed(write_bound, out)[0])
                 numba.set_num_threads(threads_all)
                 times["numbaN"].append(timed(run_numba, model, n)[0])
-                times["boundN"].append(timed(write_bound, out)[0])
+                times["prevN"].append(timed(run_previous, model, n)[0])
+                times["storeN"].append(timed(run_store, model, n)[0])
+                times["all4N"].append(timed(run_numba, model, n, SUMMARY)[0])
                 if ref is not None:
                     times["numpy"].append(timed(run_numpy, model, n)[0])
+                    times["numpy4"].append(timed(run_numpy, model, n, True)[0])
             med = {k: statistics.median(v) if v else float("nan") for k, v in times.items()}
             cells = n * n
-            rows.append((model, n, cells / med["numba1"], cells / med["numbaN"],
-                         cells / med["numpy"], cells / med["boundN"],
-                         med["numpy"] / med["numbaN"], med["boundN"] / med["numbaN"]))
-            print(f"{model:18s} {n:5d}  numba 1t {cells / med['numba1'] / 1e6:8.1f} Mcell/s  "
-                  f"{threads_all}t {cells / med['numbaN'] / 1e6:8.1f}  numpy "
-                  f"{cells / med['numpy'] / 1e6:8.1f}  bound {cells / med['boundN'] / 1e6:8.1f}",
+            rate = {k: cells / med[k] for k in keys}
+            rows.append((model, n, rate))
+            print(f"{model:18s} {n:5d}  " + "  ".join(f"{k} {rate[k] / 1e6:8.1f}" for k in keys),
                   flush=True)
     cold_warm, cold_empty = cold_start(False), cold_start(True)
+
+    def mc(x):
+        return f"{x / 1e6:.1f}" if np.isfinite(x) else "not run"
+
+    def ratio(a, b):
+        return f"{a / b:.1f}x" if np.isfinite(a / b) else "-"
+
     lines = [
         "## Grid throughput (`benchmarks/grid.py`)",
         "",
         f"Machine: {machine()}.",
-        f"2-D maps (phi x f, or phi x delta), layer `n_solutions`, moving state; medians of "
-        f"{args.repeat} alternating runs; compilation excluded. Mcell/s = 10^6 cells per second.",
+        f"2-D maps (phi x f, or phi x delta), moving state; medians of {args.repeat} "
+        "alternating runs; compilation excluded. Mcell/s = 10^6 cells per second. Every kernel "
+        "is checked cell by cell against the NumPy reference (and the previous kernel) first.",
         "",
-        f"| model | side | numba 1 thread | numba {threads_all} threads | NumPy | write bound "
-        f"({threads_all} threads) | numba / NumPy | share of write bound |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|",
+        f"### Layer `n_solutions`",
+        "",
+        f"| model | side | numba 1 thread | numba {threads_all} threads | previous kernel "
+        f"({threads_all} threads) | NumPy | store loop ({threads_all} threads) | "
+        "numba / NumPy | numba / previous | share of store loop |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
-    for model, n, r1, rn, rnp, rb, speedup, share in rows:
-        np_txt = f"{rnp / 1e6:.1f}" if np.isfinite(rnp) else "not run"
-        sp_txt = f"{speedup:.1f}x" if np.isfinite(speedup) else "-"
-        lines.append(f"| {model} | {n}^2 | {r1 / 1e6:.1f} | {rn / 1e6:.1f} | {np_txt} | "
-                     f"{rb / 1e6:.0f} | {sp_txt} | {100 * share:.1f} % |")
+    for model, n, r in rows:
+        lines.append(f"| {model} | {n}^2 | {mc(r['numba1'])} | {mc(r['numbaN'])} | "
+                     f"{mc(r['prevN'])} | {mc(r['numpy'])} | {mc(r['storeN'])} | "
+                     f"{ratio(r['numbaN'], r['numpy'])} | {ratio(r['numbaN'], r['prevN'])} | "
+                     f"{100 * r['numbaN'] / r['storeN']:.0f} % |")
+    lines += [
+        "",
+        "### All four summary layers at once",
+        "",
+        "`n_solutions`, `stagnation`, `contact_lost`, `singular` in one pass, against NumPy "
+        "computing the same four arrays.",
+        "",
+        f"| model | side | numba {threads_all} threads | NumPy | numba / NumPy |",
+        "|---|---:|---:|---:|---:|",
+    ]
+    for model, n, r in rows:
+        lines.append(f"| {model} | {n}^2 | {mc(r['all4N'])} | {mc(r['numpy4'])} | "
+                     f"{ratio(r['all4N'], r['numpy4'])} |")
     lines += [
         "",
         f"Cold start (fresh process: import phasemap and map 8 cells of the ladder): "
-        f"{cold_warm:.2f} s with numba's on-disk cache warm, {cold_empty:.2f} s with an empty "
-        f"cache (full compilation).",
+        f"{cold_warm:.2f} s with the kernel caches warm, {cold_empty:.2f} s with empty "
+        f"caches (code generation and full compilation).",
         "",
     ]
     text = "\n".join(lines)

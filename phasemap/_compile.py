@@ -20,15 +20,20 @@ import types
 
 from numba import njit
 
-from . import _numerics as nx
+from . import _codegen, _numerics as nx
 from . import events
 from .model import Model
 
 _CACHE: dict[tuple[str, str], object] = {}
 
 
-def specialize(template, model: Model, kind: str, parallel: bool = False, **constants):
-    """The template compiled for ``model`` with ``constants`` as its globals."""
+def specialize(template, model: Model, kind: str, parallel: bool = False, inline: bool = False,
+               **constants):
+    """The template compiled for ``model`` with ``constants`` as its globals.
+
+    With ``inline`` the function is inlined (numba IR inlining) into its callers
+    instead: for small per-step helpers, whose calls would pass arrays.
+    """
     key = (kind, model.name)
     kernel = _CACHE.get(key)
     if kernel is None:
@@ -38,13 +43,17 @@ def specialize(template, model: Model, kind: str, parallel: bool = False, **cons
         fn = types.FunctionType(template.__code__, scope, name)
         fn.__qualname__ = name  # one on-disk cache index per model and source
         fn.__doc__ = template.__doc__
-        kernel = _CACHE[key] = njit(parallel=parallel, cache=True, error_model="numpy")(fn)
+        if inline:
+            kernel = _CACHE[key] = njit(inline="always", error_model="numpy")(fn)
+        else:
+            kernel = _CACHE[key] = njit(parallel=parallel, cache=True, error_model="numpy")(fn)
     return kernel
 
 
 def source_hash(model: Model, *modules) -> str:
     """Hash of the model's module, the shared numerics and events, and ``modules``."""
     h = hashlib.sha256()
-    for module in (sys.modules[model.point.py_func.__module__], nx, events, *modules):
+    for module in (sys.modules[model.candidates[0].func.py_func.__module__], nx, events,
+                   _codegen, *modules):
         h.update(pathlib.Path(module.__file__).read_bytes())
     return h.hexdigest()[:12]

@@ -61,38 +61,29 @@ N_CONTINUUM = 3
 N_THREE_OR_MORE = 4
 
 
-@njit(cache=True, error_model="numpy")
+@njit(inline="always", error_model="numpy")
 def is_zero(q, scale):
     """True where ``q`` vanishes relative to the magnitude ``scale`` of its terms."""
     return abs(q) <= TOL * scale
 
 
-@njit(cache=True, error_model="numpy")
-def clear(out):
-    """Mark every candidate branch absent and not singular.
-
-    Only the status and the singular flag are reset: a branch row's numbers
-    are meaningful only where a model writes them, which it does for the
-    coefficient of every branch that applies and for every field of an
-    admissible branch.  Readers look no further (``classify`` pre-fills NaN
-    so that the numbers a model leaves unset show as NaN).
-    """
-    for b in range(out.shape[0]):
-        out[b, STATUS] = ABSENT
-        out[b, SINGULAR] = 0.0
+#: The value of a row field a branch does not determine.
+NAN = np.nan
 
 
-@njit(cache=True, error_model="numpy")
-def start_interval(from_rest, s):
+# The helpers below are for branch functions: inlined, and free of control flow
+# (conditional expressions compile to selects), so that a grid kernel's inner
+# loop vectorises through them.
+
+@njit(inline="always", error_model="numpy")
+def start_interval(rest, s):
     """Open interval of accelerations a branch may take: ``s * a > 0`` when it starts from rest."""
-    if not from_rest:
-        return -np.inf, np.inf
-    if s > 0.0:
-        return 0.0, np.inf
-    return -np.inf, 0.0
+    lo = 0.0 if (rest & (s > 0.0)) else -np.inf
+    hi = 0.0 if (rest & (not (s > 0.0))) else np.inf
+    return lo, hi
 
 
-@njit(cache=True, error_model="numpy")
+@njit(inline="always", error_model="numpy")
 def restrict_affine(q0, dq, lo, hi):
     """Intersect the open interval ``(lo, hi)`` with ``{a : q0 + dq * a >= 0}``.
 
@@ -100,13 +91,12 @@ def restrict_affine(q0, dq, lo, hi):
     satisfied by every acceleration ``a``): the reactions are affine in ``a`` and
     the admissible family is the set where they keep their required sign.
     """
-    if dq > 0.0:
-        lo = max(lo, -q0 / dq)
-    elif dq < 0.0:
-        hi = min(hi, -q0 / dq)
-    elif q0 < 0.0:
-        hi = lo  # empty
-    return lo, hi
+    t = -q0 / dq
+    up = dq > 0.0
+    down = dq < 0.0
+    new_lo = max(lo, t) if up else lo
+    new_hi = min(hi, t) if down else (lo if ((not up) & (q0 < 0.0)) else hi)
+    return new_lo, new_hi
 
 
 @njit(cache=True, error_model="numpy")

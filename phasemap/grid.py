@@ -1,112 +1,29 @@
-"""The grid evaluator: one parallel numba kernel per model over any N-D grid.
+"""The grid evaluator: one generated parallel numba kernel per scene shape.
 
-``make_grid_kernel(model)`` binds the model's jitted ``point`` function and
-the shared ``summarize`` into one ``@njit(parallel=True, cache=True)`` kernel,
-cached per model in memory and on disk.  Parameter values, axes and the choice of layers are runtime
-arguments, so the kernel compiles once per model, never per value.
+:func:`evaluate` asks :func:`phasemap._codegen.grid_kernel` for the kernel
+of the requested layers with the scene's last axis innermost; both are
+compile-time, everything else (parameter values, axes, the outer axes'
+names) is a runtime argument, so a kernel compiles once per (model, layer
+set, inner axis) and is cached on disk.
 
 Layout
 ------
-Cells are taken in C order.  ``prange`` runs over blocks of ``BLOCK`` cells;
-each block allocates its scratch (the input vector ``v`` and the branch rows
-``out``) once, unravels its first cell and then steps a multi-index counter.
-Per-axis work (the model's derived inputs such as sin(phi)) is computed once
-per axis value, outside the kernel, and only copied in the inner loop.
+Cells are taken in C order.  ``prange`` runs over the outer cells (every
+axis but the last) times chunks of the inner axis; each task copies the fixed
+inputs, sets its outer axes and reads every input into a scalar local once.
+The inner loop then only loads the inner axis value (and its derived inputs
+such as sin(phi), computed once per axis value here) and evaluates the
+inlined branch functions: no calls, no heap scratch, and nothing that the
+requested layers do not need.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
 
-from . import _numerics as nx
-from ._compile import specialize
-from .layers import SUMMARY, Layer
+from ._codegen import driver, grid_kernel
+from .layers import Layer, layers_for
 from .model import Model
-
-BLOCK = 2048
-
-# Compile-time structure of the model being compiled: the template below reads
-# these as globals, and :func:`phasemap._compile.specialize` gives each model a
-# copy of the template with its own.
-POINT = None
-STICK = -1
-N_BRANCHES = 0
-N_FIELDS = 0
-
-
-def make_grid_kernel(model: Model):
-    """The parallel grid kernel of ``model``: compiled once, cached in memory and on disk."""
-    return specialize(_kernel_template, model, "grid_kernel", parallel=True,
-                      POINT=model.point, STICK=model.stick_branch,
-                      N_BRANCHES=len(model.branches), N_FIELDS=model.n_fields)
-
-
-@njit(cache=True)
-def _set_axis(v, d, i, axis_slot, axis_values, deriv_slot, deriv_values):
-    """Put value ``i`` of axis ``d`` and its precomputed derived inputs into ``v``."""
-    v[axis_slot[d]] = axis_values[d, i]
-    for k in range(deriv_slot.shape[1]):
-        if deriv_slot[d, k] >= 0:
-            v[deriv_slot[d, k]] = deriv_values[d, k, i]
-
-
-def _kernel_template(base, shape, axis_slot, axis_values, deriv_slot, deriv_values,
-                     summary_row, req_branch, req_col, req_adm, summary, fields):
-    """Classify every cell of the grid; write the wanted summaries and branch fields.
-
-    ``summary`` is int8 (nsummary, ncells): n_solutions, stagnation,
-    contact_lost and singular go to row ``summary_row[k]`` (k in that order),
-    or nowhere where it is -1.  ``fields`` is float64 (nreq, ncells)
-    with column ``req_col[q]`` of branch ``req_branch[q]`` (NaN unless the branch
-    is admissible, or unless it applies when ``req_adm[q]`` is False).
-    """
-    ndim = shape.shape[0]
-    ncells = 1
-    for d in range(ndim):
-        ncells *= shape[d]
-    nblocks = (ncells + BLOCK - 1) // BLOCK
-    nreq = req_branch.shape[0]
-    for blk in prange(nblocks):
-        v = base.copy()
-        out = np.empty((N_BRANCHES, N_FIELDS))
-        idx = np.empty(ndim, dtype=np.int64)
-        start = blk * BLOCK
-        stop = min(start + BLOCK, ncells)
-        rem = start
-        for d in range(ndim - 1, -1, -1):
-            idx[d] = rem % shape[d]
-            rem //= shape[d]
-        for d in range(ndim):
-            _set_axis(v, d, idx[d], axis_slot, axis_values, deriv_slot, deriv_values)
-        for cell in range(start, stop):
-            POINT(v, out)
-            n, stag, lost, sing = nx.summarize(out, STICK)
-            if summary_row[0] >= 0:
-                summary[summary_row[0], cell] = n
-            if summary_row[1] >= 0:
-                summary[summary_row[1], cell] = stag
-            if summary_row[2] >= 0:
-                summary[summary_row[2], cell] = lost
-            if summary_row[3] >= 0:
-                summary[summary_row[3], cell] = sing
-            for q in range(nreq):
-                b = req_branch[q]
-                st = out[b, nx.STATUS]
-                if st == nx.ADMISSIBLE or (not req_adm[q] and st != nx.ABSENT):
-                    fields[q, cell] = out[b, req_col[q]]
-                else:
-                    fields[q, cell] = np.nan
-            # step the multi-index; refresh only the axes that changed
-            d = ndim - 1
-            while d >= 0:
-                idx[d] += 1
-                if idx[d] < shape[d]:
-                    _set_axis(v, d, idx[d], axis_slot, axis_values, deriv_slot, deriv_values)
-                    break
-                idx[d] = 0
-                _set_axis(v, d, 0, axis_slot, axis_values, deriv_slot, deriv_values)
-                d -= 1
 
 
 def pack_axes(model: Model, axes: dict[str, np.ndarray], fixed: dict[str, float]):
@@ -149,20 +66,31 @@ def evaluate(model: Model, axes: dict[str, np.ndarray], fixed: dict[str, float],
     ``axes`` maps names to 1-D float arrays (in dimension order), ``fixed`` the
     remaining names to floats.  Returns one array of shape ``grid`` per layer.
     """
-    packed = pack_axes(model, axes, fixed)
-    shape = packed[1]
-    ncells = int(np.prod(shape))
-    summary_layers = [l.name for l in layers if l.is_summary]
-    summary_row = np.array([summary_layers.index(k) if k in summary_layers else -1
-                            for k in SUMMARY], dtype=np.int64)
-    summary = np.empty((len(summary_layers), ncells), dtype=np.int8)
-    field_layers = [l for l in layers if not l.is_summary]
+    if not layers:
+        return {}
+    names = list(axes)
+    grid = tuple(len(axes[n]) for n in names)
+    if names:
+        inner = names[-1]
+        inner_values = np.array(axes[inner], dtype=float)  # a writable C copy (dask's are not)
+    else:  # a single point: one cell along the first state variable
+        inner = model.state[0].name
+        inner_values = np.array([float(fixed[inner])])
+    outer = {n: axes[n] for n in names[:-1]}
+    base, shape, axis_slot, axis_values, deriv_slot, deriv_values = pack_axes(
+        model, outer, {n: x for n, x in fixed.items() if n != inner})
+    inner_deriv = np.array([d.func(inner_values) for d in model.derived if d.source == inner],
+                           dtype=float).reshape(-1, inner_values.size)
+    order = list(layers_for(model))
+    wanted = sorted({l.name: l for l in layers}.values(), key=lambda l: order.index(l.name))
+    ncells = int(np.prod(grid, dtype=np.int64))
+    flag_layers = [l for l in wanted if l.is_summary]
+    field_layers = [l for l in wanted if not l.is_summary]
+    flags = np.empty((len(flag_layers), ncells), dtype=np.int8)
     fields = np.empty((len(field_layers), ncells))
-    make_grid_kernel(model)(
-        *packed, summary_row,
-        np.array([l.branch for l in field_layers], dtype=np.int64),
-        np.array([l.column for l in field_layers], dtype=np.int64),
-        np.array([l.admissible_only for l in field_layers]), summary, fields)
-    grid = tuple(int(s) for s in shape)
-    return {l.name: (summary[summary_layers.index(l.name)] if l.is_summary
-                     else fields[field_layers.index(l)]).reshape(grid) for l in layers}
+    cells = grid_kernel(model, tuple(flag_layers + field_layers), inner)
+    driver()(cells, base, shape, axis_slot, axis_values, deriv_slot, deriv_values, inner_values,
+             inner_deriv, flags, fields)
+    out = {l.name: flags[k].reshape(grid) for k, l in enumerate(flag_layers)}
+    out.update({l.name: fields[k].reshape(grid) for k, l in enumerate(field_layers)})
+    return {l.name: out[l.name] for l in wanted}

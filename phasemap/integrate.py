@@ -50,6 +50,7 @@ from numba import njit, prange
 
 from . import _numerics as nx
 from . import events as ev
+from ._codegen import set_cell
 from ._compile import specialize
 from .grid import pack_axes
 from .model import Model
@@ -77,7 +78,7 @@ FATE_UNITS = 1024
 
 # Compile-time structure of the model being compiled (see phasemap._compile).
 POINT = None
-BRANCH = None
+BRANCH_ROW = None
 DERIVE = None
 STICK = -1
 N_BRANCHES = 0
@@ -160,14 +161,16 @@ def _inside_template(y):
 
 
 def _rhs_template(v, y, mode, row, dy):
-    """dy/dt on the stage of branch ``mode``."""
+    """dy/dt on the stage of branch ``mode`` (NaN where the branch has no solution).
+
+    The branch row comes back as a tuple from the inlined ``BRANCH_ROW``;
+    ``row`` is not used (kept so that every step function has one signature).
+    """
     FILL(v, y)
-    for j in range(N_DOF):
-        row[ACC_COL[j]] = np.nan  # a branch without a solution leaves NaN, never stale values
-    BRANCH(v, mode, row)
+    r = BRANCH_ROW(v, mode)
     for j in range(N_DOF):
         dy[j] = y[N_DOF + j]
-        dy[N_DOF + j] = row[ACC_COL[j]]
+        dy[N_DOF + j] = r[ACC_COL[j]]
 
 
 def _summary_template(out):
@@ -517,14 +520,7 @@ def _fate_template(base, shape, axis_slot, axis_values, deriv_slot, deriv_values
         y0 = y0_fixed.copy()
         for q in range((ncells - u + units - 1) // units):
             cell = u + q * units
-            rem = cell
-            for d in range(ndim - 1, -1, -1):
-                i = rem % shape[d]
-                rem //= shape[d]
-                v[axis_slot[d]] = axis_values[d, i]
-                for k in range(deriv_slot.shape[1]):
-                    if deriv_slot[d, k] >= 0:
-                        v[deriv_slot[d, k]] = deriv_values[d, k, i]
+            set_cell(v, cell, shape, axis_slot, axis_values, deriv_slot, deriv_values)
             for i in range(Y_SLOT.shape[0]):
                 if Y_SLOT[i] >= 0:
                     y0[i] = v[Y_SLOT[i]]
@@ -548,24 +544,30 @@ def kernels(model: Model):
     positions = [c[0] for c in dyn.coordinates]
     velocities = [c[1] for c in dyn.coordinates]
     acc_names = [a.name for a in model.accelerations]
+    contract = model.contract
     consts = dict(
-        POINT=model.point, BRANCH=dyn.branch, DERIVE=dyn.derive,
+        POINT=contract.point, BRANCH_ROW=contract.branch_row_inline,
+        DERIVE=contract.derive_inline,
         STICK=model.stick_branch, N_BRANCHES=len(model.branches), N_FIELDS=model.n_fields,
         N_DOF=len(dyn.coordinates),
         Y_SLOT=np.array([slot.get(n, -1) for n in positions + velocities], dtype=np.int64),
         ACC_COL=np.array([nx.FIRST_ACC + acc_names.index(c[2]) for c in dyn.coordinates],
                          dtype=np.int64),
         VEL_Y=len(positions) + velocities.index(model.velocity),
-        DIRECTIONS=np.array(dyn.directions, dtype=np.float64),
+        DIRECTIONS=np.array(model.directions, dtype=np.float64),
         STICK_IS_REST=dyn.stick_is_rest,
         LOWER=np.array([variables[n].lower for n in positions + velocities]),
         UPPER=np.array([variables[n].upper for n in positions + velocities]),
     )
-    consts["INSIDE"] = specialize(_inside_template, model, "inside", **consts)
-    consts["FILL"] = specialize(_fill_template, model, "fill", **consts)
-    consts["RHS"] = specialize(_rhs_template, model, "rhs", **consts)
-    consts["SUMMARY"] = specialize(_summary_template, model, "summary", **consts)
-    consts["CLASSIFY"] = specialize(_classify_template, model, "classify_state", **consts)
+    # Per-step helpers: the small ones inline into their callers, so that a
+    # right-hand side is one call (a step makes six of them) with the branch
+    # physics inlined, and no array is passed between helpers.
+    for name, template, inline in (("INSIDE", _inside_template, False),
+                                   ("FILL", _fill_template, True),
+                                   ("RHS", _rhs_template, False),
+                                   ("SUMMARY", _summary_template, True),
+                                   ("CLASSIFY", _classify_template, False)):
+        consts[name] = specialize(template, model, name.lower(), inline=inline, **consts)
     consts["INTEGRATE"] = integrate = specialize(_integrate_template, model, "integrate",
                                                  **consts)
     fate_map = specialize(_fate_template, model, "fate_map", parallel=True, **consts)

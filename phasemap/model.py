@@ -17,17 +17,16 @@ A new model provides:
     :class:`Derived` inputs that depend on one name only (``sin(phi)``...).
     Callers compute them once per value, which is how the grid evaluator
     hoists per-axis work out of its inner loop.
-``branches``, ``stick_branch``
-    the names of the candidate branches, and the row of the stick branch.
+``candidates``
+    one :class:`Branch` per candidate branch: its name, the sign of the relative
+    velocity on it (+1, -1, or 0 for the stick branch) and a pure scalar
+    function that returns its row (see below).
 ``accelerations``, ``reactions``, ``coefficient``
     :class:`Variable` descriptions of the numbers a branch row carries.
-``velocity``
-    the state name whose zero activates the stick branch.
-``point(v, out)``
-    a ``numba.njit(cache=True)`` function.  ``v`` holds the values of
-    ``inputs`` (state, params, derived) in that order; ``out`` has one row per
-    branch laid out as in :mod:`phasemap._numerics` (status, singular flag,
-    coefficient, accelerations, reactions).  It must not allocate.
+``velocity``, ``velocity_scale``
+    the state name whose zero activates the stick branch, and a branch function
+    (same conventions) returning its natural scale: the velocity counts as zero
+    when ``|velocity| <= TOL * velocity_scale(...)``.
 ``check``
     optional cross-variable domain check on (possibly array) values; raises
     :class:`ValueError`.
@@ -36,7 +35,27 @@ A new model provides:
     draws when no axis is given.
 ``dynamics``
     optional :class:`Dynamics`: what :func:`phasemap.simulate` and the fate
-    maps need to move the system in time (two more small jitted functions).
+    maps need to move the system in time (which coordinates are integrated).
+
+Branch functions
+----------------
+A branch function is ``@numba.njit(inline="always", error_model="numpy")``,
+takes scalars and **returns** its row as a tuple of floats laid out as in
+:mod:`phasemap._numerics`: ``(status, singular, coefficient,
+accelerations..., reactions...)``, NaN for what it does not determine.  Its
+first parameters receive ``Branch.args`` (such as the slip direction); the
+others are named after model inputs (``phi``, ``f``, ``sin_phi``...), and a
+parameter named ``rest`` receives whether the branch starts from zero
+relative velocity.  Write it without early returns and with ``&``/``|`` and
+conditional expressions instead of ``and``/``or``/``if``, so that it inlines
+into the grid kernel's inner loop and vectorises there.
+
+From these the framework generates (:mod:`phasemap._codegen`) everything the
+rest of phasemap calls: ``model.point(v, out)`` (all candidate rows at one
+state, for :func:`phasemap.classify`), ``model.branch(v, b, row)`` (one
+branch along its stage, for the integrator), ``model.derive(v)`` and the
+grid kernels, specialised per scene.  No model writes a row index or an
+input slot by hand.
 
 Everything else just works.
 """
@@ -44,6 +63,7 @@ Everything else just works.
 from __future__ import annotations
 
 import enum
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Callable, Mapping
@@ -148,34 +168,49 @@ class Derived:
 
 
 @dataclass(frozen=True)
+class Branch:
+    """One candidate branch of the friction law.
+
+    ``name``
+        how atlases, events and :func:`phasemap.classify` call it;
+    ``direction``
+        the sign of the relative velocity on the branch's stage: +1 or -1 for
+        slip (or roll, or turn), 0 for the stick branch.  It decides where the
+        branch applies: at zero velocity every branch is a candidate (a slip
+        one starting from rest), otherwise only those whose direction is the
+        velocity's sign;
+    ``func``
+        the branch function (see the module docstring);
+    ``args``
+        constants passed first to ``func`` (such as the direction itself).
+    """
+
+    name: str
+    direction: float
+    func: Callable = field(repr=False)
+    args: tuple[float, ...] = ()
+
+
+@dataclass(frozen=True)
 class Dynamics:
-    """How a model moves: what the time integrator needs beyond ``point``.
+    """How a model moves: what the time integrator needs beyond its branches.
 
     ``coordinates``
         ``(position, velocity, acceleration)`` name triples, one per degree of
         freedom.  The integrated vector is the positions, then the velocities.
         A position that is not a model input (the elliptic pendulum's slider
         position ``x``) is described in ``positions``.
-    ``branch(v, b, row)``
-        a jitted function that fills ``row`` for branch ``b`` *along its
-        stage*: the slip direction is the branch's own, whatever the sign of
-        the velocity in ``v``, so that the right-hand side stays smooth across
-        the trial points of a step that overshoots a velocity zero.
-    ``derive(v)``
-        a jitted function that fills the derived inputs of ``v`` (sin phi ...)
-        from its state and parameters, in the order of ``Model.derived``.
-    ``directions``
-        per branch, the sign of the relative velocity on its stage
-        (+1, -1, or 0 for the stick branch).
     ``stick_is_rest``
         the stick branch freezes the whole state (one degree of freedom), so
         reaching it ends the motion.
+
+    The integrator evaluates a branch *along its stage* with
+    :attr:`Model.branch`: the slip direction is the branch's own, whatever the
+    sign of the velocity, so that the right-hand side stays smooth across the
+    trial points of a step that overshoots a velocity zero.
     """
 
     coordinates: tuple[tuple[str, str, str], ...]
-    branch: Callable = field(repr=False)
-    derive: Callable = field(repr=False)
-    directions: tuple[float, ...]
     positions: tuple[Variable, ...] = ()
     stick_is_rest: bool = True
 
@@ -190,18 +225,62 @@ class Model:
     state: tuple[Variable, ...]
     params: tuple[Variable, ...]
     derived: tuple[Derived, ...]
-    branches: tuple[str, ...]
-    stick_branch: int
+    candidates: tuple[Branch, ...]
     accelerations: tuple[Variable, ...]
     reactions: tuple[Variable, ...]
     coefficient: Variable
     velocity: str
-    point: Callable = field(repr=False)
+    velocity_scale: Callable = field(repr=False)
     check: Callable[[Mapping[str, object]], None] | None = field(default=None, repr=False)
     #: A map worth drawing first: ``{name: (start, stop, count)}`` for the CLI's defaults.
     default_axes: Mapping[str, tuple[float, float, int]] = field(default_factory=dict)
     #: How the model moves in time (None: classification and maps only).
     dynamics: Dynamics | None = field(default=None, repr=False)
+
+    # -- branches and the generated contract --------------------------------
+    @property
+    def branches(self) -> tuple[str, ...]:
+        """The names of the candidate branches, in row order."""
+        return tuple(b.name for b in self.candidates)
+
+    @property
+    def stick_branch(self) -> int:
+        """The row of the stick branch (direction 0), or -1 when there is none."""
+        rows = [i for i, b in enumerate(self.candidates) if b.direction == 0.0]
+        return rows[0] if rows else -1
+
+    @property
+    def directions(self) -> tuple[float, ...]:
+        """Per branch, the sign of the relative velocity on its stage."""
+        return tuple(float(b.direction) for b in self.candidates)
+
+    @functools.cached_property
+    def contract(self):
+        """The generated per-point module: ``point``, ``branch`` and ``derive``."""
+        from ._codegen import contract
+
+        return contract(self)
+
+    @property
+    def point(self) -> Callable:
+        """``point(v, out)``: every candidate row at the state ``v`` (jitted).
+
+        ``v`` holds the values of :attr:`inputs`; ``out`` has one row per branch
+        (status, singular flag, coefficient, accelerations, reactions), NaN in
+        what a branch does not determine and in every field of a branch that
+        does not apply.
+        """
+        return self.contract.point
+
+    @property
+    def branch(self) -> Callable:
+        """``branch(v, b, row)``: branch ``b`` along its stage, into ``row`` (jitted)."""
+        return self.contract.branch
+
+    @property
+    def derive(self) -> Callable:
+        """``derive(v)``: fill the derived inputs of ``v`` from its state and parameters."""
+        return self.contract.derive
 
     # -- names -------------------------------------------------------------
     @property

@@ -650,7 +650,7 @@ def _at_rest(m: Model, values: dict, phi: float):
         if stagnation:
             return "stop", ev.REST
         row = int(np.flatnonzero(out[:, nx.STATUS] == nx.ADMISSIBLE)[0])
-        return "go", m.dynamics.directions[row]
+        return "go", m.directions[row]
     if singular and n in (nx.N_NONE, nx.N_CONTINUUM):
         return "stop", ev.SINGULAR
     if n == nx.N_NONE:
@@ -672,7 +672,7 @@ def _moving(m: Model, values: dict, phi: float, omega: float):
     if out[row, nx.SINGULAR] != 0.0:
         return "stop", ev.SINGULAR
     if status == nx.ADMISSIBLE:
-        return "go", m.dynamics.directions[row]
+        return "go", m.directions[row]
     if status == nx.CONTACT_LOST:
         return "stop", ev.CONTACT_LOST
     return "stop", ev.NO_SOLUTION

@@ -33,7 +33,7 @@ Methods
 The scipy stage driver (fairness)
 ---------------------------------
 On a stage the right-hand side is the model's own jitted branch function
-``model.dynamics.branch(v, b, row)``, called from Python: the equations are
+``model.branch(v, b, row)``, called from Python: the equations are
 exactly phasemap's, and a call costs about as much as the same equation
 written with the ``math`` module (both ~3 us, measured), so scipy is not
 handicapped by it.  Per call the driver builds only the small tuple
@@ -251,8 +251,8 @@ def _ladder_reference(p: Problem) -> Reference:
 
     def n_min(phi):
         v[0], v[1] = phi, float(omega(np.array([phi]))[0])
-        m.dynamics.derive(v)
-        m.dynamics.branch(v, b, row)
+        m.derive(v)
+        m.branch(v, b, row)
         return min(row[c] for c in cols)
 
     lo, hi = phi0, (math.pi / 2 if s > 0 else 0.0)
@@ -344,7 +344,7 @@ class _Driver:
         acc = [a.name for a in m.accelerations]
         self.acc_col = [nx.FIRST_ACC + acc.index(c[2]) for c in dyn.coordinates]
         self.vel = names.index(m.velocity)
-        self.directions = dyn.directions
+        self.directions = m.directions
         self.out = np.empty((len(m.branches), m.n_fields))
         self.row = np.empty(m.n_fields)
         rea = [r.name for r in m.reactions]
@@ -363,7 +363,7 @@ class _Driver:
         v = self.v
         for i, s in self.fill:
             v[s] = y[i]
-        self.m.dynamics.derive(v)
+        self.m.derive(v)
 
     def branch_row(self, t, y, mode):
         """The row of branch ``mode`` at (t, y), cached on the last (t, y)."""
@@ -373,7 +373,7 @@ class _Driver:
             row = self.row
             for c in self.acc_col:
                 row[c] = np.nan
-            self.m.dynamics.branch(self.v, mode, row)
+            self.m.branch(self.v, mode, row)
             self.key = key
         return self.row
 
@@ -424,7 +424,7 @@ class _Driver:
                 events.append(("reaction", reaction))
         if not stick:
             self.set_state(y0)
-            self.m.dynamics.branch(self.v, mode, self.row)
+            self.m.branch(self.v, mode, self.row)
             self.key = None
             c_sign = math.copysign(1.0, self.row[nx.COEF])
 

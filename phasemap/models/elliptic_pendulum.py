@@ -60,128 +60,65 @@ from numba import njit
 
 from .._numerics import (
     ADMISSIBLE,
-    COEF,
     CONTINUUM,
-    FIRST_ACC,
     INADMISSIBLE,
+    NAN,
     NO_SOLUTION,
-    SINGULAR,
-    STATUS,
     TOL,
-    clear,
     is_zero,
 )
-from ..model import Derived, Dynamics, Model, Variable
-
-SLIDE_POS_NPOS, SLIDE_POS_NNEG, SLIDE_NEG_NPOS, SLIDE_NEG_NNEG, STICK = 0, 1, 2, 3, 4
-X_DDOT = FIRST_ACC
-PHI_DDOT = FIRST_ACC + 1
-N_NORMAL = FIRST_ACC + 2
-F_FRICTION = FIRST_ACC + 3
+from ..model import Branch, Derived, Dynamics, Model, Variable
 
 
-@njit(cache=True, error_model="numpy")
-def _slide(row, sigma, rho, from_rest, omega, f, l, g, m, sp, cp):
-    """Fill the slide branch with slider direction sigma and assumed sgn N = rho."""
+@njit(inline="always", error_model="numpy")
+def slide(sigma, rho, rest, omega, f, l, g, m, sin_phi, cos_phi):
+    """The slide branch with slider direction sigma and assumed sgn N = rho.
+
+    Row: (status, singular, lambda_k, x'', phi'', N, F).
+    """
+    sp, cp = sin_phi, cos_phi
     k = sigma * rho
     w2 = omega * omega
     lam = 1.0 + sp * sp - k * f * sp * cp
-    row[COEF] = lam
     q = g + l * cp * w2
-    q_scale = g + l * w2
-    q_zero = is_zero(q, q_scale)
-    if is_zero(lam, 2.0 + f):
-        row[SINGULAR] = 1.0
-        if not q_zero:
-            row[STATUS] = NO_SOLUTION
-            return
-        # Every N with sgn N = rho solves the equations.  From rest x''(N) must
-        # also have the sign sigma: from (17) and (19), with sin phi != 0 here,
-        # x'' = -(N/(m sin phi) - 2 Q/sin phi + g sin phi)/cos phi is affine in N.
-        if from_rest:
-            x0 = (2.0 * q / sp - g * sp) / cp  # x'' at N = 0
-            dx = -1.0 / (m * sp * cp)
-            # sigma x'' > 0 for some N with rho N >= 0 (N > 0 for rho = -1)?
-            ok = sigma * x0 > 0.0 or sigma * rho * dx > 0.0
-            row[STATUS] = CONTINUUM if ok else INADMISSIBLE
-        else:
-            row[STATUS] = CONTINUUM
-        return
+    q_zero = is_zero(q, g + l * w2)
+    singular = is_zero(lam, 2.0 + f)
+    # Singular: every N with sgn N = rho solves (23) when Q = 0.  From rest x''(N)
+    # must also have the sign sigma: from (17) and (19), with sin phi != 0 here,
+    # x'' = -(N/(m sin phi) - 2 Q/sin phi + g sin phi)/cos phi is affine in N;
+    # sigma x'' > 0 for some N with rho N >= 0 (N > 0 for rho = -1)?
+    x0 = (2.0 * q / sp - g * sp) / cp  # x'' at N = 0
+    dx = -1.0 / (m * sp * cp)
+    family = (not rest) | (sigma * x0 > 0.0) | (sigma * rho * dx > 0.0)
+    st_singular = (CONTINUUM if family else INADMISSIBLE) if q_zero else NO_SOLUTION
     n = 2.0 * m * q / lam
     xdd = (2.0 * l * w2 * (sp - k * f * cp) - k * f * g * (1.0 + cp * cp) + g * sp * cp) / lam
-    row[X_DDOT] = xdd
-    row[PHI_DDOT] = q * (k * f * cp - sp) / (lam * l)
-    row[N_NORMAL] = n
-    row[F_FRICTION] = -k * f * n
-    if rho > 0.0:
-        sign_ok = q_zero or q * lam > 0.0
-    else:
-        sign_ok = (not q_zero) and q * lam < 0.0
-    if not sign_ok:
-        row[STATUS] = INADMISSIBLE
-        return
-    if from_rest:
-        x_scale = (2.0 * l * w2 * (1.0 + f) + 2.0 * f * g + g) / abs(lam)
-        if not (sigma * xdd > TOL * x_scale):
-            row[STATUS] = INADMISSIBLE
-            return
-    row[STATUS] = ADMISSIBLE
+    pdd = q * (k * f * cp - sp) / (lam * l)
+    sign_ok = (q_zero | (q * lam > 0.0)) if rho > 0.0 else ((not q_zero) & (q * lam < 0.0))
+    x_scale = (2.0 * l * w2 * (1.0 + f) + 2.0 * f * g + g) / abs(lam)
+    start_ok = (not rest) | (sigma * xdd > TOL * x_scale)
+    st = ADMISSIBLE if (sign_ok & start_ok) else INADMISSIBLE
+    return (float(st_singular if singular else st), 1.0 if singular else 0.0, lam,
+            NAN if singular else xdd, NAN if singular else pdd,
+            NAN if singular else n, NAN if singular else -k * f * n)
 
 
-@njit(cache=True, error_model="numpy")
-def _stick(row, omega, f, l, g, m, sp, cp):
-    """Fill the stick branch of the slider (x' = x'' = 0)."""
+@njit(inline="always", error_model="numpy")
+def stick(omega, f, l, g, m, sin_phi, cos_phi):
+    """The stick branch of the slider (x' = x'' = 0): (status, 0, NaN, x'', phi'', N, F)."""
+    sp, cp = sin_phi, cos_phi
     w2 = omega * omega
     n = m * (g * (1.0 + cp * cp) + 2.0 * l * cp * w2)
     fr = -m * sp * (g * cp + 2.0 * l * w2)
     scale = m * (1.0 + f) * (2.0 * g + 2.0 * l * w2)
-    row[X_DDOT] = 0.0
-    row[PHI_DDOT] = -0.5 * g * sp / l
-    row[N_NORMAL] = n
-    row[F_FRICTION] = fr
-    if abs(fr) <= f * abs(n) + TOL * scale:
-        row[STATUS] = ADMISSIBLE
-    else:
-        row[STATUS] = INADMISSIBLE
+    ok = abs(fr) <= f * abs(n) + TOL * scale
+    return (float(ADMISSIBLE if ok else INADMISSIBLE), 0.0, NAN, 0.0, -0.5 * g * sp / l, n, fr)
 
 
-@njit(cache=True, error_model="numpy")
-def point(v, out):
-    """Classify one state. ``v`` = (phi, omega, xdot, f, l, g, m, sin phi, cos phi)."""
-    omega, xdot, f, l, g, m, sp, cp = v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]
-    clear(out)
-    if is_zero(xdot, math.sqrt(g * l) + l * abs(omega)):
-        _slide(out[SLIDE_POS_NPOS], 1.0, 1.0, True, omega, f, l, g, m, sp, cp)
-        _slide(out[SLIDE_POS_NNEG], 1.0, -1.0, True, omega, f, l, g, m, sp, cp)
-        _slide(out[SLIDE_NEG_NPOS], -1.0, 1.0, True, omega, f, l, g, m, sp, cp)
-        _slide(out[SLIDE_NEG_NNEG], -1.0, -1.0, True, omega, f, l, g, m, sp, cp)
-        _stick(out[STICK], omega, f, l, g, m, sp, cp)
-    elif xdot > 0.0:
-        _slide(out[SLIDE_POS_NPOS], 1.0, 1.0, False, omega, f, l, g, m, sp, cp)
-        _slide(out[SLIDE_POS_NNEG], 1.0, -1.0, False, omega, f, l, g, m, sp, cp)
-    else:
-        _slide(out[SLIDE_NEG_NPOS], -1.0, 1.0, False, omega, f, l, g, m, sp, cp)
-        _slide(out[SLIDE_NEG_NNEG], -1.0, -1.0, False, omega, f, l, g, m, sp, cp)
-
-
-
-@njit(cache=True, error_model="numpy")
-def branch(v, b, row):
-    """Fill branch ``b`` along its stage: the slider direction and sgn N are the branch's."""
-    omega, f, l, g, m, sp, cp = v[1], v[3], v[4], v[5], v[6], v[7], v[8]
-    if b == STICK:
-        _stick(row, omega, f, l, g, m, sp, cp)
-    else:
-        sigma = 1.0 if b <= SLIDE_POS_NNEG else -1.0
-        rho = 1.0 if b == SLIDE_POS_NPOS or b == SLIDE_NEG_NPOS else -1.0
-        _slide(row, sigma, rho, False, omega, f, l, g, m, sp, cp)
-
-
-@njit(cache=True, error_model="numpy")
-def derive(v):
-    """Fill sin phi and cos phi."""
-    v[7] = math.sin(v[0])
-    v[8] = math.cos(v[0])
+@njit(inline="always", error_model="numpy")
+def velocity_scale(omega, l, g):
+    """The slider's natural speed: xdot is zero below 1e-12 of it."""
+    return math.sqrt(g * l) + l * abs(omega)
 
 
 MODEL = Model(
@@ -203,8 +140,13 @@ MODEL = Model(
                  lower_open=True),
     ),
     derived=(Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos)),
-    branches=("slide_pos_Npos", "slide_pos_Nneg", "slide_neg_Npos", "slide_neg_Nneg", "stick"),
-    stick_branch=STICK,
+    candidates=(
+        Branch("slide_pos_Npos", 1.0, slide, (1.0, 1.0)),
+        Branch("slide_pos_Nneg", 1.0, slide, (1.0, -1.0)),
+        Branch("slide_neg_Npos", -1.0, slide, (-1.0, 1.0)),
+        Branch("slide_neg_Nneg", -1.0, slide, (-1.0, -1.0)),
+        Branch("stick", 0.0, stick),
+    ),
     accelerations=(
         Variable("x_ddot", "m s-2", "acceleration of the slider", "\\ddot x"),
         Variable("phi_ddot", "rad s-2", "angular acceleration of the bar", "\\ddot\\varphi"),
@@ -217,10 +159,9 @@ MODEL = Model(
                          "coefficient lambda = 1 + sin^2(phi) - k f sin(phi) cos(phi) of (23)-(25)",
                          "\\lambda"),
     velocity="xdot",
-    point=point,
+    velocity_scale=velocity_scale,
     dynamics=Dynamics(
         coordinates=(("x", "xdot", "x_ddot"), ("phi", "omega", "phi_ddot")),
-        branch=branch, derive=derive, directions=(1.0, 1.0, -1.0, -1.0, 0.0),
         positions=(Variable("x", "m", "position of the slider along the guide", "x", 0.0),),
         stick_is_rest=False),
     default_axes={"phi": (-math.pi, math.pi, 512), "f": (0.0, 6.0, 512)},

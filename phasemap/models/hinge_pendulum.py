@@ -53,105 +53,57 @@ from numba import njit
 
 from .._numerics import (
     ADMISSIBLE,
-    COEF,
     CONTINUUM,
-    FIRST_ACC,
     INADMISSIBLE,
+    NAN,
     NO_SOLUTION,
-    SINGULAR,
-    STATUS,
     TOL,
-    clear,
     is_zero,
 )
-from ..model import Derived, Dynamics, Model, Variable
-
-TURN_POS, TURN_NEG, STICK = 0, 1, 2
-PHI_DDOT = FIRST_ACC
-R_NORMAL = FIRST_ACC + 1
-R_TANGENT = FIRST_ACC + 2
+from ..model import Branch, Derived, Dynamics, Model, Variable
 
 
-@njit(cache=True, error_model="numpy")
-def _turn(row, sigma, from_rest, omega, delta, l, g, m, sp, cp):
-    """Fill one turning branch (direction sigma): the admissible root of (32)."""
+@njit(inline="always", error_model="numpy")
+def turn(sigma, rest, omega, delta, l, g, m, sin_phi, cos_phi):
+    """One turning branch (direction sigma): the admissible root of (32).
+
+    Row: (status, singular, l^2 - delta^2, phi'', R_n, R_t).
+    """
+    sp, cp = sin_phi, cos_phi
     w2 = omega * omega
     qn = l * w2 + g * cp
-    qn_scale = l * w2 + g
+    qn_zero = is_zero(qn, l * w2 + g)
     coef = l * l - delta * delta
-    row[COEF] = coef
-    if is_zero(coef, l * l + delta * delta):
-        row[SINGULAR] = 1.0
-        if not is_zero(qn, qn_scale):
-            row[STATUS] = NO_SOLUTION
-            return
-        # Every u with sigma u <= 0 solves (32); from rest phi'' = (u - g sin phi)/l
-        # must also have the sign sigma, possible iff sigma g sin phi < 0.
-        if from_rest and not (-sigma * g * sp > TOL * g):
-            row[STATUS] = INADMISSIBLE
-        else:
-            row[STATUS] = CONTINUUM
-        return
-    if coef > 0.0:
-        u = -sigma * delta * abs(qn) / math.sqrt(coef)
-    elif is_zero(qn, qn_scale):
-        u = 0.0
-    else:
-        row[STATUS] = NO_SOLUTION
-        return
+    singular = is_zero(coef, l * l + delta * delta)
+    # Singular with qn = 0: every u with sigma u <= 0 solves (32); from rest
+    # phi'' = (u - g sin phi)/l must also have the sign sigma, possible iff
+    # sigma g sin phi < 0.
+    family = (not rest) | (-sigma * g * sp > TOL * g)
+    st_singular = (CONTINUUM if family else INADMISSIBLE) if qn_zero else NO_SOLUTION
+    # Regular: for coef > 0 the root u of (32) with sigma u <= 0; for coef < 0
+    # only qn = 0 (u = 0) solves it.
+    solvable = (coef > 0.0) | qn_zero
+    u = -sigma * delta * abs(qn) / math.sqrt(coef) if coef > 0.0 else 0.0
     a = (u - g * sp) / l
-    row[PHI_DDOT] = a
-    row[R_NORMAL] = m * qn
-    row[R_TANGENT] = m * u
-    if from_rest and not (sigma * a > TOL * (abs(u) + g) / l):
-        row[STATUS] = INADMISSIBLE
-    else:
-        row[STATUS] = ADMISSIBLE
+    start_ok = (not rest) | (sigma * a > TOL * (abs(u) + g) / l)
+    st = (ADMISSIBLE if start_ok else INADMISSIBLE) if solvable else NO_SOLUTION
+    fields = (not singular) & solvable
+    return (float(st_singular if singular else st), 1.0 if singular else 0.0, coef,
+            a if fields else NAN, m * qn if fields else NAN, m * u if fields else NAN)
 
 
-@njit(cache=True, error_model="numpy")
-def _stick(row, delta, l, g, m, sp, cp):
-    """Fill the stick branch: rest is possible iff l |sin phi| <= delta (35)."""
-    if g * (delta - l * abs(sp)) >= -TOL * g * (delta + l):
-        row[STATUS] = ADMISSIBLE
-        row[PHI_DDOT] = 0.0
-        row[R_NORMAL] = m * g * cp
-        row[R_TANGENT] = m * g * sp
-    else:
-        row[STATUS] = INADMISSIBLE
+@njit(inline="always", error_model="numpy")
+def stick(delta, l, g, m, sin_phi, cos_phi):
+    """The stick branch: rest is possible iff l |sin phi| <= delta (35)."""
+    ok = g * (delta - l * abs(sin_phi)) >= -TOL * g * (delta + l)
+    return (float(ADMISSIBLE if ok else INADMISSIBLE), 0.0, NAN, 0.0 if ok else NAN,
+            m * g * cos_phi if ok else NAN, m * g * sin_phi if ok else NAN)
 
 
-@njit(cache=True, error_model="numpy")
-def point(v, out):
-    """Classify one state. ``v`` = (phi, omega, delta, l, g, m, sin phi, cos phi)."""
-    omega, delta, l, g, m, sp, cp = v[1], v[2], v[3], v[4], v[5], v[6], v[7]
-    clear(out)
-    if is_zero(omega, math.sqrt(g / l)):
-        _turn(out[TURN_POS], 1.0, True, 0.0, delta, l, g, m, sp, cp)
-        _turn(out[TURN_NEG], -1.0, True, 0.0, delta, l, g, m, sp, cp)
-        _stick(out[STICK], delta, l, g, m, sp, cp)
-    elif omega > 0.0:
-        _turn(out[TURN_POS], 1.0, False, omega, delta, l, g, m, sp, cp)
-    else:
-        _turn(out[TURN_NEG], -1.0, False, omega, delta, l, g, m, sp, cp)
-
-
-
-@njit(cache=True, error_model="numpy")
-def branch(v, b, row):
-    """Fill branch ``b`` along its stage: turning direction +1, -1, or stick."""
-    omega, delta, l, g, m, sp, cp = v[1], v[2], v[3], v[4], v[5], v[6], v[7]
-    if b == STICK:
-        _stick(row, delta, l, g, m, sp, cp)
-    else:
-        _turn(row, 1.0 if b == TURN_POS else -1.0, False, omega, delta, l, g, m, sp, cp)
-
-
-@njit(cache=True, error_model="numpy")
-def derive(v):
-    """Fill sin phi and cos phi."""
-    v[6] = math.sin(v[0])
-    v[7] = math.cos(v[0])
+@njit(inline="always", error_model="numpy")
+def velocity_scale(g, l):
+    """The pendulum's natural rate sqrt(g / l): omega is zero below 1e-12 of it."""
+    return math.sqrt(g / l)
 
 
 MODEL = Model(
@@ -171,8 +123,11 @@ MODEL = Model(
         Variable("m", "kg", "mass of the bob", "m", 1.0, 0.0, lower_open=True),
     ),
     derived=(Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos)),
-    branches=("turn_pos", "turn_neg", "stick"),
-    stick_branch=STICK,
+    candidates=(
+        Branch("turn_pos", 1.0, turn, (1.0,)),
+        Branch("turn_neg", -1.0, turn, (-1.0,)),
+        Branch("stick", 0.0, stick),
+    ),
     accelerations=(
         Variable("phi_ddot", "rad s-2", "angular acceleration of the rod", "\\ddot\\varphi"),
     ),
@@ -183,9 +138,8 @@ MODEL = Model(
     coefficient=Variable("coef", "m2", "coefficient l^2 - delta^2 of the squared equation (33)",
                          "l^2-\\delta^2"),
     velocity="omega",
-    point=point,
-    dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),), branch=branch,
-                      derive=derive, directions=(1.0, -1.0, 0.0)),
+    velocity_scale=velocity_scale,
+    dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),)),
     default_axes={"phi": (-math.pi, math.pi, 512), "delta": (0.0, 1.5, 512)},
 )
 

@@ -64,34 +64,24 @@ from numba import njit
 
 from .._numerics import (
     ADMISSIBLE,
-    COEF,
     CONTACT_LOST,
     CONTINUUM,
-    FIRST_ACC,
     INADMISSIBLE,
+    NAN,
     NO_SOLUTION,
-    SINGULAR,
-    STATUS,
     TOL,
-    clear,
     is_zero,
     restrict_affine,
     start_interval,
 )
-from ..model import Derived, Dynamics, Model, Variable
-
-# Row indices and field indices of this model.
-SLIDE_POS, SLIDE_NEG, STICK = 0, 1, 2
-PHI_DDOT = FIRST_ACC
-N_FLOOR = FIRST_ACC + 1
-N_WALL = FIRST_ACC + 2
+from ..model import Branch, Derived, Dynamics, Model, Variable
 
 
-@njit(cache=True, error_model="numpy")
-def _slide(row, s, from_rest, omega, f, l, g, m, sp, cp):
-    """Fill one slide branch (direction s) from (8) and the reactions."""
+@njit(inline="always", error_model="numpy")
+def slide(s, rest, omega, f, l, g, m, sin_phi, cos_phi):
+    """One slide branch (direction s) from (8): (status, singular, 2 - f^2, phi'', N_floor, N_wall)."""
+    sp, cp = sin_phi, cos_phi
     d = 2.0 - f * f
-    row[COEF] = d
     w2 = omega * omega
     rhs = 3.0 * (2.0 * s * f * l * w2 - 2.0 * s * f * g * cp + (1.0 - f * f) * g * sp)
     rhs_scale = 3.0 * (2.0 * f * l * w2 + 2.0 * f * g + abs(1.0 - f * f) * g)
@@ -101,77 +91,39 @@ def _slide(row, s, from_rest, omega, f, l, g, m, sp, cp):
     ydd0, dydd = -l * cp * w2, -l * sp
     nf0, dnf = inv * (g + ydd0 - s * f * xdd0), inv * (dydd - s * f * dxdd)
     nw0, dnw = inv * (xdd0 + s * f * (g + ydd0)), inv * (dxdd + s * f * dydd)
-    if is_zero(d, 2.0 + f * f):
-        row[SINGULAR] = 1.0
-        if not is_zero(rhs, rhs_scale):
-            row[STATUS] = NO_SOLUTION
-            return
-        lo, hi = start_interval(from_rest, s)
-        lo, hi = restrict_affine(nf0, dnf, lo, hi)
-        lo, hi = restrict_affine(nw0, dnw, lo, hi)
-        row[STATUS] = CONTINUUM if lo < hi else CONTACT_LOST
-        return
+    singular = is_zero(d, 2.0 + f * f)
+    # Singular with a vanishing right side: the admissible family of phi''.
+    lo, hi = start_interval(rest, s)
+    lo, hi = restrict_affine(nf0, dnf, lo, hi)
+    lo, hi = restrict_affine(nw0, dnw, lo, hi)
+    family = CONTINUUM if lo < hi else CONTACT_LOST
+    st_singular = family if is_zero(rhs, rhs_scale) else NO_SOLUTION
     a = rhs / (2.0 * l * d)
     nf = nf0 + dnf * a
     nw = nw0 + dnw * a
-    row[PHI_DDOT] = a
-    row[N_FLOOR] = nf
-    row[N_WALL] = nw
-    if from_rest and not (s * a > TOL * rhs_scale / (2.0 * l * abs(d))):
-        row[STATUS] = INADMISSIBLE
-        return
+    start_ok = (not rest) | (s * a > TOL * rhs_scale / (2.0 * l * abs(d)))
     n_scale = inv * (g + l * w2 + l * abs(a)) * (1.0 + f)
-    if nf < -TOL * n_scale or nw < -TOL * n_scale:
-        row[STATUS] = CONTACT_LOST
-    else:
-        row[STATUS] = ADMISSIBLE
+    lost = (nf < -TOL * n_scale) | (nw < -TOL * n_scale)
+    st = (CONTACT_LOST if lost else ADMISSIBLE) if start_ok else INADMISSIBLE
+    return (float(st_singular if singular else st), 1.0 if singular else 0.0, d,
+            NAN if singular else a, NAN if singular else nf, NAN if singular else nw)
 
 
-@njit(cache=True, error_model="numpy")
-def _stick(row, f, g, m, sp, cp):
-    """Fill the stick branch: rest is possible iff phi <= 2 arctan f."""
+@njit(inline="always", error_model="numpy")
+def stick(f, g, m, sin_phi, cos_phi):
+    """The stick branch: rest is possible iff phi <= 2 arctan f."""
+    sp, cp = sin_phi, cos_phi
     margin = g * (2.0 * f * cp - (1.0 - f * f) * sp)
     scale = g * (2.0 * f + abs(1.0 - f * f))
-    if margin >= -TOL * scale:
-        row[STATUS] = ADMISSIBLE
-        row[PHI_DDOT] = 0.0
-        row[N_FLOOR] = 0.5 * m * g * (1.0 + cp)
-        row[N_WALL] = 0.5 * m * g * sp
-    else:
-        row[STATUS] = INADMISSIBLE
+    ok = margin >= -TOL * scale
+    return (float(ADMISSIBLE if ok else INADMISSIBLE), 0.0, NAN, 0.0 if ok else NAN,
+            0.5 * m * g * (1.0 + cp) if ok else NAN, 0.5 * m * g * sp if ok else NAN)
 
 
-@njit(cache=True, error_model="numpy")
-def point(v, out):
-    """Classify one state. ``v`` = (phi, omega, f, l, g, m, sin phi, cos phi)."""
-    omega, f, l, g, m, sp, cp = v[1], v[2], v[3], v[4], v[5], v[6], v[7]
-    clear(out)
-    if is_zero(omega, math.sqrt(g / l)):
-        _slide(out[SLIDE_POS], 1.0, True, 0.0, f, l, g, m, sp, cp)
-        _slide(out[SLIDE_NEG], -1.0, True, 0.0, f, l, g, m, sp, cp)
-        _stick(out[STICK], f, g, m, sp, cp)
-    elif omega > 0.0:
-        _slide(out[SLIDE_POS], 1.0, False, omega, f, l, g, m, sp, cp)
-    else:
-        _slide(out[SLIDE_NEG], -1.0, False, omega, f, l, g, m, sp, cp)
-
-
-
-@njit(cache=True, error_model="numpy")
-def branch(v, b, row):
-    """Fill branch ``b`` along its stage: slide direction +1, -1, or stick."""
-    omega, f, l, g, m, sp, cp = v[1], v[2], v[3], v[4], v[5], v[6], v[7]
-    if b == STICK:
-        _stick(row, f, g, m, sp, cp)
-    else:
-        _slide(row, 1.0 if b == SLIDE_POS else -1.0, False, omega, f, l, g, m, sp, cp)
-
-
-@njit(cache=True, error_model="numpy")
-def derive(v):
-    """Fill sin phi and cos phi."""
-    v[6] = math.sin(v[0])
-    v[7] = math.cos(v[0])
+@njit(inline="always", error_model="numpy")
+def velocity_scale(g, l):
+    """The bar's natural rate sqrt(g / l): omega is zero below 1e-12 of it."""
+    return math.sqrt(g / l)
 
 
 MODEL = Model(
@@ -193,8 +145,11 @@ MODEL = Model(
         Variable("m", "kg", "mass of the bar", "m", 1.0, 0.0, lower_open=True),
     ),
     derived=(Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos)),
-    branches=("slide_pos", "slide_neg", "stick"),
-    stick_branch=STICK,
+    candidates=(
+        Branch("slide_pos", 1.0, slide, (1.0,)),
+        Branch("slide_neg", -1.0, slide, (-1.0,)),
+        Branch("stick", 0.0, stick),
+    ),
     accelerations=(
         Variable("phi_ddot", "rad s-2", "angular acceleration of the bar", "\\ddot\\varphi"),
     ),
@@ -205,9 +160,8 @@ MODEL = Model(
     coefficient=Variable("coef", "1", "coefficient 2 - f^2 of the angular acceleration",
                          "2-f^2"),
     velocity="omega",
-    point=point,
-    dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),), branch=branch,
-                      derive=derive, directions=(1.0, -1.0, 0.0)),
+    velocity_scale=velocity_scale,
+    dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),)),
     default_axes={"phi": (0.0, math.pi / 2, 512), "f": (0.0, 3.0, 512)},
 )
 

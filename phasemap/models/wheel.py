@@ -52,87 +52,59 @@ from numba import njit
 
 from .._numerics import (
     ADMISSIBLE,
-    COEF,
     CONTACT_LOST,
     CONTINUUM,
-    FIRST_ACC,
     INADMISSIBLE,
+    NAN,
     NO_SOLUTION,
-    SINGULAR,
-    STATUS,
     TOL,
-    clear,
     is_zero,
     restrict_affine,
     start_interval,
 )
-from ..model import Derived, Dynamics, Model, Variable
-
-ROLL_POS, ROLL_NEG, STICK = 0, 1, 2
-PHI_DDOT = FIRST_ACC
-N_NORMAL = FIRST_ACC + 1
-F_TANGENT = FIRST_ACC + 2
+from ..model import Branch, Derived, Dynamics, Model, Variable
 
 
-@njit(cache=True, error_model="numpy")
-def _roll(row, sigma, from_rest, omega, delta, r, l, rho, g, m, sp, cp):
-    """Fill one rolling branch (direction sigma) from (13) and the no-bounce condition."""
+@njit(inline="always", error_model="numpy")
+def roll(sigma, rest, omega, delta, r, l, rho, g, m, sin_phi, cos_phi):
+    """One rolling branch (direction sigma) from (13) and the no-bounce condition.
+
+    Row: (status, singular, J, phi'', N, F).
+    """
+    sp, cp = sin_phi, cos_phi
     w2 = omega * omega
     coef = rho * rho + r * r + l * l - 2.0 * r * l * cp + delta * sigma * l * sp
     coef_scale = rho * rho + r * r + l * l + 2.0 * r * l + delta * l
-    row[COEF] = coef
     rhs = -l * (r * sp + delta * sigma * cp) * w2 - g * l * sp - delta * sigma * g
     rhs_scale = l * (r + delta) * w2 + g * l + delta * g
     n0, dn = m * (g + l * cp * w2), m * l * sp
-    if is_zero(coef, coef_scale):
-        row[SINGULAR] = 1.0
-        if not is_zero(rhs, rhs_scale):
-            row[STATUS] = NO_SOLUTION
-            return
-        lo, hi = start_interval(from_rest, sigma)
-        lo, hi = restrict_affine(n0, dn, lo, hi)
-        row[STATUS] = CONTINUUM if lo < hi else CONTACT_LOST
-        return
+    singular = is_zero(coef, coef_scale)
+    lo, hi = start_interval(rest, sigma)
+    lo, hi = restrict_affine(n0, dn, lo, hi)
+    family = CONTINUUM if lo < hi else CONTACT_LOST
+    st_singular = family if is_zero(rhs, rhs_scale) else NO_SOLUTION
     a = rhs / coef
     n = n0 + dn * a
-    row[PHI_DDOT] = a
-    row[N_NORMAL] = n
-    row[F_TANGENT] = m * ((r - l * cp) * a + l * sp * w2)
-    if from_rest and not (sigma * a > TOL * rhs_scale / abs(coef)):
-        row[STATUS] = INADMISSIBLE
-        return
-    if n < -TOL * m * (g + l * w2 + l * abs(a)):
-        row[STATUS] = CONTACT_LOST
-    else:
-        row[STATUS] = ADMISSIBLE
+    start_ok = (not rest) | (sigma * a > TOL * rhs_scale / abs(coef))
+    lost = n < -TOL * m * (g + l * w2 + l * abs(a))
+    st = (CONTACT_LOST if lost else ADMISSIBLE) if start_ok else INADMISSIBLE
+    return (float(st_singular if singular else st), 1.0 if singular else 0.0, coef,
+            NAN if singular else a, NAN if singular else n,
+            NAN if singular else m * ((r - l * cp) * a + l * sp * w2))
 
 
-@njit(cache=True, error_model="numpy")
-def _stick(row, delta, l, g, m, sp):
-    """Fill the stick branch: rest is possible iff l |sin phi| <= delta (15)."""
-    if g * (delta - l * abs(sp)) >= -TOL * g * (delta + l):
-        row[STATUS] = ADMISSIBLE
-        row[PHI_DDOT] = 0.0
-        row[N_NORMAL] = m * g
-        row[F_TANGENT] = 0.0
-    else:
-        row[STATUS] = INADMISSIBLE
+@njit(inline="always", error_model="numpy")
+def stick(delta, l, g, m, sin_phi):
+    """The stick branch: rest is possible iff l |sin phi| <= delta (15)."""
+    ok = g * (delta - l * abs(sin_phi)) >= -TOL * g * (delta + l)
+    return (float(ADMISSIBLE if ok else INADMISSIBLE), 0.0, NAN, 0.0 if ok else NAN,
+            m * g if ok else NAN, 0.0 if ok else NAN)
 
 
-@njit(cache=True, error_model="numpy")
-def point(v, out):
-    """Classify one state. ``v`` = (phi, omega, delta, r, l, rho, g, m, sin phi, cos phi)."""
-    omega, delta, r, l, rho, g, m = v[1], v[2], v[3], v[4], v[5], v[6], v[7]
-    sp, cp = v[8], v[9]
-    clear(out)
-    if is_zero(omega, math.sqrt(g / r)):
-        _roll(out[ROLL_POS], 1.0, True, 0.0, delta, r, l, rho, g, m, sp, cp)
-        _roll(out[ROLL_NEG], -1.0, True, 0.0, delta, r, l, rho, g, m, sp, cp)
-        _stick(out[STICK], delta, l, g, m, sp)
-    elif omega > 0.0:
-        _roll(out[ROLL_POS], 1.0, False, omega, delta, r, l, rho, g, m, sp, cp)
-    else:
-        _roll(out[ROLL_NEG], -1.0, False, omega, delta, r, l, rho, g, m, sp, cp)
+@njit(inline="always", error_model="numpy")
+def velocity_scale(g, r):
+    """The disc's natural rate sqrt(g / r): omega is zero below 1e-12 of it."""
+    return math.sqrt(g / r)
 
 
 def _check(values) -> None:
@@ -143,24 +115,6 @@ def _check(values) -> None:
             f"got l = {np.max(l):g}, r = {np.min(r):g}; the centre of mass lies in the disc"
         )
 
-
-
-@njit(cache=True, error_model="numpy")
-def branch(v, b, row):
-    """Fill branch ``b`` along its stage: rolling direction +1, -1, or stick."""
-    omega, delta, r, l, rho, g, m = v[1], v[2], v[3], v[4], v[5], v[6], v[7]
-    sp, cp = v[8], v[9]
-    if b == STICK:
-        _stick(row, delta, l, g, m, sp)
-    else:
-        _roll(row, 1.0 if b == ROLL_POS else -1.0, False, omega, delta, r, l, rho, g, m, sp, cp)
-
-
-@njit(cache=True, error_model="numpy")
-def derive(v):
-    """Fill sin phi and cos phi."""
-    v[8] = math.sin(v[0])
-    v[9] = math.cos(v[0])
 
 
 MODEL = Model(
@@ -185,8 +139,11 @@ MODEL = Model(
         Variable("m", "kg", "mass of the disc", "m", 1.0, 0.0, lower_open=True),
     ),
     derived=(Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos)),
-    branches=("roll_pos", "roll_neg", "stick"),
-    stick_branch=STICK,
+    candidates=(
+        Branch("roll_pos", 1.0, roll, (1.0,)),
+        Branch("roll_neg", -1.0, roll, (-1.0,)),
+        Branch("stick", 0.0, stick),
+    ),
     accelerations=(
         Variable("phi_ddot", "rad s-2", "angular acceleration of the disc", "\\ddot\\varphi"),
     ),
@@ -198,9 +155,8 @@ MODEL = Model(
                          "coefficient rho^2 + r^2 + l^2 - 2 r l cos(phi) + delta l sin(phi) sgn(omega)"
                          " of the angular acceleration", "J"),
     velocity="omega",
-    point=point,
-    dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),), branch=branch,
-                      derive=derive, directions=(1.0, -1.0, 0.0)),
+    velocity_scale=velocity_scale,
+    dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),)),
     default_axes={"phi": (-math.pi, math.pi, 512), "delta": (0.0, 1.0, 512)},
     check=_check,
 )

@@ -1,0 +1,397 @@
+"""Generated kernels: a model's branch functions, unrolled into real Python files.
+
+A model declares its candidate branches as pure scalar functions that return
+their rows (:class:`phasemap.model.Branch`).  This module writes, as source
+text, the code that calls them at a state, and imports it:
+
+* the **contract** of a model: ``point(v, out)``, ``branch(v, b, row)`` and
+  ``derive(v)``, what :func:`phasemap.classify`, the phase curves and the
+  integrator call;
+* one **grid kernel** per scene shape: the requested layers and the innermost
+  axis are compile-time, so a map of ``n_solutions`` never computes a
+  reaction, and the innermost loop reads every other input from a scalar
+  local that LLVM keeps in a register.
+
+Why files
+---------
+numba caches a compiled function on disk next to its source file, keyed by
+the file's path and timestamp.  Code built with ``exec`` has no file and
+recompiles in every process.  So each generated module is written once to
+the kernel cache directory (``$PHASEMAP_CACHE_DIR``, else
+``~/.cache/phasemap/kernels``), under a name that hashes the generated text
+with the sources it calls (the model's module and the shared numerics) and
+the numba version: a change to any of them makes a new file, and a stale one
+is never loaded.  Files are written atomically (a temporary name, then
+``os.replace``), so concurrent processes agree.  At most ``MAX_KERNELS``
+grid kernels are kept per model: the least recently used ones are deleted
+with their numba cache entries.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import inspect
+import os
+import pathlib
+import sys
+import tempfile
+import threading
+
+import numba
+import numpy as np
+from numba import prange
+
+from . import _numerics as nx
+from ._version import __version__
+
+#: Grid kernels kept on disk per model (least recently used are deleted).
+MAX_KERNELS = 32
+
+_LOADED: dict[str, object] = {}
+_LOCK = threading.Lock()
+
+
+def cache_dir() -> pathlib.Path:
+    """Where generated kernel modules and their numba caches live."""
+    env = os.environ.get("PHASEMAP_CACHE_DIR")
+    root = pathlib.Path(env) if env else pathlib.Path.home() / ".cache" / "phasemap" / "kernels"
+    return root
+
+
+# -- what a model's code looks like as text -----------------------------------
+
+def _import(obj, alias: str) -> str:
+    """A line that binds ``obj`` (a jitted function or a numpy ufunc) to ``alias``."""
+    if isinstance(obj, np.ufunc):
+        if getattr(np, obj.__name__, None) is not obj:
+            raise ValueError(f"cannot generate code for the ufunc {obj!r}")
+        return f"{alias} = np.{obj.__name__}"
+    py = getattr(obj, "py_func", None)
+    if py is None:
+        raise ValueError(f"{obj!r} must be a numba.njit function or a numpy ufunc")
+    module, name = py.__module__, py.__name__
+    if getattr(sys.modules.get(module), name, None) is not obj:
+        raise ValueError(f"{module}.{name} must be importable by that name (a module-level "
+                         "function) to be compiled into a kernel")
+    return f"from {module} import {name} as {alias}"
+
+
+def _params(func, n_const: int, inputs: tuple[str, ...], what: str) -> list[str]:
+    """The input names (or ``rest``) a branch function takes after its constants."""
+    names = list(inspect.signature(func.py_func).parameters)[n_const:]
+    for n in names:
+        if n != "rest" and n not in inputs:
+            raise ValueError(f"{what}: parameter {n!r} is neither 'rest' nor an input "
+                             f"({', '.join(inputs)})")
+    return names
+
+
+class _Source:
+    """The model's branch calls as code lines, shared by every generated module."""
+
+    def __init__(self, model):
+        self.model = model
+        self.inputs = model.inputs
+        self.nfields = model.n_fields
+        self.imports = ["import math", "import numpy as np", "from numba import njit, prange"]
+        self.calls = []
+        for b, spec in enumerate(model.candidates):
+            self.imports.append(_import(spec.func, f"BR{b}"))
+            consts = [repr(float(a)) for a in spec.args]
+            names = _params(spec.func, len(consts), self.inputs, f"{model.name}: branch "
+                            f"{spec.name!r}")
+            self.calls.append((consts, names))
+        self.imports.append(_import(model.velocity_scale, "VSCALE"))
+        self.scale_names = _params(model.velocity_scale, 0, self.inputs,
+                                   f"{model.name}: velocity_scale")
+        for j, d in enumerate(model.derived):
+            self.imports.append(_import(d.func, f"DER{j}"))
+
+    def call(self, b: int, rest: str, velocity: str) -> str:
+        """The call of branch ``b`` with ``rest`` and the velocity local ``velocity``."""
+        consts, names = self.calls[b]
+        args = consts + [rest if n == "rest" else (velocity if n == self.model.velocity
+                                                   else f"i_{n}") for n in names]
+        return f"BR{b}({', '.join(args)})"
+
+    def head(self, ind: str) -> list[str]:
+        """Lines that define ``rest`` (the velocity is zero) and ``vb`` (the velocity
+        the branches see: exactly 0 at rest)."""
+        vel = f"i_{self.model.velocity}"
+        scale = ", ".join(f"i_{n}" for n in self.scale_names)
+        return [f"{ind}rest = abs({vel}) <= {nx.TOL!r} * VSCALE({scale})",
+                f"{ind}vb = 0.0 if rest else {vel}"]
+
+    def applies(self, b: int) -> str:
+        """Where branch ``b`` is a candidate: at rest, or moving in its direction."""
+        vel = f"i_{self.model.velocity}"
+        d = self.model.candidates[b].direction
+        if d > 0:
+            return f"rest | ({vel} > 0.0)"
+        if d < 0:
+            return f"rest | ({vel} < 0.0)"
+        return "rest"
+
+    def rows(self, ind: str) -> list[str]:
+        """Lines that compute every candidate row, without control flow (for SIMD).
+
+        Defines ``s{b}`` (status, 0 where absent), ``z{b}`` (singular flag) and
+        ``r{b}`` (the row tuple, meaningful where ``a{b}``: the branch applies).
+        """
+        out = []
+        for b in range(len(self.model.candidates)):
+            out += [f"r{b} = {self.call(b, 'rest', 'vb')}",
+                    f"a{b} = {self.applies(b)}",
+                    f"s{b} = r{b}[0] if a{b} else 0.0",
+                    f"z{b} = r{b}[1] if a{b} else 0.0"]
+        return self.head(ind) + [ind + line for line in out]
+
+    def load(self, ind: str, skip=()) -> list[str]:
+        """Lines that read every input but ``skip`` from ``v`` into ``i_*`` locals."""
+        return [f"{ind}i_{n} = v[{k}]" for k, n in enumerate(self.inputs) if n not in skip]
+
+    def summary(self, ind: str, names) -> list[str]:
+        """Lines that reduce the rows to the requested summaries (locals ``q_<name>``)."""
+        nb = len(self.model.candidates)
+        out = []
+        if "n_solutions" in names:
+            adm = " + ".join(f"(s{b} == {nx.ADMISSIBLE}.0)" for b in range(nb))
+            cont = " | ".join(f"(s{b} == {nx.CONTINUUM}.0)" for b in range(nb))
+            out += [f"nadm = np.int8({adm})",
+                    f"q_n_solutions = np.int8({nx.N_CONTINUUM}) if ({cont}) else "
+                    f"(np.int8({nx.N_THREE_OR_MORE}) if nadm >= 3 else nadm)"]
+        if "stagnation" in names:
+            stick = self.model.stick_branch
+            out.append(f"q_stagnation = np.int8(s{stick} == {nx.ADMISSIBLE}.0)" if stick >= 0
+                       else "q_stagnation = np.int8(0)")
+        if "contact_lost" in names:
+            lost = " | ".join(f"(s{b} == {nx.CONTACT_LOST}.0)" for b in range(nb))
+            out.append(f"q_contact_lost = np.int8({lost})")
+        if "singular" in names:
+            sing = " | ".join(f"(z{b} != 0.0)" for b in range(nb))
+            out.append(f"q_singular = np.int8({sing})")
+        return [ind + line for line in out]
+
+
+def _deps(model) -> list[pathlib.Path]:
+    """Source files compiled into a model's generated code."""
+    mods = {spec.func.py_func.__module__ for spec in model.candidates}
+    mods.add(model.velocity_scale.py_func.__module__)
+    mods |= {d.func.py_func.__module__ for d in model.derived if hasattr(d.func, "py_func")}
+    files = sorted(pathlib.Path(sys.modules[m].__file__) for m in mods)
+    return files + [pathlib.Path(nx.__file__), pathlib.Path(__file__)]
+
+
+def _load(model, kind: str, text: str):
+    """Write ``text`` under a content-hashed name (once) and import it."""
+    h = hashlib.sha256(text.encode())
+    for f in _deps(model):
+        h.update(f.read_bytes())
+    h.update(f"{numba.__version__} {np.__version__} {__version__}".encode())
+    stem = f"{model.name}_{kind}_{h.hexdigest()[:16]}"
+    with _LOCK:
+        if stem in _LOADED:
+            return _LOADED[stem]
+        root = cache_dir()
+        root.mkdir(parents=True, exist_ok=True)
+        path = root / f"{stem}.py"
+        if not path.exists():
+            fd, tmp = tempfile.mkstemp(dir=root, prefix=f".{stem}.", suffix=".tmp")
+            with os.fdopen(fd, "w") as fh:
+                fh.write(text)
+            os.replace(tmp, path)
+        else:
+            os.utime(path)  # recently used
+        # numba's disk cache re-imports a function's module by name when it
+        # loads the function in a new process: register it under that name.
+        name = f"phasemap_kernel_{stem}"
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        spec.loader.exec_module(module)
+        _LOADED[stem] = module
+        if kind.startswith("grid"):
+            _prune(root, model.name)
+        return module
+
+
+def _prune(root: pathlib.Path, model_name: str) -> None:
+    """Keep the ``MAX_KERNELS`` most recently used grid kernels of a model."""
+    files = sorted(root.glob(f"{model_name}_grid*.py"), key=lambda p: p.stat().st_mtime,
+                   reverse=True)
+    for old in files[MAX_KERNELS:]:
+        for f in [old, *root.glob(f"__pycache__/{old.stem}.*")]:
+            try:
+                f.unlink()
+            except OSError:
+                pass
+
+
+def _header(src: _Source, what: str) -> list[str]:
+    return [f'"""{what} of {src.model.name}: generated by phasemap._codegen, do not edit."""',
+            *src.imports, "", "NAN = np.nan", ""]
+
+
+# -- the contract: point, branch, derive --------------------------------------
+
+def contract(model):
+    """The module holding ``point(v, out)``, ``branch(v, b, row)`` and ``derive(v)``.
+
+    """
+    src = _Source(model)
+    nb, nf = len(model.candidates), src.nfields
+    bodies = {}
+    # One state at a time (classify, the integrator's events): plain control
+    # flow, so that only the branches that apply are computed.  The grid
+    # kernels compute the same rows with selects instead (see grid_kernel).
+    body = ['    """Every candidate row at the state v; NaN where a branch does not apply."""']
+    body += src.load("    ")
+    body += src.head("    ")
+    for b in range(nb):
+        body += [f"    if {src.applies(b)}:",
+                 f"        r = {src.call(b, 'rest', 'vb')}"]
+        body += [f"        out[{b}, {j}] = r[{j}]" for j in range(nf)]
+        body += ["    else:", f"        out[{b}, 0] = 0.0", f"        out[{b}, 1] = 0.0"]
+        body += [f"        out[{b}, {j}] = NAN" for j in range(2, nf)]
+    bodies["point(v, out)"] = body
+    body = ['    """Branch b along its stage: its own slip direction, whatever the velocity."""']
+    body += src.load("    ")
+    for b, spec in enumerate(model.candidates):
+        body.append(f"    {'if' if b == 0 else 'elif'} b == {b}:")
+        rest = "True" if spec.direction == 0 else "False"
+        body.append(f"        r = {src.call(b, rest, 'i_' + model.velocity)}")
+        for j in range(nf):
+            body.append(f"        row[{j}] = r[{j}]")
+    bodies["branch(v, b, row)"] = body
+    body = ['    """Branch b along its stage, as its row tuple (for the integrator)."""']
+    body += src.load("    ")
+    for b, spec in enumerate(model.candidates):
+        rest = "True" if spec.direction == 0 else "False"
+        call = src.call(b, rest, "i_" + model.velocity)
+        body.append("    else:" if b == nb - 1 else f"    {'if' if b == 0 else 'elif'} b == {b}:")
+        body.append(f"        r = {call}")
+    body.append("    return r")
+    bodies["branch_row(v, b)"] = body
+    body = ['    """Fill the derived inputs of v (sin phi ...) from their sources."""']
+    slot = {n: k for k, n in enumerate(model.inputs)}
+    for j, d in enumerate(model.derived):
+        body.append(f"    v[{slot[d.name]}] = DER{j}(v[{slot[d.source]}])")
+    if not model.derived:
+        body.append("    pass")
+    bodies["derive(v)"] = body
+    lines = _header(src, "The per-point contract")
+    for signature, body in bodies.items():
+        lines += ['@njit(cache=True, error_model="numpy")', f"def {signature}:", *body, "", ""]
+    # Inlined into the integrator's right-hand side: a step evaluates it six
+    # times, and an out-of-line call that passes arrays costs more than the physics.
+    for signature in ("branch_row(v, b)", "derive(v)"):
+        name, args = signature.split("(", 1)
+        lines += ['@njit(inline="always", error_model="numpy")', f"def {name}_inline({args}:",
+                  *bodies[signature], "", ""]
+    return _load(model, "contract", "\n".join(lines) + "\n")
+
+
+# -- the grid kernels -----------------------------------------------------------
+
+#: Inner-axis cells per parallel task (an inner axis longer than this is split).
+CHUNK = 4096
+
+_F1 = numba.types.Array(numba.float64, 1, "C")
+_F2 = numba.types.Array(numba.float64, 2, "C")
+_F3 = numba.types.Array(numba.float64, 3, "C")
+_I1 = numba.types.Array(numba.int64, 1, "C")
+_I2 = numba.types.Array(numba.int64, 2, "C")
+_B2 = numba.types.Array(numba.int8, 2, "C")
+#: Every generated ``cells`` function has this signature:
+#: ``cells(v, first, lo, hi, inner_values, inner_deriv, flags, fields)``.
+CELLS_SIGNATURE = numba.void(_F1, numba.int64, numba.int64, numba.int64, _F1, _F2, _B2, _F2)
+
+
+@numba.njit(inline="always")
+def set_cell(v, cell, shape, axis_slot, axis_values, deriv_slot, deriv_values):
+    """Put the axis values of grid cell ``cell`` (C order) and their derived inputs into ``v``."""
+    rem = cell
+    for d in range(shape.shape[0] - 1, -1, -1):
+        i = rem % shape[d]
+        rem //= shape[d]
+        v[axis_slot[d]] = axis_values[d, i]
+        for k in range(deriv_slot.shape[1]):
+            if deriv_slot[d, k] >= 0:
+                v[deriv_slot[d, k]] = deriv_values[d, k, i]
+
+
+def _drive(cells, base, outer_shape, outer_slot, outer_values, outer_dslot, outer_dvalues,
+           inner_values, inner_deriv, flags, fields):
+    """Run ``cells`` over every outer cell (and chunk of the inner axis), in parallel."""
+    nod = outer_shape.shape[0]
+    nouter = 1
+    for d in range(nod):
+        nouter *= outer_shape[d]
+    ninner = inner_values.shape[0]
+    nchunks = (ninner + CHUNK - 1) // CHUNK
+    for task in prange(nouter * nchunks):
+        o = task // nchunks
+        lo = (task % nchunks) * CHUNK
+        v = base.copy()
+        set_cell(v, o, outer_shape, outer_slot, outer_values, outer_dslot, outer_dvalues)
+        cells(v, o * ninner, lo, min(lo + CHUNK, ninner), inner_values, inner_deriv, flags,
+              fields)
+
+
+_DRIVER = []
+
+
+def driver():
+    """The one parallel driver of every grid kernel (compiled once, cached on disk).
+
+    It takes the scene's generated ``cells`` as a first-class function, so
+    numba's parfor machinery (a few seconds of compile time, mostly spent
+    re-optimising the loop body it inlines) runs once, not once per scene shape.
+    """
+    if not _DRIVER:
+        sig = numba.void(numba.types.FunctionType(CELLS_SIGNATURE), _F1, _I1, _I1, _F2, _I2, _F3,
+                         _F1, _F2, _B2, _F2)
+        _DRIVER.append(numba.njit(sig, parallel=True, cache=True, error_model="numpy")(_drive))
+    return _DRIVER[0]
+
+
+def grid_kernel(model, layers, inner: str):
+    """The ``cells`` function for the requested ``layers`` with ``inner`` innermost.
+
+    ``cells(v, first, lo, hi, inner_values, inner_deriv, flags, fields)``
+    computes cells ``lo..hi`` of the inner axis at the outer state ``v`` and
+    writes them from column ``first`` on: the int8 summary layers to the rows
+    of ``flags`` and the float layers to the rows of ``fields``, each in the
+    order of ``layers``.  :func:`driver` runs it over a grid.
+    """
+    src = _Source(model)
+    inner_derived = [d for d in model.derived if d.source == inner]
+    skip = {inner} | {d.name for d in inner_derived}
+    summaries = [l.name for l in layers if l.is_summary]
+    lines = _header(src, f"Grid kernel ({', '.join(l.name for l in layers)}; inner {inner})")
+    lines += ["from phasemap._codegen import CELLS_SIGNATURE", "",
+              '@njit(CELLS_SIGNATURE, cache=True, error_model="numpy")',
+              "def cells(v, first, lo, hi, inner_values, inner_deriv, flags, fields):",
+              '    """Cells lo..hi of the inner axis at the outer state v; outputs from first."""']
+    lines += src.load("    ", skip)
+    lines += ["    for j in range(lo, hi):",
+              f"        i_{inner} = inner_values[j]"]
+    lines += [f"        i_{d.name} = inner_deriv[{k}, j]" for k, d in enumerate(inner_derived)]
+    lines += src.rows("        ")
+    lines += src.summary("        ", summaries)
+    n_flag = n_field = 0
+    for layer in layers:
+        if layer.is_summary:
+            lines.append(f"        flags[{n_flag}, first + j] = q_{layer.name}")
+            n_flag += 1
+            continue
+        b, col = layer.branch, layer.column
+        keep = f"(s{b} == {nx.ADMISSIBLE}.0)"
+        if not layer.admissible_only:
+            keep = f"(s{b} != {nx.ABSENT}.0)"
+        lines.append(f"        fields[{n_field}, first + j] = r{b}[{col}] if {keep} else NAN")
+        n_field += 1
+    key = "_".join(l.name for l in layers)
+    tag = hashlib.sha256(f"{key}|{inner}".encode()).hexdigest()[:8]
+    return _load(model, f"grid_{inner}_{tag}", "\n".join(lines) + "\n").cells
