@@ -42,8 +42,8 @@ such as the ladder's phi past 0 or pi/2) ends with ``horizon`` at the boundary.
 A state the integrator cannot resolve (the step size falls below double
 precision, which happens as a coefficient of the senior derivative approaches
 zero and the accelerations grow without bound) ends the motion with
-``singular`` (when the active coefficient has fallen below 1e-6 of its value
-at the stage start) or ``step_failure``.
+``singular`` (when the active coefficient has fallen below 1e-6 of its
+largest value at a stage start of the motion) or ``step_failure``.
 """
 
 from __future__ import annotations
@@ -252,6 +252,9 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
     if mode >= 0 and mode != STICK:  # the stick branch has no senior-derivative coefficient
         coef0 = out[mode, nx.COEF]
         coef_sign = 1.0 if coef0 > 0.0 else (-1.0 if coef0 < 0.0 else 0.0)
+    # the scale of the coefficient: its largest size at a stage start of this motion
+    # (switches close to a singular state start stages with a coefficient already small)
+    coef_scale = abs(coef0)
 
     h = 0.0
     h_prev_ok = True
@@ -290,7 +293,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
             last = True
         if h <= 16.0 * EPS * abs(t) or h <= 1e-14 * t_end:
             c = out[mode, nx.COEF] if coef_sign != 0.0 else coef0
-            fate = ev.SINGULAR if abs(c) < 1e-6 * abs(coef0) else ev.STEP_FAILURE
+            fate = ev.SINGULAR if abs(c) < 1e-6 * coef_scale else ev.STEP_FAILURE
             break
         # -- one step of the method ------------------------------------------
         e = STEP(v, y, h, mode, row, K, yt, y1, rtol, atol)
@@ -458,6 +461,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         mode = new_mode
         coef0 = out[mode, nx.COEF] if mode != STICK else 0.0
         coef_sign = 1.0 if coef0 > 0.0 else (-1.0 if coef0 < 0.0 else 0.0)
+        coef_scale = max(coef_scale, abs(coef0))
         RHS(v, y, mode, row, k1)
         h_prev_ok = True
 
