@@ -81,7 +81,7 @@ def main(argv: list[str] | None = None) -> int:
                    "plus stagnation where the relative velocity is zero)")
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                    help="integrator setting of the fate layers: t_end, rtol, atol, max_step, "
-                   "max_steps, max_events (repeatable)")
+                   "max_steps, max_events, method (DOPRI5 or DOP853) (repeatable)")
     p.add_argument("--chunk-cells", type=int, default=1 << 24, metavar="N",
                    help="above N cells, compute and write block by block with bounded memory "
                    "(default %(default)s)")
@@ -96,6 +96,8 @@ def main(argv: list[str] | None = None) -> int:
                    "(default %(default)s)")
     p.add_argument("--rtol", type=float, default=1e-8, help="relative tolerance "
                    "(default %(default)s)")
+    p.add_argument("--method", default="DOPRI5", help="DOPRI5 (Dormand-Prince 5(4), the "
+                   "default) or DOP853 (order 8, for tight tolerances)")
     p.add_argument("-o", "--output", metavar="OUT.nc", help="write the trajectory as netCDF")
     p = sub.add_parser("info", help="summarise an atlas: axes, fixed values, cells per class")
     p.add_argument("path")
@@ -132,12 +134,16 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def _parse_values(items: list[str]) -> dict[str, float]:
+def _parse_values(items: list[str], words: tuple[str, ...] = ()) -> dict[str, float]:
+    """NAME=VALUE items as numbers (the names in ``words`` keep their text)."""
     values = {}
     for item in items:
         name, sep, text = item.partition("=")
         if not sep or not name:
             raise ValueError(f"expected NAME=VALUE, got {item!r}")
+        if name in words:
+            values[name] = text
+            continue
         try:
             values[name] = float(text)
         except ValueError:
@@ -187,7 +193,7 @@ def _atlas(args) -> str:
     if args.chunk_cells < 1:
         raise ValueError(f"--chunk-cells must be at least 1, got {args.chunk_cells}")
     layers = [x.strip() for x in args.layers.split(",") if x.strip()] if args.layers else None
-    options = _parse_values(args.option)
+    options = _parse_values(args.option, words=("method",))
     for name in ("max_steps", "max_events"):
         if name in options:
             if options[name] != int(options[name]):
@@ -215,7 +221,8 @@ def _simulate(args) -> str:
 
     model = get_model(args.model)
     out = destination(args.output) if args.output else None
-    ds = simulate(model, args.t_end, rtol=args.rtol, **_parse_values(args.values))
+    ds = simulate(model, args.t_end, rtol=args.rtol, method=args.method,
+                  **_parse_values(args.values))
     names = [v.name for v in integrated_variables(model)]
     rows = [("t (s)", "event", "branch after", *names)]
     meanings = ["none", *model.branches]

@@ -1,4 +1,4 @@
-r"""The time integrator: Dormand-Prince 5(4) with exact set-valued friction.
+r"""The time integrator: Dormand-Prince 5(4) or 8(5,3) with exact set-valued friction.
 
 One jitted integrator per model, specialised from the templates below with
 the model's ``point``, ``branch`` and ``derive`` functions (see
@@ -12,12 +12,15 @@ Method
   stick), and the right-hand side is that branch's accelerations, a smooth
   function of the state: ``branch(v, b, row)`` keeps the stage's slip
   direction even at trial points past a velocity zero.
-* **Steps.**  Explicit Runge-Kutta of Dormand and Prince, order 5 with an
-  embedded order-4 error estimate (Hairer, Norsett and Wanner, *Solving ODE
-  I*, II.5; the coefficients of ``scipy``'s ``RK45`` and Hairer's ``dopri5``),
+* **Steps.**  Explicit Runge-Kutta of Dormand and Prince (:data:`METHODS`):
+  ``DOPRI5`` (the default), order 5 with an embedded order-4 error estimate
+  and Hairer's order-4 continuous extension (:mod:`phasemap._dopri5`; the
+  coefficients of Hairer's ``dopri5`` and scipy's ``RK45``), or ``DOP853``,
+  order 8 with dop853's combined order-5/order-3 error estimate and its
+  order-7 continuous extension (:mod:`phasemap._dop853`; Hairer's ``dop853``
+  and scipy's ``DOP853``), for tight tolerances.  Both are
   first-same-as-last, with an RMS error norm over ``atol + rtol |y|`` and the
-  standard step-size controller.  Dense output is Hairer's order-4
-  continuous extension.
+  standard step-size controller.
 * **Events by classification.**  After every accepted step the end state is
   classified with the model's own ``point`` function, exactly as
   :func:`phasemap.classify` does.  The stage goes on while the classification
@@ -39,15 +42,20 @@ such as the ladder's phi past 0 or pi/2) ends with ``horizon`` at the boundary.
 A state the integrator cannot resolve (the step size falls below double
 precision, which happens as a coefficient of the senior derivative approaches
 zero and the accelerations grow without bound) ends the motion with
-``singular`` (when the active coefficient has fallen below 1e-6 of its value
-at the stage start) or ``step_failure``.
+``singular`` (when the active coefficient has fallen below 1e-6 of its
+largest value at a stage start of the motion) or ``step_failure``.
 """
 
 from __future__ import annotations
 
+import functools
+import hashlib
+import pathlib
+
 import numpy as np
 from numba import njit, prange
 
+from . import _dop853, _dopri5
 from . import _numerics as nx
 from . import events as ev
 from ._codegen import set_cell
@@ -55,21 +63,10 @@ from ._compile import specialize
 from .grid import pack_axes
 from .model import Model
 
-# Dormand-Prince 5(4) tableau.
-C2, C3, C4, C5 = 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0
-A21 = 1.0 / 5.0
-A31, A32 = 3.0 / 40.0, 9.0 / 40.0
-A41, A42, A43 = 44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0
-A51, A52, A53, A54 = 19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0
-A61, A62, A63, A64, A65 = (9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0,
-                           -5103.0 / 18656.0)
-A71, A73, A74, A75, A76 = (35.0 / 384.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0,
-                           11.0 / 84.0)
-E1, E3, E4, E5, E6, E7 = (71.0 / 57600.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0,
-                          22.0 / 525.0, -1.0 / 40.0)
-D1, D3, D4, D5, D6, D7 = (-12715105075.0 / 11282082432.0, 87487479700.0 / 32700410799.0,
-                          -10690763975.0 / 1880347072.0, 701980252875.0 / 199316789632.0,
-                          -1453857185.0 / 822651844.0, 69997945.0 / 29380423.0)
+#: The methods by name (``simulate(method=...)``, the fate layers' ``method`` option).
+METHODS = {m.NAME: m for m in (_dopri5, _dop853)}
+#: The default method.
+DEFAULT_METHOD = _dopri5.NAME
 
 SAFETY, FAC_MIN, FAC_MAX = 0.9, 0.2, 10.0
 EPS = np.finfo(np.float64).eps
@@ -97,6 +94,14 @@ RHS = None
 SUMMARY = None
 CLASSIFY = None
 INTEGRATE = None
+# ... and of the method (a module such as phasemap._dopri5; see METHODS)
+STEP = None
+DENSE = None
+N_STAGES = 7
+FSAL = 6
+N_DENSE = 5
+EXPONENT = 0.2
+STIFF_BOUND = 3.25
 
 
 @njit(cache=True)
@@ -137,10 +142,18 @@ def _norm(e, y0, y1, rtol, atol):
 
 @njit(cache=True)
 def _dense(r, theta, y):
-    """Hairer's order-4 continuous extension at ``theta`` in [0, 1] into ``y``."""
+    """The continuous extension at ``theta`` in [0, 1] into ``y``.
+
+    Hairer's nested form, for any number of rows (5 for DOPRI5, 8 for DOP853):
+    ``r0 + theta (r1 + (1 - theta) (r2 + theta (r3 + (1 - theta) (r4 + ...))))``.
+    """
     t1 = 1.0 - theta
+    last = r.shape[0] - 1
     for i in range(y.shape[0]):
-        y[i] = r[0, i] + theta * (r[1, i] + t1 * (r[2, i] + theta * (r[3, i] + t1 * r[4, i])))
+        acc = r[last, i]
+        for j in range(last - 1, -1, -1):
+            acc = r[j, i] + (theta if j % 2 == 0 else t1) * acc
+        y[i] = acc
 
 
 def _fill_template(v, y):
@@ -204,17 +217,12 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
     ny = 2 * N_DOF
     out = np.empty((N_BRANCHES, N_FIELDS))
     row = np.empty(N_FIELDS)
-    k1 = np.empty(ny)
-    k2 = np.empty(ny)
-    k3 = np.empty(ny)
-    k4 = np.empty(ny)
-    k5 = np.empty(ny)
-    k6 = np.empty(ny)
-    k7 = np.empty(ny)
+    K = np.empty((N_STAGES, ny))  # the stages; K[0] = f(y)
+    k1 = K[0]
     yt = np.empty(ny)
     y1 = np.empty(ny)
     err = np.empty(ny)
-    r = np.empty((5, ny))
+    r = np.empty((N_DENSE, ny))
     yb = np.empty(ny)
     pts = np.empty((64 if save else 1, 2 + ny))  # saved points: t, branch, y
     n_saved = 0
@@ -247,11 +255,14 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
     if mode >= 0 and mode != STICK:  # the stick branch has no senior-derivative coefficient
         coef0 = out[mode, nx.COEF]
         coef_sign = 1.0 if coef0 > 0.0 else (-1.0 if coef0 < 0.0 else 0.0)
+    # the scale of the coefficient: its largest size at a stage start of this motion
+    # (switches close to a singular state start stages with a coefficient already small)
+    coef_scale = abs(coef0)
 
     h = 0.0
     h_prev_ok = True
     flickers = 0
-    stiff_hits = 0  # Hairer's stiffness detection: consecutive steps with h |lambda| > 3.25
+    stiff_hits = 0  # Hairer's stiffness detection: consecutive steps with h |lambda| > bound
     calm = 0
     if fate < 0:
         RHS(v, y, mode, row, k1)
@@ -262,12 +273,12 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         h0 = min(h0, t_end, h_max)
         for i in range(ny):
             yt[i] = y[i] + h0 * k1[i]
-        RHS(v, yt, mode, row, k2)
+        RHS(v, yt, mode, row, K[1])
         for i in range(ny):
-            err[i] = (k2[i] - k1[i]) / h0
+            err[i] = (K[1, i] - k1[i]) / h0
         d2 = _norm(err, y, y, rtol, atol)
         dm = max(d1, d2)
-        h1 = max(1e-6, h0 * 1e-3) if dm <= 1e-15 else (0.01 / dm) ** 0.2
+        h1 = max(1e-6, h0 * 1e-3) if dm <= 1e-15 else (0.01 / dm) ** EXPONENT
         h = min(100.0 * h0, h1, h_max)
         if not (h > 0.0):
             h = 1e-6
@@ -285,50 +296,28 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
             last = True
         if h <= 16.0 * EPS * abs(t) or h <= 1e-14 * t_end:
             c = out[mode, nx.COEF] if coef_sign != 0.0 else coef0
-            fate = ev.SINGULAR if abs(c) < 1e-6 * abs(coef0) else ev.STEP_FAILURE
+            fate = ev.SINGULAR if abs(c) < 1e-6 * coef_scale else ev.STEP_FAILURE
             break
-        # -- one Dormand-Prince step ---------------------------------------
-        for i in range(ny):
-            yt[i] = y[i] + h * A21 * k1[i]
-        RHS(v, yt, mode, row, k2)
-        for i in range(ny):
-            yt[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
-        RHS(v, yt, mode, row, k3)
-        for i in range(ny):
-            yt[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
-        RHS(v, yt, mode, row, k4)
-        for i in range(ny):
-            yt[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
-        RHS(v, yt, mode, row, k5)
-        for i in range(ny):
-            yt[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i]
-                                + A65 * k5[i])
-        RHS(v, yt, mode, row, k6)
-        for i in range(ny):
-            y1[i] = y[i] + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i]
-                                + A76 * k6[i])
-        RHS(v, y1, mode, row, k7)
+        # -- one step of the method ------------------------------------------
+        e = STEP(v, y, h, mode, row, K, yt, y1, rtol, atol)
         n_steps += 1
-        for i in range(ny):
-            err[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i]
-                          + E7 * k7[i])
-        e = _norm(err, y, y1, rtol, atol)
         if not (e <= 1.0):  # also rejects NaN
-            fac = FAC_MIN if not (e == e) else max(FAC_MIN, SAFETY * e ** -0.2)
+            fac = FAC_MIN if not (e == e) else max(FAC_MIN, SAFETY * e ** -EXPONENT)
             h *= fac
             h_prev_ok = False
             continue
-        # -- accepted: stiffness detection (Hairer's dopri5) ------------------
-        # h |lambda| ~ h ||f(y1) - f(y6)|| / ||y1 - y6||, y6 the sixth stage's point;
-        # beyond the stability boundary (3.25) for 15 accepted steps the motion
-        # is stiff here (a coefficient of the senior derivative near zero) and an
-        # explicit method would crawl: stop and say so.
+        # -- accepted: stiffness detection (Hairer's dopri5 and dop853) --------
+        # h |lambda| ~ h ||f(y1) - f(yt)|| / ||y1 - yt||, yt the point of the last
+        # stage before f(y1) (also at t + h); beyond the method's stability
+        # boundary for 15 accepted steps the motion is stiff here (a coefficient
+        # of the senior derivative near zero) and an explicit method would
+        # crawl: stop and say so.
         num = 0.0
         den = 0.0
         for i in range(ny):
-            num += (k7[i] - k6[i]) ** 2
+            num += (K[FSAL, i] - K[FSAL - 1, i]) ** 2
             den += (y1[i] - yt[i]) ** 2
-        if den > 0.0 and h * np.sqrt(num / den) > 3.25:
+        if den > 0.0 and h * np.sqrt(num / den) > STIFF_BOUND:
             calm = 0
             stiff_hits += 1
             if stiff_hits >= 15:
@@ -338,22 +327,16 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
             calm += 1
             if calm >= 6:
                 stiff_hits = 0
-        # -- accepted: dense output coefficients ---------------------------
-        for i in range(ny):
-            dy = y1[i] - y[i]
-            bspl = h * k1[i] - dy
-            r[0, i] = y[i]
-            r[1, i] = dy
-            r[2, i] = bspl
-            r[3, i] = dy - h * k7[i] - bspl
-            r[4, i] = h * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i]
-                           + D7 * k7[i])
         # v holds y1 and its derived inputs from the last stage of the step
         POINT(v, out)
         n, adm, lost, sing = SUMMARY(out)
         still = n == 1 and adm == mode and (coef_sign == 0.0 or out[mode, nx.COEF]
                                              * coef_sign > 0.0) and INSIDE(y1)
         theta_end = 1.0
+        # the dense output, only where it is used: to locate an event, at requested times
+        if not still or (n_eval < t_eval.shape[0]
+                         and t_eval[n_eval] <= (t_end if last else t + h)):
+            DENSE(v, y, y1, h, mode, row, K, yt, r)
         if not still:
             # locate the first state where the stage stops being the unique solution
             lo, hi = 0.0, 1.0
@@ -383,10 +366,10 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
             t = t1
             for i in range(ny):
                 y[i] = y1[i]
-                k1[i] = k7[i]
+                k1[i] = K[FSAL, i]
             if save:
                 pts, n_saved = _push(pts, n_saved, t, mode, mode, y)
-            fac = FAC_MAX if e == 0.0 else min(FAC_MAX, max(FAC_MIN, SAFETY * e ** -0.2))
+            fac = FAC_MAX if e == 0.0 else min(FAC_MAX, max(FAC_MIN, SAFETY * e ** -EXPONENT))
             if not h_prev_ok:
                 fac = min(fac, 1.0)
             h = min(h * fac, h_max)
@@ -481,6 +464,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         mode = new_mode
         coef0 = out[mode, nx.COEF] if mode != STICK else 0.0
         coef_sign = 1.0 if coef0 > 0.0 else (-1.0 if coef0 < 0.0 else 0.0)
+        coef_scale = max(coef_scale, abs(coef0))
         RHS(v, y, mode, row, k1)
         h_prev_ok = True
 
@@ -533,8 +517,32 @@ def _fate_template(base, shape, axis_slot, axis_values, deriv_slot, deriv_values
                 pos_rest[j, cell] = res[2][pos_col[j]] if res[0] == ev.REST else np.nan
 
 
-def kernels(model: Model):
-    """The model's jitted integrator functions: ``(integrate, fate_map)``."""
+def check_method(method, model_name: str) -> str:
+    """``method`` if it names one of :data:`METHODS`, else ValueError."""
+    if not isinstance(method, str) or method not in METHODS:
+        raise ValueError(f"{model_name}: method must be one of {', '.join(METHODS)}, "
+                         f"got {method!r}")
+    return method
+
+
+@functools.cache
+def _method_tag(name: str) -> str:
+    """The kernels' name for a method: its name and a hash of its module and this one.
+
+    A kernel's on-disk cache is named after the source of its template's module
+    (:func:`phasemap._compile.source_hash`); the step of a method lives in
+    another module and is compiled into the integrator, so the hash of both
+    goes into the name, and an edit to either recompiles.
+    """
+    h = hashlib.sha256()
+    for path in (METHODS[name].__file__, __file__):
+        h.update(pathlib.Path(path).read_bytes())
+    return f"{name.lower()}_{h.hexdigest()[:8]}"
+
+
+def kernels(model: Model, method: str = DEFAULT_METHOD):
+    """The model's jitted integrator functions for ``method``: ``(integrate, fate_map)``."""
+    spec = METHODS[check_method(method, model.name)]
     dyn = model.dynamics
     if dyn is None:
         raise ValueError(f"{model.name}: this model has no dynamics (Model.dynamics is None); "
@@ -560,25 +568,33 @@ def kernels(model: Model):
         UPPER=np.array([variables[n].upper for n in positions + velocities]),
     )
     # Per-step helpers: the small ones inline into their callers, so that a
-    # right-hand side is one call (a step makes six of them) with the branch
-    # physics inlined, and no array is passed between helpers.
+    # right-hand side is one call (a step makes six or twelve of them) with the
+    # branch physics inlined, and no array is passed between helpers; the step
+    # and the dense output have one call site each and inline into the integrator.
     for name, template, inline in (("INSIDE", _inside_template, False),
                                    ("FILL", _fill_template, True),
                                    ("RHS", _rhs_template, False),
                                    ("SUMMARY", _summary_template, True),
                                    ("CLASSIFY", _classify_template, False)):
         consts[name] = specialize(template, model, name.lower(), inline=inline, **consts)
-    consts["INTEGRATE"] = integrate = specialize(_integrate_template, model, "integrate",
-                                                 **consts)
-    fate_map = specialize(_fate_template, model, "fate_map", parallel=True, **consts)
+    tag = _method_tag(spec.NAME)
+    consts.update(N_STAGES=spec.N_STAGES, FSAL=spec.FSAL, N_DENSE=spec.N_DENSE,
+                  EXPONENT=spec.EXPONENT, STIFF_BOUND=spec.STIFF_BOUND)
+    consts["STEP"] = specialize(spec._step_template, model, f"step_{tag}", inline=True,
+                                **consts)
+    consts["DENSE"] = specialize(spec._dense_template, model, f"dense_{tag}", inline=True,
+                                 **consts)
+    consts["INTEGRATE"] = integrate = specialize(_integrate_template, model,
+                                                 f"integrate_{tag}", **consts)
+    fate_map = specialize(_fate_template, model, f"fate_map_{tag}", parallel=True, **consts)
     return integrate, fate_map
 
 
 def run_fate_map(model: Model, axes: dict[str, np.ndarray], fixed: dict[str, float],
                  y0_fixed: np.ndarray, t_end: float, rtol: float, atol: float, h_max: float,
-                 max_steps: int, max_events: int):
+                 max_steps: int, max_events: int, method: str = DEFAULT_METHOD):
     """Fate of every cell of a grid of initial conditions (validated values)."""
-    _, fate_map = kernels(model)
+    _, fate_map = kernels(model, method)
     packed = pack_axes(model, axes, fixed)
     shape = packed[1]
     ncells = int(np.prod(shape))

@@ -69,7 +69,8 @@ class Scene:
         integrator settings of the fate layers, as for
         :func:`phasemap.simulate`: ``t_end`` (default 10 s), ``rtol`` (1e-6: enough
         to tell the outcomes apart and place the rest angles to ~1e-6 rad),
-        ``atol``, ``max_step``, ``max_steps``, ``max_events``.
+        ``atol``, ``max_step``, ``max_steps``, ``max_events``, ``method``
+        (``"DOPRI5"`` or ``"DOP853"``).
 
     Examples
     --------
@@ -241,7 +242,7 @@ class Scene:
             y0 = np.zeros(2 * len(dyn.coordinates))
             fate, n_rev, t_final, pos = run_fate_map(
                 m, axes, self.fixed, y0, o.t_end, o.rtol, o.atol, o.max_step, o.max_steps,
-                o.max_events)
+                o.max_events, o.method)
             rest = fate == ev.REST
             fates = {"fate": fate, "n_reversals": n_rev, "t_final": t_final,
                      "t_rest": np.where(rest, t_final, np.nan)}

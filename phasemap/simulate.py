@@ -18,7 +18,7 @@ import xarray as xr
 from . import events as ev
 from ._version import __version__
 from .atlas import CONVENTIONS
-from .integrate import kernels
+from .integrate import DEFAULT_METHOD, METHODS, check_method, kernels
 from .model import Model, Variable
 from .models import get_model
 
@@ -36,6 +36,7 @@ class Options:
     max_step: float = math.inf
     max_steps: int = 1_000_000
     max_events: int = 10_000
+    method: str = DEFAULT_METHOD
 
     def checked(self, model: str) -> "Options":
         """Validated copy (``atol`` defaults to ``rtol``); ValueError on bad values."""
@@ -59,13 +60,14 @@ class Options:
             value = getattr(self, name)
             if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < 1:
                 bad(name, value, "a positive integer")
+        check_method(self.method, model)
         return Options(float(self.t_end), float(self.rtol), float(atol), float(self.max_step),
-                       int(self.max_steps), int(self.max_events))
+                       int(self.max_steps), int(self.max_events), self.method)
 
     def as_dict(self) -> dict:
         return {"t_end": self.t_end, "rtol": self.rtol, "atol": self.atol,
                 "max_step": self.max_step, "max_steps": self.max_steps,
-                "max_events": self.max_events}
+                "max_events": self.max_events, "method": self.method}
 
 
 def integrated_variables(model: Model) -> list[Variable]:
@@ -104,7 +106,8 @@ def split_values(model: Model, values: Mapping[str, float]):
 def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
              atol: float | None = None, max_step: float = math.inf,
              t_eval: Sequence[float] | None = None, max_steps: int = 1_000_000,
-             max_events: int = 10_000, **values: float) -> xr.Dataset:
+             max_events: int = 10_000, method: str = DEFAULT_METHOD,
+             **values: float) -> xr.Dataset:
     """Integrate the motion from an initial state, with exact stick and slip.
 
     Parameters
@@ -115,8 +118,8 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     t_end:
         the time horizon (s).
     rtol, atol:
-        relative and absolute tolerances of the Dormand-Prince 5(4) steps
-        (``atol`` defaults to ``rtol``); ``rtol`` in [1e-14, 0.1].
+        relative and absolute tolerances of the steps (``atol`` defaults to
+        ``rtol``); ``rtol`` in [1e-14, 0.1].
     max_step:
         largest step (s); lower it to resolve short excursions between steps.
     t_eval:
@@ -124,6 +127,10 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
         dense output).  Default: every accepted step and every event.
     max_steps, max_events:
         limits after which the motion ends with ``max_events``.
+    method:
+        ``"DOPRI5"`` (Dormand-Prince 5(4), the default) or ``"DOP853"``
+        (Dormand-Prince 8(5,3) with a dense output of order 7: fewer steps at
+        tight tolerances, below about 1e-8).
     **values:
         initial state and parameters by name (``phasemap models`` lists them);
         missing names take the model's defaults.  The elliptic pendulum also
@@ -157,7 +164,7 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     True
     """
     m = get_model(model)
-    opts = Options(t_end, rtol, atol, max_step, max_steps, max_events).checked(m.name)
+    opts = Options(t_end, rtol, atol, max_step, max_steps, max_events, method).checked(m.name)
     for k, val in values.items():
         if np.ndim(val) != 0:
             raise ValueError(f"{m.name}: {k} must be a scalar for simulate(); "
@@ -174,7 +181,7 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
                 te.size and (te[0] < 0 or te[-1] > opts.t_end)):
             raise ValueError(f"{m.name}: t_eval must be a sorted 1-D sequence of times in "
                              f"[0, t_end = {opts.t_end:g}]")
-    integrate, _ = kernels(m)
+    integrate, _ = kernels(m, opts.method)
     names = [v.name for v in integrated_variables(m)]
     y0 = np.array([positions[n] if n in positions else float(full[n]) for n in names])
     v = m.input_vector(full)
@@ -237,7 +244,7 @@ def _dataset(m: Model, full, positions, opts: Options, names, fate, n_rev, n_ste
         "end_message": fate_event.message,
         "n_reversals": np.int32(n_rev),
         "n_steps": np.int64(n_steps),
-        "integrator": "Dormand-Prince 5(4), dense output of order 4, events by classification",
+        "integrator": f"{METHODS[opts.method].DESCRIPTION}, events by classification",
     }
     for k, value in opts.as_dict().items():
         attrs[f"phasemap_{k}"] = value

@@ -18,6 +18,7 @@ from conftest import assert_atlas_round_trip
 from scipy.integrate import solve_ivp
 
 import phasemap
+from phasemap.integrate import METHODS
 
 G = 9.81
 
@@ -102,33 +103,35 @@ def reference_states(ref, times):
 
 
 # --------------------------------------------------------------- closed form
-def test_weightless_hinge_pendulum_matches_the_exact_solution():
+@pytest.mark.parametrize("method", METHODS)
+def test_weightless_hinge_pendulum_matches_the_exact_solution(method):
     # A Dormand-Prince step keeps its local error below rtol |y| + atol (|y| <= 10 here),
     # and the motion is contractive in omega (omega' = -k omega^2), so the global error
     # stays within a few hundred local errors over the ~160 steps: about 1e-10 x 10 x 10.
     # 1e-8 is the bound with a margin; measured 3e-10.
     t = np.linspace(0.0, 10.0, 201)
     for omega0 in (5.0, -3.0):
-        ds = phasemap.simulate("hinge_pendulum", 10.0, rtol=1e-10, t_eval=t, phi=0.5,
+        ds = phasemap.simulate("hinge_pendulum", 10.0, method=method, rtol=1e-10, t_eval=t, phi=0.5,
                                omega=omega0, delta=0.3, g=0.0)
         phi, omega = weightless(t, 0.5, omega0, 0.3, 1.0)
         assert ds.attrs["end_reason"] == "horizon"
         assert np.max(np.abs(ds.phi.values - phi)) < 1e-8
         assert np.max(np.abs(ds.omega.values - omega)) < 1e-8
         # the saved steps (no t_eval) are on the solution too
-        steps = phasemap.simulate("hinge_pendulum", 10.0, rtol=1e-10, phi=0.5, omega=omega0,
-                                  delta=0.3, g=0.0)
+        steps = phasemap.simulate("hinge_pendulum", 10.0, method=method,
+                                  rtol=1e-10, phi=0.5, omega=omega0, delta=0.3, g=0.0)
         phi, omega = weightless(steps.t.values, 0.5, omega0, 0.3, 1.0)
         assert np.max(np.abs(steps.phi.values - phi)) < 1e-8
 
 
-def test_dense_output_is_as_accurate_as_the_steps():
+@pytest.mark.parametrize("method", METHODS)
+def test_dense_output_is_as_accurate_as_the_steps(method):
     # t_eval states come from the continuous extension (order 4): between the steps they
     # must be as accurate as at the steps (a wrong dense coefficient made them O(h)).
     t = np.linspace(0.0, 10.0, 1001)
     for rtol, bound in ((1e-6, 1e-4), (1e-9, 1e-7)):
-        ds = phasemap.simulate("hinge_pendulum", 10.0, rtol=rtol, t_eval=t, phi=0.0, omega=5.0,
-                               delta=0.3, g=0.0)
+        ds = phasemap.simulate("hinge_pendulum", 10.0, method=method,
+                               rtol=rtol, t_eval=t, phi=0.0, omega=5.0, delta=0.3, g=0.0)
         phi, _ = weightless(t, 0.0, 5.0, 0.3, 1.0)
         assert np.max(np.abs(ds.phi.values - phi)) < bound, rtol
 
@@ -149,14 +152,16 @@ def references():
             for name, c in CASES.items()}
 
 
+@pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize("model", list(CASES))
-def test_reversals_and_rest_match_an_independent_solution(model, references):
+def test_reversals_and_rest_match_an_independent_solution(model, references, method):
     case, ref = CASES[model], references[model]
     assert len(ref["reversals"]) >= 3 and ref["fate"] == "rest"
     t = np.linspace(0.0, case["t_end"], 401)
     # rtol 1e-11: the hinge's acceleration has a kink where Q_n = l w^2 + g cos phi = 0,
     # where one step can add ~300 rtol (3e-8 at rtol 1e-10); 1e-7 keeps a wide margin here
-    ds = phasemap.simulate(model, case["t_end"], rtol=1e-11, t_eval=t, **case["values"])
+    ds = phasemap.simulate(model, case["t_end"], method=method,
+                           rtol=1e-11, t_eval=t, **case["values"])
     assert ds.attrs["end_reason"] == "rest"
     assert int(ds.attrs["n_reversals"]) == len(ref["reversals"])
     ev_t = ds.event_t.values[np.array(kinds(ds)) == "reversal"]
@@ -171,8 +176,9 @@ def test_reversals_and_rest_match_an_independent_solution(model, references):
     assert float(ds.event_omega[-1]) == 0.0 and all(ds.omega.values[t > ref["t"]] == 0.0)
 
 
+@pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize("rtol", [1e-6, 1e-9, 1e-12])
-def test_first_velocity_zero_located_to_the_tolerance(rtol):
+def test_first_velocity_zero_located_to_the_tolerance(rtol, method):
     rhs = hinge_rhs(0.05, 1.0, G)
 
     def zero(t, y, sigma):
@@ -181,7 +187,8 @@ def test_first_velocity_zero_located_to_the_tolerance(rtol):
     ref = solve_ivp(rhs, (0.0, 5.0), [2.5, 0.0], method="DOP853", rtol=1e-13, atol=1e-13,
                     events=zero, args=(-1.0,))
     t_ref = ref.t_events[0][0]
-    ds = phasemap.simulate("hinge_pendulum", 5.0, rtol=rtol, phi=2.5, omega=0.0, delta=0.05)
+    ds = phasemap.simulate("hinge_pendulum", 5.0, method=method,
+                           rtol=rtol, phi=2.5, omega=0.0, delta=0.05)
     t_ev = float(ds.event_t[1])
     assert kinds(ds)[1] == "reversal"
     assert abs(t_ev - t_ref) <= 10.0 * rtol * max(1.0, t_ref)
@@ -191,8 +198,8 @@ def test_first_velocity_zero_located_to_the_tolerance(rtol):
     c = phasemap.classify("hinge_pendulum", phi=float(before.phi), omega=float(before.omega),
                           delta=0.05)
     assert [b.name for b in c.branches] == ["turn_neg"]
-    after = phasemap.simulate("hinge_pendulum", 5.0, rtol=rtol, phi=2.5, omega=0.0, delta=0.05,
-                              t_eval=[t_ev + 1e-6])
+    after = phasemap.simulate("hinge_pendulum", 5.0, method=method,
+                              rtol=rtol, phi=2.5, omega=0.0, delta=0.05, t_eval=[t_ev + 1e-6])
     c = phasemap.classify("hinge_pendulum", phi=float(after.phi[0]), omega=float(after.omega[0]),
                           delta=0.05)
     assert [b.name for b in c.branches] == ["turn_pos"]
@@ -200,9 +207,10 @@ def test_first_velocity_zero_located_to_the_tolerance(rtol):
 
 
 # ------------------------------------------------------------ stick and slip
-def test_elliptic_pendulum_sticks_exactly_and_slips_at_the_friction_limit():
+@pytest.mark.parametrize("method", METHODS)
+def test_elliptic_pendulum_sticks_exactly_and_slips_at_the_friction_limit(method):
     f = 0.3
-    ds = phasemap.simulate("elliptic_pendulum", 10.0, rtol=1e-10, phi=1.0, omega=0.0,
+    ds = phasemap.simulate("elliptic_pendulum", 10.0, method=method, rtol=1e-10, phi=1.0, omega=0.0,
                            xdot=0.5, f=f)
     m = phasemap.MODELS["elliptic_pendulum"]
     stick = m.branches.index("stick")
@@ -232,86 +240,98 @@ def test_elliptic_pendulum_sticks_exactly_and_slips_at_the_friction_limit():
 R2 = math.sqrt(2.0)
 
 
+@pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize("f, phi, omega, ends", [
     (R2 - 1e-9, 0.3, -0.5, {"rest"}),
     (R2 + 1e-9, 0.5, -4.0, {"contact_lost"}),
     (R2, 0.3, 0.5, {"singular"}),
 ])
-def test_ladder_with_f_near_sqrt2(f, phi, omega, ends):
-    ds = phasemap.simulate("ladder", 1.0, rtol=1e-10, phi=phi, omega=omega, f=f)
+def test_ladder_with_f_near_sqrt2(f, phi, omega, ends, method):
+    ds = phasemap.simulate("ladder", 1.0, method=method, rtol=1e-10, phi=phi, omega=omega, f=f)
     assert all_finite(ds)
     assert ds.attrs["end_reason"] in ends
 
 
-def test_ladder_just_above_sqrt2_stops_clearly_when_the_stage_is_stiff():
+@pytest.mark.parametrize("method", METHODS)
+def test_ladder_just_above_sqrt2_stops_clearly_when_the_stage_is_stiff(method):
     # f = sqrt2 + 1e-9 makes the stage stiff: a boundary layer of width ~1e-10 rad, then
     # N_wall < 0 on the slow manifold at phi = 0.49999999297 (found by phase_curve).  At
     # rtol 1e-10 simulate finds it too.  At rtol 1e-8 explicit steps sit at the stability
     # limit off the manifold and never see the contact loss; they used to crawl to
     # max_steps (10^6 steps, t = 3.6e-4 s).  Hairer's stiffness test now stops the run
     # within a few dozen steps with end_reason 'stiff', which says why.
-    tight = phasemap.simulate("ladder", 1.0, rtol=1e-10, phi=0.5, omega=-4.0, f=R2 + 1e-9)
+    tight = phasemap.simulate("ladder", 1.0, method=method,
+                              rtol=1e-10, phi=0.5, omega=-4.0, f=R2 + 1e-9)
     assert tight.attrs["end_reason"] == "contact_lost"
     assert abs(float(tight.event_phi[-1]) - 0.49999999297) < 1e-8
-    loose = phasemap.simulate("ladder", 1.0, rtol=1e-8, phi=0.5, omega=-4.0, f=R2 + 1e-9)
+    loose = phasemap.simulate("ladder", 1.0, method=method,
+                              rtol=1e-8, phi=0.5, omega=-4.0, f=R2 + 1e-9)
     assert loose.attrs["end_reason"] in {"contact_lost", "stiff"}
     assert int(loose.attrs["n_steps"]) < 1000 and all_finite(loose)
     assert "phase_curve" in phasemap.Event.STIFF.message
 
 
+@pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize("delta", [1.0 - 1e-12, 1.0])
-def test_hinge_with_delta_at_l_cannot_start(delta):
-    ds = phasemap.simulate("hinge_pendulum", 1.0, phi=1.0, omega=2.0, delta=delta)
+def test_hinge_with_delta_at_l_cannot_start(delta, method):
+    ds = phasemap.simulate("hinge_pendulum", 1.0, method=method, phi=1.0, omega=2.0, delta=delta)
     assert all_finite(ds)
     assert ds.attrs["end_reason"] in {"singular", "no_solution"}
     assert float(ds.event_t[-1]) == 0.0 and int(ds.attrs["n_steps"]) == 0
 
 
-def test_elliptic_pendulum_near_lambda_zero_never_continues_silently():
+@pytest.mark.parametrize("method", METHODS)
+def test_elliptic_pendulum_near_lambda_zero_never_continues_silently(method):
     f = 3.0  # > 2 sqrt 2: lambda_+ = 1 + s^2 - f s c vanishes at tan(phi) = 1/2 and 1
     root = math.atan(0.5)
     for phi, xdot in ((root, 0.5), (root + 1e-8, 0.5), (root + 1e-8, -0.5)):
-        ds = phasemap.simulate("elliptic_pendulum", 2.0, phi=phi, omega=0.0, xdot=xdot, f=f)
+        ds = phasemap.simulate("elliptic_pendulum", 2.0, method=method,
+                               phi=phi, omega=0.0, xdot=xdot, f=f)
         assert all_finite(ds)
         assert ds.attrs["end_reason"] in {"singular", "no_solution", "indeterminate"}
         assert float(ds.event_t[-1]) == 0.0
     # sliding into lambda_- = 1 + s^2 + f s c = 0 (phi = 3 pi / 4): stops there
-    ds = phasemap.simulate("elliptic_pendulum", 5.0, rtol=1e-10, phi=0.9, omega=-3.0,
+    ds = phasemap.simulate("elliptic_pendulum", 5.0, method=method, rtol=1e-10, phi=0.9, omega=-3.0,
                            xdot=50.0, f=f)
     assert all_finite(ds) and ds.attrs["end_reason"] == "singular"
     phi = float(ds.event_phi[-1])
     assert abs(1 + math.sin(phi) ** 2 + f * math.sin(phi) * math.cos(phi)) < 1e-8
 
 
-def test_extreme_initial_velocities():
-    ds = phasemap.simulate("hinge_pendulum", 1.0, rtol=1e-10, t_eval=np.linspace(0, 1, 11),
-                           phi=0.0, omega=1e6, delta=0.3, g=0.0)
+@pytest.mark.parametrize("method", METHODS)
+def test_extreme_initial_velocities(method):
+    ds = phasemap.simulate("hinge_pendulum", 1.0, method=method,
+                           rtol=1e-10, t_eval=np.linspace(0, 1, 11), phi=0.0, omega=1e6, delta=0.3,
+                           g=0.0)
     phi, omega = weightless(ds.t.values, 0.0, 1e6, 0.3, 1.0)
     assert all_finite(ds) and ds.attrs["end_reason"] == "horizon"
     assert np.max(np.abs(ds.phi.values - phi)) < 1e-8            # phi reaches 40 rad
     assert np.max(np.abs(ds.omega.values - omega)) < 1e-8 * 1e6  # relative to omega0
-    tiny = phasemap.simulate("hinge_pendulum", 1.0, phi=0.0, omega=1e-300, delta=0.3, g=0.0)
+    tiny = phasemap.simulate("hinge_pendulum", 1.0, method=method,
+                             phi=0.0, omega=1e-300, delta=0.3, g=0.0)
     assert all_finite(tiny) and tiny.attrs["end_reason"] == "horizon"
     assert float(tiny.phi[-1]) == pytest.approx(1e-300, rel=1e-12)
     # with gravity 1e-300 rad/s is zero for the model: the same motion as from rest
-    a = phasemap.simulate("hinge_pendulum", 5.0, phi=1.0, omega=1e-300)
-    b = phasemap.simulate("hinge_pendulum", 5.0, phi=1.0, omega=0.0)
+    a = phasemap.simulate("hinge_pendulum", 5.0, method=method, phi=1.0, omega=1e-300)
+    b = phasemap.simulate("hinge_pendulum", 5.0, method=method, phi=1.0, omega=0.0)
     assert a.attrs["end_reason"] == b.attrs["end_reason"]
     assert float(a.event_phi[-1]) == float(b.event_phi[-1])
     # an overflowing omega^2 never reaches the user as inf or NaN
-    huge = phasemap.simulate("hinge_pendulum", 1.0, phi=1.0, omega=1e300)
+    huge = phasemap.simulate("hinge_pendulum", 1.0, method=method, phi=1.0, omega=1e300)
     assert all_finite(huge)
     assert huge.attrs["end_reason"] in {"step_failure", "singular"}
 
 
-def test_tolerance_at_the_edge_of_double_precision():
-    ds = phasemap.simulate("hinge_pendulum", 10.0, rtol=1e-14, t_eval=np.linspace(0, 10, 51),
-                           phi=0.0, omega=5.0, delta=0.3, g=0.0)
+@pytest.mark.parametrize("method", METHODS)
+def test_tolerance_at_the_edge_of_double_precision(method):
+    ds = phasemap.simulate("hinge_pendulum", 10.0, method=method,
+                           rtol=1e-14, t_eval=np.linspace(0, 10, 51), phi=0.0, omega=5.0, delta=0.3,
+                           g=0.0)
     phi, _ = weightless(ds.t.values, 0.0, 5.0, 0.3, 1.0)
     assert ds.attrs["end_reason"] == "horizon"
     assert np.max(np.abs(ds.phi.values - phi)) < 1e-12
     with pytest.raises(ValueError, match=r"rtol must be in \[1e-14, 0.1\]"):
-        phasemap.simulate("hinge_pendulum", 1.0, rtol=1e-15)
+        phasemap.simulate("hinge_pendulum", 1.0, method=method, rtol=1e-15)
 
 
 # ---------------------------------------------------------------- bad input
@@ -384,3 +404,100 @@ def test_scipy_stage_driver_and_work_precision_rows():
     assert "speed-up" in wp.report(rows)
     with pytest.raises(ValueError, match="unknown method"):
         wp.work_precision("ladder", tolerances=[1e-6], methods=["Euler"])
+
+
+# ------------------------------------------------------------------- DOP853
+def test_dop853_follows_scipy_dop853_on_a_smooth_stage(references):
+    # The wheel's first stage (from phi = 2 at rest to the first velocity zero) is smooth:
+    # at rtol 1e-12 phasemap's DOP853 and scipy's, on the independent equations, agree to
+    # the tolerance (measured 6e-14 on the states, 9e-13 on the velocity zero; DOPRI5 at
+    # the same rtol: 3e-11).
+    case, ref = CASES["wheel"], references["wheel"]
+    _, t1, sol = ref["stages"][0]
+    t = np.linspace(0.0, t1, 201)[:-1]
+    ds = phasemap.simulate("wheel", float(t[-1]), rtol=1e-12, t_eval=t, method="DOP853",
+                           **case["values"])
+    assert ds.attrs["end_reason"] == "horizon" and "8(5,3)" in ds.attrs["integrator"]
+    assert np.max(np.abs(np.column_stack([ds.phi, ds.omega]) - sol(t).T)) < 1e-11
+    full = phasemap.simulate("wheel", case["t_end"], rtol=1e-12, method="DOP853",
+                             **case["values"])
+    assert kinds(full)[1] == "reversal"
+    assert abs(float(full.event_t[1]) - ref["reversals"][0]) < 1e-10
+
+
+def test_dop853_has_order_8_and_its_error_follows_rtol():
+    # The weightless hinge pendulum, exact solution (36).  With the error per step held
+    # at rtol, an order-p method takes steps h ~ rtol^(1/p), so its error falls as
+    # n_steps^-p: measured slope -8.2 for DOP853 (-6.5 for DOPRI5 on this problem), and
+    # the error itself stays proportional to rtol (slope 0.8) and below it.
+    rtols = 10.0 ** -np.arange(5.0, 13.0)
+    steps, errors = [], []
+    for rtol in rtols:
+        ds = phasemap.simulate("hinge_pendulum", 10.0, rtol=rtol, method="DOP853", phi=0.0,
+                               omega=5.0, delta=0.3, g=0.0)
+        phi, _ = weightless(ds.t.values, 0.0, 5.0, 0.3, 1.0)
+        steps.append(int(ds.attrs["n_steps"]))
+        errors.append(np.max(np.abs(ds.phi.values - phi)))
+    errors = np.array(errors)
+    assert -10.0 < np.polyfit(np.log(steps), np.log(errors), 1)[0] < -7.0
+    assert 0.6 < np.polyfit(np.log(rtols), np.log(errors), 1)[0] < 1.2
+    assert np.all(errors < rtols)
+    dopri5 = phasemap.simulate("hinge_pendulum", 10.0, rtol=1e-12, phi=0.0, omega=5.0,
+                               delta=0.3, g=0.0)
+    assert steps[-1] * 4 < int(dopri5.attrs["n_steps"])  # 45 against 282 steps
+
+
+def test_dop853_dense_output_is_of_order_7():
+    # Requested times come from the order-7 continuous extension (3 extra stages per
+    # step that has one): between the steps it is within a small factor of the order-8
+    # steps' error (measured 20-30x, as scipy's DOP853 on the same problem), and it
+    # converges; a wrong coefficient would leave it at O(h^4) or worse.
+    t = np.linspace(0.0, 10.0, 1001)
+    phi, omega = weightless(t, 0.0, 5.0, 0.3, 1.0)
+    for rtol, bound in ((1e-6, 1e-6), (1e-9, 1e-8), (1e-12, 1e-11)):
+        ds = phasemap.simulate("hinge_pendulum", 10.0, rtol=rtol, t_eval=t, method="DOP853",
+                               phi=0.0, omega=5.0, delta=0.3, g=0.0)
+        assert np.max(np.abs(ds.phi.values - phi)) < bound, rtol
+        assert np.max(np.abs(ds.omega.values - omega)) < bound, rtol
+
+
+SCENARIOS = {
+    "hinge_pendulum": (20.0, dict(phi=2.5, omega=0.0, delta=0.05)),
+    "wheel": (60.0, dict(phi=2.0, omega=0.0, delta=0.01)),
+    "elliptic_pendulum": (10.0, dict(phi=1.0, omega=0.0, xdot=0.5, f=0.3)),
+    "ladder": (1.0, dict(phi=0.3, omega=0.5, f=0.1)),
+}
+
+
+@pytest.mark.parametrize("model", list(SCENARIOS))
+def test_dop853_locates_the_same_events_as_dopri5(model):
+    # reversals and rest, stick and slip, contact loss: the same events in the same order,
+    # at the same times and states to the tolerance
+    t_end, values = SCENARIOS[model]
+    a = phasemap.simulate(model, t_end, rtol=1e-11, **values)
+    b = phasemap.simulate(model, t_end, rtol=1e-11, method="DOP853", **values)
+    assert kinds(a) == kinds(b) and len(kinds(a)) >= 2
+    assert a.attrs["end_reason"] == b.attrs["end_reason"]
+    np.testing.assert_array_equal(a.event_branch.values, b.event_branch.values)
+    np.testing.assert_allclose(a.event_t.values, b.event_t.values, rtol=0, atol=1e-7)
+    for name in ("phi", "omega"):
+        np.testing.assert_allclose(a[f"event_{name}"].values, b[f"event_{name}"].values,
+                                   rtol=0, atol=1e-7)
+    assert int(b.attrs["n_steps"]) < int(a.attrs["n_steps"])
+
+
+def test_dop853_fate_map_and_bad_method(tmp_path):
+    scene = dict(axes={"phi": np.linspace(-3.0, 3.0, 13), "omega": [-4.0, 0.0, 2.5]},
+                 fixed={"delta": 0.1}, layers=["fate", "n_reversals", "phi_rest"])
+    a = phasemap.Scene("hinge_pendulum", **scene, options={"t_end": 30.0}).compute()
+    b = phasemap.Scene("hinge_pendulum", **scene,
+                       options={"t_end": 30.0, "method": "DOP853"}).compute()
+    np.testing.assert_array_equal(a.fate.values, b.fate.values)
+    np.testing.assert_array_equal(a.n_reversals.values, b.n_reversals.values)
+    np.testing.assert_allclose(a.phi_rest.values, b.phi_rest.values, rtol=0, atol=1e-4)
+    assert '"method": "DOP853"' in b.attrs["phasemap_scene"]
+    assert_atlas_round_trip(b, tmp_path, "fates853.nc")
+    with pytest.raises(ValueError, match="method must be one of DOPRI5, DOP853"):
+        phasemap.simulate("hinge_pendulum", 1.0, method="RK4")
+    with pytest.raises(ValueError, match="method must be one of"):
+        phasemap.Scene("hinge_pendulum", **scene, options={"method": "dop853"})

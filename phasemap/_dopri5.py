@@ -1,0 +1,106 @@
+r"""Dormand-Prince 5(4): one step and its dense output, for :mod:`phasemap.integrate`.
+
+Order 5 with an embedded order-4 error estimate, first-same-as-last, and
+Hairer's order-4 continuous extension (Hairer, Norsett and Wanner, *Solving
+ODE I*, II.5 and II.6; the coefficients of Hairer's ``dopri5`` and scipy's
+``RK45``).
+
+A method module gives the integrator template (see
+:func:`phasemap.integrate.kernels`) two templates with these contracts,
+compiled per model with the model's right-hand side ``RHS`` as a global, and
+the constants below.
+
+``_step_template(v, y, h, mode, row, K, yt, y1, rtol, atol) -> error norm``
+    One step of size ``h`` from ``y`` with ``K[0] = f(y)``: the stages into
+    ``K``, the solution into ``y1``, and the RMS error norm over
+    ``atol + rtol max(|y|, |y1|)``.  When the norm is at most 1 (the step is
+    accepted) ``K[FSAL] = f(y1)``, ``yt`` is the point of stage ``FSAL - 1``
+    (so that ``h |K[FSAL] - K[FSAL-1]| / |y1 - yt|`` estimates h |lambda| for
+    Hairer's stiffness test) and ``v`` holds ``y1`` and its derived inputs.
+``_dense_template(v, y, y1, h, mode, row, K, yt, r)``
+    After an accepted step, the ``N_DENSE`` rows of the continuous extension
+    into ``r``: ``y(t + theta h) = r0 + theta (r1 + (1 - theta) (r2 + theta
+    (r3 + ...)))`` (:func:`phasemap.integrate._dense`).  It may call ``RHS``
+    (``v`` and ``yt`` are then overwritten).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: The integrator's name for the method (``simulate(method=...)``).
+NAME = "DOPRI5"
+DESCRIPTION = "Dormand-Prince 5(4), dense output of order 4"
+#: Rows of the stage array: 6 stages and f(y1).
+N_STAGES = 7
+#: The row of K that holds f(y1) after an accepted step.
+FSAL = 6
+#: Rows of the dense output.
+N_DENSE = 5
+#: Exponent of the step-size controller and of the initial step: 1 / (order of the
+#: error estimate + 1).
+EXPONENT = 1.0 / 5.0
+#: Hairer's stiffness test: h |lambda| beyond this (the stability boundary along the
+#: negative real axis) for 15 accepted steps.
+STIFF_BOUND = 3.25
+
+RHS = None  # the model's right-hand side, a compile-time global (phasemap.integrate)
+
+A21 = 1.0 / 5.0
+A31, A32 = 3.0 / 40.0, 9.0 / 40.0
+A41, A42, A43 = 44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0
+A51, A52, A53, A54 = 19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0
+A61, A62, A63, A64, A65 = (9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0,
+                           -5103.0 / 18656.0)
+A71, A73, A74, A75, A76 = (35.0 / 384.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0,
+                           11.0 / 84.0)
+E1, E3, E4, E5, E6, E7 = (71.0 / 57600.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0,
+                          22.0 / 525.0, -1.0 / 40.0)
+D1, D3, D4, D5, D6, D7 = (-12715105075.0 / 11282082432.0, 87487479700.0 / 32700410799.0,
+                          -10690763975.0 / 1880347072.0, 701980252875.0 / 199316789632.0,
+                          -1453857185.0 / 822651844.0, 69997945.0 / 29380423.0)
+
+
+def _step_template(v, y, h, mode, row, K, yt, y1, rtol, atol):
+    """One Dormand-Prince 5(4) step; returns the error norm (see the module docstring)."""
+    ny = y.shape[0]
+    for i in range(ny):
+        yt[i] = y[i] + h * A21 * K[0, i]
+    RHS(v, yt, mode, row, K[1])
+    for i in range(ny):
+        yt[i] = y[i] + h * (A31 * K[0, i] + A32 * K[1, i])
+    RHS(v, yt, mode, row, K[2])
+    for i in range(ny):
+        yt[i] = y[i] + h * (A41 * K[0, i] + A42 * K[1, i] + A43 * K[2, i])
+    RHS(v, yt, mode, row, K[3])
+    for i in range(ny):
+        yt[i] = y[i] + h * (A51 * K[0, i] + A52 * K[1, i] + A53 * K[2, i] + A54 * K[3, i])
+    RHS(v, yt, mode, row, K[4])
+    for i in range(ny):
+        yt[i] = y[i] + h * (A61 * K[0, i] + A62 * K[1, i] + A63 * K[2, i] + A64 * K[3, i]
+                            + A65 * K[4, i])
+    RHS(v, yt, mode, row, K[5])
+    for i in range(ny):
+        y1[i] = y[i] + h * (A71 * K[0, i] + A73 * K[2, i] + A74 * K[3, i] + A75 * K[4, i]
+                            + A76 * K[5, i])
+    RHS(v, y1, mode, row, K[6])
+    acc = 0.0
+    for i in range(ny):
+        err = h * (E1 * K[0, i] + E3 * K[2, i] + E4 * K[3, i] + E5 * K[4, i] + E6 * K[5, i]
+                   + E7 * K[6, i])
+        sk = atol + rtol * max(abs(y[i]), abs(y1[i]))
+        acc += (err / sk) ** 2
+    return np.sqrt(acc / ny)
+
+
+def _dense_template(v, y, y1, h, mode, row, K, yt, r):
+    """Hairer's order-4 continuous extension of the step y -> y1 into ``r`` (5 rows)."""
+    for i in range(y.shape[0]):
+        dy = y1[i] - y[i]
+        bspl = h * K[0, i] - dy
+        r[0, i] = y[i]
+        r[1, i] = dy
+        r[2, i] = bspl
+        r[3, i] = dy - h * K[6, i] - bspl
+        r[4, i] = h * (D1 * K[0, i] + D3 * K[2, i] + D4 * K[3, i] + D5 * K[4, i] + D6 * K[5, i]
+                       + D7 * K[6, i])
