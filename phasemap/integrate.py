@@ -54,6 +54,7 @@ import pathlib
 
 import numpy as np
 from numba import njit, prange
+from numba import types as nb_types
 
 from . import _dop853, _dopri5
 from . import _numerics as nx
@@ -340,6 +341,44 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         if not still:
             # locate the first state where the stage stops being the unique solution
             lo, hi = 0.0, 1.0
+            d = DIRECTIONS[mode]
+            if d != 0.0 and d * y[VEL_Y] > 0.0 and d * y1[VEL_Y] <= 0.0:
+                # The stage's velocity reaches zero in this step, where most stages
+                # end.  Its root on the dense output costs a few polynomial
+                # evaluations (Illinois), not classifications; a bracket around it
+                # that classification confirms (stage before, not after) leaves
+                # a dozen bisection steps instead of fifty.
+                a, b = 0.0, 1.0
+                fa, fb = d * y[VEL_Y], d * y1[VEL_Y]
+                side = 0
+                for _ in range(100):
+                    c = (a * fb - b * fa) / (fb - fa)
+                    if not (a < c < b):
+                        c = 0.5 * (a + b)
+                    _dense(r, c, yb)
+                    fc = d * yb[VEL_Y]
+                    if fc > 0.0:
+                        a, fa = c, fc
+                        if side == -1:
+                            fb *= 0.5
+                        side = -1
+                    else:
+                        b, fb = c, fc
+                        if side == 1:
+                            fa *= 0.5
+                        side = 1
+                    if (b - a) * h <= 4.0 * EPS * max(abs(t), abs(h)):
+                        break
+                c_lo = max(0.0, a - 1e-9)
+                _dense(r, c_lo, yb)
+                n, adm, lost, sing = CLASSIFY(v, yb, out)
+                if n == 1 and adm == mode and (coef_sign == 0.0 or out[mode, nx.COEF]
+                                               * coef_sign > 0.0) and INSIDE(yb):
+                    _dense(r, b, yb)
+                    n, adm, lost, sing = CLASSIFY(v, yb, out)
+                    if not (n == 1 and adm == mode and (coef_sign == 0.0 or out[mode, nx.COEF]
+                                                        * coef_sign > 0.0) and INSIDE(yb)):
+                        lo, hi = c_lo, b
             for _ in range(200):
                 if (hi - lo) * h <= 2.0 * EPS * max(abs(t), abs(h)):
                     break
@@ -485,11 +524,14 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
             evs[:n_ev, 2], n_ev, y_eval[:n_eval], n_eval)
 
 
-def _fate_template(base, shape, axis_slot, axis_values, deriv_slot, deriv_values, y0_fixed,
-                   t_end, rtol, atol, h_max, max_steps, max_events, pos_col,
-                   fate, n_rev, t_final, pos_rest):
+def _fate_drive(integrate, y_slot, base, shape, axis_slot, axis_values, deriv_slot,
+                deriv_values, y0_fixed, t_end, rtol, atol, h_max, max_steps, max_events,
+                pos_col, fate, n_rev, t_final, pos_rest):
     """Integrate from every cell of a grid of initial conditions; record how each ends.
 
+    ``integrate`` is a model's integrator, taken as a first-class function, so
+    that this parallel driver compiles once for every model and method (and
+    numba's parfor lowering does not re-optimise the integrator inside it).
     Work units interleave over the grid (unit u takes cells u, u + U, ...), so
     that both threads see the same mix of quick and slow cells.
     """
@@ -505,16 +547,42 @@ def _fate_template(base, shape, axis_slot, axis_values, deriv_slot, deriv_values
         for q in range((ncells - u + units - 1) // units):
             cell = u + q * units
             set_cell(v, cell, shape, axis_slot, axis_values, deriv_slot, deriv_values)
-            for i in range(Y_SLOT.shape[0]):
-                if Y_SLOT[i] >= 0:
-                    y0[i] = v[Y_SLOT[i]]
-            res = INTEGRATE(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, False,
+            for i in range(y_slot.shape[0]):
+                if y_slot[i] >= 0:
+                    y0[i] = v[y_slot[i]]
+            res = integrate(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, False,
                             no_eval)
             fate[cell] = res[0]
             n_rev[cell] = res[3]
             t_final[cell] = res[1]
             for j in range(pos_col.shape[0]):
                 pos_rest[j, cell] = res[2][pos_col[j]] if res[0] == ev.REST else np.nan
+
+
+_F1 = nb_types.Array(nb_types.float64, 1, "C")
+_F2 = nb_types.Array(nb_types.float64, 2, "C")
+_F3 = nb_types.Array(nb_types.float64, 3, "C")
+_I1 = nb_types.Array(nb_types.int64, 1, "C")
+_I2 = nb_types.Array(nb_types.int64, 2, "C")
+#: The argument types of every integrator (see _integrate_template).
+INTEGRATE_ARGS = (_F1, _F1, nb_types.float64, nb_types.float64, nb_types.float64,
+                  nb_types.float64, nb_types.int64, nb_types.int64, nb_types.boolean, _F1)
+_FATE_DRIVERS: dict = {}
+
+
+def _fate_driver(integrate):
+    """The parallel fate driver for integrators of ``integrate``'s signature (compiled once)."""
+    sig = integrate.nopython_signatures[0]
+    driver = _FATE_DRIVERS.get(sig)
+    if driver is None:
+        fsig = nb_types.void(nb_types.FunctionType(sig), _I1, _F1, _I1, _I1, _F2, _I2, _F3, _F1,
+                             nb_types.float64, nb_types.float64, nb_types.float64,
+                             nb_types.float64, nb_types.int64, nb_types.int64, _I1,
+                             nb_types.Array(nb_types.int8, 1, "C"),
+                             nb_types.Array(nb_types.int32, 1, "C"), _F1, _F2)
+        driver = _FATE_DRIVERS[sig] = njit(fsig, parallel=True, cache=True,
+                                           error_model="numpy")(_fate_drive)
+    return driver
 
 
 def check_method(method, model_name: str) -> str:
@@ -571,11 +639,11 @@ def kernels(model: Model, method: str = DEFAULT_METHOD):
     # right-hand side is one call (a step makes six or twelve of them) with the
     # branch physics inlined, and no array is passed between helpers; the step
     # and the dense output have one call site each and inline into the integrator.
-    for name, template, inline in (("INSIDE", _inside_template, False),
+    for name, template, inline in (("INSIDE", _inside_template, True),
                                    ("FILL", _fill_template, True),
                                    ("RHS", _rhs_template, False),
                                    ("SUMMARY", _summary_template, True),
-                                   ("CLASSIFY", _classify_template, False)):
+                                   ("CLASSIFY", _classify_template, True)):
         consts[name] = specialize(template, model, name.lower(), inline=inline, **consts)
     tag = _method_tag(spec.NAME)
     consts.update(N_STAGES=spec.N_STAGES, FSAL=spec.FSAL, N_DENSE=spec.N_DENSE,
@@ -586,7 +654,13 @@ def kernels(model: Model, method: str = DEFAULT_METHOD):
                                  **consts)
     consts["INTEGRATE"] = integrate = specialize(_integrate_template, model,
                                                  f"integrate_{tag}", **consts)
-    fate_map = specialize(_fate_template, model, f"fate_map_{tag}", parallel=True, **consts)
+    integrate.compile(INTEGRATE_ARGS)
+    y_slot = consts["Y_SLOT"]
+
+    def fate_map(*args):
+        """Run the shared parallel fate driver with this model's integrator."""
+        return _fate_driver(integrate)(integrate, y_slot, *args)
+
     return integrate, fate_map
 
 
