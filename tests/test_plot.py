@@ -333,20 +333,29 @@ def test_stagnation_everywhere_draws_hatching_without_an_outline(tmp_path):
     render(fig, tmp_path)
 
 
-def test_contact_lost_is_overlaid_distinctly(wheel_map, tmp_path):
+def test_contact_lost_is_a_class_of_its_own_not_none(wheel_map, tmp_path):
+    """Where a contact would pull, n_solutions is 0; the map shows 'contact lost' there, in
+    its own colour and hatch, so that 'none' is left for a Painleve inconsistency."""
+    n = wheel_map.n_solutions.values
+    lost = wheel_map.contact_lost.values == 1
+    assert (n[lost] == 0).all() and lost.any()
     fig = quiet(wheel_map.phasemap.plot, size="two_column")
     ax = fig.axes[0]
     assert fig.get_figwidth() == pytest.approx(7.2)
     texts = legend_texts(ax)
-    assert texts[-2:] == ["stagnation", "contact lost"]
-    patches = ax.get_legend().get_patches()
-    assert patches[-1].get_hatch() != patches[-2].get_hatch()
+    assert "none" not in texts  # every none cell of this atlas is a contact loss
+    assert texts == ["contact lost", "unique", "stagnation"]
+    patches = dict(zip(texts, ax.get_legend().get_patches()))
+    assert matplotlib.colors.to_hex(patches["contact lost"].get_facecolor()) == \
+        pplot.CATEGORY_COLOURS["contact_lost"].lower()
+    assert patches["contact lost"].get_hatch() == pplot.CATEGORY_HATCHES["contact_lost"]
+    assert patches["contact lost"].get_hatch() != patches["stagnation"].get_hatch()
     assert ax.get_ylabel() == r"$\omega$ (rad s$^{-1}$)"
     assert_legend_outside(fig, ax)
     render(fig, tmp_path)
 
 
-def test_singular_cells_are_dotted(tmp_path):
+def test_a_row_of_singular_cells_is_drawn_as_a_line(tmp_path):
     ds = phasemap.Scene("hinge_pendulum", axes={"phi": np.linspace(-3, 3, 30),
                                                 "delta": np.linspace(0, 1.5, 31)},
                         fixed={"omega": 1.0}, layers=["n_solutions", "singular"]).compute()
@@ -354,12 +363,46 @@ def test_singular_cells_are_dotted(tmp_path):
     assert int(ds.singular.sum()) == 30  # the row delta = l
     fig = quiet(ds.phasemap.plot)
     ax = fig.axes[0]
-    assert legend_texts(ax) == ["none", "unique", "singular"]
-    dots = [l for l in ax.lines if l.get_marker() == "o"]
-    assert len(dots) == 1 and len(dots[0].get_xdata()) == 30
-    np.testing.assert_allclose(dots[0].get_ydata(), 1.0)
-    assert ax.get_ylabel() == r"$\delta$ (m)"
+    assert legend_texts(ax) == ["none", "unique", r"singular ($l^2-\delta^2 = 0$)"]
+    handle = ax.get_legend().legend_handles[-1]
+    assert handle.get_linestyle() == "-" and handle.get_marker() in ("None", "", None)
+    assert not [l for l in ax.lines if l.get_marker() == "o"], "dots where a line belongs"
+    rows = [l for l in ax.lines if np.ptp(l.get_ydata()) == 0 and len(l.get_ydata()) == 2]
+    assert len(rows) == 1 and rows[0].get_ydata()[0] == pytest.approx(1.0)
     render(fig, tmp_path)
+
+
+def test_singular_set_is_the_zero_contour_of_the_coefficient(elliptic_map, tmp_path):
+    """lambda = 0 hits only a few cells of a grid; with the coefficient layer it is a curve."""
+    ds = phasemap.Scene("elliptic_pendulum",
+                        axes={"phi": np.linspace(-3.14, 3.14, 60), "f": np.linspace(0, 6, 40)},
+                        fixed={"xdot": -1.0},
+                        layers=["n_solutions", "singular", "coef_slide_neg_Npos"]).compute()
+    fig = quiet(ds.phasemap.plot)
+    ax = fig.axes[0]
+    lines = [c for c in ax.collections if isinstance(c, ContourSet) and not c.filled]
+    assert len(lines) == 1 and lines[0].levels.tolist() == [0.0]
+    # the contour follows lambda = 0: f = (1 + sin^2 phi) / (-sin phi cos phi) for k = -1
+    path = np.concatenate([p.vertices for p in lines[0].get_paths()])
+    s, c = np.sin(path[:, 0]), np.cos(path[:, 0])
+    np.testing.assert_allclose(path[:, 1] * (-s * c), 1 + s * s, atol=0.15)
+    assert legend_texts(ax)[-1] == r"singular ($\lambda = 0$)"
+    assert not [l for l in ax.lines if l.get_marker() == "o"]
+    render(fig, tmp_path)
+
+
+def test_isolated_singular_cells_stay_dots(tmp_path):
+    ds = phasemap.Scene("elliptic_pendulum",
+                        axes={"phi": np.linspace(-3.14, 3.14, 60), "f": np.linspace(0, 6, 40)},
+                        fixed={"xdot": -1.0}, layers=["n_solutions", "singular"]).compute()
+    mask = ds.singular.values == 1
+    if not mask.any():  # make one, as a grid that happens to hit lambda = 0 would
+        ds["singular"] = ds.singular.copy(data=np.zeros_like(ds.singular.values))
+        ds["singular"][10, 20] = 1
+    fig = quiet(ds.phasemap.plot)
+    dots = [l for l in fig.axes[0].lines if l.get_marker() == "o"]
+    assert len(dots) == 1 and len(dots[0].get_xdata()) == int((ds.singular == 1).sum())
+    assert fig.axes[0].get_legend().legend_handles[-1].get_marker() == "o"
 
 
 def test_float_layer_gets_a_diverging_colour_bar(elliptic_map, tmp_path):
