@@ -858,12 +858,18 @@ def _edges(c: np.ndarray) -> np.ndarray:
     return np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
 
 
-def _hatch_cells(ax: Axes, xc, yc, mask: np.ndarray, hatch: str, colour: str):
-    """Hatch the cells where ``mask`` (rows y, columns x) holds, with no outline."""
+def _padded(xc, yc, mask: np.ndarray):
+    """Centres padded to the cell edges, and ``mask`` padded to match: a contour at 0.5
+    of it ends where the cells do."""
     xe, ye = _edges(xc), _edges(yc)
     xp = np.concatenate([[xe[0]], xc, [xe[-1]]])
     yp = np.concatenate([[ye[0]], yc, [ye[-1]]])
-    z = np.pad(mask.astype(float), 1, mode="edge")
+    return xp, yp, np.pad(mask.astype(float), 1, mode="edge")
+
+
+def _hatch_cells(ax: Axes, xc, yc, mask: np.ndarray, hatch: str, colour: str):
+    """Hatch the cells where ``mask`` (rows y, columns x) holds, with no outline."""
+    xp, yp, z = _padded(xc, yc, mask)
     filled = ax.contourf(xp, yp, z, levels=[0.5, 1.5], colors="none", hatches=[hatch])
     filled.set_hatchcolor(colour)
     filled.set_edgecolor("none")
@@ -954,14 +960,8 @@ def _mask_overlay(ax: Axes, xc, yc, mask: np.ndarray, *, hatch: str, colour: str
     """Hatch the cells where ``mask`` (rows y, columns x) holds, and outline them."""
     if not mask.any():
         return None
-    xe, ye = _edges(xc), _edges(yc)
-    # contour on a grid padded to the cell edges, so the hatched region ends where the cells do
-    xp = np.concatenate([[xe[0]], xc, [xe[-1]]])
-    yp = np.concatenate([[ye[0]], yc, [ye[-1]]])
-    z = np.pad(mask.astype(float), 1, mode="edge")
-    filled = ax.contourf(xp, yp, z, levels=[0.5, 1.5], colors="none", hatches=[hatch])
-    filled.set_hatchcolor(colour)
-    filled.set_edgecolor("none")
+    xp, yp, z = _padded(xc, yc, mask)
+    _hatch_cells(ax, xc, yc, mask, hatch, colour)
     if not mask.all():
         ax.contour(xp, yp, z, levels=[0.5], colors=[colour], linewidths=0.6,
                    linestyles=linestyle)
