@@ -99,6 +99,7 @@ __all__ = [
     "CATEGORY_HATCHES",
     "EVENT_MARKERS",
     "KINDS",
+    "METHOD_NAMES",
     "OKABE_ITO",
     "SIZES",
     "STYLE",
@@ -165,6 +166,7 @@ CATEGORY_COLOURS = {
     "horizon": _OI["yellow"],
     "max_events": GREY,
     "step_failure": _OI["orange"],
+    "stiff": GREY,
 }
 
 #: The colour of ``yes`` in a yes/no layer, by layer.
@@ -176,16 +178,19 @@ FLAG_COLOURS = {
 
 #: A hatch per category meaning, so that classes whose colours are close in
 #: greyscale print (vermillion and bluish green, sky blue and orange) stay
-#: apart: the ordinary classes, rest and a Painleve ``none`` are solid.  The
+#: apart: the ordinary classes and rest are solid, the paradoxes hatched.  The
 #: hatch is drawn in :data:`HATCH_COLOURS` (white on dark fills).
 CATEGORY_HATCHES = {
+    "none": "xx",
+    "no_solution": "xx",
     "two": "....",
     "indeterminate": "....",
-    "continuum": "xxxx",
+    "continuum": "||||",
     "three_or_more": "++++",
     "contact_lost": "\\\\\\\\",
     "max_events": "----",
-    "step_failure": "||||",
+    "step_failure": "OO",
+    "stiff": "++++",
 }
 #: The colour of a category's hatch lines, by meaning (default white).
 HATCH_COLOURS = {"contact_lost": _OI["blue"], "three_or_more": _OI["black"]}
@@ -512,11 +517,12 @@ def _annotate(axes: Sequence[Axes], text: str, own_figure: bool) -> None:
     On a figure of one panel, and wherever the caller gave the axes, it is
     the title of the legend above the first panel (or that panel's title
     when it has no legend), left-aligned; on a figure of several panels that
-    this module made, a left-aligned figure title.
+    this module made (or one whose panel has a title already), a left-aligned
+    figure title.
     """
     if not text:
         return
-    if own_figure and len(axes) > 1:
+    if own_figure and (len(axes) > 1 or axes[0].get_title(loc="left")):
         axes[0].get_figure(root=False).suptitle(text, x=0.01, ha="left",
                                                 fontsize=_FONT, linespacing=1.3)
         return
@@ -1161,6 +1167,9 @@ def profile_figure(ds: xr.Dataset, layers: str | Sequence[str] | None = None, *,
         _label_axis(axes[-1], ds, "x", dim, xc)
         if xc.size > 1:
             axes[-1].set_xlim(xc.min(), xc.max())
+        if len(axes) > 1:
+            label_panels(axes)
+        _annotate(axes, fixed_values_text(ds, width * 0.97), ax is None)
     return axes[0].figure
 
 
@@ -1223,8 +1232,37 @@ def fate_figure(ds: xr.Dataset, *, extra: str | None = None, x: str | None = Non
                 a.tick_params(axis="y", labelleft=False)
             a.set_xlim(xe[0], xe[-1])
             a.set_ylim(ye[0], ye[-1])
+        handles += _mark_inverted_rests(axes, ds, xdim, ydim, xc, yc)
         _legend_above(axes[0], handles)
+        if len(axes) > 1:
+            label_panels(axes)
+        _annotate(axes, fixed_values_text(ds, width * 0.97 if ax is None and len(axes) > 1
+                                          else _panel_width(axes[0])), ax is None)
     return axes[0].figure
+
+
+def _mark_inverted_rests(axes: Sequence[Axes], ds: xr.Dataset, x: str, y: str, xc, yc
+                        ) -> list:
+    """Ring the cells whose motion came to rest in an inverted zone (cos phi_rest < 0).
+
+    Such rests are rare and isolated (the motion has just the energy to creep
+    into the zone about the upper position, often with no reversal), and a
+    reader would take them for noise; the ring and its legend entry say what
+    they are.  Needs ``phi_rest`` on the map's axes.
+    """
+    if "phi_rest" not in ds.data_vars or set(ds.phi_rest.dims) != {x, y}:
+        return []
+    phi_rest = np.asarray(ds.phi_rest.transpose(y, x).values, float)
+    with np.errstate(invalid="ignore"):
+        inverted = np.cos(phi_rest) < 0
+    if not inverted.any():
+        return []
+    jj, ii = np.nonzero(inverted)
+    ring = {"ls": "none", "marker": "o", "mfc": "none", "mec": _OI["black"], "mew": 0.7}
+    for a in axes:
+        a.plot(xc[ii], yc[jj], ms=4.0, zorder=6, **ring)
+    return [Line2D([], [], ms=4.0, label=r"rest inverted ($\cos\varphi_\mathrm{rest} < 0$)",
+                   **ring)]
 
 
 # --------------------------------------------------------------------------- motions
@@ -1241,12 +1279,16 @@ def _event_flags(var: xr.DataArray) -> dict[int, str]:
 def _event_style(name: str) -> dict:
     marker, colour = EVENT_MARKERS.get(name, ("o", GREY))
     if name in _TERMINAL:
-        return {"marker": marker, "ms": 6.5 if marker != "*" else 8.5, "mfc": colour,
-                "mec": _OI["black"], "mew": 0.6, "ls": "none", "zorder": 5, "clip_on": False}
+        # a translucent face: ends that coincide show as stacked edges, and the events
+        # drawn above (reversals, the start) stay visible through it
+        return {"marker": marker, "ms": 6.0 if marker != "*" else 8.0,
+                "mfc": mcolors.to_rgba(colour, 0.75), "mec": _OI["black"], "mew": 0.6,
+                "ls": "none", "zorder": 5, "clip_on": False}
     hollow = name in ("start", "stick", "slip", "switch")
-    return {"marker": marker, "ms": 3.5, "mfc": "white" if hollow else colour,
+    return {"marker": marker, "ms": 3.5 if name != "reversal" else 3.0,
+            "mfc": "white" if hollow else colour,
             "mec": _OI["black"] if name == "start" else colour, "mew": 0.8, "ls": "none",
-            "zorder": 4, "clip_on": False}
+            "zorder": 6, "clip_on": False}
 
 
 def _event_handles(names: Sequence[str]) -> list[Line2D]:
@@ -1314,7 +1356,8 @@ def phase_curve_figure(ds: xr.Dataset, *, squared: bool = False, ax=None,
             _zero_line(a, y)
         _label_axis(a, ds, "x", "phi", phi)
         a.set_ylabel(_squared_label(ds, "omega") if squared else axis_label(ds, "omega"))
-        _legend_above(a, _event_handles(names))
+        _legend_above(a, _event_handles(names),
+                      title=fixed_values_text(ds, _panel_width(a)) or None)
     return a.figure
 
 
@@ -1394,6 +1437,10 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
                 axes[0].figure.align_ylabels(axes)
         shown = [k for k in kinds if phase_plane or k != "start"]
         _legend_above(axes[0], _event_handles(shown))
+        if len(axes) > 1:
+            label_panels(axes)
+        _annotate(axes, fixed_values_text(ds, width * 0.97 if ax is None and len(axes) > 1
+                                          else _panel_width(axes[0])), ax is None)
     return axes[0].figure
 
 
@@ -1419,16 +1466,40 @@ def _mark_events(ax: Axes, ds: xr.Dataset, kinds: list[str], xname: str, yname: 
 
 _WP_KEYS = ("method", "system", "tol", "error_final", "error_l2", "seconds")
 
+#: The methods of a work-precision table as a reader knows them.
+METHOD_NAMES = {
+    "phasemap": "phasemap, Dormand–Prince 5(4)",
+    "simulate": "phasemap.simulate, Dormand–Prince 5(4)",
+    "phase_curve": "phasemap first integrals",
+    "RK45": "SciPy RK45, Dormand–Prince 5(4)",
+    "DOP853": "SciPy DOP853, Dormand–Prince 8(5,3)",
+    "Radau": "SciPy Radau IIA, order 5",
+    "LSODA": "SciPy LSODA",
+}
+#: The built-in work-precision problems as panel headings.
+SYSTEM_NAMES = {
+    "hinge_weightless": r"hinge pendulum, $g$ = 0",
+    "hinge_pendulum": "hinge pendulum",
+    "ladder": "ladder",
+    "wheel": "wheel",
+    "elliptic_pendulum": "elliptic pendulum",
+}
+
 
 def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final", ax=None,
                           size: str | float = "two_column") -> Figure:
-    """A work-precision diagram: error against run time, log-log, as in DiffEqDevTools.
+    r"""A work-precision diagram: error against run time, log-log, as in DiffEqDevTools.
 
     ``table`` is a list of dicts with keys ``method``, ``system``, ``tol``,
     ``error_final``, ``error_l2`` and ``seconds``, one per (method, system,
-    tolerance).  One panel per system (in order of appearance, titled with
-    its name), one line per method (same colour and marker in every panel),
-    points joined in order of tolerance.  ``error`` picks ``error_final`` or
+    tolerance), as :func:`phasemap.workprecision.work_precision` returns them.
+    One panel per system (in order of appearance, lettered and named), one
+    line per method (same colour and marker in every panel, named as in
+    :data:`METHOD_NAMES`), points joined in order of tolerance.  When the rows
+    carry ``seconds_min`` and ``seconds_max`` (the fastest and slowest of the
+    timing rounds), each point sits at the fastest, which timing noise can
+    only delay, and a bar reaches to the slowest.  ``error`` picks
+    ``error_final`` (max norm of the state error at the final time) or
     ``error_l2``.  Points whose error or time is not positive and finite
     cannot be drawn on log axes and are left out.
     """
@@ -1443,53 +1514,72 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
             raise ValueError(f"work_precision_figure: row {i} lacks {', '.join(missing)}")
     systems = list(dict.fromkeys(str(r["system"]) for r in rows))
     methods = list(dict.fromkeys(str(r["method"]) for r in rows))
+    spread = all("seconds_min" in r and "seconds_max" in r for r in rows)
+    rounds = max((int(r.get("n_samples", 0)) for r in rows), default=0)
     width = _width(size)
     ncols = min(len(systems), 4 if width >= 5 else 2)
     nrows = -(-len(systems) // ncols)
     spare = ax is None and nrows * ncols > len(systems)
     panel_h = (width / ncols) * (0.8 if width >= 5 else 0.85)
     top = 0.0 if spare else 0.3
+    ylabel = (r"Final-state error $\|\Delta y\|_\infty$" if error == "error_final"
+              else r"$L_2$ error along the motion")
     with style():
         axes = _axes(ax, nrows * ncols if spare else len(systems),
-                     (width, top + 0.1 + panel_h * nrows), "work_precision_figure",
+                     (width, top + 0.4 + panel_h * nrows), "work_precision_figure",
                      grid=(nrows, ncols))
         if spare:
             axes, spares = axes[:len(systems)], axes[len(systems):]
         handles = {}
         for i, (a, system) in enumerate(zip(axes, systems)):
             for j, method in enumerate(methods):
-                pts = sorted(((float(r["tol"]), float(r["seconds"]), float(r[error]))
+                pts = sorted(((float(r["tol"]),
+                               float(r["seconds_min"] if spread else r["seconds"]),
+                               float(r[error]),
+                               float(r["seconds_max"] if spread else r["seconds"]))
                               for r in rows if str(r["system"]) == system
                               and str(r["method"]) == method), reverse=True)
-                pts = [p for p in pts if all(math.isfinite(v) and v > 0 for v in p[1:])]
+                pts = [p for p in pts if all(math.isfinite(v) and v > 0 for v in p[1:3])]
                 if not pts:
                     continue
-                _, secs, errs = zip(*pts)
-                (line,) = a.plot(secs, errs, color=CYCLE[j % len(CYCLE)],
-                                 marker=MARKERS[j % len(MARKERS)], ms=3.5, lw=1.0,
-                                 label=method)
+                _, secs, errs, slow = (np.array(v) for v in zip(*pts))
+                colour, marker = CYCLE[j % len(CYCLE)], MARKERS[j % len(MARKERS)]
+                (line,) = a.plot(secs, errs, color=colour, marker=marker, ms=3.5, lw=1.0,
+                                 label=METHOD_NAMES.get(method, method), zorder=3)
+                if spread:
+                    extra = np.where(np.isfinite(slow), np.maximum(slow - secs, 0.0), 0.0)
+                    a.errorbar(secs, errs, xerr=[np.zeros_like(secs), extra], fmt="none",
+                               ecolor=colour, elinewidth=0.8, capsize=1.5, capthick=0.6,
+                               zorder=2)
                 handles.setdefault(method, line)
             a.set_xscale("log")
             a.set_yscale("log")
-            a.set_title(system.replace("_", " "))
+            a.set_title(SYSTEM_NAMES.get(system, system.replace("_", " ")), loc="left")
             if ax is not None or i % ncols == 0:
-                a.set_ylabel("Error at the final time" if error == "error_final"
-                             else "$L_2$ error along the motion")
+                a.set_ylabel(ylabel)
             if ax is not None or i + ncols >= len(systems):
-                a.set_xlabel("Run time (s)")
-        fig = axes[0].figure
+                a.set_xlabel("Run time per trajectory (s)")
+        if len(axes) > 1:
+            label_panels(axes)
+        fig = axes[0].get_figure(root=False)
         lines = [handles[m] for m in methods if m in handles]
+        labels = [ln.get_label() for ln in lines]
         if spare:
             for extra in spares[1:]:
                 extra.remove()
             spares[0].set_axis_off()
-            spares[0].legend(lines, [ln.get_label() for ln in lines], loc="center")
+            spares[0].legend(lines, labels, loc="center")
         elif ax is None:
-            labels = [ln.get_label() for ln in lines]
             fig.legend(lines, labels, loc="outside upper center",
                        ncols=_ncols(labels, width * 0.95))
         else:
             _legend_above(axes[0], lines)
+        if ax is None:
+            key = [r"$y$: the state in SI units (rad, rad s$^{-1}$, m, m s$^{-1}$)"]
+            if spread:
+                key.append(f"points: the fastest of {rounds} timing rounds, bars: the slowest"
+                           if rounds > 1 else "one timing round")
+            define_symbols(fig, key)
     return axes[0].figure
 
 

@@ -483,6 +483,7 @@ def test_profile_of_one_float_layer(tmp_path):
     fig = quiet(ds.phasemap.plot, "phi_ddot_slide_pos")
     assert fig.axes[0].get_title(loc="left") == \
         r"$\ddot\varphi\ [\mathrm{slide\ pos}]$ (rad s$^{-2}$)"
+    assert fig._suptitle.get_text().startswith(r"$\varphi$ = 0.7 rad, $\omega$ = 0.5 rad s$^{-1}$")
     assert fig.axes[0].get_xlabel() == "$f$"
     render(fig, tmp_path)
 
@@ -604,20 +605,40 @@ def test_work_precision_one_panel_per_system_one_line_per_method(size, tmp_path)
     fig = quiet(pplot.work_precision_figure, work_precision_table(), size=size)
     axes = [a for a in fig.axes if a.axison]
     assert [a.get_title(loc="left") for a in axes] == \
-        ["ladder", "hinge pendulum", "elliptic pendulum"]
+        ["(a) ladder", "(b) hinge pendulum", "(c) elliptic pendulum"]
+    names = ["phasemap, Dormand–Prince 5(4)", "solve_ivp RK45", "solve_ivp DOP853"]
     for a in axes:
         assert a.get_xscale() == "log" and a.get_yscale() == "log"
-        assert [l.get_label() for l in a.lines] == \
-            ["phasemap", "solve_ivp RK45", "solve_ivp DOP853"]
+        assert [l.get_label() for l in a.lines] == names
         assert len(a.lines[0].get_xdata()) == 4  # the zero-error row is left out
+        assert a.get_xlabel() in ("", "Run time per trajectory (s)")
+        assert a.get_ylabel() in ("", r"Final-state error $\|\Delta y\|_\infty$")
     # two columns: one legend above the panels; one column: in the free fourth slot
     legend = fig.legends[0] if size == "two_column" else fig.axes[-1].get_legend()
     assert not (size == "one_column" and fig.axes[-1].axison)
-    assert [t.get_text() for t in legend.get_texts()] == \
-        ["phasemap", "solve_ivp RK45", "solve_ivp DOP853"]
+    assert [t.get_text() for t in legend.get_texts()] == names
+    assert "$y$: the state in SI units" in fig._supxlabel.get_text()  # y is defined
     render(fig, tmp_path)
     fig = quiet(pplot.work_precision_figure, work_precision_table(), error="error_l2")
     assert fig.axes[0].get_ylabel() == "$L_2$ error along the motion"
+
+
+def test_work_precision_points_at_the_fastest_round_with_a_bar_to_the_slowest(tmp_path):
+    rows = work_precision_table()
+    for r in rows:
+        r.update(seconds_min=r["seconds"] * 0.9, seconds_max=r["seconds"] * 1.5, n_samples=5)
+    fig = quiet(pplot.work_precision_figure, rows)
+    a = fig.axes[0]
+    first = [r for r in rows if r["system"] == "ladder" and r["method"] == "phasemap"
+             and r["error_final"] > 0]
+    first.sort(key=lambda r: -r["tol"])
+    np.testing.assert_allclose(a.lines[0].get_xdata(), [r["seconds_min"] for r in first])
+    bars = [c for c in a.collections if isinstance(c, matplotlib.collections.LineCollection)]
+    assert len(bars) == 3  # one spread per method
+    spans = [seg[:, 0] for seg in bars[0].get_segments()]
+    np.testing.assert_allclose([s.max() for s in spans], [r["seconds_max"] for r in first])
+    assert "fastest of 5 timing rounds" in fig._supxlabel.get_text()
+    render(fig, tmp_path)
 
 
 def test_work_precision_bad_table():
@@ -717,3 +738,100 @@ def test_figures_draw_into_subfigures():
     root.canvas.draw()
     assert root.legends or any(a.get_legend() for sub in (left, right) for a in sub.axes)
     plt.close(root)
+
+
+# --------------------------------------------------------------------------- issue 11: what a referee asks
+
+
+def test_a_map_states_what_was_held_fixed(tmp_path):
+    """The ladder at omega = 0.5 says so, read from the atlas's metadata after a round trip."""
+    ds = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 20), "f": np.linspace(0, 2, 15)},
+                        fixed={"omega": 0.5, "l": 2.0}).compute()
+    ds = _roundtrip(ds, tmp_path / "ladder.nc")
+    for size in ("one_column", "two_column"):
+        fig = quiet(ds.phasemap.plot, size=size)
+        heading = fig.axes[0].get_legend().get_title().get_text()
+        for text in (r"$\omega$ = 0.5 rad s$^{-1}$", "$l$ = 2 m", "$g$ = 9.81 m s$^{-2}$",
+                     "$m$ = 1 kg"):
+            assert text in heading, (text, heading)
+        assert "$f$" not in heading and r"$\varphi$" not in heading  # the axes are not fixed
+        assert_legend_outside(fig, fig.axes[0])
+        render(fig, tmp_path, f"ladder_{size}")
+
+
+def test_motions_state_their_initial_state_and_parameters(tmp_path):
+    phase = pytest.importorskip("phasemap.phase")
+    simulate = pytest.importorskip("phasemap.simulate")
+    curve = phase.phase_curve("hinge_pendulum", phi=2.5, omega=0.0, delta=0.1)
+    heading = quiet(curve.phasemap.plot).axes[0].get_legend().get_title().get_text()
+    assert heading.startswith(r"$\varphi_0$ = 2.5 rad, $\omega_0$ = 0 rad s$^{-1}$;")
+    assert r"$\delta$ = 0.1 m" in heading
+    motion = simulate.simulate("elliptic_pendulum", t_end=1.0, phi=1.0, omega=0.0, xdot=-1.0,
+                               f=0.5)
+    fig = quiet(motion.phasemap.plot)
+    heading = fig._suptitle.get_text().replace("\n", " ")
+    assert r"$\dot x_0$ = −1 m s$^{-1}$;" in heading and "$f$ = 0.5" in heading
+    assert "$x_0$" not in heading  # the slider's position does not enter the equations
+    fig = quiet(motion.phasemap.plot, phase_plane=True)
+    assert "$f$ = 0.5" in fig.axes[0].get_legend().get_title().get_text()
+    render(fig, tmp_path)
+
+
+def test_fate_map_states_its_parameters_and_rings_inverted_rests(tmp_path):
+    ds = fate_dataset()
+    ds["phi_rest"][0, 0] = 3.0  # a rest near the upper position
+    fig = quiet(ds.phasemap.plot, extra="n_reversals", size="two_column")
+    texts = pplot.figure_texts(fig)
+    assert any(r"$\delta$ = 0.1 m" in t for t in texts)
+    assert r"rest inverted ($\cos\varphi_\mathrm{rest} < 0$)" in legend_texts(fig.axes[0])
+    rings = [l for a in fig.axes[:2] for l in a.lines if l.get_marker() == "o"
+             and l.get_markerfacecolor() == "none"]
+    assert len(rings) == 2 and all(len(r.get_xdata()) == 1 for r in rings)
+    render(fig, tmp_path)
+
+
+@pytest.mark.parametrize("kind", ["fate", "trajectory", "profile", "work_precision"])
+def test_multi_panel_figures_letter_their_panels(kind, hinge_profile):
+    fig = {"fate": lambda: fate_dataset().phasemap.plot(extra="phi_rest"),
+           "trajectory": lambda: trajectory_dataset().phasemap.plot(),
+           "profile": lambda: hinge_profile.phasemap.plot(),
+           "work_precision": lambda: pplot.work_precision_figure(work_precision_table()),
+           }[kind]()
+    panels = [a for a in fig.axes if a.axison and a.get_label() != "<colorbar>"]
+    panels = [a for a in panels if a.get_position().height > 0.15]
+    headings = []
+    for a in panels:
+        leg = a.get_legend()
+        title = leg.get_title().get_text() if leg is not None and \
+            leg.get_title().get_text() else a.get_title(loc="left")
+        headings.append(title)
+    assert [h[:3] for h in headings] == [f"({c})" for c in "abcd"[:len(panels)]], headings
+
+
+def _grey(colour) -> float:
+    r, g, b = matplotlib.colors.to_rgb(colour)
+    return 0.299 * r + 0.587 * g + 0.114 * b
+
+
+@pytest.mark.parametrize("meanings", [events.FATE_MEANINGS.split(),
+                                      ["none", "unique", "two", "continuum", "three_or_more",
+                                       "contact_lost"]])
+def test_classes_stay_apart_in_greyscale(meanings):
+    """Two classes of one layer differ in grey level by 0.1 or more, or in hatch."""
+    for i, a in enumerate(meanings):
+        for b in meanings[i + 1:]:
+            ca, cb = pplot.category_colour(a), pplot.category_colour(b)
+            ha, hb = pplot.category_hatch(a)[0], pplot.category_hatch(b)[0]
+            assert abs(_grey(ca) - _grey(cb)) >= 0.1 or ha != hb, (a, b)
+
+
+def test_hatched_classes_are_hatched_on_the_map(elliptic_map):
+    fig = quiet(elliptic_map.phasemap.plot, overlays=False)
+    ax = fig.axes[0]
+    hatches = [c.hatches for c in ax.collections if isinstance(c, ContourSet) and c.filled]
+    assert sorted(h[0] for h in hatches) == sorted(pplot.CATEGORY_HATCHES[m]
+                                                   for m in ("none", "two"))
+    patches = dict(zip(legend_texts(ax), ax.get_legend().get_patches()))
+    assert patches["two"].get_hatch() == pplot.CATEGORY_HATCHES["two"]
+    assert patches["none"].get_hatch() == pplot.CATEGORY_HATCHES["none"]
+    assert patches["unique"].get_hatch() is None
