@@ -110,6 +110,7 @@ __all__ = [
     "category_hatch",
     "fate_figure",
     "define_symbols",
+    "figure_legend",
     "figure_texts",
     "fixed_values",
     "fixed_values_text",
@@ -556,6 +557,24 @@ def label_panels(axes: Sequence[Axes], start: int = 0) -> None:
         _title(ax, f"({chr(ord('a') + start + i)})", prepend=True)
 
 
+def figure_legend(fig: Figure, handles: Sequence, labels: Sequence[str] | None = None, *,
+                  title: str | None = None, ncols: int | None = None):
+    """One legend above all panels of ``fig``, headed by ``title`` (what was held fixed).
+
+    The heading is the legend's own title, left-aligned, so that it never
+    overlaps the entries (a figure title and an ``outside`` legend would).
+    ``ncols`` defaults to as many columns as fit the figure's width.
+    """
+    handles = list(handles)
+    labels = [h.get_label() for h in handles] if labels is None else list(labels)
+    if ncols is None:
+        ncols = _ncols(labels, fig.get_figwidth() * 0.95)
+    legend = fig.legend(handles, labels, loc="outside upper center", ncols=ncols,
+                        title=title or None, alignment="left")
+    legend.get_title().set_fontsize(_FONT)
+    return legend
+
+
 def figure_texts(fig: Figure) -> list[str]:
     """Every heading of ``fig``: figure titles, axes titles, legend titles and labels.
 
@@ -980,7 +999,9 @@ def _overlays(ax: Axes, ds: xr.Dataset, main: str, x: str, y: str, xc, yc,
     """Hatch ``stagnation`` and ``contact_lost`` and draw the ``singular`` set over a map.
 
     ``shown`` marks cells the map itself already draws as ``contact lost``
-    (see :func:`_draw_categorical`); they are not hatched twice.
+    (see :func:`_draw_categorical`); they are not hatched twice, and the
+    hatch over any other class is listed as "a branch loses contact" (a
+    slip branch would need a contact to pull while another branch holds).
     """
     handles = []
     styles = {"stagnation": ("////", _OI["black"], "solid"),
@@ -991,8 +1012,12 @@ def _overlays(ax: Axes, ds: xr.Dataset, main: str, x: str, y: str, xc, yc,
         mask = np.asarray(ds[name].transpose(y, x).values) == 1
         if name == "contact_lost" and shown is not None:
             mask = mask & ~shown
+        label = _meaning_text(name)
+        if name == "contact_lost" and shown is not None:
+            # over another class: some branch would need a contact to pull, another holds
+            label = "a branch loses contact"
         h = _mask_overlay(ax, xc, yc, mask, hatch=hatch, colour=colour, linestyle=ls,
-                          label=_meaning_text(name))
+                          label=label)
         if h is not None:
             handles.append(h)
     if main != "singular" and "singular" in ds.data_vars and set(ds.singular.dims) == {x, y}:
