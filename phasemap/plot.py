@@ -117,6 +117,7 @@ __all__ = [
     "format_units",
     "label_panels",
     "map_figure",
+    "mark_inverted_rests",
     "phase_curve_figure",
     "plot",
     "profile_figure",
@@ -1257,7 +1258,7 @@ def fate_figure(ds: xr.Dataset, *, extra: str | None = None, x: str | None = Non
                 a.tick_params(axis="y", labelleft=False)
             a.set_xlim(xe[0], xe[-1])
             a.set_ylim(ye[0], ye[-1])
-        handles += _mark_inverted_rests(axes, ds, xdim, ydim, xc, yc)
+        handles += mark_inverted_rests(axes, ds, xdim, ydim, xc, yc)
         _legend_above(axes[0], handles)
         if len(axes) > 1:
             label_panels(axes)
@@ -1266,7 +1267,7 @@ def fate_figure(ds: xr.Dataset, *, extra: str | None = None, x: str | None = Non
     return axes[0].figure
 
 
-def _mark_inverted_rests(axes: Sequence[Axes], ds: xr.Dataset, x: str, y: str, xc, yc
+def mark_inverted_rests(axes: Sequence[Axes], ds: xr.Dataset, x: str, y: str, xc, yc
                         ) -> list:
     """Ring the cells whose motion came to rest in an inverted zone (cos phi_rest < 0).
 
