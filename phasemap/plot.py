@@ -96,8 +96,10 @@ from .models import get_model
 
 __all__ = [
     "CATEGORY_COLOURS",
+    "CATEGORY_HATCHES",
     "EVENT_MARKERS",
     "KINDS",
+    "METHOD_NAMES",
     "OKABE_ITO",
     "SIZES",
     "STYLE",
@@ -105,9 +107,17 @@ __all__ = [
     "atlas_kind",
     "axis_label",
     "category_colour",
+    "category_hatch",
     "fate_figure",
+    "define_symbols",
+    "figure_legend",
+    "figure_texts",
+    "fixed_values",
+    "fixed_values_text",
     "format_units",
+    "label_panels",
     "map_figure",
+    "mark_inverted_rests",
     "phase_curve_figure",
     "plot",
     "profile_figure",
@@ -158,6 +168,7 @@ CATEGORY_COLOURS = {
     "horizon": _OI["yellow"],
     "max_events": GREY,
     "step_failure": _OI["orange"],
+    "stiff": GREY,
 }
 
 #: The colour of ``yes`` in a yes/no layer, by layer.
@@ -166,6 +177,25 @@ FLAG_COLOURS = {
     "contact_lost": _OI["sky_blue"],
     "singular": _OI["black"],
 }
+
+#: A hatch per category meaning, so that classes whose colours are close in
+#: greyscale print (vermillion and bluish green, sky blue and orange) stay
+#: apart: the ordinary classes and rest are solid, the paradoxes hatched.  The
+#: hatch is drawn in :data:`HATCH_COLOURS` (white on dark fills).
+CATEGORY_HATCHES = {
+    "none": "xx",
+    "no_solution": "xx",
+    "two": "....",
+    "indeterminate": "....",
+    "continuum": "||||",
+    "three_or_more": "++++",
+    "contact_lost": "\\\\\\\\",
+    "max_events": "----",
+    "step_failure": "OO",
+    "stiff": "++++",
+}
+#: The colour of a category's hatch lines, by meaning (default white).
+HATCH_COLOURS = {"contact_lost": _OI["blue"], "three_or_more": _OI["black"]}
 
 #: Colours for anything else, in order (methods of a benchmark, unknown categories).
 CYCLE = [_OI[k] for k in ("blue", "orange", "bluish_green", "vermillion", "reddish_purple",
@@ -387,6 +417,203 @@ def _meaning_text(meaning: str) -> str:
     return meaning.replace("_", " ")
 
 
+# --------------------------------------------------------------------------- what was held fixed
+
+
+def _number(value: float) -> str:
+    """A value for a label: 4 significant digits, a typographic minus."""
+    text = f"{float(value):.4g}"
+    if "e" in text:
+        mant, exp = text.split("e")
+        text = rf"{mant}\times10^{{{int(exp)}}}"
+        text = f"${text}$"
+    return text.replace("-", "\u2212")
+
+
+def _value_text(ds: xr.Dataset, name: str, value: float, initial: bool = False) -> str:
+    known = _symbol_and_units(ds, name)
+    symbol, units = known if known is not None else (name, None)
+    if initial:
+        symbol = rf"{symbol}_0" if "_" not in symbol and "^" not in symbol else \
+            rf"{{{symbol}}}_0"
+    u = format_units(units)
+    return f"${symbol}$ = {_number(value)}" + (f" {u}" if u else "")
+
+
+def _fixed_items(ds: xr.Dataset) -> tuple[list[str], list[str]]:
+    model = _model_or_none(ds)
+    order = list(model.variables) if model is not None else []
+    out: tuple[list[str], list[str]] = ([], [])
+    for items, prefix, initial in ((out[0], "phasemap_initial_", True),
+                                   (out[1], "phasemap_fixed_", False)):
+        names = [k[len(prefix):] for k in ds.attrs if k.startswith(prefix)]
+        names.sort(key=lambda n: order.index(n) if n in order else len(order))
+        for name in names:
+            if name in ds.coords or name in ds.dims:
+                continue
+            try:
+                value = float(np.asarray(ds.attrs[prefix + name]).ravel()[0])
+            except (TypeError, ValueError, IndexError):
+                continue
+            if initial and name == "x" and "xdot" in names:
+                continue  # the slider's position does not enter the equations
+            items.append(_value_text(ds, name, value, initial))
+    return out
+
+
+def fixed_values(ds: xr.Dataset) -> list[str]:
+    r"""The initial state and the fixed values of ``ds``, one label each, as mathtext.
+
+    Read from the global attributes ``phasemap_initial_<name>`` (a trajectory
+    or a phase curve: ``$\varphi_0$ = 1 rad``) and ``phasemap_fixed_<name>``
+    (``$\omega$ = 0.5 rad s$^{-1}$``), in the order of the model's variables;
+    a name that is a coordinate of ``ds`` is not fixed and is left out.
+    """
+    initial, fixed = _fixed_items(ds)
+    return initial + fixed
+
+
+def _visible_length(text: str) -> float:
+    """Roughly how many characters wide ``text`` renders (mathtext markup dropped)."""
+    plain = re.sub(r"\\[A-Za-z]+", "x", text)
+    plain = re.sub(r"[${}^_]", "", plain)
+    return len(plain)
+
+
+def _wrap(items: Sequence[str], width: float, sep: str = ", ") -> str:
+    """Join ``items`` with ``sep`` in lines no wider than ``width`` inches at the house font."""
+    per_line = max(10, int(width / (0.5 * _FONT / 72.0)))
+    lines, line = [], ""
+    for item in items:
+        candidate = f"{line}{sep}{item}" if line else item
+        if line and _visible_length(candidate) > per_line:
+            lines.append(line + sep.rstrip())
+            line = item
+        else:
+            line = candidate
+    if line:
+        lines.append(line)
+    return "\n".join(lines)
+
+
+def fixed_values_text(ds: xr.Dataset, width: float | None = None) -> str:
+    r"""What was held fixed, as one annotation: ``"$\omega$ = 0.5 rad s$^{-1}$, $f$ = 0.3, ..."``.
+
+    :func:`fixed_values`, joined and wrapped to ``width`` inches (no wrapping
+    when None); the initial state of a motion comes first, separated from
+    the parameters by a semicolon.  Empty when nothing was fixed.
+    """
+    initial, fixed = _fixed_items(ds)
+    if initial and fixed:
+        initial[-1] += ";"
+    items = initial + fixed
+    if not items:
+        return ""
+    text = ", ".join(items) if width is None else _wrap(items, width)
+    return text.replace(";,", ";")
+
+
+def _annotate(axes: Sequence[Axes], text: str, own_figure: bool) -> None:
+    """Put ``text`` (what was held fixed) above the figure.
+
+    On a figure of one panel, and wherever the caller gave the axes, it is
+    the title of the legend above the first panel (or that panel's title
+    when it has no legend), left-aligned; on a figure of several panels that
+    this module made (or one whose panel has a title already), a left-aligned
+    figure title.
+    """
+    if not text:
+        return
+    if own_figure and (len(axes) > 1 or axes[0].get_title(loc="left")):
+        axes[0].get_figure(root=False).suptitle(text, x=0.01, ha="left",
+                                                fontsize=_FONT, linespacing=1.3)
+        return
+    _title(axes[0], text)
+
+
+def _title(ax: Axes, text: str, prepend: bool = False) -> None:
+    """Set (or with ``prepend``, prefix) the left-aligned heading of ``ax``.
+
+    The heading is the title of the legend above ``ax`` when there is one,
+    so that legend and heading never overlap; otherwise the axes' title.
+    """
+    legend = ax.get_legend()
+    if legend is not None and getattr(legend, "_phasemap_above", False):
+        old = legend.get_title().get_text()
+        legend.set_title(f"{text} {old}".rstrip() if prepend else text)
+        legend.get_title().set_fontsize(_FONT)
+        return
+    old = ax.get_title(loc="left")
+    ax.set_title(f"{text} {old}".rstrip() if prepend else text, loc="left")
+
+
+def label_panels(axes: Sequence[Axes], start: int = 0) -> None:
+    """Letter the panels (a), (b), ... at the start of each one's left-aligned heading.
+
+    The letter goes where :func:`_title` puts a heading: into the title of a
+    legend above the panel, else into the panel's title, so that letters sit
+    at the top left of every panel in every figure.
+    """
+    for i, ax in enumerate(axes):
+        _title(ax, f"({chr(ord('a') + start + i)})", prepend=True)
+
+
+def figure_legend(fig: Figure, handles: Sequence, labels: Sequence[str] | None = None, *,
+                  title: str | None = None, ncols: int | None = None):
+    """One legend above all panels of ``fig``, headed by ``title`` (what was held fixed).
+
+    The heading is the legend's own title, left-aligned, so that it never
+    overlaps the entries (a figure title and an ``outside`` legend would).
+    ``ncols`` defaults to as many columns as fit the figure's width.
+    """
+    handles = list(handles)
+    labels = [h.get_label() for h in handles] if labels is None else list(labels)
+    if ncols is None:
+        ncols = _ncols(labels, fig.get_figwidth() * 0.95)
+    legend = fig.legend(handles, labels, loc="outside upper center", ncols=ncols,
+                        title=title or None, alignment="left")
+    legend.get_title().set_fontsize(_FONT)
+    return legend
+
+
+def figure_texts(fig: Figure) -> list[str]:
+    """Every heading of ``fig``: figure titles, axes titles, legend titles and labels.
+
+    For tests and reviews: what a reader sees written on the figure apart
+    from tick labels.
+    """
+    out = []
+    for f in [fig, *fig.subfigs]:
+        if getattr(f, "_suptitle", None) is not None:
+            out.append(f._suptitle.get_text())
+        if getattr(f, "_supxlabel", None) is not None:
+            out.append(f._supxlabel.get_text())
+        for leg in f.legends:
+            out.append(leg.get_title().get_text())
+            out += [t.get_text() for t in leg.get_texts()]
+    for ax in fig.get_axes():
+        out += [ax.get_title(loc=loc) for loc in ("left", "center", "right")]
+        out += [ax.get_xlabel(), ax.get_ylabel()]
+        out += [t.get_text() for t in ax.texts]
+        leg = ax.get_legend()
+        if leg is not None:
+            out.append(leg.get_title().get_text())
+            out += [t.get_text() for t in leg.get_texts()]
+    return [t for t in out if t]
+
+
+def define_symbols(fig: Figure, definitions: Sequence[str], width: float | None = None) -> None:
+    r"""A key below the panels that defines the symbols a legend or title uses.
+
+    ``definitions`` such as ``r"$\lambda_k = 1 + \sin^2\varphi - kf\sin\varphi\cos\varphi$"``
+    are joined with semicolons, wrapped to the figure width, and set
+    left-aligned as the figure's bottom label (constrained layout makes room).
+    """
+    width = width or fig.get_figwidth() * 0.97
+    fig.supxlabel(_wrap(list(definitions), width, sep="; "), x=0.01, ha="left",
+                  fontsize=_FONT, linespacing=1.3)
+
+
 # --------------------------------------------------------------------------- kinds
 
 
@@ -543,15 +770,27 @@ def _ncols(labels: Sequence[str], width: float) -> int:
     return -(-len(labels) // rows)
 
 
-def _legend_above(ax: Axes, handles: list, labels: list[str] | None = None):
-    """A frameless legend centred above ``ax``, in as many columns as fit its width."""
+def _legend_above(ax: Axes, handles: list, labels: list[str] | None = None,
+                  title: str | None = None):
+    """A frameless legend above ``ax``, left-aligned with it, in as many columns as fit.
+
+    ``title`` (what was held fixed, a panel letter) heads the legend, so that
+    heading and entries never overlap.  With no handles the title becomes the
+    axes' left title.
+    """
     if labels is None:
         labels = [h.get_label() for h in handles]
     if not handles:
+        if title:
+            ax.set_title(title, loc="left")
         return None
     width = ax.get_figure(root=True).get_figwidth() * ax.get_position().width * 0.95
-    return ax.legend(handles, labels, loc="lower center", bbox_to_anchor=(0.5, 1.02),
-                     ncols=_ncols(labels, width), borderaxespad=0.0)
+    legend = ax.legend(handles, labels, loc="lower left", bbox_to_anchor=(0.0, 1.02),
+                       ncols=_ncols(labels, width), borderaxespad=0.0, title=title,
+                       alignment="left")
+    legend.get_title().set_fontsize(_FONT)
+    legend._phasemap_above = True
+    return legend
 
 
 def _coord(ds: xr.Dataset, dim: str) -> np.ndarray:
@@ -609,10 +848,16 @@ def category_colour(meaning: str, layer: str | None = None, used: Sequence[str] 
     return CYCLE[len(used) % len(CYCLE)]
 
 
-def _patch(colour: str, label: str) -> Patch:
+def category_hatch(meaning: str) -> tuple[str | None, str]:
+    """The hatch of category ``meaning`` and its colour (None: solid); see :data:`CATEGORY_HATCHES`."""
+    return CATEGORY_HATCHES.get(meaning), HATCH_COLOURS.get(meaning, "white")
+
+
+def _patch(colour: str, label: str, meaning: str | None = None) -> Patch:
     light = colour.upper() in (PALE_GREY, _OI["yellow"].upper(), "WHITE", "#FFFFFF")
+    hatch, hatch_colour = category_hatch(meaning) if meaning else (None, "white")
     return Patch(facecolor=colour, edgecolor=GREY if light else colour, linewidth=0.4,
-                 label=label)
+                 hatch=hatch, hatchcolor=hatch_colour, label=label)
 
 
 # --------------------------------------------------------------------------- maps
@@ -639,24 +884,61 @@ def _edges(c: np.ndarray) -> np.ndarray:
     return np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
 
 
+def _padded(xc, yc, mask: np.ndarray):
+    """Centres padded to the cell edges, and ``mask`` padded to match: a contour at 0.5
+    of it ends where the cells do."""
+    xe, ye = _edges(xc), _edges(yc)
+    xp = np.concatenate([[xe[0]], xc, [xe[-1]]])
+    yp = np.concatenate([[ye[0]], yc, [ye[-1]]])
+    return xp, yp, np.pad(mask.astype(float), 1, mode="edge")
+
+
+def _hatch_cells(ax: Axes, xc, yc, mask: np.ndarray, hatch: str, colour: str):
+    """Hatch the cells where ``mask`` (rows y, columns x) holds, with no outline."""
+    xp, yp, z = _padded(xc, yc, mask)
+    filled = ax.contourf(xp, yp, z, levels=[0.5, 1.5], colors="none", hatches=[hatch])
+    filled.set_hatchcolor(colour)
+    filled.set_edgecolor("none")
+    return filled
+
+
 def _draw_categorical(ax: Axes, xc, yc, codes: np.ndarray, var: xr.DataArray,
-                      all_categories: bool = False) -> list[Patch]:
-    """A categorical layer (rows y, columns x) in its category colours; the legend handles."""
+                      all_categories: bool = False, lost: np.ndarray | None = None
+                      ) -> list[Patch]:
+    """A categorical layer (rows y, columns x) in its category colours; the legend handles.
+
+    Categories with a hatch (:data:`CATEGORY_HATCHES`) are hatched over their
+    colour.  ``lost`` (rows y, columns x) marks where a one-sided contact
+    would have to pull: in an ``n_solutions`` layer those cells are drawn as
+    their own class, ``contact lost``, so that ``none`` means a Painleve
+    inconsistency only.
+    """
     values, meanings = _flags(var)
-    present = [(v, m) for v, m in zip(values, meanings) if all_categories or np.any(codes == v)]
+    masks = [(m, codes == v) for v, m in zip(values, meanings)]
+    if lost is not None and str(var.name) == "n_solutions" and lost.any():
+        none = dict(zip(meanings, values)).get("none")
+        moved = lost & (codes == none)
+        if moved.any():
+            masks = [(m, mask & ~moved) for m, mask in masks]
+            masks.insert(1, ("contact_lost", moved))
+    present = [(m, mask) for m, mask in masks if all_categories or mask.any()]
     if not present:
-        present = list(zip(values, meanings))
+        present = masks
     colours: list[str] = []
-    for _, m in present:
+    for m, _ in present:
         colours.append(category_colour(m, str(var.name), used=colours))
     index = np.full(codes.shape, -1, dtype=np.int16)
-    for i, (v, _) in enumerate(present):
-        index[codes == v] = i
+    for i, (_, mask) in enumerate(present):
+        index[mask] = i
     cmap = mcolors.ListedColormap(colours)
     norm = mcolors.BoundaryNorm(np.arange(len(present) + 1) - 0.5, len(present))
     ax.pcolormesh(_edges(xc), _edges(yc), np.ma.masked_less(index, 0), cmap=cmap, norm=norm,
                   shading="flat", rasterized=True, linewidth=0)
-    return [_patch(c, _meaning_text(m)) for c, (_, m) in zip(colours, present)]
+    for m, mask in present:
+        hatch, hatch_colour = category_hatch(m)
+        if hatch and mask.any():
+            _hatch_cells(ax, xc, yc, mask, hatch, hatch_colour)
+    return [_patch(c, _meaning_text(m), m) for c, (m, _) in zip(colours, present)]
 
 
 def _draw_continuous(ax: Axes, xc, yc, data: np.ndarray, label: str, *, robust: bool = True,
@@ -704,14 +986,8 @@ def _mask_overlay(ax: Axes, xc, yc, mask: np.ndarray, *, hatch: str, colour: str
     """Hatch the cells where ``mask`` (rows y, columns x) holds, and outline them."""
     if not mask.any():
         return None
-    xe, ye = _edges(xc), _edges(yc)
-    # contour on a grid padded to the cell edges, so the hatched region ends where the cells do
-    xp = np.concatenate([[xe[0]], xc, [xe[-1]]])
-    yp = np.concatenate([[ye[0]], yc, [ye[-1]]])
-    z = np.pad(mask.astype(float), 1, mode="edge")
-    filled = ax.contourf(xp, yp, z, levels=[0.5, 1.5], colors="none", hatches=[hatch])
-    filled.set_hatchcolor(colour)
-    filled.set_edgecolor("none")
+    xp, yp, z = _padded(xc, yc, mask)
+    _hatch_cells(ax, xc, yc, mask, hatch, colour)
     if not mask.all():
         ax.contour(xp, yp, z, levels=[0.5], colors=[colour], linewidths=0.6,
                    linestyles=linestyle)
@@ -719,7 +995,15 @@ def _mask_overlay(ax: Axes, xc, yc, mask: np.ndarray, *, hatch: str, colour: str
                  linestyle=linestyle, label=label)
 
 
-def _overlays(ax: Axes, ds: xr.Dataset, main: str, x: str, y: str, xc, yc) -> list:
+def _overlays(ax: Axes, ds: xr.Dataset, main: str, x: str, y: str, xc, yc,
+              shown: np.ndarray | None = None) -> list:
+    """Hatch ``stagnation`` and ``contact_lost`` and draw the ``singular`` set over a map.
+
+    ``shown`` marks cells the map itself already draws as ``contact lost``
+    (see :func:`_draw_categorical`); they are not hatched twice, and the
+    hatch over any other class is listed as "a branch loses contact" (a
+    slip branch would need a contact to pull while another branch holds).
+    """
     handles = []
     styles = {"stagnation": ("////", _OI["black"], "solid"),
               "contact_lost": ("\\\\\\\\", _OI["blue"], "dashed")}
@@ -727,18 +1011,70 @@ def _overlays(ax: Axes, ds: xr.Dataset, main: str, x: str, y: str, xc, yc) -> li
         if name == main or name not in ds.data_vars or set(ds[name].dims) != {x, y}:
             continue
         mask = np.asarray(ds[name].transpose(y, x).values) == 1
+        if name == "contact_lost" and shown is not None:
+            mask = mask & ~shown
+        label = _meaning_text(name)
+        if name == "contact_lost" and shown is not None:
+            # over another class: some branch would need a contact to pull, another holds
+            label = "a branch loses contact"
         h = _mask_overlay(ax, xc, yc, mask, hatch=hatch, colour=colour, linestyle=ls,
-                          label=_meaning_text(name))
+                          label=label)
         if h is not None:
             handles.append(h)
     if main != "singular" and "singular" in ds.data_vars and set(ds.singular.dims) == {x, y}:
         mask = np.asarray(ds.singular.transpose(y, x).values) == 1
-        if mask.any():
-            jj, ii = np.nonzero(mask)
-            ax.plot(xc[ii], yc[jj], ls="none", marker="o", ms=1.5, mew=0, color=_OI["black"],
-                    rasterized=True)
-            handles.append(Line2D([], [], ls="none", marker="o", ms=2.5, mew=0,
-                                  color=_OI["black"], label="singular"))
+        handles += _singular_set(ax, ds, mask, x, y, xc, yc)
+    return handles
+
+
+def _singular_set(ax: Axes, ds: xr.Dataset, mask: np.ndarray, x: str, y: str, xc, yc) -> list:
+    """Draw the singular set as the curve it is, where the data allows, else as dots.
+
+    A coefficient layer (``coef_<branch>``) on the same axes is contoured at
+    zero (one line style per branch); a row or column of singular cells (the
+    coefficient does not depend on the other axis, as 2 - f^2 or delta - l)
+    is a straight line; singular cells off those are dots.  The legend shows
+    a line for a line, a dot for dots.
+    """
+    handles = []
+    model = _model_or_none(ds)
+    symbol = model.coefficient.symbol if model is not None and model.coefficient else None
+    label = f"singular (${symbol} = 0$)" if symbol else "singular"
+    coefs = [n for n in ds.data_vars if str(n).startswith("coef_")
+             and set(ds[n].dims) == {x, y}]
+    if not mask.any() and not coefs:
+        return handles
+    drawn = np.zeros_like(mask)
+    line = {"color": _OI["black"], "lw": 1.2, "zorder": 4}
+    styles = ["solid", "dashed", "dashdot", "dotted"]
+    for i, name in enumerate(coefs):
+        z = np.asarray(ds[name].transpose(y, x).values, float)
+        if np.nanmin(z) < 0 < np.nanmax(z):
+            ax.contour(xc, yc, z, levels=[0.0], colors=[_OI["black"]], linewidths=1.2,
+                       linestyles=styles[i % len(styles)], zorder=4)
+            branch = str(name)[len("coef_"):]
+            handles.append(Line2D([], [], ls=styles[i % len(styles)], label=(
+                f"{label}, {_meaning_text(branch)}" if len(coefs) > 1 else label), **line))
+            drawn[:] = True
+    if not drawn.all():
+        rows = np.flatnonzero(mask.all(axis=1))
+        cols = np.flatnonzero(mask.all(axis=0))
+        for j in rows:
+            ax.axhline(yc[j], **line)
+            drawn[j, :] = True
+        for i in cols:
+            ax.axvline(xc[i], **line)
+            drawn[:, i] = True
+        if rows.size or cols.size:
+            handles.append(Line2D([], [], label=label, **line))
+    rest = mask & ~drawn
+    if rest.any():
+        jj, ii = np.nonzero(rest)
+        ax.plot(xc[ii], yc[jj], ls="none", marker="o", ms=1.5, mew=0, color=_OI["black"],
+                rasterized=True, zorder=4)
+        handles.append(Line2D([], [], ls="none", marker="o", ms=2.5, mew=0,
+                              color=_OI["black"], label=label if not handles else
+                              "singular (isolated cells)"))
     return handles
 
 
@@ -780,19 +1116,32 @@ def map_figure(ds: xr.Dataset, layer: str | None = None, *, x: str | None = None
         xc, yc = _coord(ds, xdim), _coord(ds, ydim)
         data = np.asarray(var.transpose(ydim, xdim).values)
         handles = []
+        lost = None
+        if overlays and "contact_lost" in ds.data_vars and layer != "contact_lost" \
+                and set(ds.contact_lost.dims) == {xdim, ydim}:
+            lost = np.asarray(ds.contact_lost.transpose(ydim, xdim).values) == 1
+        shown = None
         if _is_categorical(var):
-            handles = _draw_categorical(a, xc, yc, data, var, all_categories)
+            handles = _draw_categorical(a, xc, yc, data, var, all_categories, lost=lost)
+            if lost is not None and str(var.name) == "n_solutions":
+                none = dict(zip(_flags(var)[1], _flags(var)[0])).get("none")
+                shown = lost & (data == none)
         else:
             _draw_continuous(a, xc, yc, data, axis_label(ds, layer), robust=robust)
         if overlays:
-            handles += _overlays(a, ds, layer, xdim, ydim, xc, yc)
+            handles += _overlays(a, ds, layer, xdim, ydim, xc, yc, shown=shown)
         _label_axis(a, ds, "x", xdim, _edges(xc))
         _label_axis(a, ds, "y", ydim, _edges(yc))
         xe, ye = _edges(xc), _edges(yc)
         a.set_xlim(xe[0], xe[-1])
         a.set_ylim(ye[0], ye[-1])
-        _legend_above(a, handles)
+        _legend_above(a, handles, title=fixed_values_text(ds, _panel_width(a)) or None)
     return a.figure
+
+
+def _panel_width(ax: Axes) -> float:
+    """The width of ``ax`` in inches (before layout: its share of the figure)."""
+    return ax.get_figure(root=True).get_figwidth() * ax.get_position().width
 
 
 # --------------------------------------------------------------------------- profiles
@@ -844,6 +1193,9 @@ def profile_figure(ds: xr.Dataset, layers: str | Sequence[str] | None = None, *,
         _label_axis(axes[-1], ds, "x", dim, xc)
         if xc.size > 1:
             axes[-1].set_xlim(xc.min(), xc.max())
+        if len(axes) > 1:
+            label_panels(axes)
+        _annotate(axes, fixed_values_text(ds, width * 0.97), ax is None)
     return axes[0].figure
 
 
@@ -906,8 +1258,37 @@ def fate_figure(ds: xr.Dataset, *, extra: str | None = None, x: str | None = Non
                 a.tick_params(axis="y", labelleft=False)
             a.set_xlim(xe[0], xe[-1])
             a.set_ylim(ye[0], ye[-1])
+        handles += mark_inverted_rests(axes, ds, xdim, ydim, xc, yc)
         _legend_above(axes[0], handles)
+        if len(axes) > 1:
+            label_panels(axes)
+        _annotate(axes, fixed_values_text(ds, width * 0.97 if ax is None and len(axes) > 1
+                                          else _panel_width(axes[0])), ax is None)
     return axes[0].figure
+
+
+def mark_inverted_rests(axes: Sequence[Axes], ds: xr.Dataset, x: str, y: str, xc, yc
+                        ) -> list:
+    """Ring the cells whose motion came to rest in an inverted zone (cos phi_rest < 0).
+
+    Such rests are rare and isolated (the motion has just the energy to creep
+    into the zone about the upper position, often with no reversal), and a
+    reader would take them for noise; the ring and its legend entry say what
+    they are.  Needs ``phi_rest`` on the map's axes.
+    """
+    if "phi_rest" not in ds.data_vars or set(ds.phi_rest.dims) != {x, y}:
+        return []
+    phi_rest = np.asarray(ds.phi_rest.transpose(y, x).values, float)
+    with np.errstate(invalid="ignore"):
+        inverted = np.cos(phi_rest) < 0
+    if not inverted.any():
+        return []
+    jj, ii = np.nonzero(inverted)
+    ring = {"ls": "none", "marker": "o", "mfc": "none", "mec": _OI["black"], "mew": 0.7}
+    for a in axes:
+        a.plot(xc[ii], yc[jj], ms=4.0, zorder=6, **ring)
+    return [Line2D([], [], ms=4.0, label=r"rest inverted ($\cos\varphi_\mathrm{rest} < 0$)",
+                   **ring)]
 
 
 # --------------------------------------------------------------------------- motions
@@ -924,12 +1305,16 @@ def _event_flags(var: xr.DataArray) -> dict[int, str]:
 def _event_style(name: str) -> dict:
     marker, colour = EVENT_MARKERS.get(name, ("o", GREY))
     if name in _TERMINAL:
-        return {"marker": marker, "ms": 6.5 if marker != "*" else 8.5, "mfc": colour,
-                "mec": _OI["black"], "mew": 0.6, "ls": "none", "zorder": 5, "clip_on": False}
+        # a translucent face: ends that coincide show as stacked edges, and the events
+        # drawn above (reversals, the start) stay visible through it
+        return {"marker": marker, "ms": 6.0 if marker != "*" else 8.0,
+                "mfc": mcolors.to_rgba(colour, 0.75), "mec": _OI["black"], "mew": 0.6,
+                "ls": "none", "zorder": 5, "clip_on": False}
     hollow = name in ("start", "stick", "slip", "switch")
-    return {"marker": marker, "ms": 3.5, "mfc": "white" if hollow else colour,
+    return {"marker": marker, "ms": 3.5 if name != "reversal" else 3.0,
+            "mfc": "white" if hollow else colour,
             "mec": _OI["black"] if name == "start" else colour, "mew": 0.8, "ls": "none",
-            "zorder": 4, "clip_on": False}
+            "zorder": 6, "clip_on": False}
 
 
 def _event_handles(names: Sequence[str]) -> list[Line2D]:
@@ -997,7 +1382,8 @@ def phase_curve_figure(ds: xr.Dataset, *, squared: bool = False, ax=None,
             _zero_line(a, y)
         _label_axis(a, ds, "x", "phi", phi)
         a.set_ylabel(_squared_label(ds, "omega") if squared else axis_label(ds, "omega"))
-        _legend_above(a, _event_handles(names))
+        _legend_above(a, _event_handles(names),
+                      title=fixed_values_text(ds, _panel_width(a)) or None)
     return a.figure
 
 
@@ -1077,6 +1463,10 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
                 axes[0].figure.align_ylabels(axes)
         shown = [k for k in kinds if phase_plane or k != "start"]
         _legend_above(axes[0], _event_handles(shown))
+        if len(axes) > 1:
+            label_panels(axes)
+        _annotate(axes, fixed_values_text(ds, width * 0.97 if ax is None and len(axes) > 1
+                                          else _panel_width(axes[0])), ax is None)
     return axes[0].figure
 
 
@@ -1102,16 +1492,40 @@ def _mark_events(ax: Axes, ds: xr.Dataset, kinds: list[str], xname: str, yname: 
 
 _WP_KEYS = ("method", "system", "tol", "error_final", "error_l2", "seconds")
 
+#: The methods of a work-precision table as a reader knows them.
+METHOD_NAMES = {
+    "phasemap": "phasemap, Dormand–Prince 5(4)",
+    "simulate": "phasemap.simulate, Dormand–Prince 5(4)",
+    "phase_curve": "phasemap first integrals",
+    "RK45": "SciPy RK45, Dormand–Prince 5(4)",
+    "DOP853": "SciPy DOP853, Dormand–Prince 8(5,3)",
+    "Radau": "SciPy Radau IIA, order 5",
+    "LSODA": "SciPy LSODA",
+}
+#: The built-in work-precision problems as panel headings.
+SYSTEM_NAMES = {
+    "hinge_weightless": r"hinge pendulum, $g$ = 0",
+    "hinge_pendulum": "hinge pendulum",
+    "ladder": "ladder",
+    "wheel": "wheel",
+    "elliptic_pendulum": "elliptic pendulum",
+}
+
 
 def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final", ax=None,
                           size: str | float = "two_column") -> Figure:
-    """A work-precision diagram: error against run time, log-log, as in DiffEqDevTools.
+    r"""A work-precision diagram: error against run time, log-log, as in DiffEqDevTools.
 
     ``table`` is a list of dicts with keys ``method``, ``system``, ``tol``,
     ``error_final``, ``error_l2`` and ``seconds``, one per (method, system,
-    tolerance).  One panel per system (in order of appearance, titled with
-    its name), one line per method (same colour and marker in every panel),
-    points joined in order of tolerance.  ``error`` picks ``error_final`` or
+    tolerance), as :func:`phasemap.workprecision.work_precision` returns them.
+    One panel per system (in order of appearance, lettered and named), one
+    line per method (same colour and marker in every panel, named as in
+    :data:`METHOD_NAMES`), points joined in order of tolerance.  When the rows
+    carry ``seconds_min`` and ``seconds_max`` (the fastest and slowest of the
+    timing rounds), each point sits at the fastest, which timing noise can
+    only delay, and a bar reaches to the slowest.  ``error`` picks
+    ``error_final`` (max norm of the state error at the final time) or
     ``error_l2``.  Points whose error or time is not positive and finite
     cannot be drawn on log axes and are left out.
     """
@@ -1126,53 +1540,72 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
             raise ValueError(f"work_precision_figure: row {i} lacks {', '.join(missing)}")
     systems = list(dict.fromkeys(str(r["system"]) for r in rows))
     methods = list(dict.fromkeys(str(r["method"]) for r in rows))
+    spread = all("seconds_min" in r and "seconds_max" in r for r in rows)
+    rounds = max((int(r.get("n_samples", 0)) for r in rows), default=0)
     width = _width(size)
     ncols = min(len(systems), 4 if width >= 5 else 2)
     nrows = -(-len(systems) // ncols)
     spare = ax is None and nrows * ncols > len(systems)
     panel_h = (width / ncols) * (0.8 if width >= 5 else 0.85)
     top = 0.0 if spare else 0.3
+    ylabel = (r"Final-state error $\|\Delta y\|_\infty$" if error == "error_final"
+              else r"$L_2$ error along the motion")
     with style():
         axes = _axes(ax, nrows * ncols if spare else len(systems),
-                     (width, top + 0.1 + panel_h * nrows), "work_precision_figure",
+                     (width, top + 0.4 + panel_h * nrows), "work_precision_figure",
                      grid=(nrows, ncols))
         if spare:
             axes, spares = axes[:len(systems)], axes[len(systems):]
         handles = {}
         for i, (a, system) in enumerate(zip(axes, systems)):
             for j, method in enumerate(methods):
-                pts = sorted(((float(r["tol"]), float(r["seconds"]), float(r[error]))
+                pts = sorted(((float(r["tol"]),
+                               float(r["seconds_min"] if spread else r["seconds"]),
+                               float(r[error]),
+                               float(r["seconds_max"] if spread else r["seconds"]))
                               for r in rows if str(r["system"]) == system
                               and str(r["method"]) == method), reverse=True)
-                pts = [p for p in pts if all(math.isfinite(v) and v > 0 for v in p[1:])]
+                pts = [p for p in pts if all(math.isfinite(v) and v > 0 for v in p[1:3])]
                 if not pts:
                     continue
-                _, secs, errs = zip(*pts)
-                (line,) = a.plot(secs, errs, color=CYCLE[j % len(CYCLE)],
-                                 marker=MARKERS[j % len(MARKERS)], ms=3.5, lw=1.0,
-                                 label=method)
+                _, secs, errs, slow = (np.array(v) for v in zip(*pts))
+                colour, marker = CYCLE[j % len(CYCLE)], MARKERS[j % len(MARKERS)]
+                (line,) = a.plot(secs, errs, color=colour, marker=marker, ms=3.5, lw=1.0,
+                                 label=METHOD_NAMES.get(method, method), zorder=3)
+                if spread:
+                    extra = np.where(np.isfinite(slow), np.maximum(slow - secs, 0.0), 0.0)
+                    a.errorbar(secs, errs, xerr=[np.zeros_like(secs), extra], fmt="none",
+                               ecolor=colour, elinewidth=0.8, capsize=1.5, capthick=0.6,
+                               zorder=2)
                 handles.setdefault(method, line)
             a.set_xscale("log")
             a.set_yscale("log")
-            a.set_title(system.replace("_", " "))
+            a.set_title(SYSTEM_NAMES.get(system, system.replace("_", " ")), loc="left")
             if ax is not None or i % ncols == 0:
-                a.set_ylabel("Error at the final time" if error == "error_final"
-                             else "$L_2$ error along the motion")
+                a.set_ylabel(ylabel)
             if ax is not None or i + ncols >= len(systems):
-                a.set_xlabel("Run time (s)")
-        fig = axes[0].figure
+                a.set_xlabel("Run time per trajectory (s)")
+        if len(axes) > 1:
+            label_panels(axes)
+        fig = axes[0].get_figure(root=False)
         lines = [handles[m] for m in methods if m in handles]
+        labels = [ln.get_label() for ln in lines]
         if spare:
             for extra in spares[1:]:
                 extra.remove()
             spares[0].set_axis_off()
-            spares[0].legend(lines, [ln.get_label() for ln in lines], loc="center")
+            spares[0].legend(lines, labels, loc="center")
         elif ax is None:
-            labels = [ln.get_label() for ln in lines]
             fig.legend(lines, labels, loc="outside upper center",
                        ncols=_ncols(labels, width * 0.95))
         else:
             _legend_above(axes[0], lines)
+        if ax is None:
+            key = [r"$y$: the state in SI units (rad, rad s$^{-1}$, m, m s$^{-1}$)"]
+            if spread:
+                key.append(f"points: the fastest of {rounds} timing rounds, bars: the slowest"
+                           if rounds > 1 else "one timing round")
+            define_symbols(fig, key)
     return axes[0].figure
 
 

@@ -843,7 +843,8 @@ def work_precision(problem: Problem | str, tolerances: Sequence[float] = DEFAULT
     list of dict
         one per (method, tolerance): ``system`` (the problem's name),
         ``model``, ``method``, ``tol``, ``error_final``, ``error_l2``,
-        ``seconds`` (median per trajectory), ``fate``, ``n_reversals``,
+        ``seconds`` (median per trajectory), ``seconds_min`` and
+        ``seconds_max`` (the spread of the ``n_samples`` rounds), ``fate``, ``n_reversals``,
         ``same_fate`` (fate and reversal count equal the reference's),
         ``n_steps`` (phasemap), ``nfev`` (scipy), ``skipped`` and the
         reference's ``reference`` kind, ``floor`` and ``cross_check``.
@@ -866,7 +867,9 @@ def work_precision(problem: Problem | str, tolerances: Sequence[float] = DEFAULT
                        reference=ref.kind, floor=ref.floor, cross_check=ref.cross_check)
             if over:
                 jobs[(method, tol)] = dict(row, error_final=math.nan, error_l2=math.nan,
-                                           seconds=math.nan, fate="", n_reversals=-1,
+                                           seconds=math.nan, seconds_min=math.nan,
+                                           seconds_max=math.nan, n_samples=0,
+                                           fate="", n_reversals=-1,
                                            same_fate=False, n_steps=math.nan,
                                            nfev=math.nan, skipped=True)
                 continue
@@ -897,7 +900,10 @@ def work_precision(problem: Problem | str, tolerances: Sequence[float] = DEFAULT
     rows = []
     for row in jobs.values():
         if not row["skipped"]:
-            row["seconds"] = float(statistics.median(row.pop("_samples")))
+            samples = row.pop("_samples")
+            row["seconds"] = float(statistics.median(samples))
+            row["seconds_min"], row["seconds_max"] = float(min(samples)), float(max(samples))
+            row["n_samples"] = len(samples)
             row.pop("_go")
             row.pop("_took")
         rows.append(row)

@@ -203,8 +203,9 @@ def paradox_motion(out, files):
     """A motion that runs into a paradox; the event state classified."""
     t_end = 2.0
     # t_eval stops short of t_end: simulate labels a point at t_end itself with branch -1
-    ds = phasemap.simulate(NAME, t_end=t_end, rtol=1e-10,
-                           t_eval=np.linspace(0.0, t_end - 1e-3, 2000), **PARADOX_START)
+    # dense near t = 0, where the slider comes to a stick within a few milliseconds
+    t_eval = np.union1d(np.linspace(0.0, 0.01, 201), np.linspace(0.0, t_end - 1e-3, 2000))
+    ds = phasemap.simulate(NAME, t_end=t_end, rtol=1e-10, t_eval=t_eval, **PARADOX_START)
     files.append(study.save_atlas(ds, out, f"{NAME}_paradox_motion", NAME))
     start = phasemap.classify(NAME, **PARADOX_START)
     end = {n: float(ds[f"event_{n}"][-1]) for n in ("phi", "omega", "xdot")}
@@ -235,8 +236,12 @@ def stick_slip_motion(out, files):
 
 LAMBDA_STYLE = {1.0: {"color": "black", "lw": 0.9, "ls": "-"},
                 -1.0: {"color": "black", "lw": 0.9, "ls": (0, (3.0, 1.5))}}
-SHARP_STYLE = {"color": pplot.OKABE_ITO["reddish_purple"], "lw": 1.1, "ls": "-"}
-PAPER_STYLE = {"color": pplot.OKABE_ITO["orange"], "lw": 1.1, "ls": (0, (1.0, 1.2))}
+SHARP_STYLE = {"color": "black", "lw": 1.1, "ls": (0, (6.0, 1.5, 1.0, 1.5))}
+PAPER_STYLE = {"color": "black", "lw": 1.2, "ls": (0, (1.0, 1.2))}
+#: The symbols the legends use.
+KEY = [r"$\lambda_k = 1 + \sin^2\varphi - kf\sin\varphi\cos\varphi$, the coefficient of "
+       r"$N$ in (23)", r"$k = \mathrm{sgn}(N\dot x)$: $\lambda_{+1}$ for $N\dot x > 0$, "
+       r"$\lambda_{-1}$ for $N\dot x < 0$", r"$\lambda_k = 0$ is the singular set"]
 Q_STYLE = {"color": pplot.OKABE_ITO["bluish_green"], "lw": 1.1, "ls": "-"}
 STICK_LS = (0, (1.0, 1.5))
 STICK_SHADE = {"color": pplot.OKABE_ITO["bluish_green"], "alpha": 0.12, "lw": 0}
@@ -261,23 +266,24 @@ def _two_panel(maps, x, height):
     fig, axes = plt.subplots(1, 2, figsize=(pplot.SIZES["two_column"], height), sharey=True,
                              layout="constrained")
     handles = {}
-    for ax, side, title in zip(axes, ("right", "left"), (r"$\dot x > 0$", r"$\dot x < 0$")):
+    for k, (ax, side, title) in enumerate(zip(axes, ("right", "left"),
+                                              (r"$\dot x > 0$", r"$\dot x < 0$"))):
         ds = maps[side]
+        # the singular set lambda_k = 0 is drawn as the curves it is (closed form), not as
+        # the few cells of the grid that happen to lie on it
         pplot.map_figure(_thin(ds.drop_vars("singular")), "n_solutions", x=x, ax=ax)
         for h in _category_handles(ax):
             handles.setdefault(h.get_label(), h)
-        # singular cells are isolated points: drawn from the whole atlas, not the thinned one
-        i, j = np.nonzero(ds.singular.transpose(x, ...).values == 1)
-        if i.size:
-            other = next(d for d in ds.singular.dims if d != x)
-            ax.plot(ds[x].values[i], ds[other].values[j], ls="none", marker="o", ms=2.5, mew=0,
-                    color="black", zorder=8)
-            handles["singular"] = Line2D([], [], ls="none", marker="o", ms=2.5, mew=0,
-                                         color="black", label="singular")
-        ax.set_title(title)
+        ax.set_title(f"({'ab'[k]}) {title}", loc="left")
     axes[1].set_ylabel("")
-    order = ["none", "unique", "two", "continuum", "singular"]
+    order = ["none", "unique", "two", "continuum"]
     return fig, axes, [handles[k] for k in order if k in handles]
+
+
+def _fixed(ds):
+    """What the maps held fixed (xdot differs between the panels: only its sign matters)."""
+    return pplot.fixed_values_text(ds.drop_attrs().assign_attrs(
+        {k: v for k, v in ds.attrs.items() if k != "phasemap_fixed_xdot"}))
 
 
 def figure_phi_f(maps):
@@ -291,13 +297,13 @@ def figure_phi_f(maps):
             ax.axhline(SHARP, **SHARP_STYLE)
             ax.axhline(PAPER, **PAPER_STYLE)
             ax.set_ylim(0.0, 6.0)
-        lines = [Line2D([], [], label=r"$\lambda_{+1} = 0$", **LAMBDA_STYLE[1.0]),
-                 Line2D([], [], label=r"$\lambda_{-1} = 0$", **LAMBDA_STYLE[-1.0]),
+        lines = [Line2D([], [], label=r"$\lambda_{+1} = 0$ (singular)", **LAMBDA_STYLE[1.0]),
+                 Line2D([], [], label=r"$\lambda_{-1} = 0$ (singular)", **LAMBDA_STYLE[-1.0]),
                  Line2D([], [], label=r"$f = 2\sqrt{2}$ (sharp)", **SHARP_STYLE),
                  Line2D([], [], label=r"$f = 2$ (paper, sufficient)", **PAPER_STYLE)]
         handles = cats + lines
-        fig.legend(handles, [h.get_label() for h in handles], loc="outside upper center",
-                   ncols=len(handles))
+        pplot.figure_legend(fig, handles, ncols=4, title=_fixed(maps["right"]))
+        pplot.define_symbols(fig, KEY)
     return fig
 
 
@@ -341,8 +347,8 @@ def figure_phi_omega(maps, motion):
                 mec="white", mew=0.8, ls="none", zorder=8)
         ax.plot(*_wrapped([float(motion.phi[0])], [float(motion.omega[0])]), marker="o",
                 ms=4.5, mfc="white", mec="black", mew=0.8, ls="none", zorder=8)
-        lines = [Line2D([], [], label=r"$\lambda_{+1} = 0$", **LAMBDA_STYLE[1.0]),
-                 Line2D([], [], label=r"$\lambda_{-1} = 0$", **LAMBDA_STYLE[-1.0]),
+        lines = [Line2D([], [], label=r"$\lambda_{+1} = 0$ (singular)", **LAMBDA_STYLE[1.0]),
+                 Line2D([], [], label=r"$\lambda_{-1} = 0$ (singular)", **LAMBDA_STYLE[-1.0]),
                  Line2D([], [], label=r"$g + l\cos\varphi\,\omega^2 = 0$", **Q_STYLE),
                  Line2D([], [], color="black", lw=1.2, label=r"motion, sliding ($\dot x > 0$)"),
                  Line2D([], [], color="black", lw=1.0, ls=STICK_LS,
@@ -350,13 +356,19 @@ def figure_phi_omega(maps, motion):
                  Line2D([], [], marker=marker, ms=6, mfc=colour, mec="white", ls="none",
                         label=kind)]
         handles = cats + lines
-        fig.legend(handles, [h.get_label() for h in handles], loc="outside upper center",
-                   ncols=5)
+        start = [t for t in pplot.fixed_values(motion) if "_0$" in t]
+        pplot.figure_legend(fig, handles, ncols=5, title=_fixed(maps["right"])
+                            + "; the motion from " + ", ".join(start))
+        pplot.define_symbols(fig, KEY)
     return fig
 
 
-def figure_motion(ds, states):
-    """A trajectory with its events marked and the slider's stick phases shaded."""
+def figure_motion(ds, states, inset: float | None = None):
+    """A trajectory with its events marked and the slider's stick phases shaded.
+
+    ``inset``: a zoom of the first panel on [0, inset] s, for a stick phase
+    that starts too soon after t = 0 to be seen at the scale of the motion.
+    """
     fig = pplot.trajectory_figure(ds, states=states)
     stick = ds.branch.values == STICK
     t = ds.t.values
@@ -367,14 +379,40 @@ def figure_motion(ds, states):
                 ax.axvspan(t[a], t[b - 1], zorder=0, **STICK_SHADE)
         ax = fig.axes[0]
         leg = ax.get_legend()
+        title = leg.get_title().get_text()
         handles = list(leg.legend_handles)
         for h, txt in zip(handles, leg.get_texts()):
             h.set_label(txt.get_text())
         handles.append(Patch(label=r"slider sticks ($\dot x \equiv 0$)", **STICK_SHADE))
         leg.remove()
-        ax.legend(handles, [h.get_label() for h in handles], loc="lower center",
-                  bbox_to_anchor=(0.5, 1.02), borderaxespad=0, ncols=2)
+        new = ax.legend(handles, [h.get_label() for h in handles], loc="lower left",
+                        bbox_to_anchor=(0.0, 1.02), borderaxespad=0, ncols=2, title=title,
+                        alignment="left")
+        new._phasemap_above = True
+        if inset:
+            _zoom(ax, ds, states[0], inset, stick)
     return fig
+
+
+def _zoom(ax, ds, name, t_max, stick):
+    """An inset of ``name`` over the first ``t_max`` seconds, time in ms, events marked."""
+    sel = ds.t.values <= t_max
+    t_ms = ds.t.values[sel] * 1e3
+    zoom = ax.inset_axes([0.2, 0.45, 0.3, 0.45])
+    edges = np.flatnonzero(np.diff(np.r_[0, stick[sel].astype(int), 0]))
+    for a, b in zip(edges[::2], edges[1::2]):
+        zoom.axvspan(t_ms[a], t_ms[min(b, t_ms.size - 1)], zorder=0, **STICK_SHADE)
+    zoom.plot(t_ms, ds[name].values[sel], color="black", lw=1.0)
+    kinds = [phasemap.Event(int(k)).name.lower() for k in ds.event_kind.values]
+    for k, te, ye in zip(kinds, ds.event_t.values, ds[f"event_{name}"].values):
+        if k not in ("start", "horizon") and te <= t_max:
+            marker, colour = pplot.EVENT_MARKERS[k]
+            zoom.plot(te * 1e3, ye, marker=marker, ms=3.5, mfc="white", mec=colour, mew=0.8,
+                      ls="none", clip_on=False, zorder=5)
+    zoom.set_xlim(0.0, t_max * 1e3)
+    zoom.set_xlabel(r"$t$ (ms): the stick starts at once", labelpad=1)
+    zoom.tick_params(labelsize=7)
+    zoom.xaxis.label.set_fontsize(7)
 
 
 # --------------------------------------------------------------------------- the study
@@ -468,7 +506,7 @@ def main(argv=None) -> list[Claim]:
     # figures
     files += study.save_figure(figure_phi_f(maps), out, f"{NAME}_phi_f")
     files += study.save_figure(figure_phi_omega(pmaps, motion), out, f"{NAME}_phi_omega")
-    files += study.save_figure(figure_motion(motion, ["xdot", "phi", "omega"]), out,
+    files += study.save_figure(figure_motion(motion, ["xdot", "phi", "omega"], inset=0.01), out,
                                f"{NAME}_paradox_motion")
     files += study.save_figure(figure_motion(slip_ds, ["xdot", "x", "phi"]), out,
                                f"{NAME}_stick_slip")

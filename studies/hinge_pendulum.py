@@ -57,6 +57,9 @@ WEIGHTLESS = ((0.0, 5.0), (1.0, -3.0))
 #: Time horizon of the fate map (s).
 T_FATE = 40.0
 DELTA_LABEL = r"$\delta/l$  ($l$ = 1 m)"
+#: What delta and l are, for the key under a figure.
+DELTA_KEY = [r"$\delta$: radius of the hinge's friction circle (friction moment "
+             r"$\delta|R|$)", r"$l$: rod length"]
 ZONE = pplot.OKABE_ITO["bluish_green"]
 #: Colours of the phase curves: the Okabe-Ito ones that are not the zone's green.
 CURVE_COLOURS = [pplot.OKABE_ITO[k] for k in ("blue", "orange", "vermillion", "reddish_purple")]
@@ -191,6 +194,9 @@ def figure_rest(ds):
             Line2D([], [], color="black", lw=0.8, ls=(0, (3.0, 1.5)),
                    label=r"$\delta = l$: singular")]
         _replace_legend(ax, handles, ncols=2)
+        ax.get_legend().set_title(pplot.fixed_values_text(ds, 3.2))
+        ax.get_legend().set_alignment("left")
+        pplot.define_symbols(fig, DELTA_KEY)
     return fig
 
 
@@ -218,14 +224,14 @@ def figure_moving(by_delta, by_omega):
         ax.plot(angles, [L] * len(angles), ls="none", marker="*", ms=8, mfc=cont, mec="black",
                 mew=0.5, zorder=6, clip_on=False)
         ax.set_ylabel(DELTA_LABEL)
-        ax.set_title(rf"$\omega$ = {OMEGA_MOVING:g} rad s$^{{-1}}$")
+        ax.set_title(rf"(a) $\omega$ = {OMEGA_MOVING:g} rad s$^{{-1}}$", loc="left")
         ax = axes[1]
         for lo, hi in ((-math.pi, -math.pi / 2), (math.pi / 2, math.pi)):
             phi = np.linspace(lo, hi, 1001)
             w = np.sqrt(np.maximum(-G * np.cos(phi) / L, 0.0))
             ax.plot(phi, w, color=free, lw=1.6)
             ax.plot(phi, -w, color=free, lw=1.6)
-        ax.set_title(rf"$\delta/l$ = {DELTA_ABOVE / L:g}")
+        ax.set_title(rf"(b) $\delta/l$ = {DELTA_ABOVE / L:g}", loc="left")
         # the continuum is two cells: marked by stars rather than a patch nobody can see
         cats = [handles[k] for k in ("none", "unique", "singular") if k in handles]
         items = cats + [
@@ -233,8 +239,9 @@ def figure_moving(by_delta, by_omega):
                    label=r"$l\omega^2 + g\cos\varphi = 0$: unique ($R = 0$)"),
             Line2D([], [], ls="none", marker="*", ms=8, mfc=cont, mec="black", mew=0.5,
                    label=r"continuum ($\delta = l$ on that curve)")]
-        fig.legend(items, [h.get_label() for h in items], loc="outside upper center",
-                   ncols=len(items))
+        pplot.figure_legend(fig, items, ncols=3,
+                            title=rf"$l$ = {L:g} m, $g$ = {G:g} m s$^{{-2}}$, $m$ = 1 kg")
+        pplot.define_symbols(fig, DELTA_KEY)
     return fig
 
 
@@ -252,7 +259,8 @@ def figure_phase(curves):
                     line.set_color(colour)
             phi0, omega0 = SWINGS[i]
             starts.append(Line2D([], [], color=colour, lw=1.0,
-                                 label=rf"$\varphi_0$ = {phi0:g}, $\omega_0$ = {omega0:g}"))
+                                 label=rf"$\varphi_0$ = {phi0:g} rad, "
+                                       rf"$\omega_0$ = {omega0:g} rad s$^{{-1}}$"))
         lo = min(float(ds.phi.min()) for ds in curves)
         hi = max(float(ds.phi.max()) for ds in curves)
         pad = 0.1
@@ -266,6 +274,10 @@ def figure_phase(curves):
         zone = Patch(color=ZONE, alpha=0.18, lw=0,
                      label=rf"stagnation zone (35), $\delta/l$ = {DELTA / L:g}")
         _replace_legend(ax, starts + events + [zone], ncols=4)
+        head = pplot.fixed_values_text(curves[0].drop_attrs().assign_attrs(
+            {k: v for k, v in curves[0].attrs.items() if "initial" not in k}))
+        ax.get_legend().set_title(head)
+        ax.get_legend().set_alignment("left")
     return fig
 
 
@@ -302,20 +314,42 @@ def figure_weightless(runs):
                    for c, (_, w0) in zip(colours, WEIGHTLESS)]
         handles.append(Line2D([], [], ls="none", marker="o", ms=2.5, mfc="white", mec="black",
                               label=r"simulate, $g$ = 0 (every few steps)"))
-        axes[0].legend(handles, [h.get_label() for h in handles], loc="lower center",
-                       bbox_to_anchor=(0.5, 1.02), borderaxespad=0, ncols=1)
+        legend = axes[0].legend(handles, [h.get_label() for h in handles], loc="lower left",
+                                bbox_to_anchor=(0.0, 1.02), borderaxespad=0, ncols=1,
+                                alignment="left",
+                                title=rf"$g$ = 0, $\delta$ = {DELTA_WEIGHTLESS:g} m, "
+                                      rf"$l$ = {L:g} m; $\varphi_0$ = "
+                                      + ", ".join(f"{p:g}" for p, _ in WEIGHTLESS) + " rad")
+        legend._phasemap_above = True
+        pplot.label_panels(axes)
     return fig
 
 
 def figure_fates(ds):
-    """The fate of every initial state, where it comes to rest, and after how many swings."""
+    """Where every initial state comes to rest, and after how many swings.
+
+    Every state of the grid comes to rest within T_FATE (the study checks it),
+    so a fate panel would be one colour: the heading says it instead.  Rings
+    mark the rare rests in the upper zone (cos phi_rest < 0), the isolated
+    cells with 0 reversals.
+    """
+    rest = int((ds.fate == phasemap.Event.REST).sum())
     with pplot.style():
-        fig, axes = plt.subplots(1, 3, figsize=(pplot.SIZES["two_column"], 2.9), sharey=True,
+        fig, axes = plt.subplots(1, 2, figsize=(pplot.SIZES["two_column"], 3.2), sharey=True,
                                  layout="constrained")
-        pplot.fate_figure(ds, extra="phi_rest", ax=list(axes[:2]), size="two_column")
-        pplot.map_figure(ds, "n_reversals", x="phi", ax=axes[2])
-        for ax in axes[1:]:
-            ax.set_ylabel("")
+        pplot.map_figure(ds, "phi_rest", x="phi", ax=axes[0])
+        pplot.map_figure(ds, "n_reversals", x="phi", ax=axes[1])
+        axes[1].set_ylabel("")
+        rings = pplot.mark_inverted_rests(axes, ds, "phi", "omega", ds.phi.values,
+                                           ds.omega.values)
+        for ax in axes:
+            if ax.get_legend() is not None:
+                ax.get_legend().remove()
+            ax.set_title("")
+        pplot.label_panels(axes)
+        head = (pplot.fixed_values_text(ds) + f"; all {rest} of {ds.fate.size} initial "
+                f"states come to rest within {T_FATE:g} s")
+        pplot.figure_legend(fig, rings, title=head)
     return fig
 
 

@@ -46,7 +46,7 @@ PORTRAIT_F = (0.8, 2.0)
 #: Initial states (phi0, omega0 > 0, as in (6)) of the phase portraits, per f.
 STARTS = {
     0.8: [(0.45, 0.8), (0.5, 2.0), (0.7, 1.5), (0.9, 0.5), (1.0, 2.0), (1.2, 0.5), (1.3, 1.0)],
-    2.0: [(0.9, 4.5), (1.0, 4.0), (1.1, 3.6), (1.2, 3.2), (1.3, 3.0), (1.45, 3.1), (1.5, 2.8)],
+    2.0: [(0.9, 4.5), (1.2, 3.2), (1.5, 2.8)],
 }
 #: f values at which the static-zone boundary is measured (f < 1: 2 arctan f < pi/2).
 STATIC_F = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9)
@@ -199,17 +199,20 @@ def solvability_figure(atlas: xr.Dataset):
             ax.annotate(r"$f = \sqrt{2}$", (math.pi / 2, SQRT2), xytext=(-2, 3),
                         textcoords="offset points", ha="right", va="bottom",
                         bbox={"boxstyle": "square,pad=0.1", "fc": "white", "ec": "none"})
-            ax.set_title(rf"({'abc'[k]}) $\omega$ = {w:g} rad s$^{{-1}}$")
+            ax.set_title(rf"({'abc'[k]}) $\omega$ = {w:g} rad s$^{{-1}}$", loc="left")
             if k:
                 ax.set_ylabel("")
-        handles["φ = 2 arctan f (rest boundary)"] = Line2D(
+        n = atlas.n_solutions.transpose("f", ...).values
+        lost = atlas.contact_lost.transpose("f", ...).values == 1
+        off_line = np.abs(atlas.f.values - SQRT2) > 1e-12
+        if "none" in handles and not ((n == 0) & ~lost)[off_line].any():
+            handles[r"none (on $f = \sqrt{2}$ only)"] = handles.pop("none")
+        handles[r"$\varphi = 2\arctan f$ (rest boundary)"] = Line2D(
             [], [], color=pplot.OKABE_ITO["bluish_green"], lw=1.4)
-        if "singular" in handles:
-            handles["singular (2 − f² = 0)"] = handles.pop("singular")
-        order = ["unique", "none", "stagnation", "contact lost"]
+        order = ["unique", "contact lost", "a branch loses contact", "stagnation"]
         keys = sorted(handles, key=lambda s: order.index(s) if s in order else len(order))
-        fig.legend([handles[k] for k in keys], keys, loc="outside upper center",
-                   ncols=len(keys))
+        pplot.figure_legend(fig, [handles[k] for k in keys], keys, ncols=-(-len(keys) // 2),
+                            title=pplot.fixed_values_text(atlas))
     return fig
 
 
@@ -250,46 +253,72 @@ def portrait_figure(regions: xr.Dataset, curves):
     blue = pplot.OKABE_ITO["blue"]
     width = pplot.SIZES["two_column"]
     with pplot.style():
-        fig, axes = plt.subplots(1, len(PORTRAIT_F), figsize=(width, 0.42 * width),
+        fig, axes = plt.subplots(1, len(PORTRAIT_F), figsize=(width, 0.46 * width),
                                  layout="constrained")
         handles: dict[str, object] = {}
         for k, (ax, f) in enumerate(zip(axes, PORTRAIT_F)):
             reg = regions.sel(f=f)
-            u = reg.omega.values ** 2
-            mask = reg.contact_lost.transpose("omega", "phi").values == 1
-            _hatch(ax, reg.phi.values, u, mask, blue)
+            _pull_region(ax, f, U_TOP[f], blue, check=reg)
             for pc in curves[f]:
                 pplot.phase_curve_figure(pc, squared=True, ax=ax)
                 collect_legend(ax, handles)
             _, a, b = _coefficients(f, 1.0, corrected=True)
             pp = np.linspace(0.0, math.pi / 2, 200)
-            ax.plot(pp, a * np.sin(pp) + b * np.cos(pp), color=pplot.GREY, lw=0.8, ls=":",
-                    zorder=2)
+            ax.plot(pp, a * np.sin(pp) + b * np.cos(pp), color=pplot.OKABE_ITO["black"],
+                    lw=0.9, ls=(0, (1.0, 1.5)), zorder=2)
             ax.set_xlim(0.0, math.pi / 2)
             ax.set_ylim(0.0, U_TOP[f])
             side = "<" if f < SQRT2 else ">"
             ax.set_title(rf"({'ab'[k]}) $f$ = {f:g} {side} $\sqrt{{2}}$,  "
-                         rf"2 arctan $f$ = {2 * math.atan(f):.2f} rad")
+                         rf"$2\arctan f$ = {2 * math.atan(f):.2f} rad", loc="left")
         if "horizon" in handles:
-            handles["lying flat (φ = π/2)"] = handles.pop("horizon")
+            handles[r"lying flat ($\varphi = \pi/2$)"] = handles.pop("horizon")
         handles["a contact would pull"] = Patch(facecolor="none", edgecolor=blue,
                                                 hatch="\\\\\\\\", linewidth=0.6, ls="--")
-        handles["c = 0: ω² = a sin φ + b cos φ"] = Line2D([], [], color=pplot.GREY, lw=0.8,
-                                                         ls=":")
-        order = ["start", "rest", "contact lost", "lying flat (φ = π/2)"]
+        handles[r"$c = 0$: $\omega^2 = a\sin\varphi + b\cos\varphi$"] = Line2D(
+            [], [], color=pplot.OKABE_ITO["black"], lw=0.9, ls=(0, (1.0, 1.5)))
+        order = ["start", "rest", "contact lost", r"lying flat ($\varphi = \pi/2$)"]
         keys = sorted(handles, key=lambda s: order.index(s) if s in order else len(order))
-        fig.legend([handles[k] for k in keys], keys, loc="outside upper center",
-                   ncols=len(keys))
+        pplot.figure_legend(fig, [handles[k] for k in keys], keys, ncols=-(-len(keys) // 2),
+                            title=r"$\omega > 0$ (sliding down), $l$ = 1 m, "
+                                  r"$g$ = 9.81 m s$^{-2}$, $m$ = 1 kg")
+        pplot.define_symbols(fig, INTEGRAL_KEY)
     return fig
 
 
-def _hatch(ax, x, y, mask, colour) -> None:
-    """Hatch the cells of ``mask`` (rows y, columns x) as phasemap's contact-lost overlay."""
-    if not mask.any():
+#: The symbols of the first integral, for the key under a figure.
+INTEGRAL_KEY = [
+            r"first integral of (8): $\omega^2 = c\,e^{\lambda\varphi} + a\sin\varphi"
+            r" + b\cos\varphi$",
+            r"$\lambda = 6f/(2 - f^2)$",
+            r"$a = -6fg(5 - 4f^2)/(lq)$",
+            r"$b = -3g(2 - 15f^2 + f^4)/(lq)$",
+            r"$q = 4 + 32f^2 + f^4$",
+            r"$c$: the constant fixed by the start"]
+
+
+def _pull_region(ax, f: float, u_top: float, colour: str, check: xr.Dataset) -> None:
+    """Hatch where a contact would pull (N_floor or N_wall < 0, omega > 0) over (phi, omega^2).
+
+    The boundary is the zero contour of min(N_floor, N_wall) from the unreduced
+    Newton-Euler solve on a fine grid, so it is drawn as the smooth curve it is;
+    on the atlas's own grid that sign equals phasemap's contact_lost cell by cell.
+    """
+    phi, w = check.phi.values[:, None], check.omega.values[None, :]
+    _, n1, n2 = _unreduced(phi, w, np.full(np.broadcast_shapes(phi.shape, w.shape), f), 1.0, 1.0)
+    lost = check.contact_lost.transpose("phi", "omega").values == 1
+    if not np.array_equal(np.minimum(n1, n2) < 0, lost):
+        raise AssertionError("the closed-form contact region differs from contact_lost")
+    pp = np.linspace(0.0, math.pi / 2, 600)
+    uu = np.linspace(1e-6, u_top, 600)
+    P, U = np.meshgrid(pp, uu, indexing="xy")
+    _, n1, n2 = _unreduced(P, np.sqrt(U), np.full_like(P, f), 1.0, 1.0)
+    low = np.minimum(n1, n2)
+    if not (low < 0).any():
         return
-    ax.contourf(x, y, mask.astype(float), levels=[0.5, 1.5], colors="none",
+    ax.contourf(pp, uu, low, levels=[low.min() - 1.0, 0.0], colors="none",
                 hatches=["\\\\\\\\"]).set_hatchcolor(colour)
-    ax.contour(x, y, mask.astype(float), levels=[0.5], colors=[colour], linewidths=0.6,
+    ax.contour(pp, uu, low, levels=[0.0], colors=[colour], linewidths=0.6,
                linestyles="dashed")
 
 
@@ -453,10 +482,10 @@ def first_integral_figure(runs):
             pp = np.linspace(run["phi0"], run["phi"].max(), 300)
             if k == 0:
                 lam, a, b = _coefficients(run["f"], run["l"], False)
-                wrong = "printed b has −7f²"
+                wrong = r"printed $b$ has $-7f^2$"
             else:
                 lam, a, b = _coefficients(run["f"], run["l"], True, with_l=False)
-                wrong = "printed a, b lack 1/l"
+                wrong = r"printed $a$, $b$ lack $1/l$"
             ax.plot(pp, _integral(pp, run["phi0"], run["omega0"], lam, a, b),
                     color=oi["vermillion"], ls="--", lw=1.0)
             lam, a, b = _coefficients(run["f"], run["l"], True)
@@ -467,13 +496,18 @@ def first_integral_figure(runs):
                     mfc="none", mec=oi["blue"], mew=0.7)
             ax.set_xlabel(r"$\varphi$ (rad)")
             ax.set_ylabel(r"$\omega^2$ (rad$^{2}$ s$^{-2}$)")
-            ax.set_title(rf"({'ab'[k]}) $l$ = {run['l']:g} m, $f$ = {run['f']:g}: {wrong}")
-        fig.legend([Line2D([], [], color=oi["vermillion"], ls="--", lw=1.0),
+            ax.set_title(rf"({'ab'[k]}) $l$ = {run['l']:g} m, $f$ = {run['f']:g}, "
+                         rf"$\varphi_0$ = {run['phi0']:g} rad, "
+                         rf"$\omega_0$ = {run['omega0']:.3g} rad s$^{{-1}}$: {wrong}", loc="left")
+        pplot.figure_legend(fig, [Line2D([], [], color=oi["vermillion"], ls="--", lw=1.0),
                     Line2D([], [], color=oi["black"], lw=1.0),
                     Line2D([], [], ls="none", marker="o", ms=3.0, mfc="none", mec=oi["blue"],
                            mew=0.7)],
-                   ["first integral as printed", "corrected: b with −15f², a and b over l",
-                    "time integration of (8)"], loc="outside upper center", ncols=3)
+                   ["first integral as printed",
+                    r"corrected: $b$ with $-15f^2$, $a$ and $b$ over $l$",
+                    "time integration of (8)"], ncols=3,
+                            title=r"$\omega > 0$, $g$ = 9.81 m s$^{-2}$, $m$ = 1 kg")
+        pplot.define_symbols(fig, INTEGRAL_KEY)
     return fig
 
 

@@ -41,6 +41,10 @@ G = 9.81
 #: The fixed parameters of the study (phasemap's defaults for the wheel).
 FIXED = {"r": 1.0, "l": 0.5, "rho": 0.5, "g": G, "m": 1.0}
 L = FIXED["l"]
+#: What delta, l, r and rho are, for the key under a figure.
+KEY = [r"$\delta$: rolling-friction length (couple $\delta N$)",
+       r"$l$: offset of the centre of mass from the centre",
+       r"$r$: radius", r"$\rho$: radius of gyration"]
 #: delta/l of the oscillating regime and of the one-way regime.
 LOW, HIGH = 0.1, 1.2
 #: Initial states (phi0, omega0) of the phase portraits, per delta/l.
@@ -150,7 +154,7 @@ def maps_figure(stag: xr.Dataset, bounce: xr.Dataset, n: dict):
         a.plot(pp, np.abs(np.sin(pp)), color=oi["black"], lw=0.8, ls="--")
         a.axhline(1.0, color=oi["black"], lw=0.6, ls=":")
         a.set_ylabel(r"$\delta/l$")
-        a.set_title(r"(a) at rest, $\omega$ = 0", loc="left", pad=30)
+        a.set_title(r"(a) at rest, $\omega$ = 0", loc="left")
         _relabel_legend(a, {"no": "rest impossible", "yes": "rest possible"}, [
             (Line2D([], [], color=oi["black"], lw=0.8, ls="--"), r"$|\sin\varphi| = \delta/l$"),
             (Line2D([], [], color=oi["black"], lw=0.6, ls=":"), r"$\delta = l$")])
@@ -161,12 +165,13 @@ def maps_figure(stag: xr.Dataset, bounce: xr.Dataset, n: dict):
                   linewidths=0.8)
         b.contour(phi, w, n["printed_13"].T, levels=[0.0], colors=[oi["vermillion"]],
                   linewidths=0.9, linestyles="dashed")
-        b.set_title(rf"(b) bounce (12), $\delta/l$ = {LOW:g}", loc="left", pad=30)
-        _relabel_legend(b, {"no": "N ≥ 0", "yes": "N < 0: contact lost"}, [
-            (Line2D([], [], color=oi["black"], lw=0.8), "N = 0, Newton–Euler"),
-            (Line2D([], [], color=oi["vermillion"], lw=0.9, ls="--"), "N = 0, (13) as printed")])
-        fig.suptitle(f"r = {FIXED['r']:g} m, l = {L:g} m, ρ = {FIXED['rho']:g} m",
-                     x=0.99, ha="right")
+        b.set_title(rf"(b) bounce (12), $\delta/l$ = {LOW:g}", loc="left")
+        _relabel_legend(b, {"no": r"$N \geq 0$", "yes": r"$N < 0$: contact lost"}, [
+            (Line2D([], [], color=oi["black"], lw=0.8), r"$N = 0$, Newton–Euler"),
+            (Line2D([], [], color=oi["vermillion"], lw=0.9, ls="--"),
+             r"$N = 0$, (13) as printed")])
+        pplot.define_symbols(fig, [pplot.fixed_values_text(stag.drop_vars("delta"))
+                                   .replace(r"$\omega$ = 0 rad s$^{-1}$, ", ""), *KEY])
     return fig
 
 
@@ -176,8 +181,12 @@ def _relabel_legend(ax, names: dict, extra: list) -> None:
     handles = list(legend.legend_handles) + [h for h, _ in extra]
     labels = [names.get(t.get_text(), t.get_text()) for t in legend.get_texts()]
     labels += [t for _, t in extra]
+    title = ax.get_title(loc="left")
     legend.remove()
-    ax.legend(handles, labels, loc="lower center", bbox_to_anchor=(0.5, 1.02), ncols=2)
+    ax.set_title("", loc="left")
+    new = ax.legend(handles, labels, loc="lower left", bbox_to_anchor=(0.0, 1.02), ncols=2,
+                    title=title, alignment="left", borderaxespad=0.0)
+    new._phasemap_above = True
 
 
 # --------------------------------------------------------------------------- portraits
@@ -256,13 +265,20 @@ def portrait_figure(curves, run: xr.Dataset):
         collect_legend(ax, handles)
         half = math.asin(LOW)
         ax.axhspan(-half, half, color=green, alpha=0.3, lw=0, zorder=0)
-        ax.set_title(rf"(c) the motion of (a) from $\varphi_0$ = {STARTS[LOW][0][0]:g}, "
-                     rf"$\omega_0$ = {STARTS[LOW][0][1]:g} in time (simulate)")
+        ax.set_title(rf"(c) the motion of (a) from $\varphi_0$ = {STARTS[LOW][0][0]:g} rad, "
+                     rf"$\omega_0$ = {STARTS[LOW][0][1]:g} rad s$^{{-1}}$ in time (simulate)",
+                     loc="left")
         handles[r"zone (15): $|\sin\varphi| \leq \delta/l$"] = Patch(
             facecolor=green, alpha=0.5, lw=0)
-        fig.legend(list(handles.values()), list(handles), loc="outside upper center",
-                   ncols=len(handles))
+        pplot.figure_legend(fig, list(handles.values()), list(handles), ncols=len(handles),
+                            title=_fixed_text())
+        pplot.define_symbols(fig, KEY)
     return fig
+
+
+def _fixed_text() -> str:
+    return (rf"$r$ = {FIXED['r']:g} m, $l$ = {L:g} m, $\rho$ = {FIXED['rho']:g} m, "
+            rf"$g$ = {G:g} m s$^{{-2}}$, $m$ = {FIXED['m']:g} kg")
 
 
 # --------------------------------------------------------------------------- bounce (12)
@@ -375,20 +391,42 @@ def fate_claims(fates) -> list[Claim]:
 
 
 def fates_figure(fates):
-    """Fate and rest angle over (phi0, omega0), a row per delta/l."""
+    """(a) fate and (b) reversals at delta/l = 0.1; (c) rest angle at delta/l = 1.2.
+
+    The fate maps at the two delta/l are nearly the same (the bounce depends on
+    omega, hardly on delta), so one is drawn and the heading counts the cells
+    where the other differs; what changes with delta/l is where and after how
+    many reversals the wheel stops.
+    """
     import matplotlib.pyplot as plt
 
+    low, high = fates[LOW], fates[HIGH]
+    differ = int((low.fate != high.fate).sum())
     width = pplot.SIZES["two_column"]
     with pplot.style():
-        fig, axes = plt.subplots(2, 2, figsize=(width, 0.95 * width), layout="constrained")
-        for row, k in zip(axes, (LOW, HIGH)):
-            pplot.fate_figure(fates[k], extra="phi_rest", ax=list(row), size="two_column")
-            legend = row[0].get_legend()
-            row[0].legend(legend.legend_handles, [t.get_text() for t in legend.get_texts()],
-                          loc="lower center", bbox_to_anchor=(0.5, 1.02),
-                          ncols=len(legend.legend_handles),
-                          title=rf"$\delta/l$ = {k:g}: "
-                          + ("damped oscillations" if k < 1 else "one way only"))
+        fig, axes = plt.subplots(1, 3, figsize=(width, 0.42 * width), sharey=True,
+                                 layout="constrained")
+        pplot.fate_figure(low, extra="n_reversals", ax=list(axes[:2]), size="two_column")
+        pplot.map_figure(high, "phi_rest", x="phi", ax=axes[2])
+        legend = axes[0].get_legend()
+        handles = list(legend.legend_handles)
+        labels = [t.get_text() for t in legend.get_texts()]
+        legend.remove()
+        for ax in axes:
+            ax.set_title("", loc="left")
+            if ax.get_legend() is not None:
+                ax.get_legend().remove()
+        for ax in axes[1:]:
+            ax.set_ylabel("")
+        for ax, text in zip(axes, (rf"fate, $\delta/l$ = {LOW:g}",
+                                   rf"reversals, $\delta/l$ = {LOW:g}",
+                                   rf"rest angle, $\delta/l$ = {HIGH:g}; blank: contact lost")):
+            ax.set_title(text, loc="left")
+        pplot.label_panels(axes)
+        pplot.figure_legend(fig, handles, labels, title=(
+            _fixed_text() + rf"; at $\delta/l$ = {HIGH:g} the fate differs from (a) in "
+            f"{differ} of {low.fate.size} cells"))
+        pplot.define_symbols(fig, KEY)
     return fig
 
 

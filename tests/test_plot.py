@@ -333,20 +333,29 @@ def test_stagnation_everywhere_draws_hatching_without_an_outline(tmp_path):
     render(fig, tmp_path)
 
 
-def test_contact_lost_is_overlaid_distinctly(wheel_map, tmp_path):
+def test_contact_lost_is_a_class_of_its_own_not_none(wheel_map, tmp_path):
+    """Where a contact would pull, n_solutions is 0; the map shows 'contact lost' there, in
+    its own colour and hatch, so that 'none' is left for a Painleve inconsistency."""
+    n = wheel_map.n_solutions.values
+    lost = wheel_map.contact_lost.values == 1
+    assert (n[lost] == 0).all() and lost.any()
     fig = quiet(wheel_map.phasemap.plot, size="two_column")
     ax = fig.axes[0]
     assert fig.get_figwidth() == pytest.approx(7.2)
     texts = legend_texts(ax)
-    assert texts[-2:] == ["stagnation", "contact lost"]
-    patches = ax.get_legend().get_patches()
-    assert patches[-1].get_hatch() != patches[-2].get_hatch()
+    assert "none" not in texts  # every none cell of this atlas is a contact loss
+    assert texts == ["contact lost", "unique", "stagnation"]
+    patches = dict(zip(texts, ax.get_legend().get_patches()))
+    assert matplotlib.colors.to_hex(patches["contact lost"].get_facecolor()) == \
+        pplot.CATEGORY_COLOURS["contact_lost"].lower()
+    assert patches["contact lost"].get_hatch() == pplot.CATEGORY_HATCHES["contact_lost"]
+    assert patches["contact lost"].get_hatch() != patches["stagnation"].get_hatch()
     assert ax.get_ylabel() == r"$\omega$ (rad s$^{-1}$)"
     assert_legend_outside(fig, ax)
     render(fig, tmp_path)
 
 
-def test_singular_cells_are_dotted(tmp_path):
+def test_a_row_of_singular_cells_is_drawn_as_a_line(tmp_path):
     ds = phasemap.Scene("hinge_pendulum", axes={"phi": np.linspace(-3, 3, 30),
                                                 "delta": np.linspace(0, 1.5, 31)},
                         fixed={"omega": 1.0}, layers=["n_solutions", "singular"]).compute()
@@ -354,12 +363,46 @@ def test_singular_cells_are_dotted(tmp_path):
     assert int(ds.singular.sum()) == 30  # the row delta = l
     fig = quiet(ds.phasemap.plot)
     ax = fig.axes[0]
-    assert legend_texts(ax) == ["none", "unique", "singular"]
-    dots = [l for l in ax.lines if l.get_marker() == "o"]
-    assert len(dots) == 1 and len(dots[0].get_xdata()) == 30
-    np.testing.assert_allclose(dots[0].get_ydata(), 1.0)
-    assert ax.get_ylabel() == r"$\delta$ (m)"
+    assert legend_texts(ax) == ["none", "unique", r"singular ($l^2-\delta^2 = 0$)"]
+    handle = ax.get_legend().legend_handles[-1]
+    assert handle.get_linestyle() == "-" and handle.get_marker() in ("None", "", None)
+    assert not [l for l in ax.lines if l.get_marker() == "o"], "dots where a line belongs"
+    rows = [l for l in ax.lines if np.ptp(l.get_ydata()) == 0 and len(l.get_ydata()) == 2]
+    assert len(rows) == 1 and rows[0].get_ydata()[0] == pytest.approx(1.0)
     render(fig, tmp_path)
+
+
+def test_singular_set_is_the_zero_contour_of_the_coefficient(elliptic_map, tmp_path):
+    """lambda = 0 hits only a few cells of a grid; with the coefficient layer it is a curve."""
+    ds = phasemap.Scene("elliptic_pendulum",
+                        axes={"phi": np.linspace(-3.14, 3.14, 60), "f": np.linspace(0, 6, 40)},
+                        fixed={"xdot": -1.0},
+                        layers=["n_solutions", "singular", "coef_slide_neg_Npos"]).compute()
+    fig = quiet(ds.phasemap.plot)
+    ax = fig.axes[0]
+    lines = [c for c in ax.collections if isinstance(c, ContourSet) and not c.filled]
+    assert len(lines) == 1 and lines[0].levels.tolist() == [0.0]
+    # the contour follows lambda = 0: f = (1 + sin^2 phi) / (-sin phi cos phi) for k = -1
+    path = np.concatenate([p.vertices for p in lines[0].get_paths()])
+    s, c = np.sin(path[:, 0]), np.cos(path[:, 0])
+    np.testing.assert_allclose(path[:, 1] * (-s * c), 1 + s * s, atol=0.15)
+    assert legend_texts(ax)[-1] == r"singular ($\lambda = 0$)"
+    assert not [l for l in ax.lines if l.get_marker() == "o"]
+    render(fig, tmp_path)
+
+
+def test_isolated_singular_cells_stay_dots(tmp_path):
+    ds = phasemap.Scene("elliptic_pendulum",
+                        axes={"phi": np.linspace(-3.14, 3.14, 60), "f": np.linspace(0, 6, 40)},
+                        fixed={"xdot": -1.0}, layers=["n_solutions", "singular"]).compute()
+    mask = ds.singular.values == 1
+    if not mask.any():  # make one, as a grid that happens to hit lambda = 0 would
+        ds["singular"] = ds.singular.copy(data=np.zeros_like(ds.singular.values))
+        ds["singular"][10, 20] = 1
+    fig = quiet(ds.phasemap.plot)
+    dots = [l for l in fig.axes[0].lines if l.get_marker() == "o"]
+    assert len(dots) == 1 and len(dots[0].get_xdata()) == int((ds.singular == 1).sum())
+    assert fig.axes[0].get_legend().legend_handles[-1].get_marker() == "o"
 
 
 def test_float_layer_gets_a_diverging_colour_bar(elliptic_map, tmp_path):
@@ -440,6 +483,7 @@ def test_profile_of_one_float_layer(tmp_path):
     fig = quiet(ds.phasemap.plot, "phi_ddot_slide_pos")
     assert fig.axes[0].get_title(loc="left") == \
         r"$\ddot\varphi\ [\mathrm{slide\ pos}]$ (rad s$^{-2}$)"
+    assert fig._suptitle.get_text().startswith(r"$\varphi$ = 0.7 rad, $\omega$ = 0.5 rad s$^{-1}$")
     assert fig.axes[0].get_xlabel() == "$f$"
     render(fig, tmp_path)
 
@@ -561,20 +605,40 @@ def test_work_precision_one_panel_per_system_one_line_per_method(size, tmp_path)
     fig = quiet(pplot.work_precision_figure, work_precision_table(), size=size)
     axes = [a for a in fig.axes if a.axison]
     assert [a.get_title(loc="left") for a in axes] == \
-        ["ladder", "hinge pendulum", "elliptic pendulum"]
+        ["(a) ladder", "(b) hinge pendulum", "(c) elliptic pendulum"]
+    names = ["phasemap, Dormand–Prince 5(4)", "solve_ivp RK45", "solve_ivp DOP853"]
     for a in axes:
         assert a.get_xscale() == "log" and a.get_yscale() == "log"
-        assert [l.get_label() for l in a.lines] == \
-            ["phasemap", "solve_ivp RK45", "solve_ivp DOP853"]
+        assert [l.get_label() for l in a.lines] == names
         assert len(a.lines[0].get_xdata()) == 4  # the zero-error row is left out
+        assert a.get_xlabel() in ("", "Run time per trajectory (s)")
+        assert a.get_ylabel() in ("", r"Final-state error $\|\Delta y\|_\infty$")
     # two columns: one legend above the panels; one column: in the free fourth slot
     legend = fig.legends[0] if size == "two_column" else fig.axes[-1].get_legend()
     assert not (size == "one_column" and fig.axes[-1].axison)
-    assert [t.get_text() for t in legend.get_texts()] == \
-        ["phasemap", "solve_ivp RK45", "solve_ivp DOP853"]
+    assert [t.get_text() for t in legend.get_texts()] == names
+    assert "$y$: the state in SI units" in fig._supxlabel.get_text()  # y is defined
     render(fig, tmp_path)
     fig = quiet(pplot.work_precision_figure, work_precision_table(), error="error_l2")
     assert fig.axes[0].get_ylabel() == "$L_2$ error along the motion"
+
+
+def test_work_precision_points_at_the_fastest_round_with_a_bar_to_the_slowest(tmp_path):
+    rows = work_precision_table()
+    for r in rows:
+        r.update(seconds_min=r["seconds"] * 0.9, seconds_max=r["seconds"] * 1.5, n_samples=5)
+    fig = quiet(pplot.work_precision_figure, rows)
+    a = fig.axes[0]
+    first = [r for r in rows if r["system"] == "ladder" and r["method"] == "phasemap"
+             and r["error_final"] > 0]
+    first.sort(key=lambda r: -r["tol"])
+    np.testing.assert_allclose(a.lines[0].get_xdata(), [r["seconds_min"] for r in first])
+    bars = [c for c in a.collections if isinstance(c, matplotlib.collections.LineCollection)]
+    assert len(bars) == 3  # one spread per method
+    spans = [seg[:, 0] for seg in bars[0].get_segments()]
+    np.testing.assert_allclose([s.max() for s in spans], [r["seconds_max"] for r in first])
+    assert "fastest of 5 timing rounds" in fig._supxlabel.get_text()
+    render(fig, tmp_path)
 
 
 def test_work_precision_bad_table():
@@ -674,3 +738,100 @@ def test_figures_draw_into_subfigures():
     root.canvas.draw()
     assert root.legends or any(a.get_legend() for sub in (left, right) for a in sub.axes)
     plt.close(root)
+
+
+# --------------------------------------------------------------------------- issue 11: what a referee asks
+
+
+def test_a_map_states_what_was_held_fixed(tmp_path):
+    """The ladder at omega = 0.5 says so, read from the atlas's metadata after a round trip."""
+    ds = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 20), "f": np.linspace(0, 2, 15)},
+                        fixed={"omega": 0.5, "l": 2.0}).compute()
+    ds = _roundtrip(ds, tmp_path / "ladder.nc")
+    for size in ("one_column", "two_column"):
+        fig = quiet(ds.phasemap.plot, size=size)
+        heading = fig.axes[0].get_legend().get_title().get_text()
+        for text in (r"$\omega$ = 0.5 rad s$^{-1}$", "$l$ = 2 m", "$g$ = 9.81 m s$^{-2}$",
+                     "$m$ = 1 kg"):
+            assert text in heading, (text, heading)
+        assert "$f$" not in heading and r"$\varphi$" not in heading  # the axes are not fixed
+        assert_legend_outside(fig, fig.axes[0])
+        render(fig, tmp_path, f"ladder_{size}")
+
+
+def test_motions_state_their_initial_state_and_parameters(tmp_path):
+    phase = pytest.importorskip("phasemap.phase")
+    simulate = pytest.importorskip("phasemap.simulate")
+    curve = phase.phase_curve("hinge_pendulum", phi=2.5, omega=0.0, delta=0.1)
+    heading = quiet(curve.phasemap.plot).axes[0].get_legend().get_title().get_text()
+    assert heading.startswith(r"$\varphi_0$ = 2.5 rad, $\omega_0$ = 0 rad s$^{-1}$;")
+    assert r"$\delta$ = 0.1 m" in heading
+    motion = simulate.simulate("elliptic_pendulum", t_end=1.0, phi=1.0, omega=0.0, xdot=-1.0,
+                               f=0.5)
+    fig = quiet(motion.phasemap.plot)
+    heading = fig._suptitle.get_text().replace("\n", " ")
+    assert r"$\dot x_0$ = −1 m s$^{-1}$;" in heading and "$f$ = 0.5" in heading
+    assert "$x_0$" not in heading  # the slider's position does not enter the equations
+    fig = quiet(motion.phasemap.plot, phase_plane=True)
+    assert "$f$ = 0.5" in fig.axes[0].get_legend().get_title().get_text()
+    render(fig, tmp_path)
+
+
+def test_fate_map_states_its_parameters_and_rings_inverted_rests(tmp_path):
+    ds = fate_dataset()
+    ds["phi_rest"][0, 0] = 3.0  # a rest near the upper position
+    fig = quiet(ds.phasemap.plot, extra="n_reversals", size="two_column")
+    texts = pplot.figure_texts(fig)
+    assert any(r"$\delta$ = 0.1 m" in t for t in texts)
+    assert r"rest inverted ($\cos\varphi_\mathrm{rest} < 0$)" in legend_texts(fig.axes[0])
+    rings = [l for a in fig.axes[:2] for l in a.lines if l.get_marker() == "o"
+             and l.get_markerfacecolor() == "none"]
+    assert len(rings) == 2 and all(len(r.get_xdata()) == 1 for r in rings)
+    render(fig, tmp_path)
+
+
+@pytest.mark.parametrize("kind", ["fate", "trajectory", "profile", "work_precision"])
+def test_multi_panel_figures_letter_their_panels(kind, hinge_profile):
+    fig = {"fate": lambda: fate_dataset().phasemap.plot(extra="phi_rest"),
+           "trajectory": lambda: trajectory_dataset().phasemap.plot(),
+           "profile": lambda: hinge_profile.phasemap.plot(),
+           "work_precision": lambda: pplot.work_precision_figure(work_precision_table()),
+           }[kind]()
+    panels = [a for a in fig.axes if a.axison and a.get_label() != "<colorbar>"]
+    panels = [a for a in panels if a.get_position().height > 0.15]
+    headings = []
+    for a in panels:
+        leg = a.get_legend()
+        title = leg.get_title().get_text() if leg is not None and \
+            leg.get_title().get_text() else a.get_title(loc="left")
+        headings.append(title)
+    assert [h[:3] for h in headings] == [f"({c})" for c in "abcd"[:len(panels)]], headings
+
+
+def _grey(colour) -> float:
+    r, g, b = matplotlib.colors.to_rgb(colour)
+    return 0.299 * r + 0.587 * g + 0.114 * b
+
+
+@pytest.mark.parametrize("meanings", [events.FATE_MEANINGS.split(),
+                                      ["none", "unique", "two", "continuum", "three_or_more",
+                                       "contact_lost"]])
+def test_classes_stay_apart_in_greyscale(meanings):
+    """Two classes of one layer differ in grey level by 0.1 or more, or in hatch."""
+    for i, a in enumerate(meanings):
+        for b in meanings[i + 1:]:
+            ca, cb = pplot.category_colour(a), pplot.category_colour(b)
+            ha, hb = pplot.category_hatch(a)[0], pplot.category_hatch(b)[0]
+            assert abs(_grey(ca) - _grey(cb)) >= 0.1 or ha != hb, (a, b)
+
+
+def test_hatched_classes_are_hatched_on_the_map(elliptic_map):
+    fig = quiet(elliptic_map.phasemap.plot, overlays=False)
+    ax = fig.axes[0]
+    hatches = [c.hatches for c in ax.collections if isinstance(c, ContourSet) and c.filled]
+    assert sorted(h[0] for h in hatches) == sorted(pplot.CATEGORY_HATCHES[m]
+                                                   for m in ("none", "two"))
+    patches = dict(zip(legend_texts(ax), ax.get_legend().get_patches()))
+    assert patches["two"].get_hatch() == pplot.CATEGORY_HATCHES["two"]
+    assert patches["none"].get_hatch() == pplot.CATEGORY_HATCHES["none"]
+    assert patches["unique"].get_hatch() is None

@@ -9,6 +9,8 @@ import warnings
 import pytest
 import xarray as xr
 
+import figure_review
+
 import phasemap
 
 STUDIES = pathlib.Path(__file__).resolve().parents[1] / "studies"
@@ -68,14 +70,15 @@ def run(request, tmp_path_factory):
     import io
 
     printed = io.StringIO()
-    with warnings.catch_warnings(), contextlib.redirect_stdout(printed):
+    with warnings.catch_warnings(), contextlib.redirect_stdout(printed), \
+            figure_review.recording() as seen:
         warnings.simplefilter("error")
         claims = module.main(["--quick", "--out", str(out)])
-    return name, claims, printed.getvalue(), out
+    return name, claims, printed.getvalue(), out, seen
 
 
 def test_claims_and_verdicts(run):
-    name, claims, printed, _ = run
+    name, claims, printed, _, _ = run
     assert [(c.claim, c.verdict) for c in claims] == EXPECTED[name]
     assert "DISAGREES" not in printed
     # the printed table: a header, a rule, then one row per claim ending in its verdict
@@ -89,7 +92,7 @@ def test_claims_and_verdicts(run):
 
 
 def test_atlases_carry_provenance(run):
-    name, _, printed, out = run
+    name, _, printed, out, _ = run
     for stem in ATLASES[name]:
         path = out / f"{name}_{stem}.nc"
         assert str(path) in printed
@@ -106,7 +109,7 @@ def test_atlases_carry_provenance(run):
 
 
 def test_figures_written(run):
-    name, _, printed, out = run
+    name, _, printed, out, _ = run
     for stem in FIGURES[name]:
         pdf, png = out / f"{name}_{stem}.pdf", out / f"{name}_{stem}.png"
         assert pdf.read_bytes()[:5] == b"%PDF-"
@@ -114,3 +117,11 @@ def test_figures_written(run):
         assert str(pdf) in printed and str(png) in printed
     # every file in the folder carries the study's prefix
     assert all(p.name.startswith(f"{name}_") for p in out.iterdir())
+
+
+def test_figures_state_what_was_held_fixed_and_letter_their_panels(run):
+    """Issue 11: each figure says g (and so the values held fixed), multi-panel figures are
+    lettered, and no symbol is set upright outside mathtext."""
+    name, _, _, _, seen = run
+    assert set(seen) == {f"{name}_{stem}" for stem in FIGURES[name]}
+    figure_review.check(seen)

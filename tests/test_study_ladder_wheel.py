@@ -15,6 +15,8 @@ import warnings
 import pytest
 import xarray as xr
 
+import figure_review
+
 from phasemap.study import VERDICTS
 
 STUDIES = pathlib.Path(__file__).resolve().parents[1] / "studies"
@@ -76,14 +78,15 @@ def run(request, tmp_path_factory):
     name = request.param
     out = tmp_path_factory.mktemp(name)
     printed = io.StringIO()
-    with warnings.catch_warnings(), contextlib.redirect_stdout(printed):
+    with warnings.catch_warnings(), contextlib.redirect_stdout(printed), \
+            figure_review.recording() as seen:
         warnings.simplefilter("error")
         claims = load(name).main(["--quick", "--out", str(out)])
-    return name, out, claims, printed.getvalue()
+    return name, out, claims, printed.getvalue(), seen
 
 
 def test_files(run):
-    name, out, _, printed = run
+    name, out, _, printed, _ = run
     expected = {f"{stem}.{ext}" for stem, exts in FILES[name].items() for ext in exts}
     assert {p.name for p in out.iterdir()} == expected
     for file in expected:
@@ -101,7 +104,7 @@ def test_files(run):
 
 
 def test_verdicts(run):
-    name, _, claims, printed = run
+    name, _, claims, printed, _ = run
     assert all(c.verdict in VERDICTS for c in claims)
     got = [(c.claim, c.verdict) for c in claims]
     assert len(got) == len(EXPECTED[name]), got
@@ -113,10 +116,18 @@ def test_verdicts(run):
 
 def test_claims_table_printed(run):
     """The table printed at the end has a row per claim: measured beside paper, verdict."""
-    _, _, claims, printed = run
+    _, _, claims, printed, _ = run
     table = printed[printed.index("claim "):]
     header = table.splitlines()[0].split()
     assert header == ["claim", "paper", "measured", "verdict"]
     for c in claims:
         row = next(line for line in table.splitlines() if line.startswith(c.claim))
         assert c.paper in row and c.measured in row and row.rstrip().endswith(c.verdict)
+
+
+def test_figures_state_what_was_held_fixed_and_letter_their_panels(run):
+    """Issue 11: each figure says g (and so the values held fixed), multi-panel figures are
+    lettered, and no symbol is set upright outside mathtext."""
+    name, _, _, _, seen = run
+    assert set(seen) == {stem for stem, exts in FILES[name].items() if "png" in exts}
+    figure_review.check(seen)

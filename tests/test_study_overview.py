@@ -8,6 +8,8 @@ import warnings
 
 import xarray as xr
 
+import figure_review
+
 import phasemap
 
 STUDIES = pathlib.Path(__file__).resolve().parents[1] / "studies"
@@ -16,10 +18,14 @@ STUDIES = pathlib.Path(__file__).resolve().parents[1] / "studies"
 def test_overview_quick(tmp_path, capsys):
     spec = importlib.util.spec_from_file_location("overview", STUDIES / "overview.py")
     module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), figure_review.recording() as seen:
+        spec.loader.exec_module(module)  # inside: the study binds save_figure by name
         warnings.simplefilter("error")
         claims = module.main(["--quick", "--out", str(tmp_path)])
+    # issue 11: the fate map states its parameters; work-precision panels are lettered
+    figure_review.check(seen, exempt_fixed={"overview_work_precision"})
+    wp = " ".join(seen["overview_work_precision"]["texts"])
+    assert "fastest of 5 timing rounds" in wp and "SciPy DOP853" in wp
     assert [c.verdict for c in claims] == ["finding", "finding", "agrees", "agrees", "finding"]
     printed = capsys.readouterr().out
     assert "verdict" in printed and "DISAGREES" not in printed
