@@ -289,7 +289,7 @@ def main():
     args = ap.parse_args()
 
     threads_all = numba.config.NUMBA_NUM_THREADS
-    rows, rows4 = [], []
+    rows = []
     for model in CASES:
         run_numba(model, 16)  # compile / load
         run_numba(model, 16, SUMMARY)
@@ -342,7 +342,7 @@ def main():
         "alternating runs; compilation excluded. Mcell/s = 10^6 cells per second. Every kernel "
         "is checked cell by cell against the NumPy reference (and the previous kernel) first.",
         "",
-        f"### Layer `n_solutions`",
+        "### Layer `n_solutions`",
         "",
         f"| model | side | numba 1 thread | numba {threads_all} threads | previous kernel "
         f"({threads_all} threads) | NumPy | store loop ({threads_all} threads) | "

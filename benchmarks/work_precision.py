@@ -1,4 +1,4 @@
-"""Work-precision: error against run time per trajectory, and a 10^6-cell wheel fate map.
+"""Work-precision: error against run time per trajectory, phasemap against solve_ivp.
 
 For each built-in problem of :mod:`phasemap.workprecision` (one per system)
 this runs the first-integral tracer, the numba integrator (its kernel with
@@ -12,8 +12,8 @@ JIT compilation is excluded.
 
 Outputs: ``benchmarks/work_precision.pdf`` and ``.png`` (drawn by
 ``phasemap.plot.work_precision_figure``), ``benchmarks/work_precision.csv``
-(every row), and the section "Work-precision" of ../BENCHMARKS.md.  Then it
-times a fate map of the wheel (rtol 1e-6, t_end 30 s) on a 1000 x 1000 grid.
+(every row), and the section "Work-precision" of ../BENCHMARKS.md.  The fate
+map of the wheel is timed by ``benchmarks/fate_map.py``.
 
     python benchmarks/work_precision.py [--quick] [--repeats 3] [--no-write]
 """
@@ -21,7 +21,6 @@ times a fate map of the wheel (rtol 1e-6, t_end 30 s) on a 1000 x 1000 grid.
 from __future__ import annotations
 
 import argparse
-import collections
 import csv
 import math
 import os
@@ -30,64 +29,13 @@ import statistics
 import sys
 import time
 
-import numba
-import numpy as np
-
-import phasemap
 import phasemap.workprecision as wp
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from grid import cold_start, machine, write_section  # noqa: E402
+from grid import machine, write_section  # noqa: E402
 
 HERE = pathlib.Path(__file__).resolve().parent
 LEVELS = (1e-3, 1e-5, 1e-7, 1e-9, 1e-11)
-FATE_LAYERS = ["fate", "n_reversals", "t_rest", "phi_rest"]
-FATE_OPTIONS = {"t_end": 30.0, "rtol": 1e-6}
-OMEGA_MAX = 6.0
-
-
-def fate_scene(n: int) -> phasemap.Scene:
-    return phasemap.Scene("wheel", axes={"phi": np.linspace(-np.pi, np.pi, n),
-                                         "omega": np.linspace(-OMEGA_MAX, OMEGA_MAX, n)},
-                          layers=FATE_LAYERS, options=FATE_OPTIONS)
-
-
-#: A fresh process imports phasemap and computes a 4 x 4 wheel fate map.
-FATE_START = ("import time; t = time.perf_counter(); import sys; sys.path.insert(0, %r); "
-              "import work_precision as w; w.fate_scene(4).compute(); "
-              "print(time.perf_counter() - t)" % str(HERE))
-
-
-def fate_map(side: int, small: int) -> dict:
-    """Time the wheel's fate map: cold start, threads on a small map, the big map once."""
-    fate_scene(4).compute()
-    cold = (cold_start(False, FATE_START), cold_start(True, FATE_START))
-    threads_all = numba.config.NUMBA_NUM_THREADS
-    per_thread = {}
-    for threads in (1, threads_all):
-        numba.set_num_threads(threads)
-        times = []
-        for _ in range(3):
-            start = time.perf_counter()
-            fate_scene(small).compute()
-            times.append(time.perf_counter() - start)
-        per_thread[threads] = small * small / statistics.median(times)
-    numba.set_num_threads(threads_all)
-    start = time.perf_counter()
-    ds = fate_scene(side).compute()
-    seconds = time.perf_counter() - start
-    counts = collections.Counter(ds.fate.values.ravel().tolist())
-    rest = ds.fate.values == phasemap.Event.REST
-    return dict(side=side, cells=side * side, seconds=seconds, cold=cold,
-                per_thread=per_thread, threads=threads_all, small=small,
-                counts={phasemap.Event(k).name.lower(): v for k, v in sorted(counts.items())},
-                mean_reversals=float(ds.n_reversals.values.mean()),
-                median_t_rest=float(np.median(ds.t_rest.values[rest])) if rest.any()
-                else math.nan,
-                finite=bool(np.isfinite(ds.phi_rest.values[rest]).all()
-                            and np.isnan(ds.phi_rest.values[~rest]).all()))
-
-
 def write_csv(rows, path):
     keys = ["system", "method", "tol", "error_final", "error_l2", "seconds", "fate",
             "n_reversals", "same_fate", "n_steps", "nfev", "skipped", "reference", "floor",
@@ -183,31 +131,18 @@ def limits(rows, systems) -> list[str]:
     return lines
 
 
-def fate_limits(fm) -> str:
-    one = fm["per_thread"].get(1, math.nan)
-    both = fm["per_thread"].get(fm["threads"], math.nan)
-    rate = fm["cells"] / fm["seconds"]
-    return (f"Each cell is one trajectory (on average {fm['mean_reversals']:.1f} reversals, "
-            f"median time to rest {fm['median_t_rest']:.1f} s at rtol 1e-6): "
-            f"{1e6 / one:.0f} us of one thread per cell; {fm['threads']} threads give "
-            f"{both / one:.1f}x. Under a minute needs {1e6 / 60:.0f} cells/s, "
-            f"{1e6 / 60 / rate:.1f}x the rate measured here.")
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true",
                     help="4 tolerances, 1 round, a 200^2 fate map (a few minutes)")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--problems", nargs="+", default=list(wp.PROBLEMS))
-    ap.add_argument("--side", type=int, default=1000, help="fate map side (cells per axis)")
     ap.add_argument("--no-write", action="store_true", help="print only")
     args = ap.parse_args()
     if args.quick:
-        tolerances, repeats, min_time, side, small = (1e-3, 1e-6, 1e-9, 1e-12), 1, 0.005, 200, 64
+        tolerances, repeats, min_time = (1e-3, 1e-6, 1e-9, 1e-12), 1, 0.005
     else:
-        tolerances, repeats, min_time, side, small = (wp.DEFAULT_TOLERANCES, args.repeats, 0.05,
-                                                      args.side, 200)
+        tolerances, repeats, min_time = wp.DEFAULT_TOLERANCES, args.repeats, 0.05
     load_start = os.getloadavg()
     started = time.perf_counter()
     rows, refs = [], {}
@@ -223,9 +158,7 @@ def main():
     table = wp.report(rows, LEVELS)
     print(table)
     summary = ratio_summary(rows, args.problems)
-    fm = fate_map(side, small)
     load_end = os.getloadavg()
-    print(fm)
 
     paths = ("(not written)",)
     if not args.no_write:
@@ -295,37 +228,8 @@ def main():
         lines.append(f"- Overall: median {statistics.median(all_ratios):.0f}x, range "
                      f"{min(all_ratios):.0f}x-{max(all_ratios):.0f}x; >= 100x at {met} of "
                      f"{len(all_ratios)} (system, level) pairs.")
-    lines += ["", *limits(rows, args.problems)]
-    lines += [
-        "",
-        "### Fate map of the wheel",
-        "",
-        f"`phasemap.Scene(\"wheel\", axes={{\"phi\": linspace(-pi, pi, {fm['side']}), "
-        f"\"omega\": linspace(-{OMEGA_MAX:g}, {OMEGA_MAX:g}, {fm['side']})}}, "
-        f"layers={FATE_LAYERS}, options={FATE_OPTIONS}).compute()`, default parameters "
-        f"(delta = 0.05):",
-        "",
-        "| cells | wall time | cells/s | fates | mean reversals | median t_rest |",
-        "|---:|---:|---:|---|---:|---:|",
-        f"| {fm['cells']:.3g} | {fm['seconds']:.1f} s | {fm['cells'] / fm['seconds']:.0f} | "
-        + ", ".join(f"{k} {v}" for k, v in fm["counts"].items())
-        + f" | {fm['mean_reversals']:.2f} | {fm['median_t_rest']:.2f} s |",
-        "",
-        f"Threads on a {fm['small']}^2 map (medians of 3): "
-        + ", ".join(f"{t} thread{'s' if t > 1 else ''} {c:.0f} cells/s"
-                    for t, c in fm["per_thread"].items())
-        + f". Cold start (a fresh process importing phasemap and mapping 4 x 4 cells): "
-        f"{fm['cold'][0]:.1f} s with numba's on-disk cache warm, {fm['cold'][1]:.1f} s with "
-        f"an empty cache (compiling the integrator). phi_rest finite exactly where the fate "
-        f"is rest: {fm['finite']}.",
-        fate_limits(fm),
-        f"Target: 10^6 cells in under a minute: "
-        f"{'met' if fm['cells'] >= 1e6 and fm['seconds'] < 60 else 'not met'} "
-        f"({fm['seconds']:.0f} s for {fm['cells']:.3g} cells"
-        + (f"; at this rate 10^6 cells take {1e6 / (fm['cells'] / fm['seconds']):.0f} s"
-           if fm["cells"] != 1e6 else "") + ").",
-        "",
-    ]
+    lines += ["", *limits(rows, args.problems), "",
+              "The fate map of the wheel has its own section (`benchmarks/fate_map.py`).", ""]
     text = "\n".join(lines)
     print(text)
     print("figure:", *paths)

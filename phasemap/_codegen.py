@@ -194,7 +194,13 @@ def _load(model, kind: str, text: str):
         if stem in _LOADED:
             return _LOADED[stem]
         root = cache_dir()
-        root.mkdir(parents=True, exist_ok=True)
+        try:
+            root.mkdir(parents=True, exist_ok=True)
+            probe = tempfile.NamedTemporaryFile(dir=root, prefix=".probe.")
+            probe.close()
+        except OSError:  # a read-only home: a private folder under the temporary directory
+            root = pathlib.Path(tempfile.gettempdir()) / f"phasemap-kernels-{os.getuid()}"
+            root.mkdir(parents=True, exist_ok=True)
         path = root / f"{stem}.py"
         if not path.exists():
             fd, tmp = tempfile.mkstemp(dir=root, prefix=f".{stem}.", suffix=".tmp")

@@ -208,3 +208,19 @@ def test_the_kernel_cache_keeps_the_most_recently_used(tmp_path, monkeypatch):
     assert sorted(p.name.split(".")[0] for p in (tmp_path / "__pycache__").iterdir()) == \
         [f"ladder_grid_phi_{k:08d}" for k in (2, 3, 4)]
     assert (tmp_path / "wheel_grid_phi_00000000.py").exists()
+
+
+def test_an_unusable_cache_dir_falls_back_to_a_private_temporary_folder(tmp_path, monkeypatch):
+    import os
+    import pathlib
+    import tempfile
+    import time
+
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    monkeypatch.setenv("PHASEMAP_CACHE_DIR", str(blocker / "kernels"))  # cannot be created
+    module = _codegen._load(phasemap.MODELS["ladder"], "probe", f"X = {time.time_ns()}\n")
+    folder = pathlib.Path(module.__file__).parent
+    assert folder == pathlib.Path(tempfile.gettempdir()) / f"phasemap-kernels-{os.getuid()}"
+    assert isinstance(module.X, int)
+    pathlib.Path(module.__file__).unlink()
