@@ -77,7 +77,8 @@ def numpy_ladder(phi, f, omega, l, g, m):
     ok = (nf >= -tol) & (nw >= -tol)
     n = np.where(singular, np.where(np.abs(rhs) <= TOL * rhs_scale, 3, 0), ok)
     lost = ~singular & ~ok
-    return n.astype(np.int8), lost.astype(np.int8), singular.astype(np.int8)
+    return (n.astype(np.int8), lost.astype(np.int8),
+            np.broadcast_to(singular, n.shape).astype(np.int8))
 
 
 def numpy_wheel(phi, delta, omega, r, l, rho, g, m):

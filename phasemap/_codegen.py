@@ -133,19 +133,35 @@ class _Source:
             return f"rest | ({vel} < 0.0)"
         return "rest"
 
-    def rows(self, ind: str) -> list[str]:
-        """Lines that compute every candidate row, without control flow (for SIMD).
+    def rows(self, ind: str, regime: str | None = None) -> list[str]:
+        """Lines that compute the candidate rows, without control flow (for SIMD).
 
         Defines ``s{b}`` (status, 0 where absent), ``z{b}`` (singular flag) and
         ``r{b}`` (the row tuple, meaningful where ``a{b}``: the branch applies).
+        With ``regime`` ("rest", "pos" or "neg": the velocity is zero, positive
+        or negative for the whole loop, and ``rest``, ``vb`` are set before it)
+        only the branches that apply are computed; the others get ``s{b} = 0``
+        and no ``r{b}``.
         """
         out = []
-        for b in range(len(self.model.candidates)):
-            out += [f"r{b} = {self.call(b, 'rest', 'vb')}",
-                    f"a{b} = {self.applies(b)}",
-                    f"s{b} = r{b}[0] if a{b} else 0.0",
-                    f"z{b} = r{b}[1] if a{b} else 0.0"]
-        return self.head(ind) + [ind + line for line in out]
+        for b in self.active(regime):
+            out += [f"r{b} = {self.call(b, 'rest', 'vb')}"]
+            if regime is None:
+                out += [f"a{b} = {self.applies(b)}",
+                        f"s{b} = r{b}[0] if a{b} else 0.0",
+                        f"z{b} = r{b}[1] if a{b} else 0.0"]
+            else:
+                out += [f"s{b} = r{b}[0]", f"z{b} = r{b}[1]"]
+        for b in set(range(len(self.model.candidates))) - set(self.active(regime)):
+            out += [f"s{b} = 0.0", f"z{b} = 0.0"]
+        return (self.head(ind) if regime is None else []) + [ind + line for line in out]
+
+    def active(self, regime: str | None) -> list[int]:
+        """The branches that can apply in ``regime`` (all of them for None and rest)."""
+        if regime in (None, "rest"):
+            return list(range(len(self.model.candidates)))
+        sign = 1.0 if regime == "pos" else -1.0
+        return [b for b, c in enumerate(self.model.candidates) if c.direction == sign]
 
     def load(self, ind: str, skip=()) -> list[str]:
         """Lines that read every input but ``skip`` from ``v`` into ``i_*`` locals."""
@@ -380,24 +396,56 @@ def grid_kernel(model, layers, inner: str):
               '@njit(CELLS_SIGNATURE, cache=True, error_model="numpy")',
               "def cells(v, first, lo, hi, inner_values, inner_deriv, flags, fields):",
               '    """Cells lo..hi of the inner axis at the outer state v; outputs from first."""']
+    flag_layers = [l for l in layers if l.is_summary]
+    field_layers = [l for l in layers if not l.is_summary]
+    # One store stream per loop vectorises; several (rows of one array, which
+    # LLVM cannot prove disjoint) do not.  So several summary layers are packed
+    # into one byte per cell (n_solutions in bits 0-2, then one bit each) and
+    # unpacked by one short loop per layer.
+    packed = len(flag_layers) > 1
+    shift = {"n_solutions": 0, "stagnation": 3, "contact_lost": 4, "singular": 5}
+    mask = {"n_solutions": 7, "stagnation": 1, "contact_lost": 1, "singular": 1}
     lines += src.load("    ", skip)
-    lines += ["    for j in range(lo, hi):",
-              f"        i_{inner} = inner_values[j]"]
-    lines += [f"        i_{d.name} = inner_deriv[{k}, j]" for k, d in enumerate(inner_derived)]
-    lines += src.rows("        ")
-    lines += src.summary("        ", summaries)
-    n_flag = n_field = 0
-    for layer in layers:
-        if layer.is_summary:
-            lines.append(f"        flags[{n_flag}, first + j] = q_{layer.name}")
-            n_flag += 1
-            continue
-        b, col = layer.branch, layer.column
-        keep = f"(s{b} == {nx.ADMISSIBLE}.0)"
-        if not layer.admissible_only:
-            keep = f"(s{b} != {nx.ABSENT}.0)"
-        lines.append(f"        fields[{n_field}, first + j] = r{b}[{col}] if {keep} else NAN")
-        n_field += 1
+    if packed:
+        lines.append("    code = np.empty(hi - lo, dtype=np.int8)")
+
+    def loop(ind: str, regime: str | None) -> list[str]:
+        body = [f"{ind}for j in range(lo, hi):", f"{ind}    i_{inner} = inner_values[j]"]
+        body += [f"{ind}    i_{d.name} = inner_deriv[{k}, j]"
+                 for k, d in enumerate(inner_derived)]
+        body += src.rows(ind + "    ", regime)
+        body += src.summary(ind + "    ", summaries)
+        if packed:
+            bits = " | ".join(f"(q_{l.name} << {shift[l.name]})" for l in flag_layers)
+            body.append(f"{ind}    code[j - lo] = np.int8({bits})")
+        elif flag_layers:
+            body.append(f"{ind}    flags[0, first + j] = q_{flag_layers[0].name}")
+        active = src.active(regime)
+        for k, layer in enumerate(field_layers):
+            b, col = layer.branch, layer.column
+            keep = f"(s{b} == {nx.ADMISSIBLE}.0)"
+            if not layer.admissible_only:
+                keep = f"(s{b} != {nx.ABSENT}.0)"
+            value = f"r{b}[{col}] if {keep} else NAN" if b in active else "NAN"
+            body.append(f"{ind}    fields[{k}, first + j] = {value}")
+        return body
+
+    if inner != model.velocity and inner not in src.scale_names:
+        # The velocity is the same along the whole loop: one loop per regime,
+        # each computing only the branches that can apply (a moving state
+        # needs one slip direction of the candidates, not all).
+        lines += src.head("    ")
+        lines += ["    if rest:", *loop("        ", "rest"),
+                  f"    elif i_{model.velocity} > 0.0:", *loop("        ", "pos"),
+                  "    else:", *loop("        ", "neg")]
+    else:
+        lines += loop("    ", None)
+    if packed:
+        for k, layer in enumerate(flag_layers):
+            lines += [f"    out = flags[{k}]",
+                      "    for j in range(lo, hi):",
+                      f"        out[first + j] = (code[j - lo] >> {shift[layer.name]}) & "
+                      f"{mask[layer.name]}"]
     key = "_".join(l.name for l in layers)
     tag = hashlib.sha256(f"{key}|{inner}".encode()).hexdigest()[:8]
     return _load(model, f"grid_{inner}_{tag}", "\n".join(lines) + "\n").cells
