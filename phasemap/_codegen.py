@@ -309,7 +309,8 @@ def contract(model):
     # times, and an out-of-line call that passes arrays costs more than the physics.
     for signature in ("branch_row(v, b)", "derive(v)"):
         name, args = signature.split("(", 1)
-        lines += ['@njit(inline="always", error_model="numpy")', f"def {name}_inline({args}:",
+        lines += ['@njit(cache=True, forceinline=True, error_model="numpy")',
+                  f"def {name}_inline({args}:",
                   *bodies[signature], "", ""]
     return _load(model, "contract", "\n".join(lines) + "\n")
 

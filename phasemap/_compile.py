@@ -31,8 +31,10 @@ def specialize(template, model: Model, kind: str, parallel: bool = False, inline
                **constants):
     """The template compiled for ``model`` with ``constants`` as its globals.
 
-    With ``inline`` the function is inlined (numba IR inlining) into its callers
-    instead: for small per-step helpers, whose calls would pass arrays.
+    With ``inline`` the function is marked for LLVM to inline into its callers
+    (``forceinline``): for small per-step helpers, whose calls would pass arrays
+    as structs by value.  Unlike numba's IR inlining, the helper is compiled
+    once, not once per call site.
     """
     key = (kind, model.name)
     kernel = _CACHE.get(key)
@@ -44,7 +46,7 @@ def specialize(template, model: Model, kind: str, parallel: bool = False, inline
         fn.__qualname__ = name  # one on-disk cache index per model and source
         fn.__doc__ = template.__doc__
         if inline:
-            kernel = _CACHE[key] = njit(inline="always", error_model="numpy")(fn)
+            kernel = _CACHE[key] = njit(cache=True, forceinline=True, error_model="numpy")(fn)
         else:
             kernel = _CACHE[key] = njit(parallel=parallel, cache=True, error_model="numpy")(fn)
     return kernel

@@ -61,7 +61,7 @@ N_CONTINUUM = 3
 N_THREE_OR_MORE = 4
 
 
-@njit(inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", forceinline=True)
 def is_zero(q, scale):
     """True where ``q`` vanishes relative to the magnitude ``scale`` of its terms."""
     return abs(q) <= TOL * scale
@@ -75,7 +75,7 @@ NAN = np.nan
 # (conditional expressions compile to selects), so that a grid kernel's inner
 # loop vectorises through them.
 
-@njit(inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", forceinline=True)
 def start_interval(rest, s):
     """Open interval of accelerations a branch may take: ``s * a > 0`` when it starts from rest."""
     lo = 0.0 if (rest & (s > 0.0)) else -np.inf
@@ -83,7 +83,7 @@ def start_interval(rest, s):
     return lo, hi
 
 
-@njit(inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", forceinline=True)
 def restrict_affine(q0, dq, lo, hi):
     """Intersect the open interval ``(lo, hi)`` with ``{a : q0 + dq * a >= 0}``.
 

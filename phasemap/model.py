@@ -39,7 +39,7 @@ A new model provides:
 
 Branch functions
 ----------------
-A branch function is ``@numba.njit(inline="always", error_model="numpy")``,
+A branch function is ``@numba.njit(cache=True, forceinline=True, error_model="numpy")``,
 takes scalars and **returns** its row as a tuple of floats laid out as in
 :mod:`phasemap._numerics`: ``(status, singular, coefficient,
 accelerations..., reactions...)``, NaN for what it does not determine.  Its
@@ -48,7 +48,9 @@ others are named after model inputs (``phi``, ``f``, ``sin_phi``...), and a
 parameter named ``rest`` receives whether the branch starts from zero
 relative velocity.  Write it without early returns and with ``&``/``|`` and
 conditional expressions instead of ``and``/``or``/``if``, so that it inlines
-into the grid kernel's inner loop and vectorises there.
+into the grid kernel's inner loop and vectorises there.  ``forceinline`` asks
+LLVM to inline it; numba's own ``inline="always"`` gives the same machine code
+but repeats the work for every call site (about twice the compile time).
 
 From these the framework generates (:mod:`phasemap._codegen`) everything the
 rest of phasemap calls: ``model.point(v, out)`` (all candidate rows at one

@@ -70,7 +70,7 @@ from .._numerics import (
 from ..model import Branch, Derived, Dynamics, Model, Variable
 
 
-@njit(inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", forceinline=True)
 def slide(sigma, rho, rest, omega, f, l, g, m, sin_phi, cos_phi):
     """The slide branch with slider direction sigma and assumed sgn N = rho.
 
@@ -103,7 +103,7 @@ def slide(sigma, rho, rest, omega, f, l, g, m, sin_phi, cos_phi):
             NAN if singular else n, NAN if singular else -k * f * n)
 
 
-@njit(inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", forceinline=True)
 def stick(omega, f, l, g, m, sin_phi, cos_phi):
     """The stick branch of the slider (x' = x'' = 0): (status, 0, NaN, x'', phi'', N, F)."""
     sp, cp = sin_phi, cos_phi
@@ -115,7 +115,7 @@ def stick(omega, f, l, g, m, sin_phi, cos_phi):
     return (float(ADMISSIBLE if ok else INADMISSIBLE), 0.0, NAN, 0.0, -0.5 * g * sp / l, n, fr)
 
 
-@njit(inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", forceinline=True)
 def velocity_scale(omega, l, g):
     """The slider's natural speed: xdot is zero below 1e-12 of it."""
     return math.sqrt(g * l) + l * abs(omega)

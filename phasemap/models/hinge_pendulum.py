@@ -63,7 +63,7 @@ from .._numerics import (
 from ..model import Branch, Derived, Dynamics, Model, Variable
 
 
-@njit(inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", forceinline=True)
 def turn(sigma, rest, omega, delta, l, g, m, sin_phi, cos_phi):
     """One turning branch (direction sigma): the admissible root of (32).
 
@@ -92,7 +92,7 @@ def turn(sigma, rest, omega, delta, l, g, m, sin_phi, cos_phi):
             a if fields else NAN, m * qn if fields else NAN, m * u if fields else NAN)
 
 
-@njit(inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", forceinline=True)
 def stick(delta, l, g, m, sin_phi, cos_phi):
     """The stick branch: rest is possible iff l |sin phi| <= delta (35)."""
     ok = g * (delta - l * abs(sin_phi)) >= -TOL * g * (delta + l)
@@ -100,7 +100,7 @@ def stick(delta, l, g, m, sin_phi, cos_phi):
             m * g * cos_phi if ok else NAN, m * g * sin_phi if ok else NAN)
 
 
-@njit(inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", forceinline=True)
 def velocity_scale(g, l):
     """The pendulum's natural rate sqrt(g / l): omega is zero below 1e-12 of it."""
     return math.sqrt(g / l)

@@ -77,7 +77,7 @@ from .._numerics import (
 from ..model import Branch, Derived, Dynamics, Model, Variable
 
 
-@njit(inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", forceinline=True)
 def slide(s, rest, omega, f, l, g, m, sin_phi, cos_phi):
     """One slide branch (direction s) from (8): (status, singular, 2 - f^2, phi'', N_floor, N_wall)."""
     sp, cp = sin_phi, cos_phi
@@ -109,7 +109,7 @@ def slide(s, rest, omega, f, l, g, m, sin_phi, cos_phi):
             NAN if singular else a, NAN if singular else nf, NAN if singular else nw)
 
 
-@njit(inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", forceinline=True)
 def stick(f, g, m, sin_phi, cos_phi):
     """The stick branch: rest is possible iff phi <= 2 arctan f."""
     sp, cp = sin_phi, cos_phi
@@ -120,7 +120,7 @@ def stick(f, g, m, sin_phi, cos_phi):
             0.5 * m * g * (1.0 + cp) if ok else NAN, 0.5 * m * g * sp if ok else NAN)
 
 
-@njit(inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", forceinline=True)
 def velocity_scale(g, l):
     """The bar's natural rate sqrt(g / l): omega is zero below 1e-12 of it."""
     return math.sqrt(g / l)

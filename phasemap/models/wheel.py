@@ -65,7 +65,7 @@ from .._numerics import (
 from ..model import Branch, Derived, Dynamics, Model, Variable
 
 
-@njit(inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", forceinline=True)
 def roll(sigma, rest, omega, delta, r, l, rho, g, m, sin_phi, cos_phi):
     """One rolling branch (direction sigma) from (13) and the no-bounce condition.
 
@@ -93,7 +93,7 @@ def roll(sigma, rest, omega, delta, r, l, rho, g, m, sin_phi, cos_phi):
             NAN if singular else m * ((r - l * cp) * a + l * sp * w2))
 
 
-@njit(inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", forceinline=True)
 def stick(delta, l, g, m, sin_phi):
     """The stick branch: rest is possible iff l |sin phi| <= delta (15)."""
     ok = g * (delta - l * abs(sin_phi)) >= -TOL * g * (delta + l)
@@ -101,7 +101,7 @@ def stick(delta, l, g, m, sin_phi):
             m * g if ok else NAN, 0.0 if ok else NAN)
 
 
-@njit(inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", forceinline=True)
 def velocity_scale(g, r):
     """The disc's natural rate sqrt(g / r): omega is zero below 1e-12 of it."""
     return math.sqrt(g / r)
