@@ -296,7 +296,8 @@ class Scene:
 def _compute_block(block: xr.Dataset, spec: Mapping) -> xr.Dataset:
     """Compute one dask block: the scene restricted to the block's coordinates."""
     axes = {n: block[n].values for n in spec["axes"]}
-    scene = Scene(spec["model"], axes=axes, fixed=spec["fixed"], layers=spec["layers"])
+    scene = Scene(spec["model"], axes=axes, fixed=spec["fixed"], layers=spec["layers"],
+                  options=spec.get("options"))
     ds = scene.compute()
     return ds.assign_attrs(block.attrs)
 
