@@ -188,6 +188,11 @@ class Dynamics:
     ``stick_is_rest``
         the stick branch freezes the whole state (one degree of freedom), so
         reaching it ends the motion.
+    ``edges``
+        optional ``{state name: (at the lower bound, at the upper bound)}``:
+        what reaching an edge of the domain means for the body (the ladder
+        lying flat).  A motion that reaches one ends with ``left_domain`` and
+        this text.
     """
 
     coordinates: tuple[tuple[str, str, str], ...]
@@ -196,6 +201,7 @@ class Dynamics:
     directions: tuple[float, ...]
     positions: tuple[Variable, ...] = ()
     stick_is_rest: bool = True
+    edges: Mapping[str, tuple[str, str]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

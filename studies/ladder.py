@@ -270,8 +270,8 @@ def portrait_figure(regions: xr.Dataset, curves):
             side = "<" if f < SQRT2 else ">"
             ax.set_title(rf"({'ab'[k]}) $f$ = {f:g} {side} $\sqrt{{2}}$,  "
                          rf"2 arctan $f$ = {2 * math.atan(f):.2f} rad")
-        if "horizon" in handles:
-            handles["lying flat (φ = π/2)"] = handles.pop("horizon")
+        if "left domain" in handles:
+            handles["lying flat (φ = π/2)"] = handles.pop("left domain")
         handles["a contact would pull"] = Patch(facecolor="none", edgecolor=blue,
                                                 hatch="\\\\\\\\", linewidth=0.6, ls="--")
         handles["c = 0: ω² = a sin φ + b cos φ"] = Line2D([], [], color=pplot.GREY, lw=0.8,

@@ -207,7 +207,9 @@ MODEL = Model(
     velocity="omega",
     point=point,
     dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),), branch=branch,
-                      derive=derive, directions=(1.0, -1.0, 0.0)),
+                      derive=derive, directions=(1.0, -1.0, 0.0),
+                      edges={"phi": ("the bar stands upright against the wall",
+                                     "the bar lies flat on the floor")}),
     default_axes={"phi": (0.0, math.pi / 2, 512), "f": (0.0, 3.0, 512)},
 )
 
