@@ -41,6 +41,7 @@ import datetime as _dt
 import math
 import os
 import pathlib
+import shutil
 import tempfile
 from typing import Iterator, Mapping
 
@@ -143,16 +144,46 @@ def write_atlas(ds: xr.Dataset, path: str | os.PathLike, *, complevel: int = 4,
     ValueError
         before anything is computed or written, if the destination folder does
         not exist, or if the atlas carries attributes netCDF cannot store
-        (bools, None) or serialisation keys in ``.attrs``.
+        (bools, None) or serialisation keys in ``.attrs``; as :class:`WriteError`
+        when writing fails (a full disk), leaving no partial file.
     """
     if not isinstance(ds, xr.Dataset):
         raise TypeError(f"write_atlas needs an xarray.Dataset, got {type(ds).__name__}")
     path = destination(path)
     out = _prepare(ds)
     encoding = cf_encoding(out, chunks, complevel=complevel)
-    with atomic_path(path) as tmp:
+    with no_partial_file(path) as tmp:
         out.to_netcdf(tmp, mode="w", format="NETCDF4", engine="netcdf4", encoding=encoding)
     return path
+
+
+class WriteError(ValueError):
+    """Writing failed (a full disk, an I/O error); no partial file was left."""
+
+
+@contextlib.contextmanager
+def no_partial_file(path: pathlib.Path) -> Iterator[pathlib.Path]:
+    """:func:`atomic_path`, with I/O errors turned into a one-line :class:`WriteError`."""
+    try:
+        with atomic_path(path) as tmp:
+            yield tmp
+    except (OSError, RuntimeError) as err:
+        reason = " ".join(str(err).split()) or type(err).__name__
+        try:
+            free = _size(shutil.disk_usage(path.parent).free)
+        except OSError:
+            free = "?"
+        raise WriteError(f"cannot write {path}: {reason} ({free} free on {path.parent}); "
+                         "no file was left") from None
+
+
+def _size(n: float) -> str:
+    """A byte count for a person: 12 B, 3.4 MB, 2 TB."""
+    for unit in ("B", "kB", "MB", "GB", "TB"):
+        if abs(n) < 1000:
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.3g} {unit}"
+        n /= 1000.0
+    return f"{n:.3g} PB"
 
 
 @contextlib.contextmanager
