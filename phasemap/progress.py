@@ -19,6 +19,7 @@ import contextlib
 import os
 import sys
 import threading
+import time
 from typing import Iterator
 
 from tqdm import tqdm
@@ -64,13 +65,16 @@ def activity(desc: str) -> Iterator[None]:
     if not enabled():
         yield
         return
-    line = tqdm(total=None, desc=desc, file=sys.stderr, delay=_delay(), leave=False,
+    delay = _delay()
+    line = tqdm(total=None, desc=desc, file=sys.stderr, delay=delay, leave=False,
                 bar_format="{desc} [{elapsed}]", dynamic_ncols=True)
     stop = threading.Event()
+    start = time.monotonic()
 
     def tick():
         while not stop.wait(0.5):
-            line.refresh()
+            if time.monotonic() - start >= delay:
+                line.refresh()
 
     thread = threading.Thread(target=tick, daemon=True)
     _state["activities"].append(line)

@@ -53,8 +53,8 @@ class Scene:
         model name or :class:`phasemap.Model`.
     axes:
         ``{name: values}`` for 1 or more state or parameter names, each a
-        non-empty 1-D sequence of finite values inside the variable's domain
-        (uniform or not).  The Dataset's dimensions follow this order.
+        non-empty 1-D sequence of finite values inside the variable's domain,
+        strictly increasing or strictly decreasing (uniform or not).  The Dataset's dimensions follow this order.
     fixed:
         values for other names; names neither on an axis nor fixed take the
         model's defaults.
@@ -118,6 +118,12 @@ class Scene:
             if a.ndim != 1 or a.size == 0:
                 raise ValueError(f"{m.name}: axis {name} must be a non-empty 1-D sequence, "
                                  f"got shape {a.shape}")
+            if a.size > 1:
+                step = np.diff(a)
+                if not (np.all(step > 0) or np.all(step < 0)):
+                    what = "repeats a value" if np.any(step == 0) else "goes back and forth"
+                    raise ValueError(f"{m.name}: axis {name} {what}; an axis must be strictly "
+                                     "increasing or strictly decreasing")
             self.axes[name] = a
         for name, value in fixed.items():
             if np.ndim(value) != 0:
