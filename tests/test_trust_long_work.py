@@ -7,6 +7,7 @@ over (CLI, info, README numbers, offline cfchecks).
 
 from __future__ import annotations
 
+import contextlib
 import math
 import re
 
@@ -114,3 +115,219 @@ def test_running_out_of_steps_has_its_own_name():
     events = phasemap.simulate("hinge_pendulum", t_end=100.0, max_events=2, phi=2.0,
                                delta=0.01)
     assert events.attrs["end_reason"] == "max_events"
+
+
+# ------------------------------------------------ the command line, run -----
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+PHASEMAP = [sys.executable, "-m", "phasemap.cli"]
+
+
+def env(progress: str = "always") -> dict:
+    e = dict(os.environ, PHASEMAP_PROGRESS=progress)
+    e["PYTHONPATH"] = os.pathsep.join([str(ROOT), e.get("PYTHONPATH", "")])
+    return e
+
+
+def run(*args, cwd=None, progress="never"):
+    return subprocess.run(PHASEMAP + [str(a) for a in args], capture_output=True, text=True,
+                          cwd=cwd, timeout=300, env=env(progress))
+
+
+def one_line_error(r, words):
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2, r.stderr
+    assert len(lines) == 1 and lines[0].startswith("phasemap: error: "), r.stderr
+    assert words in lines[0], lines[0]
+
+
+# --------------------------------------------- 4. a huge grid is refused -----
+def test_a_huge_grid_is_refused_before_any_work(tmp_path):
+    r = run("atlas", "ladder", "--axis", "phi=0:1.5:1000000", "--axis", "f=0:3:1000000",
+            "-o", tmp_path / "huge.nc")
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1, r.stderr
+    # refused for the disk (2 TB uncompressed) or, on a disk that large, for --yes
+    assert ("free" in lines[0] and "typical" in lines[0]) or "--yes" in lines[0], lines[0]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_above_a_billion_cells_asks_for_yes(tmp_path):
+    from phasemap import blocks
+
+    scene = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 40000),
+                                           "f": np.linspace(0, 3, 40000)}, layers=["singular"])
+    est = blocks.estimate(scene)
+    assert est.cells == 1_600_000_000 > blocks.YES_CELLS
+    assert est.bytes == est.cells and est.typical_bytes < est.bytes
+    r = run("atlas", "ladder", "--axis", "phi=0:1.5:40000", "--axis", "f=0:3:40000",
+            "--layers", "singular", "-o", tmp_path / "big.nc")
+    if "free" in r.stderr:
+        pytest.skip("this disk cannot hold the 80 MB the estimate asks for")
+    one_line_error(r, "pass --yes to go ahead")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_estimate_is_printed_and_the_blocks_equal_the_eager_atlas(tmp_path):
+    args = ["atlas", "hinge_pendulum", "--axis", "phi=3:-3:37", "--axis", "omega=-6:6:9",
+            "--layers", "fate,t_final,phi_rest,n_solutions", "--option", "t_end=2"]
+    r = run(*args, "--chunk-cells", "10", "-o", tmp_path / "blocks.nc")
+    assert r.returncode == 0, r.stderr
+    assert "333 cells (37 phi x 9 omega)" in r.stderr and "typical" in r.stderr
+    assert "time about" in r.stderr
+    scene = phasemap.Scene("hinge_pendulum", axes={"phi": np.linspace(3, -3, 37),
+                                                   "omega": np.linspace(-6, 6, 9)},
+                           layers=["fate", "t_final", "phi_rest", "n_solutions"],
+                           options={"t_end": 2.0})
+    eager = scene.compute()
+    with xr.open_dataset(tmp_path / "blocks.nc") as ds:
+        xr.testing.assert_identical(ds.drop_attrs(deep=False), eager.drop_attrs(deep=False))
+        assert ds.attrs["phasemap_scene"] == eager.attrs["phasemap_scene"]
+
+
+def test_a_large_lazy_atlas_builds_no_task_per_block():
+    scene = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 1_000_000),
+                                           "f": np.linspace(0, 3, 1_000_000)})
+    lazy = scene.compute(chunks={"phi": 1, "f": 1_000_000})   # a million blocks
+    graph = lazy.n_solutions.data.dask
+    assert lazy.n_solutions.data.npartitions == 1_000_000
+    assert not any(layer.is_materialized() for layer in graph.layers.values())
+
+
+# ------------------------------------------------------ 5. progress -----------
+def test_progress_goes_to_stderr_and_results_to_stdout(tmp_path):
+    r = run("atlas", "ladder", "--axis", "phi=0:1.5:3000", "--axis", "f=0:3:3000",
+            "--chunk-cells", "100000", "-o", tmp_path / "l.nc", progress="always")
+    assert r.returncode == 0, r.stderr
+    assert "cell" in r.stderr and "l.nc" in r.stderr   # the tqdm bar, named after the file
+    assert r.stdout.strip().splitlines() == [
+        f"wrote {tmp_path / 'l.nc'} (9000000 cells, layers n_solutions, stagnation)"]
+
+
+def test_an_activity_line_ticks_while_nothing_else_prints(capsys):
+    from phasemap import progress
+
+    with progress.enable(), progress.activity("waiting"):
+        time.sleep(2.2)   # a wait with no count, like numba compiling
+        progress.status("still waiting")
+        time.sleep(1.2)
+    err = capsys.readouterr().err
+    assert "waiting [00:01]" in err and "waiting: still waiting [00:03]" in err
+
+
+# ------------------------------------------------------ 6. Ctrl-C ------------
+def interrupt(args, cwd, ready: str):
+    """Start the CLI, wait until ``ready`` shows on stderr, send SIGINT; return
+    (returncode, stderr)."""
+    proc = subprocess.Popen(PHASEMAP + [str(a) for a in args], cwd=cwd, env=env("always"),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            bufsize=1)
+    seen = ""
+    while ready not in seen:
+        ch = proc.stderr.read(1)
+        if not ch:
+            break
+        seen += ch
+    assert ready in seen, seen
+    proc.send_signal(signal.SIGINT)
+    _, rest = proc.communicate(timeout=60)
+    return proc.returncode, seen + rest
+
+
+@pytest.mark.parametrize("args, ready", [
+    (["atlas", "hinge_pendulum", "--axis", "phi=-3:3:3000", "--axis", "omega=-6:6:3000",
+      "--layers", "fate", "--option", "t_end=30", "-o", "fates.nc"], "fates.nc:"),
+    (["simulate", "hinge_pendulum", "phi=1", "delta=0", "--t-end", "1e5", "-o", "s.nc"],
+     "integrating"),
+    (["tour", "--out", "tour"], "[1/5] ladder"),
+])
+def test_ctrl_c_exits_130_with_one_line_and_no_partial_file(tmp_path, args, ready):
+    code, err = interrupt(args, tmp_path, ready)
+    assert code == 130, err
+    assert "Traceback" not in err
+    assert err.strip().splitlines()[-1] == "phasemap: interrupted; no partial file was left"
+    leftovers = [p for p in tmp_path.rglob("*") if p.suffix in (".nc", ".part", ".pdf",
+                                                                 ".png") and p.stat().st_size == 0
+                 or p.name.endswith(".part")]
+    assert leftovers == []
+    assert not (tmp_path / "fates.nc").exists() and not (tmp_path / "s.nc").exists()
+
+
+# ----------------------------------------- 7. output problems found first ----
+@contextlib.contextmanager
+def small_filesystem(folder: pathlib.Path, size: str, readonly: bool = False):
+    """A real tmpfs of ``size`` mounted on ``folder`` (root only; skipped elsewhere)."""
+    folder.mkdir()
+    opts = f"size={size}" + (",ro" if readonly else "")
+    mount = subprocess.run(["mount", "-t", "tmpfs", "-o", opts, "tmpfs", str(folder)],
+                           capture_output=True, text=True)
+    if mount.returncode != 0:
+        message = f"cannot mount a tmpfs here: {mount.stderr.strip()}"
+        if os.environ.get("CI"):
+            pytest.fail(message)
+        pytest.skip(message)
+    try:
+        yield folder
+    finally:
+        subprocess.run(["umount", "-l", str(folder)], check=False)
+
+
+def test_an_existing_file_needs_overwrite(tmp_path):
+    target = tmp_path / "a.nc"
+    target.write_bytes(b"precious")
+    for args in (["atlas", "ladder", "--axis", "phi=0:1:5", "-o", target],
+                 ["simulate", "ladder", "phi=1", "-o", target]):
+        one_line_error(run(*args), f"{target} exists; pass --overwrite to replace it")
+        assert target.read_bytes() == b"precious"
+    assert run("atlas", "ladder", "--axis", "phi=0:1:5", "--overwrite", "-o", target
+               ).returncode == 0
+    with xr.open_dataset(target) as ds:
+        assert ds.sizes["phi"] == 5
+
+
+def test_a_read_only_destination_is_refused_before_work(tmp_path):
+    with small_filesystem(tmp_path / "ro", "1m", readonly=True) as ro:
+        r = run("atlas", "ladder", "--axis", "phi=0:1:5", "-o", ro / "a.nc")
+        one_line_error(r, "Read-only file system")
+        assert "time about" not in r.stderr   # refused before any work
+
+
+def test_a_disk_without_room_is_refused_before_work(tmp_path):
+    with small_filesystem(tmp_path / "small", "1m") as small:
+        r = run("atlas", "ladder", "--axis", "phi=0:1.5:3000", "--axis", "f=0:3:3000",
+                "--layers", "n_solutions,phi_ddot_slide_pos", "-o", small / "a.nc")
+        one_line_error(r, "free")
+        assert "time about" not in r.stderr and list(small.iterdir()) == []
+
+
+def test_a_disk_that_fills_up_mid_write_leaves_no_file(tmp_path):
+    """Another writer fills the disk while the atlas is being written."""
+    with small_filesystem(tmp_path / "fills", "40m") as fills:
+        args = ["atlas", "ladder", "--axis", "phi=0:1.5:2000", "--axis", "f=0:3:2000",
+                "--layers", "phi_ddot_slide_pos,N_floor_slide_pos", "--chunk-cells", "20000",
+                "-o", fills / "a.nc"]
+        proc = subprocess.Popen(PHASEMAP + [str(a) for a in args], env=env("always"),
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        seen = ""
+        while "%|" not in seen:   # the bar: blocks are being written
+            ch = proc.stderr.read(1)
+            assert ch, seen
+            seen += ch
+        with open(fills / "ballast", "wb") as fh:   # fill the disk
+            with contextlib.suppress(OSError):
+                while True:
+                    fh.write(b"\0" * (1 << 20))
+                    fh.flush()
+        _, rest = proc.communicate(timeout=120)
+        err = (seen + rest).strip().splitlines()[-1]
+        assert proc.returncode == 2, seen + rest
+        assert err.startswith("phasemap: error: cannot write") and "no file was left" in err, \
+            repr(rest[-600:])
+        assert "Traceback" not in rest and "HDF5-DIAG" not in rest
+        assert sorted(p.name for p in fills.iterdir()) == ["ballast"]
