@@ -331,3 +331,116 @@ def test_a_disk_that_fills_up_mid_write_leaves_no_file(tmp_path):
             repr(rest[-600:])
         assert "Traceback" not in rest and "HDF5-DIAG" not in rest
         assert sorted(p.name for p in fills.iterdir()) == ["ballast"]
+
+
+# ----------------------------------------------- 8. tour --quick, usage ------
+def test_tour_accepts_quick_and_shows_its_own_usage_on_errors(tmp_path):
+    r = run("tour", "--quick", "--only", "nope", "--out", tmp_path / "o")
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2
+    assert lines[0].startswith("usage: phasemap tour") and "--quick" in r.stderr
+    assert lines[-1] == ("phasemap: error: unknown study 'nope'; available: ladder, wheel, "
+                         "elliptic_pendulum, hinge_pendulum, overview")
+    bad = run("tour", "--bogus")
+    assert bad.returncode == 2 and bad.stderr.startswith("usage: phasemap tour")
+    assert run("tour", "--quick", "--full").returncode == 2   # one or the other
+
+
+# ------------------------------------------- 9. axes without repeats --------
+def test_an_axis_that_repeats_a_value_is_refused(tmp_path):
+    one_line_error(run("atlas", "ladder", "--axis", "phi=0.5:0.5:3", "-o", tmp_path / "a.nc"),
+                   "START = STOP = 0.5 with COUNT 3 would repeat one value")
+    assert run("atlas", "ladder", "--axis", "phi=0.5:0.5:1", "-o", tmp_path / "one.nc"
+               ).returncode == 0
+    r = run("atlas", "ladder", "--axis", "phi=1.5:0:4", "-o", tmp_path / "down.nc")
+    assert r.returncode == 0, r.stderr
+    with xr.open_dataset(tmp_path / "down.nc") as ds:
+        assert list(ds.phi.values) == [1.5, 1.0, 0.5, 0.0]
+    assert "descending" in run("atlas", "--help").stdout
+    for axis, words in (([0.1, 0.1, 0.2], "repeats a value"),
+                        ([0.1, 0.3, 0.2], "goes back and forth")):
+        with pytest.raises(ValueError, match=words):
+            phasemap.Scene("ladder", axes={"phi": axis})
+
+
+# ------------------------------------------- 10. info on motions -------------
+def test_info_describes_trajectories_and_phase_curves_as_what_they_are(tmp_path):
+    r = run("simulate", "hinge_pendulum", "phi=2.5", "omega=0", "--t-end", "20",
+            "-o", tmp_path / "swing.nc")
+    assert r.returncode == 0, r.stderr
+    ds = xr.open_dataset(tmp_path / "swing.nc")
+    n_t, n_ev = ds.sizes["t"], ds.sizes["event"]
+    ds.close()
+    info = run("info", tmp_path / "swing.nc")
+    assert info.returncode == 0, info.stderr
+    text = info.stdout
+    assert text.startswith("phasemap trajectory ") and "cells" not in text and "%" not in text
+    assert f"saved     {n_t} states, t from 0 to " in text
+    assert f"events    {n_ev}: start 1, reversal {n_ev - 2}, rest 1" in text
+    assert "ended     rest: stopped in a stagnation zone" in text
+    curve = phasemap.phase_curve("hinge_pendulum", phi=2.5, omega=0.0, delta=0.1)
+    phasemap.write_atlas(curve, tmp_path / "curve.nc")
+    text = run("info", tmp_path / "curve.nc").stdout
+    assert text.startswith("phasemap phase curve ") and "cells" not in text
+    assert f"{curve.sizes['point']} points of omega(phi) on {curve.sizes['stage']} stages" in text
+    assert "stages end 6: reversal 5, rest 1" in text
+
+
+# ------------------------------------------- 12. cfchecks offline ------------
+def test_cfcheck_runs_offline_from_the_command_line(tmp_path):
+    from conftest import require_tool
+
+    require_tool("cfchecks", "pip install cfchecker; needs libudunits2-0")
+    assert run("atlas", "wheel", "--axis", "phi=-3:3:8", "-o", tmp_path / "w.nc"
+               ).returncode == 0
+    # no network: an unreachable proxy makes any download fail at once
+    offline = dict(env("never"), http_proxy="http://127.0.0.1:9", https_proxy="http://127.0.0.1:9",
+                   HTTP_PROXY="http://127.0.0.1:9", HTTPS_PROXY="http://127.0.0.1:9")
+    r = subprocess.run(PHASEMAP + ["cfcheck", str(tmp_path / "w.nc")], capture_output=True,
+                       text=True, env=offline, timeout=300)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "ERRORS detected: 0" in r.stdout and "WARNINGS given: 0" in r.stdout
+    # a name from a table it would have downloaded is an error, not a silent pass
+    with xr.open_dataset(tmp_path / "w.nc") as ds:
+        ds.load()
+    ds.phi.attrs["standard_name"] = "air_temperature"
+    phasemap.write_atlas(ds, tmp_path / "named.nc")
+    r = subprocess.run(PHASEMAP + ["cfcheck", str(tmp_path / "named.nc")],
+                       capture_output=True, text=True, env=offline, timeout=300)
+    assert r.returncode == 1 and "ERRORS detected: 0" not in r.stdout
+
+
+# ------------------------------------------- 13. help and tables -------------
+def test_each_command_has_its_own_help():
+    from phasemap.cli import build_parser
+
+    parser, subs = build_parser()
+    top = parser.format_help()
+    for name, sub in subs.items():
+        text = sub.format_help()
+        assert sub.description, name                         # every command says what it does
+        assert text.count("examples:") == 1, name
+        others = [c for c in subs if c != name and f"phasemap {c} " in text]
+        assert others == [], (name, others)                  # only its own examples
+        assert f"phasemap {name}" in top
+    for name in ("atlas", "simulate", "classify"):
+        assert "ladder, wheel, elliptic_pendulum, hinge_pendulum" in " ".join(
+            subs[name].format_help().split())
+    lines = top.splitlines()          # a continued example keeps its line break
+    assert not any("--axis omega" in line and "--layers" in line for line in lines)
+    assert any(line.strip().startswith("--layers fate") for line in lines)
+
+
+def test_claims_tables_fit_the_terminal():
+    from phasemap.study import Claim, claims_table
+
+    claims = [Claim("the no-solution region of the elliptic pendulum exists iff f > 2 sqrt 2 "
+                    "(the sharp threshold, beyond the paper's f <= 2)", "f <= 2 is sufficient",
+                    "minimum of lambda over phi is (3 - sqrt(1 + f^2))/2, zero at f = 2.8284",
+                    "sharper")] * 2
+    for width in (60, 100):
+        table = claims_table(claims, width=width)
+        assert max(len(line) for line in table.splitlines()) <= width
+        assert " ".join(table.split()).count("sharper") == 2
+        assert "2.8284" in table
+    assert len(claims_table(claims, width=0).splitlines()) == 4   # no terminal: one line each
