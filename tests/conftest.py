@@ -8,6 +8,17 @@ import subprocess
 
 import pytest
 
+#: What each quick study run in this session produced: {study: (verdicts, figures)}.
+#: The README's tour counts are checked against it once every study has run.
+STUDY_RUNS: dict[str, tuple[list[str], int]] = {}
+
+
+def record_study(name: str, claims, out) -> None:
+    import pathlib
+
+    STUDY_RUNS[name] = ([c.verdict for c in claims], len(list(pathlib.Path(out).glob("*.png"))))
+
+
 def require_tool(name: str, install: str):
     """Skip a test locally when a command is missing; in CI (CI=true) fail instead."""
     if shutil.which(name) is None:

@@ -7,6 +7,7 @@ import pathlib
 import warnings
 
 import pytest
+from conftest import record_study
 import xarray as xr
 
 import phasemap
@@ -71,6 +72,7 @@ def run(request, tmp_path_factory):
     with warnings.catch_warnings(), contextlib.redirect_stdout(printed):
         warnings.simplefilter("error")
         claims = module.main(["--quick", "--out", str(out)])
+    record_study(name, claims, out)
     return name, claims, printed.getvalue(), out
 
 

@@ -13,6 +13,7 @@ import pathlib
 import warnings
 
 import pytest
+from conftest import record_study
 import xarray as xr
 
 from phasemap.study import VERDICTS
@@ -79,6 +80,7 @@ def run(request, tmp_path_factory):
     with warnings.catch_warnings(), contextlib.redirect_stdout(printed):
         warnings.simplefilter("error")
         claims = load(name).main(["--quick", "--out", str(out)])
+    record_study(name, claims, out)
     return name, out, claims, printed.getvalue()
 
 

@@ -444,3 +444,23 @@ def test_claims_tables_fit_the_terminal():
         assert " ".join(table.split()).count("sharper") == 2
         assert "2.8284" in table
     assert len(claims_table(claims, width=0).splitlines()) == 4   # no terminal: one line each
+
+
+# ------------------------------------------- 11. README numbers from code ----
+def test_readme_numbers_come_from_code():
+    from phasemap.facts import elliptic_threshold, readme_facts, wheel_singular_delta
+
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    for what, text in readme_facts().items():
+        assert " ".join(text.split()) in readme, (what, text)
+    # the closed forms behind them, checked independently
+    r, l, rho = 1.0, 0.5, 0.5
+    phi = np.linspace(-math.pi, math.pi, 200001)
+    for delta in (wheel_singular_delta(r, l, rho) * (1 - 1e-6),
+                  wheel_singular_delta(r, l, rho) * (1 + 1e-6)):
+        bracket = rho ** 2 + r ** 2 + l ** 2 - 2 * r * l * np.cos(phi) + delta * l * np.sin(phi)
+        assert (bracket.min() <= 0) == (delta > wheel_singular_delta(r, l, rho))
+    assert wheel_singular_delta(r, l, rho) == pytest.approx(math.sqrt(1.25) / 0.5)
+    f = np.linspace(0, 5, 5001)
+    lam_min = (3 - np.sqrt(1 + f ** 2)) / 2
+    assert f[np.argmax(lam_min <= 0)] == pytest.approx(elliptic_threshold(), abs=1e-3)
