@@ -118,12 +118,6 @@ class Scene:
             if a.ndim != 1 or a.size == 0:
                 raise ValueError(f"{m.name}: axis {name} must be a non-empty 1-D sequence, "
                                  f"got shape {a.shape}")
-            if a.size > 1:
-                step = np.diff(a)
-                if not (np.all(step > 0) or np.all(step < 0)):
-                    what = "repeats a value" if np.any(step == 0) else "goes back and forth"
-                    raise ValueError(f"{m.name}: axis {name} {what}; an axis must be strictly "
-                                     "increasing or strictly decreasing")
             self.axes[name] = a
         for name, value in fixed.items():
             if np.ndim(value) != 0:
@@ -134,6 +128,12 @@ class Scene:
                 for i, (n, a) in enumerate(self.axes.items())}
         full = m.complete({**fixed, **mesh})
         self.fixed: dict[str, float] = {n: float(v) for n, v in full.items() if n not in self.axes}
+        for name, a in self.axes.items():  # CF coordinates: strictly monotonic
+            step = np.diff(a)
+            if a.size > 1 and not (np.all(step > 0) or np.all(step < 0)):
+                what = "repeats a value" if np.any(step == 0) else "goes back and forth"
+                raise ValueError(f"{m.name}: axis {name} {what}; an axis must be strictly "
+                                 "increasing or strictly decreasing")
         registry = layers_for(m)
         if layers is None:
             layers = ["n_solutions"] + (["stagnation"] if self._velocity_can_be_zero() else [])
