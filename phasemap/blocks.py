@@ -94,7 +94,7 @@ def estimate(scene, block_cells: int | None = None, timed: bool = False) -> Esti
     block = block_cells or _block_cells(scene, per_cell)
     per_cell_bytes = sum(itemsizes.values()) + 8 * len(scene.layers)  # result and scratch
     memory = 3 * block * per_cell_bytes + 8 * sum(a.size for a in scene.axes.values()) \
-        + (64 << 20)  # netCDF chunk caches and the interpreter's own working set
+        + (256 << 20)  # the interpreter with numpy, numba, xarray and netCDF loaded
     return Estimate(cells, out_bytes, typical, memory, block, seconds)
 
 
