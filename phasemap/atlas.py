@@ -41,6 +41,7 @@ import datetime as _dt
 import math
 import os
 import pathlib
+import shutil
 import tempfile
 from typing import Iterator, Mapping
 
@@ -143,16 +144,48 @@ def write_atlas(ds: xr.Dataset, path: str | os.PathLike, *, complevel: int = 4,
     ValueError
         before anything is computed or written, if the destination folder does
         not exist, or if the atlas carries attributes netCDF cannot store
-        (bools, None) or serialisation keys in ``.attrs``.
+        (bools, None) or serialisation keys in ``.attrs``; as :class:`WriteError`
+        when writing fails (a full disk), leaving no partial file.
     """
     if not isinstance(ds, xr.Dataset):
         raise TypeError(f"write_atlas needs an xarray.Dataset, got {type(ds).__name__}")
     path = destination(path)
     out = _prepare(ds)
     encoding = cf_encoding(out, chunks, complevel=complevel)
-    with atomic_path(path) as tmp:
+    with no_partial_file(path) as tmp:
         out.to_netcdf(tmp, mode="w", format="NETCDF4", engine="netcdf4", encoding=encoding)
     return path
+
+
+class WriteError(ValueError):
+    """Writing failed (a full disk, an I/O error); no partial file was left."""
+
+
+@contextlib.contextmanager
+def no_partial_file(path: pathlib.Path) -> Iterator[pathlib.Path]:
+    """:func:`atomic_path`, with I/O errors turned into a one-line :class:`WriteError`."""
+    try:
+        with atomic_path(path) as tmp:
+            yield tmp
+    except (OSError, RuntimeError) as err:
+        if not isinstance(err, OSError) and not str(err).startswith("NetCDF"):
+            raise  # not an I/O error: a failure of the computation
+        reason = " ".join(str(err).split()) or type(err).__name__
+        try:
+            free = _size(shutil.disk_usage(path.parent).free)
+        except OSError:
+            free = "?"
+        raise WriteError(f"cannot write {path}: {reason} ({free} free on {path.parent}); "
+                         "no file was left") from None
+
+
+def _size(n: float) -> str:
+    """A byte count for a person: 12 B, 3.4 MB, 2 TB."""
+    for unit in ("B", "kB", "MB", "GB", "TB"):
+        if abs(n) < 1000:
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.3g} {unit}"
+        n /= 1000.0
+    return f"{n:.3g} PB"
 
 
 @contextlib.contextmanager
@@ -363,6 +396,75 @@ def _check_is_atlas(ds: xr.Dataset, where: str) -> None:
 
 
 def _describe(ds: xr.Dataset, where: str) -> str:
+    kind = ds.attrs.get("phasemap_kind")
+    if kind in ("trajectory", "phase_curve"):
+        return _describe_motion(ds, where, kind)
+    return _describe_grid(ds, where)
+
+
+def _describe_motion(ds: xr.Dataset, where: str, kind: str) -> str:
+    """A trajectory (times, events) or a phase curve (points, stages), as what it is."""
+    from .events import Event
+
+    a = ds.attrs
+    lines = [f"phasemap {kind.replace('_', ' ')} {where}"]
+    if "title" in a:
+        lines.append(f"  title     {a['title']}")
+    lines.append(f"  model     {a['phasemap_model']}")
+    if kind == "trajectory":
+        t = np.asarray(ds["t"].values, dtype=float)
+        span = f", t from {t.min():.6g} to {t.max():.6g} s" if t.size else ""
+        lines.append(f"  saved     {t.size} states{span}")
+        codes = np.asarray(ds["event_kind"].values).tolist()
+        count_of = "events"
+    else:
+        lines.append(f"  points    {ds.sizes.get('point', 0)} points of omega(phi) on "
+                     f"{ds.sizes.get('stage', 0)} stages")
+        codes = np.asarray(ds["stage_end_reason"].values).tolist()
+        count_of = "stages end"
+    counts: dict[str, int] = {}
+    for code in codes:
+        try:
+            name = Event(int(code)).name.lower()
+        except ValueError:
+            name = f"(unlisted {code})"
+        counts[name] = counts.get(name, 0) + 1
+    lines.append(f"  {count_of:<9} {len(codes)}: " + ", ".join(f"{n} {k}" for n, k in
+                                                             counts.items()))
+    if "end_reason" in a:
+        lines.append(f"  ended     {a['end_reason']}: {a.get('end_message', '')}")
+    if "n_reversals" in a:
+        lines.append(f"  reversals {int(np.squeeze(a['n_reversals']))}")
+    lines.append(f"  made by   phasemap {a.get('phasemap_version', '?')}, "
+                 f"{a.get('date_created', 'creation time unknown')}")
+    start = [(k[len("phasemap_initial_"):], "=", _number(v)) for k, v in a.items()
+             if k.startswith("phasemap_initial_")]
+    fixed = [(k[len("phasemap_fixed_"):], "=", _number(v)) for k, v in a.items()
+             if k.startswith("phasemap_fixed_")]
+    lines.append("initial state")
+    lines += _table(start) if start else ["  (none)"]
+    lines.append("parameters")
+    lines += _table(fixed) if fixed else ["  (none)"]
+    if kind == "trajectory":
+        rows = [("t (s)", "event", *[str(n)[len("event_"):] for n in ds.data_vars
+                                     if str(n).startswith("event_")
+                                     and str(n) not in ("event_t", "event_kind",
+                                                        "event_branch")])]
+        names = [f"event_{n}" for n in rows[0][2:]]
+        for i in range(ds.sizes.get("event", 0)):
+            e = ds.isel(event=i)
+            try:
+                name = Event(int(e.event_kind)).name.lower()
+            except ValueError:
+                name = str(int(e.event_kind))
+            rows.append((f"{float(e.event_t):.6g}", name,
+                         *(f"{float(e[n]):.6g}" for n in names)))
+        lines.append("events")
+        lines += _table(rows)
+    return "\n".join(lines)
+
+
+def _describe_grid(ds: xr.Dataset, where: str) -> str:
     a = ds.attrs
     dims = [str(d) for d in ds.dims]
     cells = math.prod(ds.sizes[d] for d in dims)

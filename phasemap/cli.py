@@ -4,28 +4,56 @@ from __future__ import annotations
 
 import argparse
 import math
+import shutil
 import sys
+import textwrap
 
 from ._version import __version__
 
-EPILOG = """\
-examples:
-  phasemap tour                                     every study, quick, into ./phasemap-out
-  phasemap tour --full --out results                full resolution (minutes)
-  phasemap atlas elliptic_pendulum --set xdot=1 -o elliptic.nc
-  phasemap atlas ladder --axis phi=0:1.5708:1024 --axis f=0:3:1024 --set omega=0 -o ladder.nc
-  phasemap atlas wheel --axis phi=-3.1416:3.1416:400 --axis delta=0:1:400 \\
-                       --layers n_solutions,stagnation,phi_ddot_roll_pos -o wheel.nc
-  phasemap atlas hinge_pendulum --axis phi=-3:3:200 --axis omega=-6:6:200 \
-                       --layers fate,phi_rest,n_reversals --option t_end=30 -o fates.nc
-  phasemap simulate hinge_pendulum phi=2.5 omega=0 --t-end 20 -o swing.nc
-  phasemap simulate elliptic_pendulum phi=1 xdot=1 f=0.3 --t-end 5
-  phasemap info elliptic.nc                         axes, fixed values, cells per class
-  phasemap table                                    the paper's key states, classified
-  phasemap models                                   models, variables, units and defaults
-  phasemap classify elliptic_pendulum phi=0.8 xdot=-1 f=4
-  phasemap classify hinge_pendulum phi=0.05 omega=0 delta=0.1
-"""
+#: Examples per subcommand; ``phasemap --help`` shows them all, each
+#: subcommand's help only its own.
+EXAMPLES = {
+    "tour": [
+        ("phasemap tour", "every study, quick, into ./phasemap-out"),
+        ("phasemap tour --full --out results", "full resolution (minutes)"),
+    ],
+    "atlas": [
+        ("phasemap atlas elliptic_pendulum --set xdot=1 -o elliptic.nc", ""),
+        ("phasemap atlas ladder --axis phi=0:1.5708:1024 --axis f=0:3:1024 --set omega=0 "
+         "-o ladder.nc", ""),
+        ("phasemap atlas wheel --axis phi=-3.1416:3.1416:400 --axis delta=0:1:400 \\\n"
+         "        --layers n_solutions,stagnation,phi_ddot_roll_pos -o wheel.nc", ""),
+        ("phasemap atlas hinge_pendulum --axis phi=-3:3:200 --axis omega=-6:6:200 \\\n"
+         "        --layers fate,phi_rest,n_reversals --option t_end=30 -o fates.nc", ""),
+    ],
+    "simulate": [
+        ("phasemap simulate hinge_pendulum phi=2.5 omega=0 --t-end 20 -o swing.nc", ""),
+        ("phasemap simulate elliptic_pendulum phi=1 xdot=1 f=0.3 --t-end 5", ""),
+    ],
+    "info": [("phasemap info elliptic.nc", "axes, fixed values, cells per class")],
+    "cfcheck": [("phasemap cfcheck elliptic.nc", "CF compliance, offline")],
+    "table": [("phasemap table", "the paper's key states, classified")],
+    "models": [("phasemap models", "models, variables, units and defaults")],
+    "classify": [
+        ("phasemap classify elliptic_pendulum phi=0.8 xdot=-1 f=4", ""),
+        ("phasemap classify hinge_pendulum phi=0.05 omega=0 delta=0.1", ""),
+    ],
+}
+
+
+def examples(*commands: str) -> str:
+    """The examples block of ``commands`` (all when none), aligned."""
+    rows = [r for c in (commands or EXAMPLES) for r in EXAMPLES[c]]
+    lines = ["examples:"]
+    for cmd, note in rows:
+        if note:
+            lines.append(f"  {cmd:<48}  {note}" if len(cmd) <= 48 else f"  {cmd}\n      {note}")
+        else:
+            lines.append(f"  {cmd}")
+    return "\n".join(lines) + "\n"
+
+
+EPILOG = examples()
 
 # (model, values, what the paper says happens there)
 PAPER_CASES = (
@@ -46,35 +74,62 @@ PAPER_CASES = (
 )
 
 
-def main(argv: list[str] | None = None) -> int:
+def _sub(sub, name: str, help: str, description: str):
+    """A subcommand whose help shows its own description and examples."""
+    width = min(100, shutil.get_terminal_size().columns) - 2
+    return sub.add_parser(name, help=help, description=textwrap.fill(description, width),
+                          epilog=examples(name),
+                          formatter_class=argparse.RawDescriptionHelpFormatter)
+
+
+def _model_names() -> str:
+    from .models import MODELS
+
+    return ", ".join(MODELS)
+
+
+def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.ArgumentParser]]:
+    """The command-line parser and its subcommand parsers by name."""
     parser = argparse.ArgumentParser(
         prog="phasemap",
         description="Solvability and stagnation maps of mechanical systems with dry friction.",
-        epilog=EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"phasemap {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    sub.add_parser("table", help="classify the seed paper's key states (the default)")
-    p = sub.add_parser(
-        "tour", help="run every study (quick) and list the atlases and figures it wrote",
-        description="Runs the scripts in studies/ (found next to the installed package or in "
-        "./studies) in quick mode, prints each study's claims table, then where every figure "
-        "is.")
+    models = _model_names()
+    subs = {}
+    subs["table"] = _sub(sub, "table", "classify the seed paper's key states (the default)",
+                         "Classifies the states the seed paper discusses, one per line, "
+                         "beside what the paper says happens there.")
+    p = subs["tour"] = _sub(
+        sub, "tour", "run every study (quick) and list the atlases and figures it wrote",
+        "Runs the scripts in studies/ (found next to the installed package or in ./studies) "
+        "in quick mode (the default), prints each study's claims table, then where every "
+        "figure is.  Existing files in the output folder are replaced.")
+    mode = p.add_mutually_exclusive_group()
+    mode.add_argument("--quick", action="store_true", help="coarse grids, about a minute "
+                      "(the default)")
+    mode.add_argument("--full", action="store_true", help="full resolution (minutes, not "
+                      "seconds)")
     p.add_argument("--out", default="phasemap-out", metavar="DIR",
                    help="folder for atlases and figures (default %(default)s)")
-    p.add_argument("--full", action="store_true", help="full resolution (minutes, not seconds)")
     p.add_argument("--studies", metavar="DIR", help="folder of the study scripts "
                    "(default: the repository's studies/)")
     p.add_argument("--only", metavar="A,B", help="run only these studies")
-    sub.add_parser("models", help="list the models with their variables, units and defaults")
-    p = sub.add_parser(
-        "atlas", help="map solvability and stagnation over a grid into a netCDF atlas",
-        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
-        description="Without --axis, the model's default map is drawn (see phasemap models).")
-    p.add_argument("model")
+    subs["models"] = _sub(sub, "models", "list the models with their variables, units and "
+                          "defaults", "Lists every model: its state variables and parameters "
+                          "with units, defaults and domains, and its branches.")
+    p = subs["atlas"] = _sub(
+        sub, "atlas", "map solvability and stagnation over a grid into a netCDF atlas",
+        "Computes the layers over a grid of states and parameters, block by block, into a "
+        "CF netCDF atlas.  Without --axis, the model's default map is drawn (see phasemap "
+        "models).  Before any work it prints the cells, output size, memory and time, and "
+        "refuses what cannot be written or would not fit on the disk; above 10^9 cells or "
+        "an hour it asks for --yes.")
+    p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
     p.add_argument("--axis", action="append", default=[], metavar="NAME=START:STOP:COUNT",
-                   help="an axis of COUNT values from START to STOP (repeat for more axes)")
+                   help="an axis of COUNT values from START to STOP; STOP may be below "
+                   "START (a descending axis); repeat for more axes")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="fix a state variable or parameter (repeatable)")
     p.add_argument("--layers", metavar="A,B", help="layers to compute (default: n_solutions, "
@@ -82,14 +137,17 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                    help="integrator setting of the fate layers: t_end, rtol, atol, max_step, "
                    "max_steps, max_events, method (DOPRI5 or DOP853) (repeatable)")
-    p.add_argument("--chunk-cells", type=int, default=1 << 24, metavar="N",
-                   help="above N cells, compute and write block by block with bounded memory "
-                   "(default %(default)s)")
+    p.add_argument("--chunk-cells", type=int, default=None, metavar="N",
+                   help="cells per block (default: about a quarter second of work)")
+    p.add_argument("--overwrite", action="store_true", help="replace OUT.nc if it exists")
+    p.add_argument("--yes", action="store_true", help="go ahead with a large atlas (above "
+                   "10^9 cells or an hour)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.nc")
-    p = sub.add_parser(
-        "simulate", help="integrate a motion in time: phasemap simulate MODEL name=value ...",
-        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("model")
+    p = subs["simulate"] = _sub(
+        sub, "simulate", "integrate a motion in time: phasemap simulate MODEL name=value ...",
+        "Integrates the motion from an initial state with exact stick and slip, and prints "
+        "its events.")
+    p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
     p.add_argument("values", nargs="*", metavar="NAME=VALUE",
                    help="initial state and parameters (defaults: phasemap models)")
     p.add_argument("--t-end", type=float, default=10.0, metavar="T", help="horizon in s "
@@ -99,38 +157,73 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--method", default="DOPRI5", help="DOPRI5 (Dormand-Prince 5(4), the "
                    "default) or DOP853 (order 8, for tight tolerances)")
     p.add_argument("-o", "--output", metavar="OUT.nc", help="write the trajectory as netCDF")
-    p = sub.add_parser("info", help="summarise an atlas: axes, fixed values, cells per class")
+    p.add_argument("--overwrite", action="store_true", help="replace OUT.nc if it exists")
+    p = subs["info"] = _sub(sub, "info", "summarise an atlas, trajectory or phase curve",
+                            "Describes a file phasemap wrote: for an atlas its axes, fixed "
+                            "values and the cells in each class; for a trajectory its "
+                            "times and events; for a phase curve its stages.")
     p.add_argument("path")
-    p = sub.add_parser("classify", help="classify one state: phasemap classify MODEL name=value ...",
-                       epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("model")
+    p = subs["cfcheck"] = _sub(sub, "cfcheck", "check a file against the CF conventions, "
+                               "offline", "Runs cfchecks (pip install cfchecker) on FILE with "
+                               "local stand-ins for the tables it would download; a "
+                               "phasemap file uses no standard names, areas or regions.")
+    p.add_argument("path")
+    p = subs["classify"] = _sub(sub, "classify", "classify one state: phasemap classify "
+                                "MODEL name=value ...", "Counts the solutions of the motion "
+                                "equations for the senior derivatives at one state.")
+    p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
     p.add_argument("values", nargs="*", metavar="NAME=VALUE")
-    args = parser.parse_args(argv)
+    return parser, subs
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser, subs = build_parser()
+    args, extra = parser.parse_known_args(argv)
+    if extra:  # the subcommand's own usage, not the top level's
+        (subs.get(args.command) or parser).error(f"unrecognized arguments: {' '.join(extra)}")
+    from . import progress
+
     try:
-        if args.command in (None, "table"):
-            print(_table())
-        elif args.command == "tour":
-            from .tour import tour
-
-            return tour(args.out, full=args.full, studies=args.studies,
-                        only=args.only.split(",") if args.only else None)
-        elif args.command == "models":
-            print(_models())
-        elif args.command == "atlas":
-            print(_atlas(args))
-        elif args.command == "simulate":
-            print(_simulate(args))
-        elif args.command == "info":
-            from .atlas import describe_atlas
-
-            print(describe_atlas(args.path))
-        elif args.command == "classify":
-            from .classify import classify
-
-            print(classify(args.model, **_parse_values(args.values)))
+        with progress.enable():
+            return _run(args)
     except ValueError as err:
+        if args.command == "tour":
+            print(subs["tour"].format_usage().rstrip(), file=sys.stderr)
         print(f"phasemap: error: {err}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("\nphasemap: interrupted; no partial file was left", file=sys.stderr)
+        return 130
+
+
+def _run(args) -> int:
+    if args.command in (None, "table"):
+        print(_table())
+    elif args.command == "tour":
+        from .tour import tour
+
+        return tour(args.out, full=args.full, studies=args.studies,
+                    only=args.only.split(",") if args.only else None)
+    elif args.command == "models":
+        print(_models())
+    elif args.command == "atlas":
+        print(_atlas(args))
+    elif args.command == "simulate":
+        print(_simulate(args))
+    elif args.command == "info":
+        from .atlas import describe_atlas
+
+        print(describe_atlas(args.path))
+    elif args.command == "cfcheck":
+        from .cfcheck import cfcheck
+
+        report, ok = cfcheck(args.path)
+        print(report)
+        return 0 if ok else 1
+    elif args.command == "classify":
+        from .classify import classify
+
+        print(classify(args.model, **_parse_values(args.values)))
     return 0
 
 
@@ -170,16 +263,20 @@ def _parse_axis(item: str) -> tuple[str, object]:
         raise ValueError(f"--axis {name}: COUNT must be at least 1, got {count}")
     if not (math.isfinite(start) and math.isfinite(stop)):
         raise ValueError(f"--axis {name}: START and STOP must be finite, got {text!r}")
+    if count > 1 and start == stop:
+        raise ValueError(f"--axis {name}: START = STOP = {start:g} with COUNT {count} would "
+                         "repeat one value; give COUNT 1, or --set the value")
     return name, np.linspace(start, stop, count)
 
 
 def _atlas(args) -> str:
-    from .atlas import destination, write_atlas
+    from . import blocks
+    from .atlas import destination
     from .models import get_model
     from .scene import Scene
 
     model = get_model(args.model)
-    out = destination(args.output)  # before any work: the folder exists, out is no folder
+    destination(args.output)  # the folder exists, the output is no folder
     axes = dict(_parse_axis(a) for a in args.axis)
     if len(axes) != len(args.axis):
         raise ValueError("each --axis name may be given once")
@@ -190,7 +287,7 @@ def _atlas(args) -> str:
         axes = {n: np.linspace(*spec) for n, spec in model.default_axes.items() if n not in fixed}
         if not axes:
             raise ValueError(f"{model.name}: every default axis is fixed; give an --axis")
-    if args.chunk_cells < 1:
+    if args.chunk_cells is not None and args.chunk_cells < 1:
         raise ValueError(f"--chunk-cells must be at least 1, got {args.chunk_cells}")
     layers = [x.strip() for x in args.layers.split(",") if x.strip()] if args.layers else None
     options = _parse_values(args.option, words=("method",))
@@ -200,29 +297,37 @@ def _atlas(args) -> str:
                 raise ValueError(f"--option {name} must be a whole number")
             options[name] = int(options[name])
     scene = Scene(model, axes=axes, fixed=fixed, layers=layers, options=options)
-    if scene.size > args.chunk_cells:
-        from dask.diagnostics import ProgressBar
-
-        first = next(iter(scene.axes))
-        rows = max(1, args.chunk_cells // (scene.size // scene.axes[first].size))
-        ds = scene.compute(chunks={first: rows})
-        with ProgressBar(minimum=1.0):
-            write_atlas(ds, out)
-    else:
-        write_atlas(scene.compute(progress=True), out)
+    # before any work: the destination, the disk, the size
+    est = blocks.estimate(scene, args.chunk_cells)
+    out = blocks.check_output(args.output, est.bytes, est.typical_bytes,
+                              overwrite=args.overwrite)
+    if est.cells > blocks.YES_CELLS and not args.yes:
+        raise ValueError(f"{est.cells:,} cells is above {blocks.YES_CELLS:,} "
+                         f"({est.text(scene).splitlines()[1].strip()}); pass --yes to go ahead")
+    est = blocks.estimate(scene, args.chunk_cells, timed=True)
+    print(est.text(scene), file=sys.stderr)
+    if est.seconds > blocks.YES_SECONDS and not args.yes:
+        raise ValueError(f"this atlas would take about {blocks._duration(est.seconds)}; "
+                         "pass --yes to go ahead")
+    blocks.write_scene(scene, out, block_cells=est.block_cells, overwrite=args.overwrite)
     return f"wrote {out} ({scene.size} cells, layers {', '.join(scene.layers)})"
 
 
 def _simulate(args) -> str:
+    from . import progress
     from .atlas import destination, write_atlas
+    from .blocks import check_output
     from .events import Event
     from .simulate import integrated_variables, simulate
     from .models import get_model
 
     model = get_model(args.model)
-    out = destination(args.output) if args.output else None
-    ds = simulate(model, args.t_end, rtol=args.rtol, method=args.method,
-                  **_parse_values(args.values))
+    if args.output:
+        destination(args.output)
+    values = _parse_values(args.values)
+    out = check_output(args.output, overwrite=args.overwrite) if args.output else None
+    with progress.activity(f"{model.name}: integrating to t = {args.t_end:g} s"):
+        ds = simulate(model, args.t_end, rtol=args.rtol, method=args.method, **values)
     names = [v.name for v in integrated_variables(model)]
     rows = [("t (s)", "event", "branch after", *names)]
     meanings = ["none", *model.branches]

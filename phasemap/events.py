@@ -29,7 +29,11 @@ Events that end it (the *fate*):
 * ``singular``: the coefficient of the senior derivative reached zero (the
   accelerations grow without bound on the way);
 * ``horizon``: still moving at the end of the time or angle range asked for;
+* ``left_domain``: the motion reached an edge of the model's domain (the
+  ladder lying flat at phi = pi/2); :attr:`phasemap.Dynamics.edges` says what
+  each edge means for the body;
 * ``max_events``: the number of events or stages asked for ran out;
+* ``max_steps``: the number of integration steps asked for ran out;
 * ``step_failure``: the step size fell below what double precision resolves
   (reported with the state reached; never silently continued);
 * ``stiff``: the motion is stiff here (typically a coefficient of the senior
@@ -61,6 +65,8 @@ HORIZON = 11
 MAX_EVENTS = 12
 STEP_FAILURE = 13
 STIFF = 14
+LEFT_DOMAIN = 15
+MAX_STEPS = 16
 
 #: The first terminal event: codes >= FIRST_FATE end a motion.
 FIRST_FATE = REST
@@ -102,6 +108,8 @@ class Event(enum.IntEnum):
     MAX_EVENTS = MAX_EVENTS
     STEP_FAILURE = STEP_FAILURE
     STIFF = STIFF
+    LEFT_DOMAIN = LEFT_DOMAIN
+    MAX_STEPS = MAX_STEPS
 
     @property
     def terminal(self) -> bool:
@@ -127,6 +135,8 @@ _MESSAGES = {
     Event.SINGULAR: "the coefficient of the senior derivative reached zero",
     Event.HORIZON: "still moving at the end of the requested range",
     Event.MAX_EVENTS: "the requested number of events or stages ran out",
+    Event.MAX_STEPS: "the requested number of integration steps (max_steps) ran out",
+    Event.LEFT_DOMAIN: "the motion leaves the model's domain",
     Event.STEP_FAILURE: "the step size fell below double-precision resolution",
     Event.STIFF: "the motion is stiff here (a coefficient of the senior derivative near "
                  "zero): the explicit integrator stops; phase_curve handles such cases",

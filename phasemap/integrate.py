@@ -38,7 +38,12 @@ Method
   acceleration is exactly zero, so its velocity stays exactly 0: no creep.
 
 A motion that leaves the model's domain (a state variable beyond its bounds,
-such as the ladder's phi past 0 or pi/2) ends with ``horizon`` at the boundary.
+such as the ladder's phi past 0 or pi/2) ends with ``left_domain`` at the
+boundary; running out of ``max_steps`` ends it with ``max_steps``.  Where the
+step size collapses because the stage's own branch has no solution just
+ahead (the hinge pendulum with delta > l leaving the curve l omega^2 + g cos
+phi = 0), the motion ends with the classification found there
+(``no_solution``), not ``step_failure``.
 A state the integrator cannot resolve (the step size falls below double
 precision, which happens as a coefficient of the senior derivative approaches
 zero and the accelerations grow without bound) ends the motion with
@@ -286,7 +291,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
 
     while fate < 0:
         if n_steps >= max_steps:
-            fate = ev.MAX_EVENTS
+            fate = ev.MAX_STEPS
             break
         if t >= t_end:
             fate = ev.HORIZON
@@ -298,6 +303,18 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         if h <= 16.0 * EPS * abs(t) or h <= 1e-14 * t_end:
             c = out[mode, nx.COEF] if coef_sign != 0.0 else coef0
             fate = ev.SINGULAR if abs(c) < 1e-6 * coef_scale else ev.STEP_FAILURE
+            # the stage's branch may have no solution just ahead: then that is the fate
+            s = max(h, 1e-14 * t_end)
+            for _ in range(9):
+                for i in range(ny):
+                    yb[i] = y[i] + s * k1[i]
+                n2, adm2, lost2, sing2 = CLASSIFY(v, yb, out)
+                if n2 != 1:
+                    fate = ev.fate_without_unique(n2, lost2, sing2)
+                    break
+                if adm2 != mode:
+                    break
+                s *= 10.0
             break
         # -- one step of the method ------------------------------------------
         e = STEP(v, y, h, mode, row, K, yt, y1, rtol, atol)
@@ -423,7 +440,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         if not INSIDE(y):  # the state leaves the model's domain (the ladder lies flat)
             for i in range(ny):
                 y[i] = min(max(y[i], LOWER[i]), UPPER[i])
-            fate = ev.HORIZON
+            fate = ev.LEFT_DOMAIN
             break
         d = DIRECTIONS[mode]
         n, adm, lost, sing = CLASSIFY(v, y, out)

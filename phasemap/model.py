@@ -100,6 +100,14 @@ _STATUS_MESSAGES = {
 }
 
 
+#: Largest magnitude of any value: squares and products of a few values must stay
+#: finite in double precision (an overflow would be counted as a solution).
+MAX_MAGNITUDE = 1e30
+#: Smallest value of a quantity whose domain excludes zero (a length, a mass): the
+#: models divide by it.
+MIN_POSITIVE = 1e-30
+
+
 class Solvability(enum.IntEnum):
     """How many solutions the motion equations have for the senior derivatives."""
 
@@ -150,6 +158,16 @@ class Variable:
             raise ValueError(f"{model}: {self.name} must be a number, got {value!r}") from None
         if not np.all(np.isfinite(a)):
             raise ValueError(f"{model}: {self.name} must be finite, got {_show(a)}")
+        if np.any(np.abs(a) > MAX_MAGNITUDE):
+            raise ValueError(
+                f"{model}: {self.name} = {_show(a[np.abs(a) > MAX_MAGNITUDE])} is too large: "
+                f"values are limited to |{self.name}| <= {MAX_MAGNITUDE:g} {self.units} so "
+                "that products stay finite in double precision")
+        if self.lower == 0.0 and self.lower_open and np.any((a > 0) & (a < MIN_POSITIVE)):
+            raise ValueError(
+                f"{model}: {self.name} = {_show(a[(a > 0) & (a < MIN_POSITIVE)])} is too small: "
+                f"{self.long_name} must be at least {MIN_POSITIVE:g} {self.units} so that "
+                "quotients stay finite in double precision")
         too_low = a <= self.lower if self.lower_open else a < self.lower
         too_high = a >= self.upper if self.upper_open else a > self.upper
         if np.any(too_low) or np.any(too_high):
@@ -205,6 +223,11 @@ class Dynamics:
     ``stick_is_rest``
         the stick branch freezes the whole state (one degree of freedom), so
         reaching it ends the motion.
+    ``edges``
+        optional ``{state name: (at the lower bound, at the upper bound)}``:
+        what reaching an edge of the domain means for the body (the ladder
+        lying flat).  A motion that reaches one ends with ``left_domain`` and
+        this text.
 
     The integrator evaluates a branch *along its stage* with
     :attr:`Model.branch`: the slip direction is the branch's own, whatever the
@@ -215,6 +238,7 @@ class Dynamics:
     coordinates: tuple[tuple[str, str, str], ...]
     positions: tuple[Variable, ...] = ()
     stick_is_rest: bool = True
+    edges: Mapping[str, tuple[str, str]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

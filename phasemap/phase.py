@@ -89,7 +89,9 @@ A stage ends at the first of:
   The ladder's 2 - f^2 and the pendulum's l^2 - delta^2 are constant: a
   vanishing one is reported as ``singular`` when the stage starts, and
   delta > l (no solution off Q_n = 0) as ``no_solution``.
-* phi leaves ``phi_range``: ``horizon``, at the boundary.
+* phi leaves ``phi_range``: ``horizon``, at the boundary; where that boundary
+  is the model's own domain edge (the ladder lying flat at pi/2),
+  ``left_domain``.
 * the stage count runs out: the last stage's reason becomes ``max_events``.
 * a safety net of the closed forms: u would exceed :data:`U_MAX` = 1e300
   rad2 s-2, beyond double precision: ``step_failure``, at u = U_MAX.  A
@@ -780,6 +782,10 @@ def phase_curve(model: str | Model, *, phi: float, omega: float,
                 res.reason = ev.MAX_EVENTS
                 break
             phi0, u0, sigma = res.end_phi, 0.0, next_sigma
+    last = stages[-1][1]
+    var = m.variables["phi"]
+    if last.reason == ev.HORIZON and last.end_phi in (var.lower, var.upper):
+        last.reason = ev.LEFT_DOMAIN  # the model's own edge (the ladder lies flat)
     return _dataset(m, full, (lo, hi), max_stages, points, stages)
 
 
@@ -862,6 +868,8 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
     coords = {"stage": xr.Variable("stage", np.arange(len(stages), dtype=np.int32),
                                    {"long_name": "stage index (omega keeps its sign on a stage)",
                                     "units": "1"})}
+    from .simulate import end_message
+
     last = ev.Event(int(reasons[-1]))
     now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     attrs = {
@@ -876,7 +884,7 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
         "date_created": now,
         "method": _METHODS[m.name],
         "end_reason": last.name.lower(),
-        "end_message": last.message,
+        "end_message": end_message(m, last, (float(end_phi[-1]),)),
         "n_reversals": np.int32(np.count_nonzero(reasons == ev.REVERSAL)),
         "phasemap_phi_range": np.array(phi_range, dtype=float),
         "phasemap_max_stages": np.int32(max_stages),

@@ -166,7 +166,9 @@ CATEGORY_COLOURS = {
     "indeterminate": _OI["blue"],
     "singular": _OI["black"],
     "horizon": _OI["yellow"],
+    "left_domain": _OI["reddish_purple"],
     "max_events": GREY,
+    "max_steps": GREY,
     "step_failure": _OI["orange"],
     "stiff": GREY,
 }
@@ -222,7 +224,9 @@ EVENT_MARKERS = {
     "continuum": ("*", _OI["reddish_purple"]),
     "singular": ("D", _OI["black"]),
     "horizon": (">", _OI["yellow"]),
+    "left_domain": ("<", _OI["reddish_purple"]),
     "max_events": ("h", GREY),
+    "max_steps": ("h", GREY),
     "step_failure": ("v", _OI["orange"]),
 }
 _TERMINAL = {e.name.lower() for e in _events.Event if e.terminal}

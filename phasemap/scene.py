@@ -26,6 +26,7 @@ import xarray as xr
 
 from . import _numerics as nx
 from . import events as ev
+from . import progress
 from ._version import __version__
 from .atlas import CONVENTIONS
 from .grid import evaluate
@@ -52,8 +53,8 @@ class Scene:
         model name or :class:`phasemap.Model`.
     axes:
         ``{name: values}`` for 1 or more state or parameter names, each a
-        non-empty 1-D sequence of finite values inside the variable's domain
-        (uniform or not).  The Dataset's dimensions follow this order.
+        non-empty 1-D sequence of finite values inside the variable's domain,
+        strictly increasing or strictly decreasing (uniform or not).  The Dataset's dimensions follow this order.
     fixed:
         values for other names; names neither on an axis nor fixed take the
         model's defaults.
@@ -128,6 +129,12 @@ class Scene:
                 for i, (n, a) in enumerate(self.axes.items())}
         full = m.complete({**fixed, **mesh})
         self.fixed: dict[str, float] = {n: float(v) for n, v in full.items() if n not in self.axes}
+        for name, a in self.axes.items():  # CF coordinates: strictly monotonic
+            step = np.diff(a)
+            if a.size > 1 and not (np.all(step > 0) or np.all(step < 0)):
+                what = "repeats a value" if np.any(step == 0) else "goes back and forth"
+                raise ValueError(f"{m.name}: axis {name} {what}; an axis must be strictly "
+                                 "increasing or strictly decreasing")
         registry = layers_for(m)
         if layers is None:
             layers = ["n_solutions"] + (["stagnation"] if self._velocity_can_be_zero() else [])
@@ -205,27 +212,19 @@ class Scene:
             return self._lazy(chunks)
         return self._dataset(self._eager(progress))
 
-    def _eager(self, progress: bool) -> dict[str, np.ndarray]:
-        reg = layers_for(self.model)
-        wanted = [reg[n] for n in self.layers]
-        first, rest = next(iter(self.axes)), self.size // len(self.axes[next(iter(self.axes))])
-        step = max(1, SLAB_CELLS // max(rest, 1))
-        n0 = self.axes[first].size
-        if self._fate:  # a trajectory per cell: slabs of a few thousand cells
-            step = max(1, FATE_SLAB_CELLS // max(rest, 1))
-        if not progress or n0 <= step:
-            return self._evaluate(self.axes, wanted)
-        from tqdm.auto import tqdm
+    def _eager(self, show: bool) -> dict[str, np.ndarray]:
+        """Every layer in memory, computed block by block (a progress bar when ``show``)."""
+        from .blocks import compute_blocks
 
-        out = {l.name: np.empty(self.shape, dtype=l.dtype) for l in wanted}
-        with tqdm(total=self.size, unit="cell", unit_scale=True, delay=1.0,
-                  desc=f"{self.model.name} atlas") as bar:
-            for i in range(0, n0, step):
-                part = dict(self.axes)
-                part[first] = self.axes[first][i:i + step]
-                for name, arr in self._evaluate(part, wanted).items():
-                    out[name][i:i + step] = arr
-                bar.update(part[first].size * rest)
+        reg = layers_for(self.model)
+        step = FATE_SLAB_CELLS if self._fate else SLAB_CELLS
+        if self.size <= step:
+            return self._evaluate(self.axes, [reg[n] for n in self.layers])
+        out = {n: np.empty(self.shape, dtype=reg[n].dtype) for n in self.layers}
+        with progress.enable(show or progress.enabled()):
+            for index, arrays in compute_blocks(self, step, f"{self.model.name} atlas"):
+                for name, arr in arrays.items():
+                    out[name][index] = arr
         return out
 
     def _evaluate(self, axes: dict[str, np.ndarray], wanted: list) -> dict[str, np.ndarray]:
@@ -252,6 +251,11 @@ class Scene:
         return result
 
     def _lazy(self, chunks) -> xr.Dataset:
+        """Dask-backed layers: one blockwise task per block computes every layer once.
+
+        The graph is a few blockwise layers, never materialised block by block,
+        so it builds at once whatever the number of blocks.
+        """
         import dask.array as da
 
         if isinstance(chunks, int):
@@ -264,10 +268,16 @@ class Scene:
         if any(c < 1 for c in sizes):
             raise ValueError(f"{self.model.name}: chunk sizes must be >= 1, got {sizes}")
         reg = layers_for(self.model)
-        template = self._dataset({
-            n: da.empty(self.shape, dtype=reg[n].dtype, chunks=sizes) for n in self.layers})
-        return xr.map_blocks(_compute_block, template, kwargs={"spec": self.spec()},
-                             template=template)
+        ndim = len(self.axes)
+        normal = da.core.normalize_chunks(sizes, self.shape)
+        token = f"phasemap-{self.model.name}-{abs(hash(json.dumps(self.spec(), default=str)))}"
+        raw = da.map_blocks(_raw_block, chunks=normal, dtype=object,
+                            meta=np.empty((0,) * ndim, dtype=object), name=f"{token}-blocks",
+                            scene=self)
+        arrays = {n: raw.map_blocks(_pick, n, dtype=reg[n].dtype, name=f"{token}-{n}",
+                                    meta=np.empty((0,) * ndim, dtype=reg[n].dtype))
+                  for n in self.layers}
+        return self._dataset(arrays)
 
     def _dataset(self, arrays: Mapping[str, object]) -> xr.Dataset:
         m, reg = self.model, layers_for(self.model)
@@ -294,10 +304,13 @@ class Scene:
         return xr.Dataset(data_vars, coords, attrs)
 
 
-def _compute_block(block: xr.Dataset, spec: Mapping) -> xr.Dataset:
-    """Compute one dask block: the scene restricted to the block's coordinates."""
-    axes = {n: block[n].values for n in spec["axes"]}
-    scene = Scene(spec["model"], axes=axes, fixed=spec["fixed"], layers=spec["layers"])
-    ds = scene.compute()
-    return ds.assign_attrs(block.attrs)
+def _raw_block(scene: Scene, block_info=None) -> dict[str, np.ndarray]:
+    """Every layer of one dask block: the scene restricted to the block's cells."""
+    where = block_info[None]["array-location"]
+    axes = {n: a[lo:hi] for (n, a), (lo, hi) in zip(scene.axes.items(), where)}
+    reg = layers_for(scene.model)
+    return scene._evaluate(axes, [reg[n] for n in scene.layers])
 
+
+def _pick(block: dict, name: str) -> np.ndarray:
+    return block[name]

@@ -126,7 +126,7 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
         sorted times in [0, t_end] at which to report the state (from the
         dense output).  Default: every accepted step and every event.
     max_steps, max_events:
-        limits after which the motion ends with ``max_events``.
+        limits after which the motion ends with ``max_steps`` or ``max_events``.
     method:
         ``"DOPRI5"`` (Dormand-Prince 5(4), the default) or ``"DOP853"``
         (Dormand-Prince 8(5,3) with a dense output of order 7: fewer steps at
@@ -203,6 +203,21 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
                     ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode)
 
 
+def end_message(m: Model, fate: ev.Event, y=None) -> str:
+    """The fate's message; at an edge of the domain, which edge and what it means."""
+    if fate != ev.Event.LEFT_DOMAIN or y is None:
+        return fate.message
+    variables = integrated_variables(m)
+    edges = m.dynamics.edges
+    for var, value in zip(variables, y):
+        for side, bound in enumerate((var.lower, var.upper)):
+            if math.isfinite(bound) and value == bound:
+                meaning = edges.get(var.name, ("", ""))[side]
+                return (f"{fate.message}: {var.name} reached {bound:.6g} {var.units}"
+                        + (f" ({meaning})" if meaning else ""))
+    return fate.message
+
+
 def _dataset(m: Model, full, positions, opts: Options, names, fate, n_rev, n_steps, ts, ys,
              ms, ev_t, ev_kind, ev_y, ev_mode) -> xr.Dataset:
     variables = integrated_variables(m)
@@ -241,7 +256,7 @@ def _dataset(m: Model, full, positions, opts: Options, names, fate, n_rev, n_ste
         "phasemap_version": __version__,
         "date_created": now,
         "end_reason": fate_event.name.lower(),
-        "end_message": fate_event.message,
+        "end_message": end_message(m, fate_event, ev_y[-1] if len(ev_y) else None),
         "n_reversals": np.int32(n_rev),
         "n_steps": np.int64(n_steps),
         "integrator": f"{METHODS[opts.method].DESCRIPTION}, events by classification",

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import argparse
 import pathlib
+import shutil
+import textwrap
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -50,14 +52,49 @@ def verdict(ok: bool, yes: str = "agrees") -> str:
     return yes if ok else "DISAGREES"
 
 
-def claims_table(claims: Sequence[Claim]) -> str:
-    """The claims as an aligned plain-text table."""
+def claims_table(claims: Sequence[Claim], width: int | None = None) -> str:
+    """The claims as an aligned plain-text table, at most ``width`` columns wide.
+
+    ``width`` defaults to the terminal's (``COLUMNS`` or the terminal size;
+    unlimited when the output is no terminal).  The claim, paper and measured
+    columns are wrapped, each to a share of the room its text needs.
+    """
     rows = [("claim", "paper", "measured", "verdict")]
     rows += [(c.claim, c.paper, c.measured, c.verdict) for c in claims]
     widths = [max(len(r[i]) for r in rows) for i in range(4)]
-    lines = ["  ".join(x.ljust(w) for x, w in zip(r, widths)).rstrip() for r in rows]
-    lines.insert(1, "  ".join("-" * w for w in widths))
+    if width is None:
+        width = shutil.get_terminal_size((0, 0)).columns
+    room = width - widths[3] - 6  # verdicts stay whole; three 2-space gaps
+    if width > 0 and sum(widths[:3]) > room:
+        widths[:3] = _shares(widths[:3], max(room, 3 * 12))
+    lines = []
+    for r in rows:
+        cells = [textwrap.wrap(x, w, break_on_hyphens=False) or [""] if i < 3 else [x]
+                 for i, (x, w) in enumerate(zip(r, widths))]
+        for k in range(max(len(c) for c in cells)):
+            parts = [(c[k] if k < len(c) else "").ljust(w) for c, w in zip(cells, widths)]
+            lines.append("  ".join(parts).rstrip())
+        if r is rows[0]:
+            lines.append("  ".join("-" * w for w in widths))
     return "\n".join(lines)
+
+
+def _shares(natural: list[int], room: int) -> list[int]:
+    """Split ``room`` columns: a column that needs less than an even share keeps its
+    width, the rest share what is left evenly."""
+    out = list(natural)
+    free = list(range(len(natural)))
+    while free:
+        share = room // len(free)
+        small = [i for i in free if natural[i] <= share]
+        if not small:
+            for i in free:
+                out[i] = max(8, share)
+            break
+        for i in small:
+            room -= natural[i]
+            free.remove(i)
+    return out
 
 
 def arguments(doc: str, argv: Sequence[str] | None = None) -> argparse.Namespace:

@@ -4,16 +4,23 @@ The studies live in the repository's ``studies/`` folder (phasemap/ only
 defines; studies produce).  The tour finds that folder next to the package
 (an editable install or a run from the clone) or in the working directory,
 runs each study's ``main(["--quick", "--out", DIR])`` in turn with a progress
-line, and ends with the list of figures and the count of verdicts.
+line, and ends with the list of figures and the count of verdicts.  With
+progress on (the command line), each study runs under a ticking line on
+stderr that names it and its elapsed time, so that no wait is silent, not even
+numba compiling the kernels on a cold cache; the study's own progress bars
+appear beneath it and its printing above.
 """
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import pathlib
 import sys
 import time
-from typing import Sequence
+from typing import Iterator, Sequence
+
+from . import progress
 
 #: The order of the tour: the four systems of the paper, then the overview.
 ORDER = ("ladder", "wheel", "elliptic_pendulum", "hinge_pendulum", "overview")
@@ -31,6 +38,43 @@ def find_studies(folder: str | None = None) -> pathlib.Path:
     raise ValueError("no study scripts found (looked in "
                      f"{', '.join(str(c) for c in candidates)}); run the tour from a clone of "
                      "the phasemap repository or pass --studies DIR")
+
+
+class _TqdmStdout:
+    """A stdout that prints whole lines above the progress bars (``tqdm.write``)."""
+
+    def __init__(self, stream):
+        self.stream = stream
+        self.pending = ""
+
+    def write(self, text: str) -> int:
+        from tqdm import tqdm
+
+        self.pending += text
+        *lines, self.pending = self.pending.split("\n")
+        for line in lines:
+            tqdm.write(line, file=self.stream)
+        return len(text)
+
+    def flush(self) -> None:
+        self.stream.flush()
+
+    def isatty(self) -> bool:
+        return self.stream.isatty()
+
+
+@contextlib.contextmanager
+def _above_the_bars() -> Iterator[None]:
+    if not progress.enabled():
+        yield
+        return
+    out = _TqdmStdout(sys.stdout)
+    try:
+        with contextlib.redirect_stdout(out):
+            yield
+    finally:
+        if out.pending:
+            sys.stdout.write(out.pending + "\n")
 
 
 def load(path: pathlib.Path):
@@ -59,7 +103,10 @@ def tour(out: str = "phasemap-out", *, full: bool = False, studies: str | None =
     for i, name in enumerate(names, 1):
         print(f"\n[{i}/{len(names)}] {name} ({'full' if full else 'quick'}), "
               f"{time.perf_counter() - start:.0f} s so far", flush=True)
-        claims = load(folder / f"{name}.py").main(argv)
+        # a ticking line on stderr for the whole study (compiling included), the
+        # study's own bars beneath it, and its printing above both
+        with progress.activity(f"[{i}/{len(names)}] {name}"), _above_the_bars():
+            claims = load(folder / f"{name}.py").main(argv)
         for c in claims:
             verdicts[c.verdict] = verdicts.get(c.verdict, 0) + 1
     figures = sorted(out_dir.glob("*.png"))

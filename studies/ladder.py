@@ -271,8 +271,8 @@ def portrait_figure(regions: xr.Dataset, curves):
             side = "<" if f < SQRT2 else ">"
             ax.set_title(rf"({'ab'[k]}) $f$ = {f:g} {side} $\sqrt{{2}}$,  "
                          rf"$2\arctan f$ = {2 * math.atan(f):.2f} rad", loc="left")
-        if "horizon" in handles:
-            handles[r"lying flat ($\varphi = \pi/2$)"] = handles.pop("horizon")
+        if "left domain" in handles:
+            handles[r"lying flat ($\varphi = \pi/2$)"] = handles.pop("left domain")
         handles["a contact would pull"] = Patch(facecolor="none", edgecolor=blue,
                                                 hatch="\\\\\\\\", linewidth=0.6, ls="--")
         handles[r"$c = 0$: $\omega^2 = a\sin\varphi + b\cos\varphi$"] = Line2D(

@@ -15,8 +15,8 @@ m = 1 kg (phasemap's defaults), so delta/l = 2 delta.  This study
   N from an unreduced Newton-Euler solve, the paper's condition after (13) and
   the printed (13) (a sign erratum);
 * maps the fate of every initial state (phi0, omega0) at both delta/l;
-* measures where the bracket of (13) can vanish (the Painleve analogue), sharper
-  than the README's bound.
+* measures where the bracket of (13) can vanish (the Painleve analogue) against
+  the sharp bound the README states (``phasemap.facts.wheel_singular_delta``).
 
     python studies/wheel.py [--quick] [--out DIR]
 
@@ -32,6 +32,7 @@ import numpy as np
 import xarray as xr
 
 import phasemap
+from phasemap.facts import wheel_singular_delta
 from phasemap import plot as pplot
 from phasemap.study import (Claim, arguments, collect_legend, finish, save_atlas, save_figure,
                             verdict)
@@ -448,17 +449,16 @@ def singular_claims(ds: xr.Dataset) -> list[Claim]:
     r, l, rho = p["r"], p["l"], p["rho"]
     total = rho ** 2 + r ** 2 + l ** 2
     # min over phi of total - 2 r l cos phi - delta l |sin phi| is total - l sqrt(4 r^2 + delta^2)
-    sharp = math.sqrt((total / l) ** 2 - 4 * r * r)
-    readme = (rho ** 2 + (r - l) ** 2) / l
+    sharp = wheel_singular_delta(r, l, rho)
     delta = ds.delta.values
     reaches = (ds.coef_roll_pos.min("phi") <= 0.0).values
     first = float(delta[np.argmax(reaches)]) if reaches.any() else math.inf
     step = delta[1] - delta[0]
     claims = [Claim(
         f"wheel: bracket of (13) can vanish (r = l = {r:g}, rho = {rho:g})",
-        "(not stated); README: needs delta l >= rho^2 + (r-l)^2",
-        f"first at delta = {first:.4f} on the grid; sharp: l sqrt(4r^2 + delta^2) >= "
-        f"rho^2 + r^2 + l^2, delta >= {sharp:.4f} (README bound {readme:.2f})",
+        "(not stated)",
+        f"first at delta = {first:.4f} on the grid; the README's sharp bound "
+        f"l sqrt(4r^2 + delta^2) >= rho^2 + r^2 + l^2 gives delta >= {sharp:.4f}",
         verdict(sharp <= first <= sharp + step, "finding"))]
     # the paper: (13) has no solution where the bracket vanishes (unless its right side does)
     d = 0.8

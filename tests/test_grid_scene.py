@@ -34,7 +34,7 @@ def _axis(rng, name, lo, hi, uniform):
     else:
         a = np.sort(rng.uniform(lo, hi, n))
     if name in ("omega", "xdot") and rng.random() < 0.6:
-        a = np.sort(np.append(a, 0.0))
+        a = np.unique(np.append(a, 0.0))  # an axis never repeats a value
     return a
 
 

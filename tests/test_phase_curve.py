@@ -110,7 +110,9 @@ def reference_stage(system, phi, w, s, lo, hi, method):
     if i == 0:
         kind = "rest" if system.rests(phi_e) else "reversal"
     else:
-        kind = "horizon" if i == 1 else "contact_lost"
+        # 0 and pi/2 are the ladder's own domain edges (upright, flat): left_domain
+        edge = (hi if s > 0 else lo) in (0.0, math.pi / 2)
+        kind = ("left_domain" if edge else "horizon") if i == 1 else "contact_lost"
     return sol, kind, phi_e, w_e
 
 
@@ -454,7 +456,7 @@ def test_start_from_rest_follows_classify(model, grid):
         if c.n_solutions == 1 and not c.stagnation:
             acc = c.branches[0].accelerations["phi_ddot"]
             assert ds.stage_sign.values[0] == np.sign(acc)
-            assert ds.sizes["point"] > 1 or first == Event.HORIZON  # at the ladder's end
+            assert ds.sizes["point"] > 1 or first == Event.LEFT_DOMAIN  # at the ladder's end
             seen.add("moves")
         else:
             expected = {(1, True): Event.REST, (2, False): Event.INDETERMINATE,

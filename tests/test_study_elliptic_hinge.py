@@ -7,6 +7,7 @@ import pathlib
 import warnings
 
 import pytest
+from conftest import record_study
 import xarray as xr
 
 import figure_review
@@ -74,6 +75,7 @@ def run(request, tmp_path_factory):
             figure_review.recording() as seen:
         warnings.simplefilter("error")
         claims = module.main(["--quick", "--out", str(out)])
+    record_study(name, claims, out)
     return name, claims, printed.getvalue(), out, seen
 
 

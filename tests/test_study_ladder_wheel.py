@@ -13,6 +13,7 @@ import pathlib
 import warnings
 
 import pytest
+from conftest import record_study
 import xarray as xr
 
 import figure_review
@@ -82,6 +83,7 @@ def run(request, tmp_path_factory):
             figure_review.recording() as seen:
         warnings.simplefilter("error")
         claims = load(name).main(["--quick", "--out", str(out)])
+    record_study(name, claims, out)
     return name, out, claims, printed.getvalue(), seen
 
 

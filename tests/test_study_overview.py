@@ -6,7 +6,9 @@ import importlib.util
 import pathlib
 import warnings
 
+import pytest
 import xarray as xr
+from conftest import STUDY_RUNS, record_study
 
 import figure_review
 
@@ -26,6 +28,7 @@ def test_overview_quick(tmp_path, capsys):
     figure_review.check(seen, exempt_fixed={"overview_work_precision"})
     wp = " ".join(seen["overview_work_precision"]["texts"])
     assert "fastest of 5 timing rounds" in wp and "SciPy DOP853" in wp
+    record_study("overview", claims, tmp_path)
     assert [c.verdict for c in claims] == ["finding", "finding", "agrees", "agrees", "finding"]
     printed = capsys.readouterr().out
     assert "verdict" in printed and "DISAGREES" not in printed
@@ -44,3 +47,22 @@ def np_unique(a):
     import numpy as np
 
     return np.unique(a.values).tolist()
+
+
+def test_readme_tour_counts_are_the_studies_own():
+    """The README's count of claims, verdicts and figures is what the studies give."""
+    import re
+
+    from phasemap.tour import ORDER
+
+    missing = [n for n in ORDER if n not in STUDY_RUNS]
+    if missing:
+        pytest.skip(f"studies not run in this session: {', '.join(missing)}")
+    verdicts = [v for n in ORDER for v in STUDY_RUNS[n][0]]
+    figures = sum(STUDY_RUNS[n][1] for n in ORDER)
+    readme = " ".join((STUDIES.parent / "README.md").read_text().split())
+    count = {k: verdicts.count(k) for k in ("agrees", "erratum", "sharper", "finding")}
+    assert (f"The quick tour checks {len(verdicts)} claims: {count['agrees']} agree, "
+            f"{count['erratum']} confirm errata, {count['sharper']} is sharper and "
+            f"{count['finding']} are findings") in readme
+    assert re.search(rf"an overview, {figures} figures", readme)

@@ -161,7 +161,9 @@ MODEL = Model(
                          "2-f^2"),
     velocity="omega",
     velocity_scale=velocity_scale,
-    dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),)),
+    dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),),
+                      edges={"phi": ("the bar stands upright against the wall",
+                                     "the bar lies flat on the floor")}),
     default_axes={"phi": (0.0, math.pi / 2, 512), "f": (0.0, 3.0, 512)},
 )
 

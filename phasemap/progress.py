@@ -1,0 +1,96 @@
+"""Progress on stderr, in one style (tqdm), wherever a user waits.
+
+The library is quiet by default; the command line and the tour switch
+progress on with :func:`enable`.  ``PHASEMAP_PROGRESS=always`` in the
+environment forces it on and shows every bar at once (the tests use it to see
+that work has started); ``PHASEMAP_PROGRESS=never`` forces it off.
+
+* :func:`bar` counts cells (or any unit) of work that is done in pieces.
+* :func:`activity` is a ticking timer for a wait that has no count: numba
+  compiling a kernel, one long call.  A background thread refreshes it twice
+  a second, so the elapsed time moves even while nothing else prints.
+* :func:`status` names what the innermost :func:`activity` is doing now (the
+  tour's line shows the study's current step).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+import threading
+import time
+from typing import Iterator
+
+from tqdm import tqdm
+
+_state = {"on": False, "activities": []}
+
+
+def enabled() -> bool:
+    """Whether progress is shown: :func:`enable`, or ``PHASEMAP_PROGRESS``."""
+    env = os.environ.get("PHASEMAP_PROGRESS", "")
+    if env == "always":
+        return True
+    if env == "never":
+        return False
+    return _state["on"]
+
+
+def _delay() -> float:
+    return 0.0 if os.environ.get("PHASEMAP_PROGRESS") == "always" else 1.0
+
+
+@contextlib.contextmanager
+def enable(on: bool = True) -> Iterator[None]:
+    """Show progress (on stderr) inside the block."""
+    before = _state["on"]
+    _state["on"] = on
+    try:
+        yield
+    finally:
+        _state["on"] = before
+
+
+def bar(total: int, desc: str, unit: str = "cell") -> tqdm:
+    """A progress bar on stderr; silent unless :func:`enabled`, shown after one second."""
+    return tqdm(total=total, desc=desc, unit=unit, unit_scale=True, file=sys.stderr,
+                delay=_delay(), disable=not enabled(), dynamic_ncols=True, leave=False,
+                mininterval=0.2)
+
+
+@contextlib.contextmanager
+def activity(desc: str) -> Iterator[None]:
+    """A ticking ``desc: elapsed`` line on stderr while the block runs (when enabled)."""
+    if not enabled():
+        yield
+        return
+    delay = _delay()
+    line = tqdm(total=None, desc=desc, file=sys.stderr, delay=delay, leave=False,
+                bar_format="{desc} [{elapsed}]", dynamic_ncols=True)
+    stop = threading.Event()
+    start = time.monotonic()
+
+    def tick():
+        while not stop.wait(0.5):
+            if time.monotonic() - start >= delay:
+                line.refresh()
+
+    thread = threading.Thread(target=tick, daemon=True)
+    _state["activities"].append(line)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
+        _state["activities"].remove(line)
+        line.close()
+
+
+def status(text: str) -> None:
+    """Show ``text`` as what the innermost :func:`activity` is doing now."""
+    if _state["activities"]:
+        line = _state["activities"][-1]
+        base = line.desc.split(": ", 1)[0]
+        line.set_description_str(f"{base}: {text}", refresh=False)
