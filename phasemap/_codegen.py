@@ -71,7 +71,11 @@ def _import(obj, alias: str) -> str:
     if py is None:
         raise ValueError(f"{obj!r} must be a numba.njit function or a numpy ufunc")
     module, name = py.__module__, py.__name__
-    if getattr(sys.modules.get(module), name, None) is not obj:
+    target = getattr(sys.modules.get(module), name, None)
+    # a model unpickled in another process (a dask worker) holds copies of the
+    # dispatchers: the same function if it has the same code
+    if target is not obj and getattr(getattr(target, "py_func", None), "__code__", None) \
+            != py.__code__:
         raise ValueError(f"{module}.{name} must be importable by that name (a module-level "
                          "function) to be compiled into a kernel")
     return f"from {module} import {name} as {alias}"

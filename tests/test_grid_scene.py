@@ -189,7 +189,7 @@ def test_local_cluster_with_two_workers_equals_eager():
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
-        remote = client.compute(scene.compute(chunks=16)).result()
+        remote = client.compute(scene.compute(chunks=16)).result(timeout=600)
     assert_same_atlas(remote, eager)
 
 
