@@ -280,6 +280,13 @@ class Model:
         """Per branch, the sign of the relative velocity on its stage."""
         return tuple(float(b.direction) for b in self.candidates)
 
+    def __getstate__(self):
+        # The generated contract is a module (not picklable) and is rebuilt on
+        # demand: a model shipped to a dask worker goes without it.
+        state = dict(self.__dict__)
+        state.pop("contract", None)
+        return state
+
     @functools.cached_property
     def contract(self):
         """The generated per-point module: ``point``, ``branch`` and ``derive``."""

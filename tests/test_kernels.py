@@ -224,3 +224,17 @@ def test_an_unusable_cache_dir_falls_back_to_a_private_temporary_folder(tmp_path
     assert folder == pathlib.Path(tempfile.gettempdir()) / f"phasemap-kernels-{os.getuid()}"
     assert isinstance(module.X, int)
     pathlib.Path(module.__file__).unlink()
+
+
+def test_a_model_with_its_contract_built_still_pickles():
+    # dask ships models to worker processes; the generated contract (a module)
+    # stays behind and is rebuilt there
+    import pickle
+
+    m = phasemap.MODELS["hinge_pendulum"]
+    out = np.empty((len(m.branches), m.n_fields))
+    m.point(m.input_vector(m.defaults), out)
+    copy = pickle.loads(pickle.dumps(m))
+    again = np.empty_like(out)
+    copy.point(copy.input_vector(copy.defaults), again)
+    np.testing.assert_array_equal(out, again)
