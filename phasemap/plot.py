@@ -193,6 +193,7 @@ CATEGORY_HATCHES = {
     "three_or_more": "++++",
     "contact_lost": "\\\\\\\\",
     "max_events": "----",
+    "max_steps": "////",
     "step_failure": "OO",
     "stiff": "++++",
 }
