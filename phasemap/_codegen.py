@@ -262,9 +262,7 @@ def _header(src: _Source, what: str) -> list[str]:
 # -- the contract: point, branch, derive --------------------------------------
 
 def contract(model):
-    """The module holding ``point(v, out)``, ``branch(v, b, row)`` and ``derive(v)``.
-
-    """
+    """The module holding ``point(v, out)``, ``branch(v, b, row)`` and ``derive(v)``."""
     src = _Source(model)
     nb, nf = len(model.candidates), src.nfields
     bodies = {}
@@ -281,15 +279,6 @@ def contract(model):
         body += ["    else:", f"        out[{b}, 0] = 0.0", f"        out[{b}, 1] = 0.0"]
         body += [f"        out[{b}, {j}] = NAN" for j in range(2, nf)]
     bodies["point(v, out)"] = body
-    body = ['    """Branch b along its stage: its own slip direction, whatever the velocity."""']
-    body += src.load("    ")
-    for b, spec in enumerate(model.candidates):
-        body.append(f"    {'if' if b == 0 else 'elif'} b == {b}:")
-        rest = "True" if spec.direction == 0 else "False"
-        body.append(f"        r = {src.call(b, rest, 'i_' + model.velocity)}")
-        for j in range(nf):
-            body.append(f"        row[{j}] = r[{j}]")
-    bodies["branch(v, b, row)"] = body
     body = ['    """Branch b along its stage, as its row tuple (for the integrator)."""']
     body += src.load("    ")
     for b, spec in enumerate(model.candidates):
@@ -299,6 +288,10 @@ def contract(model):
         body.append(f"        r = {call}")
     body.append("    return r")
     bodies["branch_row(v, b)"] = body
+    bodies["branch(v, b, row)"] = [
+        '    """Branch b along its stage: its own slip direction, whatever the velocity."""',
+        "    r = branch_row_inline(v, b)",
+        *(f"    row[{j}] = r[{j}]" for j in range(nf))]
     body = ['    """Fill the derived inputs of v (sin phi ...) from their sources."""']
     slot = {n: k for k, n in enumerate(model.inputs)}
     for j, d in enumerate(model.derived):
@@ -383,6 +376,9 @@ def driver():
     return _DRIVER[0]
 
 
+_KERNELS: dict = {}
+
+
 def grid_kernel(model, layers, inner: str):
     """The ``cells`` function for the requested ``layers`` with ``inner`` innermost.
 
@@ -390,8 +386,19 @@ def grid_kernel(model, layers, inner: str):
     computes cells ``lo..hi`` of the inner axis at the outer state ``v`` and
     writes them from column ``first`` on: the int8 summary layers to the rows
     of ``flags`` and the float layers to the rows of ``fields``, each in the
-    order of ``layers``.  :func:`driver` runs it over a grid.
+    order of ``layers``.  :func:`driver` runs it over a grid.  Remembered per
+    process, so that a scene computed block by block generates and hashes its
+    source once, not once per block.
     """
+    key = (id(model), tuple(l.name for l in layers), inner)
+    if key not in _KERNELS:
+        # the model is kept with its kernel, so that its id is not reused
+        _KERNELS[key] = (model, _generate_grid_kernel(model, layers, inner))
+    return _KERNELS[key][1]
+
+
+def _generate_grid_kernel(model, layers, inner: str):
+    """Write (once) and load the ``cells`` function of :func:`grid_kernel`."""
     src = _Source(model)
     inner_derived = [d for d in model.derived if d.source == inner]
     skip = {inner} | {d.name for d in inner_derived}

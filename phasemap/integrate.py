@@ -64,7 +64,7 @@ from numba import types as nb_types
 from . import _dop853, _dopri5
 from . import _numerics as nx
 from . import events as ev
-from ._codegen import set_cell
+from ._codegen import _F1, _F2, _F3, _I1, _I2, set_cell
 from ._compile import specialize
 from .grid import pack_axes
 from .model import Model
@@ -576,11 +576,6 @@ def _fate_drive(integrate, y_slot, base, shape, axis_slot, axis_values, deriv_sl
                 pos_rest[j, cell] = res[2][pos_col[j]] if res[0] == ev.REST else np.nan
 
 
-_F1 = nb_types.Array(nb_types.float64, 1, "C")
-_F2 = nb_types.Array(nb_types.float64, 2, "C")
-_F3 = nb_types.Array(nb_types.float64, 3, "C")
-_I1 = nb_types.Array(nb_types.int64, 1, "C")
-_I2 = nb_types.Array(nb_types.int64, 2, "C")
 #: The argument types of every integrator (see _integrate_template).
 INTEGRATE_ARGS = (_F1, _F1, nb_types.float64, nb_types.float64, nb_types.float64,
                   nb_types.float64, nb_types.int64, nb_types.int64, nb_types.boolean, _F1)
