@@ -1,0 +1,474 @@
+"""Brute-force mode-enumeration oracles in full coordinates (pure numpy).
+
+Independent of phasemap's physics (imports nothing from phasemap, no sympy).
+Each planar rigid body is described in FULL coordinates q = (xc, yc, theta)
+(centre of mass, counter-clockwise body angle) with its mass matrix
+M = diag(m, m, J) and gravity.  Every contact force is an unknown.  For every
+combination of contact modes, the square linear system
+
+    M q'' = Q + sum_c ( N_c dvn_c/dq' + F_c dvt_c/dq' + K_c drho_c/dq' ),
+    one pair (or triple) of mode rows per contact,
+
+is solved with an SVD (rank-deficient systems are handled: indeterminate
+reactions with unique accelerations, or a continuum of accelerations), and
+the mode's own inequalities are checked.  ``vn`` is the normal gap velocity
+(reaction direction, opening positive), ``vt`` the slip velocity of the body's
+material point at the contact (friction force conjugate to it), ``rho`` a
+rolling rate (rolling contacts only; the rolling couple K is conjugate to it).
+The time derivatives d/dt vn = (dvn/dq') q'' + (D_q vn) q' are formed with a
+complex-step derivative along q' (exact to rounding; the velocity functions
+are written with numpy functions that accept complex angles).
+
+Modes of a one-sided point contact with friction f:
+    ``sep``    N = F = 0, gap acceleration > tol (strict: a tie is kept grazing);
+    ``slip+`` / ``slip-``  gap'' = 0, F = -s f N, N >= -tol; only the direction
+               sgn(vt) when vt != 0; at vt = 0 a start needs s vt' > tol;
+    ``stick``  (vt = 0 only) gap'' = 0, vt' = 0, N >= -tol, |F| <= f N + tol.
+Modes of a one-sided rolling contact (no slip, unlimited F, rolling couple
+magnitude delta N opposing the rolling rate rho):
+    ``sep``    N = F = K = 0, gap'' > tol;
+    ``roll+`` / ``roll-``  gap'' = 0, vt' = 0, K = -s delta N, N >= -tol; at
+               rho = 0 a start needs s rho' > tol;
+    ``rest``   (rho = 0 only) gap'' = 0, vt' = 0, rho' = 0, |K| <= delta N + tol.
+
+Ties follow GUIDE section 1: stick (rest) ties to admissible, a slip start
+needs a strictly positive acceleration, a kept contact with N = 0 (to
+tolerance) is kept (grazing), separation needs a strictly opening gap.  Every
+zero test is relative: tol = RTOL * scale, with the scale of forces
+m (g + L w^2) (1 + f) and of accelerations g + L w^2 of each system (L its
+size, w a velocity scale of the state).  ``margin`` reports the smallest
+relative distance of any decisive quantity from its threshold, so that tests
+can stay away from ties.
+
+Public API (all return an :class:`Answer`):
+    painleve_rod(theta, omega, xdot, f, l, g, m)
+    ladder(phi, omega, f, l, g, m)
+    wheel(phi, omega, delta, r, l, rho, g, m)
+    rod_on_step(theta, omega, f, l, h, g, m, f_edge=None)
+and the closed forms painleve_rod_threshold(), painleve_rod_B(theta, f, s).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+RTOL = 1e-9       # relative tolerance of every zero test
+VTOL = 1e-12      # a slip velocity below VTOL * velocity scale is zero
+_H = 1e-30        # complex step
+
+NONE, UNIQUE, TWO, CONTINUUM, THREE_OR_MORE = 0, 1, 2, 3, 4
+
+
+@dataclass
+class Contact:
+    """One contact: velocity functions (q, qd) -> scalar, linear in qd."""
+
+    name: str
+    vn: object
+    vt: object
+    f: float | None = None          # Coulomb coefficient (None: rolling, no slip)
+    rho: object = None              # rolling rate (rolling contacts)
+    delta: float = 0.0              # rolling friction length
+
+    @property
+    def rolling(self) -> bool:
+        return self.rho is not None
+
+
+@dataclass
+class Mode:
+    """One admissible mode combination and its numbers."""
+
+    modes: tuple[str, ...]          # one mode name per contact
+    keeps: tuple[bool, ...]         # which contacts it keeps
+    qdd: np.ndarray                 # (xc'', yc'', theta'') of the body (a point of a continuum)
+    N: np.ndarray                   # normal reactions (0 where separated)
+    F: np.ndarray                   # tangential reactions
+    K: np.ndarray                   # rolling couples (0 for point contacts)
+    continuum: bool = False         # a one-parameter family of accelerations
+    indeterminate: bool = False     # unique accelerations, reactions not unique
+    gap_dd: np.ndarray = field(default_factory=lambda: np.zeros(0))   # gap accelerations
+    extra: dict = field(default_factory=dict)   # system-specific reduced numbers
+
+
+@dataclass
+class Answer:
+    n_solutions: int
+    stagnation: bool
+    modes: list                     # admissible Mode objects
+    contacts: tuple[str, ...]
+    margin: float                   # smallest relative slack of a decisive test
+
+    @property
+    def keeps(self) -> tuple[bool, ...]:
+        """Per contact: kept by every admissible solution (False if there is none)."""
+        if not self.modes:
+            return tuple(False for _ in self.contacts)
+        return tuple(all(md.keeps[i] for md in self.modes) for i in range(len(self.contacts)))
+
+    def by_modes(self) -> dict:
+        return {md.modes: md for md in self.modes}
+
+    @property
+    def all_kept(self) -> list:
+        """Admissible modes that keep every contact."""
+        return [md for md in self.modes if all(md.keeps)]
+
+    @property
+    def separating(self) -> list:
+        """Admissible modes that leave at least one contact."""
+        return [md for md in self.modes if not all(md.keeps)]
+
+
+def _jac(fun, q, n=3):
+    """Row d fun / d qd (fun linear in qd)."""
+    return np.array([float(np.real(fun(q, np.eye(n)[k]))) for k in range(n)])
+
+
+def _drift(fun, q, qd):
+    """(D_q fun(q, qd)) qd by a complex step along qd."""
+    return float(np.imag(fun(q + 1j * _H * qd, qd)) / _H)
+
+
+def _contact_modes(c: Contact, vt: float, rho: float, vscale: float):
+    if c.rolling:
+        if abs(rho) > VTOL * vscale:
+            kept = ["roll+" if rho > 0 else "roll-"]
+        else:
+            kept = ["rest", "roll+", "roll-"]
+    else:
+        if abs(vt) > VTOL * vscale:
+            kept = ["slip+" if vt > 0 else "slip-"]
+        else:
+            kept = ["stick", "slip+", "slip-"]
+    return kept + ["sep"]
+
+
+def _equilibrate(A):
+    r = np.max(np.abs(A), axis=1)
+    r[r == 0] = 1.0
+    A1 = A / r[:, None]
+    c = np.max(np.abs(A1), axis=0)
+    c[c == 0] = 1.0
+    return r, c
+
+
+def enumerate_modes(q, qd, M, Q, contacts, force_scale, acc_scale, length, vscale):
+    """Every admissible mode combination at one state (the generic oracle)."""
+    nq = len(q)
+    nc = len(contacts)
+    # unknown layout: qdd (nq), then per contact N, F, K
+    nz = nq + 3 * nc
+    Gn = [_jac(c.vn, q, nq) for c in contacts]
+    Gt = [_jac(c.vt, q, nq) for c in contacts]
+    gn0 = [_drift(c.vn, q, qd) for c in contacts]
+    gt0 = [_drift(c.vt, q, qd) for c in contacts]
+    Gr = [(_jac(c.rho, q, nq) if c.rolling else np.zeros(nq)) for c in contacts]
+    gr0 = [(_drift(c.rho, q, qd) if c.rolling else 0.0) for c in contacts]
+    vts = [float(np.real(c.vt(q, qd))) for c in contacts]
+    rhos = [(float(np.real(c.rho(q, qd))) if c.rolling else 0.0) for c in contacts]
+    tolF = RTOL * force_scale
+    tolA = RTOL * acc_scale
+    tolK = RTOL * force_scale * length
+    tolR = RTOL * acc_scale / length
+
+    options = [_contact_modes(c, vts[i], rhos[i], vscale) for i, c in enumerate(contacts)]
+    admissible = []
+    margin = math.inf
+    for combo in itertools.product(*options):
+        A = np.zeros((nz, nz))
+        b = np.zeros(nz)
+        A[:nq, :nq] = M
+        b[:nq] = Q
+        for i in range(nc):
+            A[:nq, nq + 3 * i] = -Gn[i]
+            A[:nq, nq + 3 * i + 1] = -Gt[i]
+            A[:nq, nq + 3 * i + 2] = -Gr[i]
+        ineq = []   # (row c, rhs d, tol, strict): c.z >= d (+ tol if strict, else - tol)
+        row = nq
+        for i, (c, mode) in enumerate(zip(contacts, combo)):
+            jN, jF, jK = nq + 3 * i, nq + 3 * i + 1, nq + 3 * i + 2
+            if mode == "sep":
+                A[row, jN] = 1.0
+                A[row + 1, jF] = 1.0
+                A[row + 2, jK] = 1.0
+                cg = np.zeros(nz)
+                cg[:nq] = Gn[i]
+                ineq.append((cg, -gn0[i], tolA, True))
+                row += 3
+                continue
+            # kept: gap acceleration zero, N >= 0
+            A[row, :nq] = Gn[i]
+            b[row] = -gn0[i]
+            cN = np.zeros(nz)
+            cN[jN] = 1.0
+            ineq.append((cN, 0.0, tolF, False))
+            if c.rolling:
+                A[row + 1, :nq] = Gt[i]          # no slip
+                b[row + 1] = -gt0[i]
+                if mode == "rest":
+                    A[row + 2, :nq] = Gr[i]
+                    b[row + 2] = -gr0[i]
+                    for sgn in (1.0, -1.0):      # delta N - sgn K >= 0
+                        cc = np.zeros(nz)
+                        cc[jN] = c.delta
+                        cc[jK] = -sgn
+                        ineq.append((cc, 0.0, tolK, False))
+                else:
+                    s = 1.0 if mode == "roll+" else -1.0
+                    A[row + 2, jK] = 1.0
+                    A[row + 2, jN] = s * c.delta
+                    if abs(rhos[i]) <= VTOL * vscale:
+                        cr = np.zeros(nz)
+                        cr[:nq] = s * Gr[i]
+                        ineq.append((cr, -s * gr0[i], tolR, True))
+            else:
+                A[row + 2, jK] = 1.0             # no couple at a point contact
+                if mode == "stick":
+                    A[row + 1, :nq] = Gt[i]
+                    b[row + 1] = -gt0[i]
+                    for sgn in (1.0, -1.0):      # f N - sgn F >= 0
+                        cc = np.zeros(nz)
+                        cc[jN] = c.f
+                        cc[jF] = -sgn
+                        ineq.append((cc, 0.0, tolF, False))
+                else:
+                    s = 1.0 if mode == "slip+" else -1.0
+                    A[row + 1, jF] = 1.0
+                    A[row + 1, jN] = s * c.f
+                    if abs(vts[i]) <= VTOL * vscale:
+                        ct = np.zeros(nz)
+                        ct[:nq] = s * Gt[i]
+                        ineq.append((ct, -s * gt0[i], tolA, True))
+            row += 3
+        sol = _solve_family(A, b)
+        if sol is None:
+            continue
+        z0, v = sol
+        lo, hi = -math.inf, math.inf
+        ok = True
+        for cvec, d, tol, strict in ineq:
+            a0 = float(cvec @ z0) - d
+            a1 = 0.0 if v is None else float(cvec @ v)
+            thr = tol if strict else -tol
+            if v is None or abs(a1) <= 1e-12 * (abs(a0) + 1.0):
+                rel = abs(a0) / (tol / RTOL)
+                if rel > 1e-11:     # structural zeros (e.g. a start the kinematics forbids) are exact ties
+                    margin = min(margin, rel)
+                if a0 <= thr if strict else a0 < thr:
+                    ok = False
+            elif a1 > 0:
+                lo = max(lo, (thr - a0) / a1)
+            else:
+                hi = min(hi, (thr - a0) / a1)
+        if not ok or lo > hi:
+            continue
+        cont = False
+        indet = False
+        z = z0
+        if v is not None:
+            moves = np.max(np.abs(v[:nq])) > 1e-9 * np.max(np.abs(v))
+            t = 0.0 if lo <= 0.0 <= hi else (lo if math.isfinite(lo) else hi)
+            if math.isfinite(lo) and math.isfinite(hi):
+                t = 0.5 * (lo + hi)
+            z = z0 + t * v
+            if moves:
+                cont = hi - lo > 1e-9 * (1.0 + abs(lo) + abs(hi))
+            indet = not moves
+        gap = np.array([float(Gn[i] @ z[:nq] + gn0[i]) for i in range(nc)])
+        admissible.append(Mode(
+            modes=combo,
+            keeps=tuple(mo != "sep" for mo in combo),
+            qdd=z[:nq].copy(),
+            N=z[nq::3].copy(), F=z[nq + 1::3].copy(), K=z[nq + 2::3].copy(),
+            continuum=cont, indeterminate=indet, gap_dd=gap,
+        ))
+    if any(md.continuum for md in admissible):
+        n = CONTINUUM
+    else:
+        n = min(len(admissible), 3)
+        n = THREE_OR_MORE if n == 3 else n
+    rest_combo = tuple("rest" if c.rolling else "stick" for c in contacts)
+    stagnation = any(md.modes == rest_combo for md in admissible)
+    return Answer(n, stagnation, admissible, tuple(c.name for c in contacts), margin)
+
+
+def _solve_family(A, b):
+    """Solutions of A z = b: None (inconsistent), (z0, None) or (z0, v) (1-D family)."""
+    r, c = _equilibrate(A)
+    As = A / r[:, None] / c[None, :]
+    bs = b / r
+    U, S, Vt = np.linalg.svd(As)
+    rank = int(np.sum(S > 1e-10 * S[0]))
+    y = (U[:, :rank].T @ bs) / S[:rank]
+    zs = Vt[:rank].T @ y
+    res = As @ zs - bs
+    if np.max(np.abs(res)) > 1e-9 * (np.max(np.abs(bs)) + np.max(np.abs(zs)) + 1e-300):
+        return None
+    z0 = zs / c
+    if rank == A.shape[0]:
+        return z0, None
+    if rank < A.shape[0] - 1:
+        raise NotImplementedError("null space of dimension >= 2")
+    v = Vt[rank] / c
+    return z0, v / np.max(np.abs(v))
+
+
+# ---------------------------------------------------------------------------
+# Systems
+# ---------------------------------------------------------------------------
+
+def _rot(th):
+    return np.cos(th), np.sin(th)
+
+
+def painleve_rod(theta, omega, xdot, f, l, g, m):
+    """The classic Painleve rod: uniform rod (length 2l, J = m l^2/3), end A on a rough floor.
+
+    theta in (0, pi) is the counter-clockwise angle from the +x axis to the rod
+    direction A -> C, so C = A + l (cos theta, sin theta); xdot is A's velocity
+    along the floor.  Contacts: ``floor`` (one-sided, friction f).  Full
+    coordinates (xc, yc, theta); A - C = -l (cos theta, sin theta).
+    """
+    def vA(q, qd):
+        c, s = _rot(q[2])
+        return qd[0] + l * s * qd[2], qd[1] - l * c * qd[2]
+
+    floor = Contact("floor", vn=lambda q, qd: vA(q, qd)[1], vt=lambda q, qd: vA(q, qd)[0], f=f)
+    c, s = math.cos(theta), math.sin(theta)
+    q = np.array([0.0, l * s, theta])
+    qd = np.array([xdot - l * s * omega, l * c * omega, omega])
+    M = np.diag([m, m, m * l * l / 3.0])
+    Q = np.array([0.0, -m * g, 0.0])
+    w2 = omega * omega + xdot * xdot / (l * l)
+    ans = enumerate_modes(q, qd, M, Q, [floor], m * (g + l * w2) * (1.0 + f), g + l * w2, l,
+                          math.sqrt(g / l) * l + abs(xdot) + l * abs(omega))
+    for md in ans.modes:
+        md.extra = {"theta_ddot": md.qdd[2], "N": md.N[0], "F": md.F[0],
+                    "xA_ddot": float(md.qdd[0] + l * s * md.qdd[2] + l * c * omega ** 2)}
+    return ans
+
+
+def painleve_rod_B(theta, f, s):
+    """Coefficient B of the kept-slip normal force: B N = m (g - l sin(theta) omega^2).
+
+    B = 1 + 3 cos^2 theta + 3 s f sin theta cos theta, s = sgn(xdot).
+    """
+    return 1.0 + 3.0 * np.cos(theta) ** 2 + 3.0 * s * f * np.sin(theta) * np.cos(theta)
+
+
+def painleve_rod_threshold():
+    """(f_min, theta*) : smallest f with B = 0 somewhere, and where (for s = -1)."""
+    return 4.0 / 3.0, math.atan(2.0)
+
+
+def ladder(phi, omega, f, l, g, m):
+    """The seed ladder in full coordinates, with separation from the wall and the floor.
+
+    C = (l sin phi, l cos phi), phi from the vertical (counter-clockwise body
+    angle), bottom end P1 = C + l (sin phi, -cos phi) on the floor y = 0, top
+    end P2 = C - l (sin phi, -cos phi) on the wall x = 0.  Contacts ``floor``
+    (normal +y, slip along x) and ``wall`` (normal +x, slip along y).
+    """
+    def v1(q, qd):
+        c, s = _rot(q[2])
+        return qd[0] + l * c * qd[2], qd[1] + l * s * qd[2]
+
+    def v2(q, qd):
+        c, s = _rot(q[2])
+        return qd[0] - l * c * qd[2], qd[1] - l * s * qd[2]
+
+    floor = Contact("floor", vn=lambda q, qd: v1(q, qd)[1], vt=lambda q, qd: v1(q, qd)[0], f=f)
+    wall = Contact("wall", vn=lambda q, qd: v2(q, qd)[0], vt=lambda q, qd: v2(q, qd)[1], f=f)
+    c, s = math.cos(phi), math.sin(phi)
+    q = np.array([l * s, l * c, phi])
+    qd = np.array([l * c * omega, -l * s * omega, omega])
+    M = np.diag([m, m, m * l * l / 3.0])
+    Q = np.array([0.0, -m * g, 0.0])
+    w2 = omega * omega
+    ans = enumerate_modes(q, qd, M, Q, [floor, wall], m * (g + l * w2) * (1.0 + f), g + l * w2,
+                          l, math.sqrt(g * l) + l * abs(omega))
+    for md in ans.modes:
+        md.extra = {"phi_ddot": md.qdd[2], "N_floor": md.N[0], "N_wall": md.N[1]}
+    return ans
+
+
+def wheel(phi, omega, delta, r, l, rho, g, m):
+    """The seed wheel in full coordinates, with hopping.
+
+    Disc of radius r; phi is the clockwise rotation angle (body angle
+    theta = -phi), geometric centre A = (r phi, r) while rolling, centre of mass
+    C = A - l (sin phi, cos phi), J = m rho^2.  Contact ``floor``: one-sided,
+    rolling without slip (unlimited friction), rolling couple delta N opposing
+    the rolling rate phi'.  Contact point P = A - (0, r).
+    """
+    def vn(q, qd):
+        c, s = _rot(q[2])
+        return qd[1] - l * s * qd[2]                       # d/dt y_A, y_A = yc + l cos theta
+
+    def vt(q, qd):
+        c, s = _rot(q[2])
+        return qd[0] + qd[2] * (r - l * c)                 # material point at P, along x
+
+    floor = Contact("floor", vn=vn, vt=vt, rho=lambda q, qd: -qd[2], delta=delta)
+    c, s = math.cos(phi), math.sin(phi)
+    q = np.array([r * phi - l * s, r - l * c, -phi])
+    qd = np.array([(r - l * c) * omega, l * s * omega, -omega])
+    M = np.diag([m, m, m * rho * rho])
+    Q = np.array([0.0, -m * g, 0.0])
+    w2 = omega * omega
+    ans = enumerate_modes(q, qd, M, Q, [floor], m * (g + r * w2) * (1.0 + delta / r),
+                          g + r * w2, r, math.sqrt(g * r) + r * abs(omega))
+    for md in ans.modes:
+        md.extra = {"phi_ddot": -md.qdd[2], "N": md.N[0], "F": md.F[0]}
+    return ans
+
+
+def rod_on_step(theta, omega, f, l, h, g, m, f_edge=None):
+    """Uniform rod (length 2l, J = m l^2/3): end A on a rough floor, resting on a rough step edge.
+
+    The edge is the fixed point K = (0, h); theta in (0, pi/2) is the rod's
+    angle to the floor and the rod passes over K: A = (-h cot theta, 0),
+    C = A + l e, e = (cos theta, sin theta); requires h / sin theta <= 2 l (K on
+    the rod).  Contacts ``floor`` (at A, normal +y, slip along x, friction f)
+    and ``edge`` (at K, normal nu = (-sin theta, cos theta), slip along e,
+    friction f_edge, default f).  Both kept: one degree of freedom theta, with
+    slip velocities xA' = h omega / sin^2 theta and e.v_K = h cos theta omega /
+    sin^2 theta (both of the sign of omega).
+    """
+    fe = f if f_edge is None else f_edge
+
+    def vA(q, qd):
+        c, s = _rot(q[2])
+        return qd[0] + l * s * qd[2], qd[1] - l * c * qd[2]
+
+    def edge_v(q, qd):
+        c, s = _rot(q[2])
+        nu = (-s, c)
+        e = (c, s)
+        dx, dy = q[0], q[1] - h                            # C - K
+        vn = nu[0] * qd[0] + nu[1] * qd[1] - qd[2] * (e[0] * dx + e[1] * dy)
+        vt = e[0] * qd[0] + e[1] * qd[1] + qd[2] * (nu[0] * dx + nu[1] * dy)
+        return vn, vt
+
+    floor = Contact("floor", vn=lambda q, qd: vA(q, qd)[1], vt=lambda q, qd: vA(q, qd)[0], f=f)
+    edge = Contact("edge", vn=lambda q, qd: edge_v(q, qd)[0], vt=lambda q, qd: edge_v(q, qd)[1],
+                   f=fe)
+    c, s = math.cos(theta), math.sin(theta)
+    xA = -h * c / s
+    xAd = h * omega / (s * s)
+    q = np.array([xA + l * c, l * s, theta])
+    qd = np.array([xAd - l * s * omega, l * c * omega, omega])
+    M = np.diag([m, m, m * l * l / 3.0])
+    Q = np.array([0.0, -m * g, 0.0])
+    w2 = omega * omega * (1.0 + (h / (l * s * s)) ** 2)
+    fm = max(f, fe)
+    ans = enumerate_modes(q, qd, M, Q, [floor, edge], m * (g + l * w2) * (1.0 + fm), g + l * w2,
+                          l, math.sqrt(g * l) + l * math.sqrt(w2))
+    for md in ans.modes:
+        md.extra = {"theta_ddot": md.qdd[2], "N_floor": md.N[0], "N_edge": md.N[1]}
+    return ans
