@@ -52,6 +52,9 @@ INADMISSIBLE = 2
 CONTACT_LOST = 3
 NO_SOLUTION = 4
 CONTINUUM = 5
+#: Solves the equations with a one-sided contact opening: the body leaves it (a
+#: solution, counted in n_solutions; declared systems, see phasemap.declare).
+SEPARATION = 6
 
 # Solvability codes (mirrored by :class:`phasemap.model.Solvability`).
 N_NONE = 0
@@ -109,8 +112,10 @@ def summarize(out, stick):
       family of solutions), 4 three or more isolated solutions;
     * ``stagnation``: the stick branch (row ``stick``; -1 when the model has
       none) is admissible;
-    * ``contact_lost``: some branch solves the equations and its own sign
-      assumptions but needs a one-sided contact to pull;
+    * ``contact_lost``: a solution leaves a one-sided contact (a separation
+      branch is admissible), or, in a model without separation branches, some
+      branch solves the equations and its own sign assumptions but needs a
+      one-sided contact to pull;
     * ``singular``: the coefficient of the senior derivative of some
       candidate branch vanishes.
     """
@@ -120,11 +125,11 @@ def summarize(out, stick):
     singular = False
     for b in range(out.shape[0]):
         st = out[b, STATUS]
-        if st == ADMISSIBLE:
+        if st == ADMISSIBLE or st == SEPARATION:
             n += 1
         elif st == CONTINUUM:
             continuum = True
-        elif st == CONTACT_LOST:
+        if st == CONTACT_LOST or st == SEPARATION:
             lost = True
         if out[b, SINGULAR] != 0.0:
             singular = True

@@ -29,7 +29,8 @@ class Branch:
 
     @property
     def admissible(self) -> bool:
-        return self.status in (BranchStatus.ADMISSIBLE, BranchStatus.CONTINUUM)
+        return self.status in (BranchStatus.ADMISSIBLE, BranchStatus.CONTINUUM,
+                               BranchStatus.SEPARATION)
 
 
 @dataclass(frozen=True)

@@ -197,7 +197,8 @@ def _summary_template(out):
     n, stag, lost, sing = nx.summarize(out, STICK)
     adm = -1
     for b in range(N_BRANCHES):
-        if out[b, nx.STATUS] == nx.ADMISSIBLE:
+        st = out[b, nx.STATUS]
+        if st == nx.ADMISSIBLE or st == nx.SEPARATION:
             adm = b
             break
     return n, adm, lost, sing
@@ -248,6 +249,9 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
     if n != 1:
         mode = -1
         kind = ev.fate_without_unique(n, lost, sing)
+    elif out[mode, nx.STATUS] == nx.SEPARATION:  # the only motion leaves a contact
+        mode = -1
+        kind = ev.CONTACT_LOST
     elif mode == STICK and STICK_IS_REST:
         kind = ev.REST
     evs, n_ev = _push(evs, n_ev, t, kind, mode, y)
@@ -492,7 +496,10 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         new_mode = -1
         if n == 1:
             new_mode = adm
-            if adm == STICK:
+            if out[adm, nx.STATUS] == nx.SEPARATION:
+                kind = ev.CONTACT_LOST  # the only motion from here leaves a contact
+                new_mode = -1
+            elif adm == STICK:
                 kind = ev.REST if STICK_IS_REST else ev.STICK
             elif mode == STICK:
                 kind = ev.SLIP

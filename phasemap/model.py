@@ -84,6 +84,7 @@ class BranchStatus(enum.IntEnum):
     CONTACT_LOST = nx.CONTACT_LOST
     NO_SOLUTION = nx.NO_SOLUTION
     CONTINUUM = nx.CONTINUUM
+    SEPARATION = nx.SEPARATION
 
     @property
     def message(self) -> str:
@@ -97,6 +98,8 @@ _STATUS_MESSAGES = {
     BranchStatus.CONTACT_LOST: "solves the equations but needs a one-sided contact to pull",
     BranchStatus.NO_SOLUTION: "has no acceleration that solves the equations",
     BranchStatus.CONTINUUM: "is solved by a whole family of accelerations",
+    BranchStatus.SEPARATION: "solves the equations with a one-sided contact opening: "
+                             "the body leaves it",
 }
 
 
