@@ -176,7 +176,8 @@ class _Source:
         nb = len(self.model.candidates)
         out = []
         if "n_solutions" in names:
-            adm = " + ".join(f"(s{b} == {nx.ADMISSIBLE}.0)" for b in range(nb))
+            adm = " + ".join(f"((s{b} == {nx.ADMISSIBLE}.0) | (s{b} == {nx.SEPARATION}.0))"
+                             for b in range(nb))
             cont = " | ".join(f"(s{b} == {nx.CONTINUUM}.0)" for b in range(nb))
             out += [f"nadm = np.int8({adm})",
                     f"q_n_solutions = np.int8({nx.N_CONTINUUM}) if ({cont}) else "
@@ -186,7 +187,8 @@ class _Source:
             out.append(f"q_stagnation = np.int8(s{stick} == {nx.ADMISSIBLE}.0)" if stick >= 0
                        else "q_stagnation = np.int8(0)")
         if "contact_lost" in names:
-            lost = " | ".join(f"(s{b} == {nx.CONTACT_LOST}.0)" for b in range(nb))
+            lost = " | ".join(f"(s{b} == {nx.CONTACT_LOST}.0) | (s{b} == {nx.SEPARATION}.0)"
+                              for b in range(nb))
             out.append(f"q_contact_lost = np.int8({lost})")
         if "singular" in names:
             sing = " | ".join(f"(z{b} != 0.0)" for b in range(nb))
@@ -210,6 +212,15 @@ def _load(model, kind: str, text: str):
         h.update(f.read_bytes())
     h.update(f"{numba.__version__} {np.__version__} {__version__}".encode())
     stem = f"{model.name}_{kind}_{h.hexdigest()[:16]}"
+    module = load_module(stem, lambda: text)
+    if kind.startswith("grid"):
+        _prune(pathlib.Path(module.__file__).parent, model.name)
+    return module
+
+
+def load_module(stem: str, text):
+    """The module ``stem`` of the kernel cache: written from ``text()`` if it is not
+    there yet (atomically), then imported and registered in ``sys.modules``."""
     with _LOCK:
         if stem in _LOADED:
             return _LOADED[stem]
@@ -223,9 +234,10 @@ def _load(model, kind: str, text: str):
             root.mkdir(parents=True, exist_ok=True)
         path = root / f"{stem}.py"
         if not path.exists():
+            body = text()
             fd, tmp = tempfile.mkstemp(dir=root, prefix=f".{stem}.", suffix=".tmp")
             with os.fdopen(fd, "w") as fh:
-                fh.write(text)
+                fh.write(body)
             os.replace(tmp, path)
         else:
             os.utime(path)  # recently used
@@ -237,8 +249,6 @@ def _load(model, kind: str, text: str):
         sys.modules[name] = module
         spec.loader.exec_module(module)
         _LOADED[stem] = module
-        if kind.startswith("grid"):
-            _prune(root, model.name)
         return module
 
 
@@ -435,7 +445,7 @@ def _generate_grid_kernel(model, layers, inner: str):
         active = src.active(regime)
         for k, layer in enumerate(field_layers):
             b, col = layer.branch, layer.column
-            keep = f"(s{b} == {nx.ADMISSIBLE}.0)"
+            keep = f"((s{b} == {nx.ADMISSIBLE}.0) | (s{b} == {nx.SEPARATION}.0))"
             if not layer.admissible_only:
                 keep = f"(s{b} != {nx.ABSENT}.0)"
             value = f"r{b}[{col}] if {keep} else NAN" if b in active else "NAN"
