@@ -1,29 +1,79 @@
 """The registry of mechanical systems.
 
-Each module defines one :class:`phasemap.model.Model` named ``MODEL``; adding a
-system means adding its module and one entry here.
+Two kinds of systems live here, and every feature treats them alike:
+
+* the four seed systems of Lapshin (2021), derived by hand: each module
+  defines one :class:`phasemap.model.Model` named ``MODEL``;
+* **declared** systems (:mod:`phasemap.declare`): a module of
+  :mod:`phasemap.systems` defines ``SYSTEM``, and its model is derived (with
+  sympy, once, then cached on disk) the first time it is asked for.
+
+Anywhere a model name is accepted, a path to a declaration file
+(``path/to/system.py``, defining ``SYSTEM``) works too.
 """
 
 from __future__ import annotations
 
+import importlib
+import os
+from collections.abc import Mapping
+
 from ..model import Model
 from . import elliptic_pendulum, hinge_pendulum, ladder, wheel
 
-MODELS: dict[str, Model] = {
-    m.MODEL.name: m.MODEL for m in (ladder, wheel, elliptic_pendulum, hinge_pendulum)
-}
+#: Declared built-in systems: name -> module of phasemap.systems defining SYSTEM.
+DECLARED = {"painleve_rod": "phasemap.systems.painleve_rod"}
+
+
+class _Registry(Mapping):
+    """Name -> Model; declared systems are built when first looked up."""
+
+    def __init__(self, hand: dict[str, Model]):
+        self._models = dict(hand)
+
+    def __getitem__(self, name: str) -> Model:
+        if name not in self._models and name in DECLARED:
+            self._models[name] = importlib.import_module(DECLARED[name]).SYSTEM.model
+        return self._models[name]
+
+    def __iter__(self):
+        return iter(list(dict.fromkeys([*self._models, *DECLARED])))
+
+    def __len__(self) -> int:
+        return len(set(self._models) | set(DECLARED))
+
+    def __contains__(self, name) -> bool:
+        return name in self._models or name in DECLARED
+
+
+MODELS: Mapping[str, Model] = _Registry(
+    {m.MODEL.name: m.MODEL for m in (ladder, wheel, elliptic_pendulum, hinge_pendulum)})
+
+_FILES: dict[str, Model] = {}
 
 
 def get_model(model: str | Model) -> Model:
-    """The :class:`Model` for a name (or the model itself); ValueError for an unknown name."""
+    """The :class:`Model` for a name, a declaration file's path, or the model itself.
+
+    ValueError for an unknown name; for a file, ValueError naming the file and
+    the part of the declaration that is wrong.
+    """
     if isinstance(model, Model):
         return model
+    if isinstance(model, (str, os.PathLike)) and str(model).endswith(".py"):
+        from ..declare import load
+
+        key = os.path.abspath(str(model))
+        if key not in _FILES:
+            _FILES[key] = load(model)
+        return _FILES[key]
     try:
         return MODELS[model]
     except (KeyError, TypeError):
         raise ValueError(
-            f"unknown model {model!r}; available models: {', '.join(MODELS)}"
+            f"unknown model {model!r}; available models: {', '.join(MODELS)} "
+            "(or the path of a declaration file, path/to/system.py)"
         ) from None
 
 
-__all__ = ["MODELS", "get_model"]
+__all__ = ["MODELS", "DECLARED", "get_model"]
