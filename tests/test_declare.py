@@ -1,0 +1,196 @@
+"""Declared systems (phasemap.declare): derived equations agree with the hand derivations
+and with an independent numpy solve; malformed declarations get clear errors."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import phasemap
+from phasemap import _numerics as nx
+from phasemap.declare import Body, Coordinate, Parameter, PointContact, Rate, System
+
+import oracles
+
+ROOT = Path(__file__).resolve().parents[1]
+SEEDS = ROOT / "phasemap" / "systems" / "seeds"
+
+
+def _rows(m, values):
+    v = m.input_vector(m.complete(values))
+    out = np.full((len(m.branches), m.n_fields), np.nan)
+    m.point(v, out)
+    return out
+
+
+def _sample(m, rng, zero_velocity):
+    values = {}
+    for var in m.state + m.params:
+        lo = var.lower if math.isfinite(var.lower) else -3.0
+        hi = var.upper if math.isfinite(var.upper) else 3.0
+        if var.name in ("l", "r", "rho", "m", "g"):
+            lo, hi = 0.3, 2.0
+        elif var.name == "f":
+            lo, hi = 0.0, 3.0
+        elif var.name == "delta":
+            lo, hi = 0.0, 1.5
+        values[var.name] = rng.uniform(lo, hi)
+    if "r" in values:
+        values["l"] = min(values["l"], values["r"])
+    if zero_velocity:
+        values[m.velocity] = 0.0
+    return values
+
+
+#: declared accelerations (coordinates with a rate, in declared order) -> hand columns
+ACC = {"ladder": ["phi_ddot"], "wheel": ["phi_ddot"],
+       "elliptic_pendulum": ["phi_ddot", "x_ddot"]}
+
+
+@pytest.mark.parametrize("seed", sorted(ACC))
+def test_declared_seed_agrees_with_the_hand_derivation(seed):
+    """10,000 random states (a third at zero velocity): wherever the hand module keeps
+    its contacts, the declared system's kept solutions are the hand module's, with the
+    same accelerations and stagnation; it differs only by admissible separations."""
+    hand = phasemap.get_model(seed)
+    decl = phasemap.get_model(SEEDS / f"{seed}.py")
+    hand_cols = [nx.FIRST_ACC + [a.name for a in hand.accelerations].index(n) for n in ACC[seed]]
+    decl_cols = [nx.FIRST_ACC + [a.name for a in decl.accelerations].index(n) for n in ACC[seed]]
+    rng = np.random.default_rng(12)
+    compared = separations = 0
+    for i in range(10_000):
+        values = _sample(hand, rng, i % 3 == 0)
+        h, d = _rows(hand, values), _rows(decl, values)
+        n_h, stag_h, lost_h, sing_h = nx.summarize(h, hand.stick_branch)
+        n_d, stag_d, lost_d, sing_d = nx.summarize(d, decl.stick_branch)
+        if lost_h or sing_h or sing_d:
+            continue
+        compared += 1
+        kept_h = sorted(tuple(h[b, hand_cols]) for b in range(len(h)) if h[b, 0] == nx.ADMISSIBLE)
+        kept_d = sorted(tuple(d[b, decl_cols]) for b in range(len(d)) if d[b, 0] == nx.ADMISSIBLE)
+        n_sep = int(np.sum(d[:, 0] == nx.SEPARATION))
+        separations += n_sep
+        assert len(kept_h) == len(kept_d), (values, kept_h, kept_d)
+        np.testing.assert_allclose(kept_d, kept_h, rtol=1e-7, atol=1e-9, err_msg=str(values))
+        assert stag_d == stag_h, values
+        assert n_d == min(n_h + n_sep, nx.N_THREE_OR_MORE) or n_h == nx.N_CONTINUUM, values
+    assert compared > 3000  # the ladder leaves its contacts on two thirds of these states
+
+
+def _rod_values(rng, zero):
+    return dict(theta=rng.uniform(0.02, math.pi - 0.02), omega=rng.uniform(-4, 4),
+                xdot=0.0 if zero else rng.uniform(-3, 3), f=rng.uniform(0, 3),
+                l=rng.uniform(0.3, 2), g=rng.uniform(0.5, 12), m=rng.uniform(0.3, 3))
+
+
+def test_painleve_rod_agrees_with_an_independent_full_coordinate_solve():
+    """1000 random states, a third at zero slip velocity: n_solutions, stagnation and
+    the accelerations of every solution (separations included) agree with the numpy
+    oracle, which solves every mode combination on the full unknown vector."""
+    m = phasemap.MODELS["painleve_rod"]
+    rng = np.random.default_rng(3)
+    checked = 0
+    for i in range(1000):
+        values = _rod_values(rng, i % 3 == 0)
+        ref = oracles.painleve_rod(**values)
+        if ref.margin < 1e-7:
+            continue
+        checked += 1
+        out = _rows(m, values)
+        n, stag, lost, sing = nx.summarize(out, m.stick_branch)
+        assert (n, stag) == (ref.n_solutions, ref.stagnation), values
+        sols = out[(out[:, 0] == nx.ADMISSIBLE) | (out[:, 0] == nx.SEPARATION)]
+        got = sorted(tuple(r[nx.FIRST_ACC:nx.FIRST_ACC + 1]) for r in sols)  # theta''
+        want = sorted((md.qdd[2],) for md in ref.modes)
+        np.testing.assert_allclose(got, want, rtol=1e-7, atol=1e-8, err_msg=str(values))
+        assert lost == any(not all(md.keeps) for md in ref.modes), values
+    assert checked > 900
+
+
+def test_painleve_rod_paradox_threshold_is_four_thirds_at_arctan_two():
+    """From an atlas of the rod sliding with A pushed towards the rod (xdot < 0, omega = 0):
+    no solution appears first just above f = 4/3, around theta = arctan 2 (Genot and
+    Brogliato 1999; tests/oracles.painleve_rod_threshold)."""
+    f_min, theta_star = oracles.painleve_rod_threshold()
+    assert f_min == pytest.approx(4 / 3) and theta_star == pytest.approx(math.atan(2.0))
+    theta = np.linspace(0.05, math.pi / 2 - 0.05, 301)
+    ds = phasemap.Scene("painleve_rod", axes={"theta": theta,
+                                              "f": np.linspace(1.2, 1.5, 301)},
+                        fixed={"xdot": -1.0, "omega": 0.0}, layers=["n_solutions"]).compute()
+    n = ds.n_solutions.transpose("f", "theta").values
+    f = ds.f.values
+    none_f = f[(n == 0).any(axis=1)]
+    assert none_f.min() > 4 / 3 and none_f.min() < 4 / 3 + 0.002
+    first = np.flatnonzero(n[np.searchsorted(f, none_f.min())] == 0)
+    assert abs(theta[first].mean() - math.atan(2.0)) < 0.02
+    # sliding the other way the coefficient stays positive: never a paradox at rest omega
+    ds = phasemap.Scene("painleve_rod", axes={"theta": theta, "f": np.linspace(0, 3, 61)},
+                        fixed={"xdot": 1.0, "omega": 0.0}, layers=["n_solutions"]).compute()
+    assert (ds.n_solutions.values == 1).all()
+
+
+def test_separation_is_a_solution_not_a_paradox():
+    """A fast-spinning rod whose end would have to pull leaves the floor: one solution,
+    the separation, flagged contact_lost, and classify says so."""
+    c = phasemap.classify("painleve_rod", theta=1.2, omega=6.0, xdot=1.0, f=0.3)
+    assert c.n_solutions == phasemap.Solvability.UNIQUE and c.contact_lost
+    (b,) = c.branches
+    assert b.status == phasemap.BranchStatus.SEPARATION and b.name == "A_separated"
+    assert "leaves" in b.status.message
+
+
+def _good(**change):
+    f = Parameter("f", "1", "friction", 0.5, 0.0)
+    l = Parameter("l", "m", "half length", 1.0, 0.0, lower_open=True)
+    g = Parameter("g", "m s-2", "gravity", 9.81, 0.0)
+    m = Parameter("m", "kg", "mass", 1.0, 0.0, lower_open=True)
+    th = Coordinate("theta", "rad", "angle", 1.0, 0.0, 3.0, rate=Rate("omega", "rad s-1", "rate"))
+    x = Coordinate("x", "m", "end", rate=Rate("xdot", "m s-1", "end velocity"))
+    y = Coordinate("y", "m", "height")
+    parts = dict(
+        coordinates=(th, x, y), parameters=(f, l, g, m),
+        bodies=(Body(m, (x + l * sp.cos(th), y + l * sp.sin(th)), inertia=m * l**2 / 3,
+                     angle=th),),
+        potential=m * g * (y + l * sp.sin(th)),
+        contacts=(PointContact("A", (x, y), friction=f),))
+    env = dict(f=f, l=l, g=g, m=m, x=x, y=y, th=th)
+    parts.update({k: (v(env) if callable(v) else v) for k, v in change.items()})
+    return System("bad_rod", "a rod", "nobody", **parts)
+
+
+@pytest.mark.parametrize("change, words", [
+    (dict(bodies=lambda v: (Body(0, (v["x"], v["y"])),)), "bad_rod: body 0 mass: is zero"),
+    (dict(contacts=lambda v: (PointContact("A", (v["x"], v["y"])),)),
+     "bad_rod: contact 'A': has no friction law"),
+    (dict(potential=sp.Symbol("k") * sp.Symbol("y")), "bad_rod: potential: unknown name 'k'"),
+    (dict(bodies=lambda v: (Body(v["m"], (v["x"], v["y"])),)),
+     "bad_rod: bodies: the mass matrix is singular"),
+    (dict(contacts=()), "bad_rod: contacts: declare at least one contact"),
+    (dict(contacts=lambda v: (PointContact("A", (v["x"], v["y"]), friction=v["f"],
+                                           sided="three"),)), "sided must be 'one' or 'two'"),
+])
+def test_a_malformed_declaration_names_the_system_and_the_part(change, words):
+    with pytest.raises(ValueError, match=words.replace("(", r"\(").replace(")", r"\)")):
+        _good(**change).model
+
+
+def test_a_declaration_file_works_wherever_a_model_name_does(tmp_path):
+    """The CLI classifies a system given as the path of its declaration file."""
+    src = (ROOT / "phasemap" / "systems" / "painleve_rod.py").read_text()
+    path = tmp_path / "my_rod.py"
+    path.write_text(src.replace('"painleve_rod", "Painleve', '"my_rod", "Painleve'))
+    run = subprocess.run([sys.executable, "-m", "phasemap.cli", "classify", str(path),
+                          "theta=1.1", "omega=0", "xdot=-1", "f=2"],
+                         capture_output=True, text=True, cwd=ROOT, timeout=600)
+    assert run.returncode == 0, run.stderr
+    assert "my_rod(theta=1.1" in run.stdout and "no solution" in run.stdout
+    bad = tmp_path / "nothing.py"
+    bad.write_text("x = 1\n")
+    with pytest.raises(ValueError, match="nothing.py: the file must define SYSTEM"):
+        phasemap.get_model(bad)
