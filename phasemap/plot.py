@@ -1650,7 +1650,9 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
             if ax is not None or i % ncols == 0:
                 a.set_ylabel(ylabel)
             if ax is not None or i + ncols >= len(systems):
-                a.set_xlabel("Run time per trajectory (s)")
+                # a narrow panel has no room for the long label: the key says "per trajectory"
+                a.set_xlabel("Run time per trajectory (s)" if width >= WIDE or ax is not None
+                             else "Run time (s)")
         if len(axes) > 1:
             label_panels(axes)
         fig = axes[0].get_figure(root=False)
@@ -1668,6 +1670,8 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
             _legend_above(axes[0], lines)
         if ax is None:
             key = [r"$y$: the state in SI units (rad, rad s$^{-1}$, m, m s$^{-1}$)"]
+            if width < WIDE:
+                key.append("run time: per trajectory")
             if spread:
                 key.append(f"points: the fastest of {rounds} timing rounds, bars: the slowest"
                            if rounds > 1 else "one timing round")
