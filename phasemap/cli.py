@@ -16,6 +16,7 @@ EXAMPLES = {
     "tour": [
         ("phasemap tour", "every study, quick, into ./phasemap-out"),
         ("phasemap tour --full --out results", "full resolution (minutes)"),
+        ("phasemap tour --size both", "every figure at two-column and one-column width"),
     ],
     "atlas": [
         ("phasemap atlas elliptic_pendulum --set xdot=1 -o elliptic.nc", ""),
@@ -116,6 +117,9 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
     p.add_argument("--studies", metavar="DIR", help="folder of the study scripts "
                    "(default: the repository's studies/)")
     p.add_argument("--only", metavar="A,B", help="run only these studies")
+    p.add_argument("--size", choices=["two_column", "one_column", "both"], default="two_column",
+                   help="lay the figures out for a journal's two columns (7.2 in, the "
+                   "default), one column (3.5 in, files *_one_column) or both")
     subs["models"] = _sub(sub, "models", "list the models with their variables, units and "
                           "defaults", "Lists every model: its state variables and parameters "
                           "with units, defaults and domains, and its branches.")
@@ -203,7 +207,7 @@ def _run(args) -> int:
         from .tour import tour
 
         return tour(args.out, full=args.full, studies=args.studies,
-                    only=args.only.split(",") if args.only else None)
+                    only=args.only.split(",") if args.only else None, size=args.size)
     elif args.command == "models":
         print(_models())
     elif args.command == "atlas":

@@ -116,15 +116,20 @@ __all__ = [
     "fixed_values_text",
     "format_units",
     "label_panels",
+    "legend_columns",
     "map_figure",
     "mark_inverted_rests",
+    "outer_labels",
+    "panels",
     "phase_curve_figure",
     "plot",
     "profile_figure",
     "save_figure",
     "style",
     "trajectory_figure",
+    "width_of",
     "work_precision_figure",
+    "wrap",
 ]
 
 # --------------------------------------------------------------------------- style
@@ -485,7 +490,7 @@ def _visible_length(text: str) -> float:
     return len(plain)
 
 
-def _wrap(items: Sequence[str], width: float, sep: str = ", ") -> str:
+def wrap(items: Sequence[str], width: float, sep: str = ", ") -> str:
     """Join ``items`` with ``sep`` in lines no wider than ``width`` inches at the house font."""
     per_line = max(10, int(width / (0.5 * _FONT / 72.0)))
     lines, line = [], ""
@@ -514,7 +519,7 @@ def fixed_values_text(ds: xr.Dataset, width: float | None = None) -> str:
     items = initial + fixed
     if not items:
         return ""
-    text = ", ".join(items) if width is None else _wrap(items, width)
+    text = ", ".join(items) if width is None else wrap(items, width)
     return text.replace(";,", ";")
 
 
@@ -574,7 +579,7 @@ def figure_legend(fig: Figure, handles: Sequence, labels: Sequence[str] | None =
     handles = list(handles)
     labels = [h.get_label() for h in handles] if labels is None else list(labels)
     if ncols is None:
-        ncols = _ncols(labels, fig.get_figwidth() * 0.95)
+        ncols = legend_columns(labels, fig.get_figwidth() * 0.95)
     legend = fig.legend(handles, labels, loc="outside upper center", ncols=ncols,
                         title=title or None, alignment="left")
     legend.get_title().set_fontsize(_FONT)
@@ -615,7 +620,7 @@ def define_symbols(fig: Figure, definitions: Sequence[str], width: float | None 
     left-aligned as the figure's bottom label (constrained layout makes room).
     """
     width = width or fig.get_figwidth() * 0.97
-    fig.supxlabel(_wrap(list(definitions), width, sep="; "), x=0.01, ha="left",
+    fig.supxlabel(wrap(list(definitions), width, sep="; "), x=0.01, ha="left",
                   fontsize=_FONT, linespacing=1.3)
 
 
@@ -732,7 +737,9 @@ def plot(ds: xr.Dataset, layer: str | Sequence[str] | None = None, *, ax=None,
 # --------------------------------------------------------------------------- figure plumbing
 
 
-def _width(size: str | float) -> float:
+def width_of(size: str | float) -> float:
+    """The width in inches of ``size``: ``"one_column"`` (3.5), ``"two_column"`` (7.2) or a
+    positive number of inches; ValueError otherwise."""
     if isinstance(size, str):
         if size not in SIZES:
             raise ValueError(f"unknown size {size!r}; use one of {', '.join(SIZES)} "
@@ -764,12 +771,61 @@ def _axes(ax, n: int, figsize: tuple[float, float], what: str, **subplots) -> li
     return axes
 
 
-def _ncols(labels: Sequence[str], width: float) -> int:
-    """How many legend columns of ``labels`` fit in ``width`` inches, rows balanced."""
+#: Widths (inches) from which panels stand side by side rather than stacked.
+WIDE = 5.0
+
+
+def panels(n: int, size: str | float = "two_column", *, height: float, panel_height: float,
+           extra: float = 1.0, sharex: bool = False, sharey: bool = False,
+           **subplots) -> tuple[Figure, list[Axes]]:
+    """A new figure of ``n`` panels laid out for the width of ``size``.
+
+    At two-column width (:data:`WIDE` inches or more) the panels stand side by
+    side in one row, ``height`` inches high in all; narrower, they are stacked
+    in one column, each ``panel_height`` inches high, plus ``extra`` inches
+    for the legend above and the key below, so that no panel is squeezed to a
+    third of a 3.5 in column.  ``sharex``/``sharey`` and other keywords go to
+    ``Figure.subplots``; call :func:`outer_labels` once the panels are drawn.
+    Draw inside :func:`style`.
+    """
+    import matplotlib.pyplot as plt
+
+    width = width_of(size)
+    wide = width >= WIDE
+    rows, cols = (1, n) if wide else (n, 1)
+    fig = plt.figure(figsize=(width, height if wide else extra + n * panel_height),
+                     layout="constrained")
+    axes = fig.subplots(rows, cols, squeeze=False, sharex=sharex, sharey=sharey,
+                        **subplots).ravel().tolist()
+    return fig, axes
+
+
+def outer_labels(axes: Sequence[Axes]) -> None:
+    """Label a shared axis only once: x on the bottom panels, y on the left ones.
+
+    Where panels of a grid share an axis, the inner panels lose that axis's
+    label and tick labels (their ticks stay); an axis that is not shared keeps
+    its labels everywhere.
+    """
+    for ax in axes:
+        spec = ax.get_subplotspec()
+        if spec is None:
+            continue
+        if len(ax.get_shared_x_axes().get_siblings(ax)) > 1 and not spec.is_last_row():
+            ax.set_xlabel("")
+            ax.tick_params(axis="x", labelbottom=False)
+        if len(ax.get_shared_y_axes().get_siblings(ax)) > 1 and not spec.is_first_col():
+            ax.set_ylabel("")
+            ax.tick_params(axis="y", labelleft=False)
+
+
+def legend_columns(labels: Sequence[str], width: float) -> int:
+    """How many legend columns of ``labels`` fit in ``width`` inches at the house font,
+    rows balanced."""
     em = _FONT / 72.0
     rc = mpl.rcParams
     column = (rc["legend.handlelength"] + rc["legend.handletextpad"] + rc["legend.columnspacing"]
-              + 0.58 * max(len(s) for s in labels)) * em
+              + 0.58 * max(_visible_length(s) for s in labels)) * em
     ncols = max(1, min(len(labels), int(width // column)))
     rows = -(-len(labels) // ncols)
     return -(-len(labels) // rows)
@@ -791,7 +847,7 @@ def _legend_above(ax: Axes, handles: list, labels: list[str] | None = None,
         return None
     width = ax.get_figure(root=True).get_figwidth() * ax.get_position().width * 0.95
     legend = ax.legend(handles, labels, loc="lower left", bbox_to_anchor=(0.0, 1.02),
-                       ncols=_ncols(labels, width), borderaxespad=0.0, title=title,
+                       ncols=legend_columns(labels, width), borderaxespad=0.0, title=title,
                        alignment="left")
     legend.get_title().set_fontsize(_FONT)
     legend._phasemap_above = True
@@ -1094,7 +1150,8 @@ def _default_map_layer(ds: xr.Dataset) -> str:
 
 def map_figure(ds: xr.Dataset, layer: str | None = None, *, x: str | None = None, ax=None,
                size: str | float = "one_column", overlays: bool = True,
-               all_categories: bool = False, robust: bool = True) -> Figure:
+               all_categories: bool = False, robust: bool = True,
+               colorbar: str = "right") -> Figure:
     """A 2-D map of one layer of an atlas.
 
     A categorical layer (``flag_values``/``flag_meanings``; default
@@ -1107,14 +1164,15 @@ def map_figure(ds: xr.Dataset, layer: str | None = None, *, x: str | None = None
     hatched and outlined, ``contact_lost`` cells hatched the other way in
     blue with a dashed outline, and ``singular`` cells dotted, when the atlas
     has those layers.  ``x`` names the dimension along the x axis (default:
-    the layer's first).
+    the layer's first); ``colorbar`` places a float layer's colour bar
+    (``"right"``, or ``"bottom"`` under a stack of panels that share x).
     """
     if layer is None:
         atlas_kind(ds)  # a clear error for what is not an atlas at all
         layer = _default_map_layer(ds)
     var = _layer(ds, layer)
     xdim, ydim = _grid(ds, var, x)
-    width = _width(size)
+    width = width_of(size)
     height = width * (0.86 if width < 5 else 0.55)
     with style():
         (a,) = _axes(ax, 1, (width, height), "map_figure")
@@ -1132,7 +1190,8 @@ def map_figure(ds: xr.Dataset, layer: str | None = None, *, x: str | None = None
                 none = dict(zip(_flags(var)[1], _flags(var)[0])).get("none")
                 shown = lost & (data == none)
         else:
-            _draw_continuous(a, xc, yc, data, axis_label(ds, layer), robust=robust)
+            _draw_continuous(a, xc, yc, data, axis_label(ds, layer), robust=robust,
+                             location=colorbar)
         if overlays:
             handles += _overlays(a, ds, layer, xdim, ydim, xc, yc, shown=shown)
         _label_axis(a, ds, "x", xdim, _edges(xc))
@@ -1177,7 +1236,7 @@ def profile_figure(ds: xr.Dataset, layers: str | Sequence[str] | None = None, *,
         raise ValueError("a profile's layers must share one dimension")
     rows = [len(_flags(v)[0]) if _is_categorical(v) else 5 for v in variables]
     heights = [0.12 + 0.15 * r for r in rows]
-    width = _width(size)
+    width = width_of(size)
     with style():
         axes = _axes(ax, len(variables), (width, 0.4 + sum(h + 0.2 for h in heights)),
                      "profile_figure", sharex=True, gridspec_kw={"height_ratios": heights})
@@ -1220,16 +1279,18 @@ def fate_figure(ds: xr.Dataset, *, extra: str | None = None, x: str | None = Non
     The categories present in ``fate`` (rest, contact lost, no solution...)
     are listed above the map.  ``extra`` adds a second panel with another
     layer of the dataset, such as ``phi_rest`` (the rest angle, blank where
-    the motion did not come to rest), ``n_reversals`` or ``t_rest``, with its
-    colour bar above it: beside the fate map at two-column width (sharing
-    the y axis), below it at one-column width (sharing the x axis).
+    the motion did not come to rest), ``n_reversals`` or ``t_rest``: beside
+    the fate map at two-column width (sharing the y axis), with its colour
+    bar on the right; below it at one-column width (sharing the x axis),
+    with its colour bar underneath.  Either way the bar stays clear of the
+    legend and heading above the fate map.
     """
     atlas_kind(ds)
     fate = _layer(ds, "fate")
     if not _is_categorical(fate):
         raise ValueError("layer 'fate' needs flag_values and flag_meanings")
     xdim, ydim = _grid(ds, fate, x)
-    width = _width(size)
+    width = width_of(size)
     wide = width >= 5
     extra_var = None
     if extra is not None:
@@ -1251,7 +1312,7 @@ def fate_figure(ds: xr.Dataset, *, extra: str | None = None, x: str | None = Non
         if extra_var is not None:
             data = np.asarray(extra_var.transpose(ydim, xdim).values)
             _draw_continuous(axes[1], xc, yc, data, axis_label(ds, extra), robust=robust,
-                             location="top")
+                             location="right" if wide else "bottom")
         for i, a in enumerate(axes):
             if not (i == 0 and "sharex" in share):
                 _label_axis(a, ds, "x", xdim, xe)
@@ -1356,7 +1417,7 @@ def phase_curve_figure(ds: xr.Dataset, *, squared: bool = False, ax=None,
     if stage_of_point is None:
         raise ValueError("not a phase curve dataset: missing point_stage (the stage of "
                          "each point)")
-    width = _width(size)
+    width = width_of(size)
     figsize = (width, width * (0.78 if width < 5 else 0.45))
     phi, omega = np.asarray(ds.phi.values, float), np.asarray(ds.omega.values, float)
     stage = np.asarray(ds[stage_of_point].values)
@@ -1435,7 +1496,7 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
         t_ev = np.asarray(ds.event_t.values, float)
     else:
         kinds, t_ev = [], np.array([])
-    width = _width(size)
+    width = width_of(size)
     with style():
         if phase_plane:
             (a,) = _axes(ax, 1, (width, width * (0.78 if width < 5 else 0.45)),
@@ -1448,7 +1509,7 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
             _label_axis(a, ds, "y", states[1], ys)
             axes = [a]
         else:
-            per = 0.95 if width < 5 else 1.1
+            per = 1.1
             axes = _axes(ax, len(states), (width, 0.55 + per * len(states)),
                          "trajectory_figure", sharex=True)
             terminal = [tt for tt, k in zip(t_ev, kinds) if k in _TERMINAL]
@@ -1547,7 +1608,7 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
     methods = list(dict.fromkeys(str(r["method"]) for r in rows))
     spread = all("seconds_min" in r and "seconds_max" in r for r in rows)
     rounds = max((int(r.get("n_samples", 0)) for r in rows), default=0)
-    width = _width(size)
+    width = width_of(size)
     ncols = min(len(systems), 4 if width >= 5 else 2)
     nrows = -(-len(systems) // ncols)
     spare = ax is None and nrows * ncols > len(systems)
@@ -1589,7 +1650,9 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
             if ax is not None or i % ncols == 0:
                 a.set_ylabel(ylabel)
             if ax is not None or i + ncols >= len(systems):
-                a.set_xlabel("Run time per trajectory (s)")
+                # a narrow panel has no room for the long label: the key says "per trajectory"
+                a.set_xlabel("Run time per trajectory (s)" if width >= WIDE or ax is not None
+                             else "Run time (s)")
         if len(axes) > 1:
             label_panels(axes)
         fig = axes[0].get_figure(root=False)
@@ -1602,11 +1665,13 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
             spares[0].legend(lines, labels, loc="center")
         elif ax is None:
             fig.legend(lines, labels, loc="outside upper center",
-                       ncols=_ncols(labels, width * 0.95))
+                       ncols=legend_columns(labels, width * 0.95))
         else:
             _legend_above(axes[0], lines)
         if ax is None:
             key = [r"$y$: the state in SI units (rad, rad s$^{-1}$, m, m s$^{-1}$)"]
+            if width < WIDE:
+                key.append("run time: per trajectory")
             if spread:
                 key.append(f"points: the fastest of {rounds} timing rounds, bars: the slowest"
                            if rounds > 1 else "one timing round")

@@ -19,7 +19,7 @@ import pathlib
 import shutil
 import textwrap
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Callable, Sequence
 
 import xarray as xr
 
@@ -97,15 +97,28 @@ def _shares(natural: list[int], room: int) -> list[int]:
     return out
 
 
+#: The figure widths a study can lay its figures out for (``--size``), by choice.
+SIZE_CHOICES = {"two_column": ("two_column",), "one_column": ("one_column",),
+                "both": ("two_column", "one_column")}
+
+
 def arguments(doc: str, argv: Sequence[str] | None = None) -> argparse.Namespace:
-    """Parse a study's ``[--quick] [--out DIR]``; the output folder is created."""
+    """Parse a study's ``[--quick] [--out DIR] [--size WIDTH]``; the output folder is created.
+
+    ``args.sizes`` is the tuple of widths to draw every figure at (see
+    :func:`save_figures`).
+    """
     ap = argparse.ArgumentParser(description=doc.strip().split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="coarse grids, seconds not minutes")
     ap.add_argument("--out", default="phasemap-out", help="folder for atlases and figures "
                     "(default %(default)s)")
+    ap.add_argument("--size", choices=list(SIZE_CHOICES), default="two_column",
+                    help="figure width: a journal's two columns (7.2 in), one column (3.5 in) "
+                    "or both (default %(default)s)")
     args = ap.parse_args(argv)
     args.out = pathlib.Path(args.out)
     args.out.mkdir(parents=True, exist_ok=True)
+    args.sizes = SIZE_CHOICES[args.size]
     return args
 
 
@@ -126,6 +139,22 @@ def save_figure(fig, out: pathlib.Path, name: str) -> list[pathlib.Path]:
     paths = list(_save(fig, out / name))
     plt.close(fig)
     return paths
+
+
+def figure_name(name: str, size: str) -> str:
+    """The file stem of figure ``name`` at ``size``: ``name`` at two-column width, else
+    ``name_one_column``, so that both layouts can sit in one folder."""
+    return name if size == "two_column" else f"{name}_{size}"
+
+
+def save_figures(draw: Callable[[str], object], out: pathlib.Path, name: str,
+                 sizes: Sequence[str] = ("two_column",)) -> list[pathlib.Path]:
+    """Draw ``draw(size)`` at each of ``sizes`` and save it (:func:`save_figure`) under
+    :func:`figure_name`; the files written."""
+    files: list[pathlib.Path] = []
+    for size in sizes:
+        files += save_figure(draw(size), out, figure_name(name, size))
+    return files
 
 
 def collect_legend(ax, handles: dict) -> None:

@@ -86,8 +86,12 @@ def load(path: pathlib.Path):
 
 
 def tour(out: str = "phasemap-out", *, full: bool = False, studies: str | None = None,
-         only: Sequence[str] | None = None) -> int:
-    """Run the studies into ``out``; return 0, or 1 when a claim disagrees."""
+         only: Sequence[str] | None = None, size: str = "two_column") -> int:
+    """Run the studies into ``out``; return 0, or 1 when a claim disagrees.
+
+    ``size`` lays the figures out for a journal's ``"two_column"`` width (the
+    default), ``"one_column"`` or ``"both"`` (see :func:`phasemap.study.save_figures`).
+    """
     folder = find_studies(studies)
     names = [n for n in ORDER if (folder / f"{n}.py").is_file()]
     if only:
@@ -97,7 +101,7 @@ def tour(out: str = "phasemap-out", *, full: bool = False, studies: str | None =
         names = [n for n in names if n in only]
     out_dir = pathlib.Path(out)
     out_dir.mkdir(parents=True, exist_ok=True)
-    argv = ["--out", str(out_dir)] + ([] if full else ["--quick"])
+    argv = ["--out", str(out_dir), "--size", size] + ([] if full else ["--quick"])
     verdicts: dict[str, int] = {}
     start = time.perf_counter()
     for i, name in enumerate(names, 1):

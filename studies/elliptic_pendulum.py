@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import math
 
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
@@ -262,9 +261,10 @@ def _category_handles(ax):
     return handles
 
 
-def _two_panel(maps, x, height):
-    fig, axes = plt.subplots(1, 2, figsize=(pplot.SIZES["two_column"], height), sharey=True,
-                             layout="constrained")
+def _two_panel(maps, x, height, size):
+    """The maps for xdot > 0 and xdot < 0: side by side at two-column width, else stacked."""
+    fig, axes = pplot.panels(2, size, height=height, panel_height=2.2, extra=2.0,
+                             sharex=True, sharey=True)
     handles = {}
     for k, (ax, side, title) in enumerate(zip(axes, ("right", "left"),
                                               (r"$\dot x > 0$", r"$\dot x < 0$"))):
@@ -275,21 +275,31 @@ def _two_panel(maps, x, height):
         for h in _category_handles(ax):
             handles.setdefault(h.get_label(), h)
         ax.set_title(f"({'ab'[k]}) {title}", loc="left")
-    axes[1].set_ylabel("")
+    pplot.outer_labels(axes)
     order = ["none", "unique", "two", "continuum"]
     return fig, axes, [handles[k] for k in order if k in handles]
 
 
-def _fixed(ds):
-    """What the maps held fixed (xdot differs between the panels: only its sign matters)."""
-    return pplot.fixed_values_text(ds.drop_attrs().assign_attrs(
+def _fixed(ds, fig, more=""):
+    """What the maps held fixed (xdot differs between the panels: only its sign matters),
+    and ``more``, wrapped to the width of ``fig``."""
+    items = pplot.fixed_values(ds.drop_attrs().assign_attrs(
         {k: v for k, v in ds.attrs.items() if k != "phasemap_fixed_xdot"}))
+    if more:
+        items[-1] += ";"
+        items.append(more)
+    return pplot.wrap(items, 0.95 * fig.get_figwidth()).replace(";,", ";")
 
 
-def figure_phi_f(maps):
+def _columns(size, wide: int) -> int | None:
+    """``wide`` legend columns at two-column width; as many as fit otherwise."""
+    return wide if pplot.width_of(size) >= pplot.WIDE else None
+
+
+def figure_phi_f(maps, size="two_column"):
     """Solvability over (phi, f) with the lambda = 0 curves and the two thresholds."""
     with pplot.style():
-        fig, axes, cats = _two_panel(maps, "phi", 3.1)
+        fig, axes, cats = _two_panel(maps, "phi", 3.1, size)
         phi = np.linspace(-math.pi, math.pi, 4001)
         for ax in axes:
             for k, st in LAMBDA_STYLE.items():
@@ -302,7 +312,8 @@ def figure_phi_f(maps):
                  Line2D([], [], label=r"$f = 2\sqrt{2}$ (sharp)", **SHARP_STYLE),
                  Line2D([], [], label=r"$f = 2$ (paper, sufficient)", **PAPER_STYLE)]
         handles = cats + lines
-        pplot.figure_legend(fig, handles, ncols=4, title=_fixed(maps["right"]))
+        pplot.figure_legend(fig, handles, ncols=_columns(size, 4),
+                            title=_fixed(maps["right"], fig))
         pplot.define_symbols(fig, KEY)
     return fig
 
@@ -316,10 +327,10 @@ def _wrapped(phi, *ys):
     return out
 
 
-def figure_phi_omega(maps, motion):
+def figure_phi_omega(maps, motion, size="two_column"):
     """Solvability over (phi, omega) at f = 4, with the paradox motion on the xdot > 0 map."""
     with pplot.style():
-        fig, axes, cats = _two_panel(maps, "phi", 3.1)
+        fig, axes, cats = _two_panel(maps, "phi", 3.1, size)
         phi = np.linspace(-math.pi, math.pi, 4001)
         with np.errstate(invalid="ignore"):
             w = np.sqrt(-G / (L * np.cos(phi)))
@@ -357,19 +368,19 @@ def figure_phi_omega(maps, motion):
                         label=kind)]
         handles = cats + lines
         start = [t for t in pplot.fixed_values(motion) if "_0$" in t]
-        pplot.figure_legend(fig, handles, ncols=5, title=_fixed(maps["right"])
-                            + "; the motion from " + ", ".join(start))
+        pplot.figure_legend(fig, handles, ncols=_columns(size, 5), title=_fixed(
+            maps["right"], fig, "the motion from " + ", ".join(start)))
         pplot.define_symbols(fig, KEY)
     return fig
 
 
-def figure_motion(ds, states, inset: float | None = None):
+def figure_motion(ds, states, inset: float | None = None, size="two_column"):
     """A trajectory with its events marked and the slider's stick phases shaded.
 
     ``inset``: a zoom of the first panel on [0, inset] s, for a stick phase
     that starts too soon after t = 0 to be seen at the scale of the motion.
     """
-    fig = pplot.trajectory_figure(ds, states=states)
+    fig = pplot.trajectory_figure(ds, states=states, size=size)
     stick = ds.branch.values == STICK
     t = ds.t.values
     edges = np.flatnonzero(np.diff(np.r_[0, stick.astype(int), 0]))
@@ -384,6 +395,8 @@ def figure_motion(ds, states, inset: float | None = None):
         for h, txt in zip(handles, leg.get_texts()):
             h.set_label(txt.get_text())
         handles.append(Patch(label=r"slider sticks ($\dot x \equiv 0$)", **STICK_SHADE))
+        if inset:
+            handles.append(Line2D([], [], ls="none", label=f"inset: the first {inset * 1e3:g} ms"))
         leg.remove()
         new = ax.legend(handles, [h.get_label() for h in handles], loc="lower left",
                         bbox_to_anchor=(0.0, 1.02), borderaxespad=0, ncols=2, title=title,
@@ -398,7 +411,8 @@ def _zoom(ax, ds, name, t_max, stick):
     """An inset of ``name`` over the first ``t_max`` seconds, time in ms, events marked."""
     sel = ds.t.values <= t_max
     t_ms = ds.t.values[sel] * 1e3
-    zoom = ax.inset_axes([0.2, 0.45, 0.3, 0.45])
+    # high in the panel, so that its labels stay clear of the slider's xdot = 0 stretch
+    zoom = ax.inset_axes([0.22, 0.56, 0.36, 0.36])
     edges = np.flatnonzero(np.diff(np.r_[0, stick[sel].astype(int), 0]))
     for a, b in zip(edges[::2], edges[1::2]):
         zoom.axvspan(t_ms[a], t_ms[min(b, t_ms.size - 1)], zorder=0, **STICK_SHADE)
@@ -410,7 +424,7 @@ def _zoom(ax, ds, name, t_max, stick):
             zoom.plot(te * 1e3, ye, marker=marker, ms=3.5, mfc="white", mec=colour, mew=0.8,
                       ls="none", clip_on=False, zorder=5)
     zoom.set_xlim(0.0, t_max * 1e3)
-    zoom.set_xlabel(r"$t$ (ms): the stick starts at once", labelpad=1)
+    zoom.set_xlabel(r"$t$ (ms)", labelpad=1)
     zoom.tick_params(labelsize=7)
     zoom.xaxis.label.set_fontsize(7)
 
@@ -504,12 +518,17 @@ def main(argv=None) -> list[Claim]:
                 and s["admissible"] == s["checked"] > 0)))
 
     # figures
-    files += study.save_figure(figure_phi_f(maps), out, f"{NAME}_phi_f")
-    files += study.save_figure(figure_phi_omega(pmaps, motion), out, f"{NAME}_phi_omega")
-    files += study.save_figure(figure_motion(motion, ["xdot", "phi", "omega"], inset=0.01), out,
-                               f"{NAME}_paradox_motion")
-    files += study.save_figure(figure_motion(slip_ds, ["xdot", "x", "phi"]), out,
-                               f"{NAME}_stick_slip")
+    sizes = args.sizes
+    files += study.save_figures(lambda size: figure_phi_f(maps, size), out, f"{NAME}_phi_f",
+                                sizes)
+    files += study.save_figures(lambda size: figure_phi_omega(pmaps, motion, size), out,
+                                f"{NAME}_phi_omega", sizes)
+    files += study.save_figures(lambda size: figure_motion(
+        motion, ["xdot", "phi", "omega"], inset=0.01, size=size), out,
+        f"{NAME}_paradox_motion", sizes)
+    files += study.save_figures(lambda size: figure_motion(slip_ds, ["xdot", "x", "phi"],
+                                                           size=size), out,
+                                f"{NAME}_stick_slip", sizes)
 
     study.finish("Painleve's elliptic pendulum", claims, files)
     return claims

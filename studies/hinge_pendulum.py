@@ -168,18 +168,28 @@ def _zone_bands(ax, lo, hi, delta):
                    zorder=0)
 
 
-def _replace_legend(ax, handles, ncols=None):
+def _replace_legend(ax, handles, title, ncols=None):
+    """A legend above ``ax``, left-aligned with it and headed by ``title``, in place of the
+    one there; ``ncols`` wide (default: as many columns as fit the panel)."""
     if ax.get_legend() is not None:
         ax.get_legend().remove()
     labels = [h.get_label() for h in handles]
-    ax.legend(handles, labels, loc="lower center", bbox_to_anchor=(0.5, 1.02), borderaxespad=0,
-              ncols=ncols or len(handles))
+    width = 0.95 * ax.get_figure().get_figwidth() * ax.get_position().width
+    legend = ax.legend(handles, labels, loc="lower left", bbox_to_anchor=(0.0, 1.02),
+                       borderaxespad=0, ncols=ncols or pplot.legend_columns(labels, width),
+                       title=title, alignment="left")
+    legend._phasemap_above = True
 
 
-def figure_rest(ds):
+def _wide(size) -> bool:
+    return pplot.width_of(size) >= pplot.WIDE
+
+
+def figure_rest(ds, size="two_column"):
     """Stagnation over (phi, delta/l) with the closed-form boundary l |sin phi| = delta."""
     with pplot.style():
-        fig = pplot.map_figure(ds, "stagnation", x="phi", overlays=False)
+        fig = pplot.map_figure(ds, "stagnation", x="phi", overlays=False,
+                               size=size)
         ax = fig.axes[0]
         phi = np.linspace(-math.pi, math.pi, 2001)
         ax.plot(phi, L * np.abs(np.sin(phi)), color="black", lw=1.0)
@@ -193,20 +203,18 @@ def figure_rest(ds):
             Line2D([], [], color="black", lw=1.0, label=r"$l|\sin\varphi| = \delta$, i.e. (35)"),
             Line2D([], [], color="black", lw=0.8, ls=(0, (3.0, 1.5)),
                    label=r"$\delta = l$: singular")]
-        _replace_legend(ax, handles, ncols=2)
-        ax.get_legend().set_title(pplot.fixed_values_text(ds, 3.2))
-        ax.get_legend().set_alignment("left")
+        _replace_legend(ax, handles, pplot.fixed_values_text(ds, 0.95 * fig.get_figwidth()),
+                        ncols=2)
         pplot.define_symbols(fig, DELTA_KEY)
     return fig
 
 
-def figure_moving(by_delta, by_omega):
+def figure_moving(by_delta, by_omega, size="two_column"):
     """No solution for delta > l, except where l omega^2 + g cos phi = 0."""
     free = pplot.OKABE_ITO["yellow"]
     cont = pplot.CATEGORY_COLOURS["continuum"]
     with pplot.style():
-        fig, axes = plt.subplots(1, 2, figsize=(pplot.SIZES["two_column"], 3.0),
-                                 layout="constrained")
+        fig, axes = pplot.panels(2, size, height=3.1, panel_height=2.2, extra=1.6)
         pplot.map_figure(by_delta, "n_solutions", x="phi", ax=axes[0])
         pplot.map_figure(by_omega, "n_solutions", x="phi", ax=axes[1])
         handles = {}
@@ -233,21 +241,24 @@ def figure_moving(by_delta, by_omega):
             ax.plot(phi, -w, color=free, lw=1.6)
         ax.set_title(rf"(b) $\delta/l$ = {DELTA_ABOVE / L:g}", loc="left")
         # the continuum is two cells: marked by stars rather than a patch nobody can see
-        cats = [handles[k] for k in ("none", "unique", "singular") if k in handles]
+        cats = [handles[k] for k in ("none", "unique") if k in handles]
+        cats += [h for k, h in handles.items() if k.startswith("singular")]
         items = cats + [
             Line2D([], [], color=free, lw=1.6,
                    label=r"$l\omega^2 + g\cos\varphi = 0$: unique ($R = 0$)"),
             Line2D([], [], ls="none", marker="*", ms=8, mfc=cont, mec="black", mew=0.5,
                    label=r"continuum ($\delta = l$ on that curve)")]
-        pplot.figure_legend(fig, items, ncols=3,
+        pplot.figure_legend(fig, items, ncols=3 if _wide(size) else 1,
                             title=rf"$l$ = {L:g} m, $g$ = {G:g} m s$^{{-2}}$, $m$ = 1 kg")
         pplot.define_symbols(fig, DELTA_KEY)
     return fig
 
 
-def figure_phase(curves):
+def figure_phase(curves, size="two_column"):
     with pplot.style():
-        fig, ax = plt.subplots(figsize=(pplot.SIZES["two_column"], 3.0), layout="constrained")
+        width = pplot.width_of(size)
+        fig, ax = plt.subplots(figsize=(width, 3.0 if _wide(size) else 4.0),
+                               layout="constrained")
         starts = []
         for i, ds in enumerate(curves):
             before = len(ax.lines)
@@ -273,19 +284,23 @@ def figure_phase(curves):
             h.set_label(t.get_text())
         zone = Patch(color=ZONE, alpha=0.18, lw=0,
                      label=rf"stagnation zone (35), $\delta/l$ = {DELTA / L:g}")
-        _replace_legend(ax, starts + events + [zone], ncols=4)
         head = pplot.fixed_values_text(curves[0].drop_attrs().assign_attrs(
-            {k: v for k, v in curves[0].attrs.items() if "initial" not in k}))
-        ax.get_legend().set_title(head)
-        ax.get_legend().set_alignment("left")
+            {k: v for k, v in curves[0].attrs.items() if "initial" not in k}), 0.95 * width)
+        _replace_legend(ax, starts + events + [zone], head, ncols=4 if _wide(size) else None)
     return fig
 
 
-def figure_weightless(runs):
+def figure_weightless(runs, size="two_column"):
+    """phi, omega and the error of simulate against the exact solution (36), g = 0.
+
+    Each start is one colour, named in the legend by its initial state; the
+    heading above states what both share.
+    """
     colours = [pplot.OKABE_ITO["vermillion"], pplot.OKABE_ITO["blue"]]
+    width = pplot.width_of(size)
     with pplot.style():
-        fig, axes = plt.subplots(3, 1, figsize=(pplot.SIZES["one_column"], 3.9), sharex=True,
-                                 layout="constrained")
+        fig, axes = plt.subplots(3, 1, figsize=(width, 3.9 if _wide(size) else 4.6),
+                                 sharex=True, layout="constrained")
         worst = 0.0
         for ds, (phi0, omega0), colour in zip(runs, WEIGHTLESS, colours):
             t = ds.t.values
@@ -304,42 +319,44 @@ def figure_weightless(runs):
             axes[2].semilogy(t[1:], err[1:], color=colour, lw=0.9)
         axes[0].set_ylabel(r"$\varphi$ (rad)")
         axes[1].set_ylabel(r"$\omega$ (rad s$^{-1}$)")
-        axes[2].set_ylabel(r"max($|\Delta\varphi|, |\Delta\omega|$)")
+        axes[2].set_ylabel(r"error $\epsilon$")
         axes[2].set_ylim(worst * 1e-3, worst * 5)
         axes[2].set_xlabel(r"$t$ (s)")
         axes[2].set_xlim(0.0, max(float(ds.t[-1]) for ds in runs))
         fig.align_ylabels(axes)
-        handles = [Line2D([], [], color=c, lw=2.4, alpha=0.4,
-                          label=rf"exact (36), $\omega_0$ = {_signed(w0)} rad s$^{{-1}}$")
-                   for c, (_, w0) in zip(colours, WEIGHTLESS)]
-        handles.append(Line2D([], [], ls="none", marker="o", ms=2.5, mfc="white", mec="black",
-                              label=r"simulate, $g$ = 0 (every few steps)"))
-        legend = axes[0].legend(handles, [h.get_label() for h in handles], loc="lower left",
-                                bbox_to_anchor=(0.0, 1.02), borderaxespad=0, ncols=1,
-                                alignment="left",
-                                title=rf"$g$ = 0, $\delta$ = {DELTA_WEIGHTLESS:g} m, "
-                                      rf"$l$ = {L:g} m; $\varphi_0$ = "
-                                      + ", ".join(f"{p:g}" for p, _ in WEIGHTLESS) + " rad")
-        legend._phasemap_above = True
+        for ax, what in zip(axes, ("angle", "angular velocity", "error of simulate")):
+            ax.set_title(what, loc="left")
         pplot.label_panels(axes)
+        handles = [Line2D([], [], color=c, lw=2.4, alpha=0.4,
+                          label=rf"exact (36) from $\varphi_0$ = {_signed(p0)} rad, "
+                                rf"$\omega_0$ = {_signed(w0)} rad s$^{{-1}}$")
+                   for c, (p0, w0) in zip(colours, WEIGHTLESS)]
+        handles.append(Line2D([], [], ls="none", marker="o", ms=2.5, mfc="white", mec="black",
+                              label="simulate (every few steps)"))
+        pplot.figure_legend(fig, handles, ncols=1,
+                            title=rf"$g$ = 0, $\delta$ = {DELTA_WEIGHTLESS:g} m, $l$ = {L:g} m")
+        pplot.define_symbols(fig, [r"$\epsilon = \max(|\Delta\varphi|, |\Delta\omega|)$, "
+                                   r"$\Delta$: simulate minus (36), in rad and rad s$^{-1}$"])
     return fig
 
 
-def figure_fates(ds):
+def figure_fates(ds, size="two_column"):
     """Where every initial state comes to rest, and after how many swings.
 
     Every state of the grid comes to rest within T_FATE (the study checks it),
     so a fate panel would be one colour: the heading says it instead.  Rings
     mark the rare rests in the upper zone (cos phi_rest < 0), the isolated
-    cells with 0 reversals.
+    cells with 0 reversals.  Side by side at two-column width, stacked (colour
+    bars underneath) at one-column width.
     """
     rest = int((ds.fate == phasemap.Event.REST).sum())
+    wide = _wide(size)
     with pplot.style():
-        fig, axes = plt.subplots(1, 2, figsize=(pplot.SIZES["two_column"], 3.2), sharey=True,
-                                 layout="constrained")
-        pplot.map_figure(ds, "phi_rest", x="phi", ax=axes[0])
-        pplot.map_figure(ds, "n_reversals", x="phi", ax=axes[1])
-        axes[1].set_ylabel("")
+        fig, axes = pplot.panels(2, size, height=3.2, panel_height=2.5, extra=1.1,
+                                 sharex=True, sharey=True)
+        for ax, layer in zip(axes, ("phi_rest", "n_reversals")):
+            pplot.map_figure(ds, layer, x="phi", ax=ax, colorbar="right" if wide else "bottom")
+        pplot.outer_labels(axes)
         rings = pplot.mark_inverted_rests(axes, ds, "phi", "omega", ds.phi.values,
                                            ds.omega.values)
         for ax in axes:
@@ -347,9 +364,10 @@ def figure_fates(ds):
                 ax.get_legend().remove()
             ax.set_title("")
         pplot.label_panels(axes)
-        head = (pplot.fixed_values_text(ds) + f"; all {rest} of {ds.fate.size} initial "
-                f"states come to rest within {T_FATE:g} s")
-        pplot.figure_legend(fig, rings, title=head)
+        head = pplot.wrap(pplot.fixed_values(ds)[:-1] + [
+            pplot.fixed_values(ds)[-1] + ";", f"all {rest} of {ds.fate.size} initial "
+            f"states come to rest within {T_FATE:g} s"], 0.95 * fig.get_figwidth())
+        pplot.figure_legend(fig, rings, title=head.replace(";,", ";"))
     return fig
 
 
@@ -465,11 +483,12 @@ def main(argv=None) -> list[Claim]:
         f"{upper} at the top; max l|sin phi_rest| = {worst:.4f}",
         verdict(bool(rest_cells.all()) and worst <= DELTA and 0 < upper < rest_cells.sum())))
 
-    files += study.save_figure(figure_rest(rest), out, f"{NAME}_rest")
-    files += study.save_figure(figure_moving(by_delta, by_omega), out, f"{NAME}_moving")
-    files += study.save_figure(figure_phase(curves), out, f"{NAME}_phase_curves")
-    files += study.save_figure(figure_weightless(runs), out, f"{NAME}_weightless")
-    files += study.save_figure(figure_fates(fates), out, f"{NAME}_fates")
+    for name, draw in (("rest", lambda size: figure_rest(rest, size)),
+                       ("moving", lambda size: figure_moving(by_delta, by_omega, size)),
+                       ("phase_curves", lambda size: figure_phase(curves, size)),
+                       ("weightless", lambda size: figure_weightless(runs, size)),
+                       ("fates", lambda size: figure_fates(fates, size))):
+        files += study.save_figures(draw, out, f"{NAME}_{name}", args.sizes)
 
     study.finish("Pendulum with hinge friction", claims, files)
     return claims

@@ -33,8 +33,8 @@ import xarray as xr
 
 import phasemap
 from phasemap import plot as pplot
-from phasemap.study import (Claim, arguments, collect_legend, finish, save_atlas, save_figure,
-                            verdict)
+from phasemap.study import (Claim, arguments, collect_legend, finish, save_atlas,
+                            save_figures, verdict)
 
 STUDY = "ladder"
 SQRT2 = math.sqrt(2.0)
@@ -69,13 +69,15 @@ def main(argv=None) -> list[Claim]:
     files.append(save_atlas(atlas, out, "ladder_solvability", STUDY))
     claims += singular_line_claims(atlas)
     claims += static_zone_claims(atlas.sel(omega=0.0))
-    files += save_figure(solvability_figure(atlas), out, "ladder_solvability")
+    files += save_figures(lambda size: solvability_figure(atlas, size), out,
+                          "ladder_solvability", args.sizes)
 
     # -- phase portraits omega^2(phi), f below and above sqrt 2 ---------------------
     regions, curves = portraits(n_phi)
     files.append(save_atlas(regions, out, "ladder_portraits", STUDY))
     claims += portrait_claims(curves)
-    files += save_figure(portrait_figure(regions, curves), out, "ladder_portraits")
+    files += save_figures(lambda size: portrait_figure(regions, curves, size), out,
+                          "ladder_portraits", args.sizes)
 
     # -- errata: (8), the reactions after (7), the first integral ------------------
     errata = phasemap.Scene(
@@ -86,7 +88,8 @@ def main(argv=None) -> list[Claim]:
     claims += equation8_claims(errata)
     integrals = first_integral_runs()
     claims += first_integral_claims(integrals)
-    files += save_figure(first_integral_figure(integrals), out, "ladder_first_integral")
+    files += save_figures(lambda size: first_integral_figure(integrals, size), out,
+                          "ladder_first_integral", args.sizes)
 
     finish("ladder study", claims, files)
     return claims
@@ -179,15 +182,13 @@ def static_zone_claims(rest: xr.Dataset) -> list[Claim]:
     ]
 
 
-def solvability_figure(atlas: xr.Dataset):
+def solvability_figure(atlas: xr.Dataset, size="two_column"):
     """n_solutions over (phi, f) at each omega, overlays, f = sqrt 2 and 2 arctan f."""
-    import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 
-    width = pplot.SIZES["two_column"]
     with pplot.style():
-        fig, axes = plt.subplots(1, len(OMEGAS), figsize=(width, 0.42 * width), sharey=True,
-                                 layout="constrained")
+        fig, axes = pplot.panels(len(OMEGAS), size, height=3.0, panel_height=1.9,
+                                 extra=1.3, sharex=True, sharey=True)
         handles: dict[str, object] = {}
         for k, (ax, w) in enumerate(zip(axes, OMEGAS)):
             pplot.map_figure(atlas.sel(omega=w), "n_solutions", x="phi", ax=ax)
@@ -200,8 +201,7 @@ def solvability_figure(atlas: xr.Dataset):
                         textcoords="offset points", ha="right", va="bottom",
                         bbox={"boxstyle": "square,pad=0.1", "fc": "white", "ec": "none"})
             ax.set_title(rf"({'abc'[k]}) $\omega$ = {w:g} rad s$^{{-1}}$", loc="left")
-            if k:
-                ax.set_ylabel("")
+        pplot.outer_labels(axes)
         n = atlas.n_solutions.transpose("f", ...).values
         lost = atlas.contact_lost.transpose("f", ...).values == 1
         off_line = np.abs(atlas.f.values - SQRT2) > 1e-12
@@ -211,8 +211,8 @@ def solvability_figure(atlas: xr.Dataset):
             [], [], color=pplot.OKABE_ITO["bluish_green"], lw=1.4)
         order = ["unique", "contact lost", "a branch loses contact", "stagnation"]
         keys = sorted(handles, key=lambda s: order.index(s) if s in order else len(order))
-        pplot.figure_legend(fig, [handles[k] for k in keys], keys, ncols=-(-len(keys) // 2),
-                            title=pplot.fixed_values_text(atlas))
+        pplot.figure_legend(fig, [handles[k] for k in keys], keys, ncols=_half(keys, size),
+                            title=pplot.fixed_values_text(atlas, 0.95 * fig.get_figwidth()))
     return fig
 
 
@@ -245,16 +245,19 @@ def portrait_claims(curves) -> list[Claim]:
     ]
 
 
-def portrait_figure(regions: xr.Dataset, curves):
-    import matplotlib.pyplot as plt
+def _half(labels, size) -> int | None:
+    """Two rows of legend entries at two-column width; as many columns as fit otherwise."""
+    return -(-len(labels) // 2) if pplot.width_of(size) >= pplot.WIDE else None
+
+
+def portrait_figure(regions: xr.Dataset, curves, size="two_column"):
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     blue = pplot.OKABE_ITO["blue"]
-    width = pplot.SIZES["two_column"]
     with pplot.style():
-        fig, axes = plt.subplots(1, len(PORTRAIT_F), figsize=(width, 0.46 * width),
-                                 layout="constrained")
+        fig, axes = pplot.panels(len(PORTRAIT_F), size, height=3.3, panel_height=2.3,
+                                 extra=1.9)
         handles: dict[str, object] = {}
         for k, (ax, f) in enumerate(zip(axes, PORTRAIT_F)):
             reg = regions.sel(f=f)
@@ -279,7 +282,7 @@ def portrait_figure(regions: xr.Dataset, curves):
             [], [], color=pplot.OKABE_ITO["black"], lw=0.9, ls=(0, (1.0, 1.5)))
         order = ["start", "rest", "contact lost", r"lying flat ($\varphi = \pi/2$)"]
         keys = sorted(handles, key=lambda s: order.index(s) if s in order else len(order))
-        pplot.figure_legend(fig, [handles[k] for k in keys], keys, ncols=-(-len(keys) // 2),
+        pplot.figure_legend(fig, [handles[k] for k in keys], keys, ncols=_half(keys, size),
                             title=r"$\omega > 0$ (sliding down), $l$ = 1 m, "
                                   r"$g$ = 9.81 m s$^{-2}$, $m$ = 1 kg")
         pplot.define_symbols(fig, INTEGRAL_KEY)
@@ -470,14 +473,12 @@ def first_integral_claims(runs) -> list[Claim]:
     return claims
 
 
-def first_integral_figure(runs):
-    import matplotlib.pyplot as plt
+def first_integral_figure(runs, size="two_column"):
     from matplotlib.lines import Line2D
 
     oi = pplot.OKABE_ITO
-    width = pplot.SIZES["two_column"]
     with pplot.style():
-        fig, axes = plt.subplots(1, 2, figsize=(width, 0.36 * width), layout="constrained")
+        fig, axes = pplot.panels(2, size, height=3.0, panel_height=2.0, extra=1.6)
         for k, (ax, run) in enumerate(zip(axes, runs)):
             pp = np.linspace(run["phi0"], run["phi"].max(), 300)
             if k == 0:
@@ -496,17 +497,22 @@ def first_integral_figure(runs):
                     mfc="none", mec=oi["blue"], mew=0.7)
             ax.set_xlabel(r"$\varphi$ (rad)")
             ax.set_ylabel(r"$\omega^2$ (rad$^{2}$ s$^{-2}$)")
-            ax.set_title(rf"({'ab'[k]}) $l$ = {run['l']:g} m, $f$ = {run['f']:g}, "
-                         rf"$\varphi_0$ = {run['phi0']:g} rad, "
-                         rf"$\omega_0$ = {run['omega0']:.3g} rad s$^{{-1}}$: {wrong}", loc="left")
+            ax.set_title(rf"({'ab'[k]}) $l$ = {run['l']:g} m, $\omega_0$ = {run['omega0']:.3g} "
+                         rf"rad s$^{{-1}}$:" + "\n" + wrong, loc="left")
         pplot.figure_legend(fig, [Line2D([], [], color=oi["vermillion"], ls="--", lw=1.0),
                     Line2D([], [], color=oi["black"], lw=1.0),
                     Line2D([], [], ls="none", marker="o", ms=3.0, mfc="none", mec=oi["blue"],
                            mew=0.7)],
                    ["first integral as printed",
                     r"corrected: $b$ with $-15f^2$, $a$ and $b$ over $l$",
-                    "time integration of (8)"], ncols=3,
-                            title=r"$\omega > 0$, $g$ = 9.81 m s$^{-2}$, $m$ = 1 kg")
+                    "time integration of (8)"], ncols=3 if pplot.width_of(size) >= pplot.WIDE
+                            else 1,
+                            title=pplot.wrap([r"$\omega > 0$", *(
+                                rf"${k}$ = {v}" for k, v in (
+                                    ("f", f"{runs[0]['f']:g}"),
+                                    (r"\varphi_0", f"{runs[0]['phi0']:g} rad"),
+                                    ("g", r"9.81 m s$^{-2}$"), ("m", "1 kg")))],
+                                0.95 * fig.get_figwidth()))
         pplot.define_symbols(fig, INTEGRAL_KEY)
     return fig
 

@@ -25,7 +25,7 @@ import numpy as np
 
 import phasemap
 from phasemap import workprecision as wp
-from phasemap.study import Claim, arguments, finish, save_atlas, save_figure, verdict
+from phasemap.study import Claim, arguments, finish, save_atlas, save_figures, verdict
 
 NAME = "overview"
 
@@ -46,8 +46,9 @@ def main(argv=None) -> list[Claim]:
         rows += wp.work_precision(wp.PROBLEMS[name], tolerances=tolerances, methods=methods,
                                   repeats=repeats, min_time=0.002 if args.quick else 0.02,
                                   budget=2.0 if args.quick else 10.0)
-    fig = phasemap.plot.work_precision_figure([r for r in rows if not r.get("skipped")])
-    files += save_figure(fig, out, f"{NAME}_work_precision")
+    drawn = [r for r in rows if not r.get("skipped")]
+    files += save_figures(lambda size: phasemap.plot.work_precision_figure(drawn, size=size),
+                          out, f"{NAME}_work_precision", args.sizes)
     (out / f"{NAME}_work_precision.md").write_text(wp.report(rows) + "\n")
     files.append(out / f"{NAME}_work_precision.md")
 
@@ -79,8 +80,9 @@ def main(argv=None) -> list[Claim]:
                            options={"t_end": 60.0})
     fates = scene.compute(progress=True)
     files.append(save_atlas(fates, out, f"{NAME}_wheel_fates", NAME))
-    fig = phasemap.plot.fate_figure(fates, extra="n_reversals", size="two_column")
-    files += save_figure(fig, out, f"{NAME}_wheel_fates")
+    files += save_figures(lambda size: phasemap.plot.fate_figure(fates, extra="n_reversals",
+                                                                 size=size),
+                          out, f"{NAME}_wheel_fates", args.sizes)
 
     rest = fates.fate == phasemap.Event.REST
     p = scene.fixed

@@ -34,8 +34,8 @@ import xarray as xr
 import phasemap
 from phasemap.facts import wheel_singular_delta
 from phasemap import plot as pplot
-from phasemap.study import (Claim, arguments, collect_legend, finish, save_atlas, save_figure,
-                            verdict)
+from phasemap.study import (Claim, arguments, collect_legend, finish, save_atlas,
+                            save_figures, verdict)
 
 STUDY = "wheel"
 G = 9.81
@@ -77,7 +77,8 @@ def main(argv=None) -> list[Claim]:
                                  delta=k * L, **FIXED)
             for k, (p, w) in ((LOW, STARTS[LOW][0]), (HIGH, STARTS[HIGH][1]))}
     claims += portrait_claims(curves, runs)
-    files += save_figure(portrait_figure(curves, runs[LOW]), out, "wheel_portraits")
+    files += save_figures(lambda size: portrait_figure(curves, runs[LOW], size), out,
+                          "wheel_portraits", args.sizes)
 
     # -- the bounce condition (12) over (phi, omega) ----------------------------------
     omega = np.linspace(-8.0, 8.0, n_omega)  # an even count: omega = 0 is not on the grid
@@ -87,7 +88,8 @@ def main(argv=None) -> list[Claim]:
     files.append(save_atlas(bounce, out, "wheel_bounce", STUDY))
     normal = bounce_normals(bounce)
     claims += bounce_claims(bounce, normal)
-    files += save_figure(maps_figure(stag, bounce, normal), out, "wheel_maps")
+    files += save_figures(lambda size: maps_figure(stag, bounce, normal, size), out,
+                          "wheel_maps", args.sizes)
 
     # -- fate maps over (phi0, omega0) -------------------------------------------------
     fates = {}
@@ -99,7 +101,8 @@ def main(argv=None) -> list[Claim]:
             options={"t_end": T_END}).compute()
         files.append(save_atlas(fates[k], out, name, STUDY))
     claims += fate_claims(fates)
-    files += save_figure(fates_figure(fates), out, "wheel_fates")
+    files += save_figures(lambda size: fates_figure(fates, size), out, "wheel_fates",
+                          args.sizes)
 
     # -- where the bracket of (13) vanishes ---------------------------------------
     sing = singular_atlas(n_phi, n_delta)
@@ -141,15 +144,13 @@ def _per_l(ds: xr.Dataset) -> xr.Dataset:
     return ds.assign_coords(delta=ds.delta / L)
 
 
-def maps_figure(stag: xr.Dataset, bounce: xr.Dataset, n: dict):
+def maps_figure(stag: xr.Dataset, bounce: xr.Dataset, n: dict, size="two_column"):
     """(a) the zones (15) over (phi, delta/l) at rest; (b) the bounce region (12)."""
-    import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 
     oi = pplot.OKABE_ITO
-    width = pplot.SIZES["two_column"]
     with pplot.style():
-        fig, (a, b) = plt.subplots(1, 2, figsize=(width, 0.46 * width), layout="constrained")
+        fig, (a, b) = pplot.panels(2, size, height=3.3, panel_height=2.6, extra=0.9)
         pplot.map_figure(_per_l(stag), "stagnation", x="phi", ax=a)
         pp = np.linspace(-math.pi, math.pi, 721)
         a.plot(pp, np.abs(np.sin(pp)), color=oi["black"], lw=0.8, ls="--")
@@ -235,16 +236,23 @@ def portrait_claims(curves, runs) -> list[Claim]:
     return claims
 
 
-def portrait_figure(curves, run: xr.Dataset):
-    """Phase portraits at delta/l = 0.1 and 1.2, and phi(t) of the first curve at 0.1."""
+def portrait_figure(curves, run: xr.Dataset, size="two_column"):
+    """Phase portraits at delta/l = 0.1 and 1.2, and phi(t) of the first curve at 0.1.
+
+    At two-column width (a) and (b) stand side by side above (c); narrower,
+    the three are stacked.
+    """
     import matplotlib.pyplot as plt
     from matplotlib.patches import Patch
 
     green = pplot.OKABE_ITO["bluish_green"]
-    width = pplot.SIZES["two_column"]
+    width = pplot.width_of(size)
+    wide = width >= pplot.WIDE
     with pplot.style():
-        fig, axes = plt.subplot_mosaic([["a", "b"], ["c", "c"]], figsize=(width, 0.68 * width),
-                                       layout="constrained", height_ratios=[1.6, 1.0])
+        fig, axes = plt.subplot_mosaic(
+            [["a", "b"], ["c", "c"]] if wide else [["a"], ["b"], ["c"]],
+            figsize=(width, 0.68 * width if wide else 7.0), layout="constrained",
+            height_ratios=[1.6, 1.0] if wide else [1.6, 1.6, 1.0])
         handles: dict[str, object] = {}
         for key, ratio in (("a", LOW), ("b", HIGH)):
             ax = axes[key]
@@ -260,26 +268,28 @@ def portrait_figure(curves, run: xr.Dataset):
             ax.set_xlim(lo, hi)
             ax.set_title(rf"({key}) $\delta/l$ = {ratio:g}"
                          + (" < 1: damped oscillation" if ratio < 1 else
-                            r" $\geq$ 1: one way only"))
+                            r" $\geq$ 1: one way only"), loc="left")
         ax = axes["c"]
         pplot.trajectory_figure(run, states="phi", ax=ax)
         collect_legend(ax, handles)
         half = math.asin(LOW)
         ax.axhspan(-half, half, color=green, alpha=0.3, lw=0, zorder=0)
-        ax.set_title(rf"(c) the motion of (a) from $\varphi_0$ = {STARTS[LOW][0][0]:g} rad, "
-                     rf"$\omega_0$ = {STARTS[LOW][0][1]:g} rad s$^{{-1}}$ in time (simulate)",
-                     loc="left")
+        ax.set_title(pplot.wrap([
+            rf"(c) the motion of (a) from $\varphi_0$ = {STARTS[LOW][0][0]:g} rad",
+            rf"$\omega_0$ = {STARTS[LOW][0][1]:g} rad s$^{{-1}}$ in time (simulate)"],
+            0.95 * width), loc="left")
         handles[r"zone (15): $|\sin\varphi| \leq \delta/l$"] = Patch(
             facecolor=green, alpha=0.5, lw=0)
-        pplot.figure_legend(fig, list(handles.values()), list(handles), ncols=len(handles),
-                            title=_fixed_text())
+        pplot.figure_legend(fig, list(handles.values()), list(handles),
+                            ncols=len(handles) if wide else None,
+                            title=pplot.wrap(_fixed_items(), 0.95 * width))
         pplot.define_symbols(fig, KEY)
     return fig
 
 
-def _fixed_text() -> str:
-    return (rf"$r$ = {FIXED['r']:g} m, $l$ = {L:g} m, $\rho$ = {FIXED['rho']:g} m, "
-            rf"$g$ = {G:g} m s$^{{-2}}$, $m$ = {FIXED['m']:g} kg")
+def _fixed_items() -> list[str]:
+    return [rf"$r$ = {FIXED['r']:g} m", rf"$l$ = {L:g} m", rf"$\rho$ = {FIXED['rho']:g} m",
+            rf"$g$ = {G:g} m s$^{{-2}}$", rf"$m$ = {FIXED['m']:g} kg"]
 
 
 # --------------------------------------------------------------------------- bounce (12)
@@ -391,24 +401,26 @@ def fate_claims(fates) -> list[Claim]:
     return claims
 
 
-def fates_figure(fates):
+def fates_figure(fates, size="two_column"):
     """(a) fate and (b) reversals at delta/l = 0.1; (c) rest angle at delta/l = 1.2.
 
     The fate maps at the two delta/l are nearly the same (the bounce depends on
     omega, hardly on delta), so one is drawn and the heading counts the cells
     where the other differs; what changes with delta/l is where and after how
-    many reversals the wheel stops.
+    many reversals the wheel stops.  Side by side at two-column width (colour
+    bars on the right), stacked at one-column width (colour bars underneath).
     """
-    import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
 
     low, high = fates[LOW], fates[HIGH]
     differ = int((low.fate != high.fate).sum())
-    width = pplot.SIZES["two_column"]
+    wide = pplot.width_of(size) >= pplot.WIDE
     with pplot.style():
-        fig, axes = plt.subplots(1, 3, figsize=(width, 0.42 * width), sharey=True,
-                                 layout="constrained")
-        pplot.fate_figure(low, extra="n_reversals", ax=list(axes[:2]), size="two_column")
-        pplot.map_figure(high, "phi_rest", x="phi", ax=axes[2])
+        fig, axes = pplot.panels(3, size, height=3.3, panel_height=2.0, extra=1.5,
+                                 sharex=True, sharey=True)
+        pplot.fate_figure(low, extra="n_reversals", ax=list(axes[:2]), size=size)
+        pplot.map_figure(high, "phi_rest", x="phi", ax=axes[2],
+                         colorbar="right" if wide else "bottom")
         legend = axes[0].get_legend()
         handles = list(legend.legend_handles)
         labels = [t.get_text() for t in legend.get_texts()]
@@ -417,16 +429,18 @@ def fates_figure(fates):
             ax.set_title("", loc="left")
             if ax.get_legend() is not None:
                 ax.get_legend().remove()
-        for ax in axes[1:]:
-            ax.set_ylabel("")
+        pplot.outer_labels(axes)
         for ax, text in zip(axes, (rf"fate, $\delta/l$ = {LOW:g}",
                                    rf"reversals, $\delta/l$ = {LOW:g}",
-                                   rf"rest angle, $\delta/l$ = {HIGH:g}; blank: contact lost")):
+                                   rf"rest angle, $\delta/l$ = {HIGH:g}")):
             ax.set_title(text, loc="left")
         pplot.label_panels(axes)
-        pplot.figure_legend(fig, handles, labels, title=(
-            _fixed_text() + rf"; at $\delta/l$ = {HIGH:g} the fate differs from (a) in "
-            f"{differ} of {low.fate.size} cells"))
+        handles.append(Patch(facecolor="white", edgecolor=pplot.GREY, linewidth=0.4))
+        labels.append("(c) blank: contact lost")
+        pplot.figure_legend(fig, handles, labels, title=pplot.wrap(
+            _fixed_items() + [rf"at $\delta/l$ = {HIGH:g} the fate differs from (a) in "
+                              f"{differ} of {low.fate.size} cells"],
+            0.95 * fig.get_figwidth()).replace(" kg,", " kg;"))
         pplot.define_symbols(fig, KEY)
     return fig
 

@@ -16,7 +16,9 @@ STUDY_RUNS: dict[str, tuple[list[str], int]] = {}
 def record_study(name: str, claims, out) -> None:
     import pathlib
 
-    STUDY_RUNS[name] = ([c.verdict for c in claims], len(list(pathlib.Path(out).glob("*.png"))))
+    # the tour's figures are the two-column ones; "_one_column" files are their narrow layouts
+    figures = [p for p in pathlib.Path(out).glob("*.png") if not p.stem.endswith("_one_column")]
+    STUDY_RUNS[name] = ([c.verdict for c in claims], len(figures))
 
 
 def require_tool(name: str, install: str):

@@ -141,5 +141,17 @@ def test_tour_runs_the_studies_it_finds(tmp_path):
     assert r.returncode == 0, r.stderr
     assert "[1/1] ladder (quick)" in r.stdout and "verdicts: 1 agrees" in r.stdout
     assert str(tmp_path / "out" / "ladder_fig.png") in r.stdout
+    # --size reaches the studies: every figure at both widths, the narrow ones named so
+    (studies / "ladder.py").write_text(
+        "from phasemap.study import Claim, arguments, figure_name\n"
+        "def main(argv=None):\n"
+        "    args = arguments('fake study', argv)\n"
+        "    for size in args.sizes:\n"
+        "        (args.out / (figure_name('ladder_fig', size) + '.png')).write_bytes(b'')\n"
+        "    return [Claim('sizes', '-', ' '.join(args.sizes), 'agrees')]\n")
+    r = run("tour", "--studies", str(studies), "--out", str(tmp_path / "both"), "--size", "both")
+    assert r.returncode == 0, r.stderr
+    assert {p.name for p in (tmp_path / "both").iterdir()} == {"ladder_fig.png",
+                                                               "ladder_fig_one_column.png"}
     missing = run("tour", "--studies", str(tmp_path / "nowhere"))
     assert missing.returncode == 2 and "no study scripts found" in missing.stderr

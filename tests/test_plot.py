@@ -20,6 +20,8 @@ import pytest
 import xarray as xr
 from matplotlib.contour import ContourSet
 
+import figure_review
+
 import phasemap
 import phasemap.accessor  # registers ds.phasemap
 from phasemap import events
@@ -505,12 +507,20 @@ def test_fate_map_with_a_second_panel(extra, size, tmp_path):
     fig = quiet(fate_dataset().phasemap.plot, extra=extra, size=size)
     _, extra_ax, cbar_ax = fig.axes
     assert extra_ax.get_xlabel() == r"$\varphi$ (rad)"
-    assert cbar_ax.get_xlabel() == pplot.axis_label(fate_dataset(), extra)  # colour bar on top
+    # the colour bar stays clear of the legend above the fate map: on the right of the
+    # second panel at two-column width, under it at one-column width
+    wide = size == "two_column"
+    label = cbar_ax.get_ylabel() if wide else cbar_ax.get_xlabel()
+    assert label == pplot.axis_label(fate_dataset(), extra)
+    fig.canvas.draw()
+    bar, panel = cbar_ax.get_window_extent(), extra_ax.get_window_extent()
+    assert bar.x0 >= panel.x1 if wide else bar.y1 <= panel.y0
     if extra == "phi_rest":
-        assert cbar_ax.get_xlabel() == r"$\varphi_{\mathrm{rest}}$ (rad)"
+        assert label == r"$\varphi_{\mathrm{rest}}$ (rad)"
     if extra == "n_reversals":
-        ticks = cbar_ax.get_xticks()
+        ticks = cbar_ax.get_yticks() if wide else cbar_ax.get_xticks()
         assert np.allclose(ticks, np.round(ticks))
+    assert figure_review.layout_problems(fig) == []
     render(fig, tmp_path)
 
 
@@ -611,13 +621,17 @@ def test_work_precision_one_panel_per_system_one_line_per_method(size, tmp_path)
         assert a.get_xscale() == "log" and a.get_yscale() == "log"
         assert [l.get_label() for l in a.lines] == names
         assert len(a.lines[0].get_xdata()) == 4  # the zero-error row is left out
-        assert a.get_xlabel() in ("", "Run time per trajectory (s)")
+        assert a.get_xlabel() in ("", "Run time per trajectory (s)" if size == "two_column"
+                                  else "Run time (s)")
         assert a.get_ylabel() in ("", r"Final-state error $\|\Delta y\|_\infty$")
     # two columns: one legend above the panels; one column: in the free fourth slot
     legend = fig.legends[0] if size == "two_column" else fig.axes[-1].get_legend()
     assert not (size == "one_column" and fig.axes[-1].axison)
     assert [t.get_text() for t in legend.get_texts()] == names
     assert "$y$: the state in SI units" in fig._supxlabel.get_text()  # y is defined
+    assert ("per trajectory" in fig._supxlabel.get_text()) == (size == "one_column")
+    if size == "two_column":  # one column: the legend in the free slot is wider than the slot
+        assert figure_review.layout_problems(fig) == []
     render(fig, tmp_path)
     fig = quiet(pplot.work_precision_figure, work_precision_table(), error="error_l2")
     assert fig.axes[0].get_ylabel() == "$L_2$ error along the motion"

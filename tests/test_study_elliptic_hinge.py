@@ -74,7 +74,7 @@ def run(request, tmp_path_factory):
     with warnings.catch_warnings(), contextlib.redirect_stdout(printed), \
             figure_review.recording() as seen:
         warnings.simplefilter("error")
-        claims = module.main(["--quick", "--out", str(out)])
+        claims = module.main(["--quick", "--out", str(out), "--size", "both"])
     record_study(name, claims, out)
     return name, claims, printed.getvalue(), out, seen
 
@@ -112,7 +112,7 @@ def test_atlases_carry_provenance(run):
 
 def test_figures_written(run):
     name, _, printed, out, _ = run
-    for stem in FIGURES[name]:
+    for stem in [s + w for s in FIGURES[name] for w in ("", "_one_column")]:
         pdf, png = out / f"{name}_{stem}.pdf", out / f"{name}_{stem}.png"
         assert pdf.read_bytes()[:5] == b"%PDF-"
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -125,5 +125,7 @@ def test_figures_state_what_was_held_fixed_and_letter_their_panels(run):
     """Issue 11: each figure says g (and so the values held fixed), multi-panel figures are
     lettered, and no symbol is set upright outside mathtext."""
     name, _, _, _, seen = run
-    assert set(seen) == {f"{name}_{stem}" for stem in FIGURES[name]}
+    assert set(seen) == {f"{name}_{stem}{w}" for stem in FIGURES[name]
+                         for w in ("", "_one_column")}
+    assert {what["width"] for what in seen.values()} == {3.5, 7.2}
     figure_review.check(seen)

@@ -1,7 +1,8 @@
 """The ladder and wheel studies run in quick mode, write their files and check what they claim.
 
 Each study runs once per module (about 10 s each), in a temporary folder, with
-every warning an error, so the figures render without warnings.
+every warning an error, so the figures render without warnings, at both widths
+(``--size both``); each figure's layout is reviewed at its printed size.
 """
 
 from __future__ import annotations
@@ -66,6 +67,13 @@ EXPECTED = {
 }
 
 
+#: Every figure is drawn at both widths: ``stem.png`` (7.2 in) and ``stem_one_column.png``.
+for _files in FILES.values():
+    for _stem, _exts in list(_files.items()):
+        if "png" in _exts:
+            _files[f"{_stem}_one_column"] = ("pdf", "png")
+
+
 def load(name):
     spec = importlib.util.spec_from_file_location(f"study_{name}", STUDIES / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
@@ -82,7 +90,7 @@ def run(request, tmp_path_factory):
     with warnings.catch_warnings(), contextlib.redirect_stdout(printed), \
             figure_review.recording() as seen:
         warnings.simplefilter("error")
-        claims = load(name).main(["--quick", "--out", str(out)])
+        claims = load(name).main(["--quick", "--out", str(out), "--size", "both"])
     record_study(name, claims, out)
     return name, out, claims, printed.getvalue(), seen
 
@@ -132,4 +140,5 @@ def test_figures_state_what_was_held_fixed_and_letter_their_panels(run):
     lettered, and no symbol is set upright outside mathtext."""
     name, _, _, _, seen = run
     assert set(seen) == {stem for stem, exts in FILES[name].items() if "png" in exts}
+    assert {what["width"] for what in seen.values()} == {3.5, 7.2}
     figure_review.check(seen)

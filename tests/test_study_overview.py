@@ -23,9 +23,12 @@ def test_overview_quick(tmp_path, capsys):
     with warnings.catch_warnings(), figure_review.recording() as seen:
         spec.loader.exec_module(module)  # inside: the study binds save_figure by name
         warnings.simplefilter("error")
-        claims = module.main(["--quick", "--out", str(tmp_path)])
+        claims = module.main(["--quick", "--out", str(tmp_path), "--size", "both"])
     # issue 11: the fate map states its parameters; work-precision panels are lettered
-    figure_review.check(seen, exempt_fixed={"overview_work_precision"})
+    assert set(seen) == {f"overview_{s}{w}" for s in ("work_precision", "wheel_fates")
+                         for w in ("", "_one_column")}
+    figure_review.check(seen, exempt_fixed={"overview_work_precision",
+                                            "overview_work_precision_one_column"})
     wp = " ".join(seen["overview_work_precision"]["texts"])
     assert "fastest of 5 timing rounds" in wp and "SciPy DOP853" in wp
     record_study("overview", claims, tmp_path)
