@@ -594,10 +594,13 @@ class _Context:
                 _fail(S, "coordinates", f"{sorted(map(str, left))[0]} is still in the "
                       "equations after closing the contacts: a coordinate without a rate "
                       "must be fixed by a contact's gap or be ignorable")
-        det = self.numeric(self.M.det(method="berkowitz"), 16)
-        if np.any(np.abs(det) < 1e-12 * max(1.0, float(np.max(np.abs(det))))):
-            _fail(S, "bodies", "the mass matrix is singular: some coordinate has no "
-                  "inertia (a missing mass or inertia term)")
+        # A singular mass matrix is fine when the contacts take away the
+        # motions without inertia (the massless rod of a pendulum whose pivot
+        # is a coordinate): each mode then solves the whole saddle-point
+        # system, and fails there if the contacts do not.
+        dM = self.M.det(method="berkowitz")
+        det = self.numeric(dM / (_scale(dM) + 1), 16) if dM != 0 else np.zeros(1)
+        self.regular = bool(np.all(np.abs(det) > 1e-12))
         for k, (name, ch) in enumerate(self.channels.items()):
             for key, (w, b, v) in ch.items():
                 if key in ("N", "X", "Y") or (key == "T" and "S" in ch and "X" not in ch):
@@ -845,11 +848,15 @@ class _Row:
         C = sp.Matrix(k, n, lambda i, j: cons[i][0][j]) if k else sp.zeros(0, n)
         cb = sp.Matrix(k, 1, lambda i, j: cons[i][1]) if k else sp.zeros(0, 1)
         hv = sp.Matrix(n, 1, lambda i, j: hx[i])
+        self.aM, self.dM, self.hx, self.W = aM, dM, hx, W
+        self.null = None
+        self.qnums = None
+        if not ctx.regular:
+            self._saddle(M, W, C, hv, cb, n, k)
+            return
         if k:
             K = (C * aM * W).applyfunc(sp.expand)
             rhs = (-(C * aM * hv) - dM * cb).applyfunc(sp.expand)
-        self.aM, self.dM, self.hx, self.W = aM, dM, hx, W
-        self.null = None
         if k == 0:
             self.D = sp.Integer(1)
             self.nums = []
@@ -862,6 +869,25 @@ class _Row:
             return
         # statically indeterminate: a one-parameter family of reactions
         self._indeterminate(K, rhs, k)
+
+    def _saddle(self, M, W, C, hv, cb, n, k):
+        """Accelerations and reactions together: [[M, -W], [C, 0]] (q'', L) = (h, -c)."""
+        import sympy as sp
+
+        A = sp.zeros(n + k, n + k)
+        A[:n, :n] = M
+        if k:
+            A[:n, n:] = -W
+            A[n:, :n] = C
+        rhs = sp.Matrix.vstack(hv, -cb) if k else hv
+        D = sp.expand(A.det(method="berkowitz"))
+        if D == 0 or np.max(np.abs(self.ctx.numeric(D / _scale(D), 12))) < 1e-9:
+            _fail(self.ctx.S, "bodies", "the mass matrix is singular on the motions the "
+                  f"contacts allow (modes {', '.join(self.kinds)}): some coordinate has no "
+                  "inertia (a missing mass or inertia term)")
+        self.D, *nums = _reduced([D] + [sp.expand(self._cramer(A, rhs, i))
+                                        for i in range(n + k)])
+        self.qnums, self.nums = nums[:n], nums[n:]
 
     def _cramer(self, K, rhs, i):
         Ki = K.copy()
@@ -1044,6 +1070,17 @@ class _Row:
                for j in range(n)]
         accs = [sum((_scale(self.aM[j, a]) * gens[a] for a in range(n)), sp.Integer(0))
                 / sp.Abs(self.dM) for j in range(n)]
+        if self.qnums is not None:  # solved together with the reactions
+            Dsym = sp.Symbol("_k_D", real=True)
+            if self.mu is None:
+                acc = [e / Dsym for e in self.qnums]
+                accs = [_scale(e) / sp.Abs(Dsym) for e in self.qnums]
+            else:
+                q0 = [e.subs(self.mu, 0) for e in self.qnums]
+                q1 = [sp.diff(e, self.mu) for e in self.qnums]
+                acc = [(a + b * self.mu) / Dsym for a, b in zip(q0, q1)]
+                accs = [(_scale(a) + _scale(b) * sp.Abs(self.mu)) / sp.Abs(Dsym)
+                        for a, b in zip(q0, q1)]
         emit([(str(Q[j]), acc[j]) for j in range(n)] + [(str(Qs[j]), accs[j]) for j in range(n)])
         self.Q = Q
         # 3. the conditions

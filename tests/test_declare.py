@@ -50,7 +50,7 @@ def _sample(m, rng, zero_velocity):
 
 #: declared accelerations (coordinates with a rate, in declared order) -> hand columns
 ACC = {"ladder": ["phi_ddot"], "wheel": ["phi_ddot"],
-       "elliptic_pendulum": ["phi_ddot", "x_ddot"]}
+       "elliptic_pendulum": ["phi_ddot", "x_ddot"], "hinge_pendulum": ["phi_ddot"]}
 
 
 @pytest.mark.parametrize("seed", sorted(ACC))
