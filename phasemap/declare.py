@@ -49,6 +49,9 @@ The concepts
     a point of a body on a flat surface ``normal . point = offset``: one-sided
     (``N >= 0``, it may separate) or two-sided (a guide, split on ``sgn N``),
     with Coulomb friction ``f``.
+:class:`EdgeContact`
+    a fixed corner touching a straight edge of a body (a rod lying across a
+    step); the contact point slides along the edge.
 :class:`RollingContact`
     a disc of radius ``radius`` centred at ``centre`` rolling without slip on a
     flat surface, with a rolling-friction moment ``delta N``; one-sided.
@@ -112,8 +115,8 @@ import numpy as np
 from . import _numerics as nx
 from ._version import __version__
 
-__all__ = ["Parameter", "Rate", "Coordinate", "Body", "PointContact", "RollingContact",
-           "Joint", "System", "load"]
+__all__ = ["Parameter", "Rate", "Coordinate", "Body", "PointContact", "EdgeContact",
+           "RollingContact", "Joint", "System", "load"]
 
 
 # -- declaration objects ------------------------------------------------------
@@ -227,6 +230,25 @@ class PointContact:
 
 
 @dataclass(frozen=True, eq=False)
+class EdgeContact(PointContact):
+    """A fixed corner ``corner`` touching a straight edge of a body.
+
+    The edge passes through the body point ``point`` with the direction angle
+    ``angle`` (counter-clockwise from +x; the edge turns with the body).  The
+    contact point slides along the edge; the normal force acts at the corner
+    along the edge's normal.  ``side=+1`` when the corner touches the edge from
+    its right (below an edge pointing along +x: a rod resting on a step), -1
+    from its left.  Friction, ``sided`` and the modes are those of a
+    :class:`PointContact`; the slip velocity is the body's material velocity
+    at the corner along the edge.
+    """
+
+    corner: tuple = (0, 0)
+    angle: object = 0
+    side: int = 1
+
+
+@dataclass(frozen=True, eq=False)
 class RollingContact:
     """A disc (centre ``centre``, radius ``radius``, counter-clockwise angle ``angle``)
     rolling without slip on ``normal . point = offset``, with a rolling-friction
@@ -277,6 +299,8 @@ class System:
     forces: Mapping = field(default_factory=dict)
     default_axes: Mapping = field(default_factory=dict)
     edges: Mapping = field(default_factory=dict)
+    #: optional cross-variable domain check on (possibly array) values: raise ValueError
+    check: object = None
 
     @property
     def model(self):
@@ -391,7 +415,7 @@ def _validate(S: System):
         if not _IDENT.match(c.name) or c.name in seen:
             _fail(S, f"contact {c.name!r}", "a contact needs a unique identifier as its name")
         seen.add(c.name)
-        law = {PointContact: "friction", RollingContact: "rolling_friction",
+        law = {PointContact: "friction", EdgeContact: "friction", RollingContact: "rolling_friction",
                Joint: "friction_radius"}[type(c)]
         if getattr(c, law) is None:
             _fail(S, f"contact {c.name!r}", f"has no friction law: give {law}= (a parameter "
@@ -399,7 +423,9 @@ def _validate(S: System):
         expr(f"contact {c.name!r} {law}", getattr(c, law))
         if isinstance(c, PointContact) and c.sided not in ("one", "two"):
             _fail(S, f"contact {c.name!r}", f"sided must be 'one' or 'two', got {c.sided!r}")
-        for part in ("point", "centre", "normal", "at"):
+        if isinstance(c, EdgeContact) and c.side not in (1, -1):
+            _fail(S, f"contact {c.name!r}", f"side must be +1 or -1, got {c.side!r}")
+        for part in ("point", "centre", "normal", "at", "corner"):
             v = getattr(c, part, None)
             if v is not None:
                 if len(v) != 2:
@@ -444,6 +470,7 @@ def _canonical(S: System) -> str:
         parts.append(type(c).__name__ + repr(sorted(d.items())))
     parts.append(repr(sorted((k, tuple(v)) for k, v in S.default_axes.items())))
     parts.append(repr(sorted(S.edges.items())))
+    parts.append(repr(getattr(S.check, "__qualname__", None)))
     return "\n".join(parts)
 
 
@@ -520,7 +547,20 @@ class _Context:
         gaps, vcons = [], []
         for c in S.contacts:
             ch = {}
-            if isinstance(c, (PointContact, RollingContact)):
+            if isinstance(c, EdgeContact):
+                a = _sym(c.angle)
+                e = [sp.cos(a), sp.sin(a)]
+                nv = [-c.side * sp.sin(a), c.side * sp.cos(a)]
+                P = [_sym(v) for v in c.point]
+                K = [_sym(v) for v in c.corner]
+                w = vel(a)
+                # the body's material velocity at the corner
+                vK = [vel(P[0]) - w * (K[1] - P[1]), vel(P[1]) + w * (K[0] - P[0])]
+                gaps.append(nv[0] * (P[0] - K[0]) + nv[1] * (P[1] - K[1]))
+                ch["N"] = nv[0] * vK[0] + nv[1] * vK[1]
+                ch["T"] = e[0] * vK[0] + e[1] * vK[1]
+                vcons.append(ch["N"])
+            elif isinstance(c, (PointContact, RollingContact)):
                 nv = [_sym(a) for a in c.normal]
                 norm = sp.sqrt(nv[0] ** 2 + nv[1] ** 2)
                 nv = [sp.simplify(a / norm) for a in nv]
@@ -1384,7 +1424,7 @@ def _build(S: System):
         coefficient=Variable("coef", "1", "determinant of the branch's contact problem, "
                              "relative to the magnitude of its terms"),
         velocity=spec["velocity"], velocity_scale=module.velocity_scale,
-        default_axes=axes, dynamics=dynamics)
+        default_axes=axes, dynamics=dynamics, check=S.check)
 
 
 def _per_s2(units: str) -> str:
@@ -1401,7 +1441,8 @@ def _default_axes(S, state, params):
     else:
         v = state[0]
         axes[v.name] = (float(v.default) - math.pi, float(v.default) + math.pi, 512)
-    law = {PointContact: "friction", RollingContact: "rolling_friction", Joint: "friction_radius"}
+    law = {PointContact: "friction", EdgeContact: "friction", RollingContact: "rolling_friction",
+           Joint: "friction_radius"}
     c = S.contacts[0]
     sym = _sym(getattr(c, law[type(c)]))
     for p in params:

@@ -89,16 +89,25 @@ def _rod_values(rng, zero):
                 l=rng.uniform(0.3, 2), g=rng.uniform(0.5, 12), m=rng.uniform(0.3, 3))
 
 
-def test_painleve_rod_agrees_with_an_independent_full_coordinate_solve():
+def _step_values(rng, zero):
+    l, theta = rng.uniform(0.3, 2), rng.uniform(0.05, math.pi / 2 - 0.02)
+    return dict(theta=theta, omega=0.0 if zero else rng.uniform(-4, 4), f=rng.uniform(0, 2),
+                l=l, h=rng.uniform(0.05, 1.0) * 2 * l * math.sin(theta),
+                g=rng.uniform(0.5, 12), m=rng.uniform(0.3, 3))
+
+
+@pytest.mark.parametrize("name, sample", [("painleve_rod", _rod_values),
+                                          ("rod_on_step", _step_values)])
+def test_declared_rods_agree_with_an_independent_full_coordinate_solve(name, sample):
     """1000 random states, a third at zero slip velocity: n_solutions, stagnation and
     the accelerations of every solution (separations included) agree with the numpy
-    oracle, which solves every mode combination on the full unknown vector."""
-    m = phasemap.MODELS["painleve_rod"]
+    oracle, which solves every mode combination on the full unknown vector by SVD."""
+    m = phasemap.MODELS[name]
     rng = np.random.default_rng(3)
     checked = 0
     for i in range(1000):
-        values = _rod_values(rng, i % 3 == 0)
-        ref = oracles.painleve_rod(**values)
+        values = sample(rng, i % 3 == 0)
+        ref = getattr(oracles, name)(**values)
         if ref.margin < 1e-7:
             continue
         checked += 1

@@ -22,7 +22,8 @@ from ..model import Model
 from . import elliptic_pendulum, hinge_pendulum, ladder, wheel
 
 #: Declared built-in systems: name -> module of phasemap.systems defining SYSTEM.
-DECLARED = {"painleve_rod": "phasemap.systems.painleve_rod"}
+DECLARED = {"painleve_rod": "phasemap.systems.painleve_rod",
+            "rod_on_step": "phasemap.systems.rod_on_step"}
 
 
 class _Registry(Mapping):
