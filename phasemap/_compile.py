@@ -36,12 +36,13 @@ def specialize(template, model: Model, kind: str, parallel: bool = False, inline
     as structs by value.  Unlike numba's IR inlining, the helper is compiled
     once, not once per call site.
     """
-    key = (kind, model.name)
+    digest = source_hash(model, sys.modules[template.__module__])
+    key = (kind, model.name, digest)
     kernel = _CACHE.get(key)
     if kernel is None:
         scope = dict(template.__globals__)
         scope.update(constants)
-        name = f"{kind}_{model.name}_{source_hash(model, sys.modules[template.__module__])}"
+        name = f"{kind}_{model.name}_{digest}"
         fn = types.FunctionType(template.__code__, scope, name)
         fn.__qualname__ = name  # one on-disk cache index per model and source
         fn.__doc__ = template.__doc__
@@ -58,4 +59,8 @@ def source_hash(model: Model, *modules) -> str:
     for module in (sys.modules[model.candidates[0].func.py_func.__module__], nx, events,
                    _codegen, *modules):
         h.update(pathlib.Path(module.__file__).read_bytes())
+    # the generated contract's module name hashes its text and what it imports:
+    # a compiled kernel that calls it must not outlive it (declared models are
+    # generated files whose names change with the declaration)
+    h.update(model.contract.__name__.encode())
     return h.hexdigest()[:12]

@@ -1424,7 +1424,12 @@ def _build(S: System):
         coefficient=Variable("coef", "1", "determinant of the branch's contact problem, "
                              "relative to the magnitude of its terms"),
         velocity=spec["velocity"], velocity_scale=module.velocity_scale,
-        default_axes=axes, dynamics=dynamics, check=S.check)
+        default_axes=axes, dynamics=dynamics, check=S.check, declaration=S)
+
+
+def _model_of(system: System):
+    """The model of a declaration (how a declared model is unpickled)."""
+    return system.model
 
 
 def _per_s2(units: str) -> str:

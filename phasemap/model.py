@@ -265,6 +265,8 @@ class Model:
     default_axes: Mapping[str, tuple[float, float, int]] = field(default_factory=dict)
     #: How the model moves in time (None: classification and maps only).
     dynamics: Dynamics | None = field(default=None, repr=False)
+    #: The :class:`phasemap.declare.System` a declared model was derived from.
+    declaration: object = field(default=None, repr=False, compare=False)
 
     # -- branches and the generated contract --------------------------------
     @property
@@ -282,6 +284,16 @@ class Model:
     def directions(self) -> tuple[float, ...]:
         """Per branch, the sign of the relative velocity on its stage."""
         return tuple(float(b.direction) for b in self.candidates)
+
+    def __reduce_ex__(self, protocol):
+        # A declared model's branch functions live in a generated module that
+        # another process (a dask worker) has not imported: ship the
+        # declaration, which rebuilds the model from the kernel cache there.
+        if self.declaration is not None:
+            from .declare import _model_of
+
+            return _model_of, (self.declaration,)
+        return super().__reduce_ex__(protocol)
 
     def __getstate__(self):
         # The generated contract is a module (not picklable) and is rebuilt on

@@ -1464,8 +1464,9 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
     lists the kinds present.  ``states`` picks and orders the states
     (default: every state variable on dimension ``t``).  With
     ``phase_plane=True``, one panel of :math:`\omega` against
-    :math:`\varphi` (or ``states=(x, y)``) instead, where the start is marked
-    too.
+    :math:`\varphi` (the model's first coordinate and its velocity, from the
+    attribute ``phasemap_phase_plane``; or ``states=(x, y)``) instead, where
+    the start is marked too.
 
     Needs a coordinate ``t`` and state variables on it (categorical
     variables such as the active ``branch`` are not states); events, when
@@ -1476,7 +1477,8 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
     available = [str(n) for n, v in ds.data_vars.items()
                  if v.dims == ("t",) and not _is_categorical(v)]
     if states is None:
-        states = ["phi", "omega"] if phase_plane else available
+        plane = str(ds.attrs.get("phasemap_phase_plane", "phi omega")).split()
+        states = plane if phase_plane else available
     elif isinstance(states, str):
         states = [states]
     states = list(states)

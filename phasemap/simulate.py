@@ -260,6 +260,8 @@ def _dataset(m: Model, full, positions, opts: Options, names, fate, n_rev, n_ste
         "n_reversals": np.int32(n_rev),
         "n_steps": np.int64(n_steps),
         "integrator": f"{METHODS[opts.method].DESCRIPTION}, events by classification",
+        # the coordinate and velocity of the phase plane (the first degree of freedom)
+        "phasemap_phase_plane": " ".join(m.dynamics.coordinates[0][:2]),
     }
     for k, value in opts.as_dict().items():
         attrs[f"phasemap_{k}"] = value

@@ -203,3 +203,26 @@ def test_a_declaration_file_works_wherever_a_model_name_does(tmp_path):
     bad.write_text("x = 1\n")
     with pytest.raises(ValueError, match="nothing.py: the file must define SYSTEM"):
         phasemap.get_model(bad)
+
+
+def test_a_declared_model_travels_to_another_process():
+    """A dask worker gets the declaration and rebuilds the model from the kernel cache."""
+    import pickle
+
+    m = phasemap.MODELS["painleve_rod"]
+    code = ("import pickle, sys, phasemap; m = pickle.loads(sys.stdin.buffer.read()); "
+            "print(int(phasemap.classify(m, theta=1.1, omega=0.0, xdot=-1.0, f=2.0).n_solutions))")
+    run = subprocess.run([sys.executable, "-c", code], input=pickle.dumps(m),
+                         capture_output=True, timeout=600)
+    assert run.returncode == 0, run.stderr.decode()
+    assert run.stdout.decode().strip() == "0"
+
+
+def test_a_declared_trajectory_draws_its_own_phase_plane():
+    """simulate names the first coordinate and its velocity; the plot uses them."""
+    ds = phasemap.simulate("painleve_rod", theta=1.0, omega=0.0, xdot=1.0, f=0.3, t_end=2.0)
+    assert ds.attrs["phasemap_phase_plane"] == "theta omega"
+    assert ds.attrs["end_reason"] in ("left_domain", "contact_lost")
+    fig = ds.phasemap.plot(phase_plane=True)
+    ax = fig.axes[0]
+    assert ax.get_xlabel().startswith(r"$\theta$") and ax.get_ylabel().startswith(r"$\omega$")
