@@ -124,7 +124,7 @@ def cases() -> list[Case]:
         err, reason = against_curve("ladder", phi=0.3, omega=-0.5, f=f)
         out.append(Case("ladder f -> sqrt2", f"f = sqrt2 - {eps:g}, phi 0.3, omega -0.5",
                         "ladder", 1.0, dict(phi=0.3, omega=-0.5, f=f), expect=(reason,),
-                        error=err, target=1e-8, reference="phase_curve (closed form)"))
+                        error=err, target=1e-8, reference="phase_curve"))
     out.append(Case("ladder f -> sqrt2", "f = sqrt2 (float), omega 0.5", "ladder", 1.0,
                     dict(phi=0.3, omega=0.5, f=R2), expect=("singular",),
                     reference="2 - f^2 = 0: singular at t = 0"))
@@ -135,7 +135,7 @@ def cases() -> list[Case]:
             out.append(Case("ladder f -> sqrt2", f"f = sqrt2 + {eps:g}, phi 0.5, omega -4",
                             "ladder", 1.0, dict(phi=0.5, omega=-4.0, f=f), rtol=rtol,
                             expect=(reason,), stops=("step_failure", "stiff"), error=err,
-                            target=1e-7, reference="phase_curve (closed form)"))
+                            target=1e-7, reference="phase_curve"))
     # -- the hinge pendulum, delta -> l -----------------------------------------
     for eps in (1e-3, 1e-9):
         delta = 1.0 - eps
@@ -149,7 +149,7 @@ def cases() -> list[Case]:
         out.append(Case("hinge delta -> l", f"delta = l (1 - {eps:g}), phi 2, omega 3",
                         "hinge_pendulum", 5.0, dict(phi=2.0, omega=3.0, delta=delta),
                         expect=(reason,), error=err, target=1e-8,
-                        reference="phase_curve (closed form)"))
+                        reference="phase_curve"))
     for label, delta in (("l (1 - 1e-12)", 1.0 - 1e-12), ("l", 1.0)):
         out.append(Case("hinge delta -> l", f"delta = {label}, omega 2", "hinge_pendulum",
                         5.0, dict(phi=1.0, omega=2.0, delta=delta),
@@ -225,7 +225,7 @@ def cases() -> list[Case]:
                         t_end, dict(phi=phi0, omega=0.0, delta=delta),
                         options=dict(max_events=100_000, t_eval=[0.0, t_end]),
                         expect=(reason,), error=err, target=1e4 * 1e-10,
-                        reference="phase_curve (order-12 quadrature); target 1e4 rtol, "
+                        reference="phase_curve (order-12 collocation); target 1e4 rtol, "
                                   "the error grows over 10^2-10^4 stages"))
     out.append(Case("long horizon", "wheel delta = 1e-4 at rtol 1e-14", "wheel", 20000.0,
                     dict(phi=2.5, omega=0.0, delta=1e-4), rtol=1e-14,
@@ -243,7 +243,7 @@ def cases() -> list[Case]:
                         "hinge_pendulum", 20.0, dict(phi=2.5, omega=0.0, delta=0.05),
                         rtol=1e-14, options={} if atol is None else dict(atol=atol),
                         expect=(reason,), stops=("step_failure",), error=err, target=1e-11,
-                        reference="phase_curve (closed form)"))
+                        reference="phase_curve"))
     out.append(Case("rtol edge", "rtol = 1e-15", "hinge_pendulum", 1.0, dict(phi=1.0),
                     rtol=1e-15, raises=ValueError, reference="ValueError"))
     return out
@@ -322,8 +322,8 @@ def main():
         "",
         f"Machine: {machine()}.",
         "Each case runs `phasemap.simulate`; *error* is against the reference named "
-        "(`phase_curve` is the first-integral tracer: closed forms for the ladder and the "
-        "hinge pendulum, an order-12 quadrature for the wheel); it is the largest difference "
+        "(`phase_curve` is the first-integral tracer: exponential Gauss collocation in phi, "
+        "order 12, on the model's branch rows); it is the largest difference "
         "of the end state (phi, omega) unless said otherwise. *finite*: every floating-point "
         "variable of the returned Dataset is finite.",
         "",

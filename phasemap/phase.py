@@ -1,109 +1,96 @@
-r"""Phase curves omega(phi) of the one-degree-of-freedom systems: :func:`phase_curve`.
+r"""Phase curves omega(phi) of every one-degree-of-freedom model: :func:`phase_curve`.
 
-The ladder, the wheel and the hinge pendulum have one coordinate phi.  On a
-*stage* the sign sigma of omega is fixed, so is the friction law, and with
-u = omega^2 and phi'' = u'/2 (u' = du/dphi) the motion equation becomes a
-first-order equation for u(phi).  :func:`phase_curve` follows u stage by stage
-in phi, with no time stepping, and ends every stage at an exactly located event.
+A model whose :class:`phasemap.Dynamics` has one coordinate triple
+``(phi, omega, phi_ddot)`` has a phase plane.  On a *stage* one branch b of
+the friction law is active and the sign sigma of omega is fixed; with
+u = omega^2 and phi'' = (1/2) du/dphi the motion equation becomes a
+first-order equation for u(phi),
 
-Stage equations and how they are solved
----------------------------------------
-*Ladder* (equation (8) of :mod:`phasemap.models.ladder`): closed form
-u = c0 e^{lam (phi - phi0)} + a sin phi + b cos phi with lam = 6 s f/(2 - f^2).
-Near f = sqrt 2, |lam| grows without bound.  Every function of the stage has the
-form p(phi) E + q(phi) with E = e^{lam (phi - phi0)}, p and q trigonometric, so
-events are located on the *scaled* function (p E + q)/(1 + E): same sign and
-zeros, evaluated as p/(1 + e^{-x}) + q e^{-x}/(1 + e^{-x}) for x > 0, so it never
-overflows or forms inf - inf.  The reactions along the stage use
-phi'' = (lam c0 E + a cos phi - b sin phi)/2, the derivative of the closed form,
-so no O(lam) terms cancel.  Events are searched in tau = s (phi - phi0) >= 0 on
-a grid that is uniform in phi (step 0.01 rad) and, where |lam| tau is large,
-uniform in |lam| tau across the boundary layer of width 1/|lam|, then refined
-with Brent's method to a relative 4 eps in tau.
+    du/dphi = 2 F_b(phi, u),
 
-*Hinge pendulum* (equation (34) of :mod:`phasemap.models.hinge_pendulum`):
-l phi'' = -g sin phi - sigma k |Q_n|, with Q_n = l u + g cos phi and
-k = delta/sqrt(l^2 - delta^2).  On a piece where q = sgn Q_n is fixed the
-equation is linear with constant coefficients,
+where F_b is the senior derivative phi'' read from the model's own branch row
+(``branch_row_inline`` of the generated contract, evaluated at omega =
+sigma sqrt(u)): the same physics as :func:`phasemap.classify`, the grid and
+the integrator.  :func:`phase_curve` follows u stage by stage in phi, with no
+time stepping and no per-system code, and ends every stage at an exactly
+located event.  Like the integrator it is compiled once per model
+(:func:`phasemap._compile.specialize`) and cached on disk.
 
-    u' + 2 sigma k q u = -(2 g / l)(sin phi + sigma k q cos phi),
+Method: exponential Gauss collocation in phi
+--------------------------------------------
+For the seed systems F_b is affine in u (the ladder with a constant slope,
+the wheel with slope -l (r sin phi + delta sigma cos phi)/bracket) or
+piecewise affine (the hinge pendulum, through |Q_n|), and the slope can be
+huge: the ladder's is 3 sigma f/(2 - f^2), unbounded as f -> sqrt 2.  So
+each panel [phi_k, phi_k + sigma h] (s = sigma (phi - phi_k) in [0, h]) splits
+the right-hand side f = 2 sigma F_b into a frozen linear part and a remainder,
 
-solved by u = c0 e^{-2 sigma k q (phi - phi0)} + a sin phi + b cos phi with
+    du/ds = beta u + N(s, u),   beta = df/du at the panel start,
 
-    a = -6 sigma k q g / (l (1 + 4 k^2)),   b = 2 g (1 - 2 k^2) / (l (1 + 4 k^2))
+and solves it by variation of constants, u(s) = e^{beta s} u_k +
+int_0^s e^{beta (s - t)} N(t) dt, with N replaced by its polynomial
+interpolant at the :data:`NODES` Gauss-Legendre points of the panel
+(collocation: the stage values U_i solve the same formula at the nodes, by
+Newton's method with the slopes dF/du taken from two evaluations of the
+branch row per node; for an affine F_b one step is exact).  The weights
+int e^{z (theta - t)} t^k dt are the phi-functions of exponential integrators,
+z = beta h, computed without cancellation for every z (Taylor series and a
+downward recurrence for |z| < 6, the upward recurrence beyond), so that
 
-(k = 0 gives energy conservation u - 2 g cos phi / l = const).  Along the
-motion Q_n obeys sigma Q_n' = -3 g sigma sin phi - 2 k |Q_n|, so it crosses zero
-transversally where sigma sin phi has the right sign; there u is continuous
-and the next piece starts with q flipped.  Where q = +1 the exponential
-decays along the motion; where q = -1 it grows, but only while
-u < -g cos phi / l <= g / l, so u stays bounded.  Pieces are searched and refined
-exactly like the ladder's stage, with Q_n = 0 as one more event.  The sign
-scans run over windows of 8 pi rad, so a long phi range costs time, not memory.
+* for a moderate slope the method is Gauss collocation: **order 2 NODES = 12**
+  in the panel width (the test suite measures it);
+* for a huge slope it is exact for the linear part: a boundary layer of width
+  1/|beta| is resolved by the exponential, not by panels, and a decaying
+  exponential (f just above sqrt 2) puts u on its slow curve in one panel;
+  a growing one is followed at most :data:`Z_GROW` e-folds per panel.
 
-*Wheel* (equation (13) of :mod:`phasemap.models.wheel`): the bracket
-B = rho^2 + r^2 + l^2 - 2 r l cos phi + delta sigma l sin phi multiplies phi''.
-The linear equation u' = P u + Q of the paper is integrated in the exactly
-equivalent form for w = B u,
+The panel width adapts: the error estimate is the tail of the Legendre
+expansion of the interpolated N, extrapolated to the degree the collocation
+actually errs at (see ``_panel``), against ``rtol (|u| + u_ref)`` with u_ref
+the square of the model's velocity scale.  The interpolant is also the dense
+output: u at any phi of a panel with the same accuracy, which the event
+location and the output points use.
 
-    w' = p(phi) w + q(phi),   p = -delta sigma l cos phi / B,
-                              q = -2 g (l sin phi + delta sigma),
-
-(from (B u)' = B' u + B u', B' = 2 r l sin phi + delta sigma l cos phi).  This is
-the integrating-factor form of u' = P u + Q with E = exp(int P) =
-(B0 / B) exp(int p), whose remaining exponent int p is small (it vanishes with
-delta) and bounded.  On each panel [phi_k, phi_k + h]
-
-    w(phi_k + h) = e^{I(phi_k + h)} [w_k + int_{phi_k}^{phi_k + h} q(s) e^{-I(s)} ds],
-    I(x) = int_{phi_k}^{x} p,
-
-with both integrals by :data:`GL_NODES`-point Gauss-Legendre rules (the inner
-one mapped onto [phi_k, s_j] for each outer node s_j): **composite
-Gauss-Legendre, 6 nodes, global order 12** in the panel width (the test suite
-measures the order).  Panels are at most :data:`WHEEL_PANEL` rad long and at
-most :data:`WHEEL_KAPPA` times the distance to the nearest complex zero of B,
-so they shrink geometrically towards a real zero of B.  The same formula with h
-set to x - phi_k gives u at any x of a panel with the same accuracy (dense
-output), which the event search and the output points use.  Panel ends are
-checked for u < 0 and N < 0; the crossing is then bracketed on the panel's
-dense output and refined with Brent's method.
+Where a reaction of the active branch changes sign inside a panel (the hinge's
+Q_n, where |Q_n| has its kink), the panel is redone to end at that sign change,
+so that no panel straddles a kink of F_b.
 
 Events (the codes of :class:`phasemap.Event`)
 ---------------------------------------------
-A stage ends at the first of:
+After every panel the end state is classified with the model's ``point``
+function, exactly as :func:`phasemap.classify` does (and as the integrator
+does after every step).  The stage goes on while u > 0 and the classification
+is unique, on the stage's branch, with the coefficient of the senior
+derivative keeping its sign.  Otherwise the first state where that stops is
+located on the dense output (the zero of u by the Illinois method, the others
+by bisection to double precision in phi) and classified there:
 
-* u = 0.  The rest state (phi, 0) is classified with the model's own ``point``
-  function and :func:`phasemap._numerics.summarize`, exactly as
-  :func:`phasemap.classify` decides: a unique solution on the stick branch is
-  ``rest``; a unique solution on a slip (roll, turn) branch is ``reversal``
-  and the next stage starts from rest in that branch's direction; no solution
-  is ``no_solution`` (``singular`` if a coefficient of the senior derivative
+* u = 0 (or an omega the model counts as zero): the rest state (phi, 0) is
+  classified: a unique solution on the stick branch is ``rest``; a unique
+  solution on a slip (roll, turn) branch is ``reversal`` and the next stage
+  starts from rest in that branch's direction; no solution is
+  ``no_solution`` (``singular`` if a coefficient of the senior derivative
   vanishes, ``contact_lost`` if a branch needs a one-sided contact to pull);
   two or more solutions are ``indeterminate`` (a continuum at a vanishing
   coefficient is ``singular``).  The tracer never picks a branch.
-* a one-sided contact would pull: N_floor or N_wall < 0 for the ladder, N < 0
-  (a bounce, the paper's condition (12)) for the wheel: ``contact_lost``, at
-  the crossing N = 0.  The hinge is two-sided: it never ends a stage this way.
-* the wheel's bracket B reaches zero (|B| <= 1e-12 times the scale of its
-  terms, as in the model): ``singular``, at the last panel end before it.
-  The ladder's 2 - f^2 and the pendulum's l^2 - delta^2 are constant: a
-  vanishing one is reported as ``singular`` when the stage starts, and
-  delta > l (no solution off Q_n = 0) as ``no_solution``.
+* the stage's branch needs a one-sided contact to pull: ``contact_lost``, at
+  the crossing N = 0 (the ladder's floor or wall, the wheel's bounce (12)).
+* the coefficient of the senior derivative vanishes or changes sign
+  (the wheel's bracket): ``singular``; a state with no solution or several:
+  ``no_solution``, ``indeterminate``, ``continuum`` as the integrator names
+  them; another branch of the same direction takes over: ``switch``, and a
+  new stage starts there.
 * phi leaves ``phi_range``: ``horizon``, at the boundary; where that boundary
   is the model's own domain edge (the ladder lying flat at pi/2),
   ``left_domain``.
 * the stage count runs out: the last stage's reason becomes ``max_events``.
-* a safety net of the closed forms: u would exceed :data:`U_MAX` = 1e300
-  rad2 s-2, beyond double precision: ``step_failure``, at u = U_MAX.  A
-  growing exponential needs the ladder's f within 0.006 of sqrt 2
-  (|lam| > 450); there it loses a contact or stops within a few 1/|lam|
-  (a scan of 4000 random states grew e^{lam (phi - phi0)} to e^7 at most),
-  and the pendulum's growing pieces keep u below g / l, so this is not seen.
+* u would exceed :data:`U_MAX` = 1e300 rad2 s-2, or the panel width falls
+  below double-precision resolution: ``step_failure`` (``singular`` when the
+  active coefficient has fallen below 1e-6 of its value at the stage start).
 
 Ties: at a stage start, the model's ``point`` decides (a grazing N = 0 is
-kept); along a stage an event function counts as crossed when it is < 0
-strictly at a sample, so u = 0 or N = 0 touched without a sign change is not an
-event.
+kept); along a stage a state counts as leaving the stage where its
+classification does.
 
 Dataset
 -------
@@ -111,573 +98,791 @@ Dimension ``point``: ``phi``, ``omega`` (signed: the sign of the stage, 0 at
 rest), ``omega_squared`` and ``point_stage`` (the index of the stage each
 point belongs to; the stage coordinate is called ``stage``, so the per-point
 index cannot be).  Each stage contributes ``points_per_stage`` points evenly
-spaced in phi from its start to its exact end point (plus up to a quarter more
-inside a fast exponential boundary layer; one point for a stage that ends where
-it starts); consecutive stages share their reversal point.  Dimension
-``stage``: ``stage_sign``, ``stage_start_phi``, ``stage_start_omega``,
-``stage_end_reason`` (int8 CF flags of :class:`phasemap.Event`),
-``stage_end_phi`` and ``stage_end_omega``.
+spaced in phi from its start to its exact end point (one point for a stage
+that ends where it starts); consecutive stages share their reversal point.
+Dimension ``stage``: ``stage_sign``, ``stage_start_phi``,
+``stage_start_omega``, ``stage_end_reason`` (int8 CF flags of
+:class:`phasemap.Event`), ``stage_end_phi`` and ``stage_end_omega``.
 Global attributes: ``phasemap_kind = "phase_curve"``, the model, the version,
 ``phasemap_initial_<state>``, ``phasemap_fixed_<param>``, ``phasemap_phi_range``,
 ``end_reason`` and ``end_message``.
 
 For developers
 --------------
-A new one-degree-of-freedom model needs a stage function
-``stage(phi0, u0, sigma, phi_stop, params, points)`` returning a
-:class:`_StageResult` (u along the stage and the end event), registered in
-:data:`_STAGES`.  Classification at rest and at the start, validation and the
-Dataset are shared.
+Nothing: any model with one coordinate triple in its ``dynamics`` gets phase
+curves from its branch functions.  The names of the coordinate and its
+velocity are read from the declaration.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
+import inspect
 import math
-from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
 from numba import njit
-from scipy.optimize import brentq
 
 from . import _numerics as nx
 from . import events as ev
+from ._compile import specialize
 from ._version import __version__
 from .model import Model
 from .models import get_model
-from .models import ladder as _ladder
 
-__all__ = ["GL_NODES", "WHEEL_KAPPA", "WHEEL_PANEL", "phase_curve"]
+__all__ = ["NODES", "RTOL", "U_MAX", "Z_GROW", "phase_curve"]
 
-#: Gauss-Legendre nodes per panel of the wheel's quadrature (global order 2 * GL_NODES).
-GL_NODES = 6
-_GL_X, _GL_W = np.polynomial.legendre.leggauss(GL_NODES)
-
-#: Largest panel of the wheel's quadrature (rad).
-WHEEL_PANEL = 0.25
-#: Largest panel of the wheel's quadrature relative to the distance to the
-#: nearest complex zero of the bracket.
-WHEEL_KAPPA = 0.2
-
+#: Gauss-Legendre collocation nodes per panel (order 2 NODES for moderate slopes).
+NODES = 6
+#: Relative accuracy asked of every panel (of |u| + u_ref).
+RTOL = 1e-14
+#: Widest panel (rad).
+H_MAX = 0.5
+#: Largest growth exponent beta h of one panel (a growing exponential).
+Z_GROW = 4.0
 #: Largest omega^2 a stage may reach (rad2 s-2); beyond it, step_failure.
 U_MAX = 1e300
-
-#: Step of the uniform part of the event-search grid of the closed forms (rad).
-_SCAN_STEP = 0.01
-#: Relative precision of Brent's method (its smallest allowed value).
-_RTOL = 4.0 * np.finfo(float).eps
-#: Internal marker: the stage ended at omega = 0 (classified afterwards).
-_ZERO = -1
-#: Internal marker of the wheel's march: it stopped to let the caller grow its arrays.
-_FULL = -2
-#: Length of phi scanned at a time for the events of a closed-form stage (rad).
-_WINDOW = 8.0 * math.pi
 #: Default half width of the phi range of the unbounded models.
 _DEFAULT_SPAN = 4.0 * math.pi
+#: Internal marker: the stage ended at omega = 0 (classified afterwards).
+_ZERO = -1
+#: Columns of a stored panel: s0, h, z, u0, theta_end, then a (Legendre), c (monomial).
+_PANEL_COLS = 5 + 2 * NODES
+EPS = float(np.finfo(float).eps)
 
 
-# ---------------------------------------------------------------- closed forms
+# ---------------------------------------------------------------- collocation tables
 
 
-@njit(cache=True, error_model="numpy")
-def _split(x):
-    """(E/(1 + E), 1/(1 + E)) for E = exp(x), without overflow."""
-    if x > 0.0:
-        e = math.exp(-x)
-        return 1.0 / (1.0 + e), e / (1.0 + e)
-    e = math.exp(x)
-    return e / (1.0 + e), 1.0 / (1.0 + e)
+def _tables(n: int):
+    """Nodes, weights and the maps from node values of N to its expansions.
 
-
-@njit(cache=True, error_model="numpy")
-def _exptrig(tau, phi0, c0, s, mu, a, b):
-    """u = c0 e^{mu tau} + a sin phi + b cos phi at phi = phi0 + s tau."""
-    phi = phi0 + s * tau
-    return c0 * math.exp(mu * tau) + a * math.sin(phi) + b * math.cos(phi)
-
-
-@njit(cache=True, error_model="numpy")
-def _exptrig_many(taus, phi0, c0, s, mu, a, b, out):
-    for i in range(taus.shape[0]):
-        out[i] = _exptrig(taus[i], phi0, c0, s, mu, a, b)
-
-
-@njit(cache=True, error_model="numpy")
-def _ladder_event(tau, which, phi0, c0, s, lam, a, b, f, l, g):
-    """Scaled event function of a ladder stage: 0 u, 1 N_floor, 2 N_wall.
-
-    Each is h = p E + q with E = e^{lam (phi - phi0)}; the value returned is
-    h/(1 + E) (same sign and zeros).  Reactions are per unit mass, times 1 + f^2.
+    ``LEG[k, j]``: Legendre coefficient a_k of the interpolant (shifted to
+    [0, 1]) per node value; ``MON[m, j]``: its monomial coefficient of t^m;
+    ``A0[i, j]``: int_0^{theta_i} of the j-th Lagrange polynomial.
     """
-    d = s * tau
-    phi = phi0 + d
-    sp, cp = math.sin(phi), math.cos(phi)
-    we, w1 = _split(lam * d)
-    t = a * sp + b * cp
-    if which == 0:
-        return c0 * we + t * w1
-    dt = a * cp - b * sp  # phi'' = (lam c0 E + dt) / 2
-    if which == 1:
-        ku = -l * cp + s * f * l * sp
-        ka = -l * sp - s * f * l * cp
-        n0 = g
-    else:
-        ku = -l * sp - s * f * l * cp
-        ka = l * cp - s * f * l * sp
-        n0 = s * f * g
-    p = c0 * (ku + 0.5 * ka * lam)
-    q = n0 + ku * t + 0.5 * ka * dt
-    return p * we + q * w1
-
-
-@njit(cache=True, error_model="numpy")
-def _ladder_events(taus, phi0, c0, s, lam, a, b, f, l, g, out):
-    for i in range(taus.shape[0]):
-        for which in range(3):
-            out[which, i] = _ladder_event(taus[i], which, phi0, c0, s, lam, a, b, f, l, g)
-
-
-@njit(cache=True, error_model="numpy")
-def _hinge_coefficients(sigma, q, delta, l, g):
-    """(mu, a, b) of u = c0 e^{mu tau} + a sin phi + b cos phi on a piece of sgn Q_n = q.
-
-    tau = sigma (phi - phi0) >= 0 along the motion, so mu = -2 k q.
-    """
-    k = delta / math.sqrt((l - delta) * (l + delta))
-    den = l * (1.0 + 4.0 * k * k)
-    return -2.0 * k * q, -6.0 * sigma * k * q * g / den, 2.0 * g * (1.0 - 2.0 * k * k) / den
-
-
-@njit(cache=True, error_model="numpy")
-def _hinge_event(tau, which, phi0, c0, sigma, mu, a, b, q, l, g):
-    """Scaled event function of a hinge piece: 0 u, 1 q Q_n (Q_n = l u + g cos phi)."""
-    phi = phi0 + sigma * tau
-    sp, cp = math.sin(phi), math.cos(phi)
-    we, w1 = _split(mu * tau)
-    t = a * sp + b * cp
-    if which == 0:
-        return c0 * we + t * w1
-    return q * (l * c0 * we + (l * t + g * cp) * w1)
-
-
-@njit(cache=True, error_model="numpy")
-def _hinge_events(taus, phi0, c0, sigma, mu, a, b, q, l, g, out):
-    for i in range(taus.shape[0]):
-        for which in range(2):
-            out[which, i] = _hinge_event(taus[i], which, phi0, c0, sigma, mu, a, b, q, l, g)
-
-
-# ---------------------------------------------------------------- wheel quadrature
-
-
-@njit(cache=True, error_model="numpy")
-def _bracket(phi, sigma, delta, r, l, rho):
-    return rho * rho + r * r + l * l - 2.0 * r * l * math.cos(phi) + delta * sigma * l * math.sin(phi)
-
-
-@njit(cache=True, error_model="numpy")
-def _wheel_p(phi, sigma, delta, r, l, rho):
-    return -delta * sigma * l * math.cos(phi) / _bracket(phi, sigma, delta, r, l, rho)
-
-
-@njit(cache=True, error_model="numpy")
-def _wheel_exponent(a, x, sigma, delta, r, l, rho):
-    """I = int_a^x p by the Gauss-Legendre rule on [a, x]."""
-    half = 0.5 * (x - a)
-    mid = a + half
-    acc = 0.0
-    for j in range(GL_NODES):
-        acc += _GL_W[j] * _wheel_p(mid + half * _GL_X[j], sigma, delta, r, l, rho)
-    return half * acc
-
-
-@njit(cache=True, error_model="numpy")
-def _wheel_advance(a, w_a, x, sigma, delta, r, l, rho, g):
-    """w = B omega^2 at x from its value w_a at a (one Gauss-Legendre panel [a, x])."""
-    half = 0.5 * (x - a)
-    mid = a + half
-    acc = 0.0
-    for j in range(GL_NODES):
-        s = mid + half * _GL_X[j]
-        q = -2.0 * g * (l * math.sin(s) + delta * sigma)
-        acc += _GL_W[j] * q * math.exp(-_wheel_exponent(a, s, sigma, delta, r, l, rho))
-    return math.exp(_wheel_exponent(a, x, sigma, delta, r, l, rho)) * (w_a + half * acc)
-
-
-@njit(cache=True, error_model="numpy")
-def _wheel_normal(phi, u, sigma, delta, r, l, rho, g):
-    """N/m on a rolling stage at (phi, u = omega^2), from (13) and (12) as the model writes them."""
-    sp, cp = math.sin(phi), math.cos(phi)
-    bracket = _bracket(phi, sigma, delta, r, l, rho)
-    phi_ddot = (-l * (r * sp + delta * sigma * cp) * u - g * l * sp - delta * sigma * g) / bracket
-    return g + l * (sp * phi_ddot + cp * u)
-
-
-@njit(cache=True, error_model="numpy")
-def _wheel_event(x, which, a, w_a, sigma, delta, r, l, rho, g):
-    """0: omega^2, 1: N/m at x, from the panel that starts at (a, w_a)."""
-    w = _wheel_advance(a, w_a, x, sigma, delta, r, l, rho, g)
-    u = w / _bracket(x, sigma, delta, r, l, rho)
-    if which == 0:
-        return u
-    return _wheel_normal(x, u, sigma, delta, r, l, rho, g)
-
-
-@njit(cache=True, error_model="numpy")
-def _wheel_singularity_distance(phi, sigma, delta, r, l, rho):
-    """Distance from phi to the nearest complex zero of the bracket (inf if it is constant)."""
-    a0 = rho * rho + r * r + l * l
-    a1 = -2.0 * r * l
-    a2 = delta * sigma * l
-    amp = math.hypot(a1, a2)
-    if amp == 0.0:
-        return np.inf
-    psi = math.atan2(a2, a1)  # B = a0 + amp cos(phi - psi)
-    two_pi = 2.0 * math.pi
-    if amp > a0:  # real zeros at psi +- theta (mod 2 pi)
-        theta = math.acos(-a0 / amp)
-        best = np.inf
-        for z in (psi + theta, psi - theta):
-            d = (phi - z) % two_pi
-            best = min(best, d, two_pi - d)
-        return best
-    eta = math.acosh(a0 / amp)  # zeros at psi + pi +- i eta
-    d = (phi - psi - math.pi) % two_pi
-    d = min(d, two_pi - d)
-    return math.sqrt(d * d + eta * eta)
-
-
-@njit(cache=True, error_model="numpy")
-def _wheel_march(k0, phis, ws, sigma, phi_stop, delta, r, l, rho, g, panel, kappa):
-    """March panels from (phis[k0], ws[k0]) towards phi_stop.
-
-    Fills phis, ws from k0 + 1 on; returns (last index filled, status):
-    ``HORIZON`` (reached phi_stop), ``SINGULAR`` (|bracket| vanishes at the
-    last point), ``_ZERO`` (u < 0 or N < 0 at the last panel end: the event is
-    inside the last panel) or ``_FULL`` (the arrays are full).
-    """
-    b_scale = rho * rho + r * r + l * l + 2.0 * r * l + delta * l
-    k = k0
-    while k + 1 < phis.shape[0]:
-        phi = phis[k]
-        remaining = sigma * (phi_stop - phi)
-        if remaining <= 0.0:
-            return k, ev.HORIZON
-        if abs(_bracket(phi, sigma, delta, r, l, rho)) <= nx.TOL * b_scale:
-            return k, ev.SINGULAR
-        h = min(panel, kappa * _wheel_singularity_distance(phi, sigma, delta, r, l, rho))
-        new = phi_stop if h >= remaining else phi + sigma * h
-        w = _wheel_advance(phi, ws[k], new, sigma, delta, r, l, rho, g)
-        phis[k + 1] = new
-        ws[k + 1] = w
-        k += 1
-        u = w / _bracket(new, sigma, delta, r, l, rho)
-        if u < 0.0 or _wheel_normal(new, u, sigma, delta, r, l, rho, g) < 0.0:
-            return k, _ZERO
-    return k, _FULL
-
-
-@njit(cache=True, error_model="numpy")
-def _wheel_dense(xs, index, phis, ws, sigma, delta, r, l, rho, g, out):
-    """omega^2 at xs, each from the panel start phis[index[i]]."""
-    for i in range(xs.shape[0]):
-        k = index[i]
-        w = _wheel_advance(phis[k], ws[k], xs[i], sigma, delta, r, l, rho, g)
-        out[i] = w / _bracket(xs[i], sigma, delta, r, l, rho)
-
-
-# ---------------------------------------------------------------- stages
-
-
-@dataclass
-class _StageResult:
-    """u = omega^2 along one stage (phi in the order of motion) and how it ended."""
-
-    phi: np.ndarray
-    u: np.ndarray
-    reason: int  # an Event code, or _ZERO (omega reached 0: classify to decide)
-    end_phi: float
-    end_u: float
-
-
-def _search_grid(lo: float, hi: float, mu: float) -> np.ndarray:
-    """Sorted sample points in [lo, hi] for the sign scan of a closed-form stage.
-
-    Uniform at :data:`_SCAN_STEP`; from tau = 0 also across the boundary layer of
-    width 1/|mu| (step 0.1 in |mu| tau) and geometric towards 0 (a start from
-    rest, where u = 0 at tau = 0).
-    """
-    if hi <= lo:
-        return np.array([lo])
-    parts = [np.linspace(lo, hi, max(math.ceil((hi - lo) / _SCAN_STEP), 16) + 1)]
-    if lo == 0.0:
-        rate = abs(mu)
-        if rate * hi > 1.0:
-            parts.append(np.arange(0.1, min(rate * hi, 60.0), 0.1) / rate)
-        parts.append(hi * np.logspace(-9.0, -1.0, 17))
-    grid = np.unique(np.concatenate(parts))
-    return grid[grid <= hi]
-
-
-def _layer(tau_end: float, mu: float, points: int) -> np.ndarray:
-    """Extra output points inside a boundary layer of width 1/|mu| (none if it is thin)."""
-    rate = abs(mu)
-    if rate * tau_end <= 10.0:
-        return np.empty(0)
-    return np.geomspace(1e-3, min(rate * tau_end, 40.0), max(points // 4, 2)) / rate
-
-
-def _output_grid(tau_end: float, mu: float, points: int) -> np.ndarray:
-    """Output points of a closed-form stage: evenly spaced, plus its boundary layer."""
-    if tau_end <= 0.0:
-        return np.zeros(1)
-    grid = np.unique(np.concatenate([np.linspace(0.0, tau_end, points),
-                                     _layer(tau_end, mu, points)]))
-    return grid[grid <= tau_end]
-
-
-def _first_root(taus: np.ndarray, values: np.ndarray, fun, skip_below: float = 0.0):
-    """tau of the first crossing to < 0 after tau = 0, refined; None if there is none.
-
-    Samples below ``skip_below`` are not looked at (a piece that starts on the
-    zero of this very function).
-    """
-    negative = values < 0.0
-    negative[0] = False
-    if skip_below > 0.0:
-        negative &= taus >= skip_below
-    hits = np.flatnonzero(negative)
-    if hits.size == 0:
-        return None
-    i = int(hits[0])
-    if values[i - 1] <= 0.0:
-        return float(taus[i - 1])
-    return float(brentq(fun, taus[i - 1], taus[i], xtol=1e-300, rtol=_RTOL, maxiter=500))
-
-
-def _earliest(taus, table, fun, skip=None):
-    """(tau, which) of the earliest event among the rows of ``table``; (None, None) if none."""
-    best, which = None, None
-    for j in range(table.shape[0]):
-        root = _first_root(taus, table[j], lambda t, j=j: fun(t, j),
-                           0.0 if skip is None else skip[j])
-        if root is not None and (best is None or root < best):
-            best, which = root, j
-    return best, which
-
-
-def _scan(tau_max: float, mu: float, n_events: int, many, one, args: tuple, skip=None):
-    """(tau, which) of the earliest event of a closed-form stage in [0, tau_max].
-
-    ``many(taus, *args, table)`` evaluates the scaled event functions on a grid,
-    ``one(tau, which, *args)`` one of them; the range is scanned :data:`_WINDOW`
-    at a time.
-    """
-    lo = 0.0
-    while True:
-        hi = min(lo + _WINDOW, tau_max)
-        taus = _search_grid(lo, hi, mu)
-        table = np.empty((n_events, taus.size))
-        many(taus, *args, table)
-        root, which = _earliest(taus, table, lambda t, j: one(t, j, *args), skip)
-        if root is not None or hi >= tau_max:
-            return root, which
-        lo = hi
-
-
-def _overflow_cap(c0: float, mu: float) -> float:
-    """tau at which |c0| e^{mu tau} reaches U_MAX (inf if it never does)."""
-    if mu <= 0.0 or c0 == 0.0:
-        return math.inf
-    return max(math.log(U_MAX) - math.log(abs(c0)), 0.0) / mu
-
-
-def _ladder_stage(phi0, u0, s, phi_stop, p, points) -> _StageResult:
-    f, l, g = p["f"], p["l"], p["g"]
-    lam, a, b = _ladder.first_integral_coefficients(s, f, l, g)
-    mu = lam * s  # rate along tau = s (phi - phi0)
-    c0 = u0 - a * math.sin(phi0) - b * math.cos(phi0)
-    tau_max = max(s * (phi_stop - phi0), 0.0)
-    reason = ev.HORIZON
-    cap = _overflow_cap(c0, mu)
-    if cap < tau_max:
-        tau_max, reason = cap, ev.STEP_FAILURE
-    root, which = _scan(tau_max, mu, 3, _ladder_events, _ladder_event,
-                        (phi0, c0, s, lam, a, b, f, l, g))
-    tau_end = tau_max
-    if root is not None:
-        tau_end, reason = root, (_ZERO if which == 0 else ev.CONTACT_LOST)
-    grid = _output_grid(tau_end, mu, points)
-    u = np.empty(grid.size)
-    _exptrig_many(grid, phi0, c0, s, mu, a, b, u)
-    end_u = 0.0 if reason == _ZERO else float(u[-1])
-    u[-1] = end_u
-    u[0] = u0
-    return _StageResult(phi0 + s * grid, u, reason, phi0 + s * tau_end, end_u)
-
-
-def _hinge_stage(phi0, u0, sigma, phi_stop, p, points) -> _StageResult:
-    delta, l, g = p["delta"], p["l"], p["g"]
-    if delta >= l:  # only reachable on Q_n = 0 with delta > l, which the motion leaves at once
-        return _StageResult(np.array([phi0]), np.array([u0]), ev.NO_SOLUTION, phi0, u0)
-    pieces = []  # (tau offset, tau length, phi start, c0, mu, a, b)
-    tau0, phi_p, u_p = 0.0, phi0, u0
-    qn = l * u0 + g * math.cos(phi0)
-    if nx.is_zero(qn, l * abs(u0) + g):  # starts on Q_n = 0: take the side it moves into
-        q = 1.0 if -sigma * math.sin(phi0) >= 0.0 else -1.0
-    else:
-        q = 1.0 if qn > 0.0 else -1.0
-    switched = False
-    reason, end_u = ev.HORIZON, None
-    for _ in range(10_000):
-        mu, a, b = _hinge_coefficients(sigma, q, delta, l, g)
-        c0 = u_p - a * math.sin(phi_p) - b * math.cos(phi_p)
-        tau_max = max(sigma * (phi_stop - phi_p), 0.0)
-        cap = _overflow_cap(c0, mu)
-        piece_reason = ev.HORIZON
-        if cap < tau_max:
-            tau_max, piece_reason = cap, ev.STEP_FAILURE
-        skip = (0.0, 1e-9 * max(tau_max, 1.0) if switched else 0.0)
-        root, which = _scan(tau_max, mu, 2, _hinge_events, _hinge_event,
-                            (phi_p, c0, sigma, mu, a, b, q, l, g), skip)
-        length = tau_max if root is None else root
-        pieces.append((tau0, length, phi_p, c0, mu, a, b))
-        if root is None:
-            reason = piece_reason
-            end_u = _exptrig(length, phi_p, c0, sigma, mu, a, b)
-            break
-        if which == 0:
-            reason, end_u = _ZERO, 0.0
-            break
-        u_p = max(_exptrig(length, phi_p, c0, sigma, mu, a, b), 0.0)
-        phi_p = phi_p + sigma * length
-        tau0 += length
-        q, switched = -q, True
-    else:
-        reason = ev.STEP_FAILURE
-        end_u = u_p
-    total = pieces[-1][0] + pieces[-1][1]
-    offsets = np.array([piece[0] for piece in pieces])
-    parts = [np.linspace(0.0, total, points) if total > 0.0 else np.zeros(1), offsets]
-    for off, length, _, _, mu, _, _ in pieces:
-        parts.append(off + _layer(length, mu, points))
-    tau = np.unique(np.concatenate(parts))
-    tau = tau[tau <= total]
-    which = np.clip(np.searchsorted(offsets, tau, side="right") - 1, 0, len(pieces) - 1)
-    u = np.empty(tau.size)
-    for j, (off, _, ph, c0, mu, a, b) in enumerate(pieces):
-        sel = which == j
-        part = np.empty(int(sel.sum()))
-        _exptrig_many(tau[sel] - off, ph, c0, sigma, mu, a, b, part)
-        u[sel] = part
-    tau_end = total
-    u[0], u[-1] = u0, end_u
-    return _StageResult(phi0 + sigma * tau, u, reason, phi0 + sigma * tau_end, float(end_u))
-
-
-def _wheel_stage(phi0, u0, sigma, phi_stop, p, points) -> _StageResult:
-    args = (p["delta"], p["r"], p["l"], p["rho"], p["g"])
-    phis = np.empty(1024)
-    ws = np.empty(1024)
-    phis[0] = phi0
-    ws[0] = _bracket(phi0, sigma, *args[:4]) * u0
-    k, status = 0, _FULL
-    while status == _FULL:
-        k, status = _wheel_march(k, phis, ws, sigma, phi_stop, *args, WHEEL_PANEL, WHEEL_KAPPA)
-        if status == _FULL:
-            phis = np.concatenate([phis, np.empty(phis.size)])
-            ws = np.concatenate([ws, np.empty(ws.size)])
-    phis, ws = phis[:k + 1].copy(), ws[:k + 1].copy()
-    reason = status
-    end_phi = float(phis[k])
-    if status == _ZERO:  # the event is inside the last panel [phis[k-1], phis[k]]
-        a, w_a = phis[k - 1], ws[k - 1]
-        width = sigma * (phis[k] - a)
-        sub = np.unique(np.concatenate([np.linspace(0.0, width, 33),
-                                        width * np.logspace(-9.0, -1.0, 17)]))
-        table = np.array([[_wheel_event(a + sigma * t, j, a, w_a, sigma, *args) for t in sub]
-                          for j in range(2)])
-        root, which = _earliest(
-            sub, table, lambda t, j: _wheel_event(a + sigma * t, j, a, w_a, sigma, *args))
-        if root is None:  # crossed at the panel end only (the sample there is negative)
-            root, which = width, int(table[0, -1] >= 0.0)
-        end_phi = float(a + sigma * root)
-        reason = _ZERO if which == 0 else ev.CONTACT_LOST
-        phis[k] = end_phi
-        ws[k] = _wheel_advance(a, w_a, end_phi, sigma, *args)
-    # output: evenly spaced in tau, each from the panel that contains it
-    tau_panel = sigma * (phis - phi0)
-    tau_end = float(tau_panel[-1])
-    grid = np.linspace(0.0, tau_end, points) if tau_end > 0.0 else np.zeros(1)
-    index = np.clip(np.searchsorted(tau_panel, grid, side="right") - 1, 0, max(k - 1, 0))
-    u = np.empty(grid.size)
-    _wheel_dense(phi0 + sigma * grid, index.astype(np.int64), phis, ws, sigma, *args, u)
-    end_u = 0.0 if reason == _ZERO else float(ws[-1] / _bracket(end_phi, sigma, *args[:4]))
-    u[0], u[-1] = u0, end_u
-    phi = phi0 + sigma * grid
-    phi[-1] = end_phi
-    return _StageResult(phi, u, reason, end_phi, end_u)
-
-
-#: The stage solver of each one-degree-of-freedom model.
-_STAGES = {"ladder": _ladder_stage, "wheel": _wheel_stage, "hinge_pendulum": _hinge_stage}
-#: How each model integrates its stages (for the Dataset's provenance).
-_METHODS = {
-    "ladder": "closed form u = c0 exp(lambda (phi - phi0)) + a sin phi + b cos phi; "
-              "events by a sign scan and Brent's method on overflow-free scaled functions",
-    "wheel": f"composite Gauss-Legendre quadrature ({GL_NODES} nodes, order {2 * GL_NODES}) of "
-             "the integrating-factor form for w = bracket * omega^2; events by Brent's method "
-             "on the dense output",
-    "hinge_pendulum": "closed form on each piece of constant sgn(l omega^2 + g cos phi); events "
-                      "by a sign scan and Brent's method on overflow-free scaled functions",
-}
-
-
-# ---------------------------------------------------------------- classification
-
-
-def _classify(m: Model, values: dict, phi: float, omega: float) -> np.ndarray:
-    v = m.input_vector({**values, "phi": phi, "omega": omega})
-    out = np.full((len(m.branches), m.n_fields), np.nan)
-    m.point(v, out)
+    from numpy.polynomial import legendre as L
+    from numpy.polynomial import polynomial as P
+
+    x, w = L.leggauss(n)
+    theta, gw = (x + 1.0) / 2.0, w / 2.0
+    leg = np.empty((n, n))
+    for k in range(n):
+        e = np.zeros(k + 1)
+        e[k] = 1.0
+        leg[k] = (2 * k + 1) * gw * L.legval(x, e)
+    # shifted Legendre P_k(2t - 1) in monomials of t (exact small integers)
+    shift = np.zeros((n, n))
+    for k in range(n):
+        e = np.zeros(k + 1)
+        e[k] = 1.0
+        c = L.leg2poly(e)
+        poly = np.zeros(1)
+        for m, cm in enumerate(c):  # sum cm (2t - 1)^m
+            poly = P.polyadd(poly, cm * P.polypow([-1.0, 2.0], m))
+        shift[:len(poly), k] = poly[:n]
+    mon = shift @ leg
+    a0 = np.empty((n, n))
+    for i in range(n):
+        a0[i] = _legendre_integrals(theta[i], n) @ leg
+    return theta, gw, leg, mon, a0
+
+
+def _legendre_integrals(theta: float, n: int) -> np.ndarray:
+    """int_0^theta P_k(2t - 1) dt for k < n (numpy, for the tables)."""
+    xx = 2.0 * theta - 1.0
+    p = [1.0, xx]
+    for k in range(1, n + 1):
+        p.append(((2 * k + 1) * xx * p[k] - k * p[k - 1]) / (k + 1))
+    out = np.empty(n)
+    out[0] = theta
+    for k in range(1, n):
+        out[k] = (p[k + 1] - p[k - 1]) / (2.0 * (2 * k + 1))
     return out
 
 
-def _at_rest(m: Model, values: dict, phi: float):
-    """Classify the rest state (phi, 0): ('go', sigma) or ('stop', Event code)."""
-    out = _classify(m, values, phi, 0.0)
-    n, stagnation, lost, singular = nx.summarize(out, m.stick_branch)
-    if n == nx.N_UNIQUE:
-        if stagnation:
-            return "stop", ev.REST
-        row = int(np.flatnonzero(out[:, nx.STATUS] == nx.ADMISSIBLE)[0])
-        return "go", m.directions[row]
-    if singular and n in (nx.N_NONE, nx.N_CONTINUUM):
-        return "stop", ev.SINGULAR
-    if n == nx.N_NONE:
-        return "stop", ev.CONTACT_LOST if lost else ev.NO_SOLUTION
-    return "stop", ev.INDETERMINATE
+THETA, GLW, LEG, MON, A0 = _tables(NODES)
+FACT = np.array([math.factorial(k) for k in range(NODES + 3)], dtype=float)
+INV_FACT = 1.0 / FACT
 
 
-def _moving(m: Model, values: dict, phi: float, omega: float):
-    """Check the running branch at (phi, omega != 0): ('go', sigma) or ('stop', Event code).
+@njit(cache=True, error_model="numpy")
+def _phis(w, out):
+    """phi_k(w) = int_0^1 e^{(1 - t) w} t^{k-1}/(k-1)! dt for k < len(out) (phi_0 = e^w).
 
-    Returns ('rest', 0) when omega counts as zero for the model (its ``point``
-    treats the state as a rest state).
+    |w| < 6: the top one by its Taylor series, the others by the downward
+    recurrence phi_k = w phi_{k+1} + 1/k! (stable there); beyond, the upward
+    recurrence phi_{k+1} = (phi_k - 1/k!)/w from expm1 (no cancellation).
     """
-    out = _classify(m, values, phi, omega)
-    if out[m.stick_branch, nx.STATUS] != nx.ABSENT:
-        return "rest", 0.0
-    row = int(np.flatnonzero(out[:, nx.STATUS] != nx.ABSENT)[0])
-    status = int(out[row, nx.STATUS])
-    if out[row, nx.SINGULAR] != 0.0:
-        return "stop", ev.SINGULAR
-    if status == nx.ADMISSIBLE:
-        return "go", m.directions[row]
-    if status == nx.CONTACT_LOST:
-        return "stop", ev.CONTACT_LOST
-    return "stop", ev.NO_SOLUTION
+    top = out.shape[0] - 1
+    if abs(w) < 6.0:
+        term = INV_FACT[top]
+        acc = term
+        for j in range(1, 80):
+            term *= w / (j + top)
+            acc += term
+            if abs(term) <= 1e-17 * abs(acc):
+                break
+        out[top] = acc
+        for k in range(top - 1, 0, -1):
+            out[k] = w * out[k + 1] + INV_FACT[k]
+        out[0] = math.exp(w)
+    else:
+        out[0] = math.exp(w)
+        out[1] = math.expm1(w) / w
+        for k in range(1, top):
+            out[k + 1] = (out[k] - INV_FACT[k]) / w
+
+
+@njit(cache=True, error_model="numpy")
+def _dense(theta, z, u0, h, a, c, buf):
+    """u at theta in [0, 1] of a panel: e^{z theta} u0 + h int_0^theta e^{z (theta - t)} p(t) dt.
+
+    ``a``, ``c``: Legendre and monomial coefficients of the interpolant p of N.
+    The plain integral comes from the Legendre form (no cancellation), the
+    exponential's correction from the monomials times phi-functions.
+    """
+    n = a.shape[0]
+    x = 2.0 * theta - 1.0
+    acc = a[0] * theta
+    pm, pk = 1.0, x
+    for k in range(1, n):
+        pp = ((2 * k + 1) * x * pk - k * pm) / (k + 1)
+        acc += a[k] * (pp - pm) / (2.0 * (2 * k + 1))
+        pm, pk = pk, pp
+    e = 1.0
+    if z != 0.0:
+        w = z * theta
+        _phis(w, buf)
+        corr = 0.0
+        tp = theta
+        for k in range(n):
+            corr += c[k] * tp * FACT[k] * buf[k + 2]
+            tp *= theta
+        acc += w * corr
+        e = buf[0]
+    return e * u0 + h * acc
+
+
+@njit(cache=True, error_model="numpy")
+def _expand(nv, a, c):
+    """Legendre (``a``) and monomial (``c``) coefficients of the interpolant of node values nv."""
+    n = nv.shape[0]
+    for k in range(n):
+        ak = 0.0
+        ck = 0.0
+        for j in range(n):
+            ak += LEG[k, j] * nv[j]
+            ck += MON[k, j] * nv[j]
+        a[k] = ak
+        c[k] = ck
+
+
+@njit(cache=True, error_model="numpy")
+def _weights(z, A, buf):
+    """A[i, j] = int_0^{theta_i} e^{z (theta_i - t)} L_j(t) dt (the collocation matrix)."""
+    n = A.shape[0]
+    for i in range(n):
+        for j in range(n):
+            A[i, j] = A0[i, j]
+    if z == 0.0:
+        return
+    for i in range(n):
+        th = THETA[i]
+        w = z * th
+        _phis(w, buf)
+        for k in range(n):
+            f = w * th ** (k + 1) * FACT[k] * buf[k + 2]
+            for j in range(n):
+                A[i, j] += f * MON[k, j]
+
+
+@njit(cache=True, error_model="numpy")
+def _solve(M, r):
+    """Solve M x = r in place (r becomes x) by Gaussian elimination with partial pivoting."""
+    n = r.shape[0]
+    for k in range(n):
+        p = k
+        for i in range(k + 1, n):
+            if abs(M[i, k]) > abs(M[p, k]):
+                p = i
+        if p != k:
+            for j in range(n):
+                M[k, j], M[p, j] = M[p, j], M[k, j]
+            r[k], r[p] = r[p], r[k]
+        for i in range(k + 1, n):
+            f = M[i, k] / M[k, k]
+            for j in range(k, n):
+                M[i, j] -= f * M[k, j]
+            r[i] -= f * r[k]
+    for k in range(n - 1, -1, -1):
+        acc = r[k]
+        for j in range(k + 1, n):
+            acc -= M[k, j] * r[j]
+        r[k] = acc / M[k, k]
+
+
+@njit(cache=True)
+def _grow2(a, n):
+    """``a`` (2-D) with at least ``n`` rows, keeping its content."""
+    if n <= a.shape[0]:
+        return a
+    b = np.empty((max(n, 2 * a.shape[0]), a.shape[1]))
+    b[:a.shape[0]] = a
+    return b
+
+
+# ---------------------------------------------------------------- per-model templates
+
+# Compile-time structure of the model being compiled (see phasemap._compile).
+POINT = None
+BRANCH_ROW = None
+DERIVE = None
+PHI = 0
+OMEGA = 1
+ACC = 3
+OMEGA_DERIVED = False
+STICK = -1
+N_BRANCHES = 0
+DIRECTIONS = np.zeros(1)
+REACTIONS = np.zeros(1, dtype=np.int64)
+RATE = None
+STILL = None
+REFINE = None
+STAGE_POINTS = None
+VALUE = None
+CLASSIFY = None
+AT_REST = None
+STAGE = None
+N_FIELDS = 0
+
+
+def _rate_template(v, x, u, sigma, mode, u_ref):
+    """(F, dF/du): phi'' of branch ``mode`` at (x, u = omega^2) and its slope in u.
+
+    Two evaluations of the branch row, at u and a little above (an affine F is
+    exact); below u = 0 the row is continued linearly from u = 0.
+    """
+    ua = u if u > 0.0 else 0.0
+    d = 1e-4 * (ua + u_ref)
+    v[PHI] = x
+    v[OMEGA] = sigma * math.sqrt(ua)
+    DERIVE(v)
+    fa = BRANCH_ROW(v, mode)[ACC]
+    v[OMEGA] = sigma * math.sqrt(ua + d)
+    if OMEGA_DERIVED:
+        DERIVE(v)
+    fb = BRANCH_ROW(v, mode)[ACC]
+    s = (fb - fa) / d
+    return fa + s * (u - ua), s
+
+
+def _value_template(v, x, u, sigma, mode, u_ref):
+    """phi'' of branch ``mode`` at (x, u = omega^2) (continued linearly below u = 0)."""
+    if u >= 0.0:
+        v[PHI] = x
+        v[OMEGA] = sigma * math.sqrt(u)
+        DERIVE(v)
+        return BRANCH_ROW(v, mode)[ACC]
+    return RATE(v, x, u, sigma, mode, u_ref)[0]
+
+
+def _classify_template(v, x, omega, out):
+    """Classify (x, omega) with the model's point function: (n, first admissible, lost, singular)."""
+    v[PHI] = x
+    v[OMEGA] = omega
+    DERIVE(v)
+    POINT(v, out)
+    n, stag, lost, sing = nx.summarize(out, STICK)
+    adm = -1
+    for b in range(N_BRANCHES):
+        if out[b, nx.STATUS] == nx.ADMISSIBLE:
+            adm = b
+            break
+    return n, adm, lost, sing
+
+
+def _still_template(v, out, x, u, sigma, mode, coef_sign):
+    """The state (x, u) is still on the stage of ``mode``: u > 0, unique, same branch,
+    same sign of the coefficient, and an omega the model does not count as zero."""
+    if not (u > 0.0):
+        return False
+    n, adm, lost, sing = CLASSIFY(v, x, sigma * math.sqrt(u), out)
+    if n != 1 or adm != mode:
+        return False
+    if STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT:
+        return False
+    return coef_sign == 0.0 or out[mode, nx.COEF] * coef_sign > 0.0
+
+
+def _refine_template(v, theta, x_p, hh, z, u_p, a, c, sigma, mode, u_ref, buf, nv, a2, c2):
+    """u at theta of a panel to the panel's own order: one Gauss pass on [0, theta].
+
+    The collocation polynomial is accurate to O(h^(n+1)) inside a panel (its stage
+    order); the sub-panel's Gauss quadrature of the remainder N, evaluated on it,
+    is of order 2n where N does not depend on u (beta is the exact slope: the
+    ladder, the hinge on a piece of sgn Q_n) and O(h^(n+3)) otherwise.
+    """
+    if theta <= 0.0:
+        return u_p
+    n = NODES
+    beta = z / hh
+    hs = theta * hh
+    for j in range(n):
+        uj = _dense(theta * THETA[j], z, u_p, hh, a, c, buf)
+        fj = VALUE(v, x_p + sigma * hs * THETA[j], uj, sigma, mode, u_ref)
+        nv[j] = 2.0 * sigma * fj - beta * uj
+    _expand(nv, a2, c2)
+    return _dense(1.0, z * theta, u_p, hs, a2, c2, buf)
+
+
+def _at_rest_template(v, x, out):
+    """Classify the rest state (x, 0): (-1, branch) to go on it, or (Event code, -1)."""
+    n, adm, lost, sing = CLASSIFY(v, x, 0.0, out)
+    if n == nx.N_UNIQUE:
+        if adm == STICK:
+            return ev.REST, -1
+        return -1, adm
+    if sing and (n == nx.N_NONE or n == nx.N_CONTINUUM):
+        return ev.SINGULAR, -1
+    if n == nx.N_NONE:
+        return (ev.CONTACT_LOST if lost else ev.NO_SOLUTION), -1
+    return ev.INDETERMINATE, -1
+
+
+def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, panels):
+    """Follow one stage (branch ``mode``, sign ``sigma``) from (x0, u0) towards ``stop``.
+
+    Returns ``(reason, x_end, u_end, n_panels, panels, next_mode, h)``: an Event
+    code or _ZERO, the end state, the panels (rows s0, h, z, u0, theta_end, a,
+    c: the dense output), the branch after a switch, and the last panel width.
+    """
+    n = NODES
+    A = np.empty((n, n))
+    M = np.empty((n, n))
+    U = np.empty(n)
+    E = np.empty(n)
+    Nv = np.empty(n)
+    Jd = np.empty(n)
+    R = np.empty(n)
+    a = np.empty(n)
+    c = np.empty(n)
+    buf = np.empty(n + 2)
+    nv = np.empty(n)
+    a2 = np.empty(n)
+    c2 = np.empty(n)
+    nr = REACTIONS.shape[0]
+    react = np.empty(nr)
+    v[PHI] = x0
+    v[OMEGA] = sigma * math.sqrt(u0)
+    DERIVE(v)
+    r0 = BRANCH_ROW(v, mode)
+    coef0 = r0[nx.COEF]
+    coef_sign = 1.0 if coef0 > 0.0 else (-1.0 if coef0 < 0.0 else 0.0)
+    for q in range(nr):
+        react[q] = r0[REACTIONS[q]]
+    x, u, s = x0, u0, 0.0
+    n_pan = 0
+    truncated = False
+    for _ in range(10_000_000):
+        remaining = sigma * (stop - x)
+        if remaining <= 0.0:
+            return ev.HORIZON, x, u, n_pan, panels, mode, h
+        hh = min(h, h_max, remaining)
+        f0, s0 = RATE(v, x, u, sigma, mode, u_ref)
+        beta = 2.0 * sigma * s0
+        if beta > 0.0 and beta * hh > Z_GROW:
+            hh = Z_GROW / beta
+        if not (hh > 16.0 * EPS * max(abs(x), 1.0)) or not (beta == beta):
+            n2, adm2, lost2, sing2 = CLASSIFY(v, x, sigma * math.sqrt(max(u, 0.0)), out)
+            small = abs(out[mode, nx.COEF]) < 1e-6 * abs(coef0)
+            return (ev.SINGULAR if (sing2 or small) else ev.STEP_FAILURE), x, u, n_pan, \
+                panels, mode, h
+        last = hh == remaining
+        z = beta * hh
+        _weights(z, A, buf)
+        n0 = 2.0 * sigma * f0 - beta * u
+        for i in range(n):
+            _phis(z * THETA[i], buf)
+            E[i] = buf[0]
+            U[i] = E[i] * u + hh * THETA[i] * buf[1] * n0
+        # collocation: U = E u + hh A N(U), by Newton with the slopes of the first pass
+        converged = False
+        for it in range(10):
+            for j in range(n):
+                xj = x + sigma * hh * THETA[j]
+                if it == 0:
+                    fj, sj = RATE(v, xj, U[j], sigma, mode, u_ref)
+                    Jd[j] = 2.0 * sigma * sj - beta
+                else:
+                    fj = VALUE(v, xj, U[j], sigma, mode, u_ref)
+                Nv[j] = 2.0 * sigma * fj - beta * U[j]
+            for i in range(n):
+                acc = 0.0
+                for j in range(n):
+                    acc += A[i, j] * Nv[j]
+                    M[i, j] = -hh * A[i, j] * Jd[j]
+                M[i, i] += 1.0
+                R[i] = U[i] - E[i] * u - hh * acc
+            _solve(M, R)
+            worst = 0.0
+            for i in range(n):
+                U[i] -= R[i]
+                worst = max(worst, abs(R[i]) / (abs(U[i]) + u_ref))
+            if not (worst == worst):
+                break
+            if worst <= 1e-14:
+                converged = True
+                break
+        if not converged:
+            h = 0.25 * hh
+            truncated = False
+            continue
+        _expand(Nv, a, c)
+        u1 = _dense(1.0, z, u, hh, a, c, buf)
+        # error: the Legendre tail of N (degrees n-2, n-1), extrapolated by its
+        # decay over two degrees (rho) to about degree n + 5, near where the
+        # order-2n collocation errs; the exponent is measured to be on the safe
+        # side for the wheel, whose bracket has complex zeros near the real axis
+        tail = abs(a[n - 1]) + abs(a[n - 2])
+        head = abs(a[n - 3]) + abs(a[n - 4])
+        rho = 1.0 if tail >= head else tail / head
+        grow = math.exp(z) if z > 0.0 else 1.0
+        est = hh * grow * tail * rho ** 3
+        tol = rtol * (max(abs(u), abs(u1)) + u_ref)
+        if not (u1 == u1) or not (est <= tol):
+            fac = 0.25 if not (est == est and u1 == u1) else \
+                max(0.2, 0.9 * (tol / est) ** (1.0 / 11.0))
+            h = hh * fac
+            truncated = False
+            continue
+        h_next = hh * (4.0 if est == 0.0 else min(4.0, max(0.2, 0.9 * (tol / est) ** (1.0 / 11.0))))
+        if abs(u1) > U_MAX:
+            return ev.STEP_FAILURE, x, u, n_pan, panels, mode, h
+        x1 = stop if last else x + sigma * hh
+        if STILL(v, out, x1, u1, sigma, mode, coef_sign):
+            if not truncated and nr > 0:
+                # a reaction of the branch changes sign inside: end the panel there
+                first = 2.0
+                for q in range(nr):
+                    if react[q] * out[mode, REACTIONS[q]] < 0.0:
+                        lo, hi = 0.0, 1.0
+                        for _b in range(60):
+                            if (hi - lo) * hh <= 4.0 * EPS * max(abs(x), hh):
+                                break
+                            mid = 0.5 * (lo + hi)
+                            v[PHI] = x + sigma * mid * hh
+                            v[OMEGA] = sigma * math.sqrt(max(_dense(mid, z, u, hh, a, c, buf),
+                                                             0.0))
+                            DERIVE(v)
+                            if BRANCH_ROW(v, mode)[REACTIONS[q]] * react[q] > 0.0:
+                                lo = mid
+                            else:
+                                hi = mid
+                        first = min(first, hi)
+                if first < 1.0 and first * hh > 1e-9 * max(abs(x), 1.0):
+                    h = first * hh
+                    truncated = True
+                    continue
+            truncated = False
+            panels = _grow2(panels, n_pan + 1)
+            row = panels[n_pan]
+            row[0], row[1], row[2], row[3], row[4] = s, hh, z, u, 1.0
+            row[5:5 + n] = a
+            row[5 + n:5 + 2 * n] = c
+            n_pan += 1
+            for q in range(nr):
+                react[q] = out[mode, REACTIONS[q]]
+            s += hh
+            x, u, h = x1, u1, h_next
+            if last:
+                return ev.HORIZON, x, u, n_pan, panels, mode, h
+            continue
+        # -- the stage ends inside this panel: locate the first state off it --
+        th_hi = 1.0
+        reason = -100
+        th_e = 1.0
+        if u1 <= 0.0:
+            lo, hi, flo, fhi = 0.0, 1.0, u, u1
+            side = 0
+            for _b in range(200):
+                if (hi - lo) * hh <= 4.0 * EPS * max(abs(x), hh):
+                    break
+                t = (lo * fhi - hi * flo) / (fhi - flo)
+                if not (lo < t < hi):
+                    t = 0.5 * (lo + hi)
+                ft = REFINE(v, t, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2)
+                if ft > 0.0:
+                    lo, flo = t, ft
+                    if side == -1:
+                        fhi *= 0.5
+                    side = -1
+                else:
+                    hi, fhi = t, ft
+                    if side == 1:
+                        flo *= 0.5
+                    side = 1
+            if lo == 0.0 or STILL(v, out, x + sigma * lo * hh, REFINE(v, lo, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv,
+                                         a2, c2),
+                                  sigma, mode, coef_sign):
+                reason = _ZERO
+                th_e = hi
+            else:
+                th_hi = lo
+        if reason != _ZERO:
+            lo, hi = 0.0, th_hi
+            for _b in range(200):
+                if (hi - lo) * hh <= 2.0 * EPS * max(abs(x), hh):
+                    break
+                mid = 0.5 * (lo + hi)
+                if STILL(v, out, x + sigma * mid * hh, REFINE(v, mid, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2), sigma,
+                         mode, coef_sign):
+                    lo = mid
+                else:
+                    hi = mid
+            th_e = hi
+        x_e = stop if (last and th_e == 1.0) else x + sigma * th_e * hh
+        u_e = u1 if th_e == 1.0 else REFINE(v, th_e, x, hh, z, u, a, c, sigma, mode, u_ref,
+                                              buf, nv, a2, c2)
+        next_mode = mode
+        if reason != _ZERO:
+            n2, adm2, lost2, sing2 = CLASSIFY(v, x_e, sigma * math.sqrt(max(u_e, 0.0)), out)
+            if not (u_e > 0.0) or (STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT):
+                reason = _ZERO
+            elif n2 == 1:
+                if adm2 == mode:
+                    reason = ev.SINGULAR  # same branch, its coefficient changed sign
+                elif DIRECTIONS[adm2] == sigma:
+                    reason = ev.SWITCH
+                    next_mode = adm2
+                else:
+                    reason = ev.NO_SOLUTION
+            else:
+                reason = ev.fate_without_unique(n2, lost2, sing2)
+        if reason == ev.CONTACT_LOST:
+            # the classification flips where N < -1e-12 of its scale: end at N = 0
+            best = -1.0
+            for q in range(nr):
+                if react[q] > 0.0 and out[mode, REACTIONS[q]] < 0.0:
+                    lo, hi = 0.0, th_e
+                    for _b in range(200):
+                        if (hi - lo) * hh <= 2.0 * EPS * max(abs(x), hh):
+                            break
+                        mid = 0.5 * (lo + hi)
+                        um = REFINE(v, mid, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv,
+                                    a2, c2)  # (uses v: set the state after it)
+                        v[PHI] = x + sigma * mid * hh
+                        v[OMEGA] = sigma * math.sqrt(max(um, 0.0))
+                        DERIVE(v)
+                        if BRANCH_ROW(v, mode)[REACTIONS[q]] > 0.0:
+                            lo = mid
+                        else:
+                            hi = mid
+                    best = max(best, hi)
+            if best > 0.0:
+                th_e = best
+                x_e = x + sigma * th_e * hh
+                u_e = REFINE(v, th_e, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2)
+        if reason == _ZERO:
+            u_e = 0.0
+        panels = _grow2(panels, n_pan + 1)
+        row = panels[n_pan]
+        row[0], row[1], row[2], row[3], row[4] = s, hh, z, u, th_e
+        row[5:5 + n] = a
+        row[5 + n:5 + 2 * n] = c
+        n_pan += 1
+        return reason, x_e, u_e, n_pan, panels, next_mode, hh
+    return ev.STEP_FAILURE, x, u, n_pan, panels, mode, h
+
+
+def _stage_points_template(v, panels, n_pan, sigma, mode, u_ref, x0, u0, x_e, u_e, points, pts,
+                           npts, stage):
+    """Append the stage's output points (phi, u, stage): evenly spaced in phi."""
+    n = NODES
+    nv = np.empty(n)
+    a2 = np.empty(n)
+    c2 = np.empty(n)
+    length = sigma * (x_e - x0)
+    count = points if (length > 0.0 and n_pan > 0) else 1
+    pts = _grow2(pts, npts + count)
+    buf = np.empty(n + 2)
+    p = 0
+    for k in range(count):
+        sk = length * k / (count - 1) if count > 1 else 0.0
+        while p < n_pan - 1 and sk > panels[p, 0] + panels[p, 4] * panels[p, 1]:
+            p += 1
+        uk = u0
+        if k > 0:
+            row = panels[p]
+            theta = min(max((sk - row[0]) / row[1], 0.0), row[4])
+            uk = REFINE(v, theta, x0 + sigma * row[0], row[1], row[2], row[3], row[5:5 + n],
+                        row[5 + n:5 + 2 * n], sigma, mode, u_ref, buf, nv, a2, c2)
+        pts[npts + k, 0] = x0 + sigma * sk
+        pts[npts + k, 1] = uk
+        pts[npts + k, 2] = stage
+    if count > 1:
+        pts[npts + count - 1, 0] = x_e
+        pts[npts + count - 1, 1] = u_e
+    return pts, npts + count
+
+
+def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_max,
+                    h_first):
+    """The whole phase curve from (phi0, omega0): (points, stages) as arrays.
+
+    ``points`` rows: phi, u, stage; ``stages`` rows: sign, start phi, start u,
+    reason, end phi, end u.
+    """
+    out = np.empty((N_BRANCHES, N_FIELDS))
+    pts = np.empty((max(points, 16), 3))
+    npts = 0
+    stg = np.empty((8, 6))
+    nst = 0
+    panels = np.empty((64, _PANEL_COLS))
+    code = -1
+    mode = -1
+    if omega0 != 0.0:
+        CLASSIFY(v, phi0, omega0, out)
+        if STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT:
+            omega0 = 0.0  # an omega the model counts as zero: a rest state
+        else:
+            row = 0
+            for b in range(N_BRANCHES):
+                if out[b, nx.STATUS] != nx.ABSENT:
+                    row = b
+                    break
+            status = out[row, nx.STATUS]
+            if out[row, nx.SINGULAR] != 0.0:
+                code = ev.SINGULAR
+            elif status == nx.ADMISSIBLE:
+                mode = row
+            elif status == nx.CONTACT_LOST:
+                code = ev.CONTACT_LOST
+            else:
+                code = ev.NO_SOLUTION
+    if omega0 == 0.0:
+        code, mode = AT_REST(v, phi0, out)
+    if code >= 0:
+        sign = 0.0 if omega0 == 0.0 else (1.0 if omega0 > 0.0 else -1.0)
+        pts[0, 0], pts[0, 1], pts[0, 2] = phi0, omega0 * omega0, 0.0
+        stg[0, 0], stg[0, 1], stg[0, 2] = sign, phi0, omega0 * omega0
+        stg[0, 3], stg[0, 4], stg[0, 5] = code, phi0, omega0 * omega0
+        return pts[:1], stg[:1]
+    sigma = DIRECTIONS[mode]
+    x, u = phi0, omega0 * omega0
+    h = h_first
+    while True:
+        stop = hi if sigma > 0.0 else lo
+        reason, x_e, u_e, n_pan, panels, next_mode, h = STAGE(
+            v, out, mode, sigma, x, u, stop, u_ref, rtol, h_max, h, panels)
+        pts, npts = STAGE_POINTS(v, panels, n_pan, sigma, mode, u_ref, x, u, x_e, u_e, points,
+                                 pts, npts, float(nst))
+        go = False
+        new_mode = mode
+        if reason == _ZERO:
+            code, m2 = AT_REST(v, x_e, out)
+            if code < 0:
+                reason, new_mode, go = ev.REVERSAL, m2, True
+            else:
+                reason = code
+        elif reason == ev.SWITCH:
+            new_mode, go = next_mode, True
+        stg = _grow2(stg, nst + 1)
+        stg[nst, 0], stg[nst, 1], stg[nst, 2] = sigma, x, u
+        stg[nst, 3], stg[nst, 4], stg[nst, 5] = reason, x_e, u_e
+        nst += 1
+        if not go:
+            break
+        if nst >= max_stages:
+            stg[nst - 1, 3] = ev.MAX_EVENTS
+            break
+        x, u = x_e, (0.0 if reason == ev.REVERSAL else u_e)
+        mode = new_mode
+        sigma = DIRECTIONS[mode]
+        h = max(h, 1e-3 * h_max)
+    return pts[:npts], stg[:nst]
+
+
+# ---------------------------------------------------------------- the per-model kernel
+
+_KERNELS: dict = {}
+
+
+def _coordinate(m: Model) -> tuple[str, str, str]:
+    """The model's one coordinate triple, or a ValueError that says why there is none."""
+    dyn = m.dynamics
+    if dyn is None:
+        raise ValueError(f"{m.name}: phase_curve needs a model that moves (Model.dynamics is "
+                         f"None); {m.name} can be classified and mapped only")
+    if len(dyn.coordinates) != 1:
+        names = ", ".join(c[0] for c in dyn.coordinates)
+        raise ValueError(
+            f"{m.name}: phase_curve follows one-degree-of-freedom models only, and {m.name} "
+            f"has {len(dyn.coordinates)} coordinates ({names}); use phasemap.simulate for "
+            f"{m.name}")
+    pos, vel, acc = dyn.coordinates[0]
+    if vel != m.velocity:
+        raise ValueError(f"{m.name}: phase_curve needs the velocity of the coordinate {pos!r} "
+                         f"to be the model's relative velocity {m.velocity!r}, got {vel!r}")
+    return pos, vel, acc
+
+
+def _kernel(m: Model):
+    """The model's compiled curve function (specialised once per model, cached on disk)."""
+    curve = _KERNELS.get(m.name)
+    if curve is not None and curve[0] is m:
+        return curve[1]
+    pos, vel, acc = _coordinate(m)
+    slot = {n: i for i, n in enumerate(m.inputs)}
+    acc_names = [a.name for a in m.accelerations]
+    first_reaction = nx.FIRST_ACC + len(acc_names)
+    contract = m.contract
+    consts = dict(
+        POINT=contract.point, BRANCH_ROW=contract.branch_row_inline,
+        DERIVE=contract.derive_inline, PHI=slot[pos], OMEGA=slot[vel],
+        ACC=nx.FIRST_ACC + acc_names.index(acc),
+        OMEGA_DERIVED=any(d.source == vel for d in m.derived),
+        STICK=m.stick_branch, N_BRANCHES=len(m.branches), N_FIELDS=m.n_fields,
+        DIRECTIONS=np.array(m.directions, dtype=np.float64),
+        REACTIONS=np.arange(first_reaction, m.n_fields, dtype=np.int64),
+    )
+    for name, template, inline in (("RATE", _rate_template, True),
+                                   ("VALUE", _value_template, True),
+                                   ("CLASSIFY", _classify_template, True),
+                                   ("STILL", _still_template, True),
+                                   ("REFINE", _refine_template, True),
+                                   ("STAGE_POINTS", _stage_points_template, False),
+                                   ("AT_REST", _at_rest_template, False),
+                                   ("STAGE", _stage_template, False)):
+        consts[name] = specialize(template, m, f"phase_{name.lower()}", inline=inline, **consts)
+    curve = specialize(_curve_template, m, "phase_curve", **consts)
+    _KERNELS[m.name] = (m, curve)
+    return curve
+
+
+def _velocity_reference(m: Model, full: dict) -> float:
+    """u_ref: the square of the model's natural velocity scale at these values."""
+    names = list(inspect.signature(m.velocity_scale.py_func).parameters)
+    scale = float(m.velocity_scale.py_func(*(full[n] for n in names)))
+    return scale * scale if scale > 0.0 and math.isfinite(scale) else 1.0
+
+
+def _trace(m: Model, full: dict, phi_range, max_stages: int, points: int,
+           rtol: float = RTOL, h_max: float = H_MAX, h_first: float | None = None):
+    """Run the compiled tracer: (points (phi, u, stage), stages (sign, phi0, u0, reason,
+    phi_end, u_end)).
+
+    ``rtol``, ``h_max`` and ``h_first`` (the first panel's width, default
+    h_max / 20) are for measurements: ``rtol = inf`` accepts every panel, so
+    that panels of width h_max measure the order of the method.
+    """
+    pos, vel, _ = _coordinate(m)
+    v = m.input_vector(full)
+    return _kernel(m)(v, float(full[pos]), float(full[vel]), float(phi_range[0]),
+                      float(phi_range[1]), int(max_stages), int(points),
+                      _velocity_reference(m, full), float(rtol), float(h_max),
+                      float(0.05 * h_max if h_first is None else h_first))
 
 
 # ---------------------------------------------------------------- public API
@@ -691,12 +896,15 @@ def phase_curve(model: str | Model, *, phi: float, omega: float,
     Parameters
     ----------
     model:
-        ``"ladder"``, ``"wheel"`` or ``"hinge_pendulum"`` (or their
-        :class:`phasemap.Model`); the two-degree-of-freedom elliptic pendulum
-        has no phase curve of this kind (use :func:`phasemap.simulate`).
+        any one-degree-of-freedom model (``"ladder"``, ``"wheel"``,
+        ``"hinge_pendulum"``, or a :class:`phasemap.Model` whose dynamics has
+        one coordinate); the two-degree-of-freedom elliptic pendulum has no
+        phase curve of this kind (use :func:`phasemap.simulate`).
     phi, omega:
-        the initial state (rad, rad s-1).  An omega the model counts as zero
-        (``|omega| <= 1e-12 sqrt(g / l)``) is a rest state.
+        the initial state: the model's coordinate and its velocity, whatever
+        the model calls them (rad, rad s-1 for the built-in ones).  An omega
+        the model counts as zero (``|omega| <= 1e-12`` times its velocity
+        scale) is a rest state.
     phi_range:
         ``(low, high)`` containing ``phi``: the curve ends with ``horizon``
         where it leaves this range.  Default: the domain of ``phi`` where it is
@@ -705,8 +913,7 @@ def phase_curve(model: str | Model, *, phi: float, omega: float,
         the largest number of stages; a curve still reversing after that many
         ends with ``max_events``.
     points_per_stage:
-        points evenly spaced in phi on each stage, its ends included (stages
-        with an exponential boundary layer get up to a quarter more inside it).
+        points evenly spaced in phi on each stage, its ends included.
     **params:
         the model's parameters by name; missing ones take the defaults.
 
@@ -718,15 +925,16 @@ def phase_curve(model: str | Model, *, phi: float, omega: float,
         ``stage_sign``, ``stage_start_phi``, ``stage_start_omega``,
         ``stage_end_reason`` (flags of :class:`phasemap.Event`),
         ``stage_end_phi``, ``stage_end_omega``.  ``attrs["end_reason"]`` names the
-        last stage's reason.  See the module docstring for the methods and the
+        last stage's reason.  See the module docstring for the method and the
         events.
 
     Raises
     ------
     ValueError
-        for another model, an unknown or out-of-domain variable, a
-        non-scalar value, a ``phi_range`` that does not contain ``phi`` or
-        leaves the model's domain, or bad ``max_stages``/``points_per_stage``.
+        for a model without exactly one degree of freedom, an unknown or
+        out-of-domain variable, a non-scalar value, a ``phi_range`` that does
+        not contain ``phi`` or leaves the model's domain, or bad
+        ``max_stages``/``points_per_stage``.
 
     Examples
     --------
@@ -738,59 +946,25 @@ def phase_curve(model: str | Model, *, phi: float, omega: float,
     True
     """
     m = get_model(model)
-    if m.name not in _STAGES:
-        raise ValueError(
-            f"{m.name}: phase_curve follows one-degree-of-freedom models only "
-            f"({', '.join(_STAGES)}); use phasemap.simulate for {m.name}")
-    values = {"phi": phi, "omega": omega, **params}
+    pos, vel, _ = _coordinate(m)
+    values = {pos: phi, vel: omega, **params}
     for k, val in values.items():
         if np.ndim(val) != 0:
             raise ValueError(f"{m.name}: {k} must be a scalar for phase_curve()")
     full = {k: float(v) for k, v in m.complete(values).items()}
-    lo, hi = _checked_range(m, full["phi"], phi_range)
+    lo, hi = _checked_range(m, pos, full[pos], phi_range)
     max_stages = _positive_int(m, "max_stages", max_stages, 1)
     points = _positive_int(m, "points_per_stage", points_per_stage, 2)
-    p = {v.name: full[v.name] for v in m.params}
-    stage_fn = _STAGES[m.name]
-
-    phi0, omega0 = full["phi"], full["omega"]
-    stages: list[tuple[float, _StageResult]] = []
-    action, value = ("rest", 0.0) if omega0 == 0.0 else _moving(m, full, phi0, omega0)
-    if action == "rest":
-        omega0 = 0.0
-        action, value = _at_rest(m, full, phi0)
-    if action == "stop":
-        sign = 0.0 if omega0 == 0.0 else math.copysign(1.0, omega0)
-        stages.append((sign, _StageResult(np.array([phi0]), np.array([omega0 ** 2]), value,
-                                          phi0, omega0 ** 2)))
-    else:
-        sigma, u0 = value, omega0 * omega0
-        while True:
-            stop = hi if sigma > 0 else lo
-            res = stage_fn(phi0, u0, sigma, stop, p, points)
-            next_sigma = None
-            if res.reason == _ZERO:
-                action, value = _at_rest(m, full, res.end_phi)
-                if action == "go":
-                    res.reason, next_sigma = ev.REVERSAL, value
-                else:
-                    res.reason = value
-            stages.append((sigma, res))
-            if next_sigma is None:
-                break
-            if len(stages) >= max_stages:
-                res.reason = ev.MAX_EVENTS
-                break
-            phi0, u0, sigma = res.end_phi, 0.0, next_sigma
-    last = stages[-1][1]
-    var = m.variables["phi"]
-    if last.reason == ev.HORIZON and last.end_phi in (var.lower, var.upper):
-        last.reason = ev.LEFT_DOMAIN  # the model's own edge (the ladder lies flat)
-    return _dataset(m, full, (lo, hi), max_stages, points, stages)
+    pts, stages = _trace(m, full, (lo, hi), max_stages, points)
+    stages = stages.copy()
+    var = m.variables[pos]
+    if stages[-1, 3] == ev.HORIZON and stages[-1, 4] in (var.lower, var.upper):
+        stages[-1, 3] = ev.LEFT_DOMAIN  # the model's own edge (the ladder lies flat)
+    return _dataset(m, full, (lo, hi), max_stages, points, pts, stages)
 
 
-def _checked_range(m: Model, phi: float, phi_range) -> tuple[float, float]:
-    var = m.variables["phi"]
+def _checked_range(m: Model, pos: str, phi: float, phi_range) -> tuple[float, float]:
+    var = m.variables[pos]
     if phi_range is None:
         lo = var.lower if math.isfinite(var.lower) else phi - _DEFAULT_SPAN
         hi = var.upper if math.isfinite(var.upper) else phi + _DEFAULT_SPAN
@@ -804,7 +978,7 @@ def _checked_range(m: Model, phi: float, phi_range) -> tuple[float, float]:
         raise ValueError(f"{m.name}: phi_range must be finite with low < high, "
                          f"got {phi_range!r}")
     if not lo <= phi <= hi:
-        raise ValueError(f"{m.name}: phi_range {phi_range!r} must contain phi = {phi:g}")
+        raise ValueError(f"{m.name}: phi_range {phi_range!r} must contain {pos} = {phi:g}")
     var.check(m.name, lo)
     var.check(m.name, hi)
     return lo, hi
@@ -820,22 +994,23 @@ def _signed_root(sign: float, u: float) -> float:
     return sign * math.sqrt(u) if u > 0.0 else 0.0
 
 
+#: How the curves are computed (the Dataset's ``method`` attribute).
+METHOD = (f"exponential Gauss collocation in phi ({NODES} nodes, order {2 * NODES}) of "
+          "d(omega^2)/dphi = 2 phi'' from the model's branch rows; events by classification, "
+          "located on the dense output")
+
+
 def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
-             stages: list[tuple[float, _StageResult]]) -> xr.Dataset:
-    var_phi, var_omega = m.variables["phi"], m.variables["omega"]
-    phis, omegas, us, index = [], [], [], []
-    for i, (sign, res) in enumerate(stages):
-        u = np.maximum(res.u, 0.0)
-        phis.append(res.phi)
-        us.append(u)
-        omegas.append(np.where(u > 0.0, sign * np.sqrt(u), 0.0))
-        index.append(np.full(res.phi.size, i, dtype=np.int32))
-    signs = np.array([s for s, _ in stages], dtype=np.int8)
-    reasons = np.array([r.reason for _, r in stages], dtype=np.int8)
-    start_phi = np.array([r.phi[0] for _, r in stages])
-    start_omega = np.array([_signed_root(s, r.u[0]) for s, r in stages])
-    end_phi = np.array([r.end_phi for _, r in stages])
-    end_omega = np.array([_signed_root(s, r.end_u) for s, r in stages])
+             pts: np.ndarray, stages: np.ndarray) -> xr.Dataset:
+    pos, vel, _ = _coordinate(m)
+    var_phi, var_omega = m.variables[pos], m.variables[vel]
+    index = pts[:, 2].astype(np.int32)
+    signs = stages[:, 0].astype(np.int8)
+    u = np.maximum(pts[:, 1], 0.0)
+    omega = np.where(u > 0.0, signs[index] * np.sqrt(u), 0.0)
+    reasons = stages[:, 3].astype(np.int8)
+    start_omega = np.array([_signed_root(s, x) for s, x in zip(stages[:, 0], stages[:, 2])])
+    end_omega = np.array([_signed_root(s, x) for s, x in zip(stages[:, 0], stages[:, 5])])
     flags = {"flag_values": np.array(ev.EVENT_VALUES, dtype=np.int8),
              "flag_meanings": ev.EVENT_MEANINGS}
 
@@ -846,28 +1021,29 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
         return xr.Variable(dim, values, {"long_name": name, "units": var_omega.units})
 
     data = {
-        "phi": angle(var_phi.long_name, np.concatenate(phis), "point"),
-        "omega": rate(var_omega.long_name, np.concatenate(omegas), "point"),
-        "omega_squared": xr.Variable("point", np.concatenate(us), {
-            "long_name": f"square of the {var_omega.long_name}", "units": "rad2 s-2"}),
-        "point_stage": xr.Variable("point", np.concatenate(index), {
+        "phi": angle(var_phi.long_name, pts[:, 0].copy(), "point"),
+        "omega": rate(var_omega.long_name, omega, "point"),
+        "omega_squared": xr.Variable("point", u, {
+            "long_name": f"square of the {var_omega.long_name}",
+            "units": _squared_units(var_omega.units)}),
+        "point_stage": xr.Variable("point", index, {
             "long_name": "index of the stage the point belongs to", "units": "1"}),
         "stage_sign": xr.Variable("stage", signs, {
-            "long_name": "sign of omega on the stage (0: no motion)", "units": "1"}),
+            "long_name": f"sign of {vel} on the stage (0: no motion)", "units": "1"}),
         "stage_start_phi": angle(f"{var_phi.long_name} at the start of the stage",
-                                 start_phi, "stage"),
+                                 stages[:, 1].copy(), "stage"),
         "stage_start_omega": rate(f"{var_omega.long_name} at the start of the stage",
                                   start_omega, "stage"),
         "stage_end_reason": xr.Variable("stage", reasons, {
             "long_name": "event that ends the stage", **flags}),
-        "stage_end_phi": angle(f"{var_phi.long_name} at the end of the stage", end_phi,
-                               "stage"),
+        "stage_end_phi": angle(f"{var_phi.long_name} at the end of the stage",
+                               stages[:, 4].copy(), "stage"),
         "stage_end_omega": rate(f"{var_omega.long_name} at the end of the stage", end_omega,
                                 "stage"),
     }
     coords = {"stage": xr.Variable("stage", np.arange(len(stages), dtype=np.int32),
-                                   {"long_name": "stage index (omega keeps its sign on a stage)",
-                                    "units": "1"})}
+                                   {"long_name": f"stage index ({vel} keeps its sign on a "
+                                                 "stage)", "units": "1"})}
     from .simulate import end_message
 
     last = ev.Event(int(reasons[-1]))
@@ -882,9 +1058,9 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
         "phasemap_model": m.name,
         "phasemap_version": __version__,
         "date_created": now,
-        "method": _METHODS[m.name],
+        "method": METHOD,
         "end_reason": last.name.lower(),
-        "end_message": end_message(m, last, (float(end_phi[-1]),)),
+        "end_message": end_message(m, last, (float(stages[-1, 4]),)),
         "n_reversals": np.int32(np.count_nonzero(reasons == ev.REVERSAL)),
         "phasemap_phi_range": np.array(phi_range, dtype=float),
         "phasemap_max_stages": np.int32(max_stages),
@@ -895,3 +1071,14 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
     for v in m.params:
         attrs[f"phasemap_fixed_{v.name}"] = float(full[v.name])
     return xr.Dataset(data, coords, attrs)
+
+
+def _squared_units(units: str) -> str:
+    """UDUNITS spelling of the square of ``units`` ("rad s-1" -> "rad2 s-2")."""
+    out = []
+    for part in units.split():
+        name = part.rstrip("-0123456789")
+        power = part[len(name):] or "1"
+        p = 2 * int(power)
+        out.append(name if p == 1 else f"{name}{p}")
+    return " ".join(out)

@@ -399,9 +399,12 @@ def test_wheel_ends_singular_where_its_bracket_vanishes():
                                reference_u(sol, phis, 1.0, system.acc), atol=1e-9 * G)
 
 
-# ------------------------------------------------ the wheel's quadrature ----
-def test_wheel_quadrature_converges_at_order_twelve():
-    """Composite 6-node Gauss-Legendre (nested for the exponent): error ~ h^12."""
+# ------------------------------------------------ the collocation's order ---
+def test_collocation_converges_at_order_twelve():
+    """Exponential Gauss collocation with 6 nodes: the error of omega^2 ~ h^12, h the panel
+    width.  The wheel's u-slope is not zero (z = beta h != 0 exercises the phi-functions) and
+    its bracket has complex zeros 0.96 from the real axis, so the panels feel them."""
+    from phasemap.models import get_model
     delta, r, l, rho, phi0, u0, span = 0.1, 1.0, 0.5, 0.5, -1.0, 40.0, 2.0
 
     def bracket(phi):
@@ -414,25 +417,40 @@ def test_wheel_quadrature_converges_at_order_twelve():
 
     exact = solve_ivp(slope, (phi0, phi0 + span), [u0], method="DOP853", rtol=1e-13,
                       atol=1e-13).y[0, -1]
+    m = get_model("wheel")
+    full = {k: float(x) for k, x in m.complete(dict(phi=phi0, omega=math.sqrt(u0), delta=delta,
+                                                     r=r, l=l, rho=rho)).items()}
 
     def run(n):
-        phis, ws = np.empty(n + 2), np.empty(n + 2)
-        phis[0], ws[0] = phi0, bracket(phi0) * u0
-        k, status = phase._wheel_march(0, phis, ws, 1.0, phi0 + span, delta, r, l, rho, G,
-                                       span / n * (1 + 1e-12), 1e9)
-        assert (k, status) == (n, Event.HORIZON)
-        return ws[k] / bracket(phis[k])
+        h = span / n * (1 + 1e-12)  # n panels of width h: every panel accepted
+        _, stages = phase._trace(m, full, (phi0 - 1, phi0 + span), 1, 2, rtol=math.inf,
+                                 h_max=h, h_first=h)
+        assert stages[0, 3] == Event.HORIZON
+        return stages[0, 5]
 
-    assert phase.GL_NODES == 6
-    ns = np.array([1, 2, 3, 4])
+    assert phase.NODES == 6
+    ns = np.array([2, 3, 4, 5])
     errors = np.array([abs(run(n) - exact) for n in ns])
     order = np.polyfit(np.log(span / ns), np.log(errors), 1)[0]
     assert 10.0 <= order <= 14.0, (order, errors)
-    # with the default panels the result is at the reference's own accuracy
+    # with the adaptive panels the result is at the reference's own accuracy
     ds = phase_curve("wheel", phi=phi0, omega=math.sqrt(u0), delta=delta, r=r, l=l, rho=rho,
                      phi_range=(phi0 - 1, phi0 + span))
     assert ds.attrs["end_reason"] == "horizon"
     assert ds.stage_end_omega.values[0] ** 2 == pytest.approx(exact, rel=1e-12)
+
+
+def test_stiff_ladder_stage_matches_the_closed_form():
+    """f = sqrt 2 + 1e-6 (slope |lam| = 8.5e6): the exponential weights carry the boundary
+    layer and the slow curve; omega^2 at every output point against the ladder's closed form
+    (phasemap.models.ladder.omega_squared, independent of the tracer)."""
+    from phasemap.models import ladder as lad
+    f, phi0, omega0 = math.sqrt(2.0) + 1e-6, 0.6, -3.0
+    ds = phase_curve("ladder", phi=phi0, omega=omega0, f=f)
+    sel = ds.point_stage.values == 0
+    phis, u = ds.phi.values[sel], ds.omega_squared.values[sel]
+    exact = np.array([lad.omega_squared(p, phi0, omega0, f, 1.0, G) for p in phis])
+    np.testing.assert_allclose(u, exact, rtol=0, atol=1e-10 * G)
 
 
 # ------------------------------------------------ starts, limits, horizon ---

@@ -1,0 +1,260 @@
+"""Phase curves: the generic compiled tracer against the per-system one it replaced.
+
+For the ladder, the wheel and the hinge pendulum, times one phase curve
+
+* ``after``: :func:`phasemap.phase_curve` (the generic exponential-collocation
+  tracer, compiled per model), with its Dataset, and its kernel alone;
+* ``before``: the per-system tracer of ``phasemap/phase.py`` at git revision
+  ``--before`` (closed forms for the ladder and the hinge, Gauss-Legendre
+  quadrature for the wheel; Python stage logic), loaded from git;
+* ``simulate``: :func:`phasemap.simulate` (DOP853 at rtol 1e-12, which is about
+  the tracer's accuracy) to the same fate, with its Dataset, and its kernel alone;
+
+alternating the three in one process, medians over ``--repeat`` runs, JIT
+compilation excluded (reported separately as the first call).  Accuracy:
+omega^2 along the curve against the ladder's closed form
+(``phasemap.models.ladder.omega_squared``), the weightless hinge pendulum's
+u = omega0^2 exp(-2 k (phi - phi0)) (from ``weightless_motion``), and the
+wheel's first-integral equation integrated by scipy's DOP853 at rtol 1e-13.
+Writes the section "Phase curves" of ../BENCHMARKS.md.
+
+    python benchmarks/phase_curve.py [--repeat 21] [--before main] [--no-write]
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import math
+import pathlib
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+import phasemap
+from phasemap import phase
+from phasemap.models import get_model
+from phasemap.models import hinge_pendulum as hinge
+from phasemap.models import ladder as lad
+
+HERE = pathlib.Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(HERE))
+from grid import machine, write_section  # noqa: E402
+
+G = 9.81
+#: (label, model, start and parameters, t_end for simulate)
+CASES = [
+    ("ladder: falls from rest, leaves the floor", "ladder",
+     dict(phi=1.0, omega=0.0, f=0.3, l=0.8), 5.0),
+    ("ladder: thrown up, reverses, falls", "ladder",
+     dict(phi=1.2, omega=-1.2, f=0.3, l=0.8), 5.0),
+    ("ladder: f = sqrt2 + 1e-6, to the floor", "ladder",
+     dict(phi=0.6, omega=-3.0, f=math.sqrt(2.0) + 1e-6), 5.0),
+    ("wheel: swings to rest (4 stages)", "wheel", dict(phi=1.0, omega=0.0), 60.0),
+    ("wheel: over the top, then swings", "wheel", dict(phi=0.0, omega=7.0), 60.0),
+    ("hinge: swings to rest (5 stages)", "hinge_pendulum",
+     dict(phi=0.2, omega=0.0, delta=0.02), 60.0),
+    ("hinge: k = 22, pieces with layers", "hinge_pendulum",
+     dict(phi=2.0, omega=8.0, delta=0.999), 60.0),
+]
+
+
+def load_before(rev: str):
+    """The phase module at git revision ``rev``, as ``phasemap._phase_before``."""
+    text = subprocess.run(["git", "show", f"{rev}:phasemap/phase.py"], cwd=ROOT, check=True,
+                          capture_output=True, text=True).stdout
+    path = pathlib.Path(tempfile.mkdtemp()) / "_phase_before.py"
+    path.write_text(text)
+    spec = importlib.util.spec_from_file_location("phasemap._phase_before", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def median_ms(fn, repeat):
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return 1e3 * statistics.median(times)
+
+
+def runners(name, values, t_end, before):
+    m = get_model(name)
+    full = {k: float(v) for k, v in m.complete(values).items()}
+    lo, hi = phase._checked_range(m, "phi", full["phi"], None)
+    kernel = phase._kernel(m)
+    v = m.input_vector(full)
+    u_ref = phase._velocity_reference(m, full)
+    integrate, _ = phasemap.integrate.kernels(m, "DOP853")
+    y0 = np.array([full["phi"], full["omega"]])
+    no_eval = np.empty(0)
+    return {
+        "after": lambda: phase.phase_curve(name, **values),
+        "after kernel": lambda: kernel(v, full["phi"], full["omega"], lo, hi, 50, 200, u_ref,
+                                       phase.RTOL, phase.H_MAX, 0.05 * phase.H_MAX),
+        "after kernel, 2 points": lambda: kernel(v, full["phi"], full["omega"], lo, hi, 50, 2,
+                                                 u_ref, phase.RTOL, phase.H_MAX,
+                                                 0.05 * phase.H_MAX),
+        "before": (lambda: before.phase_curve(name, **values)) if before else None,
+        "simulate": lambda: phasemap.simulate(name, t_end, rtol=1e-12, method="DOP853",
+                                              **values),
+        "simulate kernel": lambda: integrate(v, y0, t_end, 1e-12, 1e-12, math.inf, 10**6,
+                                             10**4, True, no_eval),
+    }
+
+
+def timing(repeat, before):
+    rows = []
+    for label, name, values, t_end in CASES:
+        run = runners(name, values, t_end, before)
+        cold = {}
+        for key, fn in run.items():
+            if fn is not None:
+                t0 = time.perf_counter()
+                fn()
+                cold[key] = time.perf_counter() - t0
+        ds = run["after"]()
+        sim = run["simulate"]()
+        med = {k: [] for k in run}
+        for _ in range(3):  # alternate the methods
+            for key, fn in run.items():
+                if fn is not None:
+                    med[key].append(median_ms(fn, max(repeat // 3, 1)))
+        med = {k: statistics.median(x) if x else math.nan for k, x in med.items()}
+        rows.append((label, ds.attrs["end_reason"], int(ds.sizes["stage"]),
+                     sim.attrs["end_reason"], med))
+    return rows
+
+
+def accuracy():
+    """(label, max |omega^2 error| / (g/l), end-point error) against independent references."""
+    out = []
+    # ladder: one stage against the closed form
+    for f, phi0, omega0 in ((0.3, 0.6, 2.0), (0.5, 1.2, -1.5), (math.sqrt(2) + 1e-6, 0.6, -3.0),
+                            (math.sqrt(2) - 1e-3, 0.9, 0.5)):
+        ds = phasemap.phase_curve("ladder", phi=phi0, omega=omega0, f=f)
+        sel = ds.point_stage.values == 0
+        phis, u = ds.phi.values[sel], ds.omega_squared.values[sel]
+        exact = np.array([lad.omega_squared(p, phi0, omega0, f, 1.0, G) for p in phis])
+        out.append((f"ladder f = {f:.6g}, phi0 {phi0}, omega0 {omega0} "
+                    f"({ds.stage_end_reason.attrs['flag_meanings'].split()[ds.stage_end_reason.values[0]]})",
+                    float(np.max(np.abs(u - exact))) / G))
+    # hinge pendulum, weightless: u = omega0^2 exp(-2 k sigma (phi - phi0))
+    for delta, omega0 in ((0.3, 3.0), (0.9, -5.0)):
+        ds = phasemap.phase_curve("hinge_pendulum", phi=0.0, omega=omega0, delta=delta, g=0.0)
+        k = delta / math.sqrt(1 - delta ** 2)
+        s = math.copysign(1.0, omega0)
+        exact = omega0 ** 2 * np.exp(-2 * k * s * ds.phi.values)
+        check = hinge.weightless_motion(np.array([1.0]), 0.0, omega0, delta, 1.0)
+        assert abs(check[1][0] ** 2 - omega0 ** 2 * math.exp(-2 * k * s * check[0][0])) < 1e-9
+        out.append((f"hinge weightless delta = {delta}, omega0 {omega0} (to the horizon, 4 pi)",
+                    float(np.max(np.abs(ds.omega_squared.values - exact) / omega0 ** 2))))
+    # wheel: the first-integral equation by DOP853 at rtol 1e-13
+    for delta, phi0, u0, span in ((0.1, -1.0, 40.0, 2.0), (0.05, 0.0, 49.0, 6.0)):
+        r, l, rho = 1.0, 0.5, 0.5
+
+        def slope(phi, u):
+            sp, cp = math.sin(phi), math.cos(phi)
+            br = rho ** 2 + r ** 2 + l ** 2 - 2 * r * l * cp + delta * l * sp
+            return [(-2 * l * (r * sp + delta * cp) * u[0] - 2 * G * l * sp - 2 * delta * G) / br]
+        ds = phasemap.phase_curve("wheel", phi=phi0, omega=math.sqrt(u0), delta=delta,
+                                  phi_range=(phi0 - 1, phi0 + span))
+        sel = ds.point_stage.values == 0
+        phis = ds.phi.values[sel]
+        ref = solve_ivp(slope, (phi0, phis[-1]), [u0], method="DOP853", rtol=1e-13, atol=1e-13,
+                        t_eval=phis).y[0]
+        out.append((f"wheel delta = {delta}, phi0 {phi0}, omega0^2 {u0} over {phis[-1] - phi0:.3g}"
+                    " rad", float(np.max(np.abs(ds.omega_squared.values[sel] - ref))) / (G / l)))
+    return out
+
+
+def order():
+    """Observed order of the collocation with fixed panels (wheel, as in the tests)."""
+    m = get_model("wheel")
+    delta, phi0, u0, span = 0.1, -1.0, 40.0, 2.0
+    r, l, rho = 1.0, 0.5, 0.5
+
+    def slope(phi, u):
+        sp, cp = math.sin(phi), math.cos(phi)
+        br = rho ** 2 + r ** 2 + l ** 2 - 2 * r * l * cp + delta * l * sp
+        return [(-2 * l * (r * sp + delta * cp) * u[0] - 2 * G * l * sp - 2 * delta * G) / br]
+    exact = solve_ivp(slope, (phi0, phi0 + span), [u0], method="DOP853", rtol=1e-13,
+                      atol=1e-13).y[0, -1]
+    full = {k: float(x) for k, x in m.complete(dict(phi=phi0, omega=math.sqrt(u0),
+                                                     delta=delta)).items()}
+    ns = np.array([2, 3, 4, 5])
+    errs = []
+    for n in ns:
+        h = span / n * (1 + 1e-12)
+        _, st = phase._trace(m, full, (phi0 - 1, phi0 + span), 1, 2, rtol=math.inf, h_max=h,
+                             h_first=h)
+        errs.append(abs(st[0, 5] - exact))
+    return float(np.polyfit(np.log(span / ns), np.log(errs), 1)[0]), errs
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--repeat", type=int, default=21)
+    ap.add_argument("--before", default="main", help="git revision of the old tracer")
+    ap.add_argument("--no-write", action="store_true")
+    args = ap.parse_args()
+    try:
+        before = load_before(args.before)
+        before.phase_curve("hinge_pendulum", phi=0.2, omega=0.0)
+    except Exception as exc:  # noqa: BLE001 - a missing revision only drops a column
+        print(f"no 'before' tracer: {exc}")
+        before = None
+    t0 = time.perf_counter()
+    rows = timing(args.repeat, before)
+    acc = accuracy()
+    p, errs = order()
+    lines = ["## Phase curves (`benchmarks/phase_curve.py`)", "",
+             f"Machine: {machine()}.  Medians of {args.repeat} runs per method, the methods "
+             "alternating in one process; JIT compilation excluded.  *after*: "
+             "`phasemap.phase_curve`, the generic exponential Gauss collocation in phi "
+             f"({phase.NODES} nodes, rtol {phase.RTOL:g}) compiled per model, with its Dataset "
+             "(200 points per stage); *kernel*: the compiled curve alone.  *before*: the "
+             f"per-system tracer at `{args.before}` (closed forms for the ladder and the hinge "
+             "pendulum, Gauss-Legendre quadrature for the wheel, Python stage logic).  "
+             "*simulate*: `phasemap.simulate(..., rtol=1e-12, method='DOP853')` to the same "
+             "fate (its accuracy is about the tracer's), with its Dataset, and its kernel "
+             "(saving every step).  *kernel, 2 points*: the compiled curve with "
+             "points_per_stage = 2, i.e. the tracing alone without the 200 output points per "
+             "stage, each of which costs one more Gauss pass (6 branch-row evaluations) to "
+             "keep the output at the method's order.", "",
+             "| curve | fate (stages) | simulate fate | before | after | after kernel | "
+             "kernel, 2 points | simulate | simulate kernel | before / after | "
+             "simulate / after | simulate kernel / kernel, 2 points |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for label, fate, n, sfate, med in rows:
+        lines.append(
+            f"| {label} | {fate} ({n}) | {sfate} | {med['before']:.2f} ms | {med['after']:.2f} ms"
+            f" | {med['after kernel']:.3f} ms | {med['after kernel, 2 points']:.3f} ms | "
+            f"{med['simulate']:.2f} ms | {med['simulate kernel']:.3f} ms | "
+            f"{med['before'] / med['after']:.1f}x | {med['simulate'] / med['after']:.2f}x | "
+            f"{med['simulate kernel'] / med['after kernel, 2 points']:.2f}x |")
+    lines += ["", "Accuracy against independent references (largest error of omega^2 over the "
+              "output points of the stage, relative to g/l; the hinge's relative to omega0^2):",
+              "", "| case | error |", "|---|---|"]
+    lines += [f"| {label} | {err:.1e} |" for label, err in acc]
+    lines += ["", f"Observed order with fixed panels (wheel, n = 2..5 panels over 2 rad): "
+              f"{p:.1f} (errors {', '.join(f'{e:.1e}' for e in errs)}); "
+              f"the test suite asserts 10..14.  Run time of this script "
+              f"{time.perf_counter() - t0:.0f} s."]
+    text = "\n".join(lines)
+    print(text)
+    if not args.no_write:
+        write_section(text, "## Phase curves")
+
+
+if __name__ == "__main__":
+    main()
