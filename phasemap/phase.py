@@ -397,7 +397,8 @@ def _classify_template(v, x, omega, out):
     n, stag, lost, sing = nx.summarize(out, STICK)
     adm = -1
     for b in range(N_BRANCHES):
-        if out[b, nx.STATUS] == nx.ADMISSIBLE:
+        st = out[b, nx.STATUS]
+        if st == nx.ADMISSIBLE or st == nx.SEPARATION:
             adm = b
             break
     return n, adm, lost, sing
@@ -443,6 +444,8 @@ def _at_rest_template(v, x, out):
     if n == nx.N_UNIQUE:
         if adm == STICK:
             return ev.REST, -1
+        if out[adm, nx.STATUS] == nx.SEPARATION:
+            return ev.CONTACT_LOST, -1  # the only motion leaves a contact
         return -1, adm
     if sing and (n == nx.N_NONE or n == nx.N_CONTINUUM):
         return ev.SINGULAR, -1
@@ -651,7 +654,9 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
             if not (u_e > 0.0) or (STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT):
                 reason = _ZERO
             elif n2 == 1:
-                if adm2 == mode:
+                if out[adm2, nx.STATUS] == nx.SEPARATION:
+                    reason = ev.CONTACT_LOST  # the only motion from here leaves a contact
+                elif adm2 == mode:
                     reason = ev.SINGULAR  # same branch, its coefficient changed sign
                 elif DIRECTIONS[adm2] == sigma:
                     reason = ev.SWITCH
@@ -743,24 +748,18 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
     code = -1
     mode = -1
     if omega0 != 0.0:
-        CLASSIFY(v, phi0, omega0, out)
+        n, adm, lost, sing = CLASSIFY(v, phi0, omega0, out)
         if STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT:
             omega0 = 0.0  # an omega the model counts as zero: a rest state
-        else:
-            row = 0
-            for b in range(N_BRANCHES):
-                if out[b, nx.STATUS] != nx.ABSENT:
-                    row = b
-                    break
-            status = out[row, nx.STATUS]
-            if out[row, nx.SINGULAR] != 0.0:
-                code = ev.SINGULAR
-            elif status == nx.ADMISSIBLE:
-                mode = row
-            elif status == nx.CONTACT_LOST:
-                code = ev.CONTACT_LOST
+        elif sing and (n == nx.N_NONE or n == nx.N_CONTINUUM):
+            code = ev.SINGULAR
+        elif n == nx.N_UNIQUE:
+            if out[adm, nx.STATUS] == nx.SEPARATION:
+                code = ev.CONTACT_LOST  # the only motion leaves a contact
             else:
-                code = ev.NO_SOLUTION
+                mode = adm
+        else:
+            code = ev.fate_without_unique(n, lost, sing)
     if omega0 == 0.0:
         code, mode = AT_REST(v, phi0, out)
     if code >= 0:
@@ -888,7 +887,7 @@ def _trace(m: Model, full: dict, phi_range, max_stages: int, points: int,
 # ---------------------------------------------------------------- public API
 
 
-def phase_curve(model: str | Model, *, phi: float, omega: float,
+def phase_curve(model: str | Model, *, phi: float | None = None, omega: float | None = None,
                 phi_range: tuple[float, float] | None = None, max_stages: int = 50,
                 points_per_stage: int = 200, **params: float) -> xr.Dataset:
     """The phase curve omega(phi) from (phi, omega), stage by stage, to its fate.
@@ -901,8 +900,9 @@ def phase_curve(model: str | Model, *, phi: float, omega: float,
         one coordinate); the two-degree-of-freedom elliptic pendulum has no
         phase curve of this kind (use :func:`phasemap.simulate`).
     phi, omega:
-        the initial state: the model's coordinate and its velocity, whatever
-        the model calls them (rad, rad s-1 for the built-in ones).  An omega
+        the initial state: the model's coordinate and its velocity (rad,
+        rad s-1 for the built-in ones).  They may also be given by the model's
+        own names (``theta=..., omega=...`` for ``rod_on_step``).  An omega
         the model counts as zero (``|omega| <= 1e-12`` times its velocity
         scale) is a rest state.
     phi_range:
@@ -947,6 +947,13 @@ def phase_curve(model: str | Model, *, phi: float, omega: float,
     """
     m = get_model(model)
     pos, vel, _ = _coordinate(m)
+    for name, given in ((pos, phi), (vel, omega)):
+        if given is not None and name in params and name not in ("phi", "omega"):
+            raise ValueError(f"{m.name}: {name} is given twice")
+    phi = params.pop(pos, phi) if pos != "phi" else phi
+    omega = params.pop(vel, omega) if vel != "omega" else omega
+    if phi is None or omega is None:
+        raise ValueError(f"{m.name}: phase_curve needs the initial {pos} and {vel}")
     values = {pos: phi, vel: omega, **params}
     for k, val in values.items():
         if np.ndim(val) != 0:
