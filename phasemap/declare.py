@@ -301,6 +301,13 @@ class System:
     edges: Mapping = field(default_factory=dict)
     #: optional cross-variable domain check on (possibly array) values: raise ValueError
     check: object = None
+    #: optional short names for branches: ``{generated name: name}`` (such as
+    #: ``{"floor_slip_pos_wall_slip_pos": "slide_pos"}``); ``branch_names()`` lists them
+    names: Mapping = field(default_factory=dict)
+
+    def branch_names(self) -> tuple[str, ...]:
+        """The generated branch names, before ``names`` renames them (derives the model)."""
+        return tuple(_generated_names(self))
 
     @property
     def model(self):
@@ -1408,8 +1415,18 @@ def _build(S: System):
                           Variable(f"F_{c.name}", "N", f"tangential (friction) force of {what}")]
             if isinstance(c, RollingContact):
                 reactions.append(Variable(f"M_{c.name}", "N m", f"rolling-friction moment of {what}"))
-    candidates = tuple(Branch(name, float(direction), getattr(module, fname), tuple(args))
-                       for name, direction, presence, fname, args in spec["rows"])
+    generated = [row[0] for row in spec["rows"]]
+    unknown = sorted(set(S.names) - set(generated))
+    if unknown:
+        _fail(S, "names", f"{unknown[0]!r} is not a branch of the system; its branches are "
+              f"{', '.join(generated)}")
+    renamed = [str(S.names.get(n, n)) for n in generated]
+    clash = sorted({n for n in renamed if renamed.count(n) > 1})
+    bad = [n for n in renamed if not _IDENT.match(n)]
+    if clash or bad:
+        _fail(S, "names", f"branch names must be distinct identifiers: {(clash or bad)[0]!r}")
+    candidates = tuple(Branch(renamed[i], float(direction), getattr(module, fname), tuple(args))
+                       for i, (name, direction, presence, fname, args) in enumerate(spec["rows"]))
     positions = tuple(var(c, default=float(c.default)) for c in moving
                       if c.name not in spec["state_positions"])
     dynamics = Dynamics(coordinates=tuple((c.name, c.rate.name, f"{c.name}_ddot")
@@ -1425,6 +1442,14 @@ def _build(S: System):
                              "relative to the magnitude of its terms"),
         velocity=spec["velocity"], velocity_scale=module.velocity_scale,
         default_axes=axes, dynamics=dynamics, check=S.check, declaration=S)
+
+
+def _generated_names(S: System) -> list[str]:
+    from . import _codegen  # noqa: F401  (the model is built, or loaded from the cache)
+
+    m = S.model
+    inverse = {v: k for k, v in S.names.items()}
+    return [inverse.get(b, b) for b in m.branches]
 
 
 def _model_of(system: System):

@@ -3,6 +3,7 @@ and with an independent numpy solve; malformed declarations get clear errors."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import subprocess
 import sys
@@ -226,3 +227,17 @@ def test_a_declared_trajectory_draws_its_own_phase_plane():
     fig = ds.phasemap.plot(phase_plane=True)
     ax = fig.axes[0]
     assert ax.get_xlabel().startswith(r"$\theta$") and ax.get_ylabel().startswith(r"$\omega$")
+
+
+def test_branches_can_get_short_names():
+    """names= renames generated branches (and their layers); an unknown one is refused."""
+    from phasemap.systems.painleve_rod import SYSTEM
+
+    short = dataclasses.replace(SYSTEM, name="rod_short",
+                                names={"A_slip_pos": "slide_pos", "A_slip_neg": "slide_neg"})
+    assert short.model.branches[:3] == ("stick", "slide_pos", "slide_neg")
+    assert "A_slip_pos" in short.branch_names()
+    assert "theta_ddot_slide_pos" in phasemap.layers_for(short.model)
+    wrong = dataclasses.replace(SYSTEM, name="rod_wrong", names={"A_glide": "glide"})
+    with pytest.raises(ValueError, match="rod_wrong: names: 'A_glide' is not a branch"):
+        wrong.model
