@@ -70,6 +70,11 @@ def test_no_overflow_is_ever_counted_as_a_solution(model):
             values[var.name] = x
         if model == "wheel":
             values["l"] = min(values["l"], values["r"])
+        if m.check is not None:  # a cross-variable domain (the rod on a step must touch it)
+            try:
+                m.check(values)
+            except ValueError:
+                continue
         c = phasemap.classify(m, **values)
         for b in c.branches:
             if b.status != phasemap.BranchStatus.ADMISSIBLE:
@@ -77,7 +82,7 @@ def test_no_overflow_is_ever_counted_as_a_solution(model):
             numbers = [*b.accelerations.values(), *b.reactions.values()]
             assert all(math.isfinite(x) for x in numbers), (repr(values), b)
             checked += 1
-    assert checked > 500
+    assert checked > (100 if m.check is not None else 500)  # a check refuses most draws
 
 
 # ------------------------------------------------------- 3. end labels -----
