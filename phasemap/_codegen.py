@@ -111,6 +111,10 @@ class _Source:
                                    f"{model.name}: velocity_scale")
         for j, d in enumerate(model.derived):
             self.imports.append(_import(d.func, f"DER{j}"))
+        self.inside_names = []
+        if model.inside is not None:
+            self.imports.append(_import(model.inside, "INSIDE_FN"))
+            self.inside_names = _params(model.inside, 0, self.inputs, f"{model.name}: inside")
 
     def call(self, b: int, rest: str, velocity: str) -> str:
         """The call of branch ``b`` with ``rest`` and the velocity local ``velocity``."""
@@ -200,6 +204,8 @@ def _deps(model) -> list[pathlib.Path]:
     """Source files compiled into a model's generated code."""
     mods = {spec.func.py_func.__module__ for spec in model.candidates}
     mods.add(model.velocity_scale.py_func.__module__)
+    if model.inside is not None:
+        mods.add(model.inside.py_func.__module__)
     mods |= {d.func.py_func.__module__ for d in model.derived if hasattr(d.func, "py_func")}
     files = sorted(pathlib.Path(sys.modules[m].__file__) for m in mods)
     return files + [pathlib.Path(nx.__file__), pathlib.Path(__file__)]
@@ -309,12 +315,18 @@ def contract(model):
     if not model.derived:
         body.append("    pass")
     bodies["derive(v)"] = body
+    body = ['    """The state v (derived inputs filled) lies in the domain of the model."""']
+    if model.inside is not None:
+        body += [f"    return INSIDE_FN({', '.join(f'v[{slot[n]}]' for n in src.inside_names)})"]
+    else:
+        body += ["    return True"]
+    bodies["domain(v)"] = body
     lines = _header(src, "The per-point contract")
     for signature, body in bodies.items():
         lines += ['@njit(cache=True, error_model="numpy")', f"def {signature}:", *body, "", ""]
     # Inlined into the integrator's right-hand side: a step evaluates it six
     # times, and an out-of-line call that passes arrays costs more than the physics.
-    for signature in ("branch_row(v, b)", "derive(v)"):
+    for signature in ("branch_row(v, b)", "derive(v)", "domain(v)"):
         name, args = signature.split("(", 1)
         lines += ['@njit(cache=True, forceinline=True, error_model="numpy")',
                   f"def {name}_inline({args}:",

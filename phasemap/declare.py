@@ -246,6 +246,10 @@ class EdgeContact(PointContact):
     corner: tuple = (0, 0)
     angle: object = 0
     side: int = 1
+    #: optional ``(low, high)``: where along the edge (from ``point``, along the edge's
+    #: direction) the corner may touch it, such as ``(0, 2 * l)`` for a rod of length
+    #: 2l; outside, the state is outside the model's domain
+    extent: tuple | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -551,6 +555,7 @@ class _Context:
                      - sp.diff(V, q[i]) + forces.get(coords[i].name, 0))
         # contact channels: velocity expressions linear in the rates
         self.channels = {}
+        self.domain = []  # (expression >= 0, contact name): where the contacts exist
         gaps, vcons = [], []
         for c in S.contacts:
             ch = {}
@@ -564,6 +569,10 @@ class _Context:
                 # the body's material velocity at the corner
                 vK = [vel(P[0]) - w * (K[1] - P[1]), vel(P[1]) + w * (K[0] - P[0])]
                 gaps.append(nv[0] * (P[0] - K[0]) + nv[1] * (P[1] - K[1]))
+                if c.extent is not None:
+                    along = e[0] * (K[0] - P[0]) + e[1] * (K[1] - P[1])
+                    self.domain.append((along - _sym(c.extent[0]), c.name))
+                    self.domain.append((_sym(c.extent[1]) - along, c.name))
                 ch["N"] = nv[0] * vK[0] + nv[1] * vK[1]
                 ch["T"] = e[0] * vK[0] + e[1] * vK[1]
                 vcons.append(ch["N"])
@@ -623,6 +632,7 @@ class _Context:
         self.on = on
         self.M = M.applyfunc(on)
         self.h = [on(x) for x in h]
+        self.domain = [(on(e), nm) for e, nm in self.domain]
         self.dep = dep
         for name, ch in self.channels.items():
             for k, v in list(ch.items()):
@@ -1314,6 +1324,23 @@ def _derive(S: System) -> str:
     out += ['@njit(cache=True, error_model="numpy", forceinline=True)',
             f"def velocity_scale({', '.join(scale_args)}):",
             f"    return {printer.doprint(sp.Float(1) * scale_expr)}", ""]
+    if ctx.domain:
+        conds = [inputs_of(e) for e, _ in ctx.domain]
+        reps, red = sp.cse(conds + [inputs_of(_scale(e)) for e, _ in ctx.domain],
+                           symbols=sp.numbered_symbols("_k_x"), order="none")
+        used = set()
+        for e in conds:
+            used |= {x.name for x in e.free_symbols}
+        for e in [inputs_of(_scale(e)) for e, _ in ctx.domain]:
+            used |= {x.name for x in e.free_symbols}
+        args = [nm for nm in inputs if nm in used]
+        k = len(conds)
+        out += ['@njit(cache=True, error_model="numpy", forceinline=True)',
+                f"def inside({', '.join(args)}):"]
+        out += [f"    {a} = {printer.doprint(b)}" for a, b in reps]
+        out += ["    return " + " & ".join(
+            f"(({printer.doprint(red[i])}) >= -{nx.TOL!r} * ({printer.doprint(red[k + i])}))"
+            for i in range(k)), ""]
     acc_idx = [i for i, c in enumerate(S.coordinates) if c.rate]
     for kinds, (fname, args, body, used, sep, n_react) in funcs.items():
         params = args + ["rest"] + [nm for nm in inputs if nm in used]
@@ -1343,6 +1370,7 @@ def _derive(S: System) -> str:
                   _row_args(funcs[tuple(m[0] for m in combo)][1], presence, combo, S))
                  for name, direction, presence, combo in rows],
         "kappa": kappa,
+        "domain": sorted({nm for _, nm in ctx.domain}),
         "n_acc": n_acc,
     }
     out += [f"SPEC = {json.dumps(spec)!r}", ""]
@@ -1441,7 +1469,43 @@ def _build(S: System):
         coefficient=Variable("coef", "1", "determinant of the branch's contact problem, "
                              "relative to the magnitude of its terms"),
         velocity=spec["velocity"], velocity_scale=module.velocity_scale,
-        default_axes=axes, dynamics=dynamics, check=S.check, declaration=S)
+        default_axes=axes, dynamics=dynamics, check=_checks(S, spec, module, inputs_of=None),
+        declaration=S, inside=getattr(module, "inside", None),
+        domain_text=_domain_text(spec))
+
+
+def _domain_text(spec) -> str:
+    names = spec.get("domain", [])
+    if not names:
+        return ""
+    return ("the corner of contact " + " or ".join(repr(n) for n in names)
+            + " leaves the body's edge (the contact no longer exists)")
+
+
+def _checks(S: System, spec, module, inputs_of=None):
+    """The model's Python-level domain check: the declaration's own, and ``inside``."""
+    inside = getattr(module, "inside", None)
+    if inside is None:
+        return S.check
+    import inspect
+
+    names = list(inspect.signature(inside.py_func).parameters)
+    text = _domain_text(spec)
+
+    def check(values):
+        if S.check is not None:
+            S.check(values)
+        vals = {}
+        for n in names:
+            src = n[4:] if n.startswith(("sin_", "cos_")) else n
+            x = np.asarray(values[src], float)
+            vals[n] = np.sin(x) if n.startswith("sin_") else (np.cos(x) if n.startswith("cos_")
+                                                              else x)
+        ok = np.vectorize(inside.py_func, otypes=[bool])(*(vals[n] for n in names))
+        if not np.all(ok):
+            raise ValueError(f"{S.name}: outside the domain: {text}")
+
+    return check
 
 
 def _generated_names(S: System) -> list[str]:

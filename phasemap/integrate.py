@@ -95,6 +95,7 @@ STICK_IS_REST = True
 LOWER = np.zeros(2)
 UPPER = np.zeros(2)
 INSIDE = None
+DOMAIN = None
 FILL = None
 RHS = None
 SUMMARY = None
@@ -171,12 +172,14 @@ def _fill_template(v, y):
     DERIVE(v)
 
 
-def _inside_template(y):
-    """The integrated state lies in the model's domain (bounds of its variables)."""
+def _inside_template(v, y):
+    """The integrated state lies in the model's domain: the bounds of its variables
+    and the model's own ``inside`` condition (``v`` is filled with ``y``)."""
     for i in range(y.shape[0]):
         if y[i] < LOWER[i] or y[i] > UPPER[i]:
             return False
-    return True
+    FILL(v, y)
+    return DOMAIN(v)
 
 
 def _rhs_template(v, y, mode, row, dy):
@@ -353,7 +356,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         POINT(v, out)
         n, adm, lost, sing = SUMMARY(out)
         still = n == 1 and adm == mode and (coef_sign == 0.0 or out[mode, nx.COEF]
-                                             * coef_sign > 0.0) and INSIDE(y1)
+                                             * coef_sign > 0.0) and INSIDE(v, y1)
         theta_end = 1.0
         # the dense output, only where it is used: to locate an event, at requested times
         if not still or (n_eval < t_eval.shape[0]
@@ -394,11 +397,11 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
                 _dense(r, c_lo, yb)
                 n, adm, lost, sing = CLASSIFY(v, yb, out)
                 if n == 1 and adm == mode and (coef_sign == 0.0 or out[mode, nx.COEF]
-                                               * coef_sign > 0.0) and INSIDE(yb):
+                                               * coef_sign > 0.0) and INSIDE(v, yb):
                     _dense(r, b, yb)
                     n, adm, lost, sing = CLASSIFY(v, yb, out)
                     if not (n == 1 and adm == mode and (coef_sign == 0.0 or out[mode, nx.COEF]
-                                                        * coef_sign > 0.0) and INSIDE(yb)):
+                                                        * coef_sign > 0.0) and INSIDE(v, yb)):
                         lo, hi = c_lo, b
             for _ in range(200):
                 if (hi - lo) * h <= 2.0 * EPS * max(abs(t), abs(h)):
@@ -407,7 +410,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
                 _dense(r, mid, yb)
                 n, adm, lost, sing = CLASSIFY(v, yb, out)
                 if n == 1 and adm == mode and (coef_sign == 0.0 or out[mode, nx.COEF]
-                                               * coef_sign > 0.0) and INSIDE(yb):
+                                               * coef_sign > 0.0) and INSIDE(v, yb):
                     lo = mid
                 else:
                     hi = mid
@@ -441,7 +444,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         t = t1
         for i in range(ny):
             y[i] = y1[i]
-        if not INSIDE(y):  # the state leaves the model's domain (the ladder lies flat)
+        if not INSIDE(v, y):  # the state leaves the model's domain (the ladder lies flat)
             for i in range(ny):
                 y[i] = min(max(y[i], LOWER[i]), UPPER[i])
             fate = ev.LEFT_DOMAIN
@@ -642,7 +645,7 @@ def kernels(model: Model, method: str = DEFAULT_METHOD):
     contract = model.contract
     consts = dict(
         POINT=contract.point, BRANCH_ROW=contract.branch_row_inline,
-        DERIVE=contract.derive_inline,
+        DERIVE=contract.derive_inline, DOMAIN=contract.domain_inline,
         STICK=model.stick_branch, N_BRANCHES=len(model.branches), N_FIELDS=model.n_fields,
         N_DOF=len(dyn.coordinates),
         Y_SLOT=np.array([slot.get(n, -1) for n in positions + velocities], dtype=np.int64),
@@ -658,8 +661,8 @@ def kernels(model: Model, method: str = DEFAULT_METHOD):
     # right-hand side is one call (a step makes six or twelve of them) with the
     # branch physics inlined, and no array is passed between helpers; the step
     # and the dense output have one call site each and inline into the integrator.
-    for name, template, inline in (("INSIDE", _inside_template, True),
-                                   ("FILL", _fill_template, True),
+    for name, template, inline in (("FILL", _fill_template, True),
+                                   ("INSIDE", _inside_template, True),
                                    ("RHS", _rhs_template, False),
                                    ("SUMMARY", _summary_template, True),
                                    ("CLASSIFY", _classify_template, True)):

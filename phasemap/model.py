@@ -267,6 +267,12 @@ class Model:
     dynamics: Dynamics | None = field(default=None, repr=False)
     #: The :class:`phasemap.declare.System` a declared model was derived from.
     declaration: object = field(default=None, repr=False, compare=False)
+    #: Optional branch function (same conventions, no ``rest``) returning True where a
+    #: state is in the model's domain beyond the bounds of its variables (the rod on a
+    #: step must touch the step); a motion that leaves it ends with ``left_domain``.
+    inside: Callable | None = field(default=None, repr=False)
+    #: What leaving that domain means, for the ``left_domain`` message.
+    domain_text: str = ""
 
     # -- branches and the generated contract --------------------------------
     @property

@@ -215,6 +215,8 @@ def end_message(m: Model, fate: ev.Event, y=None) -> str:
                 meaning = edges.get(var.name, ("", ""))[side]
                 return (f"{fate.message}: {var.name} reached {bound:.6g} {var.units}"
                         + (f" ({meaning})" if meaning else ""))
+    if m.domain_text:
+        return f"{fate.message}: {m.domain_text}"
     return fate.message
 
 

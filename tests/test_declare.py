@@ -241,3 +241,15 @@ def test_branches_can_get_short_names():
     wrong = dataclasses.replace(SYSTEM, name="rod_wrong", names={"A_glide": "glide"})
     with pytest.raises(ValueError, match="rod_wrong: names: 'A_glide' is not a branch"):
         wrong.model
+
+
+def test_a_motion_that_leaves_the_contact_region_ends_there():
+    """The rod slides down the step until the step's edge reaches the rod's end
+    (h = 2 l sin theta): there the edge contact no longer exists, and the motion ends
+    with left_domain at that angle, located to the integrator's event precision."""
+    ds = phasemap.simulate("rod_on_step", theta=1.2, omega=0.0, f=0.3, h=0.8, l=1.0, t_end=5)
+    assert ds.attrs["end_reason"] == "left_domain"
+    assert "leaves the body's edge" in ds.attrs["end_message"]
+    assert float(ds.event_theta[-1]) == pytest.approx(math.asin(0.4), abs=1e-8)
+    with pytest.raises(ValueError, match="rod_on_step: outside the domain"):
+        phasemap.classify("rod_on_step", theta=0.3, h=0.8, l=1.0)
