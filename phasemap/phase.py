@@ -339,6 +339,7 @@ def _grow2(a, n):
 POINT = None
 BRANCH_ROW = None
 DERIVE = None
+DOMAIN = None
 PHI = 0
 OMEGA = 1
 ACC = 3
@@ -410,7 +411,7 @@ def _still_template(v, out, x, u, sigma, mode, coef_sign):
     if not (u > 0.0):
         return False
     n, adm, lost, sing = CLASSIFY(v, x, sigma * math.sqrt(u), out)
-    if n != 1 or adm != mode:
+    if n != 1 or adm != mode or not DOMAIN(v):  # (v holds the state: its own domain)
         return False
     if STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT:
         return False
@@ -651,7 +652,9 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
         next_mode = mode
         if reason != _ZERO:
             n2, adm2, lost2, sing2 = CLASSIFY(v, x_e, sigma * math.sqrt(max(u_e, 0.0)), out)
-            if not (u_e > 0.0) or (STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT):
+            if not DOMAIN(v):
+                reason = ev.LEFT_DOMAIN  # the model's own domain (the rod leaves the step)
+            elif not (u_e > 0.0) or (STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT):
                 reason = _ZERO
             elif n2 == 1:
                 if out[adm2, nx.STATUS] == nx.SEPARATION:
@@ -839,7 +842,8 @@ def _kernel(m: Model):
     contract = m.contract
     consts = dict(
         POINT=contract.point, BRANCH_ROW=contract.branch_row_inline,
-        DERIVE=contract.derive_inline, PHI=slot[pos], OMEGA=slot[vel],
+        DERIVE=contract.derive_inline, DOMAIN=contract.domain_inline, PHI=slot[pos],
+        OMEGA=slot[vel],
         ACC=nx.FIRST_ACC + acc_names.index(acc),
         OMEGA_DERIVED=any(d.source == vel for d in m.derived),
         STICK=m.stick_branch, N_BRANCHES=len(m.branches), N_FIELDS=m.n_fields,
