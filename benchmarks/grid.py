@@ -212,19 +212,32 @@ def run_store(model, n):
 
 
 # ------------------------------------------------------------------ runs -----
-def scene_args(model, n):
-    name2, (lo, hi), fixed = CASES[model]
-    m = phasemap.MODELS[model]
-    full = {**m.defaults, **fixed}
-    lo_phi = 0.0 if model == "ladder" else -np.pi
-    hi_phi = np.pi / 2 if model == "ladder" else np.pi
-    axes = {"phi": np.linspace(lo_phi, hi_phi, n), name2: np.linspace(lo, hi, n)}
+def scene_args(model, n, m=None, state=None, case=None):
+    """The model, axes and fixed values of ``model``'s map of side ``n``.
+
+    ``m`` replaces the registered model (a declared version of it), ``state``
+    overrides values of the case (another velocity), ``case`` replaces
+    ``CASES[model]``; a fourth element ``(name, (lo, hi))`` of a case names the
+    first axis (default: phi).
+    """
+    case = case or CASES[model]
+    name2, (lo, hi), fixed = case[:3]
+    m = phasemap.MODELS[model] if m is None else m
+    full = {**m.defaults, **fixed, **(state or {})}
+    if len(case) > 3:
+        name1, (lo1, hi1) = case[3]
+    else:
+        name1 = "phi"
+        lo1 = 0.0 if model == "ladder" else -np.pi
+        hi1 = np.pi / 2 if model == "ladder" else np.pi
+    axes = {name1: np.linspace(lo1, hi1, n), name2: np.linspace(lo, hi, n)}
     full = {k: v for k, v in full.items() if k not in axes}
     return m, axes, full
 
 
-def run_numba(model, n, layers=("n_solutions",)):
-    m, axes, fixed = scene_args(model, n)
+def run_numba(model, n, layers=("n_solutions",), **scene):
+    """The kernel's map (``scene``: keywords of :func:`scene_args`)."""
+    m, axes, fixed = scene_args(model, n, **scene)
     reg = layers_for(m)
     got = evaluate(m, axes, fixed, [reg[k] for k in layers])
     return got["n_solutions"] if len(layers) == 1 else got
