@@ -22,8 +22,9 @@ from typing import Iterator, Sequence
 
 from . import progress
 
-#: The order of the tour: the four systems of the paper, then the overview.
-ORDER = ("ladder", "wheel", "elliptic_pendulum", "hinge_pendulum", "overview")
+#: The order of the tour: the four systems of the paper, the rod on a step (a declared
+#: system with two frictional contacts), then the overview.
+ORDER = ("ladder", "wheel", "elliptic_pendulum", "hinge_pendulum", "rod_on_step", "overview")
 
 
 def find_studies(folder: str | None = None) -> pathlib.Path:
