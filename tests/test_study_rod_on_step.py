@@ -33,7 +33,7 @@ EXPECTED = [
     ("rest and sliding from rest coexist (f = 0.5, h/l = 0.60257)", "agrees"),
     ("rest at h/l = 0.6: rest and sliding from rest", "finding"),
     ("the rod slides down from rest off the step", "finding"),
-    ("simulate past the edge", "finding"),
+    ("the motion ends where the rod leaves the step", "finding"),
 ]
 ATLASES = ["motion", "omega_scan", "rest", "rest_low_step", "slide"]
 FIGURES = ["rest", "motion", "slide"]
