@@ -250,7 +250,7 @@ def interrupt(args, cwd, ready: str):
       "--layers", "fate", "--option", "t_end=30", "-o", "fates.nc"], "fates.nc:"),
     (["simulate", "hinge_pendulum", "phi=1", "delta=0", "--t-end", "1e5", "-o", "s.nc"],
      "integrating"),
-    (["tour", "--out", "tour"], "[1/5] ladder"),
+    (["tour", "--out", "tour"], "[1/6] ladder"),
 ])
 def test_ctrl_c_exits_130_with_one_line_and_no_partial_file(tmp_path, args, ready):
     code, err = interrupt(args, tmp_path, ready)
@@ -345,7 +345,7 @@ def test_tour_accepts_quick_and_shows_its_own_usage_on_errors(tmp_path):
     assert r.returncode == 2
     assert lines[0].startswith("usage: phasemap tour") and "--quick" in r.stderr
     assert lines[-1] == ("phasemap: error: unknown study 'nope'; available: ladder, wheel, "
-                         "elliptic_pendulum, hinge_pendulum, overview")
+                         "elliptic_pendulum, hinge_pendulum, rod_on_step, overview")
     bad = run("tour", "--bogus")
     assert bad.returncode == 2 and bad.stderr.startswith("usage: phasemap tour")
     assert run("tour", "--quick", "--full").returncode == 2   # one or the other
