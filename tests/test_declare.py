@@ -23,8 +23,8 @@ ROOT = Path(__file__).resolve().parents[1]
 SEEDS = ROOT / "phasemap" / "systems" / "seeds"
 
 
-def _rows(m, values):
-    v = m.input_vector(m.complete(values))
+def _rows(m, values, checked=True):
+    v = m.input_vector(m.complete(values) if checked else values)
     out = np.full((len(m.branches), m.n_fields), np.nan)
     m.point(v, out)
     return out
@@ -67,7 +67,7 @@ def test_declared_seed_agrees_with_the_hand_derivation(seed):
     compared = separations = 0
     for i in range(10_000):
         values = _sample(hand, rng, i % 3 == 0)
-        h, d = _rows(hand, values), _rows(decl, values)
+        h, d = _rows(hand, values, False), _rows(decl, values, False)  # in the domain
         n_h, stag_h, lost_h, sing_h = nx.summarize(h, hand.stick_branch)
         n_d, stag_d, lost_d, sing_d = nx.summarize(d, decl.stick_branch)
         if lost_h or sing_h or sing_d:
