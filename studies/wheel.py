@@ -50,7 +50,7 @@ KEY = [r"$\delta$: rolling-friction length (couple $\delta N$)",
 LOW, HIGH = 0.1, 1.2
 #: Initial states (phi0, omega0) of the phase portraits, per delta/l.
 STARTS = {LOW: [(2.0, 0.0), (-1.0, 5.0)],
-          HIGH: [(-3.0, 2.0), (-2.0, 4.0), (-1.0, 5.5), (1.0, -3.0), (2.5, -4.0), (0.5, -6.0)]}
+          HIGH: [(-3.0, 2.0), (-2.0, 4.0), (0.5, 6.0), (1.0, -3.0), (-0.5, -4.0), (-0.5, -6.0)]}
 #: Time horizon of the fate maps (s): every motion at delta/l = 0.1 has ended by then.
 T_END = 30.0
 
