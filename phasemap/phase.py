@@ -652,6 +652,27 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
         next_mode = mode
         if reason != _ZERO:
             n2, adm2, lost2, sing2 = CLASSIFY(v, x_e, sigma * math.sqrt(max(u_e, 0.0)), out)
+            if n2 == nx.N_TWO and u_e > 0.0 and th_e < 1.0 and DOMAIN(v):
+                # Within 1e-12 of a boundary the tie rules can admit two rows (a
+                # contact kept with N = 0 to tolerance, and the same contact
+                # leaving).  A genuine indeterminacy persists past the boundary;
+                # a tie does not: probe just beyond it on this panel's dense
+                # output for the first state decided by another row.
+                for k in range(1, 10):
+                    th_p = th_e + 10.0 ** k * 2.0 * EPS * max(abs(x), hh) / hh
+                    if th_p > 1.0:
+                        break
+                    u_p = REFINE(v, th_p, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2)
+                    x_p = x + sigma * th_p * hh
+                    n3, adm3, lost3, sing3 = CLASSIFY(v, x_p, sigma * math.sqrt(max(u_p, 0.0)),
+                                                      out)
+                    if n3 == 1 and u_p > 0.0 and adm3 != mode:
+                        th_e, x_e, u_e = th_p, x_p, u_p
+                        n2, adm2, lost2, sing2 = n3, adm3, lost3, sing3
+                        break
+                if n2 != 1:  # undecided: the event's own classification
+                    n2, adm2, lost2, sing2 = CLASSIFY(v, x_e, sigma * math.sqrt(max(u_e, 0.0)),
+                                                      out)
             if not DOMAIN(v):
                 reason = ev.LEFT_DOMAIN  # the model's own domain (the rod leaves the step)
             elif not (u_e > 0.0) or (STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT):

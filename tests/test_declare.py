@@ -253,3 +253,17 @@ def test_a_motion_that_leaves_the_contact_region_ends_there():
     assert float(ds.event_theta[-1]) == pytest.approx(math.asin(0.4), abs=1e-8)
     with pytest.raises(ValueError, match="rod_on_step: outside the domain"):
         phasemap.classify("rod_on_step", theta=0.3, h=0.8, l=1.0)
+
+
+def test_phase_curve_and_simulate_agree_where_a_contact_is_left():
+    """The rod sliding down the step lifts off the floor: the first-integral tracer and
+    the time integrator both end with contact_lost, at the same state (a tie at the
+    boundary, kept with N = 0 and leaving, is resolved just past it)."""
+    curve = phasemap.phase_curve("rod_on_step", theta=1.2, omega=-1.0, f=0.3, h=0.8)
+    motion = phasemap.simulate("rod_on_step", theta=1.2, omega=-1.0, f=0.3, h=0.8, rtol=1e-10,
+                               atol=1e-12)
+    assert curve.attrs["end_reason"] == motion.attrs["end_reason"] == "contact_lost"
+    assert float(curve.stage_end_phi[-1]) == pytest.approx(float(motion.event_theta[-1]),
+                                                           abs=1e-8)
+    assert float(curve.stage_end_omega[-1]) == pytest.approx(float(motion.event_omega[-1]),
+                                                             abs=1e-7)
