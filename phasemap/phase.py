@@ -1055,6 +1055,11 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
     data = {
         "phi": angle(var_phi.long_name, pts[:, 0].copy(), "point"),
         "omega": rate(var_omega.long_name, omega, "point"),
+    }
+    # the model's own symbols, for plots of a model whose coordinate is not phi
+    data["phi"].attrs["phasemap_symbol"] = var_phi.symbol or var_phi.name
+    data["omega"].attrs["phasemap_symbol"] = var_omega.symbol or var_omega.name
+    data |= {
         "omega_squared": xr.Variable("point", u, {
             "long_name": f"square of the {var_omega.long_name}",
             "units": _squared_units(var_omega.units)}),

@@ -408,6 +408,8 @@ def axis_label(ds: xr.Dataset, name: str) -> str:
         return _with_units(f"${symbol}$", units)
     attrs = ds[name].attrs if name in ds.variables else {}
     units = attrs.get("units")
+    if attrs.get("phasemap_symbol"):  # a phase curve of a model whose coordinate is not phi
+        return _with_units(f"${attrs['phasemap_symbol']}$", units)
     if re.fullmatch(r"[A-Za-z]{1,2}", name):
         return _with_units(f"${name}$", units)
     text = str(attrs.get("long_name", name.replace("_", " ")))

@@ -267,3 +267,5 @@ def test_phase_curve_and_simulate_agree_where_a_contact_is_left():
                                                            abs=1e-8)
     assert float(curve.stage_end_omega[-1]) == pytest.approx(float(motion.event_omega[-1]),
                                                              abs=1e-7)
+    ax = curve.phasemap.plot().axes[0]  # labelled with the model's own symbols
+    assert ax.get_xlabel() == r"$\theta$ (rad)" and ax.get_ylabel().startswith(r"$\omega$")
