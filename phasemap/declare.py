@@ -102,13 +102,10 @@ import itertools
 import json
 import keyword
 import math
-import os
 import pathlib
 import re
-import sys
-import tempfile
 from dataclasses import dataclass, field
-from typing import Mapping, Sequence
+from typing import Mapping
 
 import numpy as np
 
@@ -994,7 +991,7 @@ class _Row:
 
     # -- printing ---------------------------------------------------------------
 
-    def code(self, inputs_of, TOL: str = "TOL") -> tuple[list[str], set]:
+    def code(self, inputs_of) -> tuple[list[str], set]:
         """The function's body lines and the set of input names it reads."""
         import sympy as sp
 
@@ -1063,7 +1060,7 @@ class _Row:
                 f"_k_cont = (abs(_k_B) <= {tol} * _k_Bs) & (abs(_k_C) <= {tol} * _k_Cs)",
                 f"_k_real = _k_disc >= -{tol} * _k_discs",
                 f"_k_mu = (-_k_B + {root} * math.sqrt(max(_k_disc, 0.0))) / (2.0 * _k_A)",
-                f"_k_mus = _k_dl * math.sqrt(_k_sx * _k_sx + _k_sy * _k_sy) + abs(_k_mu)",
+                "_k_mus = _k_dl * math.sqrt(_k_sx * _k_sx + _k_sy * _k_sy) + abs(_k_mu)",
                 f"_k_keep = ({sig} * _k_mu <= {tol} * _k_mus) & (({root} < 0.0) | "
                 f"(_k_disc > {tol} * _k_discs))",
                 "_k_coef = _k_A",
@@ -1296,7 +1293,7 @@ def _derive(S: System) -> str:
     def inputs_of(e):
         return sp.sympify(e).xreplace(trig)
 
-    funcs, lines, used_all = {}, [], set()
+    funcs, used_all = {}, set()
     for name, direction, presence, combo in rows:
         kinds = tuple(m[0] for m in combo)
         if kinds in funcs:
@@ -1469,7 +1466,7 @@ def _build(S: System):
         coefficient=Variable("coef", "1", "determinant of the branch's contact problem, "
                              "relative to the magnitude of its terms"),
         velocity=spec["velocity"], velocity_scale=module.velocity_scale,
-        default_axes=axes, dynamics=dynamics, check=_checks(S, spec, module, inputs_of=None),
+        default_axes=axes, dynamics=dynamics, check=_checks(S, spec, module),
         declaration=S, inside=getattr(module, "inside", None),
         domain_text=_domain_text(spec))
 
@@ -1482,7 +1479,7 @@ def _domain_text(spec) -> str:
             + " leaves the body's edge (the contact no longer exists)")
 
 
-def _checks(S: System, spec, module, inputs_of=None):
+def _checks(S: System, spec, module):
     """The model's Python-level domain check: the declaration's own, and ``inside``."""
     inside = getattr(module, "inside", None)
     if inside is None:
@@ -1509,8 +1506,6 @@ def _checks(S: System, spec, module, inputs_of=None):
 
 
 def _generated_names(S: System) -> list[str]:
-    from . import _codegen  # noqa: F401  (the model is built, or loaded from the cache)
-
     m = S.model
     inverse = {v: k for k, v in S.names.items()}
     return [inverse.get(b, b) for b in m.branches]
@@ -1522,7 +1517,7 @@ def _model_of(system: System):
 
 
 def _per_s2(units: str) -> str:
-    return "s-2" if units in ("1", "rad") and units == "1" else f"{units} s-2"
+    return "s-2" if units == "1" else f"{units} s-2"
 
 
 def _default_axes(S, state, params):

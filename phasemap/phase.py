@@ -127,6 +127,7 @@ from numba import njit
 from . import _numerics as nx
 from . import events as ev
 from ._compile import specialize
+from .integrate import _grow
 from ._version import __version__
 from .model import Model
 from .models import get_model
@@ -321,16 +322,6 @@ def _solve(M, r):
         for j in range(k + 1, n):
             acc -= M[k, j] * r[j]
         r[k] = acc / M[k, k]
-
-
-@njit(cache=True)
-def _grow2(a, n):
-    """``a`` (2-D) with at least ``n`` rows, keeping its content."""
-    if n <= a.shape[0]:
-        return a
-    b = np.empty((max(n, 2 * a.shape[0]), a.shape[1]))
-    b[:a.shape[0]] = a
-    return b
 
 
 # ---------------------------------------------------------------- per-model templates
@@ -590,7 +581,7 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                     truncated = True
                     continue
             truncated = False
-            panels = _grow2(panels, n_pan + 1)
+            panels = _grow(panels, n_pan + 1)
             row = panels[n_pan]
             row[0], row[1], row[2], row[3], row[4] = s, hh, z, u, 1.0
             row[5:5 + n] = a
@@ -715,7 +706,7 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                 u_e = REFINE(v, th_e, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2)
         if reason == _ZERO:
             u_e = 0.0
-        panels = _grow2(panels, n_pan + 1)
+        panels = _grow(panels, n_pan + 1)
         row = panels[n_pan]
         row[0], row[1], row[2], row[3], row[4] = s, hh, z, u, th_e
         row[5:5 + n] = a
@@ -734,7 +725,7 @@ def _stage_points_template(v, panels, n_pan, sigma, mode, u_ref, x0, u0, x_e, u_
     c2 = np.empty(n)
     length = sigma * (x_e - x0)
     count = points if (length > 0.0 and n_pan > 0) else 1
-    pts = _grow2(pts, npts + count)
+    pts = _grow(pts, npts + count)
     buf = np.empty(n + 2)
     p = 0
     for k in range(count):
@@ -811,7 +802,7 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
                 reason = code
         elif reason == ev.SWITCH:
             new_mode, go = next_mode, True
-        stg = _grow2(stg, nst + 1)
+        stg = _grow(stg, nst + 1)
         stg[nst, 0], stg[nst, 1], stg[nst, 2] = sigma, x, u
         stg[nst, 3], stg[nst, 4], stg[nst, 5] = reason, x_e, u_e
         nst += 1
