@@ -39,6 +39,6 @@ if __name__ == "__main__":
     fig = atlas.phasemap.plot()
     fig.savefig("own_system_map.png", dpi=150)
     motion = phasemap.simulate(model, theta=1.0, omega=0.0, xdot=1.0, f=0.3, t_end=2.0)
-    fig = motion.phasemap.plot()
+    fig = motion.phasemap.plot(phase_plane=True)   # theta against omega, events marked
     fig.savefig("own_system_motion.png", dpi=150)
     print(atlas.n_solutions.attrs["long_name"], "and", motion.attrs.get("fate", ""))
