@@ -96,6 +96,7 @@ Limits (clear errors, not silent failures)
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import importlib.util
 import itertools
@@ -302,8 +303,10 @@ class System:
     edges: Mapping = field(default_factory=dict)
     #: optional cross-variable domain check on (possibly array) values: raise ValueError
     check: object = None
-    #: optional short names for branches: ``{generated name: name}`` (such as
-    #: ``{"floor_slip_pos_wall_slip_pos": "slide_pos"}``); ``branch_names()`` lists them
+    #: optional short names for branches and reactions: ``{generated name: name}``
+    #: (such as ``{"floor_slip_pos_wall_slip_pos": "slide_pos", "N_floor": "N"}``);
+    #: ``branch_names()`` lists the generated branch names, ``model.reactions`` the
+    #: reactions (``N_<contact>``, ``F_<contact>``, ``M_<contact>``, ``Rx_``/``Ry_``)
     names: Mapping = field(default_factory=dict)
 
     def branch_names(self) -> tuple[str, ...]:
@@ -728,6 +731,16 @@ def _rows(S: System, kappa: dict):
     ``presence`` 0: applies while moving in ``direction`` and from rest; 1: only
     at rest; 2: only while moving (a second copy of a row that needs no slip
     direction).  The first row with direction 0 is the stick branch.
+
+    Every contact slips with the same state velocity v (contact i with
+    v_i = k_i(q) v, sgn k_i = kappa_i; :func:`_slip_velocity` checks it).  While
+    every contact stays closed, v_i = k_i v holds along the motion, so at v = 0
+    each tangential acceleration is k_i v': one contact sticking (k_i v' = 0)
+    stops all of them, and slips starting in directions of different
+    s_i kappa_i ask v' for two signs at once.  Such rows can never be
+    admissible and are not generated (at a bound of the domain where some
+    k_i = 0 this keeps, as the hand models do, the limit from inside).  A row
+    with a separated contact has more freedom and is kept.
     """
     combos = list(itertools.product(*(_options(c) for c in S.contacts)))
     rows = []
@@ -736,10 +749,14 @@ def _rows(S: System, kappa: dict):
         name = "_".join(_token(c, m) for c, m in zip(S.contacts, combo))
         if combo == stick_all:
             name = "stick"
-        if any(m[0] == "stick" for m in combo):
+        kept = [(c, m) for c, m in zip(S.contacts, combo) if m[0] != "sep"]
+        signs = {m[1] * kappa[c.name] for c, m in kept if m[0] != "stick"}
+        n_stick = sum(m[0] == "stick" for _, m in kept)
+        if len(kept) == len(combo) and (len(signs) > 1 or 0 < n_stick < len(kept)):
+            continue  # kinematically impossible (see above)
+        if n_stick:
             rows.append((name, 0.0, 1, combo))
             continue
-        signs = {m[1] * kappa[c.name] for c, m in zip(S.contacts, combo) if m[0] != "sep"}
         if not signs:  # every contact separated: any direction
             rows.append((name, 1.0, 0, combo))
             rows.append((name + "_moving_neg", -1.0, 2, combo))
@@ -1441,15 +1458,19 @@ def _build(S: System):
             if isinstance(c, RollingContact):
                 reactions.append(Variable(f"M_{c.name}", "N m", f"rolling-friction moment of {what}"))
     generated = [row[0] for row in spec["rows"]]
-    unknown = sorted(set(S.names) - set(generated))
+    unknown = sorted(set(S.names) - set(generated) - {r.name for r in reactions})
     if unknown:
-        _fail(S, "names", f"{unknown[0]!r} is not a branch of the system; its branches are "
-              f"{', '.join(generated)}")
+        _fail(S, "names", f"{unknown[0]!r} is not a branch or a reaction of the system; its "
+              f"branches are {', '.join(generated)}; its reactions "
+              f"{', '.join(r.name for r in reactions)}")
+    reactions = [dataclasses.replace(r, name=str(S.names[r.name]))
+                 if r.name in S.names else r for r in reactions]
     renamed = [str(S.names.get(n, n)) for n in generated]
-    clash = sorted({n for n in renamed if renamed.count(n) > 1})
-    bad = [n for n in renamed if not _IDENT.match(n)]
-    if clash or bad:
-        _fail(S, "names", f"branch names must be distinct identifiers: {(clash or bad)[0]!r}")
+    for what, got in (("branch", renamed), ("reaction", [r.name for r in reactions])):
+        clash = sorted({n for n in got if got.count(n) > 1})
+        bad = [n for n in got if not _IDENT.match(n)]
+        if clash or bad:
+            _fail(S, "names", f"{what} names must be distinct identifiers: {(clash or bad)[0]!r}")
     candidates = tuple(Branch(renamed[i], float(direction), getattr(module, fname), tuple(args))
                        for i, (name, direction, presence, fname, args) in enumerate(spec["rows"]))
     positions = tuple(var(c, default=float(c.default)) for c in moving
