@@ -682,6 +682,21 @@ class _Context:
                 vals[c.rate.name] = rng.uniform(-2.0, 2.0)
         return vals
 
+    def points(self) -> list[dict]:
+        """Fixed sample points: 16 random ones, and each coordinate at its finite bounds."""
+        pts = [self.sample() for _ in range(16)]
+        for c in self.S.coordinates:
+            pts += [{**self.sample(), c.name: b} for b in (c.lower, c.upper) if math.isfinite(b)]
+        return pts
+
+    def at(self, e, pts) -> np.ndarray:
+        """``e`` evaluated at the points of :meth:`points` (sign symbols +1)."""
+        import sympy as sp
+
+        e = sp.sympify(e)
+        return np.array([complex(e.xreplace({s: pt.get(s.name, 1.0) for s in e.free_symbols})
+                                 .evalf()).real for pt in pts])
+
     def numeric(self, e, k: int, extra=None) -> np.ndarray:
         """``e`` evaluated at ``k`` random samples (sign symbols random +-1)."""
         import sympy as sp
@@ -972,39 +987,63 @@ class _Row:
         if self.mu is not None:
             _fail(S, f"mode {self.fname}", "a joint with statically indeterminate reactions "
                   "is not supported")
+        # The family is parametrised by one reaction j0 with equation i0 dropped, by
+        # Cramer on the minor Dp that is left.  Every minor may vanish somewhere in
+        # the domain (the ladder: one at phi = 0, where the floor's normal is the
+        # wall's tangent, another at phi = pi/2): then two parametrisations are
+        # generated and the one with the larger |Dp| is taken at run time.  The
+        # reported reactions, the middle of the admissible segment, do not depend
+        # on the parametrisation.
+        pts = ctx.points()
+        choices = []
         for I in itertools.combinations(range(k), k - 1):
             for J in itertools.combinations(range(k), k - 1):
                 sub = K.extract(list(I), list(J))
                 Dp = sub.det(method="berkowitz")
-                if Dp == 0 or np.max(np.abs(ctx.numeric(Dp / _scale(Dp), 8))) < 1e-9:
+                if Dp == 0:
                     continue
-                (i0,) = set(range(k)) - set(I)
-                (j0,) = set(range(k)) - set(J)
-                p = [self._cramer(sub, rhs.extract(list(I), [0]), a) for a in range(k - 1)]
-                dcol = -K.extract(list(I), [j0])
-                d = [self._cramer(sub, dcol, a) for a in range(k - 1)]
-                # the dropped equation must hold for the whole family, and the
-                # accelerations must not depend on the family's parameter
-                lam_d = [sp.Integer(0)] * k
-                lam_p = [sp.Integer(0)] * k
-                for a, j in enumerate(J):
-                    lam_d[j], lam_p[j] = d[a], p[a]
-                lam_d[j0] = Dp
-                row_p = sum(K[i0, j] * lam_p[j] for j in range(k)) - rhs[i0] * Dp
-                row_d = sum(K[i0, j] * lam_d[j] for j in range(k))
-                acc_d = self.aM * self.W * sp.Matrix(lam_d)
-                checks = [row_p, row_d, *acc_d]
-                bad = [e for e in checks if e != 0 and np.max(np.abs(
-                    ctx.numeric(e / (_scale(e) + 1), 8))) > 1e-9]
-                if bad:
-                    _fail(S, f"mode {self.fname}", "the reactions are indeterminate and the "
-                          "accelerations depend on them (a continuum of motions): not supported")
-                Dp, *pd = _reduced([Dp, *p, *d])
-                self.D = Dp
-                self.null = (J, j0, pd[:k - 1], pd[k - 1:])
-                return
-        _fail(S, f"mode {self.fname}", "the reactions are indeterminate with a family of more "
-              "than one parameter: not supported")
+                size = np.abs(ctx.at(Dp / _scale(Dp), pts))
+                if np.max(size) >= 1e-9:
+                    choices.append((I, J, sub, Dp, size))
+        if not choices:
+            _fail(S, f"mode {self.fname}", "the reactions are indeterminate with a family of "
+                  "more than one parameter: not supported")
+        best = max(range(len(choices)), key=lambda a: (np.min(choices[a][4]), -a))
+        picked = [best]
+        if np.min(choices[best][4]) < 1e-6:
+            pair = max(itertools.combinations(range(len(choices)), 2), key=lambda ab: (
+                np.min(np.maximum(choices[ab[0]][4], choices[ab[1]][4])), -ab[0], -ab[1]))
+            picked = list(pair)
+        self.null = []
+        for I, J, sub, Dp, _ in (choices[a] for a in picked):
+            (i0,) = set(range(k)) - set(I)
+            (j0,) = set(range(k)) - set(J)
+            p = [self._cramer(sub, rhs.extract(list(I), [0]), a) for a in range(k - 1)]
+            dcol = -K.extract(list(I), [j0])
+            d = [self._cramer(sub, dcol, a) for a in range(k - 1)]
+            # the dropped equation must hold for the whole family, and the
+            # accelerations must not depend on the family's parameter
+            lam_d = [sp.Integer(0)] * k
+            lam_p = [sp.Integer(0)] * k
+            for a, j in enumerate(J):
+                lam_d[j], lam_p[j] = d[a], p[a]
+            lam_d[j0] = Dp
+            row_p = sum(K[i0, j] * lam_p[j] for j in range(k)) - rhs[i0] * Dp
+            row_d = sum(K[i0, j] * lam_d[j] for j in range(k))
+            acc_d = self.aM * self.W * sp.Matrix(lam_d)
+            checks = [row_p, row_d, *acc_d]
+            bad = [e for e in checks if e != 0 and np.max(np.abs(
+                ctx.numeric(e / (_scale(e) + 1), 8))) > 1e-9]
+            if bad:
+                _fail(S, f"mode {self.fname}", "the reactions are indeterminate and the "
+                      "accelerations depend on them (a continuum of motions): not supported")
+            Dp, *pd = _reduced([Dp, *p, *d])
+            P, Dd = [sp.Integer(0)] * k, [sp.Integer(0)] * k
+            for a, j in enumerate(J):
+                P[j], Dd[j] = pd[a], pd[k - 1 + a]
+            Dd[j0] = Dp
+            self.null.append((Dp, P, Dd))
+        self.D = self.null[0][0]
 
     # -- printing ---------------------------------------------------------------
 
@@ -1086,22 +1125,25 @@ class _Row:
                 lines.append(f"{L[i]} = (_k_a{i} + _k_b{i} * _k_mu) / _k_D")
                 lines.append(f"{Ls[i]} = (_k_as{i} + _k_bs{i} * abs(_k_mu)) / abs(_k_D)")
         else:
-            J, j0, p, d = self.null
-            emit([("_k_D", self.D), ("_k_Ds", _scale(self.D))]
-                 + [(f"_k_p{a}", e) for a, e in enumerate(p)]
-                 + [(f"_k_ps{a}", _scale(e)) for a, e in enumerate(p)]
-                 + [(f"_k_d{a}", e) for a, e in enumerate(d)])
+            # the family: L_j = (P_j + Dd_j t) / D (P = 0, Dd = D for the parameter)
+            for r, (D, Pj, Ddj) in enumerate(self.null):
+                emit([(f"_k_D_{r}", D), (f"_k_Ds_{r}", _scale(D))]
+                     + [(f"_k_P{j}_{r}", e) for j, e in enumerate(Pj)]
+                     + [(f"_k_PS{j}_{r}", _scale(e)) for j, e in enumerate(Pj)]
+                     + [(f"_k_Dd{j}_{r}", e) for j, e in enumerate(Ddj)])
+            picked = ["_k_D", "_k_Ds"] + [f"_k_{x}{j}" for x in ("P", "PS", "Dd")
+                                           for j in range(k)]
+            if len(self.null) == 1:
+                lines += [f"{x} = {x}_0" for x in picked]
+            else:
+                lines.append("_k_use = abs(_k_D_0) * _k_Ds_1 >= abs(_k_D_1) * _k_Ds_0")
+                lines += [f"{x} = {x}_0 if _k_use else {x}_1" for x in picked]
             lines.append(f"_k_sing = abs(_k_D) <= {tol} * _k_Ds")
             lines.append("_k_cont = False")
             lines.append("_k_real = True")
             lines.append("_k_coef = _k_D / _k_Ds")
-            # the family: L_J = (p + d t) / D, L_j0 = t; its scale from p
-            lines.append("_k_R = " + " + ".join(f"_k_ps{a}" for a in range(len(p)))
-                         + " + 0.0")
-            fam = {}
-            for a, j in enumerate(J):
-                fam[j] = (f"_k_p{a} / _k_D", f"_k_d{a} / _k_D")
-            fam[j0] = ("0.0", "1.0")
+            lines.append("_k_R = " + " + ".join(f"_k_PS{j}" for j in range(k)) + " + 0.0")
+            fam = {j: (f"_k_P{j} / _k_D", f"_k_Dd{j} / _k_D") for j in range(k)}
             lines.append("_k_lo, _k_hi = -np.inf, np.inf")
             forms = self._forms()
             for form, strict in forms:
@@ -1117,10 +1159,14 @@ class _Row:
                         c_names.append((i, nmc))
                 g0 = " + ".join(f"{cn} * ({fam[i][0]})" for i, cn in c_names) or "0.0"
                 g1 = " + ".join(f"{cn} * ({fam[i][1]})" for i, cn in c_names) or "0.0"
+                g1s = " + ".join(f"abs({cn} * ({fam[i][1]}))" for i, cn in c_names) or "0.0"
                 shift = (f"{'-' if strict is True else ''}{tol} * _k_R / abs(_k_D)"
                          if isinstance(strict, bool) else
                          f"({tol} if {strict} > 0.0 else -{tol}) * _k_R / abs(_k_D)")
-                lines.append(f"_k_lo, _k_hi = restrict_affine({g0} + {shift}, {g1}, "
+                # a slope that cancels to rounding is zero (a ray, not a far endpoint)
+                lines.append(f"_k_sl = {g1}")
+                lines.append(f"_k_sl = _k_sl if abs(_k_sl) > {tol} * ({g1s}) else 0.0")
+                lines.append(f"_k_lo, _k_hi = restrict_affine({g0} + {shift}, _k_sl, "
                              "_k_lo, _k_hi)")
             lines.append("_k_fam = _k_lo < _k_hi")
             lines.append("_k_t = 0.5 * (_k_lo + _k_hi) if (_k_lo > -np.inf) & (_k_hi < np.inf) "

@@ -6,7 +6,10 @@ linear program and the hinge pendulum's unsquared irrational equation by
 root-finding.  It imports nothing from phasemap.  Here the GUIDE's branch and
 admissibility rules are applied to those solutions and compared with
 ``classify()`` at >= 1000 random states per model, a third of them at zero
-relative velocity.
+relative velocity.  The ladder and the wheel run as declarations
+(phasemap.systems.seeds), which also count leaving a contact: the reference's
+kept-contact solutions are checked against the hand modules (the paper's closed
+forms) and against the running models' kept branches.
 """
 
 from __future__ import annotations
@@ -18,6 +21,8 @@ import pytest
 import reference as ref
 
 import phasemap
+from phasemap.models import ladder as hand_ladder
+from phasemap.models import wheel as hand_wheel
 
 N_STATES = 1000
 RTOL = 1e-7
@@ -31,9 +36,11 @@ def _code(n_isolated: int) -> int:
     return 4 if n_isolated >= 3 else n_isolated
 
 
-def _check_branches(c, expected, scale):
-    """Every admissible branch phasemap reports has the reference's numbers."""
-    got = {b.name: b for b in c.branches}
+def _check_branches(c, expected, scale, kept_only=False):
+    """Every admissible branch phasemap reports has the reference's numbers
+    (``kept_only``: every branch that keeps the contacts; separations aside)."""
+    got = {b.name: b for b in c.branches
+           if not kept_only or b.status == phasemap.BranchStatus.ADMISSIBLE}
     assert set(got) == set(expected), (c, expected)
     for name, numbers in expected.items():
         b = got[name]
@@ -54,7 +61,8 @@ def test_ladder_against_unreduced_newton_euler():
         f = rng.choice([rng.uniform(0, 1.3), rng.uniform(1.5, 4)])
         l, g, m = rng.uniform(0.2, 3), rng.uniform(0.5, 20), rng.uniform(0.1, 5)
         omega = 0.0 if rng.random() < 1 / 3 else rng.normal() * 3 * math.sqrt(g / l)
-        c = phasemap.classify("ladder", phi=phi, omega=omega, f=f, l=l, g=g, m=m)
+        c = phasemap.classify(hand_ladder.MODEL, phi=phi, omega=omega, f=f, l=l, g=g, m=m)
+        run = phasemap.classify("ladder", phi=phi, omega=omega, f=f, l=l, g=g, m=m)
         scale = m * g
         expected, lost = {}, False
         for s, name in ((1.0, "slide_pos"), (-1.0, "slide_neg")):
@@ -73,9 +81,12 @@ def test_ladder_against_unreduced_newton_euler():
         assert c.n_solutions == _code(len(expected)), c
         assert c.stagnation == stagnation, c
         assert c.contact_lost == lost, c
-        _check_branches(c, {k: {"phi_ddot": v["phi_ddot"]} if k == "stick" else
-                            {q: v[q] for q in ("phi_ddot", "N_floor", "N_wall")}
-                            for k, v in expected.items()}, scale)
+        numbers = {k: {"phi_ddot": v["phi_ddot"]} if k == "stick" else
+                   {q: v[q] for q in ("phi_ddot", "N_floor", "N_wall")}
+                   for k, v in expected.items()}
+        _check_branches(c, numbers, scale)
+        _check_branches(run, numbers, scale, kept_only=True)
+        assert run.stagnation == stagnation
         checked += 1
         at_rest += omega == 0.0
     assert at_rest > 250
@@ -90,8 +101,10 @@ def test_wheel_against_unreduced_newton_euler():
         g, m = rng.uniform(0.5, 20), rng.uniform(0.1, 5)
         phi = rng.uniform(-2 * math.pi, 2 * math.pi)
         omega = 0.0 if rng.random() < 1 / 3 else rng.normal() * 3 * math.sqrt(g / r)
-        c = phasemap.classify("wheel", phi=phi, omega=omega, delta=delta, r=r, l=l, rho=rho,
-                              g=g, m=m)
+        c = phasemap.classify(hand_wheel.MODEL, phi=phi, omega=omega, delta=delta, r=r, l=l,
+                              rho=rho, g=g, m=m)
+        run = phasemap.classify("wheel", phi=phi, omega=omega, delta=delta, r=r, l=l, rho=rho,
+                                g=g, m=m)
         if not _far_from_singular(c):
             continue
         expected, lost = {}, False
@@ -116,6 +129,8 @@ def test_wheel_against_unreduced_newton_euler():
         assert c.stagnation == stagnation, c
         assert c.contact_lost == lost, c
         _check_branches(c, expected, m * g)
+        _check_branches(run, expected, m * g, kept_only=True)
+        assert run.stagnation == stagnation
         checked += 1
         at_rest += omega == 0.0
     assert at_rest > 250
@@ -196,14 +211,18 @@ def test_hinge_pendulum_against_unsquared_equation():
 
 @pytest.mark.parametrize("f", [0.0, 0.3, 1.0, 2.5])
 def test_ladder_reactions_at_rest_satisfy_statics(f):
-    """The reported rest reactions balance the bar with friction inside its cone."""
+    """The reported rest reactions balance the bar with friction inside its cone, up to
+    and including the bar lying flat (phi = pi/2, where the floor's tangent is the
+    wall's normal).  Tangents are the normals turned clockwise: +x on the floor, -y
+    on the wall."""
     for phi in np.linspace(0, min(2 * math.atan(f), math.pi / 2), 7):
         c = phasemap.classify("ladder", phi=phi, omega=0.0, f=f, g=9.81, m=2.0)
-        stick = {b.name: b for b in c.branches}["stick"]
-        n1, n2 = stick.reactions["N_floor"], stick.reactions["N_wall"]
-        w = 2.0 * 9.81
-        f2 = w - n1  # wall friction from vertical balance, floor friction = -n2
-        torque = math.sin(phi) * (n1 - f2) - math.cos(phi) * 2 * n2
-        assert n1 >= 0 and n2 >= -1e-12
+        r = {b.name: b for b in c.branches}["stick"].reactions
+        w, s, co = 2.0 * 9.81, math.sin(phi), math.cos(phi)
+        assert abs(r["N_wall"] + r["F_floor"]) < 1e-9 * w
+        assert abs(r["N_floor"] - r["F_wall"] - w) < 1e-9 * w
+        torque = s * r["N_floor"] + co * r["F_floor"] + s * r["F_wall"] - co * r["N_wall"]
         assert abs(torque) < 1e-9 * w
-        assert n2 <= f * n1 + 1e-9 * w and abs(f2) <= f * n2 + 1e-9 * w
+        assert r["N_floor"] >= 0 and r["N_wall"] >= -1e-12
+        assert abs(r["F_floor"]) <= f * r["N_floor"] + 1e-9 * w
+        assert abs(r["F_wall"]) <= f * r["N_wall"] + 1e-9 * w

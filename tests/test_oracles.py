@@ -1,7 +1,8 @@
 """The full-coordinate oracles of ``oracles.py`` validated on their own.
 
-Against today's hand models (``phasemap.classify``) wherever the hand model
-keeps its contacts, and against closed forms derived by hand (Painleve rod:
+Against the hand models (``phasemap.models.ladder.MODEL`` and ``.wheel.MODEL``,
+the paper's equations) wherever the hand model keeps its contacts, against the
+running (declared) ladder and wheel everywhere, and against closed forms derived by hand (Painleve rod:
 B N = m (g - l sin(theta) omega^2), the pivot (stick) solution, the threshold
 f = 4/3 at tan(theta) = 2; rod on a step: the kept-kept coefficient and its
 threshold f = 2/sqrt(3)).  States close to a tie of a decisive inequality
@@ -17,6 +18,8 @@ import oracles as O
 import pytest
 
 import phasemap
+from phasemap.models import ladder as hand_ladder
+from phasemap.models import wheel as hand_wheel
 
 N_STATES = 1000
 MARGIN = 1e-7
@@ -145,7 +148,9 @@ def test_ladder_against_hand_model():
         if a.margin < MARGIN:
             skipped += 1
             continue
-        c = phasemap.classify("ladder", phi=phi, omega=omega, f=f, l=l, g=g, m=m)
+        c = phasemap.classify(hand_ladder.MODEL, phi=phi, omega=omega, f=f, l=l, g=g, m=m)
+        run = phasemap.classify("ladder", phi=phi, omega=omega, f=f, l=l, g=g, m=m)
+        assert (run.n_solutions, run.stagnation) == (a.n_solutions, a.stagnation)
         kept = {_LADDER_NAMES[md.modes]: md for md in a.all_kept}
         hand = {b.name: b for b in c.branches}
         assert set(kept) == set(hand), (phi, omega, f, kept.keys(), hand.keys())
@@ -173,8 +178,10 @@ def test_wheel_against_hand_model():
         g, m = rng.uniform(0.5, 20), rng.uniform(0.1, 5)
         phi = rng.uniform(-2 * math.pi, 2 * math.pi)
         omega = 0.0 if rng.random() < 1 / 3 else rng.normal() * 3 * math.sqrt(g / r)
-        c = phasemap.classify("wheel", phi=phi, omega=omega, delta=delta, r=r, l=l, rho=rho,
-                              g=g, m=m)
+        c = phasemap.classify(hand_wheel.MODEL, phi=phi, omega=omega, delta=delta, r=r, l=l,
+                              rho=rho, g=g, m=m)
+        run = phasemap.classify("wheel", phi=phi, omega=omega, delta=delta, r=r, l=l, rho=rho,
+                                g=g, m=m)
         a = O.wheel(phi, omega, delta, r, l, rho, g, m)
         if c.singular or a.margin < MARGIN or any(abs(b.coefficient) < 1e-6 for b in c.candidates
                                                   if not math.isnan(b.coefficient)):
@@ -192,6 +199,7 @@ def test_wheel_against_hand_model():
         assert a.stagnation == c.stagnation
         if not c.contact_lost:
             assert not a.separating and a.n_solutions == c.n_solutions
+        assert (run.n_solutions, run.stagnation) == (a.n_solutions, a.stagnation)
         hops += bool(a.separating)
         checked += 1
         at_rest += omega == 0.0
@@ -202,36 +210,51 @@ def test_wheel_against_hand_model():
 # What counting separation changes (docs/systems/separation_findings.md)
 # ---------------------------------------------------------------------------
 
+def _hand_and_running(name, **values):
+    hand = {"ladder": hand_ladder, "wheel": hand_wheel}[name].MODEL
+    return phasemap.classify(hand, **values), phasemap.classify(name, **values)
+
+
 def test_separation_findings_examples():
+    """What counting separation changes: the hand module (contacts kept) against the
+    oracle and against the running, declared model."""
     # ladder, the issue's example: hand "none" + contact_lost; the ladder leaves the wall
-    c = phasemap.classify("ladder", phi=0.5, omega=3.0, f=0.3)
+    c, run = _hand_and_running("ladder", phi=0.5, omega=3.0, f=0.3)
     a = O.ladder(0.5, 3.0, 0.3, 1.0, 9.81, 1.0)
     assert c.n_solutions == 0 and c.contact_lost
     assert a.n_solutions == 1 and [md.modes for md in a.modes] == [("slip+", "sep")]
+    assert run.n_solutions == 1 and run.contact_lost
+    assert [b.name for b in run.branches] == ["floor_slip_pos_wall_separated"]
     # ladder, f > sqrt 2: the hand model's unique slide gains a second solution (leaving the wall)
-    c = phasemap.classify("ladder", phi=0.962, omega=3.0, f=1.469)
+    c, run = _hand_and_running("ladder", phi=0.962, omega=3.0, f=1.469)
     a = O.ladder(0.962, 3.0, 1.469, 1.0, 9.81, 1.0)
     assert c.n_solutions == 1 and not c.contact_lost
     assert a.n_solutions == 2 and {md.modes for md in a.modes} == {("slip+", "slip-"),
                                                                       ("slip+", "sep")}
+    assert run.n_solutions == 2 and {b.name for b in run.branches} == {
+        "slide_pos", "floor_slip_pos_wall_separated"}
     # ladder, f > sqrt 2: neither sliding nor leaving a contact is consistent: none stays none
     a = O.ladder(0.128, 3.0, 2.816, 1.0, 9.81, 1.0)
     assert a.n_solutions == 0
+    assert phasemap.classify("ladder", phi=0.128, omega=3.0, f=2.816).n_solutions == 0
     # ladder at rest (the default map): nothing changes
     for phi in np.linspace(0.05, 1.5, 12):
         for f in np.linspace(0.05, 2.9, 12):
-            c = phasemap.classify("ladder", phi=phi, omega=0.0, f=f)
-            assert O.ladder(phi, 0.0, f, 1.0, 9.81, 1.0).n_solutions == c.n_solutions
+            c, run = _hand_and_running("ladder", phi=phi, omega=0.0, f=f)
+            n = O.ladder(phi, 0.0, f, 1.0, 9.81, 1.0).n_solutions
+            assert n == c.n_solutions == run.n_solutions
     # wheel spinning fast with its centre of mass high: it hops
     w = dict(r=1.0, l=0.5, rho=0.5, g=9.81, m=1.0)
-    c = phasemap.classify("wheel", phi=-3.013, omega=6.0, delta=0.02, **w)
+    c, run = _hand_and_running("wheel", phi=-3.013, omega=6.0, delta=0.02, **w)
     a = O.wheel(-3.013, 6.0, 0.02, **w)
     assert c.n_solutions == 0 and c.contact_lost and a.n_solutions == 1
     assert a.modes[0].modes == ("sep",)
+    assert run.n_solutions == 1 and [b.name for b in run.branches] == ["floor_separated"]
     # ... but in a band before the top neither rolling nor hopping is consistent
-    c = phasemap.classify("wheel", phi=-2.116, omega=6.0, delta=0.02, **w)
+    c, run = _hand_and_running("wheel", phi=-2.116, omega=6.0, delta=0.02, **w)
     a = O.wheel(-2.116, 6.0, 0.02, **w)
     assert c.n_solutions == 0 and c.contact_lost and a.n_solutions == 0
+    assert run.n_solutions == 0
 
 
 # ---------------------------------------------------------------------------

@@ -1,8 +1,7 @@
-"""The ladder of Lapshin (2021), declared: a bar against a rough wall and a rough floor.
+"""The ladder of Lapshin (2021, Fig. 1): a bar against a rough wall and a rough floor.
 
-The hand derivation (phasemap.models.ladder) is what runs; this declaration
-checks it (tests/test_declare.py) and counts what it cannot: the ladder
-leaving the wall or the floor.
+This declaration is what runs as ``ladder``; the hand derivation with the paper's
+equations, errata and closed forms (phasemap.models.ladder) checks it in the tests.
 """
 
 import sympy as sp
@@ -22,13 +21,17 @@ yc = Coordinate("yc", "m", "height of the centre of the bar")
 s, c = sp.sin(phi), sp.cos(phi)
 
 SYSTEM = System(
-    "ladder_declared", "Ladder (declared): a bar against a rough wall and a rough floor",
+    "ladder", "Homogeneous bar (ladder) against a rough wall and a rough floor",
     "Lapshin V.V. (2021), Herald of the Bauman Moscow State Technical University, Series "
-    "Natural Sciences, no. 6 (99), pp. 4-16, Fig. 1",
+    "Natural Sciences, no. 6 (99), pp. 4-16, Fig. 1, eq. (6)-(8). "
+    "doi:10.18698/1812-3368-2021-6-4-16",
     coordinates=(phi, xc, yc), parameters=(f, l, g, m),
     bodies=(Body(m, (xc, yc), inertia=m * l**2 / 3, angle=phi),),
     potential=m * g * yc,
     contacts=(PointContact("floor", (xc + l * s, yc - l * c), normal=(0, 1), friction=f),
               PointContact("wall", (xc - l * s, yc + l * c), normal=(1, 0), friction=f)),
     default_axes={"phi": (0.0, float(sp.pi) / 2, 512), "f": (0.0, 3.0, 512)},
+    edges={"phi": ("the bar stands upright against the wall", "the bar lies flat on the floor")},
+    names={"floor_slip_pos_wall_slip_pos": "slide_pos",
+           "floor_slip_neg_wall_slip_neg": "slide_neg"},
 )
