@@ -57,8 +57,9 @@ def test_grid_equals_classify_cell_by_cell(model, uniform):
             assert bool(cell.stagnation) == c.stagnation
             assert bool(cell.contact_lost) == c.contact_lost
             assert bool(cell.singular) == c.singular
-            admissible = {b.name: b for b in c.candidates
-                          if b.status == phasemap.BranchStatus.ADMISSIBLE}
+            admissible = {b.name: b for b in c.candidates  # solutions, separations included
+                          if b.status in (phasemap.BranchStatus.ADMISSIBLE,
+                                          phasemap.BranchStatus.SEPARATION)}
             applies = {b.name: b for b in c.candidates}
             for b in m.branches:
                 for v in m.accelerations + m.reactions:

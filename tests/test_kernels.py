@@ -87,7 +87,8 @@ def _expected(m, layer, out):
     if layer.is_summary:
         return nx.summarize(out, m.stick_branch)[SUMMARY.index(layer.name)]
     st = out[layer.branch, nx.STATUS]
-    keep = st == nx.ADMISSIBLE or (not layer.admissible_only and st != nx.ABSENT)
+    solution = st == nx.ADMISSIBLE or st == nx.SEPARATION  # separation is a solution
+    keep = solution or (not layer.admissible_only and st != nx.ABSENT)
     return out[layer.branch, layer.column] if keep else np.nan
 
 
