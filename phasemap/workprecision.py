@@ -250,8 +250,9 @@ def _ladder_reference(p: Problem) -> Reference:
 
     v = m.input_vector(full)
     row = np.empty(m.n_fields)
-    cols = [nx.FIRST_ACC + len(m.accelerations) + i for i in range(len(m.reactions))]
-    b = 0 if s > 0 else 1
+    cols = [nx.FIRST_ACC + len(m.accelerations) + i for i, r in enumerate(m.reactions)
+            if r.name in ("N_floor", "N_wall")]
+    b = m.branches.index("slide_pos" if s > 0 else "slide_neg")
 
     def n_min(phi):
         v[0], v[1] = phi, float(omega(np.array([phi]))[0])
@@ -382,7 +383,10 @@ class _Driver:
         return self.row
 
     def classify(self, y):
-        """(n, first admissible branch, contact_lost, singular) at ``y``."""
+        """(n, first admissible branch, contact_lost, singular) at ``y``.
+
+        A unique solution that leaves a contact (a separation) has no
+        admissible branch: the branch is -1 and the motion ends there."""
         self.set_state(y)
         out = self.out
         self.m.point(self.v, out)
@@ -508,7 +512,9 @@ class _Driver:
         events, stages = [], []
         n, mode, lost, sing = self.classify(y)
         fate = None
-        if n != 1:
+        if n == 1 and mode < 0:  # the unique solution leaves a contact
+            fate = ev.CONTACT_LOST
+        elif n != 1:
             fate = int(ev.fate_without_unique(n, lost, sing))
             mode = -1
         elif mode == stick and dyn.stick_is_rest:
@@ -555,7 +561,9 @@ class _Driver:
             if not vel_zero and n == 1 and adm == mode:
                 t, y, (n, adm, lost, sing) = self.past_tie(fun, t, y, mode, (n, adm, lost, sing))
             new_mode = -1
-            if n == 1:
+            if n == 1 and adm < 0:
+                kind = ev.CONTACT_LOST  # the unique solution leaves a contact
+            elif n == 1:
                 new_mode = adm
                 if adm == mode and not vel_zero:
                     kind, new_mode = ev.STEP_FAILURE, -1  # an event the model does not see

@@ -6,9 +6,12 @@ import math
 
 import numpy as np
 import pytest
+import oracles
 import reference as ref
 
 import phasemap
+from phasemap.models import ladder as hand_ladder
+from phasemap.models import wheel as hand_wheel
 
 G = 9.81
 SQRT2 = math.sqrt(2.0)
@@ -18,8 +21,15 @@ F_SHARP = 2.0 * math.sqrt(2.0)  # the elliptic pendulum's sharp threshold
 # ---------------------------------------------------------------- ladder -----
 @pytest.mark.parametrize("phi, omega", [(0.3, 1.0), (0.8, -2.0), (1.2, 0.5), (0.1, 4.0)])
 def test_ladder_singular_at_sqrt2_has_no_acceleration(phi, omega):
+    """(8) has no solution at f = sqrt 2 (the hand module); leaving a contact may have one:
+    the running ladder counts exactly the independent oracle's separations."""
+    hand = phasemap.classify(hand_ladder.MODEL, phi=phi, omega=omega, f=SQRT2)
+    assert hand.singular and hand.n_solutions == 0 and not hand.branches
     c = phasemap.classify("ladder", phi=phi, omega=omega, f=SQRT2)
-    assert c.singular and c.n_solutions == 0 and not c.branches
+    kept = {b.name: b for b in c.candidates}["slide_pos" if omega > 0 else "slide_neg"]
+    assert c.singular and kept.status == phasemap.BranchStatus.NO_SOLUTION
+    assert c.n_solutions == oracles.ladder(phi, omega, SQRT2, 1.0, G, 1.0).n_solutions
+    assert all(b.status == phasemap.BranchStatus.SEPARATION for b in c.branches)
 
 
 def test_ladder_sqrt2_continuum_where_the_right_side_vanishes_too():
@@ -36,11 +46,19 @@ def test_ladder_not_singular_off_sqrt2():
         assert not phasemap.classify("ladder", phi=0.5, omega=1.0, f=f).singular
 
 
-def test_ladder_above_sqrt2_sliding_lifts_off():
-    """Beyond sqrt 2 the sliding ladder would need a contact to pull: contact_lost, not a paradox."""
+def test_ladder_above_sqrt2_sliding_ladder_is_a_genuine_paradox():
+    """Beyond sqrt 2 the sliding ladder would need a contact to pull (the hand module's
+    contact_lost), and leaving the wall, the floor or both is not consistent either
+    (except near the wall): no solution at all, a genuine Painleve paradox."""
+    none = 0
     for phi in np.linspace(0.05, 1.5, 15):
+        hand = phasemap.classify(hand_ladder.MODEL, phi=phi, omega=1.0, f=3.0)
+        assert hand.n_solutions == 0 and hand.contact_lost and not hand.singular
         c = phasemap.classify("ladder", phi=phi, omega=1.0, f=3.0)
-        assert c.n_solutions == 0 and c.contact_lost and not c.singular
+        assert c.n_solutions == oracles.ladder(phi, 1.0, 3.0, 1.0, G, 1.0).n_solutions
+        assert c.contact_lost == (c.n_solutions > 0) and not c.singular
+        none += c.n_solutions == 0
+    assert none == 14  # only phi = 0.05 leaves the wall
 
 
 # ----------------------------------------------------- elliptic pendulum -----
@@ -167,9 +185,13 @@ def test_wheel_rests_everywhere_and_moves_one_way_for_delta_at_least_l():
 
 
 def test_wheel_bounces_when_spinning_fast():
-    """Condition (12): at high speed with the centre of mass high the wheel leaves the floor."""
+    """Condition (12): at high speed with the centre of mass high the wheel leaves the floor:
+    rolling on would need the floor to pull (the hand module), and the hop is the unique
+    solution."""
+    hand = phasemap.classify(hand_wheel.MODEL, phi=math.pi, omega=10.0)
+    assert hand.contact_lost and hand.n_solutions == 0
     c = phasemap.classify("wheel", phi=math.pi, omega=10.0)
-    assert c.contact_lost and c.n_solutions == 0
+    assert c.contact_lost and c.n_solutions == 1 and c.branches[0].name == "floor_separated"
     c = phasemap.classify("wheel", phi=0.0, omega=10.0)
     assert not c.contact_lost and c.n_solutions == 1
 

@@ -35,6 +35,11 @@ DECLARED = {"ladder": "phasemap.systems.seeds.ladder", "wheel": "phasemap.system
             "rod_on_step": "phasemap.systems.rod_on_step"}
 
 
+#: The order in which the built-in systems are listed (the paper's, then the rods).
+ORDER = ("ladder", "wheel", "elliptic_pendulum", "hinge_pendulum", "painleve_rod",
+         "rod_on_step")
+
+
 class _Registry(Mapping):
     """Name -> Model; declared systems are built when first looked up."""
 
@@ -47,7 +52,7 @@ class _Registry(Mapping):
         return self._models[name]
 
     def __iter__(self):
-        return iter(list(dict.fromkeys([*self._models, *DECLARED])))
+        return iter(list(dict.fromkeys([*ORDER, *self._models, *DECLARED])))
 
     def __len__(self) -> int:
         return len(set(self._models) | set(DECLARED))
