@@ -20,7 +20,14 @@ from scipy.integrate import solve_ivp
 
 from phasemap import phase
 from phasemap.events import Event
+from phasemap.models import ladder as hand_ladder
+from phasemap.models import wheel as hand_wheel
 from phasemap.phase import phase_curve
+
+#: The tracer against references that keep the contacts (the paper's equations) runs on
+#: the hand modules; the running ladder and wheel also count leaving a contact, which
+#: ends some of these curves earlier (test_running_models_end_where_the_oracle_says).
+HAND = {"ladder": hand_ladder.MODEL, "wheel": hand_wheel.MODEL}
 
 G = 9.81
 
@@ -190,7 +197,7 @@ def assert_matches(ds, chain, system, u_scale, tol=1e-8):
 ])
 def test_ladder_curve_matches_integration(f, phi0, omega0):
     system = ladder(f, l=0.8)
-    ds = phase_curve("ladder", phi=phi0, omega=omega0, f=f, l=0.8)
+    ds = phase_curve(HAND["ladder"], phi=phi0, omega=omega0, f=f, l=0.8)
     chain = reference_chain(system, phi0, omega0, 0.0, math.pi / 2)
     assert_matches(ds, chain, system, u_scale=G / 0.8)
 
@@ -238,7 +245,7 @@ def test_hinge_curve_matches_integration(delta, phi0, omega0, method):
 ])
 def test_ladder_near_sqrt2_is_finite_and_matches_equation_8(df, phi0, omega0, method):
     f = math.sqrt(2.0) + df
-    ds = phase_curve("ladder", phi=phi0, omega=omega0, f=f)
+    ds = phase_curve(HAND["ladder"], phi=phi0, omega=omega0, f=f)
     for name in ("phi", "omega", "omega_squared"):
         assert np.all(np.isfinite(ds[name].values)), name
     assert np.all(ds.omega_squared.values >= 0.0)
@@ -255,8 +262,8 @@ def test_ladder_closed_form_never_overflows():
     for df in (-1e-10, -1e-6, -1e-3, 1e-3, 1e-6, 1e-10):
         for phi0 in (0.05, 0.5, 0.9, 1.2, 1.55):
             for omega0 in (-5.0, -0.5, 0.0, 0.5, 5.0):
-                ds = phase_curve("ladder", phi=phi0, omega=omega0, f=math.sqrt(2.0) + df,
-                                 points_per_stage=20)
+                ds = phase_curve(HAND["ladder"], phi=phi0, omega=omega0,
+                                 f=math.sqrt(2.0) + df, points_per_stage=20)
                 assert np.all(np.isfinite(ds.omega_squared.values))
                 assert np.all(np.isfinite(ds.stage_end_omega.values))
                 assert ds.attrs["end_reason"] != "step_failure"
@@ -352,7 +359,7 @@ def test_frictionless_ladder_leaves_the_wall_at_two_thirds_height(phi0):
     ("wheel", {"delta": 0.1, "l": 0.8, "rho": 0.2}, {"phi": 1.5, "omega": 4.0}),  # bounces at 5.0
 ])
 def test_contact_is_lost_where_the_independent_reaction_vanishes(model, params, start):
-    ds = phase_curve(model, **start, **params)
+    ds = phase_curve(HAND[model], **start, **params)
     assert ds.attrs["end_reason"] == "contact_lost"
     assert ds.sizes["point"] > 1  # it moved before leaving the contact
     phi_c, w_c = ds.stage_end_phi.values[-1], ds.stage_end_omega.values[-1]
@@ -599,3 +606,37 @@ def test_docstring_example_runs():
     import doctest
     result = doctest.testmod(phase)
     assert result.attempted >= 2 and result.failed == 0
+
+
+@pytest.mark.parametrize("model, params, start", [
+    ("ladder", {"f": 1.6, "l": 0.8}, {"phi": 1.3, "omega": 3.0}),
+    ("ladder", {"f": 2.5, "l": 0.8}, {"phi": 1.0, "omega": -3.0}),
+    ("ladder", {"f": 0.3, "l": 1.0}, {"phi": 0.9, "omega": -1.5}),
+    ("wheel", {}, {"phi": math.pi, "omega": 4.4}),
+    ("wheel", {"delta": 0.1, "l": 0.8, "rho": 0.2}, {"phi": 1.5, "omega": 4.0}),
+])
+def test_running_models_end_where_the_oracle_says(model, params, start):
+    """The running (declared) ladder and wheel trace the hand module's curve until their
+    own classification stops it; where it stops, the independent full-coordinate oracle
+    has no unique kept-contact continuation, and the fate is what the oracle counts."""
+    import oracles
+
+    run = phase_curve(model, **start, **params)
+    hand = phase_curve(HAND[model], **start, **params)
+    end_phi, end_w = float(run.stage_end_phi.values[-1]), float(run.stage_end_omega.values[-1])
+    lo, hi = sorted((float(hand.phi.values[0]), float(hand.stage_end_phi.values[-1])))
+    assert lo - 1e-9 <= end_phi <= hi + 1e-9  # on the hand module's path, no farther
+    full = {"delta": 0.05, "r": 1.0, "l": 0.5, "rho": 0.5, **params}
+    if model == "ladder":
+        a = oracles.ladder(end_phi, end_w, params["f"], params["l"], G, 1.0)
+    else:
+        a = oracles.wheel(end_phi, end_w, full["delta"], full["r"], full["l"], full["rho"],
+                          G, 1.0)
+    reason = run.attrs["end_reason"]
+    assert reason in {"no_solution", "contact_lost", "indeterminate", "rest"}, reason
+    if reason == "no_solution":      # keeping needs a pull from here on; leaving is no better
+        assert not a.separating
+    elif reason == "contact_lost":   # leaving is consistent, or the end is the tie N = 0
+        assert a.separating or any(np.min(np.abs(md.N)) < 1e-8 * G for md in a.all_kept)
+    elif reason == "indeterminate":  # keeping and leaving are both consistent
+        assert a.separating and a.all_kept

@@ -336,12 +336,23 @@ def test_stagnation_everywhere_draws_hatching_without_an_outline(tmp_path):
 
 
 def test_contact_lost_is_a_class_of_its_own_not_none(wheel_map, tmp_path):
-    """Where a contact would pull, n_solutions is 0; the map shows 'contact lost' there, in
-    its own colour and hatch, so that 'none' is left for a Painleve inconsistency."""
-    n = wheel_map.n_solutions.values
-    lost = wheel_map.contact_lost.values == 1
+    """A model that keeps its contacts (the hand wheel): where a contact would pull,
+    n_solutions is 0; the map shows 'contact lost' there, in its own colour and hatch, so
+    that 'none' is left for a Painleve inconsistency.  The running wheel counts the hop
+    instead: those cells are 'unique' and flagged contact_lost."""
+    n_run = wheel_map.n_solutions.values
+    assert (n_run[wheel_map.contact_lost.values == 1] == 1).all()
+    from phasemap.models import wheel as hand_wheel
+
+    hand_map = phasemap.Scene(hand_wheel.MODEL, axes={"phi": wheel_map.phi.values,
+                                                      "omega": wheel_map.omega.values},
+                              layers=["n_solutions", "stagnation", "contact_lost"]).compute()
+    hand_map = _roundtrip(hand_map, tmp_path / "hand_wheel.nc")
+    n = hand_map.n_solutions.values
+    lost = hand_map.contact_lost.values == 1
     assert (n[lost] == 0).all() and lost.any()
-    fig = quiet(wheel_map.phasemap.plot, size="two_column")
+    assert (n_run[lost] >= 0).all() and (n_run[lost] == 1).any()
+    fig = quiet(hand_map.phasemap.plot, size="two_column")
     ax = fig.axes[0]
     assert fig.get_figwidth() == pytest.approx(7.2)
     texts = legend_texts(ax)
@@ -484,7 +495,7 @@ def test_profile_of_one_float_layer(tmp_path):
                         layers=["n_solutions", "phi_ddot_slide_pos"]).compute()
     fig = quiet(ds.phasemap.plot, "phi_ddot_slide_pos")
     assert fig.axes[0].get_title(loc="left") == \
-        r"$\ddot\varphi\ [\mathrm{slide\ pos}]$ (rad s$^{-2}$)"
+        r"$\ddot{\varphi}\ [\mathrm{slide\ pos}]$ (rad s$^{-2}$)"
     assert fig._suptitle.get_text().startswith(r"$\varphi$ = 0.7 rad, $\omega$ = 0.5 rad s$^{-1}$")
     assert fig.axes[0].get_xlabel() == "$f$"
     render(fig, tmp_path)
