@@ -43,7 +43,8 @@ def test_overview_quick(tmp_path, capsys):
     with xr.open_dataset(tmp_path / "overview_wheel_fates.nc") as ds:
         assert ds.attrs["phasemap_study"] == "overview" and ds.phasemap.kind == "fate"
         assert set(np_unique(ds.fate)) <= {int(phasemap.Event.REST),
-                                           int(phasemap.Event.CONTACT_LOST)}
+                                           int(phasemap.Event.CONTACT_LOST),
+                                           int(phasemap.Event.NO_SOLUTION)}
 
 
 def np_unique(a):
