@@ -1,5 +1,9 @@
 r"""Ladder: a homogeneous bar against a rough wall and a rough floor (Lapshin 2021, Fig. 1).
 
+Not registered: ``ladder`` runs the declaration phasemap.systems.seeds.ladder, which
+also counts leaving a contact.  This module keeps the paper's equations, errata and
+closed forms, and checks the declaration in the tests (``MODEL`` is a full Model).
+
 Setup
 -----
 Bar of length 2l and mass m, inertia m l^2/3 about its centre C.  Floor y = 0,

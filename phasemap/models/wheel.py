@@ -1,5 +1,9 @@
 r"""Wheel: a disc with a displaced centre of mass and rolling friction (Lapshin 2021, Fig. 2).
 
+Not registered: ``wheel`` runs the declaration phasemap.systems.seeds.wheel, which
+also counts leaving a contact.  This module keeps the paper's equations, errata and
+closed forms, and checks the declaration in the tests (``MODEL`` is a full Model).
+
 Setup
 -----
 Disc of radius r and mass m rolling without slip on the floor y = 0.  Its
