@@ -135,6 +135,71 @@ def timing(repeat, before):
     return rows
 
 
+#: Curves timed at equal accuracy: (label, model, start and parameters, t_end)
+EQUAL = [CASES[0], CASES[3], CASES[5]]
+TOLS = (1e-6, 1e-8, 1e-10, 1e-12, 1e-14)
+LEVELS = (1e-6, 1e-9, 1e-12)
+
+
+def equal_accuracy(repeat):
+    """Cost of one curve at equal accuracy: the tracer at rtol in TOLS against simulate's
+    kernel (DOPRI5 and DOP853) at the same tolerances, both to the curve's fate.  Error:
+    the end state, max(|d phi|, |d omega^2| / u_ref), against the tracer at rtol 1e-14
+    with the simulate runs also checked against simulate at rtol 1e-14 (DOP853)."""
+    rows = []
+    for label, name, values, t_end in EQUAL:
+        m = get_model(name)
+        full = {k: float(v) for k, v in m.complete(values).items()}
+        lo, hi = phase._checked_range(m, "phi", full["phi"], None)
+        kernel = phase._kernel(m)
+        v = m.input_vector(full)
+        u_ref = phase._velocity_reference(m, full)
+
+        def curve_end(rtol):
+            _, st = kernel(v, full["phi"], full["omega"], lo, hi, 50, 2, u_ref, rtol,
+                           phase.H_MAX, 0.05 * phase.H_MAX)
+            return float(st[-1, 4]), float(st[-1, 5])
+
+        def sim_end(method, rtol):
+            ds = phasemap.simulate(name, t_end, rtol=rtol, atol=rtol * math.sqrt(u_ref),
+                                   method=method, **values)
+            return float(ds.event_phi[-1]), float(ds.event_omega[-1]) ** 2
+
+        ref = curve_end(phase.RTOL)
+        check = sim_end("DOP853", 1e-14)
+
+        def err(end):
+            return max(abs(end[0] - ref[0]), abs(end[1] - ref[1]) / u_ref)
+
+        runs = {"tracer": [], "DOPRI5": [], "DOP853": []}
+        y0 = np.array([full["phi"], full["omega"]])
+        no_eval = np.empty(0)
+        for tol in TOLS:
+            kernel(v, full["phi"], full["omega"], lo, hi, 50, 2, u_ref, tol, phase.H_MAX,
+                   0.05 * phase.H_MAX)
+            runs["tracer"].append((err(curve_end(tol)), median_ms(
+                lambda tol=tol: kernel(v, full["phi"], full["omega"], lo, hi, 50, 2, u_ref,
+                                       tol, phase.H_MAX, 0.05 * phase.H_MAX), repeat)))
+            for method in ("DOPRI5", "DOP853"):
+                integrate, _ = phasemap.integrate.kernels(m, method)
+                atol = tol * math.sqrt(u_ref)
+                integrate(v, y0, t_end, tol, atol, math.inf, 10**6, 10**4, True, no_eval)
+                runs[method].append((err(sim_end(method, tol)), median_ms(
+                    lambda integrate=integrate, tol=tol, atol=atol: integrate(
+                        v, y0, t_end, tol, atol, math.inf, 10**6, 10**4, True, no_eval),
+                    repeat)))
+
+        def cheapest(pairs, level):
+            ok = [t for e, t in pairs if e <= level]
+            return min(ok) if ok else math.nan
+        rows.append((label, err(check), {
+            level: (cheapest(runs["tracer"], level),
+                    min(cheapest(runs["DOPRI5"], level), cheapest(runs["DOP853"], level),
+                        key=lambda x: math.inf if math.isnan(x) else x))
+            for level in LEVELS}))
+    return rows
+
+
 def accuracy():
     """(label, max |omega^2 error| / (g/l), end-point error) against independent references."""
     out = []
@@ -216,6 +281,7 @@ def main():
     t0 = time.perf_counter()
     rows = timing(args.repeat, before)
     acc = accuracy()
+    equal = equal_accuracy(max(args.repeat // 3, 3))
     p, errs = order()
     lines = ["## Phase curves (`benchmarks/phase_curve.py`)", "",
              f"Machine: {machine()}.  Medians of {args.repeat} runs per method, the methods "
@@ -242,6 +308,24 @@ def main():
             f"{med['simulate']:.2f} ms | {med['simulate kernel']:.3f} ms | "
             f"{med['before'] / med['after']:.1f}x | {med['simulate'] / med['after']:.2f}x | "
             f"{med['simulate kernel'] / med['after kernel, 2 points']:.2f}x |")
+    lines += ["", "### At equal accuracy", "",
+              "The compiled curve alone (2 points per stage) at rtol = "
+              f"{', '.join(f'{t:g}' for t in TOLS)} (`phase_curve(..., rtol=...)`) against "
+              "`simulate`'s kernel, DOPRI5 and DOP853, at the same tolerances (atol = rtol "
+              "times the velocity scale), to the same fate.  Error: the end state, "
+              "max(|d phi|, |d omega^2| / u_ref), against the curve at rtol 1e-14 "
+              "(*check*: DOP853 at rtol 1e-14 against it).  Cheapest run with the error at "
+              "most the level; *simulate kernel / curve* above 1 means the curve is cheaper.",
+              "", "| curve | check | " + " | ".join(
+                  f"curve, err <= {lv:g} | simulate kernel | simulate kernel / curve"
+                  for lv in LEVELS) + " |",
+              "|---|---|" + "---:|" * (3 * len(LEVELS))]
+    for label, check, by_level in equal:
+        cells = []
+        for lv in LEVELS:
+            c, sk = by_level[lv]
+            cells += [f"{c * 1e3:.0f} us", f"{sk * 1e3:.0f} us", f"{sk / c:.2f}x"]
+        lines.append(f"| {label} | {check:.1e} | " + " | ".join(cells) + " |")
     lines += ["", "Accuracy against independent references (largest error of omega^2 over the "
               "output points of the stage, relative to g/l; the hinge's relative to omega0^2):",
               "", "| case | error |", "|---|---|"]

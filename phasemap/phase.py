@@ -909,7 +909,8 @@ def _trace(m: Model, full: dict, phi_range, max_stages: int, points: int,
 
 def phase_curve(model: str | Model, *, phi: float | None = None, omega: float | None = None,
                 phi_range: tuple[float, float] | None = None, max_stages: int = 50,
-                points_per_stage: int = 200, **params: float) -> xr.Dataset:
+                points_per_stage: int = 200, rtol: float = RTOL,
+                **params: float) -> xr.Dataset:
     """The phase curve omega(phi) from (phi, omega), stage by stage, to its fate.
 
     Parameters
@@ -934,6 +935,12 @@ def phase_curve(model: str | Model, *, phi: float | None = None, omega: float | 
         ends with ``max_events``.
     points_per_stage:
         points evenly spaced in phi on each stage, its ends included.
+    rtol:
+        the error of omega^2 allowed per panel, relative to ``|omega^2| +
+        u_ref`` (u_ref the square of the model's velocity scale), in
+        [1e-14, 1e-3].  The default, 1e-14, traces to about machine precision;
+        a looser one takes fewer, longer panels (the method is of order 12), for
+        portraits of many curves.
     **params:
         the model's parameters by name; missing ones take the defaults.
 
@@ -982,12 +989,18 @@ def phase_curve(model: str | Model, *, phi: float | None = None, omega: float | 
     lo, hi = _checked_range(m, pos, full[pos], phi_range)
     max_stages = _positive_int(m, "max_stages", max_stages, 1)
     points = _positive_int(m, "points_per_stage", points_per_stage, 2)
-    pts, stages = _trace(m, full, (lo, hi), max_stages, points)
+    try:
+        rtol = float(rtol)
+    except (TypeError, ValueError):
+        raise ValueError(f"{m.name}: rtol must be a number, got {rtol!r}") from None
+    if not RTOL <= rtol <= 1e-3:
+        raise ValueError(f"{m.name}: rtol must be in [1e-14, 1e-3], got {rtol!r}")
+    pts, stages = _trace(m, full, (lo, hi), max_stages, points, rtol=rtol)
     stages = stages.copy()
     var = m.variables[pos]
     if stages[-1, 3] == ev.HORIZON and stages[-1, 4] in (var.lower, var.upper):
         stages[-1, 3] = ev.LEFT_DOMAIN  # the model's own edge (the ladder lies flat)
-    return _dataset(m, full, (lo, hi), max_stages, points, pts, stages)
+    return _dataset(m, full, (lo, hi), max_stages, points, pts, stages, rtol)
 
 
 def _checked_range(m: Model, pos: str, phi: float, phi_range) -> tuple[float, float]:
@@ -1028,7 +1041,7 @@ METHOD = (f"exponential Gauss collocation in phi ({NODES} nodes, order {2 * NODE
 
 
 def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
-             pts: np.ndarray, stages: np.ndarray) -> xr.Dataset:
+             pts: np.ndarray, stages: np.ndarray, rtol: float = RTOL) -> xr.Dataset:
     pos, vel, _ = _coordinate(m)
     var_phi, var_omega = m.variables[pos], m.variables[vel]
     index = pts[:, 2].astype(np.int32)
@@ -1097,6 +1110,7 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
         "phasemap_phi_range": np.array(phi_range, dtype=float),
         "phasemap_max_stages": np.int32(max_stages),
         "phasemap_points_per_stage": np.int32(points),
+        "phasemap_rtol": float(rtol),
     }
     for v in m.state:
         attrs[f"phasemap_initial_{v.name}"] = float(full[v.name])

@@ -640,3 +640,21 @@ def test_running_models_end_where_the_oracle_says(model, params, start):
         assert a.separating or any(np.min(np.abs(md.N)) < 1e-8 * G for md in a.all_kept)
     elif reason == "indeterminate":  # keeping and leaving are both consistent
         assert a.separating and a.all_kept
+
+
+def test_a_looser_rtol_keeps_the_curve_to_its_tolerance():
+    """rtol trades accuracy for fewer panels: the wheel swinging to rest keeps its stages
+    and reasons, and its omega^2 stays within a small multiple of rtol of the default's."""
+    tight = phase_curve("wheel", phi=1.0, omega=0.0)
+    loose = phase_curve("wheel", phi=1.0, omega=0.0, rtol=1e-8)
+    assert loose.attrs["phasemap_rtol"] == 1e-8 and tight.attrs["phasemap_rtol"] == 1e-14
+    assert list(loose.stage_end_reason.values) == list(tight.stage_end_reason.values)
+    u_ref = G / 1.0  # the wheel's velocity scale squared, g / r
+    np.testing.assert_allclose(loose.stage_end_phi.values, tight.stage_end_phi.values,
+                               atol=1e-6)
+    np.testing.assert_allclose(loose.omega_squared.values, tight.omega_squared.values,
+                               atol=1e-6 * u_ref)
+    assert not np.array_equal(loose.omega_squared.values, tight.omega_squared.values)
+    for bad in (1e-16, 0.1, "tight", float("nan")):
+        with pytest.raises(ValueError, match="rtol"):
+            phase_curve("wheel", phi=1.0, omega=0.0, rtol=bad)
