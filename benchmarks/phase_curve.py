@@ -87,13 +87,17 @@ def median_ms(fn, repeat):
     return 1e3 * statistics.median(times)
 
 
-def runners(name, values, t_end, before):
+def setup(name, values):
+    """(model, values, phi range, compiled curve, input vector, u_ref) of one curve."""
     m = get_model(name)
     full = {k: float(v) for k, v in m.complete(values).items()}
     lo, hi = phase._checked_range(m, "phi", full["phi"], None)
-    kernel = phase._kernel(m)
-    v = m.input_vector(full)
-    u_ref = phase._velocity_reference(m, full)
+    return m, full, lo, hi, phase._kernel(m), m.input_vector(full), \
+        phase._velocity_reference(m, full)
+
+
+def runners(name, values, t_end, before):
+    m, full, lo, hi, kernel, v, u_ref = setup(name, values)
     integrate, _ = phasemap.integrate.kernels(m, "DOP853")
     y0 = np.array([full["phi"], full["omega"]])
     no_eval = np.empty(0)
@@ -148,12 +152,7 @@ def equal_accuracy(repeat):
     with the simulate runs also checked against simulate at rtol 1e-14 (DOP853)."""
     rows = []
     for label, name, values, t_end in EQUAL:
-        m = get_model(name)
-        full = {k: float(v) for k, v in m.complete(values).items()}
-        lo, hi = phase._checked_range(m, "phi", full["phi"], None)
-        kernel = phase._kernel(m)
-        v = m.input_vector(full)
-        u_ref = phase._velocity_reference(m, full)
+        m, full, lo, hi, kernel, v, u_ref = setup(name, values)
 
         def curve_end(rtol):
             _, st = kernel(v, full["phi"], full["omega"], lo, hi, 50, 2, u_ref, rtol,
