@@ -255,7 +255,7 @@ def test_ladder_with_f_near_sqrt2(f, phi, omega, ends, method):
     assert ds.attrs["end_reason"] in ends
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", ["DOPRI5"])  # the hand model: one compile, not two
 def test_ladder_just_above_sqrt2_stops_clearly_when_the_stage_is_stiff(method):
     # f = sqrt2 + 1e-9 makes the stage stiff: a boundary layer of width ~1e-10 rad, then
     # N_wall < 0 on the slow manifold at phi = 0.49999999297 (found by phase_curve).  At
