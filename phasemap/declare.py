@@ -753,9 +753,12 @@ def _rows(S: System, kappa: dict):
     each tangential acceleration is k_i v': one contact sticking (k_i v' = 0)
     stops all of them, and slips starting in directions of different
     s_i kappa_i ask v' for two signs at once.  Such rows can never be
-    admissible and are not generated (at a bound of the domain where some
-    k_i = 0 this keeps, as the hand models do, the limit from inside).  A row
-    with a separated contact has more freedom and is kept.
+    admissible inside the domain and are not generated.  At a bound where
+    some k_i = 0 (the ladder lying flat, phi = pi/2) that contact cannot
+    start to slip either, so a slide from rest is not admissible there: the
+    hand ladder keeps the limit from inside instead, and the two differ on
+    that edge (683 cells of a 2048^2 rest map, BENCHMARKS.md).  A row with a
+    separated contact has more freedom and is kept.
     """
     combos = list(itertools.product(*(_options(c) for c in S.contacts)))
     rows = []
