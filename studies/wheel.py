@@ -161,14 +161,18 @@ def maps_figure(stag: xr.Dataset, bounce: xr.Dataset, n: dict, size="two_column"
             (Line2D([], [], color=oi["black"], lw=0.8, ls="--"), r"$|\sin\varphi| = \delta/l$"),
             (Line2D([], [], color=oi["black"], lw=0.6, ls=":"), r"$\delta = l$")])
 
-        pplot.map_figure(bounce, "contact_lost", x="phi", ax=b)
+        # n_solutions with contact_lost hatched: rolling on (N >= 0), a hop (the rolling
+        # would pull; hatched), or neither (N < 0 and free flight closes the gap: none)
+        pplot.map_figure(bounce, "n_solutions", x="phi", ax=b)
         phi, w = bounce.phi.values, bounce.omega.values
         b.contour(phi, w, n["unreduced"].T, levels=[0.0], colors=[oi["black"]],
                   linewidths=0.8)
         b.contour(phi, w, n["printed_13"].T, levels=[0.0], colors=[oi["vermillion"]],
                   linewidths=0.9, linestyles="dashed")
         b.set_title(rf"(b) bounce (12), $\delta/l$ = {LOW:g}", loc="left")
-        _relabel_legend(b, {"no": r"$N \geq 0$", "yes": r"$N < 0$: contact lost"}, [
+        _relabel_legend(b, {"unique": r"rolls ($N \geq 0$) or hops",
+                            "none": r"none: $N < 0$, no hop",
+                            "a branch loses contact": "hops"}, [
             (Line2D([], [], color=oi["black"], lw=0.8), r"$N = 0$, Newton–Euler"),
             (Line2D([], [], color=oi["vermillion"], lw=0.9, ls="--"),
              r"$N = 0$, (13) as printed")])
