@@ -75,9 +75,10 @@ class Classification:
             f"  stagnation = {self.stagnation}, contact_lost = {self.contact_lost}, "
             f"singular = {self.singular}",
         ]
+        width = max([10] + [len(b.name) for b in self.candidates])
         for b in self.candidates:
             nums = ", ".join(f"{k}={v:.6g}" for k, v in {**b.accelerations, **b.reactions}.items())
-            lines.append(f"  {b.name:<10} {b.status.name.lower():<12} {nums}")
+            lines.append(f"  {b.name:<{width}} {b.status.name.lower():<12} {nums}")
         return "\n".join(lines)
 
 
