@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import pathlib
 import shutil
+import sys
 import textwrap
 from dataclasses import dataclass
 from typing import Callable, Sequence
@@ -52,18 +53,27 @@ def verdict(ok: bool, yes: str = "agrees") -> str:
     return yes if ok else "DISAGREES"
 
 
+def _to_terminal() -> bool:
+    try:
+        return sys.stdout.isatty()
+    except (AttributeError, ValueError):  # replaced or closed stdout
+        return False
+
+
 def claims_table(claims: Sequence[Claim], width: int | None = None) -> str:
     """The claims as an aligned plain-text table, at most ``width`` columns wide.
 
-    ``width`` defaults to the terminal's (``COLUMNS`` or the terminal size;
-    unlimited when the output is no terminal).  The claim, paper and measured
-    columns are wrapped, each to a share of the room its text needs.
+    ``width`` defaults to the terminal's when standard output is one
+    (``COLUMNS`` or the terminal size), and is unlimited when the output goes
+    to a file, a pipe or a capture (one line per claim, for tools that read
+    it).  The claim, paper and measured columns are wrapped, each to a share
+    of the room its text needs.
     """
     rows = [("claim", "paper", "measured", "verdict")]
     rows += [(c.claim, c.paper, c.measured, c.verdict) for c in claims]
     widths = [max(len(r[i]) for r in rows) for i in range(4)]
     if width is None:
-        width = shutil.get_terminal_size((0, 0)).columns
+        width = shutil.get_terminal_size((0, 0)).columns if _to_terminal() else 0
     room = width - widths[3] - 6  # verdicts stay whole; three 2-space gaps
     if width > 0 and sum(widths[:3]) > room:
         widths[:3] = _shares(widths[:3], max(room, 3 * 12))

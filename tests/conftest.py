@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import pathlib
 import shutil
 import subprocess
 
@@ -13,9 +14,18 @@ import pytest
 STUDY_RUNS: dict[str, tuple[list[str], int]] = {}
 
 
-def record_study(name: str, claims, out) -> None:
-    import pathlib
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """Under pytest-xdist (``-n``, ``--dist loadgroup``), run each test module on one
+    worker, so that a module's fixtures (its compiled kernels) are built once, and every
+    study on the same worker, so that the tour counts see all of them (:data:`STUDY_RUNS`)."""
+    for item in items:
+        module = item.nodeid.split("::")[0]
+        group = "studies" if pathlib.Path(module).name.startswith("test_study_") else module
+        item.add_marker(pytest.mark.xdist_group(group))
 
+
+def record_study(name: str, claims, out) -> None:
     # the tour's figures are the two-column ones; "_one_column" files are their narrow layouts
     figures = [p for p in pathlib.Path(out).glob("*.png") if not p.stem.endswith("_one_column")]
     STUDY_RUNS[name] = ([c.verdict for c in claims], len(figures))
