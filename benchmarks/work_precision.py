@@ -15,7 +15,7 @@ Outputs: ``benchmarks/work_precision.pdf`` and ``.png`` (drawn by
 (every row), and the section "Work-precision" of ../BENCHMARKS.md.  The fate
 map of the wheel is timed by ``benchmarks/fate_map.py``.
 
-    python benchmarks/work_precision.py [--quick] [--repeats 3] [--no-write]
+    python benchmarks/work_precision.py [--quick] [--repeats 3] [--no-write] [--figure-only]
 """
 
 from __future__ import annotations
@@ -37,7 +37,8 @@ from grid import machine, write_section  # noqa: E402
 HERE = pathlib.Path(__file__).resolve().parent
 LEVELS = (1e-3, 1e-5, 1e-7, 1e-9, 1e-11)
 def write_csv(rows, path):
-    keys = ["system", "method", "tol", "error_final", "error_l2", "seconds", "fate",
+    keys = ["system", "method", "tol", "error_final", "error_l2", "seconds", "seconds_min",
+            "seconds_max", "n_samples", "fate",
             "n_reversals", "same_fate", "n_steps", "nfev", "skipped", "reference", "floor",
             "cross_check"]
     with open(path, "w", newline="") as fh:
@@ -45,6 +46,18 @@ def write_csv(rows, path):
         w.writeheader()
         for r in rows:
             w.writerow(r)
+
+
+def read_csv(path):
+    """The rows :func:`write_csv` wrote (numbers as floats, words as they are)."""
+    def value(v):
+        try:
+            return float(v)
+        except ValueError:
+            return v
+
+    with open(path, newline="") as fh:
+        return [{k: value(v) for k, v in row.items() if v != ""} for row in csv.DictReader(fh)]
 
 
 def figure(rows, stem):
@@ -138,7 +151,12 @@ def main():
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--problems", nargs="+", default=list(wp.PROBLEMS))
     ap.add_argument("--no-write", action="store_true", help="print only")
+    ap.add_argument("--figure-only", action="store_true",
+                    help="redraw the figure from work_precision.csv, time nothing")
     args = ap.parse_args()
+    if args.figure_only:
+        print("figure:", *figure(read_csv(HERE / "work_precision.csv"), HERE / "work_precision"))
+        return
     if args.quick:
         tolerances, repeats, min_time = (1e-3, 1e-6, 1e-9, 1e-12), 1, 0.005
     else:

@@ -824,13 +824,32 @@ def outer_labels(axes: Sequence[Axes]) -> None:
 def legend_columns(labels: Sequence[str], width: float) -> int:
     """How many legend columns of ``labels`` fit in ``width`` inches at the house font,
     rows balanced."""
+    column = _legend_size(labels, 1)[0]
+    ncols = max(1, min(len(labels), int(width // column)))
+    rows = -(-len(labels) // ncols)
+    return -(-len(labels) // rows)
+
+
+def _legend_size(labels: Sequence[str], ncols: int) -> tuple[float, float]:
+    """Roughly the (width, height) in inches of a frameless legend of ``labels`` in
+    ``ncols`` columns at the house font (the estimate :func:`legend_columns` uses)."""
     em = _FONT / 72.0
     rc = mpl.rcParams
     column = (rc["legend.handlelength"] + rc["legend.handletextpad"] + rc["legend.columnspacing"]
               + 0.58 * max(_visible_length(s) for s in labels)) * em
-    ncols = max(1, min(len(labels), int(width // column)))
     rows = -(-len(labels) // ncols)
-    return -(-len(labels) // rows)
+    return ncols * column, rows * (1.0 + rc["legend.labelspacing"]) * em * 1.2
+
+
+def _legend_fits(labels: Sequence[str], width: float, height: float) -> bool:
+    """Whether a one-column legend of ``labels`` fits a ``width`` x ``height`` inch slot."""
+    w, h = _legend_size(labels, 1)
+    return w <= 0.95 * width and h <= 0.9 * height
+
+
+def _legend_height(labels: Sequence[str], width: float) -> float:
+    """The height (inches) a legend of ``labels`` above ``width`` inches of panels needs."""
+    return 0.1 + _legend_size(labels, legend_columns(labels, width))[1]
 
 
 def _legend_above(ax: Axes, handles: list, labels: list[str] | None = None,
@@ -1565,6 +1584,7 @@ _WP_KEYS = ("method", "system", "tol", "error_final", "error_l2", "seconds")
 #: The methods of a work-precision table as a reader knows them.
 METHOD_NAMES = {
     "phasemap": "phasemap, Dormand–Prince 5(4)",
+    "phasemap_DOP853": "phasemap, Dormand–Prince 8(5,3)",
     "simulate": "phasemap.simulate, Dormand–Prince 5(4)",
     "phase_curve": "phasemap first integrals",
     "RK45": "SciPy RK45, Dormand–Prince 5(4)",
@@ -1580,6 +1600,24 @@ SYSTEM_NAMES = {
     "wheel": "wheel",
     "elliptic_pendulum": "elliptic pendulum",
 }
+
+
+def _two_decades_shown(ax: Axes) -> None:
+    """Widen each log axis of ``ax`` until two powers of ten lie on it: with fewer,
+    matplotlib labels minor ticks (4x10^-4, 6x10^-4, ...), and they collide."""
+    for get, put in ((ax.get_xlim, ax.set_xlim), (ax.get_ylim, ax.set_ylim)):
+        lo, hi = get()
+        if not 0 < lo < hi:
+            continue
+        a, b = math.log10(lo), math.log10(hi)
+        while math.floor(b + 1e-9) - math.ceil(a - 1e-9) < 1:
+            # extend the end nearer to its next power of ten, to it
+            down, up = a - math.floor(a - 1e-9), math.ceil(b + 1e-9) - b
+            if down <= up:
+                a = math.floor(a - 1e-9) if down > 1e-9 else a - 1.0
+            else:
+                b = math.ceil(b + 1e-9) if up > 1e-9 else b + 1.0
+        put(10.0 ** a, 10.0 ** b)
 
 
 def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final", ax=None,
@@ -1615,9 +1653,12 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
     width = width_of(size)
     ncols = min(len(systems), 4 if width >= 5 else 2)
     nrows = -(-len(systems) // ncols)
-    spare = ax is None and nrows * ncols > len(systems)
     panel_h = (width / ncols) * (0.8 if width >= 5 else 0.85)
-    top = 0.0 if spare else 0.3
+    names = [METHOD_NAMES.get(m, m) for m in methods]
+    # the key goes in a free panel slot when it fits there, else above the panels
+    spare = (ax is None and nrows * ncols > len(systems)
+             and _legend_fits(names, width / ncols, panel_h))
+    top = 0.0 if spare or ax is not None else _legend_height(names, 0.95 * width)
     ylabel = (r"Final-state error $\|\Delta y\|_\infty$" if error == "error_final"
               else r"$L_2$ error along the motion")
     with style():
@@ -1650,6 +1691,7 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
                 handles.setdefault(method, line)
             a.set_xscale("log")
             a.set_yscale("log")
+            _two_decades_shown(a)
             a.set_title(SYSTEM_NAMES.get(system, system.replace("_", " ")), loc="left")
             if ax is not None or i % ncols == 0:
                 a.set_ylabel(ylabel)
@@ -1662,6 +1704,9 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
         fig = axes[0].get_figure(root=False)
         lines = [handles[m] for m in methods if m in handles]
         labels = [ln.get_label() for ln in lines]
+        if ax is None and not spare:
+            for extra in fig.axes[len(systems):]:
+                extra.remove()
         if spare:
             for extra in spares[1:]:
                 extra.remove()

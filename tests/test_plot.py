@@ -635,17 +635,40 @@ def test_work_precision_one_panel_per_system_one_line_per_method(size, tmp_path)
         assert a.get_xlabel() in ("", "Run time per trajectory (s)" if size == "two_column"
                                   else "Run time (s)")
         assert a.get_ylabel() in ("", r"Final-state error $\|\Delta y\|_\infty$")
-    # two columns: one legend above the panels; one column: in the free fourth slot
-    legend = fig.legends[0] if size == "two_column" else fig.axes[-1].get_legend()
-    assert not (size == "one_column" and fig.axes[-1].axison)
+    # one legend above the panels: the method names are too long for the free fourth slot
+    # of the one-column grid, which is removed
+    legend = fig.legends[0]
+    assert len(fig.axes) == 3
     assert [t.get_text() for t in legend.get_texts()] == names
     assert "$y$: the state in SI units" in fig._supxlabel.get_text()  # y is defined
     assert ("per trajectory" in fig._supxlabel.get_text()) == (size == "one_column")
-    if size == "two_column":  # one column: the legend in the free slot is wider than the slot
-        assert figure_review.layout_problems(fig) == []
+    assert figure_review.layout_problems(fig) == []
     render(fig, tmp_path)
     fig = quiet(pplot.work_precision_figure, work_precision_table(), error="error_l2")
     assert fig.axes[0].get_ylabel() == "$L_2$ error along the motion"
+
+
+@pytest.mark.parametrize("size", ["one_column", "two_column"])
+def test_work_precision_of_every_builtin_problem_and_method_lays_out(size, tmp_path):
+    """The benchmark's figure: five systems, eight methods, at both widths."""
+    rows = []
+    systems = list(pplot.SYSTEM_NAMES)
+    methods = list(pplot.METHOD_NAMES)
+    for system in systems:
+        for j, method in enumerate(methods):
+            for tol in (1e-4, 1e-8):
+                rows.append({"method": method, "system": system, "tol": tol,
+                             "error_final": tol * (j + 1), "error_l2": tol,
+                             "seconds": 1e-4 * (j + 1) / tol ** 0.1})
+    fig = quiet(pplot.work_precision_figure, rows, size=size)
+    panels = [a for a in fig.axes if a.axison]
+    assert len(panels) == len(systems)
+    legends = fig.legends + [a.get_legend() for a in fig.axes if a.get_legend()]
+    assert len(legends) == 1
+    assert [t.get_text() for t in legends[0].get_texts()] == [pplot.METHOD_NAMES[m]
+                                                              for m in methods]
+    assert figure_review.layout_problems(fig) == []
+    render(fig, tmp_path)
 
 
 def test_work_precision_points_at_the_fastest_round_with_a_bar_to_the_slowest(tmp_path):
