@@ -1479,7 +1479,9 @@ def _build(S: System):
     spec = json.loads(module.SPEC)
 
     def var(x, **kw):
-        return Variable(x.name, x.units, x.long_name, x.symbol or x.name, **kw)
+        # no symbol declared: sympy's (rho -> \rho, x_a -> x_{a}), so figures stay mathtext
+        return Variable(x.name, x.units, x.long_name, x.symbol or sp.latex(sp.Symbol(x.name)),
+                        **kw)
 
     coords = {c.name: c for c in S.coordinates}
     state = tuple(var(coords[nm], default=float(coords[nm].default), lower=coords[nm].lower,

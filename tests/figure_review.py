@@ -67,7 +67,15 @@ def check(seen: dict[str, dict], exempt_fixed=()) -> None:
         if what["panels"] > 1:
             assert "(a)" in text and "(b)" in text, (name, what["texts"])
         assert "φ" not in text and "²" not in text, (name, "upright symbol outside mathtext")
+        plain = " ".join(text.split("$")[::2])  # what lies outside mathtext
+        spelled = _SPELLED.search(plain)
+        assert spelled is None, (name, f"{spelled and spelled.group(0)!r}: a symbol spelled out")
         assert not what["problems"], (name, what["problems"])
+
+
+#: A Greek letter's name given a value outside mathtext ("rho = 0.5 m"): a missing symbol.
+_SPELLED = re.compile(r"\b(alpha|beta|gamma|delta|epsilon|zeta|eta|theta|kappa|lambda|mu|nu|xi"
+                      r"|rho|sigma|tau|phi|chi|psi|omega)\s*=", re.IGNORECASE)
 
 
 # --------------------------------------------------------------------------- layout
