@@ -32,7 +32,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import to_hex
 from matplotlib.lines import Line2D
-from matplotlib.patches import Patch
+from matplotlib.patches import Patch, Rectangle
 
 import phasemap
 from phasemap import plot as pplot
@@ -255,10 +255,16 @@ def figure_moving(by_delta, by_omega, size="two_column"):
 
 
 def figure_phase(curves, size="two_column"):
+    """The phase curves (a), and (b) the zone at phi = 0 enlarged, where three of them come
+    to rest within 0.1 rad of each other (their rest squares would overlap in (a))."""
     with pplot.style():
         width = pplot.width_of(size)
-        fig, ax = plt.subplots(figsize=(width, 3.0 if _wide(size) else 4.0),
-                               layout="constrained")
+        if _wide(size):
+            fig, (ax, zoom) = plt.subplots(1, 2, figsize=(width, 3.2), layout="constrained",
+                                           width_ratios=[4.0, 1.0])
+        else:
+            fig, (ax, zoom) = plt.subplots(2, 1, figsize=(width, 5.6), layout="constrained",
+                                           height_ratios=[2.2, 1.2])
         starts = []
         for i, ds in enumerate(curves):
             before = len(ax.lines)
@@ -282,12 +288,39 @@ def figure_phase(curves, size="two_column"):
         events = list(leg.legend_handles)
         for h, t in zip(events, leg.get_texts()):
             h.set_label(t.get_text())
+        leg.remove()
+        _zoom_on_zone(ax, zoom)
         zone = Patch(color=ZONE, alpha=0.18, lw=0,
                      label=rf"stagnation zone (35), $\delta/l$ = {DELTA / L:g}")
         head = pplot.fixed_values_text(curves[0].drop_attrs().assign_attrs(
             {k: v for k, v in curves[0].attrs.items() if "initial" not in k}), 0.95 * width)
-        _replace_legend(ax, starts + events + [zone], head, ncols=4 if _wide(size) else None)
+        pplot.figure_legend(fig, starts + events + [zone], title=head,
+                            ncols=4 if _wide(size) else None)
+        ax.set_title("phase curves to their fates", loc="left")
+        zoom.set_title(r"near $\varphi = 0$", loc="left")
+        pplot.label_panels([ax, zoom])
     return fig
+
+
+def _zoom_on_zone(ax, zoom):
+    """Draw ``ax``'s curves and markers again in ``zoom``, on the zone at phi = 0, and mark
+    that window in ``ax``."""
+    half = math.asin(min(DELTA / L, 1.0))
+    x0, x1, y0, y1 = -1.3 * half, 1.3 * half, -0.8, 0.8
+    for line in ax.lines:
+        x, y = line.get_data()
+        zoom.plot(x, y, color=line.get_color(), ls=line.get_linestyle(),
+                  lw=line.get_linewidth(), marker=line.get_marker(),
+                  ms=line.get_markersize(), mfc=line.get_markerfacecolor(),
+                  mec=line.get_markeredgecolor(), mew=line.get_markeredgewidth(),
+                  zorder=line.get_zorder())
+    zoom.axvspan(-half, half, color=ZONE, alpha=0.18, lw=0)
+    zoom.set_xlim(x0, x1)
+    zoom.set_ylim(y0, y1)
+    zoom.set_xlabel(r"$\varphi$ (rad)")
+    zoom.set_ylabel(r"$\omega$ (rad s$^{-1}$)")
+    ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec="0.3", lw=0.6,
+                           zorder=6))
 
 
 def figure_weightless(runs, size="two_column"):
