@@ -1371,11 +1371,16 @@ def mark_inverted_rests(axes: Sequence[Axes], ds: xr.Dataset, x: str, y: str, xc
     if not inverted.any():
         return []
     jj, ii = np.nonzero(inverted)
-    ring = {"ls": "none", "marker": "o", "mfc": "none", "mec": _OI["black"], "mew": 0.7}
+    # a ring a little wider than a cell on a coarse map; on a fine one (cells under 2 pt,
+    # where such rests line up along curves) a dot a cell wide, which hides nothing
+    cell = min(_panel_width(a) for a in axes) * 72.0 / max(len(xc), 1)
+    ring = cell >= 2.0
+    mark = {"ls": "none", "marker": "o", "mec": _OI["black"],
+            "mfc": "none" if ring else _OI["black"], "mew": 0.7 if ring else 0.0}
     for a in axes:
-        a.plot(xc[ii], yc[jj], ms=4.0, zorder=6, **ring)
-    return [Line2D([], [], ms=4.0, label=r"rest inverted ($\cos\varphi_\mathrm{rest} < 0$)",
-                   **ring)]
+        a.plot(xc[ii], yc[jj], ms=4.0 if ring else max(cell, 1.0), zorder=6, **mark)
+    return [Line2D([], [], ms=4.0 if ring else 2.5,
+                   label=r"rest inverted ($\cos\varphi_\mathrm{rest} < 0$)", **mark)]
 
 
 # --------------------------------------------------------------------------- motions

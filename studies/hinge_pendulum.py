@@ -147,7 +147,7 @@ def weightless(out, files):
 
 def fate_map(quick, out, files):
     """Fate, rest angle and number of swings from every (phi0, omega0) of a grid."""
-    n = 61 if quick else 241
+    n = 161 if quick else 241  # odd: phi = 0 on the grid; a cell under 4 px at 300 dpi
     ds = phasemap.Scene(NAME, axes={"phi": np.linspace(-math.pi, math.pi, n),
                                     "omega": np.linspace(-9.0, 9.0, n)},
                         fixed={"delta": DELTA, "l": L},

@@ -59,7 +59,7 @@ def main(argv=None) -> list[Claim]:
     args = arguments(__doc__, argv)
     out = args.out
     files, claims = [], []
-    n_phi, n_delta, n_omega, n_fate = (241, 151, 200, 60) if args.quick else \
+    n_phi, n_delta, n_omega, n_fate = (241, 151, 200, 160) if args.quick else \
         (1441, 601, 800, 241)
 
     # -- stagnation zones (15) over (phi, delta/l) ----------------------------------

@@ -838,6 +838,20 @@ def test_fate_map_states_its_parameters_and_rings_inverted_rests(tmp_path):
     render(fig, tmp_path)
 
 
+def test_inverted_rests_on_a_fine_fate_map_are_dots_a_cell_wide(tmp_path):
+    """Rings would cover a fine map (such rests line up along curves there): dots instead."""
+    ds = fate_dataset().interp(phi=np.linspace(-np.pi, np.pi, 400), method="nearest")
+    ds["phi_rest"][:, 0] = 3.0
+    fig = quiet(ds.phasemap.plot, extra="n_reversals", size="two_column")
+    marks = [l for l in fig.axes[0].lines if l.get_marker() == "o"]
+    assert len(marks) == 1 and len(marks[0].get_xdata()) == 400
+    assert marks[0].get_markerfacecolor() != "none"
+    cell = pplot._panel_width(fig.axes[0]) * 72.0 / 400
+    assert marks[0].get_markersize() <= max(cell, 1.0)
+    assert r"rest inverted ($\cos\varphi_\mathrm{rest} < 0$)" in legend_texts(fig.axes[0])
+    render(fig, tmp_path)
+
+
 @pytest.mark.parametrize("kind", ["fate", "trajectory", "profile", "work_precision"])
 def test_multi_panel_figures_letter_their_panels(kind, hinge_profile):
     fig = {"fate": lambda: fate_dataset().phasemap.plot(extra="phi_rest"),
