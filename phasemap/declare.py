@@ -955,9 +955,30 @@ class _Row:
         vals = ctx.numeric(D / Ds, 12)
         if np.max(np.abs(vals)) > 1e-9:
             self.D, *self.nums = _reduced([D] + [self._cramer(K, rhs, i) for i in range(k)])
+            self._one_direction()
             return
         # statically indeterminate: a one-parameter family of reactions
         self._indeterminate(K, rhs, k)
+
+    def _one_direction(self):
+        """Write the determinant and numerators with the one slip direction that every
+        contact shares when all of them slip, reduced and factored (:func:`_pythagorean`).
+
+        When every contact slips, contact c slips with sign kappa_c s (the rows
+        where they would not share s are never generated, see :func:`_rows`):
+        sigma_c = kappa_c kappa_1 sigma_1.  Substituted, terms such as the
+        sliding ladder's 3 f sin(phi) cos(phi) (sigma_floor - sigma_wall) vanish
+        in the algebra instead of cancelling in rounding, and its determinant
+        becomes 2 (2 - f^2) / 9, whose rounding does not change along the motion.
+        """
+        ctx = self.ctx
+        if len(self.sig) < 2 or any(k not in ("slip", "roll") for k in self.kinds):
+            return
+        first, *others = self.sig
+        sub = {self.sig[nm]: ctx.kappa[nm] * ctx.kappa[first] * self.sig[first]
+               for nm in others}
+        self.D = _pythagorean(self.D.xreplace(sub), ctx.q)
+        self.nums = [e.xreplace(sub) for e in self.nums]
 
     def _saddle(self, M, W, C, hv, cb, n, k):
         """Accelerations and reactions together: [[M, -W], [C, 0]] (q'', L) = (h, -c)."""
@@ -1264,6 +1285,33 @@ class _Row:
         return out
 
 
+def _pythagorean(e, angles):
+    """``e`` reduced modulo sin(q)^2 + cos(q)^2 = 1 for every coordinate q, and factored
+    (a constant times sin^2 + cos^2 becomes the constant).  Left as it is when it is
+    not a polynomial in the sines and cosines."""
+    import sympy as sp
+
+    sub, back, ideal, gens = {}, {}, [], []
+    for q in angles:
+        if not e.has(sp.sin(q), sp.cos(q)):
+            continue
+        s, c = sp.Dummy(f"s_{q}"), sp.Dummy(f"c_{q}")
+        sub.update({sp.sin(q): s, sp.cos(q): c})
+        back.update({s: sp.sin(q), c: sp.cos(q)})
+        ideal.append(s ** 2 + c ** 2 - 1)
+        gens += [s, c]
+    if not gens:
+        return sp.factor(e)
+    p = sp.expand(e.xreplace(sub))
+    if p.has(*angles):  # sin(2 q), sin(q + a), ...: not a polynomial in s, c
+        return e
+    try:
+        _, rem = sp.reduced(p, ideal, *gens)
+    except sp.polys.polyerrors.PolynomialError:
+        return e
+    return sp.factor(rem).xreplace(back)
+
+
 def _monomial(e):
     """The monomial factor common to the terms of ``e`` (such as m**4 l**4)."""
     import sympy as sp
@@ -1347,7 +1395,7 @@ def _derive(S: System) -> str:
 
     ctx = _Context(S)
     velocity, kappa = _slip_velocity(ctx)
-    ctx.velocity = velocity
+    ctx.velocity, ctx.kappa = velocity, kappa
     rows = _rows(S, kappa)
     positions = [c for c in S.coordinates if c.rate]
     trig = {}

@@ -256,6 +256,22 @@ def test_ladder_near_sqrt2_is_finite_and_matches_equation_8(df, phi0, omega0, me
     assert travel == pytest.approx(chain[0][2] - phi0, rel=1e-6)
 
 
+@pytest.mark.parametrize("phi0, omega0", [(0.05, -0.5), (0.5, -0.5), (0.9, -0.5),
+                                          (0.9, 0.5), (1.2, 0.5), (1.55, 0.5)])
+def test_the_running_ladder_traces_through_its_near_singular_determinant(phi0, omega0):
+    """f = sqrt 2 - 1e-10: the declared ladder stops within about 1e-12 rad where the hand
+    module stops.  Its sliding determinant is generated as 2 (2 - f^2) / 9, the two slip
+    signs written as one (``declare._Row._one_direction``); expanded, its rounding changed
+    with phi, and the tracer stopped at once with step_failure from each of these starts."""
+    f = math.sqrt(2.0) - 1e-10
+    ds = phase_curve("ladder", phi=phi0, omega=omega0, f=f, points_per_stage=20)
+    hand = phase_curve(HAND["ladder"], phi=phi0, omega=omega0, f=f, points_per_stage=20)
+    assert ds.attrs["end_reason"] == hand.attrs["end_reason"] == "rest"
+    end = ds.stage_end_phi.values[-1]
+    assert end == pytest.approx(hand.stage_end_phi.values[-1], abs=1e-14)
+    assert 0 < (end - phi0) * np.sign(omega0) < 1e-11
+
+
 def test_ladder_closed_form_never_overflows():
     """|lam| up to 1e11 from both sides of sqrt 2: finite curves, nothing past U_MAX."""
     for df in (-1e-10, -1e-6, -1e-3, 1e-3, 1e-6, 1e-10):
