@@ -1656,10 +1656,13 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
     spread = all("seconds_min" in r and "seconds_max" in r for r in rows)
     rounds = max((int(r.get("n_samples", 0)) for r in rows), default=0)
     width = width_of(size)
-    ncols = min(len(systems), 4 if width >= 5 else 2)
+    # three panels a row at two-column width, two at one column: narrower, the axis
+    # labels and headings of neighbouring panels collide
+    ncols = min(len(systems), 3 if width >= WIDE else 2)
     nrows = -(-len(systems) // ncols)
     panel_h = (width / ncols) * (0.8 if width >= 5 else 0.85)
     names = [METHOD_NAMES.get(m, m) for m in methods]
+    long_x = ax is not None or width / ncols >= 2.2  # room for "Run time per trajectory (s)"
     # the key goes in a free panel slot when it fits there, else above the panels
     spare = (ax is None and nrows * ncols > len(systems)
              and _legend_fits(names, width / ncols, panel_h))
@@ -1697,13 +1700,18 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
             a.set_xscale("log")
             a.set_yscale("log")
             _two_decades_shown(a)
-            a.set_title(SYSTEM_NAMES.get(system, system.replace("_", " ")), loc="left")
+            title = SYSTEM_NAMES.get(system, system.replace("_", " "))
+            # the heading may not reach over the next panel's tick labels: wrapped at its
+            # commas to the axes' width (the slot less the tick labels), "(a) " included
+            room = width / ncols - 0.55
+            if _visible_length("(a) " + title) * 0.55 * _FONT / 72.0 > room:
+                title = wrap(title.split(", "), room - 4 * 0.55 * _FONT / 72.0)
+            a.set_title(title, loc="left")
             if ax is not None or i % ncols == 0:
                 a.set_ylabel(ylabel)
             if ax is not None or i + ncols >= len(systems):
                 # a narrow panel has no room for the long label: the key says "per trajectory"
-                a.set_xlabel("Run time per trajectory (s)" if width >= WIDE or ax is not None
-                             else "Run time (s)")
+                a.set_xlabel("Run time per trajectory (s)" if long_x else "Run time (s)")
         if len(axes) > 1:
             label_panels(axes)
         fig = axes[0].get_figure(root=False)
@@ -1724,7 +1732,7 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
             _legend_above(axes[0], lines)
         if ax is None:
             key = [r"$y$: the state in SI units (rad, rad s$^{-1}$, m, m s$^{-1}$)"]
-            if width < WIDE:
+            if not long_x:
                 key.append("run time: per trajectory")
             if spread:
                 key.append(f"points: the fastest of {rounds} timing rounds, bars: the slowest"
