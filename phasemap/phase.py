@@ -62,8 +62,11 @@ function, exactly as :func:`phasemap.classify` does (and as the integrator
 does after every step).  The stage goes on while u > 0 and the classification
 is unique, on the stage's branch, with the coefficient of the senior
 derivative keeping its sign.  Otherwise the first state where that stops is
-located on the dense output (the zero of u by the Illinois method, the others
-by bisection to double precision in phi) and classified there:
+located on the dense output to double precision in phi and classified there.
+A zero of u, of a reaction or of the coefficient is found by Newton's method
+(a few Gauss passes); a change of classification by bisection, on the
+straight line u is within 1e-8 of such a zero, or on Gauss passes where there
+is none:
 
 * u = 0 (or an omega the model counts as zero): the rest state (phi, 0) is
   classified: a unique solution on the stick branch is ``rest``; a unique
@@ -304,30 +307,46 @@ def _weights(z, A, buf, E, P1):
         _phis(w, buf)
         E[i] = buf[0]
         P1[i] = buf[1]
+        tp = th
         for k in range(n):
-            f = w * th ** (k + 1) * FACT[k] * buf[k + 2]
+            f = w * tp * FACT[k] * buf[k + 2]
+            tp *= th
             for j in range(n):
                 A[i, j] += f * MON[k, j]
 
 
 @njit(cache=True, error_model="numpy")
-def _solve(M, r):
-    """Solve M x = r in place (r becomes x) by Gaussian elimination with partial pivoting."""
-    n = r.shape[0]
+def _factor(M, piv):
+    """LU factors of M in place, by Gaussian elimination with partial pivoting (rows
+    swapped whole, multipliers below the diagonal, the pivot rows in ``piv``)."""
+    n = M.shape[0]
     for k in range(n):
         p = k
         for i in range(k + 1, n):
             if abs(M[i, k]) > abs(M[p, k]):
                 p = i
+        piv[k] = p
         if p != k:
             for j in range(n):
                 M[k, j], M[p, j] = M[p, j], M[k, j]
-            r[k], r[p] = r[p], r[k]
         for i in range(k + 1, n):
             f = M[i, k] / M[k, k]
-            for j in range(k, n):
+            for j in range(k + 1, n):
                 M[i, j] -= f * M[k, j]
-            r[i] -= f * r[k]
+            M[i, k] = f
+
+
+@njit(cache=True, error_model="numpy")
+def _lu_solve(M, piv, r):
+    """Solve M x = r in place (r becomes x) with the factors of :func:`_factor`."""
+    n = r.shape[0]
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            r[k], r[p] = r[p], r[k]
+    for k in range(n):
+        for i in range(k + 1, n):
+            r[i] -= M[i, k] * r[k]
     for k in range(n - 1, -1, -1):
         acc = r[k]
         for j in range(k + 1, n):
@@ -538,13 +557,14 @@ def _at_rest_template(v, x, out):
 
 
 def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, panels, mats,
-                    vecs, buf, react):
+                    vecs, buf, react, piv):
     """Follow one stage (branch ``mode``, sign ``sigma``) from (x0, u0) towards ``stop``.
 
     Returns ``(reason, x_end, u_end, n_panels, panels, next_mode, h)``: an Event
     code or _ZERO, the end state, the panels (rows s0, h, z, u0, theta_end, a,
     c: the dense output), the branch after a switch, and the last panel width.
-    ``mats``, ``vecs``, ``buf``, ``react``: scratch of the curve (no heap per stage).
+    ``mats``, ``vecs``, ``buf``, ``react``, ``piv``: scratch of the curve (no heap per
+    stage).
     """
     n = NODES
     A = mats[0]
@@ -608,10 +628,14 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                 acc = 0.0
                 for j in range(n):
                     acc += A[i, j] * Nv[j]
-                    M[i, j] = -hh * A[i, j] * Jd[j]
-                M[i, i] += 1.0
                 R[i] = U[i] - E[i] * u - hh * acc
-            _solve(M, R)
+            if it == 0:  # the Newton matrix (slopes of the first pass) is factored once
+                for i in range(n):
+                    for j in range(n):
+                        M[i, j] = -hh * A[i, j] * Jd[j]
+                    M[i, i] += 1.0
+                _factor(M, piv)
+            _lu_solve(M, piv, R)
             worst = 0.0
             for i in range(n):
                 U[i] -= R[i]
@@ -879,6 +903,7 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
     vecs = np.empty((11, NODES))
     buf = np.empty(NODES + 2)
     react = np.empty(REACTIONS.shape[0])
+    piv = np.empty(NODES, dtype=np.int64)
     code = -1
     mode = -1
     if omega0 != 0.0:
@@ -908,7 +933,8 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
     while True:
         stop = hi if sigma > 0.0 else lo
         reason, x_e, u_e, n_pan, panels, next_mode, h = STAGE(
-            v, out, mode, sigma, x, u, stop, u_ref, rtol, h_max, h, panels, mats, vecs, buf, react)
+            v, out, mode, sigma, x, u, stop, u_ref, rtol, h_max, h, panels, mats, vecs, buf, react,
+            piv)
         pts, npts = STAGE_POINTS(v, panels, n_pan, sigma, mode, u_ref, x, u, x_e, u_e, points,
                                  pts, npts, float(nst), vecs, buf)
         go = False
@@ -982,7 +1008,7 @@ def _kernel(m: Model):
         REACTIONS=np.arange(first_reaction, m.n_fields, dtype=np.int64),
     )
     # RATE and VALUE (the branch row, per collocation node) are LLVM-inlined;
-    # CLASSIFY, STILL and REFINE (once per panel or event) are called, which
+    # CLASSIFY, STILL, REFINE and ROOT (once per panel or event) are called, which
     # cuts the cold compile by a sixth (43.7 -> 36.2 s for the 17-row rod on a
     # step, 22.7 -> 17.6 s for the hinge) for curves 7-11 % slower.
     for name, template, inline in (("RATE", _rate_template, True),
