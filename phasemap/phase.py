@@ -470,8 +470,9 @@ def _root_template(v, field, sg, lo, hi, glo, ghi, tol, x, hh, z, u, a, c, sigma
     the bracket closed to ``hi - lo <= tol`` and the u at its ends (NaN where
     an end was not evaluated).  u is the dense output (``fine`` False) or :func:`REFINE`
     (``fine`` True, after a first solve on the dense output for the start and
-    its slope).  Newton with secant slopes; a step below tol/2 is lengthened to
-    tol/2, so that a converged iterate is bracketed by the next evaluation;
+    its slope).  Newton with secant slopes; a step d below tol/2 is lengthened
+    to max(2 |d|, tol/16), so that a converged iterate is bracketed closely by
+    the next evaluation;
     bisection wherever |g| does not halve.  Few evaluations where the
     bisection of the bracket takes 50.
     """
@@ -534,8 +535,10 @@ def _root_template(v, field, sg, lo, hi, glo, ghi, tol, x, hh, z, u, a, c, sigma
                     sl = s2
             t_prev, g_prev = t, gt
             d = -gt / sl if sl < 0.0 else math.nan
-            if not (abs(d) >= 0.5 * tol):
-                d = 0.5 * tol if gt > 0.0 else -0.5 * tol
+            if not (abs(d) >= 0.5 * tol):  # converged: bracket the zero tightly
+                step = max(2.0 * abs(d), 0.0625 * tol, 2.0 * EPS * abs(t)) if d == d \
+                    else 0.5 * tol  # (at least an ulp of t)
+                d = step if gt > 0.0 else -step
             t = t + d
     return lo, hi, u_lo, u_hi
 
