@@ -62,8 +62,11 @@ function, exactly as :func:`phasemap.classify` does (and as the integrator
 does after every step).  The stage goes on while u > 0 and the classification
 is unique, on the stage's branch, with the coefficient of the senior
 derivative keeping its sign.  Otherwise the first state where that stops is
-located on the dense output (the zero of u by the Illinois method, the others
-by bisection to double precision in phi) and classified there:
+located on the dense output to double precision in phi and classified there.
+A zero of u, of a reaction or of the coefficient is found by Newton's method
+(a few Gauss passes); a change of classification by bisection, on the
+straight line u is within 1e-8 of such a zero, or on Gauss passes where there
+is none:
 
 * u = 0 (or an omega the model counts as zero): the rest state (phi, 0) is
   classified: a unique solution on the stick branch is ``rest``; a unique
@@ -206,6 +209,12 @@ def _legendre_integrals(theta: float, n: int) -> np.ndarray:
 THETA, GLW, LEG, MON, A0 = _tables(NODES)
 FACT = np.array([math.factorial(k) for k in range(NODES + 3)], dtype=float)
 INV_FACT = 1.0 / FACT
+#: 1/k for the Taylor series of the phi-functions (a multiply, not a divide, per term).
+INV_INT = np.array([0.0] + [1.0 / k for k in range(1, 100)])
+#: Legendre recurrence (2k+1)/(k+1), k/(k+1) and the integral weight 1/(2 (2k+1)).
+LEG_A = np.array([(2 * k + 1) / (k + 1) for k in range(NODES)])
+LEG_B = np.array([k / (k + 1) for k in range(NODES)])
+LEG_W = np.array([1.0 / (2.0 * (2 * k + 1)) for k in range(NODES)])
 
 
 @njit(cache=True, error_model="numpy")
@@ -221,7 +230,7 @@ def _phis(w, out):
         term = INV_FACT[top]
         acc = term
         for j in range(1, 80):
-            term *= w / (j + top)
+            term *= w * INV_INT[j + top]
             acc += term
             if abs(term) <= 1e-17 * abs(acc):
                 break
@@ -249,8 +258,8 @@ def _dense(theta, z, u0, h, a, c, buf):
     acc = a[0] * theta
     pm, pk = 1.0, x
     for k in range(1, n):
-        pp = ((2 * k + 1) * x * pk - k * pm) / (k + 1)
-        acc += a[k] * (pp - pm) / (2.0 * (2 * k + 1))
+        pp = LEG_A[k] * x * pk - LEG_B[k] * pm
+        acc += a[k] * (pp - pm) * LEG_W[k]
         pm, pk = pk, pp
     e = 1.0
     if z != 0.0:
@@ -281,10 +290,13 @@ def _expand(nv, a, c):
 
 
 @njit(cache=True, error_model="numpy")
-def _weights(z, A, buf):
-    """A[i, j] = int_0^{theta_i} e^{z (theta_i - t)} L_j(t) dt (the collocation matrix)."""
+def _weights(z, A, buf, E, P1):
+    """A[i, j] = int_0^{theta_i} e^{z (theta_i - t)} L_j(t) dt (the collocation matrix),
+    and E[i] = e^{z theta_i}, P1[i] = phi_1(z theta_i) (the start of the Newton solve)."""
     n = A.shape[0]
     for i in range(n):
+        E[i] = 1.0
+        P1[i] = 1.0
         for j in range(n):
             A[i, j] = A0[i, j]
     if z == 0.0:
@@ -293,30 +305,48 @@ def _weights(z, A, buf):
         th = THETA[i]
         w = z * th
         _phis(w, buf)
+        E[i] = buf[0]
+        P1[i] = buf[1]
+        tp = th
         for k in range(n):
-            f = w * th ** (k + 1) * FACT[k] * buf[k + 2]
+            f = w * tp * FACT[k] * buf[k + 2]
+            tp *= th
             for j in range(n):
                 A[i, j] += f * MON[k, j]
 
 
 @njit(cache=True, error_model="numpy")
-def _solve(M, r):
-    """Solve M x = r in place (r becomes x) by Gaussian elimination with partial pivoting."""
-    n = r.shape[0]
+def _factor(M, piv):
+    """LU factors of M in place, by Gaussian elimination with partial pivoting (rows
+    swapped whole, multipliers below the diagonal, the pivot rows in ``piv``)."""
+    n = M.shape[0]
     for k in range(n):
         p = k
         for i in range(k + 1, n):
             if abs(M[i, k]) > abs(M[p, k]):
                 p = i
+        piv[k] = p
         if p != k:
             for j in range(n):
                 M[k, j], M[p, j] = M[p, j], M[k, j]
-            r[k], r[p] = r[p], r[k]
         for i in range(k + 1, n):
             f = M[i, k] / M[k, k]
-            for j in range(k, n):
+            for j in range(k + 1, n):
                 M[i, j] -= f * M[k, j]
-            r[i] -= f * r[k]
+            M[i, k] = f
+
+
+@njit(cache=True, error_model="numpy")
+def _lu_solve(M, piv, r):
+    """Solve M x = r in place (r becomes x) with the factors of :func:`_factor`."""
+    n = r.shape[0]
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            r[k], r[p] = r[p], r[k]
+    for k in range(n):
+        for i in range(k + 1, n):
+            r[i] -= M[i, k] * r[k]
     for k in range(n - 1, -1, -1):
         acc = r[k]
         for j in range(k + 1, n):
@@ -342,6 +372,7 @@ REACTIONS = np.zeros(1, dtype=np.int64)
 RATE = None
 STILL = None
 REFINE = None
+ROOT = None
 STAGE_POINTS = None
 VALUE = None
 CLASSIFY = None
@@ -430,6 +461,88 @@ def _refine_template(v, theta, x_p, hh, z, u_p, a, c, sigma, mode, u_ref, buf, n
     return _dense(1.0, z * theta, u_p, hs, a2, c2, buf)
 
 
+def _root_template(v, field, sg, lo, hi, glo, ghi, tol, x, hh, z, u, a, c, sigma, mode, u_ref,
+                   buf, nv, a2, c2, fine):
+    """The zero of g(theta) = sg u (``field`` < 0) or sg (``field`` of the row of ``mode``)
+    on a panel.
+
+    ``g(lo) = glo > 0 >= ghi = g(hi)``; returns ``(lo, hi, u_lo, u_hi)`` with
+    the bracket closed to ``hi - lo <= tol`` and the u at its ends (NaN where
+    an end was not evaluated).  u is the dense output (``fine`` False) or :func:`REFINE`
+    (``fine`` True, after a first solve on the dense output for the start and
+    its slope).  Newton with secant slopes; a step d below tol/2 is lengthened
+    to max(2 |d|, tol/16), so that a converged iterate is bracketed closely by
+    the next evaluation;
+    bisection wherever |g| does not halve.  Few evaluations where the
+    bisection of the bracket takes 50.
+    """
+    sl = (ghi - glo) / (hi - lo)
+    t = lo - glo / sl
+    lo0, hi0, glo0, ghi0 = lo, hi, glo, ghi
+    u_lo = u_hi = math.nan
+    for pss in range(2 if fine else 1):
+        on_refine = fine and pss == 1
+        if pss == 1:  # from the dense output's zero, on the refined u, with its local slope
+            t = 0.5 * (lo + hi)
+            dt = min(1e-6, 0.5 * (t - lo0), 0.5 * (hi0 - t))
+            if dt > 0.0:
+                gp = _dense(t + dt, z, u, hh, a, c, buf)
+                gm = _dense(t - dt, z, u, hh, a, c, buf)
+                if field >= 0:
+                    v[PHI] = x + sigma * (t + dt) * hh
+                    v[OMEGA] = sigma * math.sqrt(max(gp, 0.0))
+                    DERIVE(v)
+                    gp = BRANCH_ROW(v, mode)[field]
+                    v[PHI] = x + sigma * (t - dt) * hh
+                    v[OMEGA] = sigma * math.sqrt(max(gm, 0.0))
+                    DERIVE(v)
+                    gm = BRANCH_ROW(v, mode)[field]
+                s2 = sg * (gp - gm) / (2.0 * dt)
+                if s2 < 0.0:
+                    sl = s2
+            lo, hi, glo, ghi = lo0, hi0, glo0, ghi0
+        t_prev, g_prev = math.nan, math.nan
+        g_best = math.inf
+        stall = 0
+        for _it in range(200):
+            if not (hi - lo > tol):
+                break
+            if not (lo < t < hi) or stall >= 2:
+                t = 0.5 * (lo + hi)
+                stall = 0
+            if on_refine:
+                ut = REFINE(v, t, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2)
+            else:
+                ut = _dense(t, z, u, hh, a, c, buf)
+            if field < 0:
+                gt = sg * ut
+            else:
+                v[PHI] = x + sigma * t * hh
+                v[OMEGA] = sigma * math.sqrt(max(ut, 0.0))
+                DERIVE(v)
+                gt = sg * BRANCH_ROW(v, mode)[field]
+            if gt > 0.0:
+                lo, glo = t, gt
+                u_lo = ut if on_refine else math.nan
+            else:
+                hi, ghi = t, gt
+                u_hi = ut if on_refine else math.nan
+            stall = stall + 1 if abs(gt) > 0.5 * g_best else 0
+            g_best = min(g_best, abs(gt))
+            if abs(t - t_prev) > 64.0 * tol:
+                s2 = (gt - g_prev) / (t - t_prev)
+                if s2 < 0.0:
+                    sl = s2
+            t_prev, g_prev = t, gt
+            d = -gt / sl if sl < 0.0 else math.nan
+            if not (abs(d) >= 0.5 * tol):  # converged: bracket the zero tightly
+                step = max(2.0 * abs(d), 0.0625 * tol, 2.0 * EPS * abs(t)) if d == d \
+                    else 0.5 * tol  # (at least an ulp of t)
+                d = step if gt > 0.0 else -step
+            t = t + d
+    return lo, hi, u_lo, u_hi
+
+
 def _at_rest_template(v, x, out):
     """Classify the rest state (x, 0): (-1, branch) to go on it, or (Event code, -1)."""
     n, adm, lost, sing = CLASSIFY(v, x, 0.0, out)
@@ -446,29 +559,31 @@ def _at_rest_template(v, x, out):
     return ev.INDETERMINATE, -1
 
 
-def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, panels):
+def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, panels, mats,
+                    vecs, buf, react, piv):
     """Follow one stage (branch ``mode``, sign ``sigma``) from (x0, u0) towards ``stop``.
 
     Returns ``(reason, x_end, u_end, n_panels, panels, next_mode, h)``: an Event
     code or _ZERO, the end state, the panels (rows s0, h, z, u0, theta_end, a,
     c: the dense output), the branch after a switch, and the last panel width.
+    ``mats``, ``vecs``, ``buf``, ``react``, ``piv``: scratch of the curve (no heap per
+    stage).
     """
     n = NODES
-    A = np.empty((n, n))
-    M = np.empty((n, n))
-    U = np.empty(n)
-    E = np.empty(n)
-    Nv = np.empty(n)
-    Jd = np.empty(n)
-    R = np.empty(n)
-    a = np.empty(n)
-    c = np.empty(n)
-    buf = np.empty(n + 2)
-    nv = np.empty(n)
-    a2 = np.empty(n)
-    c2 = np.empty(n)
+    A = mats[0]
+    M = mats[1]
+    U = vecs[0]
+    E = vecs[1]
+    P1 = vecs[2]
+    Nv = vecs[3]
+    Jd = vecs[4]
+    R = vecs[5]
+    a = vecs[6]
+    c = vecs[7]
+    nv = vecs[8]
+    a2 = vecs[9]
+    c2 = vecs[10]
     nr = REACTIONS.shape[0]
-    react = np.empty(nr)
     v[PHI] = x0
     v[OMEGA] = sigma * math.sqrt(u0)
     DERIVE(v)
@@ -477,6 +592,7 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
     coef_sign = 1.0 if coef0 > 0.0 else (-1.0 if coef0 < 0.0 else 0.0)
     for q in range(nr):
         react[q] = r0[REACTIONS[q]]
+    coef_prev = coef0
     x, u, s = x0, u0, 0.0
     n_pan = 0
     truncated = False
@@ -496,12 +612,10 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                 panels, mode, h
         last = hh == remaining
         z = beta * hh
-        _weights(z, A, buf)
+        _weights(z, A, buf, E, P1)
         n0 = 2.0 * sigma * f0 - beta * u
         for i in range(n):
-            _phis(z * THETA[i], buf)
-            E[i] = buf[0]
-            U[i] = E[i] * u + hh * THETA[i] * buf[1] * n0
+            U[i] = E[i] * u + hh * THETA[i] * P1[i] * n0
         # collocation: U = E u + hh A N(U), by Newton with the slopes of the first pass
         converged = False
         for it in range(10):
@@ -517,10 +631,14 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                 acc = 0.0
                 for j in range(n):
                     acc += A[i, j] * Nv[j]
-                    M[i, j] = -hh * A[i, j] * Jd[j]
-                M[i, i] += 1.0
                 R[i] = U[i] - E[i] * u - hh * acc
-            _solve(M, R)
+            if it == 0:  # the Newton matrix (slopes of the first pass) is factored once
+                for i in range(n):
+                    for j in range(n):
+                        M[i, j] = -hh * A[i, j] * Jd[j]
+                    M[i, i] += 1.0
+                _factor(M, piv)
+            _lu_solve(M, piv, R)
             worst = 0.0
             for i in range(n):
                 U[i] -= R[i]
@@ -562,19 +680,11 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                 first = 2.0
                 for q in range(nr):
                     if react[q] * out[mode, REACTIONS[q]] < 0.0:
-                        lo, hi = 0.0, 1.0
-                        for _b in range(60):
-                            if (hi - lo) * hh <= 4.0 * EPS * max(abs(x), hh):
-                                break
-                            mid = 0.5 * (lo + hi)
-                            v[PHI] = x + sigma * mid * hh
-                            v[OMEGA] = sigma * math.sqrt(max(_dense(mid, z, u, hh, a, c, buf),
-                                                             0.0))
-                            DERIVE(v)
-                            if BRANCH_ROW(v, mode)[REACTIONS[q]] * react[q] > 0.0:
-                                lo = mid
-                            else:
-                                hi = mid
+                        sg = 1.0 if react[q] > 0.0 else -1.0
+                        lo, hi, _ul, _uh = ROOT(v, REACTIONS[q], sg, 0.0, 1.0, sg * react[q],
+                                          sg * out[mode, REACTIONS[q]],
+                                          4.0 * EPS * max(abs(x), hh) / hh, x, hh, z, u, a, c,
+                                          sigma, mode, u_ref, buf, nv, a2, c2, False)
                         first = min(first, hi)
                 if first < 1.0 and first * hh > 1e-9 * max(abs(x), 1.0):
                     h = first * hh
@@ -589,6 +699,7 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
             n_pan += 1
             for q in range(nr):
                 react[q] = out[mode, REACTIONS[q]]
+            coef_prev = out[mode, nx.COEF]
             s += hh
             x, u, h = x1, u1, h_next
             if last:
@@ -599,47 +710,79 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
         reason = -100
         th_e = 1.0
         if u1 <= 0.0:
-            lo, hi, flo, fhi = 0.0, 1.0, u, u1
-            side = 0
-            for _b in range(200):
-                if (hi - lo) * hh <= 4.0 * EPS * max(abs(x), hh):
-                    break
-                t = (lo * fhi - hi * flo) / (fhi - flo)
-                if not (lo < t < hi):
-                    t = 0.5 * (lo + hi)
-                ft = REFINE(v, t, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2)
-                if ft > 0.0:
-                    lo, flo = t, ft
-                    if side == -1:
-                        fhi *= 0.5
-                    side = -1
-                else:
-                    hi, fhi = t, ft
-                    if side == 1:
-                        flo *= 0.5
-                    side = 1
-            if lo == 0.0 or STILL(v, out, x + sigma * lo * hh, REFINE(v, lo, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv,
-                                         a2, c2),
-                                  sigma, mode, coef_sign):
+            # the zero of u (u > 0 at the panel start, where the stage goes on)
+            lo, hi, u_lo, u_hi = ROOT(v, -1, 1.0, 0.0, 1.0, u, u1,
+                                      4.0 * EPS * max(abs(x), hh) / hh, x, hh, z, u, a, c,
+                                      sigma, mode, u_ref, buf, nv, a2, c2, True)
+            if lo == 0.0 or STILL(v, out, x + sigma * lo * hh, u_lo, sigma, mode, coef_sign):
                 reason = _ZERO
                 th_e = hi
             else:
                 th_hi = lo
+        c_fld, c_th, c_u = -1, 2.0, math.nan
+        guided = False
+        slope = 0.0
+        dd = 1e-8
         if reason != _ZERO:
             lo, hi = 0.0, th_hi
+            tol_b = 2.0 * EPS * max(abs(x), hh) / hh
+            # Where a reaction or the coefficient of the stage's branch has changed
+            # sign by th_hi, the state leaves the stage at or just past (by the
+            # tolerance of the sign test) the first such zero: find it, bracket the
+            # change of classification within +-1e-8 of it, where u is a straight
+            # line to rounding, and bisect on that line instead of a Gauss pass
+            # per step.  Otherwise (or if the bracket fails) plain bisection.
+            c_lo, c_ulo = 0.0, math.nan
+            for q in range(nr + 1):
+                fld = REACTIONS[q] if q < nr else nx.COEF
+                g0 = react[q] if q < nr else coef_prev
+                g1 = out[mode, fld]
+                if g0 * g1 < 0.0:
+                    sg = 1.0 if g0 > 0.0 else -1.0
+                    g1 = sg * g1
+                    top = th_hi
+                    if c_lo > 0.0:  # a zero found: this one matters only before it
+                        v[PHI] = x + sigma * c_lo * hh
+                        v[OMEGA] = sigma * math.sqrt(max(c_ulo, 0.0))
+                        DERIVE(v)
+                        g1 = sg * BRANCH_ROW(v, mode)[fld]
+                        top = c_lo
+                        if g1 > 0.0:
+                            continue  # its first zero is not before c_lo: not earlier
+                    l_c, h_c, ul_c, u_c = ROOT(v, fld, sg, 0.0, top, sg * g0, g1, tol_b, x, hh,
+                                               z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2,
+                                               True)
+                    if h_c < c_th and u_c == u_c and ul_c == ul_c:
+                        c_fld, c_th, c_u, c_lo, c_ulo = fld, h_c, u_c, l_c, ul_c
+            if c_th - dd > 0.0 and c_th + dd < th_hi:
+                u_d = REFINE(v, c_th + dd, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2)
+                slope = (u_d - c_u) / dd
+                if STILL(v, out, x + sigma * (c_th - dd) * hh, c_u - slope * dd, sigma, mode,
+                         coef_sign) and not STILL(v, out, x + sigma * (c_th + dd) * hh, u_d,
+                                                  sigma, mode, coef_sign):
+                    lo, hi, guided = c_th - dd, c_th + dd, True
             for _b in range(200):
                 if (hi - lo) * hh <= 2.0 * EPS * max(abs(x), hh):
                     break
                 mid = 0.5 * (lo + hi)
-                if STILL(v, out, x + sigma * mid * hh, REFINE(v, mid, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2), sigma,
-                         mode, coef_sign):
+                if guided:
+                    um = c_u + slope * (mid - c_th)
+                else:
+                    um = REFINE(v, mid, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2)
+                if STILL(v, out, x + sigma * mid * hh, um, sigma, mode, coef_sign):
                     lo = mid
                 else:
                     hi = mid
             th_e = hi
         x_e = stop if (last and th_e == 1.0) else x + sigma * th_e * hh
-        u_e = u1 if th_e == 1.0 else REFINE(v, th_e, x, hh, z, u, a, c, sigma, mode, u_ref,
-                                              buf, nv, a2, c2)
+        u_e = 0.0
+        if reason != _ZERO:  # (at a zero of u the end is the rest state)
+            if th_e == 1.0:
+                u_e = u1
+            elif guided:
+                u_e = c_u + slope * (th_e - c_th)
+            else:
+                u_e = REFINE(v, th_e, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2)
         next_mode = mode
         if reason != _ZERO:
             n2, adm2, lost2, sing2 = CLASSIFY(v, x_e, sigma * math.sqrt(max(u_e, 0.0)), out)
@@ -653,7 +796,11 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                     th_p = th_e + 10.0 ** k * 2.0 * EPS * max(abs(x), hh) / hh
                     if th_p > 1.0:
                         break
-                    u_p = REFINE(v, th_p, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2)
+                    if guided and abs(th_p - c_th) <= dd:
+                        u_p = c_u + slope * (th_p - c_th)
+                    else:
+                        u_p = REFINE(v, th_p, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv,
+                                     a2, c2)
                     x_p = x + sigma * th_p * hh
                     n3, adm3, lost3, sing3 = CLASSIFY(v, x_p, sigma * math.sqrt(max(u_p, 0.0)),
                                                       out)
@@ -683,27 +830,23 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
         if reason == ev.CONTACT_LOST:
             # the classification flips where N < -1e-12 of its scale: end at N = 0
             best = -1.0
+            u_best = math.nan
             for q in range(nr):
                 if react[q] > 0.0 and out[mode, REACTIONS[q]] < 0.0:
-                    lo, hi = 0.0, th_e
-                    for _b in range(200):
-                        if (hi - lo) * hh <= 2.0 * EPS * max(abs(x), hh):
-                            break
-                        mid = 0.5 * (lo + hi)
-                        um = REFINE(v, mid, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv,
-                                    a2, c2)  # (uses v: set the state after it)
-                        v[PHI] = x + sigma * mid * hh
-                        v[OMEGA] = sigma * math.sqrt(max(um, 0.0))
-                        DERIVE(v)
-                        if BRANCH_ROW(v, mode)[REACTIONS[q]] > 0.0:
-                            lo = mid
-                        else:
-                            hi = mid
-                    best = max(best, hi)
+                    if REACTIONS[q] == c_fld and c_th <= th_e:
+                        hi, u_hi = c_th, c_u  # located above
+                    else:
+                        lo, hi, _ul, u_hi = ROOT(v, REACTIONS[q], 1.0, 0.0, th_e, react[q],
+                                                 out[mode, REACTIONS[q]],
+                                                 2.0 * EPS * max(abs(x), hh) / hh, x, hh, z, u,
+                                                 a, c, sigma, mode, u_ref, buf, nv, a2, c2, True)
+                    if hi > best:
+                        best, u_best = hi, u_hi
             if best > 0.0:
                 th_e = best
                 x_e = x + sigma * th_e * hh
-                u_e = REFINE(v, th_e, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2)
+                u_e = u_best if u_best == u_best else REFINE(v, th_e, x, hh, z, u, a, c, sigma,
+                                                             mode, u_ref, buf, nv, a2, c2)
         if reason == _ZERO:
             u_e = 0.0
         panels = _grow(panels, n_pan + 1)
@@ -717,23 +860,22 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
 
 
 def _stage_points_template(v, panels, n_pan, sigma, mode, u_ref, x0, u0, x_e, u_e, points, pts,
-                           npts, stage):
+                           npts, stage, vecs, buf):
     """Append the stage's output points (phi, u, stage): evenly spaced in phi."""
     n = NODES
-    nv = np.empty(n)
-    a2 = np.empty(n)
-    c2 = np.empty(n)
+    nv = vecs[8]
+    a2 = vecs[9]
+    c2 = vecs[10]
     length = sigma * (x_e - x0)
     count = points if (length > 0.0 and n_pan > 0) else 1
     pts = _grow(pts, npts + count)
-    buf = np.empty(n + 2)
     p = 0
     for k in range(count):
         sk = length * k / (count - 1) if count > 1 else 0.0
         while p < n_pan - 1 and sk > panels[p, 0] + panels[p, 4] * panels[p, 1]:
             p += 1
         uk = u0
-        if k > 0:
+        if k > 0 and k < count - 1:  # (the last point is the end state)
             row = panels[p]
             theta = min(max((sk - row[0]) / row[1], 0.0), row[4])
             uk = REFINE(v, theta, x0 + sigma * row[0], row[1], row[2], row[3], row[5:5 + n],
@@ -760,6 +902,11 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
     stg = np.empty((8, 6))
     nst = 0
     panels = np.empty((64, _PANEL_COLS))
+    mats = np.empty((2, NODES, NODES))
+    vecs = np.empty((11, NODES))
+    buf = np.empty(NODES + 2)
+    react = np.empty(REACTIONS.shape[0])
+    piv = np.empty(NODES, dtype=np.int64)
     code = -1
     mode = -1
     if omega0 != 0.0:
@@ -789,9 +936,10 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
     while True:
         stop = hi if sigma > 0.0 else lo
         reason, x_e, u_e, n_pan, panels, next_mode, h = STAGE(
-            v, out, mode, sigma, x, u, stop, u_ref, rtol, h_max, h, panels)
+            v, out, mode, sigma, x, u, stop, u_ref, rtol, h_max, h, panels, mats, vecs, buf, react,
+            piv)
         pts, npts = STAGE_POINTS(v, panels, n_pan, sigma, mode, u_ref, x, u, x_e, u_e, points,
-                                 pts, npts, float(nst))
+                                 pts, npts, float(nst), vecs, buf)
         go = False
         new_mode = mode
         if reason == _ZERO:
@@ -863,7 +1011,7 @@ def _kernel(m: Model):
         REACTIONS=np.arange(first_reaction, m.n_fields, dtype=np.int64),
     )
     # RATE and VALUE (the branch row, per collocation node) are LLVM-inlined;
-    # CLASSIFY, STILL and REFINE (once per panel or event) are called, which
+    # CLASSIFY, STILL, REFINE and ROOT (once per panel or event) are called, which
     # cuts the cold compile by a sixth (43.7 -> 36.2 s for the 17-row rod on a
     # step, 22.7 -> 17.6 s for the hinge) for curves 7-11 % slower.
     for name, template, inline in (("RATE", _rate_template, True),
@@ -871,6 +1019,7 @@ def _kernel(m: Model):
                                    ("CLASSIFY", _classify_template, False),
                                    ("STILL", _still_template, False),
                                    ("REFINE", _refine_template, False),
+                                   ("ROOT", _root_template, False),
                                    ("STAGE_POINTS", _stage_points_template, False),
                                    ("AT_REST", _at_rest_template, False),
                                    ("STAGE", _stage_template, False)):
