@@ -191,9 +191,11 @@ def main():
         f"{', '.join(f'{t:.0e}' for t in tolerances)} (rtol = atol); {repeats} timing "
         f"round(s), methods alternating within each, medians; JIT compilation excluded. "
         f"Sweep: {sweep_seconds / 60:.1f} min. Load average {load_start[0]:.1f} at the start, "
-        f"{load_end[0]:.1f} at the end: **the machine was shared** (other engineers' jobs ran "
-        f"at the same time), so absolute times are noisy; the ratios compare methods within "
-        f"one run.",
+        f"{load_end[0]:.1f} at the end"
+        + (": **the machine was shared** (other jobs ran at the same time), so absolute times "
+           "are noisy; the ratios compare methods within one run."
+           if max(load_start[0], load_end[0]) > 1.5 else
+           " (this run alone on the 2 cores); the ratios compare methods within one run."),
         "",
         "Figure: `benchmarks/work_precision.pdf` / `.png` (error at the end of the motion "
         "against seconds per trajectory, one panel per system, one line per method); every "
