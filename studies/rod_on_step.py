@@ -244,7 +244,7 @@ def figure_motion(ds, size="two_column"):
                                                                 ls="dashed")
         handles[r"floor alone: $f = (1 + 3\cos^2\theta)/(3\sin\theta\cos\theta)$"] = Line2D(
             [], [], color=green, lw=1.3)
-        handles[rf"$f^* = 2/\sqrt{{3}}$, $\tan\theta^* = 5/\sqrt{{3}}$"] = Line2D(
+        handles[r"$f^* = 2/\sqrt{3}$, $\tan\theta^* = 5/\sqrt{3}$"] = Line2D(
             [], [], ls="none", marker="*", ms=8, mfc="white", mec="black", mew=0.6)
         _legend(fig, handles, size, ds)
         pplot.define_symbols(fig, [rf"$h/l = 25/(6\sqrt{{7}})$ = {H_STAR / L:.4f}"] + KEY)

@@ -26,7 +26,6 @@ import itertools
 import re
 
 from matplotlib.legend import Legend
-from matplotlib.lines import Line2D
 
 from phasemap import plot as pplot
 from phasemap import study

@@ -15,7 +15,6 @@ import math
 
 import numpy as np
 import oracles as O
-import pytest
 
 import phasemap
 from phasemap.models import ladder as hand_ladder
