@@ -25,7 +25,7 @@ import phasemap
 
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from grid import cold_start, machine, write_section  # noqa: E402
+from grid import cold_start, hand_model, machine, write_section  # noqa: E402
 
 FATE_LAYERS = ["fate", "n_reversals", "t_rest", "phi_rest"]
 FATE_OPTIONS = {"t_end": 30.0, "rtol": 1e-6}
@@ -60,9 +60,7 @@ def fate_map(side: int, small: int) -> dict:
         per_thread[threads] = small * small / statistics.median(times)
     numba.set_num_threads(threads_all)
     # the running wheel is its declaration (it counts hops); the hand module beside it
-    import importlib
-
-    hand = importlib.import_module("phasemap.models.wheel").MODEL
+    hand = hand_model("wheel")
     fate_scene(4, hand).compute()
     pair = {"declared": [], "hand": []}
     for _ in range(3):
