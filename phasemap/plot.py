@@ -1703,10 +1703,8 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
             title = SYSTEM_NAMES.get(system, system.replace("_", " "))
             # the heading may not reach over the next panel's tick labels: wrapped at its
             # commas to the axes' width (the slot less the tick labels), "(a) " included
-            room = width / ncols - 0.55
-            if _visible_length("(a) " + title) * 0.55 * _FONT / 72.0 > room:
-                title = wrap(title.split(", "), room - 4 * 0.55 * _FONT / 72.0)
-            a.set_title(title, loc="left")
+            room = width / ncols - 0.55 - _visible_length("(a) ") * 0.5 * _FONT / 72.0
+            a.set_title(wrap(title.split(", "), room), loc="left")
             if ax is not None or i % ncols == 0:
                 a.set_ylabel(ylabel)
             if ax is not None or i + ncols >= len(systems):
