@@ -962,7 +962,8 @@ class _Row:
 
     def _one_direction(self):
         """Write the determinant and numerators with the one slip direction that every
-        contact shares when all of them slip, reduced and factored (:func:`_pythagorean`).
+        contact shares when all of them slip; the determinant also reduced and factored
+        (:func:`_pythagorean`).
 
         When every contact slips, contact c slips with sign kappa_c s (the rows
         where they would not share s are never generated, see :func:`_rows`):
@@ -970,6 +971,9 @@ class _Row:
         sliding ladder's 3 f sin(phi) cos(phi) (sigma_floor - sigma_wall) vanish
         in the algebra instead of cancelling in rounding, and its determinant
         becomes 2 (2 - f^2) / 9, whose rounding does not change along the motion.
+        The numerators are left expanded: reduced, their zero-test scales no longer
+        matched the separated row's at a contact's release (the frictionless ladder
+        leaving the wall ended ``no_solution`` instead of ``contact_lost``).
         """
         ctx = self.ctx
         if len(self.sig) < 2 or any(k not in ("slip", "roll") for k in self.kinds):
