@@ -199,50 +199,50 @@ D7_15 = -39.17726167561544
 D7_16 = -149.72683625798564
 
 
-def _step_template(v, y, h, mode, row, K, yt, y1, rtol, atol):
+def _step_template(v, y, h, mode, K, yt, y1, rtol, atol):
     """One DOP853 step; returns the error norm (see :mod:`phasemap._dopri5`)."""
     ny = y.shape[0]
     for i in range(ny):
         yt[i] = y[i] + h * (A2_1 * K[0, i])
-    RHS(v, yt, mode, row, K[1])
+    RHS(v, yt, mode, K, 1)
     for i in range(ny):
         yt[i] = y[i] + h * (A3_1 * K[0, i] + A3_2 * K[1, i])
-    RHS(v, yt, mode, row, K[2])
+    RHS(v, yt, mode, K, 2)
     for i in range(ny):
         yt[i] = y[i] + h * (A4_1 * K[0, i] + A4_3 * K[2, i])
-    RHS(v, yt, mode, row, K[3])
+    RHS(v, yt, mode, K, 3)
     for i in range(ny):
         yt[i] = y[i] + h * (A5_1 * K[0, i] + A5_3 * K[2, i] + A5_4 * K[3, i])
-    RHS(v, yt, mode, row, K[4])
+    RHS(v, yt, mode, K, 4)
     for i in range(ny):
         yt[i] = y[i] + h * (A6_1 * K[0, i] + A6_4 * K[3, i] + A6_5 * K[4, i])
-    RHS(v, yt, mode, row, K[5])
+    RHS(v, yt, mode, K, 5)
     for i in range(ny):
         yt[i] = y[i] + h * (A7_1 * K[0, i] + A7_4 * K[3, i] + A7_5 * K[4, i] + A7_6 * K[5, i])
-    RHS(v, yt, mode, row, K[6])
+    RHS(v, yt, mode, K, 6)
     for i in range(ny):
         yt[i] = y[i] + h * (A8_1 * K[0, i] + A8_4 * K[3, i] + A8_5 * K[4, i] + A8_6 * K[5, i]
                             + A8_7 * K[6, i])
-    RHS(v, yt, mode, row, K[7])
+    RHS(v, yt, mode, K, 7)
     for i in range(ny):
         yt[i] = y[i] + h * (A9_1 * K[0, i] + A9_4 * K[3, i] + A9_5 * K[4, i] + A9_6 * K[5, i]
                             + A9_7 * K[6, i] + A9_8 * K[7, i])
-    RHS(v, yt, mode, row, K[8])
+    RHS(v, yt, mode, K, 8)
     for i in range(ny):
         yt[i] = y[i] + h * (A10_1 * K[0, i] + A10_4 * K[3, i] + A10_5 * K[4, i]
                             + A10_6 * K[5, i] + A10_7 * K[6, i] + A10_8 * K[7, i]
                             + A10_9 * K[8, i])
-    RHS(v, yt, mode, row, K[9])
+    RHS(v, yt, mode, K, 9)
     for i in range(ny):
         yt[i] = y[i] + h * (A11_1 * K[0, i] + A11_4 * K[3, i] + A11_5 * K[4, i]
                             + A11_6 * K[5, i] + A11_7 * K[6, i] + A11_8 * K[7, i]
                             + A11_9 * K[8, i] + A11_10 * K[9, i])
-    RHS(v, yt, mode, row, K[10])
+    RHS(v, yt, mode, K, 10)
     for i in range(ny):
         yt[i] = y[i] + h * (A12_1 * K[0, i] + A12_4 * K[3, i] + A12_5 * K[4, i]
                             + A12_6 * K[5, i] + A12_7 * K[6, i] + A12_8 * K[7, i]
                             + A12_9 * K[8, i] + A12_10 * K[9, i] + A12_11 * K[10, i])
-    RHS(v, yt, mode, row, K[11])
+    RHS(v, yt, mode, K, 11)
     acc5 = 0.0
     acc3 = 0.0
     for i in range(ny):
@@ -260,28 +260,28 @@ def _step_template(v, y, h, mode, row, K, yt, y1, rtol, atol):
     else:
         e = abs(h) * acc5 / np.sqrt((acc5 + 0.01 * acc3) * ny)
     if e <= 1.0:
-        RHS(v, y1, mode, row, K[12])  # first same as last; v now holds y1
+        RHS(v, y1, mode, K, 12)  # first same as last; v now holds y1
     return e
 
 
-def _dense_template(v, y, y1, h, mode, row, K, yt, r):
+def _dense_template(v, y, y1, h, mode, K, yt, r):
     """The order-7 continuous extension of the step y -> y1 into ``r`` (8 rows)."""
     ny = y.shape[0]
     for i in range(ny):
         yt[i] = y[i] + h * (A14_1 * K[0, i] + A14_7 * K[6, i] + A14_8 * K[7, i]
                             + A14_9 * K[8, i] + A14_10 * K[9, i] + A14_11 * K[10, i]
                             + A14_12 * K[11, i] + A14_13 * K[12, i])
-    RHS(v, yt, mode, row, K[13])
+    RHS(v, yt, mode, K, 13)
     for i in range(ny):
         yt[i] = y[i] + h * (A15_1 * K[0, i] + A15_6 * K[5, i] + A15_7 * K[6, i]
                             + A15_8 * K[7, i] + A15_11 * K[10, i] + A15_12 * K[11, i]
                             + A15_13 * K[12, i] + A15_14 * K[13, i])
-    RHS(v, yt, mode, row, K[14])
+    RHS(v, yt, mode, K, 14)
     for i in range(ny):
         yt[i] = y[i] + h * (A16_1 * K[0, i] + A16_6 * K[5, i] + A16_7 * K[6, i]
                             + A16_8 * K[7, i] + A16_9 * K[8, i] + A16_13 * K[12, i]
                             + A16_14 * K[13, i] + A16_15 * K[14, i])
-    RHS(v, yt, mode, row, K[15])
+    RHS(v, yt, mode, K, 15)
     for i in range(ny):
         dy = y1[i] - y[i]
         r[0, i] = y[i]

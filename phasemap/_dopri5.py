@@ -10,14 +10,14 @@ A method module gives the integrator template (see
 compiled per model with the model's right-hand side ``RHS`` as a global, and
 the constants below.
 
-``_step_template(v, y, h, mode, row, K, yt, y1, rtol, atol) -> error norm``
+``_step_template(v, y, h, mode, K, yt, y1, rtol, atol) -> error norm``
     One step of size ``h`` from ``y`` with ``K[0] = f(y)``: the stages into
     ``K``, the solution into ``y1``, and the RMS error norm over
     ``atol + rtol max(|y|, |y1|)``.  When the norm is at most 1 (the step is
     accepted) ``K[FSAL] = f(y1)``, ``yt`` is the point of stage ``FSAL - 1``
     (so that ``h |K[FSAL] - K[FSAL-1]| / |y1 - yt|`` estimates h |lambda| for
     Hairer's stiffness test) and ``v`` holds ``y1`` and its derived inputs.
-``_dense_template(v, y, y1, h, mode, row, K, yt, r)``
+``_dense_template(v, y, y1, h, mode, K, yt, r)``
     After an accepted step, the ``N_DENSE`` rows of the continuous extension
     into ``r``: ``y(t + theta h) = r0 + theta (r1 + (1 - theta) (r2 + theta
     (r3 + ...)))`` (:func:`phasemap.integrate._dense`).  It may call ``RHS``
@@ -61,29 +61,29 @@ D1, D3, D4, D5, D6, D7 = (-12715105075.0 / 11282082432.0, 87487479700.0 / 327004
                           -1453857185.0 / 822651844.0, 69997945.0 / 29380423.0)
 
 
-def _step_template(v, y, h, mode, row, K, yt, y1, rtol, atol):
+def _step_template(v, y, h, mode, K, yt, y1, rtol, atol):
     """One Dormand-Prince 5(4) step; returns the error norm (see the module docstring)."""
     ny = y.shape[0]
     for i in range(ny):
         yt[i] = y[i] + h * A21 * K[0, i]
-    RHS(v, yt, mode, row, K[1])
+    RHS(v, yt, mode, K, 1)
     for i in range(ny):
         yt[i] = y[i] + h * (A31 * K[0, i] + A32 * K[1, i])
-    RHS(v, yt, mode, row, K[2])
+    RHS(v, yt, mode, K, 2)
     for i in range(ny):
         yt[i] = y[i] + h * (A41 * K[0, i] + A42 * K[1, i] + A43 * K[2, i])
-    RHS(v, yt, mode, row, K[3])
+    RHS(v, yt, mode, K, 3)
     for i in range(ny):
         yt[i] = y[i] + h * (A51 * K[0, i] + A52 * K[1, i] + A53 * K[2, i] + A54 * K[3, i])
-    RHS(v, yt, mode, row, K[4])
+    RHS(v, yt, mode, K, 4)
     for i in range(ny):
         yt[i] = y[i] + h * (A61 * K[0, i] + A62 * K[1, i] + A63 * K[2, i] + A64 * K[3, i]
                             + A65 * K[4, i])
-    RHS(v, yt, mode, row, K[5])
+    RHS(v, yt, mode, K, 5)
     for i in range(ny):
         y1[i] = y[i] + h * (A71 * K[0, i] + A73 * K[2, i] + A74 * K[3, i] + A75 * K[4, i]
                             + A76 * K[5, i])
-    RHS(v, y1, mode, row, K[6])
+    RHS(v, y1, mode, K, 6)
     acc = 0.0
     for i in range(ny):
         err = h * (E1 * K[0, i] + E3 * K[2, i] + E4 * K[3, i] + E5 * K[4, i] + E6 * K[5, i]
@@ -93,7 +93,7 @@ def _step_template(v, y, h, mode, row, K, yt, y1, rtol, atol):
     return np.sqrt(acc / ny)
 
 
-def _dense_template(v, y, y1, h, mode, row, K, yt, r):
+def _dense_template(v, y, y1, h, mode, K, yt, r):
     """Hairer's order-4 continuous extension of the step y -> y1 into ``r`` (5 rows)."""
     for i in range(y.shape[0]):
         dy = y1[i] - y[i]

@@ -182,17 +182,21 @@ def _inside_template(v, y):
     return DOMAIN(v)
 
 
-def _rhs_template(v, y, mode, row, dy):
-    """dy/dt on the stage of branch ``mode`` (NaN where the branch has no solution).
+def _rhs_template(v, y, mode, K, k):
+    """dy/dt on the stage of branch ``mode`` into row ``k`` of the stage array ``K``
+    (NaN where the branch has no solution).
 
-    The branch row comes back as a tuple from the inlined ``BRANCH_ROW``;
-    ``row`` is not used (kept so that every step function has one signature).
+    The branch row comes back as a tuple from the inlined ``BRANCH_ROW``.  The
+    stage is addressed by its row index, not passed as a view ``K[k]``: a view
+    made at each of the six (DOPRI5) or twelve (DOP853) calls per step costs a
+    reference-count increment and decrement (atomic), measured at a third of a
+    step of the hand wheel (BENCHMARKS.md, "Fate map of the wheel").
     """
     FILL(v, y)
     r = BRANCH_ROW(v, mode)
     for j in range(N_DOF):
-        dy[j] = y[N_DOF + j]
-        dy[N_DOF + j] = r[ACC_COL[j]]
+        K[k, j] = y[N_DOF + j]
+        K[k, N_DOF + j] = r[ACC_COL[j]]
 
 
 def _summary_template(out):
@@ -226,7 +230,6 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
     """
     ny = 2 * N_DOF
     out = np.empty((N_BRANCHES, N_FIELDS))
-    row = np.empty(N_FIELDS)
     K = np.empty((N_STAGES, ny))  # the stages; K[0] = f(y)
     k1 = K[0]
     yt = np.empty(ny)
@@ -278,7 +281,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
     stiff_hits = 0  # Hairer's stiffness detection: consecutive steps with h |lambda| > bound
     calm = 0
     if fate < 0:
-        RHS(v, y, mode, row, k1)
+        RHS(v, y, mode, K, 0)
         # Initial step (Hairer's hinit): from the scaled sizes of y and y'.
         d0 = _norm(y, y, y, rtol, atol)
         d1 = _norm(k1, y, y, rtol, atol)
@@ -286,7 +289,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         h0 = min(h0, t_end, h_max)
         for i in range(ny):
             yt[i] = y[i] + h0 * k1[i]
-        RHS(v, yt, mode, row, K[1])
+        RHS(v, yt, mode, K, 1)
         for i in range(ny):
             err[i] = (K[1, i] - k1[i]) / h0
         d2 = _norm(err, y, y, rtol, atol)
@@ -324,7 +327,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
                 s *= 10.0
             break
         # -- one step of the method ------------------------------------------
-        e = STEP(v, y, h, mode, row, K, yt, y1, rtol, atol)
+        e = STEP(v, y, h, mode, K, yt, y1, rtol, atol)
         n_steps += 1
         if not (e <= 1.0):  # also rejects NaN
             fac = FAC_MIN if not (e == e) else max(FAC_MIN, SAFETY * e ** -EXPONENT)
@@ -361,7 +364,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         # the dense output, only where it is used: to locate an event, at requested times
         if not still or (n_eval < t_eval.shape[0]
                          and t_eval[n_eval] <= (t_end if last else t + h)):
-            DENSE(v, y, y1, h, mode, row, K, yt, r)
+            DENSE(v, y, y1, h, mode, K, yt, r)
         if not still:
             # locate the first state where the stage stops being the unique solution
             lo, hi = 0.0, 1.0
@@ -493,7 +496,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
                 if flickers > 8:
                     fate = ev.STEP_FAILURE
                     break
-                RHS(v, y, mode, row, k1)
+                RHS(v, y, mode, K, 0)
                 continue
         flickers = 0
         new_mode = -1
@@ -531,7 +534,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         coef0 = out[mode, nx.COEF] if mode != STICK else 0.0
         coef_sign = 1.0 if coef0 > 0.0 else (-1.0 if coef0 < 0.0 else 0.0)
         coef_scale = max(coef_scale, abs(coef0))
-        RHS(v, y, mode, row, k1)
+        RHS(v, y, mode, K, 0)
         h_prev_ok = True
 
     # -- the fate, as the last event (unless the motion never started) ------
