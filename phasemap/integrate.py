@@ -100,6 +100,12 @@ FILL = None
 RHS = None
 SUMMARY = None
 CLASSIFY = None
+STILL = None
+INDICATOR = None
+ZERO = None
+LOCATE = None
+#: Columns of a branch row watched for zeros that end a stage: reactions, coefficient.
+WATCH = np.zeros(0, dtype=np.int64)
 INTEGRATE = None
 # ... and of the method (a module such as phasemap._dopri5; see METHODS)
 STEP = None
@@ -218,6 +224,124 @@ def _classify_template(v, y, out):
     return SUMMARY(out)
 
 
+def _still_template(v, yb, out, mode, coef_sign):
+    """The state ``yb`` is still on the stage of branch ``mode``: the unique solution, the
+    same branch, the coefficient's sign kept, inside the domain (``out``: its rows)."""
+    n, adm, lost, sing = CLASSIFY(v, yb, out)
+    return n == 1 and adm == mode and (coef_sign == 0.0 or out[mode, nx.COEF]
+                                       * coef_sign > 0.0) and INSIDE(v, yb)
+
+
+def _indicator_template(v, r, theta, mode, col, yb):
+    """At ``theta`` of the step (dense output ``r``, into ``yb``): the stage's velocity
+    (``col`` < 0) or column ``col`` of its branch row."""
+    _dense(r, theta, yb)
+    if col < 0:
+        return yb[VEL_Y]
+    FILL(v, yb)
+    return BRANCH_ROW(v, mode)[col]
+
+
+def _zero_template(v, r, mode, col, sg, fa, fb, h, t, yb):
+    """Illinois on the step for the zero of ``sg`` times an indicator (see INDICATOR),
+    from ``fa`` > 0 at theta = 0 and ``fb`` <= 0 at theta = 1: ``(a, b)``, a bracket
+    of width 4 eps in time."""
+    a, b = 0.0, 1.0
+    side = 0
+    for _ in range(100):
+        c = (a * fb - b * fa) / (fb - fa)
+        if not (a < c < b):
+            c = 0.5 * (a + b)
+        fc = sg * INDICATOR(v, r, c, mode, col, yb)
+        if fc > 0.0:
+            a, fa = c, fc
+            if side == -1:
+                fb *= 0.5
+            side = -1
+        else:
+            b, fb = c, fc
+            if side == 1:
+                fa *= 0.5
+            side = 1
+        if (b - a) * h <= 4.0 * EPS * max(abs(t), abs(h)):
+            break
+    return a, b
+
+
+def _locate_template(v, y, y1, h, t, mode, coef_sign, r, out, yb, zs):
+    """The first theta of the step ``y`` -> ``y1`` (dense output ``r``) where the stage
+    stops being the unique solution, to 2 eps in time (``zs``: scratch, one row per
+    WATCH column and one for the velocity).
+
+    Classification decides where a stage ends, and is what bisection would call
+    fifty times.  Most stages end where a continuous quantity of their branch
+    row crosses zero: the velocity (a reversal or a stop), a reaction (a
+    contact released), the coefficient of the senior derivative (a singular
+    state).  Those crossing zero in the step are rooted on the dense output
+    (Illinois: a few row evaluations each), and the earliest zero that
+    classification confirms (the stage 1e-11 or 1e-9 of the step before it,
+    not at it or up to 1e-9 after it) leaves a bracket of 1e-11 to 2e-9 for a
+    dozen bisection steps.  Anything else (a friction
+    cone left at stick, another branch turning admissible, the domain's edge)
+    is bisected from the whole step.
+    """
+    nz = 0
+    d = DIRECTIONS[mode]
+    if d != 0.0 and d * y[VEL_Y] > 0.0 and d * y1[VEL_Y] <= 0.0:
+        zs[nz, 0], zs[nz, 1] = ZERO(v, r, mode, -1, d, d * y[VEL_Y], d * y1[VEL_Y], h, t, yb)
+        nz += 1
+    if WATCH.shape[0] > 0:
+        FILL(v, y)
+        g0 = BRANCH_ROW(v, mode)
+        FILL(v, y1)
+        g1 = BRANCH_ROW(v, mode)
+        for q in range(WATCH.shape[0]):
+            a0, a1 = g0[WATCH[q]], g1[WATCH[q]]
+            if a0 * a1 < 0.0:
+                sg = 1.0 if a0 > 0.0 else -1.0
+                zs[nz, 0], zs[nz, 1] = ZERO(v, r, mode, WATCH[q], sg, sg * a0, sg * a1, h, t,
+                                             yb)
+                nz += 1
+    lo, hi = 0.0, 1.0
+    for _ in range(nz):  # the candidates in order of their zeros
+        k = 0
+        for j in range(1, nz):
+            if zs[j, 1] < zs[k, 1]:
+                k = j
+        a, b = zs[k, 0], zs[k, 1]
+        zs[k, 1] = 2.0
+        if b > 1.0:
+            break
+        # the zero tests admit 1e-12 of a quantity's scale (GUIDE 1), so the stage
+        # may end a little past the zero; past 1e-9 of the step, the zero does
+        # not end it (a reaction free in sign)
+        c_hi = b
+        for k in range(3):
+            _dense(r, c_hi, yb)
+            if not STILL(v, yb, out, mode, coef_sign):
+                break
+            c_hi = min(1.0, b + 10.0 ** (2 * k - 13))
+        else:
+            continue
+        for k in range(2):
+            c_lo = max(0.0, a - 10.0 ** (2 * k - 11))
+            _dense(r, c_lo, yb)
+            if STILL(v, yb, out, mode, coef_sign):
+                lo, hi = c_lo, c_hi
+                break
+        break
+    for _ in range(200):
+        if (hi - lo) * h <= 2.0 * EPS * max(abs(t), abs(h)):
+            break
+        mid = 0.5 * (lo + hi)
+        _dense(r, mid, yb)
+        if STILL(v, yb, out, mode, coef_sign):
+            lo = mid
+        else:
+            hi = mid
+    return hi
+
+
 def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, save, t_eval):
     """Integrate from ``y0`` (positions then velocities) at t = 0 until a fate or ``t_end``.
 
@@ -225,8 +349,13 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
     are overwritten).  With ``save`` every accepted step is recorded; the
     states at the sorted times ``t_eval`` are always recorded.
 
-    Returns ``(fate, t, y, n_reversals, n_steps, ts, ys, ms, n_saved, ev_t,
-    ev_kind, ev_y, ev_mode, n_events, y_eval, n_eval)``.
+    Returns ``(fate, t, y, n_reversals, n_steps, points, events, y_eval)``:
+    ``points`` has one row (t, branch, y...) per saved point, ``events`` one row
+    (t, kind, branch after, y...) per event (:func:`unpack` names their
+    columns), ``y_eval`` the states at the first ``len(y_eval)`` times of
+    ``t_eval``.  Four arrays, not one per column: each array handed back to
+    Python costs about a microsecond and a half of boxing, a tenth of a short
+    motion's whole call.
     """
     ny = 2 * N_DOF
     out = np.empty((N_BRANCHES, N_FIELDS))
@@ -237,6 +366,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
     err = np.empty(ny)
     r = np.empty((N_DENSE, ny))
     yb = np.empty(ny)
+    zs = np.empty((WATCH.shape[0] + 1, 2))  # zeros ending the stage in a step (LOCATE)
     pts = np.empty((64 if save else 1, 2 + ny))  # saved points: t, branch, y
     n_saved = 0
     evs = np.empty((16, 3 + ny))  # events: t, kind, branch after, y
@@ -366,59 +496,8 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
                          and t_eval[n_eval] <= (t_end if last else t + h)):
             DENSE(v, y, y1, h, mode, K, yt, r)
         if not still:
-            # locate the first state where the stage stops being the unique solution
-            lo, hi = 0.0, 1.0
-            d = DIRECTIONS[mode]
-            if d != 0.0 and d * y[VEL_Y] > 0.0 and d * y1[VEL_Y] <= 0.0:
-                # The stage's velocity reaches zero in this step, where most stages
-                # end.  Its root on the dense output costs a few polynomial
-                # evaluations (Illinois), not classifications; a bracket around it
-                # that classification confirms (stage before, not after) leaves
-                # a dozen bisection steps instead of fifty.
-                a, b = 0.0, 1.0
-                fa, fb = d * y[VEL_Y], d * y1[VEL_Y]
-                side = 0
-                for _ in range(100):
-                    c = (a * fb - b * fa) / (fb - fa)
-                    if not (a < c < b):
-                        c = 0.5 * (a + b)
-                    _dense(r, c, yb)
-                    fc = d * yb[VEL_Y]
-                    if fc > 0.0:
-                        a, fa = c, fc
-                        if side == -1:
-                            fb *= 0.5
-                        side = -1
-                    else:
-                        b, fb = c, fc
-                        if side == 1:
-                            fa *= 0.5
-                        side = 1
-                    if (b - a) * h <= 4.0 * EPS * max(abs(t), abs(h)):
-                        break
-                c_lo = max(0.0, a - 1e-9)
-                _dense(r, c_lo, yb)
-                n, adm, lost, sing = CLASSIFY(v, yb, out)
-                if n == 1 and adm == mode and (coef_sign == 0.0 or out[mode, nx.COEF]
-                                               * coef_sign > 0.0) and INSIDE(v, yb):
-                    _dense(r, b, yb)
-                    n, adm, lost, sing = CLASSIFY(v, yb, out)
-                    if not (n == 1 and adm == mode and (coef_sign == 0.0 or out[mode, nx.COEF]
-                                                        * coef_sign > 0.0) and INSIDE(v, yb)):
-                        lo, hi = c_lo, b
-            for _ in range(200):
-                if (hi - lo) * h <= 2.0 * EPS * max(abs(t), abs(h)):
-                    break
-                mid = 0.5 * (lo + hi)
-                _dense(r, mid, yb)
-                n, adm, lost, sing = CLASSIFY(v, yb, out)
-                if n == 1 and adm == mode and (coef_sign == 0.0 or out[mode, nx.COEF]
-                                               * coef_sign > 0.0) and INSIDE(v, yb):
-                    lo = mid
-                else:
-                    hi = mid
-            theta_end = hi
-            _dense(r, hi, y1)
+            theta_end = LOCATE(v, y, y1, h, t, mode, coef_sign, r, out, yb, zs)
+            _dense(r, theta_end, y1)
         t1 = t + theta_end * h
         if theta_end == 1.0 and last:
             t1 = t_end
@@ -549,9 +628,14 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         while n_eval < t_eval.shape[0] and t_eval[n_eval] <= t_end:
             y_eval[n_eval] = y
             n_eval += 1
-    return (fate, t, y, n_rev, n_steps, pts[:n_saved, 0], pts[:n_saved, 2:],
-            pts[:n_saved, 1], n_saved, evs[:n_ev, 0], evs[:n_ev, 1], evs[:n_ev, 3:],
-            evs[:n_ev, 2], n_ev, y_eval[:n_eval], n_eval)
+    return fate, t, y, n_rev, n_steps, pts[:n_saved], evs[:n_ev], y_eval[:n_eval]
+
+
+def unpack(points, events):
+    """The columns of an integrator's ``points`` and ``events`` (see
+    ``_integrate_template``): ``(ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode)``."""
+    return (points[:, 0], points[:, 2:], points[:, 1], events[:, 0], events[:, 1],
+            events[:, 3:], events[:, 2])
 
 
 def _fate_drive(integrate, y_slot, base, shape, axis_slot, axis_values, deriv_slot,
@@ -659,6 +743,8 @@ def kernels(model: Model, method: str = DEFAULT_METHOD):
         STICK_IS_REST=dyn.stick_is_rest,
         LOWER=np.array([variables[n].lower for n in positions + velocities]),
         UPPER=np.array([variables[n].upper for n in positions + velocities]),
+        WATCH=np.array([nx.COEF, *range(nx.FIRST_ACC + len(acc_names), model.n_fields)],
+                       dtype=np.int64),
     )
     # Per-step helpers: the small ones inline into their callers, so that a
     # right-hand side is one call (a step makes six or twelve of them) with the
@@ -668,7 +754,11 @@ def kernels(model: Model, method: str = DEFAULT_METHOD):
                                    ("INSIDE", _inside_template, True),
                                    ("RHS", _rhs_template, False),
                                    ("SUMMARY", _summary_template, True),
-                                   ("CLASSIFY", _classify_template, True)):
+                                   ("CLASSIFY", _classify_template, True),
+                                   ("STILL", _still_template, True),
+                                   ("INDICATOR", _indicator_template, True),
+                                   ("ZERO", _zero_template, False),
+                                   ("LOCATE", _locate_template, False)):
         consts[name] = specialize(template, model, name.lower(), inline=inline, **consts)
     tag = _method_tag(spec.NAME)
     consts.update(N_STAGES=spec.N_STAGES, FSAL=spec.FSAL, N_DENSE=spec.N_DENSE,

@@ -18,7 +18,7 @@ import xarray as xr
 from . import events as ev
 from ._version import __version__
 from .atlas import CONVENTIONS
-from .integrate import DEFAULT_METHOD, METHODS, check_method, kernels
+from .integrate import DEFAULT_METHOD, METHODS, check_method, kernels, unpack
 from .model import Model, Variable
 from .models import get_model
 
@@ -185,9 +185,10 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     names = [v.name for v in integrated_variables(m)]
     y0 = np.array([positions[n] if n in positions else float(full[n]) for n in names])
     v = m.input_vector(full)
-    (fate, t, y, n_rev, n_steps, ts, ys, ms, _, ev_t, ev_kind, ev_y, ev_mode, _, y_eval,
-     _) = integrate(v, y0, opts.t_end, opts.rtol, opts.atol, opts.max_step, opts.max_steps,
-                    opts.max_events, t_eval is None, te)
+    fate, t, y, n_rev, n_steps, points, events, y_eval = integrate(
+        v, y0, opts.t_end, opts.rtol, opts.atol, opts.max_step, opts.max_steps,
+        opts.max_events, t_eval is None, te)
+    ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode = unpack(points, events)
     if t_eval is not None:
         ts = te[:len(y_eval)]
         ys = y_eval

@@ -653,7 +653,7 @@ def tight_reference(problem: Problem, rtol: float = TIGHT) -> Reference:
                    float(np.max(np.abs(dop.y_final - end_other))))
 
     floor = gap(loose.t, loose.y, loose.y_final)
-    cross = gap(p.t_save[:len(pm[14])], pm[14], pm[2])
+    cross = gap(p.t_save[:len(pm[7])], pm[7], pm[2])
     stages = dop.stages
     starts = np.array([s[0] for s in stages])
     t_stop, y_stop, fate = dop.t_final, dop.y_final, dop.fate
@@ -753,7 +753,7 @@ def _job(p: Problem, ref: Reference, method: str, tol: float):
         go = _kernel_run(p, tol, PHASEMAP_METHODS[method])
 
         def measure(r):
-            fe, l2 = _time_errors(ref, p.t_save[:len(r[14])], r[14], r[2])
+            fe, l2 = _time_errors(ref, p.t_save[:len(r[7])], r[7], r[2])
             return dict(error_final=fe, error_l2=l2, fate=ev.Event(int(r[0])).name.lower(),
                         n_reversals=int(r[3]), n_steps=int(r[4]), nfev=math.nan)
     elif method == "simulate":
