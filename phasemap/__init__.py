@@ -14,7 +14,17 @@ from .phase import phase_curve
 from .scene import Scene
 from .simulate import simulate
 from . import accessor as _accessor  # noqa: F401  (registers Dataset.phasemap)
-from . import plot
+
+
+def __getattr__(name: str):
+    """``phasemap.plot`` is imported (with matplotlib, half a second) on first use: a
+    script that maps, integrates or writes atlases does not pay for it."""
+    if name == "plot":
+        import importlib
+
+        return importlib.import_module(".plot", __name__)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "MODELS",
