@@ -45,3 +45,12 @@ def test_cli_table_and_errors():
     assert bad.stderr.strip() == ("phasemap: error: ladder: phi = 9 is outside its domain "
                                   "[0, 1.5708] (angle of the bar from the vertical, rad)")
     assert "Traceback" not in bad.stderr
+
+
+def test_import_phasemap_leaves_matplotlib_until_plot_is_used():
+    code = ("import sys, phasemap; before = 'matplotlib' in sys.modules; "
+            "from phasemap import plot; print(before, 'matplotlib' in sys.modules, "
+            "plot is phasemap.plot, callable(phasemap.plot.plot))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == ["False", "True", "True", "True"]
