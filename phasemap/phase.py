@@ -590,6 +590,7 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
     x, u, s = x0, u0, 0.0
     n_pan = 0
     truncated = False
+    h_resume = 0.0  # the width the controller chose before a panel was ended at a kink
     for _ in range(10_000_000):
         remaining = sigma * (stop - x)
         if remaining <= 0.0:
@@ -682,8 +683,11 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                         first = min(first, hi)
                 if first < 1.0 and first * hh > 1e-9 * max(abs(x), 1.0):
                     h = first * hh
+                    h_resume = h_next
                     truncated = True
                     continue
+            if truncated:  # the panel ended at a kink, not for its error: go on as before
+                h_next = max(h_next, h_resume)
             truncated = False
             panels = _grow(panels, n_pan + 1)
             row = panels[n_pan]
