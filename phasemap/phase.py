@@ -32,7 +32,13 @@ int_0^s e^{beta (s - t)} N(t) dt, with N replaced by its polynomial
 interpolant at the :data:`NODES` Gauss-Legendre points of the panel
 (collocation: the stage values U_i solve the same formula at the nodes, by
 Newton's method with the slopes dF/du taken from two evaluations of the
-branch row per node; for an affine F_b one step is exact).  The weights
+branch row per node; for an affine F_b one step is exact).  The iteration
+stops where its correction (relative to |u| + u_ref) is below 1e-14 or, at a
+loose rtol, below :data:`NEWTON` rtol times 1 - its contraction (measured
+between two corrections, 1/2 before).  N is evaluated at the iterate before
+the last correction, about correction / (1 - contraction) from the solution,
+which moves u at the panel's end by h |dN/du| (below about 1) times that: a
+thousandth of what the panel may err.  The weights
 int e^{z (theta - t)} t^k dt are the phi-functions of exponential integrators,
 z = beta h, computed without cancellation for every z (Taylor series and a
 downward recurrence for |z| < 6, the upward recurrence beyond), so that
@@ -143,6 +149,9 @@ NODES = 6
 RTOL = 1e-14
 #: Widest panel (rad).
 H_MAX = 0.5
+#: The collocation's Newton iteration stops where its correction, relative to |u| +
+#: u_ref and divided by 1 - the measured contraction, is below NEWTON rtol (or 1e-14).
+NEWTON = 1e-3
 #: Largest growth exponent beta h of one panel (a growing exponential).
 Z_GROW = 4.0
 #: Largest omega^2 a stage may reach (rad2 s-2); beyond it, step_failure.
@@ -589,6 +598,8 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
     coef_prev = coef0
     x, u, s = x0, u0, 0.0
     n_pan = 0
+    # (rtol >= 1, the measurements' accept-every-panel, still converges to 1e-14)
+    tol_newton = NEWTON * rtol if rtol < 1.0 else 0.0
     truncated = False
     h_resume = 0.0  # the width the controller chose before a panel was ended at a kink
     for _ in range(10_000_000):
@@ -613,6 +624,7 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
             U[i] = E[i] * u + hh * THETA[i] * P1[i] * n0
         # collocation: U = E u + hh A N(U), by Newton with the slopes of the first pass
         converged = False
+        worst_prev = math.inf
         for it in range(10):
             for j in range(n):
                 xj = x + sigma * hh * THETA[j]
@@ -640,9 +652,13 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                 worst = max(worst, abs(R[i]) / (abs(U[i]) + u_ref))
             if not (worst == worst):
                 break
-            if worst <= 1e-14:
+            # N was evaluated at U before this correction, about (1 + rate / (1 - rate))
+            # times its size from the solution (rate: the contraction, 1/2 until measured)
+            rate = worst / worst_prev if it > 0 else 0.5
+            if worst <= 1e-14 or (rate < 1.0 and worst <= (1.0 - rate) * tol_newton):
                 converged = True
                 break
+            worst_prev = worst
         if not converged:
             h = 0.25 * hh
             truncated = False
@@ -1038,8 +1054,9 @@ def _trace(m: Model, full: dict, phi_range, max_stages: int, points: int,
     phi_end, u_end)).
 
     ``rtol``, ``h_max`` and ``h_first`` (the first panel's width, default
-    h_max / 20) are for measurements: ``rtol = inf`` accepts every panel, so
-    that panels of width h_max measure the order of the method.
+    h_max / 20) are for measurements: ``rtol = inf`` accepts every panel (and
+    converges each one's Newton iteration to 1e-14), so that panels of width h_max
+    measure the order of the method.
     """
     pos, vel, _ = _coordinate(m)
     v = m.input_vector(full)
@@ -1084,7 +1101,8 @@ def phase_curve(model: str | Model, *, phi: float | None = None, omega: float | 
         the error of omega^2 allowed per panel, relative to ``|omega^2| +
         u_ref`` (u_ref the square of the model's velocity scale), in
         [1e-14, 1e-3].  The default, 1e-14, traces to about machine precision;
-        a looser one takes fewer, longer panels (the method is of order 12), for
+        a looser one takes fewer, longer panels (the method is of order 12) and
+        stops each panel's Newton iteration earlier (at :data:`NEWTON` rtol), for
         portraits of many curves.
     **params:
         the model's parameters by name; missing ones take the defaults.
