@@ -641,6 +641,7 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
     tol_newton = NEWTON * rtol if rtol < 1.0 else 0.0
     truncated = False
     h_resume = 0.0  # the width the controller chose before a panel was ended at a kink
+    ratio_prev, h_prev = 0.0, 1.0  # est / tol of the last panel accepted whole, its width
     for _ in range(10_000_000):
         remaining = sigma * (stop - x)
         if remaining <= 0.0:
@@ -720,7 +721,11 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
             h = hh * fac
             truncated = False
             continue
-        h_next = hh * (4.0 if est == 0.0 else min(4.0, max(0.2, 0.9 * (tol / est) ** (1.0 / 11.0))))
+        # the next width: by this estimate, but not beyond what the last panel's, scaled
+        # as h^11, allows (where a Legendre coefficient of the tail is near a zero, the
+        # estimate can be 1e3 too small, and the wider panel it suggests is rejected)
+        ratio = max(est / tol, ratio_prev * min(hh / h_prev, 4.0) ** 11)
+        h_next = hh * (4.0 if ratio == 0.0 else min(4.0, max(0.2, 0.9 * ratio ** (-1.0 / 11.0))))
         if abs(u1) > U_MAX:
             return ev.STEP_FAILURE, x, u, n_pan, panels, mode, h
         x1 = stop if last else x + sigma * hh
@@ -743,6 +748,8 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                     continue
             if truncated:  # the panel ended at a kink, not for its error: go on as before
                 h_next = max(h_next, h_resume)
+            else:
+                ratio_prev, h_prev = est / tol, hh
             truncated = False
             panels = _grow(panels, n_pan + 1)
             row = panels[n_pan]
