@@ -524,7 +524,9 @@ def _root_template(v, field, sg, lo, hi, glo, ghi, tol, x, hh, z, u, a, c, sigma
     to max(2 |d|, tol/16), so that a converged iterate is bracketed closely by
     the next evaluation;
     bisection wherever |g| does not halve.  Few evaluations where the
-    bisection of the bracket takes 50.
+    bisection of the bracket takes 50.  A zero of u on :func:`REFINE` takes the
+    slope from the equation itself (one branch row) and ends on the straight line
+    u is within 1e-8 of the zero: one or two passes where the secant takes four.
     """
     sl = (ghi - glo) / (hi - lo)
     t = lo - glo / sl
@@ -533,6 +535,27 @@ def _root_template(v, field, sg, lo, hi, glo, ghi, tol, x, hh, z, u, a, c, sigma
     u_lo = u_hi = math.nan
     for pss in range(2 if fine else 1):
         on_refine = fine and pss == 1
+        if on_refine and field < 0:
+            # a zero of u: Newton from the dense output's zero with the equation's own slope,
+            # du/dtheta = 2 sigma F hh at the refined u; once the step is below 1e-8, u is a
+            # straight line to rounding there (as for the classification in STAGE), and the
+            # bracket closes on that line without more passes
+            t = 0.5 * (lo + hi)
+            for _it in range(6):
+                ut = REFINE(v, t, x, hh, z, u, a, c, sigma, mode, u_ref, buf, tb, nv, a2, c2)
+                st = 2.0 * sigma * hh * VALUE(v, x + sigma * t * hh, ut, sigma, mode, u_ref)
+                if not (sg * st < 0.0):
+                    break
+                d = -ut / st
+                tz = t + d
+                if not (lo0 < tz < hi0):
+                    break
+                if abs(d) <= 1e-8:
+                    q = max(0.25 * tol, 2.0 * EPS * abs(tz))
+                    if lo0 <= tz - q and tz + q <= hi0:
+                        return tz - q, tz + q, ut - st * (t - tz + q), ut - st * (t - tz - q)
+                    break
+                t = tz
         if pss == 1:  # from the dense output's zero, on the refined u, with its local slope
             t = 0.5 * (lo + hi)
             dt = min(1e-6, 0.5 * (t - lo0), 0.5 * (hi0 - t))
