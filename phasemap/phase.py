@@ -55,11 +55,17 @@ expansion of the interpolated N, extrapolated to the degree the collocation
 actually errs at (see ``_panel``), against ``rtol (|u| + u_ref)`` with u_ref
 the square of the model's velocity scale.  The interpolant is also the dense
 output: u at any phi of a panel with the same accuracy, which the event
-location and the output points use.
+location and the output points use (where |z| <= 1 evaluated by its Taylor
+series in the panel's variable, with no phi-functions per point).  The next
+width heeds the last panel's estimate (scaled as h^11) as well as this one's,
+so that a tail coefficient passing near zero does not suggest a panel that
+fails.
 
 Where a reaction of the active branch changes sign inside a panel (the hinge's
 Q_n, where |Q_n| has its kink), the panel is redone to end at that sign change,
-so that no panel straddles a kink of F_b.
+so that no panel straddles a kink of F_b; the next one resumes the width chosen
+before.  (A reaction that enters F_b without a kink, the wheel's contact force
+F, is split the same way: the tracer cannot tell the two apart.)
 
 Events (the codes of :class:`phasemap.Event`)
 ---------------------------------------------
@@ -70,7 +76,8 @@ is unique, on the stage's branch, with the coefficient of the senior
 derivative keeping its sign.  Otherwise the first state where that stops is
 located on the dense output to double precision in phi and classified there.
 A zero of u, of a reaction or of the coefficient is found by Newton's method
-(a few Gauss passes); a change of classification by bisection, on the
+(a few Gauss passes; for u with the slope the equation gives, one or two); a
+change of classification by bisection, on the
 straight line u is within 1e-8 of such a zero, or on Gauss passes where there
 is none:
 
