@@ -147,7 +147,8 @@ LEVELS = (1e-6, 1e-9, 1e-12)
 
 def equal_accuracy(repeat):
     """Cost of one curve at equal accuracy: the tracer at rtol in TOLS against simulate's
-    kernel (DOPRI5 and DOP853) at the same tolerances, both to the curve's fate.  Error:
+    kernel (DOPRI5 and DOP853) at the same tolerances, both to the curve's fate, all 15
+    runs alternating (``repeat`` rounds of 3 calls, medians).  Error:
     the end state, max(|d phi|, |d omega^2| / u_ref), against the tracer at rtol 1e-14
     with the simulate runs also checked against simulate at rtol 1e-14 (DOP853)."""
     rows = []
@@ -170,23 +171,28 @@ def equal_accuracy(repeat):
         def err(end):
             return max(abs(end[0] - ref[0]), abs(end[1] - ref[1]) / u_ref)
 
-        runs = {"tracer": [], "DOPRI5": [], "DOP853": []}
+        errors, calls = {}, {}  # (method, tol): end-state error, the timed call
         y0 = np.array([full["phi"], full["omega"]])
         no_eval = np.empty(0)
         for tol in TOLS:
-            kernel(v, full["phi"], full["omega"], lo, hi, 50, 2, u_ref, tol, phase.H_MAX,
-                   0.05 * phase.H_MAX)
-            runs["tracer"].append((err(curve_end(tol)), median_ms(
-                lambda tol=tol: kernel(v, full["phi"], full["omega"], lo, hi, 50, 2, u_ref,
-                                       tol, phase.H_MAX, 0.05 * phase.H_MAX), repeat)))
+            errors["tracer", tol] = err(curve_end(tol))
+            calls["tracer", tol] = lambda tol=tol: kernel(
+                v, full["phi"], full["omega"], lo, hi, 50, 2, u_ref, tol, phase.H_MAX,
+                0.05 * phase.H_MAX)
             for method in ("DOPRI5", "DOP853"):
                 integrate, _ = phasemap.integrate.kernels(m, method)
                 atol = tol * math.sqrt(u_ref)
-                integrate(v, y0, t_end, tol, atol, math.inf, 10**6, 10**4, True, no_eval)
-                runs[method].append((err(sim_end(method, tol)), median_ms(
-                    lambda integrate=integrate, tol=tol, atol=atol: integrate(
-                        v, y0, t_end, tol, atol, math.inf, 10**6, 10**4, True, no_eval),
-                    repeat)))
+                errors[method, tol] = err(sim_end(method, tol))
+                calls[method, tol] = lambda integrate=integrate, tol=tol, atol=atol: integrate(
+                    v, y0, t_end, tol, atol, math.inf, 10**6, 10**4, True, no_eval)
+        times = {key: [] for key in calls}
+        for fn in calls.values():
+            fn()  # (compiled above; first calls out of the timing)
+        for _ in range(repeat):  # all runs alternating, so that a change of load hits each
+            for key, fn in calls.items():
+                times[key].append(median_ms(fn, 3))
+        runs = {method: [(errors[method, tol], statistics.median(times[method, tol]))
+                         for tol in TOLS] for method in ("tracer", "DOPRI5", "DOP853")}
 
         def cheapest(pairs, level):
             ok = [t for e, t in pairs if e <= level]
@@ -281,7 +287,7 @@ def main():
     t0 = time.perf_counter()
     rows = timing(args.repeat, before)
     acc = accuracy()
-    equal = equal_accuracy(max(args.repeat // 3, 3))
+    equal = equal_accuracy(max(args.repeat, 3))
     p, errs = order()
     lines = ["## Phase curves (`benchmarks/phase_curve.py`)", "",
              f"Machine: {machine()}.  Medians of {args.repeat} runs per method, the methods "
@@ -312,7 +318,9 @@ def main():
               "The compiled curve alone (2 points per stage) at rtol = "
               f"{', '.join(f'{t:g}' for t in TOLS)} (`phase_curve(..., rtol=...)`) against "
               "`simulate`'s kernel, DOPRI5 and DOP853, at the same tolerances (atol = rtol "
-              "times the velocity scale), to the same fate.  Error: the end state, "
+              "times the velocity scale), to the same fate; the 15 runs of a curve "
+              f"alternate (medians of {max(args.repeat, 3)} rounds of 3 calls), so that a "
+              "change of the load on the shared cores hits each alike.  Error: the end state, "
               "max(|d phi|, |d omega^2| / u_ref), against the curve at rtol 1e-14 "
               "(*check*: DOP853 at rtol 1e-14 against it).  Cheapest run with the error at "
               "most the level ('-': no run reaches it); *simulate kernel / curve* above 1 "
@@ -320,20 +328,34 @@ def main():
               "does not change with rtol: the exponential integrates their linear part "
               "exactly, so their panels are few (3 on the ladder's stage, about 2 per swing "
               "of the hinge) and the cost is per stage: classifying its start and locating "
-              "its end to double precision in phi.  A zero of omega^2, of a reaction or of "
-              "the coefficient is found by Newton's method on the dense output, then on "
-              "Gauss passes (3-4 passes of 6 branch rows each per zero); a change of "
-              "classification is bisected on the straight line that omega^2 is within 1e-8 "
-              "of that zero (about 25 classifications, no Gauss pass).  That location used "
-              "to bisect on Gauss passes, about 50 per event (the ladder 130 us, the hinge "
-              "158 us at every level).  The wheel's cost is in its panels: about 3 us each "
-              "(20 branch rows, 7 sets of phi-functions, one 6x6 LU factorisation) against "
-              "DOP853's 12 right-hand sides per step.  At the tight levels rtol sets their "
-              "number and the two are about even.  At err <= 1e-6 it does not: rtol 1e-3 "
-              "and 1e-6 take the same 17 panels, bounded by the widest panel H_MAX = 0.5 "
-              "rad over the 4.3 rad the wheel swings through (and the first panels growing "
-              "from H_MAX/20), so there the curve can cost more than DOPRI5's long steps; "
-              "a wider H_MAX would change the panels of every curve and is left alone.",
+              "its end to double precision in phi.  A zero of omega^2 is found by Newton's "
+              "method on the dense output (its Taylor series in theta where |beta h| <= 1: "
+              "13 ns a point instead of 60-100 ns of phi-functions), then by Newton on Gauss "
+              "passes with the slope the equation itself gives (one branch row), ending on "
+              "the straight line omega^2 is within 1e-8 of the zero: 1-2 passes of 6 branch "
+              "rows, 2.7 us a reversal of the wheel (4.5 us with the secant's 3-4 passes).  "
+              "A zero of a reaction or of the coefficient takes the secant's 3-4 passes; a "
+              "change of classification is bisected on that straight line (about 25 "
+              "classifications, no Gauss pass).  That location used to bisect on Gauss "
+              "passes, about 50 per event (the ladder 130 us, the hinge 158 us at every "
+              "level).  The wheel's cost is in its panels, about 2 us each (each part "
+              "measured by repeating it inside the curve): 7 slopes of 2 branch rows each "
+              "(0.4 us), the phi-functions at the 6 nodes with the collocation matrix (0.36 "
+              "us), the Newton matrix and its LU factorisation (0.13 us), a second Newton "
+              "pass of 6 rows and the classification of the end (75 ns); DOP853 takes 12 "
+              "right-hand sides per step.  The Newton iteration stops at NEWTON = 1e-3 "
+              "rtol, not at 1e-14, so at loose rtol the third pass half the wheel's panels "
+              "took is gone.  At rtol 1e-14 the wheel swinging to rest computes 59 panels: "
+              "48 accepted, 7 rejected by the error estimate (12 before the width also "
+              "heeded the last panel's estimate scaled as h^11) and 4 redone to end where "
+              "the contact force F changes sign.  At err <= 1e-6 (rtol 1e-6) it computes "
+              "17: 14 accepted, bounded by the widest panel H_MAX = 0.5 rad and by the "
+              "estimate, which allows about 0.54 rad there (H_MAX = 1 measured slower), "
+              "over the 4.3 rad the wheel swings through; and 3 redone at a sign change of "
+              "F.  F enters the wheel's phi'' without a kink, but the tracer ends a panel "
+              "at every sign change of a reaction of the branch, because the hinge's "
+              "|Q_n| does; the redone panels and the extra ones the split makes are about "
+              "a third of the wheel's panel work at that level.",
               "", "| curve | check | " + " | ".join(
                   f"curve, err <= {lv:g} | simulate kernel | simulate kernel / curve"
                   for lv in LEVELS) + " |",

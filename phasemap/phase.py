@@ -32,7 +32,13 @@ int_0^s e^{beta (s - t)} N(t) dt, with N replaced by its polynomial
 interpolant at the :data:`NODES` Gauss-Legendre points of the panel
 (collocation: the stage values U_i solve the same formula at the nodes, by
 Newton's method with the slopes dF/du taken from two evaluations of the
-branch row per node; for an affine F_b one step is exact).  The weights
+branch row per node; for an affine F_b one step is exact).  The iteration
+stops where its correction (relative to |u| + u_ref) is below 1e-14 or, at a
+loose rtol, below :data:`NEWTON` rtol times 1 - its contraction (measured
+between two corrections, 1/2 before).  N is evaluated at the iterate before
+the last correction, about correction / (1 - contraction) from the solution,
+which moves u at the panel's end by h |dN/du| (below about 1) times that: a
+thousandth of what the panel may err.  The weights
 int e^{z (theta - t)} t^k dt are the phi-functions of exponential integrators,
 z = beta h, computed without cancellation for every z (Taylor series and a
 downward recurrence for |z| < 6, the upward recurrence beyond), so that
@@ -49,11 +55,17 @@ expansion of the interpolated N, extrapolated to the degree the collocation
 actually errs at (see ``_panel``), against ``rtol (|u| + u_ref)`` with u_ref
 the square of the model's velocity scale.  The interpolant is also the dense
 output: u at any phi of a panel with the same accuracy, which the event
-location and the output points use.
+location and the output points use (where |z| <= 1 evaluated by its Taylor
+series in the panel's variable, with no phi-functions per point).  The next
+width heeds the last panel's estimate (scaled as h^11) as well as this one's,
+so that a tail coefficient passing near zero does not suggest a panel that
+fails.
 
 Where a reaction of the active branch changes sign inside a panel (the hinge's
 Q_n, where |Q_n| has its kink), the panel is redone to end at that sign change,
-so that no panel straddles a kink of F_b.
+so that no panel straddles a kink of F_b; the next one resumes the width chosen
+before.  (A reaction that enters F_b without a kink, the wheel's contact force
+F, is split the same way: the tracer cannot tell the two apart.)
 
 Events (the codes of :class:`phasemap.Event`)
 ---------------------------------------------
@@ -64,7 +76,8 @@ is unique, on the stage's branch, with the coefficient of the senior
 derivative keeping its sign.  Otherwise the first state where that stops is
 located on the dense output to double precision in phi and classified there.
 A zero of u, of a reaction or of the coefficient is found by Newton's method
-(a few Gauss passes); a change of classification by bisection, on the
+(a few Gauss passes; for u with the slope the equation gives, one or two); a
+change of classification by bisection, on the
 straight line u is within 1e-8 of such a zero, or on Gauss passes where there
 is none:
 
@@ -143,8 +156,14 @@ NODES = 6
 RTOL = 1e-14
 #: Widest panel (rad).
 H_MAX = 0.5
+#: The collocation's Newton iteration stops where its correction, relative to |u| +
+#: u_ref and divided by 1 - the measured contraction, is below NEWTON rtol (or 1e-14).
+NEWTON = 1e-3
 #: Largest growth exponent beta h of one panel (a growing exponential).
 Z_GROW = 4.0
+#: Terms of the Taylor series in theta of a panel's dense output, used where |z| <= Z_SERIES.
+SERIES = 22
+Z_SERIES = 1.0
 #: Largest omega^2 a stage may reach (rad2 s-2); beyond it, step_failure.
 U_MAX = 1e300
 #: Default half width of the phi range of the unbounded models.
@@ -273,6 +292,40 @@ def _dense(theta, z, u0, h, a, c, buf):
         acc += w * corr
         e = buf[0]
     return e * u0 + h * acc
+
+
+@njit(cache=True, error_model="numpy")
+def _series(z, u0, h, c, b):
+    """Taylor coefficients b of a panel's u in theta (u = sum b_m theta^m), where
+    |z| <= Z_SERIES; returns whether it computed them.
+
+    u solves du/dtheta = z u + h p(theta) with p = sum c_k theta^k, so b_0 = u0 and
+    (m + 1) b_{m+1} = z b_m + h c_m.  With |z| <= 1 the :data:`SERIES` terms reach
+    1e-18 of the sum, which is as accurate as :func:`_dense` (a few ulp of |u0| + h |p|)
+    and, evaluated by Horner's rule, a fifth of its cost (no phi-functions per point).
+    """
+    if not (abs(z) <= Z_SERIES):
+        return False
+    n = c.shape[0]
+    b[0] = u0
+    for m in range(SERIES - 1):
+        bm = z * b[m]
+        if m < n:
+            bm += h * c[m]
+        b[m + 1] = bm * INV_INT[m + 1]
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _dense_at(theta, series, b, z, u0, h, a, c, buf):
+    """u at theta of a panel: its Taylor sum ``b`` where ``series`` (see :func:`_series`),
+    else :func:`_dense`."""
+    if series:
+        acc = b[SERIES - 1]
+        for m in range(SERIES - 2, -1, -1):
+            acc = acc * theta + b[m]
+        return acc
+    return _dense(theta, z, u0, h, a, c, buf)
 
 
 @njit(cache=True, error_model="numpy")
@@ -443,7 +496,7 @@ def _still_template(v, out, x, u, sigma, mode, coef_sign):
     return coef_sign == 0.0 or out[mode, nx.COEF] * coef_sign > 0.0
 
 
-def _refine_template(v, theta, x_p, hh, z, u_p, a, c, sigma, mode, u_ref, buf, nv, a2, c2):
+def _refine_template(v, theta, x_p, hh, z, u_p, a, c, sigma, mode, u_ref, buf, tb, nv, a2, c2):
     """u at theta of a panel to the panel's own order: one Gauss pass on [0, theta].
 
     The collocation polynomial is accurate to O(h^(n+1)) inside a panel (its stage
@@ -456,8 +509,9 @@ def _refine_template(v, theta, x_p, hh, z, u_p, a, c, sigma, mode, u_ref, buf, n
     n = NODES
     beta = z / hh
     hs = theta * hh
+    series = _series(z, u_p, hh, c, tb)
     for j in range(n):
-        uj = _dense(theta * THETA[j], z, u_p, hh, a, c, buf)
+        uj = _dense_at(theta * THETA[j], series, tb, z, u_p, hh, a, c, buf)
         fj = VALUE(v, x_p + sigma * hs * THETA[j], uj, sigma, mode, u_ref)
         nv[j] = 2.0 * sigma * fj - beta * uj
     _expand(nv, a2, c2)
@@ -465,7 +519,7 @@ def _refine_template(v, theta, x_p, hh, z, u_p, a, c, sigma, mode, u_ref, buf, n
 
 
 def _root_template(v, field, sg, lo, hi, glo, ghi, tol, x, hh, z, u, a, c, sigma, mode, u_ref,
-                   buf, nv, a2, c2, fine):
+                   buf, tb, nv, a2, c2, fine):
     """The zero of g(theta) = sg u (``field`` < 0) or sg (``field`` of the row of ``mode``)
     on a panel.
 
@@ -477,20 +531,44 @@ def _root_template(v, field, sg, lo, hi, glo, ghi, tol, x, hh, z, u, a, c, sigma
     to max(2 |d|, tol/16), so that a converged iterate is bracketed closely by
     the next evaluation;
     bisection wherever |g| does not halve.  Few evaluations where the
-    bisection of the bracket takes 50.
+    bisection of the bracket takes 50.  A zero of u on :func:`REFINE` takes the
+    slope from the equation itself (one branch row) and ends on the straight line
+    u is within 1e-8 of the zero: one or two passes where the secant takes four.
     """
     sl = (ghi - glo) / (hi - lo)
     t = lo - glo / sl
+    series = _series(z, u, hh, c, tb)  # (REFINE recomputes the same)
     lo0, hi0, glo0, ghi0 = lo, hi, glo, ghi
     u_lo = u_hi = math.nan
     for pss in range(2 if fine else 1):
         on_refine = fine and pss == 1
+        if on_refine and field < 0:
+            # a zero of u: Newton from the dense output's zero with the equation's own slope,
+            # du/dtheta = 2 sigma F hh at the refined u; once the step is below 1e-8, u is a
+            # straight line to rounding there (as for the classification in STAGE), and the
+            # bracket closes on that line without more passes
+            t = 0.5 * (lo + hi)
+            for _it in range(6):
+                ut = REFINE(v, t, x, hh, z, u, a, c, sigma, mode, u_ref, buf, tb, nv, a2, c2)
+                st = 2.0 * sigma * hh * VALUE(v, x + sigma * t * hh, ut, sigma, mode, u_ref)
+                if not (sg * st < 0.0):
+                    break
+                d = -ut / st
+                tz = t + d
+                if not (lo0 < tz < hi0):
+                    break
+                if abs(d) <= 1e-8:
+                    q = max(0.25 * tol, 2.0 * EPS * abs(tz))
+                    if lo0 <= tz - q and tz + q <= hi0:
+                        return tz - q, tz + q, ut - st * (t - tz + q), ut - st * (t - tz - q)
+                    break
+                t = tz
         if pss == 1:  # from the dense output's zero, on the refined u, with its local slope
             t = 0.5 * (lo + hi)
             dt = min(1e-6, 0.5 * (t - lo0), 0.5 * (hi0 - t))
             if dt > 0.0:
-                gp = _dense(t + dt, z, u, hh, a, c, buf)
-                gm = _dense(t - dt, z, u, hh, a, c, buf)
+                gp = _dense_at(t + dt, series, tb, z, u, hh, a, c, buf)
+                gm = _dense_at(t - dt, series, tb, z, u, hh, a, c, buf)
                 if field >= 0:
                     gp = ROW(v, x + sigma * (t + dt) * hh, gp, sigma, mode)[field]
                     gm = ROW(v, x + sigma * (t - dt) * hh, gm, sigma, mode)[field]
@@ -508,9 +586,9 @@ def _root_template(v, field, sg, lo, hi, glo, ghi, tol, x, hh, z, u, a, c, sigma
                 t = 0.5 * (lo + hi)
                 stall = 0
             if on_refine:
-                ut = REFINE(v, t, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2)
+                ut = REFINE(v, t, x, hh, z, u, a, c, sigma, mode, u_ref, buf, tb, nv, a2, c2)
             else:
-                ut = _dense(t, z, u, hh, a, c, buf)
+                ut = _dense_at(t, series, tb, z, u, hh, a, c, buf)
             if field < 0:
                 gt = sg * ut
             else:
@@ -554,14 +632,14 @@ def _at_rest_template(v, x, out):
 
 
 def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, panels, mats,
-                    vecs, buf, react, piv):
+                    vecs, buf, tb, react, piv):
     """Follow one stage (branch ``mode``, sign ``sigma``) from (x0, u0) towards ``stop``.
 
     Returns ``(reason, x_end, u_end, n_panels, panels, next_mode, h)``: an Event
     code or _ZERO, the end state, the panels (rows s0, h, z, u0, theta_end, a,
     c: the dense output), the branch after a switch, and the last panel width.
-    ``mats``, ``vecs``, ``buf``, ``react``, ``piv``: scratch of the curve (no heap per
-    stage).
+    ``mats``, ``vecs``, ``buf``, ``tb``, ``react``, ``piv``: scratch of the curve (no heap
+    per stage).
     """
     n = NODES
     A = mats[0]
@@ -589,7 +667,11 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
     coef_prev = coef0
     x, u, s = x0, u0, 0.0
     n_pan = 0
+    # (rtol >= 1, the measurements' accept-every-panel, still converges to 1e-14)
+    tol_newton = NEWTON * rtol if rtol < 1.0 else 0.0
     truncated = False
+    h_resume = 0.0  # the width the controller chose before a panel was ended at a kink
+    ratio_prev, h_prev = 0.0, 1.0  # est / tol of the last panel accepted whole, its width
     for _ in range(10_000_000):
         remaining = sigma * (stop - x)
         if remaining <= 0.0:
@@ -612,6 +694,7 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
             U[i] = E[i] * u + hh * THETA[i] * P1[i] * n0
         # collocation: U = E u + hh A N(U), by Newton with the slopes of the first pass
         converged = False
+        worst_prev = math.inf
         for it in range(10):
             for j in range(n):
                 xj = x + sigma * hh * THETA[j]
@@ -639,9 +722,13 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                 worst = max(worst, abs(R[i]) / (abs(U[i]) + u_ref))
             if not (worst == worst):
                 break
-            if worst <= 1e-14:
+            # N was evaluated at U before this correction, about (1 + rate / (1 - rate))
+            # times its size from the solution (rate: the contraction, 1/2 until measured)
+            rate = worst / worst_prev if it > 0 else 0.5
+            if worst <= 1e-14 or (rate < 1.0 and worst <= (1.0 - rate) * tol_newton):
                 converged = True
                 break
+            worst_prev = worst
         if not converged:
             h = 0.25 * hh
             truncated = False
@@ -664,7 +751,11 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
             h = hh * fac
             truncated = False
             continue
-        h_next = hh * (4.0 if est == 0.0 else min(4.0, max(0.2, 0.9 * (tol / est) ** (1.0 / 11.0))))
+        # the next width: by this estimate, but not beyond what the last panel's, scaled
+        # as h^11, allows (where a Legendre coefficient of the tail is near a zero, the
+        # estimate can be 1e3 too small, and the wider panel it suggests is rejected)
+        ratio = max(est / tol, ratio_prev * min(hh / h_prev, 4.0) ** 11)
+        h_next = hh * (4.0 if ratio == 0.0 else min(4.0, max(0.2, 0.9 * ratio ** (-1.0 / 11.0))))
         if abs(u1) > U_MAX:
             return ev.STEP_FAILURE, x, u, n_pan, panels, mode, h
         x1 = stop if last else x + sigma * hh
@@ -678,12 +769,17 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                         lo, hi, _ul, _uh = ROOT(v, REACTIONS[q], sg, 0.0, 1.0, sg * react[q],
                                           sg * out[mode, REACTIONS[q]],
                                           4.0 * EPS * max(abs(x), hh) / hh, x, hh, z, u, a, c,
-                                          sigma, mode, u_ref, buf, nv, a2, c2, False)
+                                          sigma, mode, u_ref, buf, tb, nv, a2, c2, False)
                         first = min(first, hi)
                 if first < 1.0 and first * hh > 1e-9 * max(abs(x), 1.0):
                     h = first * hh
+                    h_resume = h_next
                     truncated = True
                     continue
+            if truncated:  # the panel ended at a kink, not for its error: go on as before
+                h_next = max(h_next, h_resume)
+            else:
+                ratio_prev, h_prev = est / tol, hh
             truncated = False
             panels = _grow(panels, n_pan + 1)
             row = panels[n_pan]
@@ -707,7 +803,7 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
             # the zero of u (u > 0 at the panel start, where the stage goes on)
             lo, hi, u_lo, u_hi = ROOT(v, -1, 1.0, 0.0, 1.0, u, u1,
                                       4.0 * EPS * max(abs(x), hh) / hh, x, hh, z, u, a, c,
-                                      sigma, mode, u_ref, buf, nv, a2, c2, True)
+                                      sigma, mode, u_ref, buf, tb, nv, a2, c2, True)
             if lo == 0.0 or STILL(v, out, x + sigma * lo * hh, u_lo, sigma, mode, coef_sign):
                 reason = _ZERO
                 th_e = hi
@@ -741,12 +837,13 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                         if g1 > 0.0:
                             continue  # its first zero is not before c_lo: not earlier
                     l_c, h_c, ul_c, u_c = ROOT(v, fld, sg, 0.0, top, sg * g0, g1, tol_b, x, hh,
-                                               z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2,
+                                               z, u, a, c, sigma, mode, u_ref, buf, tb, nv, a2, c2,
                                                True)
                     if h_c < c_th and u_c == u_c and ul_c == ul_c:
                         c_fld, c_th, c_u, c_lo, c_ulo = fld, h_c, u_c, l_c, ul_c
             if c_th - dd > 0.0 and c_th + dd < th_hi:
-                u_d = REFINE(v, c_th + dd, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2)
+                u_d = REFINE(v, c_th + dd, x, hh, z, u, a, c, sigma, mode, u_ref, buf, tb, nv,
+                             a2, c2)
                 slope = (u_d - c_u) / dd
                 if STILL(v, out, x + sigma * (c_th - dd) * hh, c_u - slope * dd, sigma, mode,
                          coef_sign) and not STILL(v, out, x + sigma * (c_th + dd) * hh, u_d,
@@ -759,7 +856,7 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                 if guided:
                     um = c_u + slope * (mid - c_th)
                 else:
-                    um = REFINE(v, mid, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2)
+                    um = REFINE(v, mid, x, hh, z, u, a, c, sigma, mode, u_ref, buf, tb, nv, a2, c2)
                 if STILL(v, out, x + sigma * mid * hh, um, sigma, mode, coef_sign):
                     lo = mid
                 else:
@@ -773,7 +870,7 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
             elif guided:
                 u_e = c_u + slope * (th_e - c_th)
             else:
-                u_e = REFINE(v, th_e, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv, a2, c2)
+                u_e = REFINE(v, th_e, x, hh, z, u, a, c, sigma, mode, u_ref, buf, tb, nv, a2, c2)
         next_mode = mode
         if reason != _ZERO:
             n2, adm2, lost2, sing2 = CLASSIFY(v, x_e, sigma * math.sqrt(max(u_e, 0.0)), out)
@@ -790,8 +887,8 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                     if guided and abs(th_p - c_th) <= dd:
                         u_p = c_u + slope * (th_p - c_th)
                     else:
-                        u_p = REFINE(v, th_p, x, hh, z, u, a, c, sigma, mode, u_ref, buf, nv,
-                                     a2, c2)
+                        u_p = REFINE(v, th_p, x, hh, z, u, a, c, sigma, mode, u_ref, buf, tb,
+                                     nv, a2, c2)
                     x_p = x + sigma * th_p * hh
                     n3, adm3, lost3, sing3 = CLASSIFY(v, x_p, sigma * math.sqrt(max(u_p, 0.0)),
                                                       out)
@@ -830,14 +927,15 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                         lo, hi, _ul, u_hi = ROOT(v, REACTIONS[q], 1.0, 0.0, th_e, react[q],
                                                  out[mode, REACTIONS[q]],
                                                  2.0 * EPS * max(abs(x), hh) / hh, x, hh, z, u,
-                                                 a, c, sigma, mode, u_ref, buf, nv, a2, c2, True)
+                                                 a, c, sigma, mode, u_ref, buf, tb, nv, a2, c2,
+                                                 True)
                     if hi > best:
                         best, u_best = hi, u_hi
             if best > 0.0:
                 th_e = best
                 x_e = x + sigma * th_e * hh
                 u_e = u_best if u_best == u_best else REFINE(v, th_e, x, hh, z, u, a, c, sigma,
-                                                             mode, u_ref, buf, nv, a2, c2)
+                                                             mode, u_ref, buf, tb, nv, a2, c2)
         if reason == _ZERO:
             u_e = 0.0
         panels = _grow(panels, n_pan + 1)
@@ -851,7 +949,7 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
 
 
 def _stage_points_template(v, panels, n_pan, sigma, mode, u_ref, x0, u0, x_e, u_e, points, pts,
-                           npts, stage, vecs, buf):
+                           npts, stage, vecs, buf, tb):
     """Append the stage's output points (phi, u, stage): evenly spaced in phi."""
     n = NODES
     nv = vecs[8]
@@ -870,7 +968,7 @@ def _stage_points_template(v, panels, n_pan, sigma, mode, u_ref, x0, u0, x_e, u_
             row = panels[p]
             theta = min(max((sk - row[0]) / row[1], 0.0), row[4])
             uk = REFINE(v, theta, x0 + sigma * row[0], row[1], row[2], row[3], row[5:5 + n],
-                        row[5 + n:5 + 2 * n], sigma, mode, u_ref, buf, nv, a2, c2)
+                        row[5 + n:5 + 2 * n], sigma, mode, u_ref, buf, tb, nv, a2, c2)
         pts[npts + k, 0] = x0 + sigma * sk
         pts[npts + k, 1] = uk
         pts[npts + k, 2] = stage
@@ -896,6 +994,7 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
     mats = np.empty((2, NODES, NODES))
     vecs = np.empty((11, NODES))
     buf = np.empty(NODES + 2)
+    tb = np.empty(SERIES)
     react = np.empty(REACTIONS.shape[0])
     piv = np.empty(NODES, dtype=np.int64)
     code = -1
@@ -927,10 +1026,10 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
     while True:
         stop = hi if sigma > 0.0 else lo
         reason, x_e, u_e, n_pan, panels, next_mode, h = STAGE(
-            v, out, mode, sigma, x, u, stop, u_ref, rtol, h_max, h, panels, mats, vecs, buf, react,
-            piv)
+            v, out, mode, sigma, x, u, stop, u_ref, rtol, h_max, h, panels, mats, vecs, buf, tb,
+            react, piv)
         pts, npts = STAGE_POINTS(v, panels, n_pan, sigma, mode, u_ref, x, u, x_e, u_e, points,
-                                 pts, npts, float(nst), vecs, buf)
+                                 pts, npts, float(nst), vecs, buf, tb)
         go = False
         new_mode = mode
         if reason == _ZERO:
@@ -1034,8 +1133,9 @@ def _trace(m: Model, full: dict, phi_range, max_stages: int, points: int,
     phi_end, u_end)).
 
     ``rtol``, ``h_max`` and ``h_first`` (the first panel's width, default
-    h_max / 20) are for measurements: ``rtol = inf`` accepts every panel, so
-    that panels of width h_max measure the order of the method.
+    h_max / 20) are for measurements: ``rtol = inf`` accepts every panel (and
+    converges each one's Newton iteration to 1e-14), so that panels of width h_max
+    measure the order of the method.
     """
     pos, vel, _ = _coordinate(m)
     v = m.input_vector(full)
@@ -1080,7 +1180,8 @@ def phase_curve(model: str | Model, *, phi: float | None = None, omega: float | 
         the error of omega^2 allowed per panel, relative to ``|omega^2| +
         u_ref`` (u_ref the square of the model's velocity scale), in
         [1e-14, 1e-3].  The default, 1e-14, traces to about machine precision;
-        a looser one takes fewer, longer panels (the method is of order 12), for
+        a looser one takes fewer, longer panels (the method is of order 12) and
+        stops each panel's Newton iteration earlier (at :data:`NEWTON` rtol), for
         portraits of many curves.
     **params:
         the model's parameters by name; missing ones take the defaults.

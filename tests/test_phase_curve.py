@@ -674,3 +674,20 @@ def test_a_looser_rtol_keeps_the_curve_to_its_tolerance():
     for bad in (1e-16, 0.1, "tight", float("nan")):
         with pytest.raises(ValueError, match="rtol"):
             phase_curve("wheel", phi=1.0, omega=0.0, rtol=bad)
+
+
+@pytest.mark.parametrize("rtol", [1e-3, 1e-4, 1e-6])
+@pytest.mark.parametrize("start", [dict(phi=1.0, omega=0.0), dict(phi=0.0, omega=7.0)])
+def test_a_loose_rtol_stops_newton_early_and_keeps_its_tolerance(start, rtol):
+    """At a loose rtol each panel's Newton iteration stops once its correction is below
+    phase.NEWTON rtol (not 1e-14): omega^2 and the stage ends stay within rtol of the
+    default curve (a stop at rtol itself puts the wheel over the top 70 rtol off at 1e-3)."""
+    assert phase.NEWTON * rtol > 1e-14
+    tight = phase_curve("wheel", **start)
+    loose = phase_curve("wheel", **start, rtol=rtol)
+    assert list(loose.stage_end_reason.values) == list(tight.stage_end_reason.values)
+    u_ref = G / 1.0  # the wheel's velocity scale squared, g / r
+    np.testing.assert_allclose(loose.stage_end_phi.values, tight.stage_end_phi.values,
+                               rtol=0, atol=rtol)
+    np.testing.assert_allclose(loose.omega_squared.values, tight.omega_squared.values,
+                               rtol=0, atol=rtol * u_ref)
