@@ -1592,7 +1592,11 @@ def _build(S: System):
         velocity=spec["velocity"], velocity_scale=module.velocity_scale,
         default_axes=axes, dynamics=dynamics, check=_checks(S, spec, module),
         declaration=S, inside=getattr(module, "inside", None),
-        domain_text=_domain_text(spec))
+        domain_text=_domain_text(spec),
+        # every sign a mode's law depends on (a slip's, a two-sided contact's normal
+        # force's) is fixed by the mode, so a reaction changing sign ends the mode's
+        # stage instead of bending its law
+        kinks=())
 
 
 def _domain_text(spec) -> str:

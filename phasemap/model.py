@@ -273,6 +273,12 @@ class Model:
     inside: Callable | None = field(default=None, repr=False)
     #: What leaving that domain means, for the ``left_domain`` message.
     domain_text: str = ""
+    #: Reactions whose sign enters a branch's law within the branch (the hinge
+    #: pendulum's R_n, through |Q_n|): phi'' has a kink where one changes sign, and a
+    #: phase curve ends its panel there.  A reaction whose sign change ends the
+    #: branch's stage (a contact that would pull) or does not enter the law (the
+    #: wheel's friction force) is not one.  None: every reaction (safe, and slower).
+    kinks: tuple[str, ...] | None = None
 
     # -- branches and the generated contract --------------------------------
     @property

@@ -61,11 +61,13 @@ width heeds the last panel's estimate (scaled as h^11) as well as this one's,
 so that a tail coefficient passing near zero does not suggest a panel that
 fails.
 
-Where a reaction of the active branch changes sign inside a panel (the hinge's
-Q_n, where |Q_n| has its kink), the panel is redone to end at that sign change,
-so that no panel straddles a kink of F_b; the next one resumes the width chosen
-before.  (A reaction that enters F_b without a kink, the wheel's contact force
-F, is split the same way: the tracer cannot tell the two apart.)
+Where a reaction the model names in ``Model.kinks`` changes sign inside a panel
+(the hinge's R_n = m Q_n, where |Q_n| has its kink), the panel is redone to end
+at that sign change, so that no panel straddles a kink of F_b; the next one
+resumes the width chosen before.  A reaction that enters F_b without a kink
+(the wheel's contact force F) is not split at: a declared system's modes fix
+every sign their laws depend on, so its kinks are empty, and a model that does
+not say splits at every reaction.
 
 Events (the codes of :class:`phasemap.Event`)
 ---------------------------------------------
@@ -126,7 +128,9 @@ Global attributes: ``phasemap_kind = "phase_curve"``, the model, the version,
 For developers
 --------------
 Nothing: any model with one coordinate triple in its ``dynamics`` gets phase
-curves from its branch functions.  The names of the coordinate and its
+curves from its branch functions.  A hand-written model whose law bends where a
+reaction changes sign within one branch names that reaction in ``Model.kinks``
+(declared systems need not: their modes fix those signs).  The names of the coordinate and its
 velocity are read from the declaration.
 """
 
@@ -422,6 +426,8 @@ STICK = -1
 N_BRANCHES = 0
 DIRECTIONS = np.zeros(1)
 REACTIONS = np.zeros(1, dtype=np.int64)
+#: Indices into REACTIONS of the reactions whose sign change bends the law (Model.kinks).
+KINKS = np.zeros(0, dtype=np.int64)
 ROW = None
 RATE = None
 STILL = None
@@ -760,10 +766,10 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
             return ev.STEP_FAILURE, x, u, n_pan, panels, mode, h
         x1 = stop if last else x + sigma * hh
         if STILL(v, out, x1, u1, sigma, mode, coef_sign):
-            if not truncated and nr > 0:
-                # a reaction of the branch changes sign inside: end the panel there
+            if not truncated and KINKS.shape[0] > 0:
+                # a reaction with a kink in the law changes sign inside: end the panel there
                 first = 2.0
-                for q in range(nr):
+                for q in KINKS:
                     if react[q] * out[mode, REACTIONS[q]] < 0.0:
                         sg = 1.0 if react[q] > 0.0 else -1.0
                         lo, hi, _ul, _uh = ROOT(v, REACTIONS[q], sg, 0.0, 1.0, sg * react[q],
@@ -812,16 +818,16 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
         c_fld, c_th, c_u = -1, 2.0, math.nan
         guided = False
         slope = 0.0
-        dd = 1e-8
+        dd = 0.0
         if reason != _ZERO:
             lo, hi = 0.0, th_hi
             tol_b = 2.0 * EPS * max(abs(x), hh) / hh
             # Where a reaction or the coefficient of the stage's branch has changed
             # sign by th_hi, the state leaves the stage at or just past (by the
             # tolerance of the sign test) the first such zero: find it, bracket the
-            # change of classification within +-1e-8 of it, where u is a straight
-            # line to rounding, and bisect on that line instead of a Gauss pass
-            # per step.  Otherwise (or if the bracket fails) plain bisection.
+            # change of classification within +-1e-11 (else +-1e-8) of it, where u is a
+            # straight line to rounding, and bisect on that line instead of a Gauss
+            # pass per step.  Otherwise (or if the bracket fails) plain bisection.
             c_lo, c_ulo = 0.0, math.nan
             for q in range(nr + 1):
                 fld = REACTIONS[q] if q < nr else nx.COEF
@@ -841,14 +847,16 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
                                                True)
                     if h_c < c_th and u_c == u_c and ul_c == ul_c:
                         c_fld, c_th, c_u, c_lo, c_ulo = fld, h_c, u_c, l_c, ul_c
-            if c_th - dd > 0.0 and c_th + dd < th_hi:
-                u_d = REFINE(v, c_th + dd, x, hh, z, u, a, c, sigma, mode, u_ref, buf, tb, nv,
-                             a2, c2)
-                slope = (u_d - c_u) / dd
-                if STILL(v, out, x + sigma * (c_th - dd) * hh, c_u - slope * dd, sigma, mode,
-                         coef_sign) and not STILL(v, out, x + sigma * (c_th + dd) * hh, u_d,
-                                                  sigma, mode, coef_sign):
-                    lo, hi, guided = c_th - dd, c_th + dd, True
+            for d_try in (1e-11, 1e-8):  # the narrow bracket first: ten bisections fewer
+                if guided or not (c_th - d_try > 0.0 and c_th + d_try < th_hi):
+                    break
+                u_d = REFINE(v, c_th + d_try, x, hh, z, u, a, c, sigma, mode, u_ref, buf, tb,
+                             nv, a2, c2)
+                slope = (u_d - c_u) / d_try
+                if STILL(v, out, x + sigma * (c_th - d_try) * hh, c_u - slope * d_try, sigma,
+                         mode, coef_sign) and not STILL(v, out, x + sigma * (c_th + d_try) * hh,
+                                                        u_d, sigma, mode, coef_sign):
+                    lo, hi, guided, dd = c_th - d_try, c_th + d_try, True, d_try
             for _b in range(200):
                 if (hi - lo) * hh <= 2.0 * EPS * max(abs(x), hh):
                     break
@@ -1099,6 +1107,8 @@ def _kernel(m: Model):
         STICK=m.stick_branch, N_BRANCHES=len(m.branches), N_FIELDS=m.n_fields,
         DIRECTIONS=np.array(m.directions, dtype=np.float64),
         REACTIONS=np.arange(first_reaction, m.n_fields, dtype=np.int64),
+        KINKS=np.array([q for q, r in enumerate(m.reactions)
+                        if m.kinks is None or r.name in m.kinks], dtype=np.int64),
     )
     # RATE and VALUE (the branch row, per collocation node) are LLVM-inlined;
     # CLASSIFY, STILL, REFINE and ROOT (once per panel or event) are called, which

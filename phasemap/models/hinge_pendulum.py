@@ -137,6 +137,7 @@ MODEL = Model(
     ),
     coefficient=Variable("coef", "m2", "coefficient l^2 - delta^2 of the squared equation (33)",
                          "l^2-\\delta^2"),
+    kinks=("R_n",),  # R_n = m Q_n, and (34) holds |Q_n|
     velocity="omega",
     velocity_scale=velocity_scale,
     dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),)),
