@@ -104,10 +104,11 @@ def runners(name, values, t_end, before):
     return {
         "after": lambda: phase.phase_curve(name, **values),
         "after kernel": lambda: kernel(v, full["phi"], full["omega"], lo, hi, 50, 200, u_ref,
-                                       phase.RTOL, phase.H_MAX, 0.05 * phase.H_MAX),
+                                       phase.RTOL, phase.H_MAX,
+                                       phase.first_width(phase.RTOL, phase.H_MAX)),
         "after kernel, 2 points": lambda: kernel(v, full["phi"], full["omega"], lo, hi, 50, 2,
                                                  u_ref, phase.RTOL, phase.H_MAX,
-                                                 0.05 * phase.H_MAX),
+                                                 phase.first_width(phase.RTOL, phase.H_MAX)),
         "before": (lambda: before.phase_curve(name, **values)) if before else None,
         "simulate": lambda: phasemap.simulate(name, t_end, rtol=1e-12, method="DOP853",
                                               **values),
@@ -157,7 +158,7 @@ def equal_accuracy(repeat):
 
         def curve_end(rtol):
             _, st = kernel(v, full["phi"], full["omega"], lo, hi, 50, 2, u_ref, rtol,
-                           phase.H_MAX, 0.05 * phase.H_MAX)
+                           phase.H_MAX, phase.first_width(rtol, phase.H_MAX))
             return float(st[-1, 4]), float(st[-1, 5])
 
         def sim_end(method, rtol):
@@ -178,7 +179,7 @@ def equal_accuracy(repeat):
             errors["tracer", tol] = err(curve_end(tol))
             calls["tracer", tol] = lambda tol=tol: kernel(
                 v, full["phi"], full["omega"], lo, hi, 50, 2, u_ref, tol, phase.H_MAX,
-                0.05 * phase.H_MAX)
+                phase.first_width(tol, phase.H_MAX))
             for method in ("DOPRI5", "DOP853"):
                 integrate, _ = phasemap.integrate.kernels(m, method)
                 atol = tol * math.sqrt(u_ref)
@@ -335,8 +336,9 @@ def main():
               "the straight line omega^2 is within 1e-8 of the zero: 1-2 passes of 6 branch "
               "rows, 2.7 us a reversal of the wheel (4.5 us with the secant's 3-4 passes).  "
               "A zero of a reaction or of the coefficient takes the secant's 3-4 passes; a "
-              "change of classification is bisected on that straight line (about 25 "
-              "classifications, no Gauss pass).  That location used to bisect on Gauss "
+              "change of classification is bisected on that straight line, within 1e-11 of "
+              "the zero where classification confirms that bracket, else 1e-8 (about 15 or "
+              "25 classifications, no Gauss pass).  That location used to bisect on Gauss "
               "passes, about 50 per event (the ladder 130 us, the hinge 158 us at every "
               "level).  The wheel's cost is in its panels, about 2 us each (each part "
               "measured by repeating it inside the curve): 7 slopes of 2 branch rows each "
@@ -345,17 +347,16 @@ def main():
               "pass of 6 rows and the classification of the end (75 ns); DOP853 takes 12 "
               "right-hand sides per step.  The Newton iteration stops at NEWTON = 1e-3 "
               "rtol, not at 1e-14, so at loose rtol the third pass half the wheel's panels "
-              "took is gone.  At rtol 1e-14 the wheel swinging to rest computes 59 panels: "
-              "48 accepted, 7 rejected by the error estimate (12 before the width also "
-              "heeded the last panel's estimate scaled as h^11) and 4 redone to end where "
-              "the contact force F changes sign.  At err <= 1e-6 (rtol 1e-6) it computes "
-              "17: 14 accepted, bounded by the widest panel H_MAX = 0.5 rad and by the "
-              "estimate, which allows about 0.54 rad there (H_MAX = 1 measured slower), "
-              "over the 4.3 rad the wheel swings through; and 3 redone at a sign change of "
-              "F.  F enters the wheel's phi'' without a kink, but the tracer ends a panel "
-              "at every sign change of a reaction of the branch, because the hinge's "
-              "|Q_n| does; the redone panels and the extra ones the split makes are about "
-              "a third of the wheel's panel work at that level.",
+              "took is gone.  A panel ends at a reaction's sign change only where the model "
+              "names that reaction a kink of its law (`Model.kinks`: the hinge's R_n = m "
+              "Q_n, through |Q_n|; a declared system's modes fix every sign their laws use, "
+              "so its kinks are none).  The wheel's contact force F enters phi'' without a "
+              "kink, and the panels split at its sign changes (at rtol 1e-6, 3 of 17 redone "
+              "and 3 short ones added: about a third of the wheel's panel work there, "
+              "counted before this change) are gone.  The first panel is H_MAX = 0.5 rad "
+              "wide where rtol >= 1e-10 (`phase.first_width`), instead of growing from "
+              "H_MAX / 20: a fifth of the ladder's curve and 7-12 % of the wheel's and the "
+              "hinge's at those levels.",
               "", "| curve | check | " + " | ".join(
                   f"curve, err <= {lv:g} | simulate kernel | simulate kernel / curve"
                   for lv in LEVELS) + " |",
