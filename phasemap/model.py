@@ -365,6 +365,11 @@ class Model:
     def n_fields(self) -> int:
         return nx.FIRST_ACC + len(self.accelerations) + len(self.reactions)
 
+    @property
+    def first_reaction(self) -> int:
+        """The column of a branch row that holds the first reaction (the rest follow)."""
+        return nx.FIRST_ACC + len(self.accelerations)
+
     # -- validation --------------------------------------------------------
     def complete(self, values: Mapping[str, object]) -> dict[str, object]:
         """Validate user values (scalars or arrays) and fill in the defaults.

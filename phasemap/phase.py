@@ -1096,7 +1096,6 @@ def _kernel(m: Model):
     pos, vel, acc = _coordinate(m)
     slot = {n: i for i, n in enumerate(m.inputs)}
     acc_names = [a.name for a in m.accelerations]
-    first_reaction = nx.FIRST_ACC + len(acc_names)
     contract = m.contract
     consts = dict(
         POINT=contract.point, BRANCH_ROW=contract.branch_row_inline,
@@ -1106,7 +1105,7 @@ def _kernel(m: Model):
         OMEGA_DERIVED=any(d.source == vel for d in m.derived),
         STICK=m.stick_branch, N_BRANCHES=len(m.branches), N_FIELDS=m.n_fields,
         DIRECTIONS=np.array(m.directions, dtype=np.float64),
-        REACTIONS=np.arange(first_reaction, m.n_fields, dtype=np.int64),
+        REACTIONS=np.arange(m.first_reaction, m.n_fields, dtype=np.int64),
         KINKS=np.array([q for q, r in enumerate(m.reactions)
                         if m.kinks is None or r.name in m.kinks], dtype=np.int64),
     )

@@ -250,7 +250,7 @@ def _ladder_reference(p: Problem) -> Reference:
 
     v = m.input_vector(full)
     row = np.empty(m.n_fields)
-    cols = [nx.FIRST_ACC + len(m.accelerations) + i for i, r in enumerate(m.reactions)
+    cols = [m.first_reaction + i for i, r in enumerate(m.reactions)
             if r.name in ("N_floor", "N_wall")]
     b = m.branches.index("slide_pos" if s > 0 else "slide_neg")
 
@@ -353,7 +353,7 @@ class _Driver:
         self.out = np.empty((len(m.branches), m.n_fields))
         self.row = np.empty(m.n_fields)
         rea = [r.name for r in m.reactions]
-        base = nx.FIRST_ACC + len(m.accelerations)
+        base = m.first_reaction
         self.signed = {b: [(base + rea.index(n), sgn(bname))
                            for n, sgn in _SIGNED_REACTIONS[m.name].items()]
                        for b, bname in enumerate(m.branches)}
