@@ -100,6 +100,7 @@ FILL = None
 RHS = None
 SUMMARY = None
 CLASSIFY = None
+ON_STAGE = None
 STILL = None
 INDICATOR = None
 ZERO = None
@@ -195,8 +196,8 @@ def _rhs_template(v, y, mode, K, k):
     The branch row comes back as a tuple from the inlined ``BRANCH_ROW``.  The
     stage is addressed by its row index, not passed as a view ``K[k]``: a view
     made at each of the six (DOPRI5) or twelve (DOP853) calls per step costs a
-    reference-count increment and decrement (atomic), measured at a third of a
-    step of the hand wheel (BENCHMARKS.md, "Fate map of the wheel").
+    reference-count increment and decrement (atomic), measured at 40 % of a
+    step of the wheel (BENCHMARKS.md, "Fate map of the wheel").
     """
     FILL(v, y)
     r = BRANCH_ROW(v, mode)
@@ -224,12 +225,19 @@ def _classify_template(v, y, out):
     return SUMMARY(out)
 
 
+def _on_stage_template(n, adm, out, mode, coef_sign):
+    """A classification (``n``, ``adm`` of the rows ``out``) goes on with the stage of
+    branch ``mode``: the unique solution, the same branch, the sign ``coef_sign`` of
+    its coefficient kept (0: not watched)."""
+    return n == 1 and adm == mode and (coef_sign == 0.0
+                                       or out[mode, nx.COEF] * coef_sign > 0.0)
+
+
 def _still_template(v, yb, out, mode, coef_sign):
-    """The state ``yb`` is still on the stage of branch ``mode``: the unique solution, the
-    same branch, the coefficient's sign kept, inside the domain (``out``: its rows)."""
+    """The state ``yb`` is still on the stage of branch ``mode`` (ON_STAGE) and inside
+    the domain (``out``: its rows)."""
     n, adm, lost, sing = CLASSIFY(v, yb, out)
-    return n == 1 and adm == mode and (coef_sign == 0.0 or out[mode, nx.COEF]
-                                       * coef_sign > 0.0) and INSIDE(v, yb)
+    return ON_STAGE(n, adm, out, mode, coef_sign) and INSIDE(v, yb)
 
 
 def _indicator_template(v, r, theta, mode, col, yb):
@@ -279,11 +287,11 @@ def _locate_template(v, y, y1, h, t, mode, coef_sign, r, out, yb, zs):
     contact released), the coefficient of the senior derivative (a singular
     state).  Those crossing zero in the step are rooted on the dense output
     (Illinois: a few row evaluations each), and the earliest zero that
-    classification confirms (the stage 1e-11 or 1e-9 of the step before it,
-    not at it or up to 1e-9 after it) leaves a bracket of 1e-11 to 2e-9 for a
-    dozen bisection steps.  Anything else (a friction
-    cone left at stick, another branch turning admissible, the domain's edge)
-    is bisected from the whole step.
+    classification confirms (the stage 1e-11 or 1e-9 of the step before it, not
+    at it or 1e-13 or 1e-11 after it) leaves a bracket of 1e-11 to 1e-9 for a
+    dozen bisection steps.  Anything else (a friction cone left at stick,
+    another branch turning admissible, the domain's edge) is bisected from the
+    whole step.
     """
     nz = 0
     d = DIRECTIONS[mode]
@@ -313,18 +321,17 @@ def _locate_template(v, y, y1, h, t, mode, coef_sign, r, out, yb, zs):
         if b > 1.0:
             break
         # the zero tests admit 1e-12 of a quantity's scale (GUIDE 1), so the stage
-        # may end a little past the zero; past 1e-9 of the step, the zero does
-        # not end it (a reaction free in sign)
-        c_hi = b
-        for k in range(3):
+        # may end a little past the zero; still on it 1e-11 of the step past, the
+        # zero does not end it (a reaction free in sign)
+        for past in (0.0, 1e-13, 1e-11):
+            c_hi = min(1.0, b + past)
             _dense(r, c_hi, yb)
             if not STILL(v, yb, out, mode, coef_sign):
                 break
-            c_hi = min(1.0, b + 10.0 ** (2 * k - 13))
         else:
             continue
-        for k in range(2):
-            c_lo = max(0.0, a - 10.0 ** (2 * k - 11))
+        for before in (1e-11, 1e-9):
+            c_lo = max(0.0, a - before)
             _dense(r, c_lo, yb)
             if STILL(v, yb, out, mode, coef_sign):
                 lo, hi = c_lo, c_hi
@@ -488,8 +495,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         # v holds y1 and its derived inputs from the last stage of the step
         POINT(v, out)
         n, adm, lost, sing = SUMMARY(out)
-        still = n == 1 and adm == mode and (coef_sign == 0.0 or out[mode, nx.COEF]
-                                             * coef_sign > 0.0) and INSIDE(v, y1)
+        still = ON_STAGE(n, adm, out, mode, coef_sign) and INSIDE(v, y1)
         theta_end = 1.0
         # the dense output, only where it is used: to locate an event, at requested times
         if not still or (n_eval < t_eval.shape[0]
@@ -537,8 +543,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         if vel_zero:
             y[VEL_Y] = 0.0
             n, adm, lost, sing = CLASSIFY(v, y, out)
-        elif n != 1 or (adm == mode and (coef_sign == 0.0
-                                         or out[mode, nx.COEF] * coef_sign > 0.0)):
+        elif n != 1 or ON_STAGE(n, adm, out, mode, coef_sign):
             # Within 1e-12 of a boundary the tie rules can admit two branches
             # (stick by its inclusive friction limit, and a slip whose starting
             # acceleration just clears its tolerance) or none, and a state one
@@ -555,8 +560,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
                     break
                 _dense(r, theta, yb)
                 n2, adm2, lost2, sing2 = CLASSIFY(v, yb, out)
-                stage = n2 == 1 and adm2 == mode and (coef_sign == 0.0 or out[mode, nx.COEF]
-                                                      * coef_sign > 0.0)
+                stage = ON_STAGE(n2, adm2, out, mode, coef_sign)
                 if not stage and first_bad < 0.0:
                     first_bad = theta
                 if n2 == 1 and not stage:
@@ -743,7 +747,7 @@ def kernels(model: Model, method: str = DEFAULT_METHOD):
         STICK_IS_REST=dyn.stick_is_rest,
         LOWER=np.array([variables[n].lower for n in positions + velocities]),
         UPPER=np.array([variables[n].upper for n in positions + velocities]),
-        WATCH=np.array([nx.COEF, *range(nx.FIRST_ACC + len(acc_names), model.n_fields)],
+        WATCH=np.array([nx.COEF, *range(model.first_reaction, model.n_fields)],
                        dtype=np.int64),
     )
     # Per-step helpers: the small ones inline into their callers, so that a
@@ -755,6 +759,7 @@ def kernels(model: Model, method: str = DEFAULT_METHOD):
                                    ("RHS", _rhs_template, False),
                                    ("SUMMARY", _summary_template, True),
                                    ("CLASSIFY", _classify_template, True),
+                                   ("ON_STAGE", _on_stage_template, True),
                                    ("STILL", _still_template, True),
                                    ("INDICATOR", _indicator_template, True),
                                    ("ZERO", _zero_template, False),
