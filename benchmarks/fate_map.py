@@ -88,7 +88,7 @@ def _physics_loops(model):
     return rhs, classify
 
 
-def step_profile(model, cells: int = 1500, repeat: int = 5) -> dict:
+def step_profile(model, cells: int = 1500, repeat: int = 5, fit_cells: int = 400) -> dict:
     """One thread: ns per integrator step on random cells of the fate map, and the
     physics of a step (6 right-hand sides and one classification) timed alone."""
     integrate, _ = phasemap.integrate.kernels(model, "DOPRI5")
@@ -117,7 +117,7 @@ def step_profile(model, cells: int = 1500, repeat: int = 5) -> dict:
     # (no dispatch) as the fastest of 3 runs of 10
     repeat_cell = _repeat_loop(integrate)
     rows = []
-    for y0 in starts[:400]:
+    for y0 in starts[:fit_cells]:
         res = integrate(v, y0, o.t_end, o.rtol, o.atol, o.max_step, o.max_steps,
                         o.max_events, True, no_eval)
         best = math.inf
@@ -144,7 +144,8 @@ def step_profile(model, cells: int = 1500, repeat: int = 5) -> dict:
         t_point.append(time.perf_counter() - start)
     return dict(steps_per_cell=steps / cells, step_ns=1e9 * min(times) / steps,
                 rhs_ns=1e9 * min(t_rhs) / n, point_ns=1e9 * min(t_point) / n,
-                rows=len(model.branches), fit_step_ns=1e9 * fit[0], fit_event_us=1e6 * fit[1],
+                rows=len(model.branches), cells=cells, repeat=repeat, fit_cells=fit_cells,
+                fit_step_ns=1e9 * fit[0], fit_event_us=1e6 * fit[1],
                 fit_cell_us=1e6 * fit[2], events_per_cell=float(np.mean([r[1] for r in rows])))
 
 
@@ -241,9 +242,10 @@ def step_text(fm) -> str:
                      + (f", {pr[name]['fit_cell_us']:.1f} us per cell"
                         if abs(pr[name]['fit_cell_us']) >= 1.0 else ", under 1 us per cell")
                      for name in ("declared", "hand"))
-    return (f"Where a step goes (one thread, 1500 random cells of this map, "
-            f"{d['steps_per_cell']:.0f} steps per cell, fastest of 5): "
-            + "; ".join(parts) + ". Fitted over 400 of these cells, each timed alone "
+    return (f"Where a step goes (one thread, {d['cells']} random cells of this map, "
+            f"{d['steps_per_cell']:.0f} steps per cell, fastest of {d['repeat']}): "
+            + "; ".join(parts) + f". Fitted over {d['fit_cells']} of these cells, each timed "
+            "alone "
             f"(least squares on steps and events, {d['events_per_cell']:.1f} events per "
             f"cell counting its start and end): {fits}. The rest is the method (stages, error norm, step "
             "control with one power per step, Hairer's stiffness test), the start of each "
