@@ -724,7 +724,7 @@ def test_save_figure_into_a_missing_folder(tmp_path):
 # --------------------------------------------------------------------------- docs
 
 
-@pytest.mark.parametrize("module", ["phasemap.plot", "phasemap.accessor"])
+@pytest.mark.parametrize("module", ["phasemap.plot", "phasemap.accessor", "phasemap._dataset"])
 def test_docstring_examples(module):
     import doctest
     import importlib
