@@ -139,7 +139,8 @@ def _describe(model) -> dict:
         "variables": {v.name: _entry(v) for v in model.variables.values()},
         "accelerations": {v.name: _entry(v) for v in model.accelerations},
         "reactions": {v.name: _entry(v) for v in model.reactions},
-        "coefficient": [coef.name, *_entry(coef)] if coef is not None else None,
+        "coefficient": ([coef.name, coef.symbol, coef.units, coef.long_name]
+                        if coef is not None else None),
         "branches": list(model.branches),
     }
 

@@ -72,6 +72,7 @@ The package has one room per concern, as xarray's ``plot/`` has:
 :mod:`.maps`        maps, profiles and fate maps of an atlas
 :mod:`.motion`      phase curves and trajectories
 :mod:`.benchmark`   the work-precision figure
+:mod:`.command`     ``phasemap plot FILE.nc``: the figure of any file
 ==================  ==========================================================
 
 What a Dataset is (its kind) is decided in :mod:`phasemap._dataset`, without
@@ -79,7 +80,7 @@ matplotlib.  A new kind of figure needs: a ``<kind>_figure(ds, ..., ax=None,
 size=...)`` function that opens ``with style():``, gets its axes from
 :func:`.layout._axes` and its labels from :func:`axis_label`, takes category
 colours from :func:`category_colour` and puts legends above with
-:func:`.layout._legend_above`; a rule in
+:func:`.layout.legend_above`; a rule in
 :func:`phasemap._dataset.dataset_kind`; and a line in :func:`plot`.
 """
 
@@ -92,53 +93,68 @@ from matplotlib.figure import Figure
 
 from .._dataset import KINDS, dataset_kind as atlas_kind
 from .benchmark import METHOD_NAMES, SYSTEM_NAMES, work_precision_figure
-from .labels import axis_label, fixed_values, fixed_values_text, format_units, wrap
-from .layout import (WIDE, define_symbols, figure_legend, figure_texts,
-                     label_panels, legend_columns, outer_labels, panels, save_figure, width_of)
+from .labels import (axis_label, fixed_values, fixed_values_text, format_number, format_units,
+                     wrap)
+from .layout import (WIDE, angle_ticks, define_symbols, figure_legend, figure_texts, label_panels,
+                     legend_above, legend_columns, outer_labels, panels, save_figure, width_of)
 from .layout import _panel_width  # noqa: F401  (the tests measure a panel with it)
-from .maps import fate_figure, map_figure, mark_inverted_rests, profile_figure
-from .motion import phase_curve_figure, trajectory_figure
-from .style import (CATEGORY_COLOURS, CATEGORY_HATCHES, CYCLE, EVENT_MARKERS, GREY, MARKERS,
-                    OKABE_ITO, PALE_GREY, SIZES, STYLE, SUNSET, category_colour, category_hatch,
-                    style)
+from .maps import (draw_boundaries, fate_figure, map_figure, mark_inverted_rests,
+                   profile_figure)
+from .motion import event_handle, mark_event, phase_curve_figure, trajectory_figure
+from .style import (CATEGORY_COLOURS, CATEGORY_HATCHES, CYCLE, DASHES, EVENT_MARKERS, GREY,
+                    HALO, MARKERS, OKABE_ITO, OVERLAYS, PALE_GREY, SIZES, STYLE, SUNSET,
+                    category_colour, category_hatch, overlay_patch, stagnation_patch,
+                    stagnation_span, style)
 
 __all__ = [
     "CATEGORY_COLOURS",
     "CATEGORY_HATCHES",
     "CYCLE",
+    "DASHES",
     "EVENT_MARKERS",
     "GREY",
+    "HALO",
     "KINDS",
     "MARKERS",
     "METHOD_NAMES",
     "OKABE_ITO",
+    "OVERLAYS",
     "PALE_GREY",
     "SIZES",
     "STYLE",
     "SUNSET",
     "SYSTEM_NAMES",
     "WIDE",
+    "angle_ticks",
     "atlas_kind",
     "axis_label",
     "category_colour",
     "category_hatch",
     "define_symbols",
+    "draw_boundaries",
+    "event_handle",
     "fate_figure",
     "figure_legend",
     "figure_texts",
     "fixed_values",
     "fixed_values_text",
+    "format_number",
     "format_units",
     "label_panels",
+    "legend_above",
     "legend_columns",
     "map_figure",
+    "mark_event",
     "mark_inverted_rests",
     "outer_labels",
+    "overlay_patch",
     "panels",
     "phase_curve_figure",
     "plot",
     "profile_figure",
     "save_figure",
+    "stagnation_patch",
+    "stagnation_span",
     "style",
     "trajectory_figure",
     "width_of",

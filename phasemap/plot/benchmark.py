@@ -10,9 +10,9 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from .labels import _visible_length, wrap
-from .layout import (WIDE, _axes, _legend_above, _legend_fits, _legend_height, define_symbols,
+from .layout import (WIDE, _axes, legend_above, _legend_fits, _legend_height, define_symbols,
                      label_panels, legend_columns, width_of)
-from .style import CYCLE, MARKERS, _FONT, style
+from .style import CYCLE, MARKERS, _FONT, _OI, style
 
 # --------------------------------------------------------------------------- benchmarks
 
@@ -29,9 +29,32 @@ METHOD_NAMES = {
     "Radau": "SciPy Radau IIA, order 5",
     "LSODA": "SciPy LSODA",
 }
+
+#: One look per method: the colour and marker name the method's order (Dormand-Prince
+#: 5(4) blue circles, 8(5,3) orange squares), a filled marker and a solid line
+#: phasemap's implementation, a hollow marker and a dashed line SciPy's, so that each
+#: phasemap method stands beside its SciPy counterpart, in greyscale too.
+METHOD_LOOKS = {
+    "phasemap": (_OI["blue"], "o", True),
+    "RK45": (_OI["blue"], "o", False),
+    "phasemap_DOP853": (_OI["orange"], "s", True),
+    "DOP853": (_OI["orange"], "s", False),
+    "simulate": (_OI["sky_blue"], "D", True),
+    "phase_curve": (_OI["bluish_green"], "^", True),
+    "Radau": (_OI["reddish_purple"], "v", False),
+    "LSODA": (_OI["black"], "X", False),
+}
+
+
+def _method_look(method: str, j: int) -> dict:
+    colour, marker, own = METHOD_LOOKS.get(method, (CYCLE[j % len(CYCLE)],
+                                                    MARKERS[j % len(MARKERS)], True))
+    return {"color": colour, "marker": marker, "ms": 3.5, "lw": 1.0,
+            "ls": "solid" if own else (0, (3.0, 1.5)), "mfc": colour if own else "white",
+            "mec": colour, "mew": 0.9}
 #: The built-in work-precision problems as panel headings.
 SYSTEM_NAMES = {
-    "hinge_weightless": r"hinge pendulum, $g$ = 0",
+    "hinge_weightless": r"hinge pendulum, $g$ = 0 m s$^{-2}$",
     "hinge_pendulum": "hinge pendulum",
     "ladder": "ladder",
     "wheel": "wheel",
@@ -58,21 +81,25 @@ def _two_decades_shown(ax: Axes) -> None:
 
 
 def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final", ax=None,
-                          size: str | float = "two_column") -> Figure:
+                          size: str | float = "two_column", ylabel: str | None = None,
+                          key: Sequence[str] | None = None) -> Figure:
     r"""A work-precision diagram: error against run time, log-log, as in DiffEqDevTools.
 
     ``table`` is a list of dicts with keys ``method``, ``system``, ``tol``,
     ``error_final``, ``error_l2`` and ``seconds``, one per (method, system,
     tolerance), as :func:`phasemap.workprecision.work_precision` returns them.
     One panel per system (in order of appearance, lettered and named), one
-    line per method (same colour and marker in every panel, named as in
+    line per method (the same look in every panel, :data:`METHOD_LOOKS`: a
+    phasemap method beside its SciPy counterpart; named as in
     :data:`METHOD_NAMES`), points joined in order of tolerance.  When the rows
     carry ``seconds_min`` and ``seconds_max`` (the fastest and slowest of the
     timing rounds), each point sits at the fastest, which timing noise can
     only delay, and a bar reaches to the slowest.  ``error`` picks
     ``error_final`` (max norm of the state error at the final time) or
-    ``error_l2``.  Points whose error or time is not positive and finite
-    cannot be drawn on log axes and are left out.
+    ``error_l2``.  ``ylabel`` names the error with its unit (default: the
+    state's max norm, each component in its SI unit) and ``key`` defines the
+    symbols it uses (default: :math:`y`).  Points whose error or time is not
+    positive and finite cannot be drawn on log axes and are left out.
     """
     if error not in ("error_final", "error_l2"):
         raise ValueError(f"error must be 'error_final' or 'error_l2', got {error!r}")
@@ -99,8 +126,9 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
     spare = (ax is None and nrows * ncols > len(systems)
              and _legend_fits(names, width / ncols, panel_h))
     top = 0.0 if spare or ax is not None else _legend_height(names, 0.95 * width)
-    ylabel = (r"Final-state error $\|\Delta y\|_\infty$" if error == "error_final"
-              else r"$L_2$ error along the motion")
+    if ylabel is None:
+        ylabel = (r"Final-state error $\|\Delta y\|_\infty$ (SI)" if error == "error_final"
+                  else r"$L_2$ error along the motion (SI)")
     with style():
         axes = _axes(ax, nrows * ncols if spare else len(systems),
                      (width, top + 0.4 + panel_h * nrows), "work_precision_figure",
@@ -120,9 +148,10 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
                 if not pts:
                     continue
                 _, secs, errs, slow = (np.array(v) for v in zip(*pts))
-                colour, marker = CYCLE[j % len(CYCLE)], MARKERS[j % len(MARKERS)]
-                (line,) = a.plot(secs, errs, color=colour, marker=marker, ms=3.5, lw=1.0,
-                                 label=METHOD_NAMES.get(method, method), zorder=3)
+                look = _method_look(method, j)
+                colour = look["color"]
+                (line,) = a.plot(secs, errs, label=METHOD_NAMES.get(method, method), zorder=3,
+                                 **look)
                 if spread:
                     extra = np.where(np.isfinite(slow), np.maximum(slow - secs, 0.0), 0.0)
                     a.errorbar(secs, errs, xerr=[np.zeros_like(secs), extra], fmt="none",
@@ -159,9 +188,10 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
             fig.legend(lines, labels, loc="outside upper center",
                        ncols=legend_columns(labels, width * 0.95))
         else:
-            _legend_above(axes[0], lines)
+            legend_above(axes[0], lines)
         if ax is None:
-            key = [r"$y$: the state in SI units (rad, rad s$^{-1}$, m, m s$^{-1}$)"]
+            key = list(key) if key is not None else [
+                r"$y$: the state (rad, rad s$^{-1}$, m, m s$^{-1}$)"]
             if not long_x:
                 key.append("run time: per trajectory")
             if spread:

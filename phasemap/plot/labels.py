@@ -8,6 +8,7 @@ declared system is labelled as a built-in one is: ``$\theta$ (rad)``.
 
 from __future__ import annotations
 
+import json
 import re
 from typing import Sequence
 
@@ -78,6 +79,14 @@ def _symbol_and_units(ds: xr.Dataset, name: str) -> tuple[str, str | None] | Non
 _MOMENTS = ("rest", "start", "end", "final", "initial", "min", "max")
 
 
+def _units(ds: xr.Dataset, name: str) -> str | None:
+    """The units of ``name`` as the Dataset says them (see :func:`_symbol_and_units`)."""
+    known = _symbol_and_units(ds, name)
+    if known is not None:
+        return known[1]
+    return ds[name].attrs.get("units") if name in ds.variables else None
+
+
 def _math_words(text: str) -> str:
     return text.replace("_", r"\ ")
 
@@ -120,8 +129,9 @@ def _meaning_text(meaning: str) -> str:
 # --------------------------------------------------------------------------- what was held fixed
 
 
-def _number(value: float) -> str:
-    """A value for a label: 4 significant digits, a typographic minus."""
+def format_number(value: float) -> str:
+    """A value for a label: 4 significant digits, a typographic minus, powers of ten as
+    mathtext (``1.5e-13`` -> ``"$1.5\\times10^{-13}$"``)."""
     text = f"{float(value):.4g}"
     if "e" in text:
         mant, exp = text.split("e")
@@ -137,7 +147,7 @@ def _value_text(ds: xr.Dataset, name: str, value: float, initial: bool = False) 
         symbol = rf"{symbol}_0" if "_" not in symbol and "^" not in symbol else \
             rf"{{{symbol}}}_0"
     u = format_units(units)
-    return f"${symbol}$ = {_number(value)}" + (f" {u}" if u else "")
+    return f"${symbol}$ = {format_number(value)}" + (f" {u}" if u else "")
 
 
 def _fixed_items(ds: xr.Dataset) -> tuple[list[str], list[str]]:
@@ -157,7 +167,20 @@ def _fixed_items(ds: xr.Dataset) -> tuple[list[str], list[str]]:
             if initial and name == "x" and "xdot" in names:
                 continue  # the slider's position does not enter the equations
             items.append(_value_text(ds, name, value, initial))
+    horizon = _horizon(ds)
+    if horizon is not None:
+        out[1].append(rf"$t_\mathrm{{end}}$ = {format_number(horizon)} s")
     return out
+
+
+def _horizon(ds: xr.Dataset) -> float | None:
+    """The time horizon ``t_end`` of a fate map (from the scene that made it), else None."""
+    if "fate" not in ds.data_vars:
+        return None
+    try:
+        return float(json.loads(str(ds.attrs["phasemap_scene"]))["options"]["t_end"])
+    except (KeyError, TypeError, ValueError):
+        return None
 
 
 def fixed_values(ds: xr.Dataset) -> list[str]:
@@ -180,7 +203,11 @@ def _visible_length(text: str) -> float:
 
 
 def wrap(items: Sequence[str], width: float, sep: str = ", ") -> str:
-    """Join ``items`` with ``sep`` in lines no wider than ``width`` inches at the house font."""
+    """Join ``items`` with ``sep`` in lines no wider than ``width`` inches at the house font.
+
+    An item too long for a line of its own is broken at its spaces (never inside
+    ``$...$`` mathtext).
+    """
     per_line = max(10, int(width / (0.5 * _FONT / 72.0)))
     lines, line = [], ""
     for item in items:
@@ -190,9 +217,26 @@ def wrap(items: Sequence[str], width: float, sep: str = ", ") -> str:
             line = item
         else:
             line = candidate
+        while _visible_length(line) > per_line:
+            head, rest = _break(line, per_line)
+            if not rest:
+                break
+            lines.append(head)
+            line = rest
     if line:
         lines.append(line)
     return "\n".join(lines)
+
+
+def _break(text: str, per_line: int) -> tuple[str, str]:
+    """``text`` split at the last space outside mathtext that leaves a head of at most
+    ``per_line`` visible characters (at the first such space if none does)."""
+    spaces = [i for i, c in enumerate(text) if c == " " and text[:i].count("$") % 2 == 0]
+    fits = [i for i in spaces if _visible_length(text[:i]) <= per_line]
+    cut = fits[-1] if fits else (spaces[0] if spaces else None)
+    if cut is None:
+        return text, ""
+    return text[:cut], text[cut + 1:]
 
 
 def fixed_values_text(ds: xr.Dataset, width: float | None = None) -> str:

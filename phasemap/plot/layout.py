@@ -18,11 +18,12 @@ import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, MultipleLocator
+from matplotlib.transforms import offset_copy
 
 from .._version import __version__
 from ..atlas import atomic_path, destination
-from .labels import _symbol_and_units, _visible_length, axis_label, wrap
-from .style import _FONT, SIZES, style
+from .labels import _units, _visible_length, axis_label, wrap
+from .style import _FONT, SIZES, TITLE_PAD, style
 
 def _annotate(axes: Sequence[Axes], text: str, own_figure: bool) -> None:
     """Put ``text`` (what was held fixed) above the figure.
@@ -39,31 +40,32 @@ def _annotate(axes: Sequence[Axes], text: str, own_figure: bool) -> None:
         axes[0].get_figure(root=False).suptitle(text, x=0.01, ha="left",
                                                 fontsize=_FONT, linespacing=1.3)
         return
+    legend = axes[0].get_legend()
+    if legend is not None and getattr(legend, "_phasemap_above", False):
+        legend.set_title(text)
+        legend.get_title().set_fontsize(_FONT)
+        return
     _title(axes[0], text)
 
 
 def _title(ax: Axes, text: str, prepend: bool = False) -> None:
-    """Set (or with ``prepend``, prefix) the left-aligned heading of ``ax``.
+    """Set (or with ``prepend``, prefix) the panel's heading: its left-aligned title.
 
-    The heading is the title of the legend above ``ax`` when there is one,
-    so that legend and heading never overlap; otherwise the axes' title.
+    The heading sits :data:`TITLE_PAD` above the panel, and a legend above the
+    panel (:func:`legend_above`) moves up to clear it.
     """
-    legend = ax.get_legend()
-    if legend is not None and getattr(legend, "_phasemap_above", False):
-        old = legend.get_title().get_text()
-        legend.set_title(f"{text} {old}".rstrip() if prepend else text)
-        legend.get_title().set_fontsize(_FONT)
-        return
     old = ax.get_title(loc="left")
     ax.set_title(f"{text} {old}".rstrip() if prepend else text, loc="left")
+    _clear_heading(ax)
 
 
 def label_panels(axes: Sequence[Axes], start: int = 0) -> None:
-    """Letter the panels (a), (b), ... at the start of each one's left-aligned heading.
+    """Letter the panels (a), (b), ... at the start of each one's heading.
 
-    The letter goes where :func:`_title` puts a heading: into the title of a
-    legend above the panel, else into the panel's title, so that letters sit
-    at the top left of every panel in every figure.
+    The letter opens the panel's left-aligned title, so that every letter
+    sits at one offset from the top left corner of its own panel, in every
+    figure, whatever legend stands above the panel (it stands above the
+    letter).
     """
     for i, ax in enumerate(axes):
         _title(ax, f"({chr(ord('a') + start + i)})", prepend=True)
@@ -241,59 +243,92 @@ def _legend_height(labels: Sequence[str], width: float) -> float:
     return 0.1 + _legend_size(labels, legend_columns(labels, width))[1]
 
 
-def _legend_above(ax: Axes, handles: list, labels: list[str] | None = None,
-                  title: str | None = None):
+def legend_above(ax: Axes, handles: Sequence, labels: Sequence[str] | None = None, *,
+                 title: str | None = None, ncols: int | None = None):
     """A frameless legend above ``ax``, left-aligned with it, in as many columns as fit.
 
-    ``title`` (what was held fixed, a panel letter) heads the legend, so that
-    heading and entries never overlap.  With no handles the title becomes the
-    axes' left title.
+    ``title`` (what was held fixed) heads the legend, so that heading and
+    entries never overlap; the panel's own heading (its letter) stays between
+    the legend and the panel, at one offset from the panel.  ``ncols``
+    defaults to as many columns as fit the panel's width.  With no handles the
+    title becomes the panel's heading.  Any legend already on ``ax`` is
+    replaced.
     """
-    if labels is None:
-        labels = [h.get_label() for h in handles]
+    handles = list(handles)
+    labels = [h.get_label() for h in handles] if labels is None else list(labels)
+    if ax.get_legend() is not None:
+        ax.get_legend().remove()
     if not handles:
         if title:
-            ax.set_title(title, loc="left")
+            _title(ax, title)
         return None
-    width = ax.get_figure(root=True).get_figwidth() * ax.get_position().width * 0.95
-    legend = ax.legend(handles, labels, loc="lower left", bbox_to_anchor=(0.0, 1.02),
-                       ncols=legend_columns(labels, width), borderaxespad=0.0, title=title,
-                       alignment="left")
+    if ncols is None:
+        width = ax.get_figure(root=True).get_figwidth() * ax.get_position().width * 0.95
+        ncols = legend_columns(labels, width)
+    legend = ax.legend(handles, labels, loc="lower left", ncols=ncols, borderaxespad=0.0,
+                       title=title, alignment="left")
     legend.get_title().set_fontsize(_FONT)
     legend._phasemap_above = True
+    _clear_heading(ax)
     return legend
 
 
+
+#: The height (points) of one line of a panel's heading: the house font with a sub- or
+#: superscript.
+_LINE = 1.45 * _FONT
+
+
+def _clear_heading(ax: Axes) -> None:
+    """Anchor the legend above ``ax`` (if any) just above the panel's heading."""
+    legend = ax.get_legend()
+    if legend is None or not getattr(legend, "_phasemap_above", False):
+        return
+    heading = ax.get_title(loc="left")
+    lines = heading.count("\n") + 1 if heading else 0
+    rise = TITLE_PAD + lines * _LINE if lines else 2.0
+    fig = ax.get_figure(root=True)
+    legend.set_bbox_to_anchor((0.0, 1.0), transform=offset_copy(ax.transAxes, fig=fig, x=0.0,
+                                                                y=rise, units="points"))
+
+
+def _pi_text(k: int, den: int = 4) -> str:
+    """``k`` pi / ``den`` as mathtext, reduced: ``"0"``, ``"$\\pi/2$"``, ``"$-2\\pi$"``."""
+    if k == 0:
+        return "0"
+    sign = "-" if k < 0 else ""
+    k = abs(k)
+    g = math.gcd(k, den)
+    num, den = k // g, den // g
+    head = r"\pi" if num == 1 else rf"{num}\pi"
+    return f"${sign}{head}$" if den == 1 else f"${sign}{head}/{den}$"
+
+
 def _angle_ticks(ax: Axes, axis: str, lo: float, hi: float) -> None:
-    """Tick an angle axis in rad at multiples of pi/4, pi/2 or pi when it spans pi or more."""
+    """Tick an angle axis in rad at multiples of pi/4, pi/2, pi, 2 pi... when it spans pi or
+    more, with at most about eight ticks."""
     span = hi - lo
     if not (math.isfinite(span) and span >= math.pi * 0.99):
         return
+    # quarter turns of pi at the finest; doubled until at most 8 ticks fit the span
     quarters = 1 if span < 1.5 * math.pi else 2 if span <= 4.5 * math.pi else 4
-    step = quarters * math.pi / 4
-
-    def fmt(x, _pos):
-        k = round(x / (math.pi / 4))
-        if k == 0:
-            return "0"
-        sign = "-" if k < 0 else ""
-        k = abs(k)
-        g = math.gcd(k, 4)
-        num, den = k // g, 4 // g
-        head = r"\pi" if num == 1 else rf"{num}\pi"
-        return f"${sign}{head}$" if den == 1 else f"${sign}{head}/{den}$"
-
+    while span / (quarters * math.pi / 4) > 8:
+        quarters *= 2
     target = ax.xaxis if axis == "x" else ax.yaxis
-    target.set_major_locator(MultipleLocator(step))
-    target.set_major_formatter(FuncFormatter(fmt))
+    target.set_major_locator(MultipleLocator(quarters * math.pi / 4))
+    target.set_major_formatter(FuncFormatter(lambda x, _pos: _pi_text(round(x / (math.pi / 4)))))
+
+
+def angle_ticks(ax: Axes, axis: str = "x") -> None:
+    """Tick an angle axis of ``ax`` at multiples of pi over its present limits (when they
+    span pi or more), so that one quantity is ticked alike in every panel."""
+    lo, hi = sorted(ax.get_xlim() if axis == "x" else ax.get_ylim())
+    _angle_ticks(ax, axis, lo, hi)
 
 
 def _label_axis(ax: Axes, ds: xr.Dataset, axis: str, name: str, values=None) -> None:
     (ax.set_xlabel if axis == "x" else ax.set_ylabel)(axis_label(ds, name))
-    units = ds[name].attrs.get("units") if name in ds.variables else None
-    known = _symbol_and_units(ds, name)
-    if known is not None:
-        units = known[1]
+    units = _units(ds, name)
     if units == "rad" and values is not None and np.size(values):
         finite = np.asarray(values, dtype=float)
         finite = finite[np.isfinite(finite)]

@@ -10,12 +10,13 @@ import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
 
 from .. import events as _events
 from .._dataset import is_categorical
 from .labels import _coord, _flags, _require, _squared_label, _meaning_text, axis_label, \
     fixed_values_text
-from .layout import (_annotate, _axes, _label_axis, _legend_above, _panel_width, label_panels,
+from .layout import (_annotate, _axes, _label_axis, legend_above, _panel_width, label_panels,
                      width_of)
 from .style import EVENT_MARKERS, GREY, PALE_GREY, _OI, _TERMINAL, style
 
@@ -38,11 +39,24 @@ def _event_style(name: str) -> dict:
         return {"marker": marker, "ms": 6.0 if marker != "*" else 8.0,
                 "mfc": mcolors.to_rgba(colour, 0.75), "mec": _OI["black"], "mew": 0.6,
                 "ls": "none", "zorder": 5, "clip_on": False}
-    hollow = name in ("start", "stick", "slip", "switch")
-    return {"marker": marker, "ms": 3.5 if name != "reversal" else 3.0,
-            "mfc": "white" if hollow else colour,
-            "mec": _OI["black"] if name == "start" else colour, "mew": 0.8, "ls": "none",
-            "zorder": 6, "clip_on": False}
+    # the events along a motion are told apart by shape, not colour: black edges, hollow
+    # but for the reversal dot; the start a ring wider than a dot, drawn over one
+    start = name == "start"
+    return {"marker": marker, "ms": 5.0 if start else 3.0 if name == "reversal" else 3.5,
+            "mfc": colour, "mec": _OI["black"], "mew": 0.8, "ls": "none",
+            "zorder": 7 if start else 6, "clip_on": False}
+
+
+def event_handle(name: str, label: str | None = None) -> Line2D:
+    """The legend entry of an event of kind ``name`` (``"rest"``, ``"reversal"``...), in its
+    one look; ``label`` defaults to the kind."""
+    return Line2D([], [], label=_meaning_text(name) if label is None else label,
+                  **_event_style(name))
+
+
+def mark_event(ax: Axes, name: str, x, y) -> None:
+    """Mark events of kind ``name`` at ``x``, ``y`` on ``ax`` in their one look."""
+    ax.plot(np.atleast_1d(x), np.atleast_1d(y), **_event_style(name))
 
 
 def _event_handles(names: Sequence[str]) -> list[Line2D]:
@@ -110,7 +124,7 @@ def phase_curve_figure(ds: xr.Dataset, *, squared: bool = False, ax=None,
             _zero_line(a, y)
         _label_axis(a, ds, "x", "phi", phi)
         a.set_ylabel(_squared_label(ds, "omega") if squared else axis_label(ds, "omega"))
-        _legend_above(a, _event_handles(names),
+        legend_above(a, _event_handles(names),
                       title=fixed_values_text(ds, _panel_width(a)) or None)
     return a.figure
 
@@ -180,6 +194,9 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
             for a, name in zip(axes, states):
                 values = np.asarray(ds[name].values, float)
                 a.plot(t, values, color=_OI["black"], lw=1.0, zorder=3)
+                # a short panel: at least three labelled ticks (angles spanning pi or more
+                # get multiples of pi from _label_axis)
+                a.yaxis.set_major_locator(MaxNLocator(nbins=4, min_n_ticks=3))
                 _mark_events(a, ds, kinds, "t", name)
                 for tt in terminal:
                     a.axvline(tt, color=GREY, lw=0.6, ls="--", zorder=1)
@@ -188,11 +205,13 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
                     a.tick_params(axis="x", labelbottom=False)
             _label_axis(axes[-1], ds, "x", "t")
             if t.size > 1:
-                axes[-1].set_xlim(t.min(), t.max())
+                # room at the right for a terminal event's marker at the last time
+                end = t.max() + (0.025 * (t.max() - t.min()) if terminal else 0.0)
+                axes[-1].set_xlim(t.min(), end)
             if len(axes) > 1:
                 axes[0].figure.align_ylabels(axes)
         shown = [k for k in kinds if phase_plane or k != "start"]
-        _legend_above(axes[0], _event_handles(shown))
+        legend_above(axes[0], _event_handles(shown))
         if len(axes) > 1:
             label_panels(axes)
         _annotate(axes, fixed_values_text(ds, width * 0.97 if ax is None and len(axes) > 1

@@ -7,10 +7,12 @@ inconsistency or a lost contact looks the same wherever it is drawn.
 from __future__ import annotations
 
 import contextlib
+from dataclasses import dataclass
 from typing import Sequence
 
 import matplotlib as mpl
 import matplotlib.colors as mcolors
+from matplotlib import patheffects
 from matplotlib.patches import Patch
 
 from .. import events as _events
@@ -36,6 +38,8 @@ _OI = OKABE_ITO
 #: The ordinary class (a unique solution, a flag that is off): out of the way.
 PALE_GREY = "#DDDDDD"
 GREY = "#999999"
+#: Stagnation's hatch: dark enough over every class, lighter than a black curve over it.
+DARK_GREY = "#555555"
 
 #: One colour per category meaning, the same in every figure.
 CATEGORY_COLOURS = {
@@ -44,7 +48,7 @@ CATEGORY_COLOURS = {
     "unique": PALE_GREY,
     "two": _OI["blue"],
     "continuum": _OI["reddish_purple"],
-    "three_or_more": _OI["orange"],
+    "three_or_more": _OI["yellow"],
     # yes/no flags
     "no": PALE_GREY,
     # fates (the terminal events)
@@ -61,9 +65,10 @@ CATEGORY_COLOURS = {
     "stiff": GREY,
 }
 
-#: The colour of ``yes`` in a yes/no layer, by layer.
+#: The colour of ``yes`` in a yes/no layer, by layer: a stagnation map looks as the
+#: stagnation overlay does on the ordinary class (pale grey, hatched ``////``).
 FLAG_COLOURS = {
-    "stagnation": _OI["bluish_green"],
+    "stagnation": PALE_GREY,
     "contact_lost": _OI["sky_blue"],
     "singular": _OI["black"],
 }
@@ -88,6 +93,34 @@ CATEGORY_HATCHES = {
 #: The colour of a category's hatch lines, by meaning (default white).
 HATCH_COLOURS = {"contact_lost": _OI["blue"], "three_or_more": _OI["black"]}
 
+
+@dataclass(frozen=True)
+class Overlay:
+    """The look of a yes/no layer drawn over a map: hatch, colour, outline, legend label."""
+
+    hatch: str
+    colour: str
+    linestyle: str
+    label: str
+
+
+#: The overlays, one look and one name each in every figure: stagnation (rest is
+#: possible) dark grey ``////``, a contact that would have to pull blue ``\\``.  The
+#: 1-D form of stagnation (a zone along one axis, a stick phase in time) is the same
+#: hatch (:func:`stagnation_span`).
+OVERLAYS = {
+    "stagnation": Overlay("////", DARK_GREY, "solid", "stagnation"),
+    "contact_lost": Overlay("\\\\\\\\", _OI["blue"], "dashed", "a contact would pull"),
+}
+
+#: Reference curves (closed forms, thresholds, printed formulas) are black; they are
+#: told apart by their dashes, in this order, never by colour, and a white halo
+#: (:data:`HALO`) keeps them visible over any class colour and in greyscale.
+DASHES = ["solid", (0, (4.0, 1.5)), (0, (1.0, 1.3)), (0, (6.0, 1.5, 1.0, 1.5)),
+          (0, (2.5, 1.2, 1.0, 1.2, 1.0, 1.2))]
+#: A white outline under a reference curve.
+HALO = [patheffects.withStroke(linewidth=2.4, foreground="white"), patheffects.Normal()]
+
 #: Colours for anything else, in order (methods of a benchmark, unknown categories).
 CYCLE = [_OI[k] for k in ("blue", "orange", "bluish_green", "vermillion", "reddish_purple",
                           "sky_blue", "black", "yellow")]
@@ -103,9 +136,9 @@ SEQUENTIAL = "viridis"
 EVENT_MARKERS = {
     "start": ("o", "white"),
     "reversal": ("o", _OI["black"]),
-    "stick": ("s", _OI["bluish_green"]),
-    "slip": ("^", _OI["orange"]),
-    "switch": ("d", _OI["reddish_purple"]),
+    "stick": ("s", "white"),
+    "slip": ("^", "white"),
+    "switch": ("d", "white"),
     "rest": ("s", _OI["bluish_green"]),
     "contact_lost": ("^", _OI["sky_blue"]),
     "no_solution": ("X", _OI["vermillion"]),
@@ -124,6 +157,8 @@ _TERMINAL = {e.name.lower() for e in _events.Event if e.terminal}
 MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*"]
 
 _FONT = 8.0
+#: The gap (points) between a panel and its heading.
+TITLE_PAD = 3.0
 #: The rcParams every figure is drawn with (applied with :func:`style`).
 STYLE: dict = {
     "font.family": "sans-serif",
@@ -133,7 +168,7 @@ STYLE: dict = {
     "axes.labelsize": _FONT,
     "axes.titlesize": _FONT,
     "axes.titlelocation": "left",
-    "axes.titlepad": 3.0,
+    "axes.titlepad": TITLE_PAD,
     "xtick.labelsize": _FONT,
     "ytick.labelsize": _FONT,
     "legend.fontsize": _FONT,
@@ -194,6 +229,27 @@ def style() -> contextlib.AbstractContextManager:
     return mpl.rc_context(STYLE)
 
 
+def stagnation_span(ax, lo: float, hi: float, axis: str = "x", **kw):
+    """Hatch the band ``lo``..``hi`` along ``axis`` as stagnation (rest possible, or a
+    stick phase): the look of the stagnation overlay in one dimension."""
+    look = OVERLAYS["stagnation"]
+    span = ax.axvspan if axis == "x" else ax.axhspan
+    return span(lo, hi, facecolor="none", hatch=look.hatch, hatchcolor=look.colour,
+                edgecolor="none", linewidth=0, zorder=0, **kw)
+
+
+def overlay_patch(name: str, label: str | None = None) -> Patch:
+    """The legend entry of overlay ``name`` (:data:`OVERLAYS`), on a map or as a span."""
+    look = OVERLAYS[name]
+    return Patch(facecolor="none", edgecolor=look.colour, hatch=look.hatch, linewidth=0.6,
+                 linestyle=look.linestyle, label=look.label if label is None else label)
+
+
+def stagnation_patch(label: str | None = None) -> Patch:
+    """The legend entry of :func:`stagnation_span` (and of the stagnation overlay)."""
+    return overlay_patch("stagnation", label)
+
+
 def category_colour(meaning: str, layer: str | None = None, used: Sequence[str] = ()) -> str:
     """The colour of category ``meaning`` of ``layer``: the same in every figure."""
     if meaning == "yes" and layer in FLAG_COLOURS:
@@ -206,14 +262,22 @@ def category_colour(meaning: str, layer: str | None = None, used: Sequence[str] 
     return CYCLE[len(used) % len(CYCLE)]
 
 
-def category_hatch(meaning: str) -> tuple[str | None, str]:
-    """The hatch of category ``meaning`` and its colour (None: solid); see :data:`CATEGORY_HATCHES`."""
+def category_hatch(meaning: str, layer: str | None = None) -> tuple[str | None, str]:
+    """The hatch of category ``meaning`` of ``layer`` and its colour (None: solid).
+
+    See :data:`CATEGORY_HATCHES`; ``yes`` in a layer that has an overlay look
+    (:data:`OVERLAYS`) is hatched as that overlay.
+    """
+    if meaning == "yes" and layer in OVERLAYS and layer in FLAG_COLOURS \
+            and FLAG_COLOURS[layer] == PALE_GREY:
+        return OVERLAYS[layer].hatch, OVERLAYS[layer].colour
     return CATEGORY_HATCHES.get(meaning), HATCH_COLOURS.get(meaning, "white")
 
 
-def _patch(colour: str, label: str, meaning: str | None = None) -> Patch:
+def _patch(colour: str, label: str, meaning: str | None = None, layer: str | None = None
+           ) -> Patch:
     light = colour.upper() in (PALE_GREY, _OI["yellow"].upper(), "WHITE", "#FFFFFF")
-    hatch, hatch_colour = category_hatch(meaning) if meaning else (None, "white")
+    hatch, hatch_colour = category_hatch(meaning, layer) if meaning else (None, "white")
     return Patch(facecolor=colour, edgecolor=GREY if light else colour, linewidth=0.4,
                  hatch=hatch, hatchcolor=hatch_colour, label=label)
 
