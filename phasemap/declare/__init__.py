@@ -93,6 +93,14 @@ Limits (clear errors, not silent failures)
   family of more than one parameter are refused.
 * Contact surfaces are flat (a line ``normal . point = offset``).
 
+Conditions for the bifurcation tracer
+-------------------------------------
+:func:`conditions` lists, per candidate branch, every scalar condition that
+decides whether it is admissible (coefficient, normal forces, friction limits,
+start from rest, gap, family, the joint's roots, the domain) as sympy
+expressions without poles, built from the same contact-law requirements as
+the generated code.  See :mod:`phasemap.declare.conditions`.
+
 The package
 -----------
 ``api``         the quantities: Parameter, Coordinate, Rate, Body
@@ -105,15 +113,18 @@ The package
 ``solvers``     one mode combination solved: regular, saddle point, indeterminate, joint
 ``derivation``  equations, candidates and solutions together (one derivation)
 ``emit``        the generated numba module
+``conditions``  the admissibility conditions as expressions (for the tracer)
 ``build``       the kernel cache and the Model
 """
 
 from __future__ import annotations
 
 from .api import Body, Coordinate, Parameter, Rate
+from .conditions import Condition, conditions
 from .contacts import EdgeContact, Joint, PointContact, RollingContact
 from .law import ContactLaw
 from .system import System, load
 
 __all__ = ["Parameter", "Rate", "Coordinate", "Body", "PointContact", "EdgeContact",
-           "RollingContact", "Joint", "ContactLaw", "System", "load"]
+           "RollingContact", "Joint", "ContactLaw", "System", "load",
+           "Condition", "conditions"]

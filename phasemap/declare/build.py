@@ -61,7 +61,10 @@ def cache_stem(S) -> str:
     import sympy as sp
 
     h = hashlib.sha256(canonical(S).encode())
-    for f in sorted(pathlib.Path(__file__).parent.glob("*.py")) + [pathlib.Path(nx.__file__)]:
+    # every module of the package but the conditions, which the generated text does not use
+    sources = [f for f in sorted(pathlib.Path(__file__).parent.glob("*.py"))
+               if f.name != "conditions.py"]
+    for f in sources + [pathlib.Path(nx.__file__)]:
         h.update(f.read_bytes())
     h.update(f"{sp.__version__} {numba.__version__} {np.__version__} {__version__}".encode())
     return f"{S.name}_declared_{h.hexdigest()[:16]}"

@@ -164,10 +164,10 @@ class EdgeContact(PointContact):
         w = vel(a)
         # the body's material velocity at the corner
         vK = [vel(P[0]) - w * (K[1] - P[1]), vel(P[1]) + w * (K[0] - P[0])]
-        domain = []
+        domain = {}
         if self.extent is not None:
             along = e[0] * (K[0] - P[0]) + e[1] * (K[1] - P[1])
-            domain = [along - sym(self.extent[0]), sym(self.extent[1]) - along]
+            domain = {"low": along - sym(self.extent[0]), "high": sym(self.extent[1]) - along}
         return Kinematics(channels={"N": _dot(nv, vK), "T": _dot(e, vK)},
                           gaps=[nv[0] * (P[0] - K[0]) + nv[1] * (P[1] - K[1])],
                           constraints=("N",), domain=domain)

@@ -49,8 +49,20 @@ class Derivation:
         return sp.sympify(e).xreplace(trig)
 
 
+_DERIVED: dict[int, tuple] = {}
+
+
 def derive(S) -> Derivation:
-    """Derive the equations of ``S`` and solve every mode combination (sympy)."""
+    """Derive the equations of ``S`` and solve every mode combination (sympy; once per
+    declaration object)."""
+    cached = _DERIVED.get(id(S))
+    if cached is None or cached[0] is not S:
+        cached = (S, _derive(S))
+        _DERIVED[id(S)] = cached
+    return cached[1]
+
+
+def _derive(S) -> Derivation:
     eqs = Equations(S)
     eqs.velocity, eqs.kappa = slip_velocity(eqs)
     rows = candidates(S, eqs.kappa)

@@ -223,31 +223,37 @@ def _restrict(w, form, fam, coeffs):
     w.lines.append(f"_k_lo, _k_hi = restrict_affine({g0} + {shift}, _k_sl, _k_lo, _k_hi)")
 
 
-def accelerations(sol, L, Ls):
+def accelerations(sol, L, Ls, over=True):
     """The accelerations and their scales, in the unknowns ``L`` and their scales ``Ls``
-    (solved together with the reactions, in ``_k_D`` and the moment ``_k_mu``)."""
+    (solved together with the reactions: in ``_k_D`` and the moment ``_k_mu``).
+
+    ``over=False``: the numerators over the common denominator instead, ``dM D``
+    (``D`` the row's determinant) or, solved together, ``D``; ``L`` and ``Ls`` are
+    then the numerators over ``D``, and the scales are multiplied by ``|dM D|``.
+    """
     import sympy as sp
 
     n, k = sol.problem.n, len(L)
+    one = sp.Integer(1)
     if sol.qnums is None:
-        gen = [sol.hx[a] + sum((sol.W[a, i] * L[i] for i in range(k)), sp.Integer(0))
+        unit, unit_s, den = (one, one, sol.dM) if over else (sol.D, sp.Abs(sol.D), one)
+        gen = [unit * sol.hx[a] + sum((sol.W[a, i] * L[i] for i in range(k)), sp.Integer(0))
                for a in range(n)]
-        gens = [scale_of(sol.hx[a]) + sum((scale_of(sol.W[a, i]) * Ls[i] for i in range(k)),
-                                          sp.Integer(0)) for a in range(n)]
-        acc = [sum((sol.aM[j, a] * gen[a] for a in range(n)), sp.Integer(0)) / sol.dM
+        gens = [scale_of(sol.hx[a]) * unit_s + sum(
+            (scale_of(sol.W[a, i]) * Ls[i] for i in range(k)), sp.Integer(0)) for a in range(n)]
+        acc = [sum((sol.aM[j, a] * gen[a] for a in range(n)), sp.Integer(0)) / den
                for j in range(n)]
         accs = [sum((scale_of(sol.aM[j, a]) * gens[a] for a in range(n)), sp.Integer(0))
-                / sp.Abs(sol.dM) for j in range(n)]
+                / sp.Abs(den) for j in range(n)]
         return acc, accs
-    Dsym = sp.Symbol("_k_D", real=True)
+    D = sp.Symbol("_k_D", real=True) if over else one
     mu = sol.problem.squared.moment if sol.problem.squared is not None else None
     if mu is None:
-        return ([e / Dsym for e in sol.qnums],
-                [scale_of(e) / sp.Abs(Dsym) for e in sol.qnums])
+        return [e / D for e in sol.qnums], [scale_of(e) / sp.Abs(D) for e in sol.qnums]
     q0 = [e.subs(mu, 0) for e in sol.qnums]
     q1 = [sp.diff(e, mu) for e in sol.qnums]
-    return ([(a + b * mu) / Dsym for a, b in zip(q0, q1)],
-            [(scale_of(a) + scale_of(b) * sp.Abs(mu)) / sp.Abs(Dsym) for a, b in zip(q0, q1)])
+    return ([(a + b * mu) / D for a, b in zip(q0, q1)],
+            [(scale_of(a) + scale_of(b) * sp.Abs(mu)) / sp.Abs(D) for a, b in zip(q0, q1)])
 
 
 def _accelerations(w, sol, L, Ls):
@@ -258,16 +264,16 @@ def _accelerations(w, sol, L, Ls):
     return Q
 
 
-def channel_acceleration(eqs, sol, contact, key, Q, Qs):
+def channel_acceleration(eqs, sol, contact, key, Q, Qs, unit=1):
     """A channel's acceleration ``w . Q + bias`` and its scale, in the accelerations ``Q``
-    and their scales ``Qs``."""
+    and their scales ``Qs`` (numerators over ``unit``: the bias times ``unit``)."""
     import sympy as sp
 
     w, b, _ = eqs.channels[contact][key]
     b = b.xreplace(sol.problem.zero)
     n = sol.problem.n
-    a = sum((w[j] * Q[j] for j in range(n)), sp.Integer(0)) + b
-    s = sum((scale_of(w[j]) * Qs[j] for j in range(n)), sp.Integer(0)) + scale_of(b)
+    a = sum((w[j] * Q[j] for j in range(n)), sp.Integer(0)) + b * unit
+    s = sum((scale_of(w[j]) * Qs[j] for j in range(n)), sp.Integer(0)) + scale_of(b) * abs(unit)
     return a, s
 
 

@@ -25,7 +25,8 @@ class Equations:
     Attributes: ``q``, ``qd`` (coordinate and velocity symbols), ``n``, ``M``,
     ``h`` (mass matrix and generalised forces, contacts closed), ``channels``
     (per contact, per key: ``(w, bias, v)`` with ``v = w . qd`` and its
-    acceleration ``w . q'' + bias``), ``domain`` (``(expression >= 0, contact)``),
+    acceleration ``w . q'' + bias``), ``domain`` (``(expression >= 0, contact)``,
+    named in ``domain_labels``),
     ``params``, ``rates``, ``regular`` (the mass matrix is invertible).
     """
 
@@ -85,12 +86,14 @@ class Equations:
     def _contacts(self):
         """Each contact's channels and domain; all their gaps and velocity constraints."""
         self.channels, self.domain, self.constrained = {}, [], {}
+        self.domain_labels = []
         gaps, constraints = [], []
         for c in self.S.contacts:
             kin = c.kinematics(self.vel)
             self.channels[c.name] = dict(kin.channels)
             self.constrained[c.name] = kin.constraints
-            self.domain += [(e, c.name) for e in kin.domain]
+            self.domain += [(e, c.name) for e in kin.domain.values()]
+            self.domain_labels += [f"domain_{label}_{c.name}" for label in kin.domain]
             gaps += kin.gaps
             constraints += [kin.channels[k] for k in kin.constraints]
         return gaps, constraints

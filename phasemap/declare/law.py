@@ -89,7 +89,7 @@ class Kinematics:
     channels: dict
     gaps: list
     constraints: tuple[str, ...]
-    domain: list = field(default_factory=list)
+    domain: dict = field(default_factory=dict)   # label -> expression >= 0
 
 
 # -- requirements: the admissibility conditions of a mode ------------------------
@@ -101,13 +101,21 @@ class Form:
     ``strict`` may be a sign symbol (a two-sided contact's assumed sign of N):
     strict where it is negative.  ``label`` names the quantity without the
     branch (``N_floor``, ``limit_pos_floor``), ``kind`` is ``normal`` or
-    ``friction_limit``.
+    ``friction_limit``.  Where ``expr`` is not smooth (``f |N| - |F|``),
+    ``smooth`` is the same inequality as a polynomial, ``smooth = expr * factor``
+    with ``factor > 0`` (what the conditions for the tracer use).
     """
 
     label: str
     kind: str
     expr: object
     strict: object = False
+    smooth: object = None
+    factor: object = 1
+
+    @property
+    def smooth_expr(self):
+        return self.expr if self.smooth is None else self.smooth
 
 
 class Requirement:
@@ -117,12 +125,8 @@ class Requirement:
     contact: str
 
     def forms(self) -> list[Form]:
-        """The reaction inequalities, as the branch function tests them."""
+        """The reaction inequalities it states (none for an acceleration's sign)."""
         return []
-
-    def smooth_forms(self) -> list[Form]:
-        """The same inequalities as smooth expressions (no ``Abs``), for the conditions."""
-        return self.forms()
 
 
 @dataclass(frozen=True)
@@ -166,11 +170,8 @@ class WithinAbsCone(WithinCone):
         import sympy as sp
 
         f, N, F = self.coefficient, self.normal, self.force
-        return [Form(f"limit_{self.contact}", "friction_limit", f * sp.Abs(N) - sp.Abs(F))]
-
-    def smooth_forms(self):
-        f, N, F = self.coefficient, self.normal, self.force
-        return [Form(f"limit_{self.contact}", "friction_limit", f * f * N * N - F * F)]
+        return [Form(f"limit_{self.contact}", "friction_limit", f * sp.Abs(N) - sp.Abs(F),
+                     smooth=f * f * N * N - F * F, factor=f * sp.Abs(N) + sp.Abs(F))]
 
 
 @dataclass(frozen=True)
