@@ -275,7 +275,7 @@ def test_phase_curve_and_simulate_agree_where_a_contact_is_left():
     assert ax.get_xlabel() == r"$\theta$ (rad)" and ax.get_ylabel().startswith(r"$\omega$")
 
 
-# -- the conditions the bifurcation tracer reads (phasemap.declare.conditions) ----------
+# -- the conditions the bifurcation tracer reads (phasemap.declare.admissibility) ----------
 
 #: declared built-ins, the twins (as files) and the hand models they stand in for
 CONDITION_MODELS = ["ladder", "wheel", "painleve_rod", "rod_on_step",
@@ -385,9 +385,9 @@ def test_the_painleve_rods_conditions_are_its_closed_forms():
     start = c["start_A_A_slip_neg"]
     assert start.rest_only and start.strict and "xdot" not in start.symbols
     assert c["gap_A_A_separated_moving_neg"].branch == "A_separated_moving_neg"
-    from phasemap.declare.conditions import presence
+    from phasemap.declare.admissibility import presence
     assert presence(SYSTEM)["A_separated_moving_neg"] == 2 and presence(SYSTEM)["stick"] == 1
-    result = doctest.testmod(importlib.import_module("phasemap.declare.conditions"))
+    result = doctest.testmod(importlib.import_module("phasemap.declare.admissibility"))
     assert result.attempted >= 5 and result.failed == 0
 
 

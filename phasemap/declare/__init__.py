@@ -99,28 +99,28 @@ Conditions for the bifurcation tracer
 decides whether it is admissible (coefficient, normal forces, friction limits,
 start from rest, gap, family, the joint's roots, the domain) as sympy
 expressions without poles, built from the same contact-law requirements as
-the generated code.  See :mod:`phasemap.declare.conditions`.
+the generated code.  See :mod:`phasemap.declare.admissibility`.
 
 The package
 -----------
-``api``         the quantities: Parameter, Coordinate, Rate, Body
-``law``         the contract of a contact law (its hooks), modes and requirements
-``contacts``    the laws: PointContact, EdgeContact, RollingContact, Joint
-``system``      System, load
-``validation``  every problem of a declaration as one ValueError
-``equations``   Lagrange's equations on the contact manifold (Equations)
-``modes``       the candidate branches (mode combinations) and the slip velocity
-``solvers``     one mode combination solved: regular, saddle point, indeterminate, joint
-``derivation``  equations, candidates and solutions together (one derivation)
-``emit``        the generated numba module
-``conditions``  the admissibility conditions as expressions (for the tracer)
-``build``       the kernel cache and the Model
+``api``            the quantities: Parameter, Coordinate, Rate, Body
+``law``            the contract of a contact law (its hooks), modes and requirements
+``contacts``       the laws: PointContact, EdgeContact, RollingContact, Joint
+``system``         System, load
+``validation``     every problem of a declaration as one ValueError
+``equations``      Lagrange's equations on the contact manifold (Equations)
+``modes``          the candidate branches (mode combinations) and the slip velocity
+``solvers``        one mode combination solved: regular, saddle point, indeterminate, joint
+``derivation``     equations, candidates and solutions together (one derivation)
+``emit``           the generated numba module
+``admissibility``  the conditions of each branch as expressions (for the tracer)
+``build``          the kernel cache and the Model
 """
 
 from __future__ import annotations
 
 from .api import Body, Coordinate, Parameter, Rate
-from .conditions import Condition, conditions
+from .admissibility import Condition, conditions
 from .contacts import EdgeContact, Joint, PointContact, RollingContact
 from .law import ContactLaw
 from .system import System, load

@@ -12,6 +12,7 @@ import pathlib
 
 import numpy as np
 
+from .. import _codegen
 from .. import _numerics as nx
 from .._version import __version__
 from ..model import Branch, Derived, Dynamics, Model, Variable
@@ -63,7 +64,7 @@ def cache_stem(S) -> str:
     h = hashlib.sha256(canonical(S).encode())
     # every module of the package but the conditions, which the generated text does not use
     sources = [f for f in sorted(pathlib.Path(__file__).parent.glob("*.py"))
-               if f.name != "conditions.py"]
+               if f.name != "admissibility.py"]
     for f in sources + [pathlib.Path(nx.__file__)]:
         h.update(f.read_bytes())
     h.update(f"{sp.__version__} {numba.__version__} {np.__version__} {__version__}".encode())
@@ -72,8 +73,6 @@ def cache_stem(S) -> str:
 
 def generated(S):
     """The generated module of ``S`` (validated; derived once, then loaded from the cache)."""
-    from .. import _codegen
-
     validate(S)
     return _codegen.load_module(cache_stem(S), lambda: module_source(S))
 

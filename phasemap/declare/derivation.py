@@ -2,7 +2,7 @@
 
 One derivation serves both the generated module (:mod:`phasemap.declare.emit`)
 and the conditions the bifurcation tracer reads
-(:mod:`phasemap.declare.conditions`).  It is deterministic: the sampler that
+(:mod:`phasemap.declare.admissibility`).  It is deterministic: the sampler that
 probes the declared domain is seeded, so deriving again gives the same rows.
 """
 

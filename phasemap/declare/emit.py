@@ -8,7 +8,10 @@ import json
 from .. import _numerics as nx
 from .algebra import scale_in, scale_of
 from .api import sym
+from .derivation import derive
 from .law import Accelerates
+from .solvers import joint_parts
+from .validation import fail
 
 TOL = f"{nx.TOL!r}"
 
@@ -119,8 +122,6 @@ def _regular(w, sol, L, Ls):
 def _joint(w, sol, L, Ls):
     """The unknowns affine in the friction moment, and the moment from the squared law
     (:class:`phasemap.declare.solvers.JointRoots` states the same quantities over D)."""
-    from .solvers import joint_parts
-
     n0, n1, X, Y = joint_parts(sol)
     sq = sol.problem.squared
     w.emit([("_k_D", sol.D), ("_k_Ds", scale_of(sol.D))]
@@ -192,8 +193,6 @@ def _family(w, sol, L, Ls, S):
 def family_coefficients(form, L, S, fname):
     """The coefficients of a form linear in the unknowns ``L`` (a ValueError otherwise)."""
     import sympy as sp
-
-    from .validation import fail
 
     coeffs = [sp.diff(form.expr, L[i]) for i in range(len(L))]
     if any(cf.free_symbols & set(L) for cf in coeffs):
@@ -310,8 +309,6 @@ def _admissible(w, sol, eqs, Q, L, Ls):
 
 def module_source(S) -> str:
     """The generated module's source text (sympy runs here, and only here)."""
-    from .derivation import derive
-
     d = derive(S)
     code = {kinds: row_code(sol, d.eqs, d.inputs_of) for kinds, sol in d.solutions.items()}
     inputs, state_pos, derived = _inputs(S, d, set().union(*(u for _, u in code.values())))

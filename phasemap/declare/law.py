@@ -17,7 +17,7 @@ five hooks, as sympy.physics.mechanics' ``Joint`` subclasses do:
 ``requirements(mode, reactions)``
     the admissibility conditions of a mode, as :class:`Requirement` objects:
     the generated branch functions (:mod:`phasemap.declare.emit`) and the
-    conditions the bifurcation tracer reads (:mod:`phasemap.declare.conditions`)
+    conditions the bifurcation tracer reads (:mod:`phasemap.declare.admissibility`)
     are both built from them;
 ``reaction_variables()``
     the reactions it reports: names, units, long names.

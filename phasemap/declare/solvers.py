@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .algebra import cramer, pythagorean, reduced, scale_of
-from .law import LinearProblem, STICK
+from .law import STICK, LinearProblem, Mode
 from .validation import fail
 
 
@@ -51,8 +51,6 @@ class Solution:
 def problem(eqs, kinds: tuple, fname: str) -> LinearProblem:
     """The linear problem of the mode kinds ``kinds`` (one per contact)."""
     import sympy as sp
-
-    from .law import Mode
 
     zero = {eqs.velocity: sp.Integer(0)} if STICK in kinds else {}
     p = LinearProblem(kinds, fname, eqs.n, zero, extra=[sp.Integer(0)] * eqs.n)
