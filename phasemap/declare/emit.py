@@ -308,7 +308,7 @@ def _admissible(w, sol, eqs, Q, L, Ls):
 # -- the generated module ---------------------------------------------------------
 
 def module_source(S) -> str:
-    """The generated module's source text (sympy runs here, and only here)."""
+    """The generated module's source text (from the derivation of ``S``)."""
     d = derive(S)
     code = {kinds: row_code(sol, d.eqs, d.inputs_of) for kinds, sol in d.solutions.items()}
     inputs, state_pos, derived = _inputs(S, d, set().union(*(u for _, u in code.values())))
