@@ -8,10 +8,10 @@ five hooks, as sympy.physics.mechanics' ``Joint`` subclasses do:
     its velocity *channels* (expressions linear in the rates: the normal and
     tangential velocity of a point, a rotation rate), the *gaps* that close it,
     which channels are *constraints* (zero while it is kept), and the *domain*
-    where it exists (expressions >= 0);
+    where it exists (labelled expressions >= 0);
 ``modes()``
     its :class:`Mode` s (slip either way, stick, separate...);
-``unknowns(mode, problem)``
+``unknowns(mode, channels, problem)``
     the unknown reactions a mode adds to one mode combination's linear problem
     (through :meth:`LinearProblem.new`) and the reactions in those unknowns;
 ``requirements(mode, reactions)``
@@ -22,10 +22,13 @@ five hooks, as sympy.physics.mechanics' ``Joint`` subclasses do:
 ``reaction_variables()``
     the reactions it reports: names, units, long names.
 
-and names two class attributes: ``friction_field`` (the field that holds its
-friction coefficient) and ``slip_channel`` (the channel it slips with).
-Everything else (validation of its fields, the branch names, the arguments a
-row passes) follows from these.
+and names its class attributes: ``friction_field`` (the field that holds its
+friction coefficient), ``slip_channel`` (the channel it slips with),
+``point_fields`` and ``scalar_fields`` (the fields validated as expressions),
+and optionally ``check_choices`` (fields with a few allowed values) and
+``squared_law``.  Everything else (validation, the branch names, the arguments
+a row passes, the model's reactions, the conditions) follows from these: a new
+law is one class in :mod:`phasemap.declare.contacts`.
 """
 
 from __future__ import annotations
