@@ -17,7 +17,6 @@ arrays or lazily with dask.  The result is a self-describing
 
 from __future__ import annotations
 
-import datetime as _dt
 import json
 from typing import Mapping, Sequence
 
@@ -27,8 +26,7 @@ import xarray as xr
 from . import _numerics as nx
 from . import events as ev
 from . import progress
-from ._version import __version__
-from .atlas import CONVENTIONS
+from ._dataset import cf_header, variable_attrs
 from .grid import evaluate
 from .integrate import run_fate_map
 from .layers import layers_for
@@ -285,20 +283,9 @@ class Scene:
         coords = {}
         for name, a in self.axes.items():
             var = m.variables[name]
-            coords[name] = xr.Variable(name, a, {"units": var.units, "long_name": var.long_name})
+            coords[name] = xr.Variable(name, a, variable_attrs(var))
         data_vars = {n: xr.Variable(dims, arrays[n], reg[n].attrs) for n in self.layers}
-        now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-        attrs = {
-            "Conventions": CONVENTIONS,
-            "title": f"phasemap atlas: {m.title}",
-            "source": f"phasemap {__version__}",
-            "history": f"{now} created by phasemap {__version__}",
-            "references": m.citation,
-            "phasemap_model": m.name,
-            "phasemap_version": __version__,
-            "phasemap_scene": json.dumps(self.spec()),
-            "date_created": now,
-        }
+        attrs = {**cf_header(m), "phasemap_scene": json.dumps(self.spec())}
         for name, value in self.fixed.items():
             attrs[f"phasemap_fixed_{name}"] = value
         return xr.Dataset(data_vars, coords, attrs)

@@ -106,7 +106,8 @@ def test_only_requested_layers_are_stored():
 def test_metadata_comes_from_the_registry_and_the_model():
     ds = phasemap.Scene("elliptic_pendulum", axes={"phi": np.linspace(-1, 1, 3), "f": [1.0, 4.0]},
                         fixed={"xdot": 1.0}, layers=["n_solutions", "N_slide_pos_Npos"]).compute()
-    assert ds.phi.attrs == {"units": "rad", "long_name": "angle of the bar from the downward vertical"}
+    assert ds.phi.attrs == {"units": "rad", "long_name": "angle of the bar from the downward vertical",
+                            "phasemap_symbol": r"\varphi"}
     assert ds.n_solutions.dtype == np.int8
     assert list(ds.n_solutions.attrs["flag_values"]) == [0, 1, 2, 3, 4]
     assert ds.n_solutions.attrs["flag_meanings"] == "none unique two continuum three_or_more"
