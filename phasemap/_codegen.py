@@ -144,24 +144,28 @@ class _Source:
     def rows(self, ind: str, regime: str | None = None) -> list[str]:
         """Lines that compute the candidate rows, without control flow (for SIMD).
 
-        Defines ``s{b}`` (status, 0 where absent), ``z{b}`` (singular flag) and
-        ``r{b}`` (the row tuple, meaningful where ``a{b}``: the branch applies).
-        With ``regime`` ("rest", "pos" or "neg": the velocity is zero, positive
-        or negative for the whole loop, and ``rest``, ``vb`` are set before it)
-        only the branches that apply are computed; the others get ``s{b} = 0``
-        and no ``r{b}``.
+        Defines ``s{b}`` (status as an integer, 0 where absent), ``z{b}``
+        (singular flag) and ``r{b}`` (the row tuple, meaningful where ``a{b}``:
+        the branch applies).  A branch function returns its status as the
+        float of a small integer; taking it back to an integer at once lets
+        LLVM fold the pair of conversions, so the summary compares integers.
+        With ``regime`` ("rest", "pos" or "neg": the velocity is zero,
+        positive or negative for the whole loop, and ``vb`` is set before it)
+        only the branches that apply are computed, with ``rest`` a constant;
+        the others get ``s{b} = 0`` and no ``r{b}``.
         """
         out = []
         for b in self.active(regime):
-            out += [f"r{b} = {self.call(b, 'rest', 'vb')}"]
+            rest = "rest" if regime is None else repr(regime == "rest")
+            out += [f"r{b} = {self.call(b, rest, 'vb')}"]
             if regime is None:
                 out += [f"a{b} = {self.applies(b)}",
-                        f"s{b} = r{b}[0] if a{b} else 0.0",
+                        f"s{b} = r{b}[0] if a{b} else 0",
                         f"z{b} = r{b}[1] if a{b} else 0.0"]
             else:
                 out += [f"s{b} = r{b}[0]", f"z{b} = r{b}[1]"]
         for b in set(range(len(self.model.candidates))) - set(self.active(regime)):
-            out += [f"s{b} = 0.0", f"z{b} = 0.0"]
+            out += [f"s{b} = 0", f"z{b} = 0.0"]
         return (self.head(ind) if regime is None else []) + [ind + line for line in out]
 
     def active(self, regime: str | None) -> list[int]:
@@ -176,28 +180,41 @@ class _Source:
         return [f"{ind}i_{n} = v[{k}]" for k, n in enumerate(self.inputs) if n not in skip]
 
     def summary(self, ind: str, names) -> list[str]:
-        """Lines that reduce the rows to the requested summaries (locals ``q_<name>``)."""
-        nb = len(self.model.candidates)
+        """Lines that reduce the rows to the requested summaries (integer locals
+        ``q_<name>``, one per summary layer of :data:`phasemap.layers.SUMMARY_LAYERS`).
+
+        They stay 64-bit integers, as wide as the lanes of the double-precision
+        rows, until one narrowing at the store: each early narrowing of a vector
+        mask to bytes costs shuffles.
+        """
         out = []
-        if "n_solutions" in names:
-            adm = " + ".join(f"((s{b} == {nx.ADMISSIBLE}.0) | (s{b} == {nx.SEPARATION}.0))"
-                             for b in range(nb))
-            cont = " | ".join(f"(s{b} == {nx.CONTINUUM}.0)" for b in range(nb))
-            out += [f"nadm = np.int8({adm})",
-                    f"q_n_solutions = np.int8({nx.N_CONTINUUM}) if ({cont}) else "
-                    f"(np.int8({nx.N_THREE_OR_MORE}) if nadm >= 3 else nadm)"]
-        if "stagnation" in names:
-            stick = self.model.stick_branch
-            out.append(f"q_stagnation = np.int8(s{stick} == {nx.ADMISSIBLE}.0)" if stick >= 0
-                       else "q_stagnation = np.int8(0)")
-        if "contact_lost" in names:
-            lost = " | ".join(f"(s{b} == {nx.CONTACT_LOST}.0) | (s{b} == {nx.SEPARATION}.0)"
-                              for b in range(nb))
-            out.append(f"q_contact_lost = np.int8({lost})")
-        if "singular" in names:
-            sing = " | ".join(f"(z{b} != 0.0)" for b in range(nb))
-            out.append(f"q_singular = np.int8({sing})")
+        for name in names:
+            *pre, value = getattr(self, "_" + name)()
+            out += [*pre, f"q_{name} = {value}"]
         return [ind + line for line in out]
+
+    def _any(self, statuses) -> str:
+        return " | ".join(f"(s{b} == {st})" for b in range(len(self.model.candidates))
+                          for st in statuses)
+
+    def _n_solutions(self) -> list[str]:
+        nb = len(self.model.candidates)
+        n = " + ".join(f"((s{b} == {nx.ADMISSIBLE}) | (s{b} == {nx.SEPARATION}))"
+                       for b in range(nb))
+        return [f"nadm = {n}",
+                f"{nx.N_CONTINUUM} if ({self._any([nx.CONTINUUM])}) else "
+                f"({nx.N_THREE_OR_MORE} if nadm >= 3 else nadm)"]
+
+    def _stagnation(self) -> list[str]:
+        stick = self.model.stick_branch
+        return [f"int(s{stick} == {nx.ADMISSIBLE})" if stick >= 0 else "0"]
+
+    def _contact_lost(self) -> list[str]:
+        return [f"int({self._any([nx.CONTACT_LOST, nx.SEPARATION])})"]
+
+    def _singular(self) -> list[str]:
+        nb = len(self.model.candidates)
+        return ["int(" + " | ".join(f"(z{b} != 0.0)" for b in range(nb)) + ")"]
 
 
 def _deps(model) -> list[pathlib.Path]:
@@ -290,18 +307,21 @@ def contract(model):
     body += src.head("    ")
     for b in range(nb):
         body += [f"    if {src.applies(b)}:",
-                 f"        r = {src.call(b, 'rest', 'vb')}"]
-        body += [f"        out[{b}, {j}] = r[{j}]" for j in range(nf)]
+                 f"        r{b} = {src.call(b, 'rest', 'vb')}"]
+        body += [f"        out[{b}, {j}] = r{b}[{j}]" for j in range(nf)]
         body += ["    else:", f"        out[{b}, 0] = 0.0", f"        out[{b}, 1] = 0.0"]
         body += [f"        out[{b}, {j}] = NAN" for j in range(2, nf)]
     bodies["point(v, out)"] = body
-    body = ['    """Branch b along its stage, as its row tuple (for the integrator)."""']
+    # The integrator indexes the row with runtime columns: a tuple of floats,
+    # the status (an integer in a branch function's row) included.
+    body = ['    """Branch b along its stage, as its row tuple of floats (for the integrator)."""']
     body += src.load("    ")
     for b, spec in enumerate(model.candidates):
         rest = "True" if spec.direction == 0 else "False"
         call = src.call(b, rest, "i_" + model.velocity)
         body.append("    else:" if b == nb - 1 else f"    {'if' if b == 0 else 'elif'} b == {b}:")
-        body.append(f"        r = {call}")
+        body.append(f"        r{b} = {call}")
+        body.append(f"        r = (float(r{b}[0]), {', '.join(f'r{b}[{j}]' for j in range(1, nf))})")
     body.append("    return r")
     bodies["branch_row(v, b)"] = body
     bodies["branch(v, b, row)"] = [
@@ -424,44 +444,46 @@ def _generate_grid_kernel(model, layers, inner: str):
     src = _Source(model)
     inner_derived = [d for d in model.derived if d.source == inner]
     skip = {inner} | {d.name for d in inner_derived}
-    summaries = [l.name for l in layers if l.is_summary]
+    flag_layers = [l for l in layers if l.is_summary]
+    field_layers = [l for l in layers if not l.is_summary]
     lines = _header(src, f"Grid kernel ({', '.join(l.name for l in layers)}; inner {inner})")
     lines += ["from phasemap._codegen import CELLS_SIGNATURE", "",
               '@njit(CELLS_SIGNATURE, cache=True, error_model="numpy")',
               "def cells(v, first, lo, hi, inner_values, inner_deriv, flags, fields):",
               '    """Cells lo..hi of the inner axis at the outer state v; outputs from first."""']
-    flag_layers = [l for l in layers if l.is_summary]
-    field_layers = [l for l in layers if not l.is_summary]
+    lines += src.load("    ", skip)
+    # The loops index slices from 0 (``for j in range(n)``): an index such as
+    # ``first + j`` may be negative for all LLVM knows, and numba's wraparound
+    # for it turns vector loads into gathers and vector stores into bytes.
+    lines += ["    n = hi - lo", f"    x_{inner} = inner_values[lo:hi]"]
+    lines += [f"    x_{d.name} = inner_deriv[{k}, lo:hi]" for k, d in enumerate(inner_derived)]
+    out = "first + lo:first + hi"
+    lines += [f"    flags_{k} = flags[{k}, {out}]" for k in range(len(flag_layers))]
+    lines += [f"    fields_{k} = fields[{k}, {out}]" for k in range(len(field_layers))]
     # One store stream per loop vectorises; several (rows of one array, which
     # LLVM cannot prove disjoint) do not.  So several summary layers are packed
-    # into one byte per cell (n_solutions in bits 0-2, then one bit each) and
-    # unpacked by one short loop per layer.
+    # into one byte per cell, at the bit positions of the layer registry, in
+    # the first layer's row, and unpacked by one short loop per layer.
     packed = len(flag_layers) > 1
-    shift = {"n_solutions": 0, "stagnation": 3, "contact_lost": 4, "singular": 5}
-    mask = {"n_solutions": 7, "stagnation": 1, "contact_lost": 1, "singular": 1}
-    lines += src.load("    ", skip)
-    if packed:
-        lines.append("    code = np.empty(hi - lo, dtype=np.int8)")
 
     def loop(ind: str, regime: str | None) -> list[str]:
-        body = [f"{ind}for j in range(lo, hi):", f"{ind}    i_{inner} = inner_values[j]"]
-        body += [f"{ind}    i_{d.name} = inner_deriv[{k}, j]"
-                 for k, d in enumerate(inner_derived)]
+        body = [f"{ind}for j in range(n):", f"{ind}    i_{inner} = x_{inner}[j]"]
+        body += [f"{ind}    i_{d.name} = x_{d.name}[j]" for d in inner_derived]
         body += src.rows(ind + "    ", regime)
-        body += src.summary(ind + "    ", summaries)
+        body += src.summary(ind + "    ", [l.name for l in flag_layers])
         if packed:
-            bits = " | ".join(f"(q_{l.name} << {shift[l.name]})" for l in flag_layers)
-            body.append(f"{ind}    code[j - lo] = np.int8({bits})")
+            bits = " | ".join(f"(q_{l.name} << {l.shift})" for l in flag_layers)
+            body.append(f"{ind}    flags_0[j] = np.int8({bits})")
         elif flag_layers:
-            body.append(f"{ind}    flags[0, first + j] = q_{flag_layers[0].name}")
+            body.append(f"{ind}    flags_0[j] = np.int8(q_{flag_layers[0].name})")
         active = src.active(regime)
         for k, layer in enumerate(field_layers):
             b, col = layer.branch, layer.column
-            keep = f"((s{b} == {nx.ADMISSIBLE}.0) | (s{b} == {nx.SEPARATION}.0))"
+            keep = f"((s{b} == {nx.ADMISSIBLE}) | (s{b} == {nx.SEPARATION}))"
             if not layer.admissible_only:
-                keep = f"(s{b} != {nx.ABSENT}.0)"
+                keep = f"(s{b} != {nx.ABSENT})"
             value = f"r{b}[{col}] if {keep} else NAN" if b in active else "NAN"
-            body.append(f"{ind}    fields[{k}, first + j] = {value}")
+            body.append(f"{ind}    fields_{k}[j] = {value}")
         return body
 
     if inner != model.velocity and inner not in src.scale_names:
@@ -474,12 +496,10 @@ def _generate_grid_kernel(model, layers, inner: str):
                   "    else:", *loop("        ", "neg")]
     else:
         lines += loop("    ", None)
-    if packed:
-        for k, layer in enumerate(flag_layers):
-            lines += [f"    out = flags[{k}]",
-                      "    for j in range(lo, hi):",
-                      f"        out[first + j] = (code[j - lo] >> {shift[layer.name]}) & "
-                      f"{mask[layer.name]}"]
+    if packed:  # the first layer's row last: the others read the packed byte from it
+        for k, layer in reversed(list(enumerate(flag_layers))):
+            lines += ["    for j in range(n):",
+                      f"        flags_{k}[j] = (flags_0[j] >> {layer.shift}) & {layer.mask}"]
     key = "_".join(l.name for l in layers)
     tag = hashlib.sha256(f"{key}|{inner}".encode()).hexdigest()[:8]
     return _load(model, f"grid_{inner}_{tag}", "\n".join(lines) + "\n").cells

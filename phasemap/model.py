@@ -40,9 +40,11 @@ A new model provides:
 Branch functions
 ----------------
 A branch function is ``@numba.njit(cache=True, forceinline=True, error_model="numpy")``,
-takes scalars and **returns** its row as a tuple of floats laid out as in
+takes scalars and **returns** its row as a tuple laid out as in
 :mod:`phasemap._numerics`: ``(status, singular, coefficient,
-accelerations..., reactions...)``, NaN for what it does not determine.  Its
+accelerations..., reactions...)``, the status an integer code (so that the
+grid kernel compares integers), the rest floats, NaN for what it does not
+determine.  Its
 first parameters receive ``Branch.args`` (such as the slip direction); the
 others are named after model inputs (``phi``, ``f``, ``sin_phi``...), and a
 parameter named ``rest`` receives whether the branch starts from zero
