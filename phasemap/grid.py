@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._codegen import driver, grid_kernel
+from ._codegen import grid_kernel, run_grid
 from .layers import Layer, layers_for
 from .model import Model
 
@@ -89,7 +89,7 @@ def evaluate(model: Model, axes: dict[str, np.ndarray], fixed: dict[str, float],
     flags = np.empty((len(flag_layers), ncells), dtype=np.int8)
     fields = np.empty((len(field_layers), ncells))
     cells = grid_kernel(model, tuple(flag_layers + field_layers), inner)
-    driver()(cells, base, shape, axis_slot, axis_values, deriv_slot, deriv_values, inner_values,
+    run_grid(cells, base, shape, axis_slot, axis_values, deriv_slot, deriv_values, inner_values,
              inner_deriv, flags, fields)
     out = {l.name: flags[k].reshape(grid) for k, l in enumerate(flag_layers)}
     out.update({l.name: fields[k].reshape(grid) for k, l in enumerate(field_layers)})
