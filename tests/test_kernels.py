@@ -140,6 +140,18 @@ def test_point_branch_and_grid_agree(model, mask, inner_kind):
     assert {nx.ABSENT, nx.ADMISSIBLE, nx.INADMISSIBLE} <= statuses
 
 
+def test_a_hand_module_and_its_declaration_each_have_their_own_layers():
+    from phasemap.models import ladder
+
+    declared, hand = phasemap.get_model("ladder"), ladder.MODEL  # both named "ladder"
+    assert hand.name == declared.name and hand.branches != declared.branches
+    for m in (hand, declared, hand):
+        reg = layers_for(m)
+        assert list(reg)[:4] == list(SUMMARY)
+        fields = [l for l in reg.values() if l.branch >= 0]
+        assert fields and all(l.name.endswith("_" + m.branches[l.branch]) for l in fields)
+
+
 def test_a_single_point_scene_matches_classify():
     m = phasemap.MODELS["wheel"]
     reg = layers_for(m)
