@@ -312,7 +312,10 @@ def _assemble(data_vars: dict, coords: dict, attrs: dict) -> xr.Dataset:
     xarray's merge and alignment (a few tenths of a millisecond, more than
     the kernel of a small map) have nothing to do.  No array is copied.
     """
-    indexes = {name: xr.indexes.PandasIndex(var.values, name) for name, var in coords.items()}
+    import pandas as pd  # loaded with xarray
+
+    indexes = {name: xr.indexes.PandasIndex(pd.Index(var.values), name, coord_dtype=var.dtype)
+               for name, var in coords.items()}
     variables = {}
     for name, var in coords.items():
         variables.update(indexes[name].create_variables({name: var}))
