@@ -39,6 +39,7 @@ import tempfile
 import threading
 
 import numba
+import numba.extending
 import numpy as np
 from numba import prange
 
@@ -427,7 +428,21 @@ def driver():
     return _DRIVER[0]
 
 
-_ADDRESSES: dict = {}
+class _FirstClass(numba.types.CompileResultWAP):
+    """A generated ``cells`` as the driver takes it: its compiled address, and its
+    numba type made once (numba would build a new type at every call)."""
+
+    def __init__(self, cells):
+        super().__init__(cells.overloads[CELLS_SIGNATURE.args])
+        self.numba_type = numba.types.FunctionType(self.signature())
+
+
+@numba.extending.typeof_impl.register(_FirstClass)
+def _typeof_first_class(value, context):
+    return value.numba_type
+
+
+_FIRST_CLASS: dict = {}
 
 
 def run_grid(cells, base, outer_shape, outer_slot, outer_values, outer_dslot, outer_dvalues,
@@ -438,12 +453,12 @@ def run_grid(cells, base, outer_shape, outer_slot, outer_values, outer_dslot, ou
     function, numba would type it again at every call (0.1 to 0.3 ms, more
     than a small map's cells).
     """
-    wap = _ADDRESSES.get(cells)
-    if wap is None:
-        wap = _ADDRESSES[cells] = numba.types.CompileResultWAP(
-            cells.overloads[CELLS_SIGNATURE.args])
-    driver()(wap, TASKS_PER_THREAD * numba.get_num_threads(), base, outer_shape, outer_slot,
-             outer_values, outer_dslot, outer_dvalues, inner_values, inner_deriv, flags, fields)
+    first_class = _FIRST_CLASS.get(cells)
+    if first_class is None:
+        first_class = _FIRST_CLASS[cells] = _FirstClass(cells)
+    driver()(first_class, TASKS_PER_THREAD * numba.get_num_threads(), base, outer_shape,
+             outer_slot, outer_values, outer_dslot, outer_dvalues, inner_values, inner_deriv,
+             flags, fields)
 
 
 _KERNELS: dict = {}
