@@ -124,12 +124,16 @@ class _Source:
                                                    else f"i_{n}") for n in names]
         return f"BR{b}({', '.join(args)})"
 
-    def head(self, ind: str) -> list[str]:
+    def velocity_tolerance(self) -> str:
+        """The magnitude below which the relative velocity counts as zero."""
+        return f"{nx.TOL!r} * VSCALE({', '.join(f'i_{n}' for n in self.scale_names)})"
+
+    def head(self, ind: str, tolerance: str | None = None) -> list[str]:
         """Lines that define ``rest`` (the velocity is zero) and ``vb`` (the velocity
-        the branches see: exactly 0 at rest)."""
+        the branches see: exactly 0 at rest); ``tolerance`` names a local that holds
+        :meth:`velocity_tolerance` already."""
         vel = f"i_{self.model.velocity}"
-        scale = ", ".join(f"i_{n}" for n in self.scale_names)
-        return [f"{ind}rest = abs({vel}) <= {nx.TOL!r} * VSCALE({scale})",
+        return [f"{ind}rest = abs({vel}) <= {tolerance or self.velocity_tolerance()}",
                 f"{ind}vb = 0.0 if rest else {vel}"]
 
     def applies(self, b: int) -> str:
@@ -142,7 +146,8 @@ class _Source:
             return f"rest | ({vel} < 0.0)"
         return "rest"
 
-    def rows(self, ind: str, regime: str | None = None) -> list[str]:
+    def rows(self, ind: str, regime: str | None = None, tolerance: str | None = None
+             ) -> list[str]:
         """Lines that compute the candidate rows, without control flow (for SIMD).
 
         Defines ``s{b}`` (status as an integer, 0 where absent), ``z{b}``
@@ -153,7 +158,7 @@ class _Source:
         With ``regime`` ("rest", "pos" or "neg": the velocity is zero,
         positive or negative for the whole loop, and ``vb`` is set before it)
         only the branches that apply are computed, with ``rest`` a constant;
-        the others get ``s{b} = 0`` and no ``r{b}``.
+        the others get ``s{b} = 0`` and no ``r{b}``.  ``tolerance``: see :meth:`head`.
         """
         out = []
         for b in self.active(regime):
@@ -167,7 +172,8 @@ class _Source:
                 out += [f"s{b} = r{b}[0]", f"z{b} = r{b}[1]"]
         for b in set(range(len(self.model.candidates))) - set(self.active(regime)):
             out += [f"s{b} = 0", f"z{b} = 0.0"]
-        return (self.head(ind) if regime is None else []) + [ind + line for line in out]
+        return ((self.head(ind, tolerance) if regime is None else [])
+                + [ind + line for line in out])
 
     def active(self, regime: str | None) -> list[int]:
         """The branches that can apply in ``regime`` (all of them for None and rest)."""
@@ -508,14 +514,16 @@ def _generate_grid_kernel(model, layers, inner: str):
     # into one byte per cell, at the bit positions of the layer registry, in
     # the first layer's row, and unpacked by one short loop per layer.
     packed = len(flag_layers) > 1
+    tolerance = None  # or the local holding the zero-velocity tolerance of every cell
 
     def loop(ind: str, regime: str | None) -> list[str]:
         body = [f"{ind}for j in range(n):", f"{ind}    i_{inner} = x_{inner}[j]"]
         body += [f"{ind}    i_{d.name} = x_{d.name}[j]" for d in inner_derived]
-        body += src.rows(ind + "    ", regime)
+        body += src.rows(ind + "    ", regime, tolerance)
         body += src.summary(ind + "    ", [l.name for l in flag_layers])
         if packed:
-            bits = " | ".join(f"(q_{l.name} << {l.shift})" for l in flag_layers)
+            bits = " | ".join(f"(q_{l.name} << {l.shift})" if l.shift else f"q_{l.name}"
+                              for l in flag_layers)
             body.append(f"{ind}    flags_0[j] = np.int8({bits})")
         elif flag_layers:
             body.append(f"{ind}    flags_0[j] = np.int8(q_{flag_layers[0].name})")
@@ -538,11 +546,14 @@ def _generate_grid_kernel(model, layers, inner: str):
                   f"    elif i_{model.velocity} > 0.0:", *loop("        ", "pos"),
                   "    else:", *loop("        ", "neg")]
     else:
+        if inner not in src.scale_names:  # the same zero-velocity tolerance in every cell
+            lines.append(f"    vtol = {src.velocity_tolerance()}")
+            tolerance = "vtol"
         lines += loop("    ", None)
     if packed:  # the first layer's row last: the others read the packed byte from it
         for k, layer in reversed(list(enumerate(flag_layers))):
-            lines += ["    for j in range(n):",
-                      f"        flags_{k}[j] = (flags_0[j] >> {layer.shift}) & {layer.mask}"]
+            bits = f"(flags_0[j] >> {layer.shift})" if layer.shift else "flags_0[j]"
+            lines += ["    for j in range(n):", f"        flags_{k}[j] = {bits} & {layer.mask}"]
     key = "_".join(l.name for l in layers)
     tag = hashlib.sha256(f"{key}|{inner}".encode()).hexdigest()[:8]
     return _load(model, f"grid_{inner}_{tag}", "\n".join(lines) + "\n").cells

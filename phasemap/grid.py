@@ -8,13 +8,16 @@ set, inner axis) and is cached on disk.
 
 Layout
 ------
-Cells are taken in C order.  ``prange`` runs over the outer cells (every
-axis but the last) times chunks of the inner axis; each task copies the fixed
-inputs, sets its outer axes and reads every input into a scalar local once.
-The inner loop then only loads the inner axis value (and its derived inputs
-such as sin(phi), computed once per axis value here) and evaluates the
-inlined branch functions: no calls, no heap scratch, and nothing that the
-requested layers do not need.
+Cells are taken in C order.  The items of work are the outer cells (every
+axis but the last) times chunks of the inner axis; ``prange`` runs a few
+tasks per thread over contiguous runs of them, each copying the fixed inputs
+once.  For each item the kernel sets its outer axes, reads every input into a
+scalar local, and runs one loop per velocity regime over the inner axis: it
+only loads the inner axis value (and its derived inputs such as sin(phi),
+computed once per axis value here) and evaluates the inlined branch
+functions, with statuses compared as integers and indices from zero: no
+calls, no heap scratch, and nothing that the requested layers do not need.
+The result arrays are the Dataset's (no copy).
 """
 
 from __future__ import annotations
