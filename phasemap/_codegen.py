@@ -152,13 +152,14 @@ class _Source:
 
         Defines ``s{b}`` (status as an integer, 0 where absent), ``z{b}``
         (singular flag) and ``r{b}`` (the row tuple, meaningful where ``a{b}``:
-        the branch applies).  A branch function returns its status as the
-        float of a small integer; taking it back to an integer at once lets
-        LLVM fold the pair of conversions, so the summary compares integers.
-        With ``regime`` ("rest", "pos" or "neg": the velocity is zero,
-        positive or negative for the whole loop, and ``vb`` is set before it)
-        only the branches that apply are computed, with ``rest`` a constant;
-        the others get ``s{b} = 0`` and no ``r{b}``.  ``tolerance``: see :meth:`head`.
+        the branch applies).  A branch function returns its status as an
+        integer, so that the summary compares integers and LLVM folds each
+        status test into the branch's own conditions (a float status works, at
+        the cost of selecting and comparing doubles).  With ``regime``
+        ("rest", "pos" or "neg": the velocity is zero, positive or negative
+        for the whole loop, and ``vb`` is set before it) only the branches that
+        apply are computed, with ``rest`` a constant; the others get
+        ``s{b} = 0`` and no ``r{b}``.  ``tolerance``: see :meth:`head`.
         """
         out = []
         for b in self.active(regime):
@@ -328,7 +329,8 @@ def contract(model):
         call = src.call(b, rest, "i_" + model.velocity)
         body.append("    else:" if b == nb - 1 else f"    {'if' if b == 0 else 'elif'} b == {b}:")
         body.append(f"        r{b} = {call}")
-        body.append(f"        r = (float(r{b}[0]), {', '.join(f'r{b}[{j}]' for j in range(1, nf))})")
+        rest_of_row = ", ".join(f"r{b}[{j}]" for j in range(1, nf))
+        body.append(f"        r = (float(r{b}[0]), {rest_of_row})")
     body.append("    return r")
     bodies["branch_row(v, b)"] = body
     bodies["branch(v, b, row)"] = [
