@@ -39,6 +39,10 @@ EXAMPLES = {
         ("phasemap classify elliptic_pendulum phi=0.8 xdot=-1 f=4", ""),
         ("phasemap classify hinge_pendulum phi=0.05 omega=0 delta=0.1", ""),
     ],
+    "cache": [
+        ("phasemap cache info", "where compiled kernels are kept, and how much"),
+        ("phasemap cache clear", "delete them all (they compile again on use)"),
+    ],
 }
 
 
@@ -177,6 +181,13 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                                 "equations for the senior derivatives at one state.")
     p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
     p.add_argument("values", nargs="*", metavar="NAME=VALUE")
+    p = subs["cache"] = _sub(sub, "cache", "show or clear the kernel cache: phasemap cache "
+                             "info|clear", "The kernel cache holds the code phasemap generates "
+                             "and what numba compiles from it and from phasemap's own "
+                             "integrators, under one least-recently-used size bound "
+                             "(PHASEMAP_CACHE_MAX_MB).  info lists its folders, entries and "
+                             "size; clear deletes every entry.")
+    p.add_argument("action", choices=["info", "clear"])
     return parser, subs
 
 
@@ -228,7 +239,19 @@ def _run(args) -> int:
         from .classify import classify
 
         print(classify(args.model, **_parse_values(args.values)))
+    elif args.command == "cache":
+        print(_cache(args.action))
     return 0
+
+
+def _cache(action: str) -> str:
+    from . import cache
+    from .progress import human_bytes
+
+    if action == "clear":
+        files, freed = cache.clear()
+        return f"removed {files} files ({human_bytes(freed)}) from the kernel cache"
+    return cache.info().text()
 
 
 def _parse_values(items: list[str], words: tuple[str, ...] = ()) -> dict[str, float]:

@@ -15,6 +15,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from conftest import small_filesystem
+
 import phasemap
 from phasemap.model import MAX_MAGNITUDE, MIN_POSITIVE
 from phasemap.models import MODELS
@@ -265,24 +267,6 @@ def test_ctrl_c_exits_130_with_one_line_and_no_partial_file(tmp_path, args, read
 
 
 # ----------------------------------------- 7. output problems found first ----
-@contextlib.contextmanager
-def small_filesystem(folder: pathlib.Path, size: str, readonly: bool = False):
-    """A real tmpfs of ``size`` mounted on ``folder`` (root only; skipped elsewhere)."""
-    folder.mkdir()
-    opts = f"size={size}" + (",ro" if readonly else "")
-    mount = subprocess.run(["mount", "-t", "tmpfs", "-o", opts, "tmpfs", str(folder)],
-                           capture_output=True, text=True)
-    if mount.returncode != 0:
-        message = f"cannot mount a tmpfs here: {mount.stderr.strip()}"
-        if os.environ.get("CI"):
-            pytest.fail(message)
-        pytest.skip(message)
-    try:
-        yield folder
-    finally:
-        subprocess.run(["umount", "-l", str(folder)], check=False)
-
-
 def test_an_existing_file_needs_overwrite(tmp_path):
     target = tmp_path / "a.nc"
     target.write_bytes(b"precious")
