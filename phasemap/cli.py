@@ -146,7 +146,8 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                    help="integrator setting of the fate layers: t_end, rtol, atol, max_step, "
                    "max_steps, max_events, method (DOPRI5 or DOP853) (repeatable)")
     p.add_argument("--chunk-cells", type=int, default=None, metavar="N",
-                   help="cells per block (default: about a quarter second of work)")
+                   help="cells per block (default: each block about a quarter second of "
+                   "work, sized as the work goes)")
     p.add_argument("--overwrite", action="store_true", help="replace OUT.nc if it exists")
     p.add_argument("--yes", action="store_true", help="go ahead with a large atlas (above "
                    "10^9 cells or an hour)")
@@ -197,9 +198,10 @@ def main(argv: list[str] | None = None) -> int:
     if extra:  # the subcommand's own usage, not the top level's
         (subs.get(args.command) or parser).error(f"unrecognized arguments: {' '.join(extra)}")
     from . import progress
+    from .atlas import Terminated, removed_on_signals
 
     try:
-        with progress.enable():
+        with progress.enable(), removed_on_signals():
             return _run(args)
     except ValueError as err:
         if args.command == "tour":
@@ -209,6 +211,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("\nphasemap: interrupted; no partial file was left", file=sys.stderr)
         return 130
+    except Terminated as stop:
+        print(f"\nphasemap: {stop}; no partial file was left", file=sys.stderr)
+        return stop.code
 
 
 def _run(args) -> int:
@@ -300,6 +305,7 @@ def _atlas(args) -> str:
     from . import blocks
     from .atlas import destination
     from .models import get_model
+    from .progress import human_duration
     from .scene import Scene
 
     model = get_model(args.model)
@@ -334,9 +340,9 @@ def _atlas(args) -> str:
     est = blocks.estimate(scene, args.chunk_cells, timed=True)
     print(est.text(scene), file=sys.stderr)
     if est.seconds > blocks.YES_SECONDS and not args.yes:
-        raise ValueError(f"this atlas would take about {blocks._duration(est.seconds)}; "
+        raise ValueError(f"this atlas would take about {human_duration(est.seconds)}; "
                          "pass --yes to go ahead")
-    blocks.write_scene(scene, out, block_cells=est.block_cells, overwrite=args.overwrite)
+    blocks.write_scene(scene, out, block_cells=args.chunk_cells, overwrite=args.overwrite)
     return f"wrote {out} ({scene.size} cells, layers {', '.join(scene.layers)})"
 
 
@@ -368,7 +374,7 @@ def _simulate(args) -> str:
     lines.append(f"{ds.attrs['end_reason']}: {ds.attrs['end_message']} "
                  f"({int(ds.attrs['n_steps'])} steps, {ds.sizes['t']} saved points)")
     if out is not None:
-        write_atlas(ds, out)
+        write_atlas(ds, out, overwrite=args.overwrite)
         lines.append(f"wrote {out}")
     return "\n".join(lines)
 

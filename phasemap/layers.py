@@ -23,7 +23,9 @@ Layers of a model:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Callable, NamedTuple
+
 import numpy as np
 
 from . import _numerics as nx
@@ -31,6 +33,16 @@ from . import events as ev
 from .model import Model, Solvability
 
 SUMMARY = ("n_solutions", "stagnation", "contact_lost", "singular")
+
+
+class Outcome(NamedTuple):
+    """What the integrator returns for a grid of initial states (one array per cell, and
+    per coordinate for ``positions``); each fate layer is read from it."""
+
+    fate: np.ndarray
+    n_reversals: np.ndarray
+    t_final: np.ndarray
+    positions: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -47,6 +59,9 @@ class Layer:
     column: int = -1  # ... and the column of out[branch] to copy
     admissible_only: bool = True  # NaN unless the branch is admissible
     fate: bool = False  # computed by integrating from each cell (see phasemap.integrate)
+    #: fate layers: the layer's values from the integrator's :class:`Outcome`
+    outcome: Callable[[Outcome], np.ndarray] | None = field(default=None, compare=False,
+                                                             repr=False)
 
     @property
     def is_summary(self) -> bool:
@@ -66,9 +81,20 @@ class Layer:
 _REGISTRIES: dict[str, dict[str, Layer]] = {}
 
 
+def _key(model: Model) -> str:
+    """What the layers are built from: not the name alone, since two declaration files
+    may declare one name with other branches."""
+    dyn = model.dynamics
+    return repr((model.name, model.branches, model.stick_branch, model.accelerations,
+                 model.reactions, model.coefficient,
+                 dyn and (dyn.coordinates, dyn.stick_is_rest,
+                          [model.variables.get(c[0]) for c in dyn.coordinates])))
+
+
 def _registry(model: Model) -> dict[str, Layer]:
-    if model.name in _REGISTRIES:
-        return _REGISTRIES[model.name]
+    key = _key(model)
+    if key in _REGISTRIES:
+        return _REGISTRIES[key]
     layers = {
         "n_solutions": Layer(
             "n_solutions", "int8", "number of solutions of the motion equations for the senior "
@@ -94,20 +120,23 @@ def _registry(model: Model) -> dict[str, Layer]:
     if model.dynamics is not None:
         layers["fate"] = Layer("fate", "int8", "how the motion from this initial state ends",
                                flag_values=ev.FATE_VALUES, flag_meanings=ev.FATE_MEANINGS,
-                               fate=True)
+                               fate=True, outcome=lambda o: o.fate)
         layers["n_reversals"] = Layer("n_reversals", "int32", "number of reversals of the "
-                                      "relative velocity", units="1", fate=True)
+                                      "relative velocity", units="1", fate=True,
+                                      outcome=lambda o: o.n_reversals)
         layers["t_final"] = Layer("t_final", "float64", "time at which the motion ended (the "
-                                  "horizon if still moving)", units="s", fate=True)
+                                  "horizon if still moving)", units="s", fate=True,
+                                  outcome=lambda o: o.t_final)
         layers["t_rest"] = Layer("t_rest", "float64", "time to rest in a stagnation zone",
-                                 units="s", fate=True)
+                                 units="s", fate=True,
+                                 outcome=lambda o: np.where(o.fate == ev.REST, o.t_final, np.nan))
         if model.dynamics.stick_is_rest:
-            for c in model.dynamics.coordinates:
+            for j, c in enumerate(model.dynamics.coordinates):
                 var = model.variables[c[0]]
                 layers[f"{c[0]}_rest"] = Layer(f"{c[0]}_rest", "float64",
                                                f"{var.long_name} at rest", units=var.units,
-                                               fate=True)
-    _REGISTRIES[model.name] = layers
+                                               fate=True, outcome=lambda o, j=j: o.positions[j])
+    _REGISTRIES[key] = layers
     return layers
 
 
