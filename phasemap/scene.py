@@ -25,6 +25,7 @@ import numpy as np
 import xarray as xr
 
 from . import _numerics as nx
+from ._codegen import content_hash
 from ._version import __version__
 from .atlas import CONVENTIONS
 from .grid import evaluate
@@ -305,9 +306,13 @@ class Scene:
         """Dask-backed layers: one blockwise task per block computes every layer once.
 
         The graph is a few blockwise layers, never materialised block by block,
-        so it builds at once whatever the number of blocks.
+        so it builds at once whatever the number of blocks.  Task names hash
+        everything that decides the values (the model's content, the scene,
+        the options and the chunks), so two scenes share a name only if they
+        share every value.
         """
         import dask.array as da
+        from dask.base import tokenize
 
         if isinstance(chunks, int):
             chunks = {n: chunks for n in self.axes}
@@ -321,7 +326,10 @@ class Scene:
         reg = layers_for(self.model)
         ndim = len(self.axes)
         normal = da.core.normalize_chunks(sizes, self.shape)
-        token = f"phasemap-{self.model.name}-{abs(hash(json.dumps(self.spec(), default=str)))}"
+        token = tokenize(content_hash(self.model), json.dumps(self.spec(), default=str),
+                         self.options.as_dict(), [a.tobytes() for a in self.axes.values()],
+                         normal)
+        token = f"phasemap-{self.model.name}-{token}"
         raw = da.map_blocks(_raw_block, chunks=normal, dtype=object,
                             meta=np.empty((0,) * ndim, dtype=object), name=f"{token}-blocks",
                             scene=self)
