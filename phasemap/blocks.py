@@ -297,6 +297,9 @@ def plan(shape: tuple[int, ...], block_cells: int) -> tuple[int, int]:
 
     Such a block is a run of cells in C order; :func:`write_scene` uses it as
     the netCDF chunk of every layer.
+
+    >>> plan((100, 50), 1000)    # 16 rows of 50 cells
+    (0, 16)
     """
     block_cells = max(1, int(block_cells))
     for k in range(len(shape)):

@@ -193,6 +193,7 @@ def _load_or_generate(stem: str, text):
             pass
     body = text()
     try:
+        root.mkdir(parents=True, exist_ok=True)   # removed while this process ran
         _write(path, body)
     except OSError as err:
         root = _private(f"cannot write {path.name} into {root} ({err.strerror or err})")
@@ -412,13 +413,14 @@ def _folders() -> list[tuple[pathlib.Path, bool]]:
 
 def _entries() -> list[_Entry]:
     entries: dict[tuple[str, bool], _Entry] = {}
+    root = folder()
     for where, generated in _folders():
         try:
             names = os.listdir(where)
         except OSError:
             continue
         for name in names:
-            if generated and where == folder() and name.endswith(".py"):
+            if generated and where == root and name.endswith(".py"):
                 stem = name[:-3]
             else:
                 m = _NUMBA_FILE.match(name) or (_BYTECODE.match(name) if generated else None)

@@ -227,8 +227,9 @@ class Scene:
         With ``chunks`` (cells per axis, as an int for every axis or a mapping)
         the Dataset is dask-backed and each block runs the same numba kernel
         when computed, locally or on a ``dask.distributed`` cluster.  Without,
-        it is computed now: a map in one kernel call, a fate map in blocks of
-        well under a second (Ctrl-C interrupts it between two), with a progress
+        it is computed now: a map in one kernel call (in blocks above
+        :data:`SLAB_CELLS` cells), a fate map in blocks of well under a second
+        (Ctrl-C interrupts it between two), with a progress
         bar after a second in an interactive session (``progress=True`` or
         ``False`` decides; ``PHASEMAP_PROGRESS`` overrides).
 

@@ -95,15 +95,35 @@ print(est.memory, peak)
 """
 
 
+#: Runs the command line and prints its peak resident memory (bytes) after its stderr.
+CLI_PEAK = """
+import resource, subprocess, sys
+r = subprocess.run([sys.executable, "-m", "phasemap.cli", *sys.argv[1:]], capture_output=True,
+                   text=True)
+print(r.stderr, r.returncode, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * 1024)
+"""
+
+
 @pytest.mark.parametrize("side", [1, 2000])
-def test_the_memory_estimate_is_near_the_measured_peak(side):
-    """Python: the estimate against the process's own peak; a 1-cell map and 4 * 10^6
-    cells of one int8 and one float layer (36 MB)."""
+def test_the_memory_estimate_is_near_the_measured_peak(side, tmp_path):
+    """The estimate against the measured peak: in Python with the whole result in
+    memory, and on the command line block by block; a 1-cell map and 4 * 10^6 cells
+    of one int8 and one float layer (36 MB)."""
     r = subprocess.run([sys.executable, "-c", MEASURE.replace("N", str(side))],
                        capture_output=True, text=True, env=env(), timeout=600)
     assert r.returncode == 0, r.stderr
     estimated, peak = map(int, r.stdout.split())
     assert 0.8 * peak <= estimated <= 1.25 * peak, (estimated, peak)
+    r = subprocess.run([sys.executable, "-c", CLI_PEAK, "atlas", "ladder", "--axis",
+                        f"phi=0:1.5:{side}", "--axis", f"f=0:3:{side}", "--layers",
+                        "n_solutions,phi_ddot_slide_pos", "-o", str(tmp_path / "a.nc")],
+                       capture_output=True, text=True, env=env(PHASEMAP_PROGRESS="never"),
+                       timeout=600)
+    *err, code, peak = r.stdout.split()
+    assert code == "0", r.stdout
+    size, unit = re.search(r"memory about ([\d.]+) (MB|GB)", " ".join(err)).groups()
+    estimated = float(size) * (1e6 if unit == "MB" else 1e9)
+    assert 0.8 * int(peak) <= estimated <= 1.25 * int(peak), (estimated, peak)
 
 
 # ------------------------------------------------------------- progress ---------
@@ -186,11 +206,11 @@ def test_ctrl_c_interrupts_a_fate_map_from_python(attempt):
 
 def test_ctrl_c_stops_the_command_line_while_it_times_its_sample(tmp_path):
     args = ["atlas", "hinge_pendulum", "--axis", "phi=-3:3:41", "--axis", "omega=-6:6:41",
-            "--set", "delta=0", "--layers", "fate", "--option", "t_end=2e4", "-o", "f.nc"]
+            "--set", "delta=0", "--layers", "fate", "--option", "t_end=4e4", "-o", "f.nc"]
     proc = subprocess.Popen([sys.executable, "-m", "phasemap.cli", *args], cwd=tmp_path,
                             env=env(PHASEMAP_PROGRESS="always"), text=True,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, bufsize=1)
-    wait_for(proc, proc.stderr, "timing up to")
+    wait_for(proc, proc.stderr, "sample cells")   # timing them: 0.4 s of work per cell
     _, err = interrupt(proc, 1.0, "timing its sample")
     assert proc.returncode == 130, err
     assert err.strip().splitlines()[-1] == "phasemap: interrupted; no partial file was left"
