@@ -61,6 +61,7 @@ from typing import Iterator, Mapping
 import numpy as np
 import xarray as xr
 
+from ._dataset import CONVENTIONS, motion_kind
 from ._version import __version__
 from .progress import human_bytes
 
@@ -80,9 +81,6 @@ __all__ = [
     "removed_on_signals",
     "write_atlas",
 ]
-
-#: The CF version every atlas declares (see the module docstring for why 1.8).
-CONVENTIONS = "CF-1.8"
 
 #: Upper bound on the uncompressed size of one netCDF chunk of a layer.
 CHUNK_BYTES = 1 << 20
@@ -593,8 +591,8 @@ def _check_is_atlas(ds: xr.Dataset, where: str) -> None:
 
 
 def _describe(ds: xr.Dataset, where: str) -> str:
-    kind = ds.attrs.get("phasemap_kind")
-    if kind in ("trajectory", "phase_curve"):
+    kind = motion_kind(ds)
+    if kind is not None:
         return _describe_motion(ds, where, kind)
     return _describe_grid(ds, where)
 
