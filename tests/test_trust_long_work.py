@@ -249,7 +249,7 @@ def interrupt(args, cwd, ready: str, sig=signal.SIGINT):
 
 @pytest.mark.parametrize("args, ready", [
     (["atlas", "hinge_pendulum", "--axis", "phi=-3:3:3000", "--axis", "omega=-6:6:3000",
-      "--layers", "fate", "--option", "t_end=30", "-o", "fates.nc"], "fates.nc:"),
+      "--layers", "fate", "--option", "t_end=30", "--yes", "-o", "fates.nc"], "fates.nc:"),
     (["simulate", "hinge_pendulum", "phi=1", "delta=0", "--t-end", "1e5", "-o", "s.nc"],
      "integrating"),
     (["tour", "--out", "tour"], "[1/6] ladder"),
