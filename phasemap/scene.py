@@ -343,8 +343,11 @@ class Scene:
         coords = {}
         for name, a in self.axes.items():
             var = m.variables[name]
-            coords[name] = xr.Variable(name, a, variable_attrs(var))
-        data_vars = {n: xr.Variable(dims, arrays[n], reg[n].attrs) for n in self.layers}
+            coords[name] = xr.Variable(name, a, variable_attrs(var), fastpath=True)
+        # fastpath: the arrays are ours, so xarray need not ask whether they are dask
+        # arrays (which imports dask.array, seconds in a fresh process)
+        data_vars = {n: xr.Variable(dims, arrays[n], reg[n].attrs, fastpath=True)
+                     for n in self.layers}
         attrs = {**cf_header(m), "phasemap_scene": json.dumps(self.spec())}
         for name, value in self.fixed.items():
             attrs[f"phasemap_fixed_{name}"] = value

@@ -219,8 +219,8 @@ def _declaration(x):
     if isinstance(x, System):
         return x, None
     S = getattr(x, "declaration", None)
-    if S is not None:
-        return S, None
+    if S is not None:  # a model loaded from the kernel cache holds a lazy Declaration
+        return getattr(S, "system", S), None
     twin = TWINS.get(getattr(x, "name", None))
     if twin is None:
         raise TypeError(f"conditions: {getattr(x, 'name', x)!r} is not a declared system or "

@@ -5,15 +5,13 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import inspect
 import json
 import math
-import pathlib
 
 import numpy as np
 
 from .. import _codegen
-from .. import _numerics as nx
+from .._declared import checks, declare_sources
 from .._version import __version__
 from ..model import Branch, Derived, Dynamics, Model, Variable
 from .api import Coordinate, sym
@@ -62,10 +60,7 @@ def cache_stem(S) -> str:
     import sympy as sp
 
     h = hashlib.sha256(canonical(S).encode())
-    # every module of the package but the conditions, which the generated text does not use
-    sources = [f for f in sorted(pathlib.Path(__file__).parent.glob("*.py"))
-               if f.name != "admissibility.py"]
-    for f in sources + [pathlib.Path(nx.__file__)]:
+    for f in declare_sources():
         h.update(f.read_bytes())
     h.update(f"{sp.__version__} {numba.__version__} {np.__version__} {__version__}".encode())
     return f"{S.name}_declared_{h.hexdigest()[:16]}"
@@ -102,7 +97,8 @@ def build_model(S) -> Model:
                              "relative to the magnitude of its terms"),
         velocity=spec["velocity"], velocity_scale=module.velocity_scale,
         default_axes=dict(S.default_axes) or _default_axes(S, state, params),
-        dynamics=dynamics, check=_checks(S, spec, module),
+        dynamics=dynamics,
+        check=checks(S.name, S.check, getattr(module, "inside", None), _domain_text(spec)),
         declaration=S, inside=getattr(module, "inside", None),
         domain_text=_domain_text(spec),
         # every sign a mode's law depends on (a slip's, a two-sided contact's normal
@@ -172,30 +168,6 @@ def _domain_text(spec) -> str:
         return ""
     return ("the corner of contact " + " or ".join(repr(n) for n in names)
             + " leaves the body's edge (the contact no longer exists)")
-
-
-def _checks(S, spec, module):
-    """The model's Python-level domain check: the declaration's own, and ``inside``."""
-    inside = getattr(module, "inside", None)
-    if inside is None:
-        return S.check
-    names = list(inspect.signature(inside.py_func).parameters)
-    text = _domain_text(spec)
-
-    def check(values):
-        if S.check is not None:
-            S.check(values)
-        vals = {}
-        for n in names:
-            src = n[4:] if n.startswith(("sin_", "cos_")) else n
-            x = np.asarray(values[src], float)
-            vals[n] = np.sin(x) if n.startswith("sin_") else (np.cos(x) if n.startswith("cos_")
-                                                              else x)
-        ok = np.vectorize(inside.py_func, otypes=[bool])(*(vals[n] for n in names))
-        if not np.all(ok):
-            raise ValueError(f"{S.name}: outside the domain: {text}")
-
-    return check
 
 
 def _per_s2(units: str) -> str:

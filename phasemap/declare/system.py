@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import hashlib
-import importlib.util
-import pathlib
 from dataclasses import dataclass, field
 from typing import Mapping
 
+from .. import _declared
 from .build import build_model
 
 
@@ -33,7 +31,9 @@ class System:
     forces: Mapping = field(default_factory=dict)
     default_axes: Mapping = field(default_factory=dict)
     edges: Mapping = field(default_factory=dict)
-    #: optional cross-variable domain check on (possibly array) values: raise ValueError
+    #: optional cross-variable domain check on (possibly array) values: raise ValueError.
+    #: Defined in an importable module other than the declaration file, it lets a warm
+    #: process load the model without building the declaration (phasemap._declared).
     check: object = None
     #: optional short names for branches and reactions: ``{generated name: name}``
     #: (such as ``{"floor_slip_pos_wall_slip_pos": "slide_pos", "N_floor": "N"}``);
@@ -62,20 +62,8 @@ _MODELS: dict[int, tuple] = {}
 def load(path) -> "object":
     """The Model declared in a Python file: its ``SYSTEM`` (a :class:`System`).
 
+    With a warm kernel cache and an unchanged file, the model is loaded without
+    running the file (and without sympy): see :mod:`phasemap._declared`.
     ValueError naming the file when it cannot be read or declares no system.
     """
-    p = pathlib.Path(path)
-    if not p.is_file():
-        raise ValueError(f"{path}: no such declaration file")
-    name = "phasemap_declared_" + hashlib.sha256(str(p.resolve()).encode()).hexdigest()[:12]
-    spec = importlib.util.spec_from_file_location(name, p)
-    module = importlib.util.module_from_spec(spec)
-    try:
-        spec.loader.exec_module(module)
-    except Exception as e:  # a user's file: report it as a declaration error
-        raise ValueError(f"{path}: the declaration failed to run: {type(e).__name__}: {e}") \
-            from e
-    system = getattr(module, "SYSTEM", None)
-    if not isinstance(system, System):
-        raise ValueError(f"{path}: the file must define SYSTEM = phasemap.declare.System(...)")
-    return system.model
+    return _declared.load(path)

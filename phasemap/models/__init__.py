@@ -22,10 +22,10 @@ Anywhere a model name is accepted, a path to a declaration file
 
 from __future__ import annotations
 
-import importlib
 import os
 from collections.abc import Mapping
 
+from .. import _declared
 from ..model import Model
 from . import elliptic_pendulum, hinge_pendulum
 
@@ -48,7 +48,7 @@ class _Registry(Mapping):
 
     def __getitem__(self, name: str) -> Model:
         if name not in self._models and name in DECLARED:
-            self._models[name] = importlib.import_module(DECLARED[name]).SYSTEM.model
+            self._models[name] = _declared.load(DECLARED[name])
         return self._models[name]
 
     def __iter__(self):
@@ -64,8 +64,6 @@ class _Registry(Mapping):
 MODELS: Mapping[str, Model] = _Registry(
     {m.MODEL.name: m.MODEL for m in (elliptic_pendulum, hinge_pendulum)})
 
-_FILES: dict[str, Model] = {}
-
 
 def get_model(model: str | Model) -> Model:
     """The :class:`Model` for a name, a declaration file's path, or the model itself.
@@ -76,12 +74,7 @@ def get_model(model: str | Model) -> Model:
     if isinstance(model, Model):
         return model
     if isinstance(model, (str, os.PathLike)) and str(model).endswith(".py"):
-        from ..declare import load
-
-        key = os.path.abspath(str(model))
-        if key not in _FILES:
-            _FILES[key] = load(model)
-        return _FILES[key]
+        return _declared.load(model)
     try:
         return MODELS[model]
     except (KeyError, TypeError):

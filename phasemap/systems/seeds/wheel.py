@@ -1,10 +1,10 @@
 """The wheel of Lapshin (2021, Fig. 2), as it runs: a disc with a displaced centre of mass
 rolling with rolling friction.  phasemap.models.wheel (the paper's equations) checks it."""
 
-import numpy as np
 import sympy as sp
 
 from phasemap.declare import Body, Coordinate, Parameter, Rate, RollingContact, System
+from phasemap.systems.seeds.checks import centre_of_mass_inside_the_disc
 
 delta = Parameter("delta", "m", "rolling friction coefficient", 0.05, 0.0)
 r = Parameter("r", "m", "radius of the disc", 1.0, 0.0, lower_open=True)
@@ -21,12 +21,6 @@ xa, ya = Coordinate("xa", "m", "disc centre, x"), Coordinate("ya", "m", "disc ce
 C = (xa - l * sp.sin(phi), ya - l * sp.cos(phi))
 
 
-def _inside_the_disc(v):
-    if np.any(np.asarray(v["l"], float) > np.asarray(v["r"], float)):
-        raise ValueError("wheel: l (offset of the centre of mass) must not exceed r (radius): "
-                         f"got l = {np.max(v['l']):g}, r = {np.min(v['r']):g}")
-
-
 SYSTEM = System(
     "wheel", "Disc with a displaced centre of mass, rolling with rolling friction",
     "Lapshin V.V. (2021), Herald of the Bauman Moscow State Technical University, Series "
@@ -38,7 +32,7 @@ SYSTEM = System(
     contacts=(RollingContact("floor", (xa, ya), radius=r, angle=-phi, normal=(0, 1),
                              rolling_friction=delta),),
     default_axes={"phi": (-float(sp.pi), float(sp.pi), 512), "delta": (0.0, 1.0, 512)},
-    check=_inside_the_disc,
+    check=centre_of_mass_inside_the_disc,
     names={"floor_roll_neg": "roll_pos", "floor_roll_pos": "roll_neg",
            "N_floor": "N", "F_floor": "F", "M_floor": "M"},
 )

@@ -1,0 +1,86 @@
+"""Declared rows against hand rows, per integrator step (issue 22, target 4's last bullet).
+
+The wheel's fate-map integrator (DOPRI5, rtol 1e-6, as ``Scene(..., layers=fate)``
+runs it) on the same random cells, with the declared model (what ``wheel`` runs)
+and the hand module (``phasemap.models.wheel.MODEL``): nanoseconds per step on
+one thread, and the physics of a step timed alone (one right-hand side: sin,
+cos and the roll row; one classification of every row), from
+``benchmarks/fate_map.py``'s ``step_profile``.  The two models alternate over
+``--rounds`` rounds; each figure is the fastest of 5 runs within a round, and
+the table gives the median over rounds.
+
+    python benchmarks/declared_rows.py [--rounds 3] [--cells 1500]
+
+Writes the section "Declared rows per step" of ../BENCHMARKS.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import shlex
+import statistics
+import sys
+
+import numba
+
+HERE = pathlib.Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+from fate_map import step_profile  # noqa: E402
+from grid import hand_model, load, machine, write_section  # noqa: E402
+
+import phasemap  # noqa: E402
+
+FIELDS = {"step_ns": "ns per step", "fit_step_ns": "ns per step, fitted",
+          "rhs_ns": "one right-hand side (ns)", "point_ns": "one classification (ns)"}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--cells", type=int, default=1500)
+    ap.add_argument("--fit-cells", type=int, default=100)
+    ap.add_argument("--no-write", action="store_true", help="print only")
+    a = ap.parse_args()
+    numba.set_num_threads(1)
+    models = {"declared": phasemap.get_model("wheel"), "hand": hand_model("wheel")}
+    before = load()
+    got = {k: [] for k in models}
+    for _ in range(a.rounds):
+        for k, m in models.items():
+            got[k].append(step_profile(m, cells=a.cells, fit_cells=a.fit_cells))
+    med = {k: {f: statistics.median(p[f] for p in v) for f in FIELDS} for k, v in got.items()}
+    p = got["declared"][0]
+    lines = [
+        "## Declared rows per step (`benchmarks/declared_rows.py`)", "",
+        f"Machine: {machine()}; load average {before} before, {load()} after.  ",
+        "Command: `" + " ".join(shlex.quote(x) for x in
+                                ["python", "benchmarks/declared_rows.py", *sys.argv[1:]]) + "`",
+        "",
+        f"The wheel's fate-map integrator on {a.cells} random cells (phi in [-pi, pi], omega "
+        f"in [-6, 6], DOPRI5, rtol 1e-6; {p['steps_per_cell']:.0f} steps per cell), one "
+        "thread, declared (`phasemap/systems/seeds/wheel.py`, what `wheel` runs) against "
+        "hand (`phasemap.models.wheel`), alternating over "
+        f"{a.rounds} rounds: medians of each round's fastest of 5.  *fitted*: least squares "
+        f"on steps and events over {a.fit_cells} cells, each timed alone.  The right-hand "
+        "side and the classification are timed alone, each call waiting for the last "
+        "(`fate_map.step_profile`).",
+        "",
+        "| | " + " | ".join(FIELDS.values()) + " |",
+        "|---|" + "---:|" * len(FIELDS),
+    ]
+    for k in models:
+        lines.append(f"| {k} ({len(models[k].branches)} rows) | " + " | ".join(f"{med[k][f]:.0f}" for f in FIELDS) + " |")
+    lines.append("| declared / hand | " + " | ".join(
+        f"{med['declared'][f] / med['hand'][f]:.2f}" for f in FIELDS) + " |")
+    ratio = med["declared"]["step_ns"] / med["hand"]["step_ns"]
+    lines += ["", f"Target 4 (declared rows no slower per step than the hand ones): "
+              f"{'met' if ratio <= 1.0 else f'**missed** ({ratio:.2f}x per step)'}.", ""]
+    text = "\n".join(lines)
+    print(text)
+    if not a.no_write:
+        write_section(text, "## Declared rows per step")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,120 @@
+"""A warm process maps without sympy, and a changed declaration is never loaded stale.
+
+Assertions on modules and values, not on time (benchmarks/cold_start.py times it).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import phasemap
+from phasemap import _declared
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: A small map of each model over its default axes (default layers), then the heavy
+#: modules that were imported after it, as JSON.
+MAP_EVERY_MODEL = """
+import json, sys
+import numpy as np
+import phasemap
+heavy = ("sympy", "dask", "matplotlib")
+seen = {"import phasemap": [m for m in heavy if m in sys.modules]}
+for name in phasemap.MODELS:
+    m = phasemap.get_model(name)
+    axes = {k: np.linspace(a, b, 8) for k, (a, b, _) in list(m.default_axes.items())[:2]}
+    phasemap.Scene(name, axes=axes).compute()
+    seen[name] = [m for m in ("sympy", "dask.array", "matplotlib") if m in sys.modules]
+print(json.dumps(seen))
+"""
+
+
+def _run(code: str, *args) -> str:
+    run = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True,
+                         cwd=ROOT, timeout=1800)
+    assert run.returncode == 0, run.stderr
+    return run.stdout.strip().splitlines()[-1]
+
+
+def test_a_warm_process_maps_every_built_in_model_without_sympy():
+    """The first process fills the kernel cache; the second finds every declared model's
+    manifest there and never builds a declaration: no sympy, no dask, no matplotlib."""
+    _run(MAP_EVERY_MODEL)
+    seen = json.loads(_run(MAP_EVERY_MODEL))
+    assert set(seen) == {"import phasemap", *phasemap.MODELS}
+    assert seen == {k: [] for k in seen}
+
+
+CLASSIFY = """
+import json, sys
+import phasemap
+c = phasemap.classify(sys.argv[1], phi=0.6, omega=-1.0, f=0.2)
+print(json.dumps([c.n_solutions, [b.accelerations.get("phi_ddot") for b in c.branches],
+                  "sympy" in sys.modules]))
+"""
+
+
+def test_a_changed_declaration_is_derived_again_never_loaded_stale(tmp_path):
+    """A declaration file's manifest is keyed on its bytes: after an edit that changes the
+    physics (the bar's inertia) a warm process uses the new derivation."""
+    src = (ROOT / "phasemap" / "systems" / "seeds" / "ladder.py").read_text()
+    src = src.replace('"ladder", "Homogeneous', '"my_ladder", "Homogeneous')
+    assert "inertia=m * l**2 / 3" in src
+    edited = src.replace("inertia=m * l**2 / 3", "inertia=m * l**2 / 12")
+    path, twin = tmp_path / "my_ladder.py", tmp_path / "my_ladder_edited.py"
+    path.write_text(src)
+    twin.write_text(edited)
+    expected = phasemap.classify(twin, phi=0.6, omega=-1.0, f=0.2)  # derived here, with sympy
+    _run(CLASSIFY, str(path))                                          # fills the cache
+    n, before, sympy = json.loads(_run(CLASSIFY, str(path)))
+    assert not sympy                                                   # from the manifest
+    path.write_text(edited)
+    n, after, sympy = json.loads(_run(CLASSIFY, str(path)))
+    assert sympy                                                       # derived again
+    new = [b.accelerations.get("phi_ddot") for b in expected.branches]
+    assert after == new and after != before and n == expected.n_solutions
+    n, again, sympy = json.loads(_run(CLASSIFY, str(path)))
+    assert again == new and not sympy
+
+
+def test_a_model_from_the_manifest_is_the_derived_model():
+    """Every field but the closures (check) and the declaration round-trips through the
+    manifest; the lazy declaration builds the System on use."""
+    source = phasemap.models.DECLARED["wheel"]
+    S = _declared.system(source)
+    derived = S.model
+    data = json.loads(json.dumps(_declared.manifest(S, derived)))
+    module = sys.modules["phasemap_kernel_" + data["module"]]
+    rebuilt = _declared.build(data, module, S.check, _declared.Declaration(source))
+    for f in dataclasses.fields(derived):
+        if f.name not in ("check", "declaration"):
+            assert getattr(rebuilt, f.name) == getattr(derived, f.name), f.name
+    assert rebuilt.declaration.system is S and rebuilt.declaration.name == "wheel"
+    assert data["check"] == "phasemap.systems.seeds.checks:centre_of_mass_inside_the_disc"
+    try:
+        rebuilt.check({"l": 2.0, "r": 1.0})
+    except ValueError as e:
+        assert "must not exceed r" in str(e)
+    else:
+        raise AssertionError("the wheel's domain check did not run")
+
+
+def test_a_check_defined_in_the_declaration_file_keeps_the_slow_path(tmp_path):
+    """A check the manifest cannot name (defined in the declaration file) writes no
+    manifest: such a file is built in every process, as before, never half-loaded."""
+    source = phasemap.models.DECLARED["wheel"]
+    S = _declared.system(source)
+
+    def local(values):
+        return None
+
+    assert _declared.manifest(dataclasses.replace(S, check=local), S.model) is None
+    path = tmp_path / "uses_open.py"
+    path.write_text("import sympy\nSYSTEM = eval(open('x.txt').read())\n")
+    assert _declared.key_of(path) is None
+    path.write_text("import scipy\n")
+    assert _declared.key_of(path) is None
