@@ -590,9 +590,18 @@ def _check_is_atlas(ds: xr.Dataset, where: str) -> None:
         raise ValueError(f"{where}: not a phasemap atlas (no layers)")
 
 
+#: What a motion's description reads, by kind.
+_MOTION_VARIABLES = {"trajectory": ("t", "event_kind", "event_t"),
+                     "phase_curve": ("stage_end_reason",)}
+
+
 def _describe(ds: xr.Dataset, where: str) -> str:
     kind = motion_kind(ds)
     if kind is not None:
+        missing = [n for n in _MOTION_VARIABLES[kind] if n not in ds.variables]
+        if missing:
+            raise ValueError(f"{where}: phasemap_kind says {kind}, but it has no "
+                             f"{', '.join(missing)}")
         return _describe_motion(ds, where, kind)
     return _describe_grid(ds, where)
 
