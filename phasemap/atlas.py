@@ -689,8 +689,8 @@ def _describe_grid(ds: xr.Dataset, where: str) -> str:
             x = np.asarray(ds[d].values, dtype=float)
             attrs = ds[d].attrs
             rng = f"[{x.min():.6g}, {x.max():.6g}]" if x.size else "[]"
-            rows.append((d, str(x.size), rng, attrs.get("units", "?"), _spacing(x),
-                         attrs.get("long_name", "")))
+            rows.append((d, str(x.size), rng, str(attrs.get("units", "?")), _spacing(x),
+                         str(attrs.get("long_name", ""))))
         else:
             rows.append((d, str(ds.sizes[d]), "(no coordinate)", "", "", ""))
     lines += _table(rows)

@@ -294,3 +294,43 @@ def test_the_readers_of_a_file_fuzzed_with_malformed_attributes(ladder_map, tmp_
         plt.close("all")
     assert not (tmp_path / "MARKER").exists()
     assert outcomes["ok"] > 100 and outcomes["refused"] > 100, outcomes
+
+
+#: Values of a variable's attributes, the malformed ones first.
+VARIABLE_JUNK = [None, "", "a b", "1 2 3", 3, np.nan, np.array([1.0]),
+                 np.array([0, 1, 2, 3, 4, 5, 6, 7]), "\\frac{", "$\\frac{$", "$", "x" * 3000,
+                 "m s-1", "rad2"]
+
+
+def test_the_figure_and_description_of_a_file_fuzzed_in_its_variables(ladder_map):
+    """A seeded fuzz of the attributes figures and ``phasemap info`` read from a variable
+    (``flag_values``, ``flag_meanings``, ``phasemap_symbol``, ``units``,
+    ``long_name``): drawn to the end, each gives a figure or one ValueError/TypeError
+    raised by phasemap (a symbol that is not mathtext is not used)."""
+    import matplotlib.pyplot as plt
+
+    rng = random.Random(2028)
+    drawn = 0
+    cases = [("phi", "phasemap_symbol", "\\frac{"), ("f", "phasemap_symbol", "$"),
+             ("phi", "long_name", "$\\frac{$"), ("phi", "units", "$\\frac{$"),
+             ("phi", "units", np.array([1.0])), ("f", "long_name", np.array([1.0])),
+             ("n_solutions", "flag_meanings", "a b"), ("n_solutions", "flag_values", 3)]
+    cases += [(rng.choice(["n_solutions", "phi", "f"]),
+               rng.choice(["flag_values", "flag_meanings", "phasemap_symbol", "units",
+                           "long_name"]), rng.choice(VARIABLE_JUNK)) for _ in range(17)]
+    for var, attr, value in cases:
+        ds = ladder_map.copy()
+        ds[var].attrs = dict(ladder_map[var].attrs)
+        if value is None:
+            ds[var].attrs.pop(attr, None)
+        else:
+            ds[var].attrs[attr] = value
+        for what, call in (("plot", lambda: ds.phasemap.plot().canvas.draw()),
+                           ("describe", lambda: describe_atlas(ds))):
+            try:
+                call()
+                drawn += what == "plot"
+            except (ValueError, TypeError) as e:
+                assert _raised_by_phasemap(e) and "\n" not in str(e), (var, attr, value, e)
+            plt.close("all")
+    assert drawn > 12
