@@ -18,6 +18,7 @@ arrays or lazily with dask.  The result is a self-describing
 from __future__ import annotations
 
 import json
+import numbers
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -233,9 +234,10 @@ class Scene:
                 f"Scene.from_spec: {name!r} is declared otherwise than when the atlas was "
                 f"made (declaration sha256 {recorded[:12]}... recorded, "
                 f"{str(declaration_hash(m))[:12]}... given)"
-                + _what_differs(spec, m))
-        arrays = {n: (np.linspace(a["start"], a["stop"], a["count"]) if isinstance(a, dict)
-                      else np.asarray(a, dtype=float)) for n, a in axes.items()}
+                + _what_differs({*axes, *fixed}, m))
+        arrays = {n: (np.linspace(a["start"], a["stop"], int(a["count"]))
+                      if isinstance(a, Mapping) else np.asarray(a, dtype=float))
+                  for n, a in axes.items()}
         return cls(m, axes=arrays, fixed=fixed, layers=layers, options=options)
 
     def __repr__(self) -> str:
@@ -422,7 +424,7 @@ _SPEC_KEYS = {"model", "axes", "fixed", "layers", "options", "declaration_sha256
 
 
 def _number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 
 def _read_spec(spec):
@@ -465,7 +467,8 @@ def _read_spec(spec):
             if not (_number(a["start"]) and _number(a["stop"])):
                 bad(f"axis {axis[:40]!r}: start and stop must be numbers")
             count = a["count"]
-            if not isinstance(count, int) or isinstance(count, bool) or count < 1:
+            if not isinstance(count, numbers.Integral) or isinstance(count, (bool, np.bool_)) \
+                    or count < 1:
                 bad(f"axis {axis[:40]!r}: count must be a positive integer")
         elif isinstance(a, (list, tuple)) and all(_number(v) for v in a):
             count = len(a)
@@ -490,9 +493,9 @@ def _read_spec(spec):
     return name, dict(axes), dict(fixed), layers, options, recorded
 
 
-def _what_differs(spec: Mapping, model: Model) -> str:
-    """What a declaration and a spec disagree on, as far as the spec tells."""
-    named = set(spec["axes"]) | set(spec.get("fixed") or {})
+def _what_differs(named: set, model: Model) -> str:
+    """What a declaration and a spec naming the variables ``named`` disagree on, as far as
+    the spec tells."""
     only = sorted(named - set(model.variables))
     if only:
         return f"; the atlas has {', '.join(only)}, which the given declaration does not"

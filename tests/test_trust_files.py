@@ -170,8 +170,8 @@ def test_a_declared_atlas_is_recomputed_only_from_its_own_declaration(tmp_path):
     changed.parent.mkdir()
     assert "inertia=m * l**2 / 3," in text
     changed.write_text(text.replace("inertia=m * l**2 / 3,", "inertia=m * l**2 / 30,"))
-    with pytest.raises(ValueError) as err:
-        phasemap.Scene.from_spec(spec, model=str(changed))
+    with pytest.raises(ValueError) as err:   # the attribute's JSON text, as a file holds it
+        phasemap.Scene.from_spec(json.dumps(spec), model=str(changed))
     message = str(err.value)
     assert "\n" not in message and "declared otherwise" in message
     assert spec["declaration_sha256"][:12] in message and "names agree" in message
@@ -189,6 +189,8 @@ def test_a_spec_is_checked_before_anything_it_names_is_made(monkeypatch):
     good = {"model": "ladder", "axes": {"phi": {"start": 0.0, "stop": 1.0, "count": 3}},
             "fixed": {"f": 0.5}}
     assert phasemap.Scene.from_spec(good).shape == (3,)
+    numpy_count = {**good, "axes": {"phi": {"start": 0.0, "stop": 1.0, "count": np.int64(3)}}}
+    assert phasemap.Scene.from_spec(numpy_count).shape == (3,)
 
     def no_allocation(*args, **kwargs):
         raise AssertionError("allocated")
