@@ -28,6 +28,7 @@ alone, with no code loaded (:func:`vocabulary`).
 from __future__ import annotations
 
 import datetime as _dt
+import hashlib
 import json
 import re
 from dataclasses import dataclass, field
@@ -44,6 +45,8 @@ __all__ = [
     "Vocabulary",
     "cf_header",
     "dataset_kind",
+    "declaration_hash",
+    "recorded_model",
     "first_layer",
     "is_categorical",
     "motion_kind",
@@ -78,8 +81,9 @@ def cf_header(model, kind: str = "atlas", producer: str = "phasemap") -> dict:
     ``references`` (the model's citation), ``phasemap_kind`` (a motion only:
     ``"trajectory"`` or ``"phase_curve"``), ``phasemap_model``,
     ``phasemap_version``, ``date_created`` and ``phasemap_variables`` (the
-    model's description, see :func:`vocabulary`).  The producer adds what is
-    its own (the scene, the fixed values, the end of a motion).
+    model's description, see :func:`vocabulary`), and for a declared model
+    ``phasemap_declaration_sha256`` (:func:`declaration_hash`).  The producer
+    adds what is its own (the scene, the fixed values, the end of a motion).
     """
     if kind not in _TITLES:
         raise ValueError(f"kind must be one of {', '.join(_TITLES)}, got {kind!r}")
@@ -99,7 +103,32 @@ def cf_header(model, kind: str = "atlas", producer: str = "phasemap") -> dict:
         "date_created": now,
         "phasemap_variables": json.dumps(_describe(model), ensure_ascii=False),
     }
+    declared = declaration_hash(model)
+    if declared is not None:
+        attrs["phasemap_declaration_sha256"] = declared
     return attrs
+
+
+#: id(model) -> (model, its declaration's hash)
+_DECLARATION_HASHES: dict[int, tuple] = {}
+
+
+def declaration_hash(model) -> str | None:
+    """SHA-256 (hex) of a declared model's declaration in its canonical form (what the
+    build step keys the kernel cache with), None for a model derived by hand.
+
+    An atlas records it (``phasemap_declaration_sha256``), so that it is recomputed
+    only from the very declaration it was made with (:meth:`phasemap.Scene.from_spec`).
+    """
+    declaration = getattr(model, "declaration", None)
+    if declaration is None:
+        return None
+    if id(model) not in _DECLARATION_HASHES:
+        from .declare.build import canonical
+
+        digest = hashlib.sha256(canonical(declaration).encode()).hexdigest()
+        _DECLARATION_HASHES[id(model)] = (model, digest)
+    return _DECLARATION_HASHES[id(model)][1]
 
 
 def variable_attrs(var) -> dict:
@@ -142,6 +171,8 @@ def _describe(model) -> dict:
         "coefficient": ([coef.name, coef.symbol, coef.units, coef.long_name]
                         if coef is not None else None),
         "branches": list(model.branches),
+        "edges": {name: list(meanings) for name, meanings in
+                  (model.dynamics.edges if model.dynamics is not None else {}).items()},
     }
 
 
@@ -151,8 +182,9 @@ class Vocabulary:
 
     ``variables``, ``accelerations`` and ``reactions`` map a name to
     ``(symbol, units, long_name)``, ``coefficient`` is ``(name, symbol,
-    units, long_name)`` or None, ``branches`` the branch names in order.
-    Empty when nothing is known.
+    units, long_name)`` or None, ``branches`` the branch names in order,
+    ``edges`` maps a coordinate to what reaching its lower and upper bound
+    means.  Empty when nothing is known.
     """
 
     variables: Mapping[str, tuple] = field(default_factory=dict)
@@ -160,41 +192,93 @@ class Vocabulary:
     reactions: Mapping[str, tuple] = field(default_factory=dict)
     coefficient: tuple | None = None
     branches: tuple[str, ...] = ()
+    edges: Mapping[str, tuple] = field(default_factory=dict)
 
     def __bool__(self) -> bool:
         return bool(self.variables)
 
 
-def _from_description(d: Mapping) -> Vocabulary:
-    def table(key):
-        return {str(k): tuple(v) for k, v in dict(d.get(key) or {}).items()}
+def _strings(value, n: int, where: str) -> tuple:
+    """``value`` as a tuple of ``n`` strings (None allowed), or ValueError naming ``where``."""
+    if (not isinstance(value, (list, tuple)) or len(value) != n
+            or not all(v is None or isinstance(v, str) for v in value)):
+        raise ValueError(f"phasemap_variables: {where} must be a list of {n} strings, "
+                         f"got {str(value)[:60]}")
+    return tuple(value)
+
+
+def _from_description(d) -> Vocabulary:
+    """The :class:`Vocabulary` of a description (JSON data from a file: every part is
+    checked; ValueError in one line for anything malformed)."""
+    if not isinstance(d, dict):
+        raise ValueError("phasemap_variables: must be a JSON object")
+
+    def table(key, n=3):
+        items = d.get(key) or {}
+        if not isinstance(items, dict):
+            raise ValueError(f"phasemap_variables: {key} must be an object")
+        return {str(k): _strings(v, n, f"{key}.{k}") for k, v in items.items()}
 
     coef = d.get("coefficient")
+    branches = d.get("branches") or []
+    if not isinstance(branches, list) or not all(isinstance(b, str) for b in branches):
+        raise ValueError("phasemap_variables: branches must be a list of strings")
     return Vocabulary(table("variables"), table("accelerations"), table("reactions"),
-                      tuple(coef) if coef else None, tuple(d.get("branches") or ()))
+                      _strings(coef, 4, "coefficient") if coef else None, tuple(branches),
+                      table("edges", 2))
 
 
 def vocabulary(ds: xr.Dataset | Mapping) -> Vocabulary:
     """What the Dataset ``ds`` (or its global attributes) says about its model's words.
 
     Read from the global attribute ``phasemap_variables`` that :func:`cf_header`
-    writes; a Dataset made before it existed falls back to the registered model
-    named by ``phasemap_model``; an empty :class:`Vocabulary` when neither is there.
+    writes, as data: ValueError in one line if it is malformed.  A Dataset
+    made before it existed falls back to the built-in model named by
+    ``phasemap_model`` (never a file: nothing a file names is loaded); an
+    empty :class:`Vocabulary` when neither is there.
     """
     attrs = ds.attrs if isinstance(ds, xr.Dataset) else ds
     text = attrs.get("phasemap_variables")
-    if text:
+    if text is not None:
+        if not isinstance(text, str):
+            raise ValueError("phasemap_variables: must be JSON text")
         try:
-            return _from_description(json.loads(str(text)))
-        except (ValueError, TypeError, AttributeError):
-            pass
-    from .models import get_model
-
+            description = json.loads(text)
+        except ValueError as e:
+            raise ValueError(f"phasemap_variables: not JSON ({e})") from None
+        return _from_description(description)
     try:
-        model = get_model(attrs.get("phasemap_model"))
-    except (ValueError, TypeError):
+        model = recorded_model(attrs)
+    except ValueError:
         return Vocabulary()
     return _from_description(_describe(model))
+
+
+def recorded_model(ds: xr.Dataset | Mapping):
+    """The built-in model a Dataset (or its global attributes) was made with.
+
+    ``phasemap_model`` is looked up among the built-in models only: a name
+    read from a file is data, and no file it names is ever run.  A declared
+    model must also have the declaration the Dataset records
+    (``phasemap_declaration_sha256``).  ValueError in one line otherwise.
+    """
+    from .models import builtin_model
+
+    attrs = ds.attrs if isinstance(ds, xr.Dataset) else ds
+    name = attrs.get("phasemap_model")
+    if name is None:
+        raise ValueError("not a phasemap atlas: no phasemap_model global attribute")
+    try:
+        model = builtin_model(name)
+    except ValueError as e:
+        raise ValueError(f"the file's model: {e}; load a declaration yourself with "
+                         "phasemap.get_model('path/to/system.py')") from None
+    recorded = attrs.get("phasemap_declaration_sha256")
+    if recorded is not None and recorded != declaration_hash(model):
+        raise ValueError(f"the file's model {name!r} was declared otherwise than the built-in "
+                         f"{name!r} (declaration sha256 {str(recorded)[:12]}..., built-in "
+                         f"{str(declaration_hash(model))[:12]}...)")
+    return model
 
 
 # --------------------------------------------------------------------------- kinds
@@ -216,7 +300,7 @@ def first_layer(ds: xr.Dataset) -> xr.DataArray:
 def motion_kind(ds: xr.Dataset) -> str | None:
     """``"trajectory"`` or ``"phase_curve"`` for a Dataset that follows one motion, else None."""
     kind = ds.attrs.get("phasemap_kind")
-    return str(kind) if kind in MOTIONS else None
+    return kind if isinstance(kind, str) and kind in MOTIONS else None
 
 
 def dataset_kind(ds: xr.Dataset) -> str:
@@ -239,6 +323,8 @@ def dataset_kind(ds: xr.Dataset) -> str:
         raise ValueError(f"not a phasemap atlas: expected an xarray.Dataset, "
                          f"got {type(ds).__name__}")
     kind = ds.attrs.get("phasemap_kind")
+    if kind is not None and not isinstance(kind, str):
+        raise ValueError(f"phasemap_kind must be text, got {type(kind).__name__}")
     if kind is not None and kind != "atlas":
         if kind not in KINDS:
             raise ValueError(f"unknown phasemap_kind {kind!r}; known kinds: {', '.join(KINDS)}")

@@ -23,9 +23,8 @@ from typing import TYPE_CHECKING, Sequence
 
 import xarray as xr
 
-from ._dataset import dataset_kind
+from ._dataset import dataset_kind, recorded_model
 from .model import Model
-from .models import get_model
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -51,14 +50,14 @@ class PhasemapAccessor:
 
     @property
     def model(self) -> Model:
-        """The :class:`phasemap.Model` named by the ``phasemap_model`` global attribute.
+        """The built-in :class:`phasemap.Model` named by the ``phasemap_model`` global attribute.
 
-        Raises ValueError if there is no such attribute or it names no model.
+        A Dataset is data: the name is looked up among the built-in models and
+        nothing it names is loaded (see :func:`phasemap._dataset.recorded_model`).
+        Raises ValueError if there is no such attribute, it names no built-in
+        model, or the built-in model was declared otherwise than the Dataset records.
         """
-        name = self._ds.attrs.get("phasemap_model")
-        if name is None:
-            raise ValueError("not a phasemap atlas: no phasemap_model global attribute")
-        return get_model(name)
+        return recorded_model(self._ds)
 
     def plot(self, layer: str | Sequence[str] | None = None, ax=None,
              size: str | float = "one_column", **kw) -> Figure:

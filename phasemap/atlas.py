@@ -590,9 +590,18 @@ def _check_is_atlas(ds: xr.Dataset, where: str) -> None:
         raise ValueError(f"{where}: not a phasemap atlas (no layers)")
 
 
+#: What a motion's description reads, by kind.
+_MOTION_VARIABLES = {"trajectory": ("t", "event_kind", "event_t"),
+                     "phase_curve": ("stage_end_reason",)}
+
+
 def _describe(ds: xr.Dataset, where: str) -> str:
     kind = motion_kind(ds)
     if kind is not None:
+        missing = [n for n in _MOTION_VARIABLES[kind] if n not in ds.variables]
+        if missing:
+            raise ValueError(f"{where}: phasemap_kind says {kind}, but it has no "
+                             f"{', '.join(missing)}")
         return _describe_motion(ds, where, kind)
     return _describe_grid(ds, where)
 
@@ -680,8 +689,8 @@ def _describe_grid(ds: xr.Dataset, where: str) -> str:
             x = np.asarray(ds[d].values, dtype=float)
             attrs = ds[d].attrs
             rng = f"[{x.min():.6g}, {x.max():.6g}]" if x.size else "[]"
-            rows.append((d, str(x.size), rng, attrs.get("units", "?"), _spacing(x),
-                         attrs.get("long_name", "")))
+            rows.append((d, str(x.size), rng, str(attrs.get("units", "?")), _spacing(x),
+                         str(attrs.get("long_name", ""))))
         else:
             rows.append((d, str(ds.sizes[d]), "(no coordinate)", "", "", ""))
     lines += _table(rows)

@@ -37,6 +37,7 @@ def readme_facts() -> dict[str, str]:
     from .blocks import YES_CELLS
     from .cache import DEFAULT_MAX_MB
     from .model import MAX_MAGNITUDE, MIN_POSITIVE
+    from .scene import MAX_SPEC_CELLS
 
     return {
         "wheel singular threshold at r = 1, l = rho = 0.5":
@@ -48,4 +49,6 @@ def readme_facts() -> dict[str, str]:
         "CF version": f"declare **{CONVENTIONS}**",
         "--yes threshold": f"above 10^{round(math.log10(YES_CELLS))} cells",
         "kernel cache bound": f"{DEFAULT_MAX_MB} MB by default",
+        "largest scene spec read from a file":
+            f"at most 10^{round(math.log10(MAX_SPEC_CELLS))} cells",
     }

@@ -18,6 +18,7 @@ arrays or lazily with dask.  The result is a self-describing
 from __future__ import annotations
 
 import json
+import numbers
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -25,12 +26,12 @@ import xarray as xr
 
 from . import _numerics as nx
 from ._codegen import content_hash
-from ._dataset import cf_header, variable_attrs
+from ._dataset import cf_header, declaration_hash, variable_attrs
 from .grid import evaluate
 from .integrate import run_fate_map
 from .layers import Outcome, layers_for
 from .model import Model
-from .models import get_model
+from .models import builtin_model, get_model
 from .simulate import Options
 
 #: Default relative tolerance of a fate map's trajectories.
@@ -181,18 +182,63 @@ class Scene:
                 axes[name] = a.tolist()
         spec = {"model": self.model.name, "axes": axes, "fixed": self.fixed,
                 "layers": list(self.layers)}
+        declared = declaration_hash(self.model)
+        if declared is not None:
+            spec["declaration_sha256"] = declared
         if self.has_fates:
             spec["options"] = self.options.as_dict()
         return spec
 
     @classmethod
-    def from_spec(cls, spec: Mapping) -> "Scene":
-        axes = {}
-        for name, a in spec["axes"].items():
-            axes[name] = (np.linspace(a["start"], a["stop"], a["count"]) if isinstance(a, dict)
-                          else np.asarray(a, dtype=float))
-        return cls(spec["model"], axes=axes, fixed=spec["fixed"], layers=spec["layers"],
-                   options=spec.get("options"))
+    def from_spec(cls, spec: Mapping | str, model: str | Model | None = None) -> "Scene":
+        """The scene a :meth:`spec` describes (an atlas's ``phasemap_scene``, as JSON
+        text or parsed).
+
+        A spec is data, checked before anything it names is made: unknown
+        keys, wrong types, more than :data:`MAX_SPEC_CELLS` cells or
+        :data:`MAX_SPEC_VALUES` values on an axis are refused in one ValueError.
+        Its model name resolves to a built-in model only; nothing the spec
+        names is run.  To recompute the atlas of a system declared in a file,
+        pass the declaration, ``model="my_rod.py"`` (or its Model): it must
+        declare the system the spec records (``declaration_sha256``, the hash
+        of the declaration's canonical form), else ValueError saying what differs.
+
+        >>> import numpy as np, phasemap
+        >>> scene = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 4)},
+        ...                        fixed={"f": 0.5, "omega": 0.0})
+        >>> phasemap.Scene.from_spec(scene.spec()).spec() == scene.spec()
+        True
+        >>> phasemap.Scene.from_spec({**scene.spec(), "model": "evil.py"})
+        Traceback (most recent call last):
+        ...
+        ValueError: Scene.from_spec: the spec's model 'evil.py' is not a built-in model; pass the declaration it was made with explicitly, Scene.from_spec(spec, model='path/to/system.py')
+        """
+        name, axes, fixed, layers, options, recorded = _read_spec(spec)
+        if model is None:
+            try:
+                m = builtin_model(name)
+            except ValueError:
+                raise ValueError(f"Scene.from_spec: the spec's model {name!r} is not a built-in "
+                                 "model; pass the declaration it was made with explicitly, "
+                                 "Scene.from_spec(spec, model='path/to/system.py')") from None
+        else:
+            m = get_model(model)
+            if m.name != name:
+                raise ValueError(f"Scene.from_spec: the spec is of {name!r}, the model given "
+                                 f"is {m.name!r}")
+            if recorded is None and m.declaration is not None:
+                raise ValueError(f"Scene.from_spec: the spec records no declaration hash, so "
+                                 f"it cannot be checked against the declaration of {name!r}")
+        if recorded is not None and recorded != declaration_hash(m):
+            raise ValueError(
+                f"Scene.from_spec: {name!r} is declared otherwise than when the atlas was "
+                f"made (declaration sha256 {recorded[:12]}... recorded, "
+                f"{str(declaration_hash(m))[:12]}... given)"
+                + _what_differs({*axes, *fixed}, m))
+        arrays = {n: (np.linspace(a["start"], a["stop"], int(a["count"]))
+                      if isinstance(a, Mapping) else np.asarray(a, dtype=float))
+                  for n, a in axes.items()}
+        return cls(m, axes=arrays, fixed=fixed, layers=layers, options=options)
 
     def __repr__(self) -> str:
         axes = ", ".join(f"{n}[{a.size}]" for n, a in self.axes.items())
@@ -371,6 +417,93 @@ def _assemble(data_vars: dict, coords: dict, attrs: dict) -> xr.Dataset:
         variables.update(indexes[name].create_variables({name: var}))
     variables.update(data_vars)
     return xr.Dataset._construct_direct(variables, set(coords), attrs=attrs, indexes=indexes)
+
+
+#: The most cells a spec read from a file may describe (:meth:`Scene.from_spec`) ...
+MAX_SPEC_CELLS = 10 ** 10
+#: ... and the most values on one of its axes.
+MAX_SPEC_VALUES = 10 ** 7
+_SPEC_KEYS = {"model", "axes", "fixed", "layers", "options", "declaration_sha256"}
+
+
+def _number(value) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+
+
+def _read_spec(spec):
+    """The parts of a scene spec (data from a file), each checked for its type and size
+    before anything is made from it; ValueError in one line otherwise."""
+    def bad(what):
+        raise ValueError(f"Scene.from_spec: {what}")
+
+    if isinstance(spec, str):
+        try:
+            spec = json.loads(spec)
+        except ValueError as e:
+            bad(f"the spec is not JSON ({e})")
+    if not isinstance(spec, Mapping):
+        bad(f"a spec is a mapping, got {type(spec).__name__}")
+    unknown = set(spec) - _SPEC_KEYS
+    if unknown:
+        bad(f"unknown key {str(sorted(map(str, unknown))[0])[:40]!r}; a spec has "
+            f"{', '.join(sorted(_SPEC_KEYS))}")
+    for key in ("model", "axes"):
+        if key not in spec:
+            bad(f"the spec has no {key!r}")
+    name, axes = spec["model"], spec["axes"]
+    fixed, layers, options = spec.get("fixed") or {}, spec.get("layers"), spec.get("options")
+    recorded = spec.get("declaration_sha256")
+    if not isinstance(name, str):
+        bad(f"model must be a name, got {type(name).__name__}")
+    if recorded is not None and not isinstance(recorded, str):
+        bad(f"declaration_sha256 must be text, got {type(recorded).__name__}")
+    if not isinstance(axes, Mapping) or not axes:
+        bad("axes must be a non-empty mapping of names to values")
+    cells = 1
+    for axis, a in axes.items():
+        if not isinstance(axis, str):
+            bad(f"axis names must be text, got {type(axis).__name__}")
+        if isinstance(a, Mapping):
+            if set(a) != {"start", "stop", "count"}:
+                bad(f"axis {axis[:40]!r} must be a list of numbers or "
+                    "{start, stop, count}")
+            if not (_number(a["start"]) and _number(a["stop"])):
+                bad(f"axis {axis[:40]!r}: start and stop must be numbers")
+            count = a["count"]
+            if not isinstance(count, numbers.Integral) or isinstance(count, (bool, np.bool_)) \
+                    or count < 1:
+                bad(f"axis {axis[:40]!r}: count must be a positive integer")
+        elif isinstance(a, (list, tuple)) and all(_number(v) for v in a):
+            count = len(a)
+        else:
+            bad(f"axis {axis[:40]!r} must be a list of numbers or {{start, stop, count}}")
+        if count > MAX_SPEC_VALUES:
+            bad(f"axis {axis[:40]!r} has {count:,} values, more than {MAX_SPEC_VALUES:,}")
+        cells *= max(count, 1)
+        if cells > MAX_SPEC_CELLS:
+            bad(f"the axes describe more than {MAX_SPEC_CELLS:,} cells")
+    if not isinstance(fixed, Mapping) or not all(isinstance(k, str) and _number(v)
+                                                 for k, v in fixed.items()):
+        bad("fixed must map names to numbers")
+    if layers is not None and not (isinstance(layers, (list, tuple))
+                                   and all(isinstance(n, str) for n in layers)):
+        bad("layers must be a list of names")
+    if options is not None and not (
+            isinstance(options, Mapping)
+            and all(isinstance(k, str) and (_number(v) or isinstance(v, str) or v is None)
+                    for k, v in options.items())):
+        bad("options must map names to numbers or text")
+    return name, dict(axes), dict(fixed), layers, options, recorded
+
+
+def _what_differs(named: set, model: Model) -> str:
+    """What a declaration and a spec naming the variables ``named`` disagree on, as far as
+    the spec tells."""
+    only = sorted(named - set(model.variables))
+    if only:
+        return f"; the atlas has {', '.join(only)}, which the given declaration does not"
+    return ("; the names agree, so the bodies, forces, contacts, bounds, units or texts "
+            "differ")
 
 
 def _raw_block(scene: Scene, block_info=None) -> dict[str, np.ndarray]:

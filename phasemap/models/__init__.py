@@ -84,4 +84,19 @@ def get_model(model: str | Model) -> Model:
         ) from None
 
 
-__all__ = ["MODELS", "DECLARED", "get_model"]
+def builtin_model(name) -> Model:
+    """The built-in model registered as ``name``: never a file, never a module named by
+    the caller.  What a name read from a data file's metadata resolves to.
+
+    >>> builtin_model("ladder").name
+    'ladder'
+
+    ValueError (one line) for anything else, a path to a declaration file included.
+    """
+    if isinstance(name, str) and name in MODELS:
+        return MODELS[name]
+    raise ValueError(f"{str(name)[:80]!r} is not a built-in model ({', '.join(MODELS)}); a "
+                     "model named by a data file is never loaded from a file")
+
+
+__all__ = ["MODELS", "DECLARED", "builtin_model", "get_model"]

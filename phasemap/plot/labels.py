@@ -8,6 +8,7 @@ declared system is labelled as a built-in one is: ``$\theta$ (rad)``.
 
 from __future__ import annotations
 
+import functools
 import json
 import re
 from typing import Sequence
@@ -34,8 +35,26 @@ def format_units(units: str | None) -> str:
         if m and m.group(2) != "1":
             out.append(f"{m.group(1)}$^{{{m.group(2)}}}$")
         else:
-            out.append(m.group(1) if m else token)
+            out.append(m.group(1) if m else _plain(token))
     return " ".join(out)
+
+
+def _plain(text: str) -> str:
+    """Text read from a file, shown as it is (a ``$`` does not start mathtext)."""
+    return text.replace("$", r"\$")
+
+
+@functools.lru_cache(maxsize=512)
+def _is_mathtext(symbol: str) -> bool:
+    """Whether ``$symbol$`` is mathtext matplotlib can draw (a symbol read from a file may
+    not be: it is then not used)."""
+    from matplotlib.mathtext import MathTextParser
+
+    try:
+        MathTextParser("path").parse(f"${symbol}$")
+    except ValueError:
+        return False
+    return True
 
 
 def _with_units(text: str, units: str | None) -> str:
@@ -49,8 +68,16 @@ def _symbol_and_units(ds: xr.Dataset, name: str) -> tuple[str, str | None] | Non
     A variable's own ``phasemap_symbol`` attribute first; then the model's
     description (:func:`phasemap._dataset.vocabulary`): a variable, a branch's
     acceleration, reaction or coefficient (``phi_ddot_slide_pos``), a variable
-    at a moment of a motion (``phi_rest``).
+    at a moment of a motion (``phi_rest``).  None if the symbol is not mathtext
+    (the label is then made from the name or ``long_name``).
     """
+    known = _declared_symbol(ds, name)
+    if known is None or not _is_mathtext(known[0]):
+        return None
+    return known
+
+
+def _declared_symbol(ds: xr.Dataset, name: str) -> tuple[str, str | None] | None:
     attrs = ds[name].attrs if name in ds.variables else {}
     if attrs.get("phasemap_symbol"):
         return str(attrs["phasemap_symbol"]), attrs.get("units")
@@ -109,7 +136,7 @@ def axis_label(ds: xr.Dataset, name: str) -> str:
     units = attrs.get("units")
     if re.fullmatch(r"[A-Za-z]{1,2}", name):
         return _with_units(f"${name}$", units)
-    text = str(attrs.get("long_name", name.replace("_", " ")))
+    text = _plain(str(attrs.get("long_name", name.replace("_", " "))))
     return _with_units(text[:1].upper() + text[1:], units)
 
 
