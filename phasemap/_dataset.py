@@ -124,9 +124,12 @@ def declaration_hash(model) -> str | None:
     if declaration is None:
         return None
     if id(model) not in _DECLARATION_HASHES:
-        from .declare.build import canonical
+        # a model loaded from the kernel cache carries its hash (no sympy needed)
+        digest = getattr(declaration, "__dict__", {}).get("sha256")
+        if digest is None:
+            from .declare.build import declaration_sha256
 
-        digest = hashlib.sha256(canonical(declaration).encode()).hexdigest()
+            digest = declaration_sha256(declaration)
         _DECLARATION_HASHES[id(model)] = (model, digest)
     return _DECLARATION_HASHES[id(model)][1]
 

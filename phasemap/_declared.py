@@ -126,8 +126,11 @@ class Declaration:
     loads the model from its own cache.
     """
 
-    def __init__(self, source: str):
+    def __init__(self, source: str, sha256: str | None = None):
         self.source = source
+        #: the declaration's hash (:func:`phasemap.declare.build.declaration_sha256`),
+        #: recorded when it was derived
+        self.sha256 = sha256
 
     @property
     def system(self):
@@ -144,7 +147,7 @@ class Declaration:
         return getattr(self.system, name)
 
     def __reduce__(self):
-        return Declaration, (self.source,)
+        return Declaration, (self.source, self.sha256)
 
     def __repr__(self) -> str:
         return f"Declaration({self.source!r})"
@@ -243,11 +246,15 @@ def _from_manifest(key: str, path: pathlib.Path, source: str) -> Model | None:
     except _Miss:  # the generated module was pruned: derive it again
         return None
     check = _resolve(data["check"]) if data["check"] else None
-    return build(data, module, check, Declaration(source))
+    return build(data, module, check, Declaration(source, data.get("declaration_sha256")))
 
 
 def _write_manifest(key: str, path: pathlib.Path, S, model: Model) -> None:
+    from .declare.build import declaration_sha256  # S is built: sympy is loaded already
+
     data = manifest(S, model)
+    if data is not None:
+        data["declaration_sha256"] = declaration_sha256(S)
     text = (f'"""The model of {path.name}, as phasemap._declared loads it without sympy: '
             'generated, do not edit."""\n\n'
             f"KEY = {key!r}\nMODEL = {None if data is None else json.dumps(data)!r}\n")

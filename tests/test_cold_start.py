@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -33,9 +34,9 @@ print(json.dumps(seen))
 """
 
 
-def _run(code: str, *args) -> str:
+def _run(code: str, *args, env=None) -> str:
     run = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True,
-                         cwd=ROOT, timeout=1800)
+                         cwd=ROOT, timeout=1800, env=env)
     assert run.returncode == 0, run.stderr
     return run.stdout.strip().splitlines()[-1]
 
@@ -69,15 +70,18 @@ def test_a_changed_declaration_is_derived_again_never_loaded_stale(tmp_path):
     path.write_text(src)
     twin.write_text(edited)
     expected = phasemap.classify(twin, phi=0.6, omega=-1.0, f=0.2)  # derived here, with sympy
-    _run(CLASSIFY, str(path))                                          # fills the cache
-    n, before, sympy = json.loads(_run(CLASSIFY, str(path)))
+    # a cache of this test's own: a kept cache would hold the edited file's manifest from
+    # an earlier run, and the edit would rightly load without sympy
+    env = dict(os.environ, PHASEMAP_CACHE_DIR=str(tmp_path / "cache"))
+    _run(CLASSIFY, str(path), env=env)                                 # fills the cache
+    n, before, sympy = json.loads(_run(CLASSIFY, str(path), env=env))
     assert not sympy                                                   # from the manifest
     path.write_text(edited)
-    n, after, sympy = json.loads(_run(CLASSIFY, str(path)))
+    n, after, sympy = json.loads(_run(CLASSIFY, str(path), env=env))
     assert sympy                                                       # derived again
     new = [b.accelerations.get("phi_ddot") for b in expected.branches]
     assert after == new and after != before and n == expected.n_solutions
-    n, again, sympy = json.loads(_run(CLASSIFY, str(path)))
+    n, again, sympy = json.loads(_run(CLASSIFY, str(path), env=env))
     assert again == new and not sympy
 
 

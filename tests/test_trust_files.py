@@ -114,7 +114,7 @@ fig = ds.phasemap.plot()
 ax = fig.axes[0]
 print(ax.get_xlabel())
 print(ax.get_legend().get_title().get_text().replace("\\n", " "))
-loaded = [m for m in sys.modules if "declared" in m or "own_system" in m]
+loaded = [m for m in sys.modules if "_declared_" in m or "own_system" in m]  # generated ones
 print("modules:", loaded)
 """
 

@@ -53,6 +53,12 @@ def canonical(S) -> str:
     return "\n".join(parts)
 
 
+def declaration_sha256(S) -> str:
+    """SHA-256 (hex) of the declaration's canonical form: what an atlas records to be
+    recomputed only from the very declaration it was made with."""
+    return hashlib.sha256(canonical(S).encode()).hexdigest()
+
+
 def cache_stem(S) -> str:
     """The generated module's name in the kernel cache: the declaration, the derivation's
     sources and the versions of what it runs on, hashed."""
