@@ -44,7 +44,7 @@ def _dot(a, b):
 
 @dataclass(frozen=True, eq=False)
 class PointContact(ContactLaw):
-    """A body point on the flat surface ``normal . point = offset`` with Coulomb friction.
+    """A body point on the flat surface ``dot(normal, point) = offset`` with Coulomb friction.
 
     ``normal`` points into the free side; ``sided`` is ``"one"`` (N >= 0, the
     point may lift off) or ``"two"`` (a guide: N of either sign).  The
@@ -176,7 +176,7 @@ class EdgeContact(PointContact):
 @dataclass(frozen=True, eq=False)
 class RollingContact(ContactLaw):
     """A disc (centre ``centre``, radius ``radius``, counter-clockwise angle ``angle``)
-    rolling without slip on ``normal . point = offset``, with a rolling-friction
+    rolling without slip on ``dot(normal, point) = offset``, with a rolling-friction
     moment ``rolling_friction * N``.  One-sided: the disc may hop."""
 
     name: str
