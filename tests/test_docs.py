@@ -3,6 +3,7 @@ user guide, the docstring examples, and an API reference entry for every public 
 
 from __future__ import annotations
 
+import argparse
 import doctest
 import importlib
 import inspect
@@ -168,3 +169,70 @@ def test_import_phasemap_leaves_matplotlib_until_plot_is_used():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
     assert out == ["False", "True", "True", "True"]
+
+
+def documented_names(api: pathlib.Path = DOCS / "api") -> set[str]:
+    """Every qualified name the API reference gives an entry: the autosummary lists
+    (under their ``currentmodule``), ``.. data::``, ``.. automodule::`` and ``.. module::``."""
+    names: set[str] = set()
+    for page in sorted(api.glob("*.rst")):
+        module, in_summary = "", False
+        for line in page.read_text().splitlines():
+            directive = re.match(r"\.\. ([\w:-]+)::\s*(\S*)", line)
+            if directive:
+                kind, arg = directive.groups()
+                in_summary = kind == "autosummary"
+                if kind in ("currentmodule", "module", "automodule"):
+                    module = arg
+                    names.add(arg)
+                elif kind == "data":
+                    names.add(f"{module}.{arg}")
+            elif in_summary and re.match(r"   [A-Za-z_]\w*\s*$", line):
+                names.add(f"{module}.{line.strip()}")
+            elif line and not line.startswith(" "):
+                in_summary = False
+    return names
+
+
+def public_names() -> set[str]:
+    """The public API: ``__all__`` of phasemap, phasemap.declare and phasemap.plot, the
+    accessor's class, and ``phasemap.plot`` itself (a module)."""
+    names = {"phasemap.accessor.PhasemapAccessor"}
+    for module in ("phasemap", "phasemap.declare", "phasemap.plot"):
+        mod = importlib.import_module(module)
+        for name in mod.__all__:
+            obj = getattr(mod, name)
+            names.add(obj.__name__ if inspect.ismodule(obj) else f"{module}.{name}")
+    return names
+
+
+def test_every_public_name_has_a_reference_entry():
+    missing = public_names() - documented_names()
+    assert not missing, f"public names without an entry in docs/api/*.rst: {sorted(missing)}"
+
+
+def test_reference_check_sees_a_name_left_out(tmp_path):
+    (tmp_path / "one.rst").write_text(
+        ".. currentmodule:: phasemap\n\n.. autosummary::\n   :toctree: generated/\n\n"
+        "   classify\n   Scene\n\nText\n\n   simulate\n\n.. data:: MODELS\n")
+    assert documented_names(tmp_path) == {"phasemap", "phasemap.classify", "phasemap.Scene",
+                                          "phasemap.MODELS"}
+    assert "phasemap.simulate" in public_names() - documented_names(tmp_path)
+
+
+def test_cli_reference_has_every_subcommand_and_argument():
+    sys.path.insert(0, str(DOCS / "_ext"))
+    try:
+        cli = importlib.import_module("phasemap_cli")
+    finally:
+        sys.path.remove(str(DOCS / "_ext"))
+    parser, subs, _ = cli.parser_and_subcommands()
+    page = "\n".join(cli.cli_rst())
+    assert ".. phasemap-cli::" in (DOCS / "cli.rst").read_text()
+    assert len(subs) >= 8
+    for name, sub in subs.items():
+        assert f".. _cli-{name}:" in page and f"``phasemap {name}``" in page
+        for action in sub._actions:
+            if action.option_strings and action.help != argparse.SUPPRESS and \
+                    not isinstance(action, argparse._HelpAction):
+                assert action.option_strings[-1] in page, (name, action.option_strings)
