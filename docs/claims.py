@@ -3,9 +3,9 @@
 Runs every study in ``studies/`` in quick mode (as ``phasemap tour`` does, into a
 temporary folder) and replaces the text between the ``claims:NAME`` markers of
 the page with that study's claims table, the measured value beside the
-paper's.  The test of the tour counts (``tests/test_study_overview.py``) checks
-the page's tables against the claims the studies give in the test session, so
-a stale table fails there.
+paper's.  The page's count of claims and verdicts is checked against the claims
+the studies give in the test session (``tests/test_study_overview.py``); the
+tables themselves are as fresh as the last run of this script.
 
     python docs/claims.py          # about a minute and a half on warm caches
 """
