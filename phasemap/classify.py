@@ -93,6 +93,12 @@ def classify(model: str | Model, **values: float) -> Classification:
         state variables and parameters by name; missing names take the model's
         defaults (``phasemap.MODELS[name].defaults``).
 
+    Returns
+    -------
+    Classification
+        ``n_solutions`` and the flags (``stagnation``, ``contact_lost``,
+        ``singular``), with every candidate branch, admissible or not.
+
     Raises
     ------
     ValueError

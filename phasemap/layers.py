@@ -139,7 +139,33 @@ def _registry(model: Model) -> dict[str, Layer]:
 
 
 def layers_for(model: str | Model) -> dict[str, Layer]:
-    """Every layer a model (a name or a :class:`Model`) offers, by name, in a stable order."""
+    """Every layer a model offers, by name, in a stable order.
+
+    Parameters
+    ----------
+    model : str or Model
+        a model name (``phasemap.MODELS``) or a :class:`Model`.
+
+    Returns
+    -------
+    dict of str to Layer
+        the summary layers (``n_solutions``, ``stagnation``, ...), then each
+        branch's accelerations and reactions, then the fate layers.
+
+    Raises
+    ------
+    ValueError
+        for an unknown model name.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> layers = phasemap.layers_for("ladder")
+    >>> list(layers)[:4]
+    ['n_solutions', 'stagnation', 'contact_lost', 'singular']
+    >>> layers["n_solutions"].flag_meanings
+    'none unique two continuum three_or_more'
+    """
     from .models import get_model
 
     return dict(_registry(get_model(model)))
