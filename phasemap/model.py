@@ -78,7 +78,15 @@ from . import _numerics as nx
 
 
 class BranchStatus(enum.IntEnum):
-    """What one candidate branch is at one state."""
+    """What one candidate branch is at one state.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> c = phasemap.classify("elliptic_pendulum", phi=0.8, xdot=1.0, f=4.0)
+    >>> sorted({b.status.name for b in c.candidates})
+    ['INADMISSIBLE']
+    """
 
     ABSENT = nx.ABSENT
     ADMISSIBLE = nx.ADMISSIBLE
@@ -114,7 +122,20 @@ MIN_POSITIVE = 1e-30
 
 
 class Solvability(enum.IntEnum):
-    """How many solutions the motion equations have for the senior derivatives."""
+    """How many solutions the motion equations have for the senior derivatives.
+
+    The values are the ``n_solutions`` of :func:`phasemap.classify` and the
+    ``flag_values`` of an atlas's ``n_solutions`` layer.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> [s.name.lower() for s in phasemap.Solvability]
+    ['none', 'unique', 'two', 'continuum', 'three_or_more']
+    >>> phasemap.Solvability(phasemap.classify("elliptic_pendulum", phi=0.8, xdot=-1.0,
+    ...                                        f=4.0).n_solutions)
+    <Solvability.TWO: 2>
+    """
 
     NONE = nx.N_NONE
     UNIQUE = nx.N_UNIQUE
