@@ -16,9 +16,13 @@ import phasemap
 
 with phasemap.plot.style():
     fig, ax = plt.subplots(figsize=(7.2, 3.2), layout="constrained")
-    for phi0 in (0.8, 1.6, 2.4, 3.0):
+    starts = (0.8, 1.6, 2.4, 3.0)
+    for phi0 in starts:
         curve = phasemap.phase_curve("hinge_pendulum", phi=phi0, omega=0.0, delta=0.1)
         phasemap.plot.phase_curve_figure(curve, ax=ax)
         print(f"phi0 = {phi0}: {curve.attrs['end_reason']} after "
               f"{int(curve.attrs['n_reversals'])} reversals")
+    # each call titles the legend with its own start; name all four instead
+    ax.get_legend().set_title(r"$\varphi_0$ = " + ", ".join(f"{s:g}" for s in starts)
+                              + r" rad, $\omega_0$ = 0; $\delta$ = 0.1 m, $l$ = 1 m")
 plt.show()
