@@ -35,7 +35,15 @@ from .model import Model, Solvability
 
 @dataclass(frozen=True)
 class Layer:
-    """One atlas variable: what it is, how it is stored, where the kernel finds it."""
+    """One atlas variable: what it is, how it is stored, where the kernel finds it.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> layer = phasemap.layers_for("ladder")["stagnation"]
+    >>> layer.dtype, layer.flag_values, layer.flag_meanings
+    ('int8', (0, 1), 'no yes')
+    """
 
     name: str
     dtype: str

@@ -138,7 +138,9 @@ def test_guide_code_block_runner_catches_a_wrong_example(tmp_path):
                                     "phasemap.phase", "phasemap.plot", "phasemap.study",
                                     "phasemap.atlas", "phasemap.layers", "phasemap.models",
                                     "phasemap.model", "phasemap.events",
-                                    "phasemap.declare.system"])
+                                    "phasemap.declare.system", "phasemap.declare.api",
+                                    "phasemap.declare.contacts", "phasemap.declare.law",
+                                    "phasemap.declare.admissibility"])
 def test_docstring_examples(module):
     result = doctest.testmod(importlib.import_module(module))
     assert result.attempted >= 2 and result.failed == 0
@@ -239,3 +241,28 @@ def test_cli_reference_has_every_subcommand_and_argument():
             if action.option_strings and action.help != argparse.SUPPRESS and \
                     not isinstance(action, argparse._HelpAction):
                 assert action.option_strings[-1] in page, (name, action.option_strings)
+
+
+def numpydoc_gaps(modules=("phasemap", "phasemap.declare")) -> list[str]:
+    """Public names of ``modules`` whose docstrings fall short of numpydoc form: a function
+    without Parameters, Returns, Raises and Examples sections, a class without Examples."""
+    from numpydoc.docscrape import NumpyDocString
+
+    gaps = []
+    for module in modules:
+        mod = importlib.import_module(module)
+        for name in mod.__all__:
+            obj = getattr(mod, name)
+            if inspect.isfunction(obj):
+                wanted = ("Parameters", "Returns", "Raises", "Examples")
+            elif inspect.isclass(obj):
+                wanted = ("Examples",)
+            else:
+                continue
+            doc = NumpyDocString(inspect.getdoc(obj) or "")
+            gaps += [f"{module}.{name}: no {s}" for s in wanted if not doc[s]]
+    return gaps
+
+
+def test_public_api_docstrings_are_numpydoc():
+    assert not numpydoc_gaps()
