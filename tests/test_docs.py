@@ -137,10 +137,10 @@ def test_guide_code_block_runner_catches_a_wrong_example(tmp_path):
 @pytest.mark.parametrize("module", ["phasemap.classify", "phasemap.scene", "phasemap.simulate",
                                     "phasemap.phase", "phasemap.plot", "phasemap.study",
                                     "phasemap.atlas", "phasemap.layers", "phasemap.models",
-                                    "phasemap.model", "phasemap.events",
-                                    "phasemap.declare.system", "phasemap.declare.api",
-                                    "phasemap.declare.contacts", "phasemap.declare.law",
-                                    "phasemap.declare.admissibility"])
+                                    "phasemap.model", "phasemap.events", "phasemap.cache",
+                                    "phasemap.blocks", "phasemap.declare.system",
+                                    "phasemap.declare.api", "phasemap.declare.contacts",
+                                    "phasemap.declare.law", "phasemap.declare.admissibility"])
 def test_docstring_examples(module):
     result = doctest.testmod(importlib.import_module(module))
     assert result.attempted >= 2 and result.failed == 0
