@@ -166,6 +166,25 @@ def write_atlas(ds: xr.Dataset, path: str | os.PathLike, *, complevel: int = 4,
     ``overwrite=False`` an existing file is never replaced, even one that
     appears while the atlas is being written.
 
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        the atlas, as :meth:`phasemap.Scene.compute` returns it.
+    path : str or os.PathLike
+        the file to write (``~`` is expanded); its folder must exist.
+    complevel : int, default 4
+        zlib compression level of the layers.
+    chunks : mapping of str to int, optional
+        netCDF chunk sizes by dimension; by default chunks of about a megabyte.
+    overwrite : bool, default True
+        replace an existing file; with False, refuse one (even one that
+        appears while the atlas is written).
+
+    Returns
+    -------
+    pathlib.Path
+        the path written.
+
     Raises
     ------
     ValueError
@@ -174,6 +193,18 @@ def write_atlas(ds: xr.Dataset, path: str | os.PathLike, *, complevel: int = 4,
         (bools, None) or serialisation keys in ``.attrs``; when ``path`` exists
         and ``overwrite`` is false; as :class:`WriteError` when writing fails
         (a full disk), leaving no partial file.
+
+    Examples
+    --------
+    >>> import os, tempfile, numpy as np, phasemap
+    >>> ds = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 4),
+    ...                                     "f": [0.0, 0.5, 1.0]}, fixed={"omega": 0.0}).compute()
+    >>> path = phasemap.write_atlas(ds, os.path.join(tempfile.mkdtemp(), "ladder.nc"))
+    >>> path.name
+    'ladder.nc'
+    >>> with phasemap.open_atlas(path) as back:
+    ...     back.attrs["Conventions"], back.n_solutions.shape
+    ('CF-1.8', (4, 3))
     """
     if not isinstance(ds, xr.Dataset):
         raise TypeError(f"write_atlas needs an xarray.Dataset, got {type(ds).__name__}")
@@ -530,14 +561,35 @@ def _fsync_folder(folder: pathlib.Path) -> None:
 def open_atlas(path: str | os.PathLike, **kwargs) -> xr.Dataset:
     """Open an atlas file lazily, checking that it is one.
 
-    Keyword arguments go to :func:`xarray.open_dataset`.  Close the result (or
-    use it in a ``with`` block) when done.
+    Close the result (or use it in a ``with`` block) when done.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        an atlas file written by :func:`write_atlas` or ``phasemap atlas``.
+    **kwargs
+        passed to :func:`xarray.open_dataset` (``chunks=`` for dask arrays).
+
+    Returns
+    -------
+    xarray.Dataset
+        the atlas, its layers read lazily.
 
     Raises
     ------
     ValueError
         with a one-line message if the file does not exist, is not netCDF, or
         is not a phasemap atlas.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> phasemap.open_atlas("no_such_atlas.nc")
+    Traceback (most recent call last):
+    ...
+    ValueError: no_such_atlas.nc: no such file
+
+    Reading one back is shown in :func:`write_atlas`.
     """
     path = pathlib.Path(os.path.expanduser(os.fspath(path)))
     if not path.is_file():
@@ -567,10 +619,31 @@ def describe_atlas(path_or_ds: str | os.PathLike | xr.Dataset) -> str:
     that made the atlas.  Layers are read in slabs, so a large file is never
     loaded whole.
 
+    Parameters
+    ----------
+    path_or_ds : str, os.PathLike or xarray.Dataset
+        an atlas file, or an atlas in memory.
+
+    Returns
+    -------
+    str
+        the summary, several lines.
+
     Raises
     ------
     ValueError
         if the file does not exist, is not netCDF or is not a phasemap atlas.
+
+    Examples
+    --------
+    >>> import numpy as np, phasemap
+    >>> ds = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 4),
+    ...                                     "f": [0.0, 0.5, 1.0]}, fixed={"omega": 0.0}).compute()
+    >>> print(phasemap.describe_atlas(ds))   # doctest: +ELLIPSIS
+    phasemap atlas (in memory)
+    ...
+      cells     12 = 4 phi x 3 f
+    ...
     """
     if isinstance(path_or_ds, xr.Dataset):
         _check_is_atlas(path_or_ds, "dataset")

@@ -18,7 +18,28 @@ from .models import get_model
 
 @dataclass(frozen=True)
 class Branch:
-    """One candidate branch at one state: its status, accelerations and reactions."""
+    """One candidate branch at one state: its status, accelerations and reactions.
+
+    Attributes
+    ----------
+    name:
+        the branch's name in its model (``slide_neg_Npos``: sliding in the
+        negative direction with N >= 0).
+    status:
+        a :class:`BranchStatus`; ``admissible`` is true for a solution
+        (admissible, a continuum or a consistent separation).
+    singular, coefficient:
+        whether the coefficient of the senior derivative vanishes, and its value.
+    accelerations, reactions:
+        by name (``phi_ddot``, ``N``, ...), NaN where the branch has no solution.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> c = phasemap.classify("elliptic_pendulum", phi=0.8, xdot=-1.0, f=4.0)
+    >>> [(b.name, b.admissible, b.reactions["N"] > 0) for b in c.branches]
+    [('slide_neg_Npos', True, True), ('slide_neg_Nneg', True, False)]
+    """
 
     name: str
     status: BranchStatus
@@ -52,6 +73,13 @@ class Classification:
         the admissible branches (including a continuum), in the model's order.
     candidates:
         every branch that applies at this state, with its :class:`BranchStatus`.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> c = phasemap.classify("ladder", phi=0.5, omega=0.0, f=0.3)
+    >>> c.n_solutions, c.stagnation, c.contact_lost, c.singular
+    (1, True, False, False)
     """
 
     model: str
@@ -92,6 +120,12 @@ def classify(model: str | Model, **values: float) -> Classification:
     **values:
         state variables and parameters by name; missing names take the model's
         defaults (``phasemap.MODELS[name].defaults``).
+
+    Returns
+    -------
+    Classification
+        ``n_solutions`` and the flags (``stagnation``, ``contact_lost``,
+        ``singular``), with every candidate branch, admissible or not.
 
     Raises
     ------

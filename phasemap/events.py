@@ -91,7 +91,19 @@ def fate_without_unique(n, lost, singular):
 
 
 class Event(enum.IntEnum):
-    """A named event of a motion; members from ``REST`` on end it."""
+    """A named event of a motion; members from ``REST`` on end it.
+
+    The ``fate`` layer of a fate map holds the terminal member that ended each
+    motion; ``terminal`` and ``message`` say what a member means.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> phasemap.Event.STICK.terminal, phasemap.Event.REST.terminal
+    (False, True)
+    >>> phasemap.Event(7).name
+    'NO_SOLUTION'
+    """
 
     START = START
     REVERSAL = REVERSAL

@@ -1,4 +1,5 @@
-"""The numbers the README states, computed: a test checks each one is in the README.
+"""The numbers the documentation states, computed: a test checks each one is in the
+README or the user guide (``docs/guide/``).
 
 Each entry of :func:`readme_facts` is a piece of README text built from the
 code that decides it (a closed form, a constant the library uses), so a

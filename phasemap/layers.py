@@ -46,7 +46,15 @@ class Outcome(NamedTuple):
 
 @dataclass(frozen=True)
 class Layer:
-    """One atlas variable: what it is, how it is stored, where the kernel finds it."""
+    """One atlas variable: what it is, how it is stored, where the kernel finds it.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> layer = phasemap.layers_for("ladder")["stagnation"]
+    >>> layer.dtype, layer.flag_values, layer.flag_meanings
+    ('int8', (0, 1), 'no yes')
+    """
 
     name: str
     dtype: str
@@ -156,7 +164,33 @@ def _registry(model: Model) -> dict[str, Layer]:
 
 
 def layers_for(model: str | Model) -> dict[str, Layer]:
-    """Every layer a model (a name or a :class:`Model`) offers, by name, in a stable order."""
+    """Every layer a model offers, by name, in a stable order.
+
+    Parameters
+    ----------
+    model : str or Model
+        a model name (``phasemap.MODELS``) or a :class:`Model`.
+
+    Returns
+    -------
+    dict of str to Layer
+        the summary layers (``n_solutions``, ``stagnation``, ...), then each
+        branch's accelerations and reactions, then the fate layers.
+
+    Raises
+    ------
+    ValueError
+        for an unknown model name.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> layers = phasemap.layers_for("ladder")
+    >>> list(layers)[:4]
+    ['n_solutions', 'stagnation', 'contact_lost', 'singular']
+    >>> layers["n_solutions"].flag_meanings
+    'none unique two continuum three_or_more'
+    """
     from .models import get_model
 
     return dict(_registry(get_model(model)))

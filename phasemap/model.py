@@ -78,7 +78,15 @@ from . import _numerics as nx
 
 
 class BranchStatus(enum.IntEnum):
-    """What one candidate branch is at one state."""
+    """What one candidate branch is at one state.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> c = phasemap.classify("elliptic_pendulum", phi=0.8, xdot=1.0, f=4.0)
+    >>> sorted({b.status.name for b in c.candidates})
+    ['INADMISSIBLE']
+    """
 
     ABSENT = nx.ABSENT
     ADMISSIBLE = nx.ADMISSIBLE
@@ -114,7 +122,20 @@ MIN_POSITIVE = 1e-30
 
 
 class Solvability(enum.IntEnum):
-    """How many solutions the motion equations have for the senior derivatives."""
+    """How many solutions the motion equations have for the senior derivatives.
+
+    The values are the ``n_solutions`` of :func:`phasemap.classify` and the
+    ``flag_values`` of an atlas's ``n_solutions`` layer.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> [s.name.lower() for s in phasemap.Solvability]
+    ['none', 'unique', 'two', 'continuum', 'three_or_more']
+    >>> phasemap.Solvability(phasemap.classify("elliptic_pendulum", phi=0.8, xdot=-1.0,
+    ...                                        f=4.0).n_solutions)
+    <Solvability.TWO: 2>
+    """
 
     NONE = nx.N_NONE
     UNIQUE = nx.N_UNIQUE
@@ -138,7 +159,19 @@ _SOLVABILITY_MESSAGES = {
 
 @dataclass(frozen=True)
 class Variable:
-    """A named scalar: state variable, parameter, acceleration or reaction."""
+    """A named scalar: state variable, parameter, acceleration or reaction.
+
+    Its units, long name and symbol label the maps and the atlas variables;
+    ``default`` and the domain (``lower``, ``upper``, open or closed) are what
+    :func:`phasemap.classify` and :class:`phasemap.Scene` check values against.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> phi = phasemap.MODELS["ladder"].variables["phi"]
+    >>> phi.units, phi.long_name, phi.lower, round(phi.upper, 4)
+    ('rad', 'angle of the bar from the vertical', 0.0, 1.5708)
+    """
 
     name: str
     units: str
@@ -195,7 +228,14 @@ class Variable:
 
 @dataclass(frozen=True)
 class Derived:
-    """An input computed from one other input, once per value (e.g. sin(phi))."""
+    """An input computed from one other input, once per value (e.g. sin(phi)).
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> [(d.name, d.source) for d in phasemap.MODELS["hinge_pendulum"].derived]
+    [('sin_phi', 'phi'), ('cos_phi', 'phi')]
+    """
 
     name: str
     source: str
@@ -248,6 +288,14 @@ class Dynamics:
     :attr:`Model.branch`: the slip direction is the branch's own, whatever the
     sign of the velocity, so that the right-hand side stays smooth across the
     trial points of a step that overshoots a velocity zero.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> phasemap.MODELS["hinge_pendulum"].dynamics.coordinates
+    (('phi', 'omega', 'phi_ddot'),)
+    >>> phasemap.MODELS["elliptic_pendulum"].dynamics.stick_is_rest
+    False
     """
 
     coordinates: tuple[tuple[str, str, str], ...]
@@ -258,7 +306,21 @@ class Dynamics:
 
 @dataclass(frozen=True)
 class Model:
-    """One mechanical system: its variables, branches and jitted point function."""
+    """One mechanical system: its variables, branches and jitted point function.
+
+    The contract a new model implements is the "for developers" section of
+    the module docstring of :mod:`phasemap.model`; a declared system builds its
+    Model itself (:class:`phasemap.declare.System`).
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> model = phasemap.get_model("wheel")
+    >>> model.title
+    'Disc with a displaced centre of mass, rolling with rolling friction'
+    >>> [v.name for v in model.state], model.velocity, list(model.defaults)[:3]
+    (['phi', 'omega'], 'omega', ['phi', 'omega', 'delta'])
+    """
 
     name: str
     title: str

@@ -64,7 +64,8 @@ def test_readme_tour_counts_are_the_studies_own():
         pytest.skip(f"studies not run in this session: {', '.join(missing)}")
     verdicts = [v for n in ORDER for v in STUDY_RUNS[n][0]]
     figures = sum(STUDY_RUNS[n][1] for n in ORDER)
-    readme = " ".join((STUDIES.parent / "README.md").read_text().split())
+    readme = " ".join(" ".join((STUDIES.parent / page).read_text()   # README, studies page
+                               for page in ("README.md", "docs/guide/studies.md")).split())
     count = {k: verdicts.count(k) for k in ("agrees", "erratum", "sharper", "finding")}
     assert (f"The quick tour checks {len(verdicts)} claims: {count['agrees']} agree, "
             f"{count['erratum']} confirm errata, {count['sharper']} is sharper and "

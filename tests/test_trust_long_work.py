@@ -476,7 +476,8 @@ def test_claims_tables_fit_the_terminal():
 def test_readme_numbers_come_from_code():
     from phasemap.facts import elliptic_threshold, readme_facts, wheel_singular_delta
 
-    readme = " ".join((ROOT / "README.md").read_text().split())
+    readme = " ".join(" ".join(page.read_text() for page in [ROOT / "README.md", *sorted(
+        (ROOT / "docs" / "guide").glob("*.md"))]).split())   # the README and the user guide
     for what, text in readme_facts().items():
         assert " ".join(text.split()) in readme, (what, text)
     # the closed forms behind them, checked independently

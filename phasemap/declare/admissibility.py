@@ -115,7 +115,33 @@ SENSES = ("!= 0", ">= 0", "> 0")
 
 @dataclass(frozen=True)
 class Condition:
-    """One scalar condition that decides a branch's status (see the module docstring)."""
+    """One scalar condition that decides a branch's status (see the module docstring).
+
+    Attributes
+    ----------
+    name, branch, kind : str
+        the condition's label, its branch (None for the domain's) and its kind
+        (``coefficient``, ``normal``, ``friction_limit``, ``start``, ``gap``,
+        ``family``, ``discriminant``, ``root``, ``domain``).
+    expr, scale : sympy expressions
+        ``expr`` compared with 0 as ``sense`` says, with the tolerance scaled
+        by ``scale``, the magnitude of its terms.
+    sense : str
+        ``">= 0"``, ``"> 0"`` or ``"!= 0"``.
+    rest_only : bool
+        applies only at zero relative velocity (a slip starting from rest).
+    divisor, where
+        the ``family`` conditions' divisor, and where a condition applies
+        (``where > 0``; None: everywhere).  The module docstring has the rules.
+
+    Examples
+    --------
+    >>> from phasemap.declare import conditions
+    >>> from phasemap.systems.painleve_rod import SYSTEM
+    >>> c = conditions(SYSTEM)[0]
+    >>> c.name, c.branch, c.kind, c.sense
+    ('N_A_stick', 'stick', 'normal', '>= 0')
+    """
 
     name: str
     branch: str | None
@@ -187,7 +213,27 @@ def conditions(system_or_model) -> tuple[Condition, ...]:
     whose branches carry the hand model's names: the twin's conditions of those
     branches, in the hand model's row order).  Derived with sympy once per declaration.
 
-    TypeError for a model with neither a declaration nor a twin.
+    Parameters
+    ----------
+    system_or_model : System or Model
+        a declaration, a declared model, or a hand-written model with a twin
+        (``phasemap.get_model("ladder")``; a name alone is refused).
+
+    Returns
+    -------
+    tuple of Condition
+
+    Raises
+    ------
+    TypeError
+        for a model with neither a declaration nor a twin.
+
+    Examples
+    --------
+    >>> from phasemap.declare import conditions
+    >>> from phasemap.systems.painleve_rod import SYSTEM
+    >>> sorted({c.branch for c in conditions(SYSTEM)})
+    ['A_separated', 'A_separated_moving_neg', 'A_slip_neg', 'A_slip_pos', 'stick']
     """
     S, hand = _declaration(system_or_model)
     cached = _CACHE.get(id(S))

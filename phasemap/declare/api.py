@@ -60,7 +60,27 @@ class _Quantity(_Symbolic):
 
 @dataclass(frozen=True, eq=False)
 class Parameter(_Quantity):
-    """A named constant: ``Parameter("l", "m", "half length", default=1.0, lower=0.0)``."""
+    """A named constant: ``Parameter("l", "m", "half length", default=1.0, lower=0.0)``.
+
+    Parameters
+    ----------
+    name, units, long_name : str
+        an identifier, UDUNITS units (``"m"``, ``"1"``) and a description; they
+        label the maps and the atlas variables.
+    default : float, default 1.0
+    lower, upper : float
+        the domain; ``lower_open``/``upper_open`` exclude the bound itself.
+    symbol : str
+        LaTeX for the figures (default: the name).
+
+    Examples
+    --------
+    >>> from phasemap.declare import Parameter
+    >>> l = Parameter("l", "m", "half length of the rod", default=1.0, lower=0.0,
+    ...               lower_open=True)
+    >>> l.name, l.default, 2 * l                  # a sympy symbol in expressions
+    ('l', 1.0, 2*l)
+    """
 
     default: float = 1.0
 
@@ -72,6 +92,23 @@ class Rate(_Symbolic):
     ``scale`` (an expression of the parameters, in the rate's units) is the
     natural size of the velocity: it counts as zero when
     ``|rate| <= 1e-12 * scale``.  The default, 1, means 1e-12 in SI units.
+
+    Parameters
+    ----------
+    name, units, long_name : str
+    default : float, default 0.0
+    symbol : str
+        LaTeX for the figures.
+    scale : sympy expression or number, default 1
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> from phasemap.declare import Parameter, Rate
+    >>> g = Parameter("g", "m s-2", "gravitational acceleration", default=9.81)
+    >>> l = Parameter("l", "m", "half length", default=1.0)
+    >>> Rate("omega", "rad s-1", "angular velocity", scale=sp.sqrt(g / l)).scale
+    sqrt(g/l)
     """
 
     name: str
@@ -84,14 +121,56 @@ class Rate(_Symbolic):
 
 @dataclass(frozen=True, eq=False)
 class Coordinate(_Quantity):
-    """A generalised coordinate; with a :class:`Rate` it is a state variable."""
+    """A generalised coordinate; with a :class:`Rate` it is a state variable.
+
+    Without a rate it is *dependent*: the contacts fix it (the height of a rod
+    end on the floor).
+
+    Parameters
+    ----------
+    name, units, long_name, default, lower, upper, lower_open, upper_open, symbol
+        as for :class:`Parameter` (default 0).
+    rate : Rate, optional
+        its velocity.
+
+    Examples
+    --------
+    >>> from phasemap.declare import Coordinate, Rate
+    >>> theta = Coordinate("theta", "rad", "angle of the rod to the floor", default=1.0,
+    ...                    lower=0.0, upper=3.14, rate=Rate("omega", "rad s-1", "angular velocity"))
+    >>> y = Coordinate("y", "m", "height of end A")     # fixed by a contact
+    >>> theta.rate.name, y.rate is None
+    ('omega', True)
+    """
 
     rate: Rate | None = None
 
 
 @dataclass(frozen=True, eq=False)
 class Body:
-    """A mass ``mass`` at ``position`` (x, y) with ``inertia`` about it, turned by ``angle``."""
+    """A mass ``mass`` at ``position`` (x, y) with ``inertia`` about it, turned by ``angle``.
+
+    Parameters
+    ----------
+    mass : Parameter or expression
+    position : tuple of two expressions
+        the centre of mass in the coordinates and parameters.
+    inertia : expression, default 0
+        the moment of inertia about the centre of mass.
+    angle : expression, default 0
+        the body's rotation angle (counter-clockwise).
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> from phasemap.declare import Body, Coordinate, Parameter
+    >>> m, l = Parameter("m", "kg", "mass"), Parameter("l", "m", "half length")
+    >>> theta, x = Coordinate("theta", "rad", "angle"), Coordinate("x", "m", "end A")
+    >>> rod = Body(m, (x + l * sp.cos(theta), l * sp.sin(theta)), inertia=m * l**2 / 3,
+    ...            angle=theta)
+    >>> rod.inertia
+    l**2*m/3
+    """
 
     mass: object
     position: tuple

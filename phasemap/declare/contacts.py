@@ -44,12 +44,34 @@ def _dot(a, b):
 
 @dataclass(frozen=True, eq=False)
 class PointContact(ContactLaw):
-    """A body point on the flat surface ``normal . point = offset`` with Coulomb friction.
+    """A body point on the flat surface ``dot(normal, point) = offset`` with Coulomb friction.
 
     ``normal`` points into the free side; ``sided`` is ``"one"`` (N >= 0, the
     point may lift off) or ``"two"`` (a guide: N of either sign).  The
     tangential direction is the normal turned clockwise by 90 degrees, so
     ``normal=(0, 1)`` (a floor) slips positive along +x.
+
+    Parameters
+    ----------
+    name : str
+        names the contact's reactions (``N_<name>``, ``F_<name>``) and modes.
+    point : tuple of two expressions
+        the body point in contact.
+    normal : tuple of two numbers, default (0, 1)
+    offset : number or expression, default 0
+    friction : Parameter or expression, optional
+        the Coulomb coefficient; None for a smooth contact.
+    sided : {"one", "two"}, default "one"
+    long_name : str
+
+    Examples
+    --------
+    >>> from phasemap.declare import Coordinate, Parameter, PointContact
+    >>> x, y = Coordinate("x", "m", "end A"), Coordinate("y", "m", "height of end A")
+    >>> f = Parameter("f", "1", "friction coefficient", default=0.5)
+    >>> floor = PointContact("A", point=(x, y), normal=(0, 1), friction=f)
+    >>> floor.sided, floor.friction.name
+    ('one', 'f')
     """
 
     name: str
@@ -135,6 +157,27 @@ class EdgeContact(PointContact):
     from its left.  Friction, ``sided`` and the modes are those of a
     :class:`PointContact`; the slip velocity is the body's material velocity
     at the corner along the edge.
+
+    Parameters
+    ----------
+    name, point, normal, offset, friction, sided, long_name
+        as for :class:`PointContact`.
+    corner : tuple of two numbers or expressions, default (0, 0)
+    angle : expression, default 0
+        the edge's direction angle.
+    side : {1, -1}, default 1
+    extent : (low, high), optional
+        where the edge is, as distances from ``point`` along it: a state with
+        the corner outside is not in the model (the rod on a step: ``(0, 2 * l)``).
+
+    Examples
+    --------
+    The rod on a step (``phasemap/systems/rod_on_step.py``) rests on the floor
+    and across the step's edge:
+
+    >>> from phasemap.systems import rod_on_step
+    >>> [(type(c).__name__, c.name) for c in rod_on_step.SYSTEM.contacts]
+    [('PointContact', 'floor'), ('EdgeContact', 'edge')]
     """
 
     corner: tuple = (0, 0)
@@ -176,8 +219,31 @@ class EdgeContact(PointContact):
 @dataclass(frozen=True, eq=False)
 class RollingContact(ContactLaw):
     """A disc (centre ``centre``, radius ``radius``, counter-clockwise angle ``angle``)
-    rolling without slip on ``normal . point = offset``, with a rolling-friction
-    moment ``rolling_friction * N``.  One-sided: the disc may hop."""
+    rolling without slip on ``dot(normal, point) = offset``, with a rolling-friction
+    moment ``rolling_friction * N``.  One-sided: the disc may hop.
+
+    Parameters
+    ----------
+    name : str
+    centre : tuple of two expressions
+    radius : Parameter or expression
+    angle : expression
+        the disc's rotation angle (counter-clockwise).
+    normal, offset
+        the surface, as for :class:`PointContact`.
+    rolling_friction : Parameter or expression, optional
+        the rolling friction coefficient (a length).
+    long_name : str
+
+    Examples
+    --------
+    The seed paper's wheel, declared (``phasemap/systems/seeds/wheel.py``):
+
+    >>> from phasemap.systems.seeds import wheel
+    >>> disc = wheel.SYSTEM.contacts[0]
+    >>> type(disc).__name__, disc.radius.name, disc.rolling_friction.name
+    ('RollingContact', 'r', 'delta')
+    """
 
     name: str
     centre: tuple
@@ -246,7 +312,31 @@ class RollingContact(ContactLaw):
 @dataclass(frozen=True, eq=False)
 class Joint(ContactLaw):
     """A body point pinned at ``at`` with a friction moment ``friction_radius * |R|``
-    opposing the rotation ``angle`` (counter-clockwise)."""
+    opposing the rotation ``angle`` (counter-clockwise).
+
+    Parameters
+    ----------
+    name : str
+    point : tuple of two expressions
+        the body point pinned.
+    angle : expression
+        the rotation the friction moment opposes.
+    at : tuple of two numbers, default (0, 0)
+        the fixed pivot.
+    friction_radius : Parameter or expression, optional
+        the friction moment is ``friction_radius * |R|``, R the reaction.
+    long_name : str
+
+    Examples
+    --------
+    The seed paper's hinge pendulum, declared
+    (``phasemap/systems/seeds/hinge_pendulum.py``):
+
+    >>> from phasemap.systems.seeds import hinge_pendulum
+    >>> hinge = hinge_pendulum.SYSTEM.contacts[0]
+    >>> type(hinge).__name__, hinge.at, hinge.friction_radius.name
+    ('Joint', (0, 0), 'delta')
+    """
 
     name: str
     point: tuple

@@ -274,7 +274,20 @@ class LinearProblem:
 # -- the contract -----------------------------------------------------------------
 
 class ContactLaw(abc.ABC):
-    """A contact and its friction law (see the module docstring for the hooks)."""
+    """A contact and its friction law (see the module docstring for the hooks).
+
+    The built-in laws (:class:`PointContact`, :class:`EdgeContact`,
+    :class:`RollingContact`, :class:`Joint`) implement it; a law of one's own
+    subclasses it and implements the hooks the module docstring lists, and
+    everything else (the modes, the solvers, the generated kernels, the
+    admissibility conditions) follows.
+
+    Examples
+    --------
+    >>> from phasemap.declare import ContactLaw, Joint, PointContact, RollingContact
+    >>> all(issubclass(law, ContactLaw) for law in (PointContact, RollingContact, Joint))
+    True
+    """
 
     #: the field holding the friction law's coefficient (a parameter or expression)
     friction_field: ClassVar[str]

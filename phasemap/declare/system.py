@@ -18,6 +18,40 @@ class System:
     ``default_axes`` is the map ``phasemap atlas NAME`` draws by default;
     ``edges`` what reaching a bound of a coordinate means (see
     :class:`phasemap.Dynamics`).
+
+    Parameters
+    ----------
+    name, title, citation : str
+        the model's name (``phasemap.MODELS``, file names), a one-line title
+        and the source of the system.
+    coordinates : tuple of Coordinate
+        the generalised coordinates; those with a :class:`Rate` are the state.
+    parameters : tuple of Parameter
+    bodies : tuple of Body
+    contacts : tuple of ContactLaw
+        :class:`PointContact`, :class:`EdgeContact`, :class:`RollingContact`,
+        :class:`Joint`, or a law of one's own.
+    potential, forces, default_axes, edges, check, names
+        as above and in the attribute comments of the source.
+
+    Raises
+    ------
+    ValueError
+        when ``.model`` is first built, naming the system and the part of the
+        declaration with the first problem found.
+
+    Examples
+    --------
+    The declared built-in Painlevé rod (``phasemap/systems/painleve_rod.py``):
+
+    >>> from phasemap.systems.painleve_rod import SYSTEM
+    >>> [c.name for c in SYSTEM.coordinates], [c.name for c in SYSTEM.contacts]
+    (['theta', 'x', 'y'], ['A'])
+    >>> SYSTEM.branch_names()
+    ('stick', 'A_slip_pos', 'A_slip_neg', 'A_separated', 'A_separated_moving_neg')
+
+    A declaration of one's own is in the gallery and the user guide
+    ("Declaring a system").
     """
 
     name: str
@@ -64,6 +98,32 @@ def load(path) -> "object":
 
     With a warm kernel cache and an unchanged file, the model is loaded without
     running the file (and without sympy): see :mod:`phasemap._declared`.
-    ValueError naming the file when it cannot be read or declares no system.
+    ``phasemap.get_model(path)`` and every command that takes a model
+    (``phasemap atlas my_rod.py ...``) call it for a path ending in ``.py``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        a Python file that assigns a :class:`System` to ``SYSTEM``.
+
+    Returns
+    -------
+    phasemap.Model
+        ``SYSTEM.model``: derived once per declaration, then loaded from the
+        kernel cache.
+
+    Raises
+    ------
+    ValueError
+        naming the file when it cannot be read or declares no system, and the
+        part of the declaration that is wrong.
+
+    Examples
+    --------
+    >>> import phasemap.systems.painleve_rod as rod
+    >>> from phasemap.declare import load
+    >>> model = load(rod.__file__)
+    >>> model.name, [v.name for v in model.state]
+    ('painleve_rod', ['theta', 'omega', 'xdot'])
     """
     return _declared.load(path)

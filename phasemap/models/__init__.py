@@ -68,8 +68,29 @@ MODELS: Mapping[str, Model] = _Registry(
 def get_model(model: str | Model) -> Model:
     """The :class:`Model` for a name, a declaration file's path, or the model itself.
 
-    ValueError for an unknown name; for a file, ValueError naming the file and
-    the part of the declaration that is wrong.
+    Parameters
+    ----------
+    model : str, os.PathLike or Model
+        a registered name (``phasemap.MODELS``), the path of a ``.py`` file
+        that declares a ``SYSTEM`` (see :func:`phasemap.declare.load`), or a
+        :class:`Model`, returned as it is.
+
+    Returns
+    -------
+    Model
+
+    Raises
+    ------
+    ValueError
+        for an unknown name; for a file, naming the file and the part of the
+        declaration that is wrong.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> model = phasemap.get_model("ladder")
+    >>> [v.name for v in model.state], model.variables["phi"].units
+    (['phi', 'omega'], 'rad')
     """
     if isinstance(model, Model):
         return model

@@ -8,15 +8,15 @@ for a figure of several panels) it draws there instead and returns that
 Axes' figure.  :func:`plot` (and the accessor ``ds.phasemap.plot()``, see
 :mod:`phasemap.accessor`) picks the right function from the data:
 
-==============  ===========================================  ============================
-kind            how it is recognised                         figure
-==============  ===========================================  ============================
-``map``         a 2-D atlas from ``Scene.compute()``         :func:`map_figure`
-``profile``     a 1-D atlas                                  :func:`profile_figure`
-``fate``        a ``fate`` layer                             :func:`fate_figure`
-``phase_curve`` global attribute ``phasemap_kind``           :func:`phase_curve_figure`
-``trajectory``  global attribute ``phasemap_kind``           :func:`trajectory_figure`
-==============  ===========================================  ============================
+===============  ===========================================  ============================
+kind             how it is recognised                         figure
+===============  ===========================================  ============================
+``map``          a 2-D atlas from ``Scene.compute()``         :func:`map_figure`
+``profile``      a 1-D atlas                                  :func:`profile_figure`
+``fate``         a ``fate`` layer                             :func:`fate_figure`
+``phase_curve``  global attribute ``phasemap_kind``           :func:`phase_curve_figure`
+``trajectory``   global attribute ``phasemap_kind``           :func:`trajectory_figure`
+===============  ===========================================  ============================
 
 :func:`work_precision_figure` draws a benchmark table, and :func:`save_figure`
 writes a figure as vector PDF and 300 dpi PNG.
