@@ -147,7 +147,7 @@ from numba import njit
 from . import _numerics as nx
 from . import events as ev
 from ._compile import specialize
-from .integrate import _grow
+from ._compile import grow as _grow
 from ._version import __version__
 from .model import Model
 from .models import get_model
@@ -1353,8 +1353,6 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
     coords = {"stage": xr.Variable("stage", np.arange(len(stages), dtype=np.int32),
                                    {"long_name": f"stage index ({vel} keeps its sign on a "
                                                  "stage)", "units": "1"})}
-    from .simulate import end_message
-
     last = ev.Event(int(reasons[-1]))
     now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     attrs = {
@@ -1369,7 +1367,8 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
         "date_created": now,
         "method": METHOD,
         "end_reason": last.name.lower(),
-        "end_message": end_message(m, last, (float(stages[-1, 4]),)),
+        "end_message": ev.end_message(m, last,
+                                      {m.dynamics.coordinates[0][0]: float(stages[-1, 4])}),
         "n_reversals": np.int32(np.count_nonzero(reasons == ev.REVERSAL)),
         "phasemap_phi_range": np.array(phi_range, dtype=float),
         "phasemap_max_stages": np.int32(max_stages),

@@ -204,23 +204,6 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
                     ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode)
 
 
-def end_message(m: Model, fate: ev.Event, y=None) -> str:
-    """The fate's message; at an edge of the domain, which edge and what it means."""
-    if fate != ev.Event.LEFT_DOMAIN or y is None:
-        return fate.message
-    variables = integrated_variables(m)
-    edges = m.dynamics.edges
-    for var, value in zip(variables, y):
-        for side, bound in enumerate((var.lower, var.upper)):
-            if math.isfinite(bound) and value == bound:
-                meaning = edges.get(var.name, ("", ""))[side]
-                return (f"{fate.message}: {var.name} reached {bound:.6g} {var.units}"
-                        + (f" ({meaning})" if meaning else ""))
-    if m.domain_text:
-        return f"{fate.message}: {m.domain_text}"
-    return fate.message
-
-
 def _dataset(m: Model, full, positions, opts: Options, names, fate, n_rev, n_steps, ts, ys,
              ms, ev_t, ev_kind, ev_y, ev_mode) -> xr.Dataset:
     variables = integrated_variables(m)
@@ -259,7 +242,8 @@ def _dataset(m: Model, full, positions, opts: Options, names, fate, n_rev, n_ste
         "phasemap_version": __version__,
         "date_created": now,
         "end_reason": fate_event.name.lower(),
-        "end_message": end_message(m, fate_event, ev_y[-1] if len(ev_y) else None),
+        "end_message": ev.end_message(m, fate_event, dict(zip(names, ev_y[-1]))
+                                      if len(ev_y) else None),
         "n_reversals": np.int32(n_rev),
         "n_steps": np.int64(n_steps),
         "integrator": f"{METHODS[opts.method].DESCRIPTION}, events by classification",
