@@ -40,9 +40,11 @@ A new model provides:
 Branch functions
 ----------------
 A branch function is ``@numba.njit(cache=True, forceinline=True, error_model="numpy")``,
-takes scalars and **returns** its row as a tuple of floats laid out as in
+takes scalars and **returns** its row as a tuple laid out as in
 :mod:`phasemap._numerics`: ``(status, singular, coefficient,
-accelerations..., reactions...)``, NaN for what it does not determine.  Its
+accelerations..., reactions...)``, the status an integer code (so that the
+grid kernel compares integers), the rest floats, NaN for what it does not
+determine.  Its
 first parameters receive ``Branch.args`` (such as the slip direction); the
 others are named after model inputs (``phi``, ``f``, ``sin_phi``...), and a
 parameter named ``rest`` receives whether the branch starts from zero
@@ -148,6 +150,14 @@ class Variable:
     lower_open: bool = False
     upper_open: bool = False
 
+    def _fine(self, x: float) -> bool:
+        """Whether the number ``x`` passes every test of :meth:`check` (which explains a
+        failure)."""
+        return (math.isfinite(x) and abs(x) <= MAX_MAGNITUDE
+                and not (self.lower == 0.0 and self.lower_open and 0.0 < x < MIN_POSITIVE)
+                and (x > self.lower if self.lower_open else x >= self.lower)
+                and (x < self.upper if self.upper_open else x <= self.upper))
+
     def domain_text(self) -> str:
         lo = "(" if self.lower_open else "["
         hi = ")" if self.upper_open else "]"
@@ -155,6 +165,8 @@ class Variable:
 
     def check(self, model: str, value) -> None:
         """Raise ValueError unless every element of ``value`` is finite and in the domain."""
+        if isinstance(value, (int, float)) and self._fine(float(value)):
+            return  # a plain number in the domain: no array to build (a Scene checks several)
         try:
             a = np.asarray(value, dtype=float)
         except (TypeError, ValueError):
@@ -302,9 +314,7 @@ class Model:
         # another process (a dask worker) has not imported: ship the
         # declaration, which rebuilds the model from the kernel cache there.
         if self.declaration is not None:
-            from .declare import _model_of
-
-            return _model_of, (self.declaration,)
+            return _declared_model, (self.declaration,)
         return super().__reduce_ex__(protocol)
 
     def __getstate__(self):
@@ -399,6 +409,12 @@ class Model:
         for j, d in enumerate(self.derived):
             v[len(self.names) + j] = d.func(float(values[d.source]))
         return v
+
+
+def _declared_model(declaration) -> Model:
+    """The model of a declaration (how a declared model is unpickled): the declaration
+    rebuilds it, from the kernel cache."""
+    return declaration.model
 
 
 def _fmt(x: float) -> str:

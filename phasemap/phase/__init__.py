@@ -140,7 +140,6 @@ compiled per model) and this module (:func:`phase_curve` and its Dataset).
 
 from __future__ import annotations
 
-import datetime as _dt
 import inspect
 import math
 
@@ -149,7 +148,7 @@ import xarray as xr
 
 from .. import events as ev
 from .._compile import contract_constants, remember, specialize
-from .._version import __version__
+from .._dataset import cf_header, squared_units
 from ..model import Model
 from ..models import get_model
 from . import tracer
@@ -417,7 +416,7 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
     data |= {
         "omega_squared": xr.Variable("point", u, {
             "long_name": f"square of the {var_omega.long_name}",
-            "units": _squared_units(var_omega.units)}),
+            "units": squared_units(var_omega.units)}),
         "point_stage": xr.Variable("point", index, {
             "long_name": "index of the stage the point belongs to", "units": "1"}),
         "stage_sign": xr.Variable("stage", signs, {
@@ -437,17 +436,8 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
                                    {"long_name": f"stage index ({vel} keeps its sign on a "
                                                  "stage)", "units": "1"})}
     last = ev.Event(int(reasons[-1]))
-    now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     attrs = {
-        "Conventions": "CF-1.8",
-        "title": f"phasemap phase curve: {m.title}",
-        "source": f"phasemap {__version__}",
-        "history": f"{now} created by phasemap.phase_curve {__version__}",
-        "references": m.citation,
-        "phasemap_kind": "phase_curve",
-        "phasemap_model": m.name,
-        "phasemap_version": __version__,
-        "date_created": now,
+        **cf_header(m, "phase_curve", "phasemap.phase_curve"),
         "method": METHOD,
         "end_reason": last.name.lower(),
         "end_message": ev.end_message(m, last, {pos: float(stages[-1, 4])}),
@@ -463,13 +453,3 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
         attrs[f"phasemap_fixed_{v.name}"] = float(full[v.name])
     return xr.Dataset(data, coords, attrs)
 
-
-def _squared_units(units: str) -> str:
-    """UDUNITS spelling of the square of ``units`` ("rad s-1" -> "rad2 s-2")."""
-    out = []
-    for part in units.split():
-        name = part.rstrip("-0123456789")
-        power = part[len(name):] or "1"
-        p = 2 * int(power)
-        out.append(name if p == 1 else f"{name}{p}")
-    return " ".join(out)
