@@ -15,7 +15,7 @@ import numpy as np
 import xarray as xr
 
 from . import events as ev
-from ._dataset import cf_header, variable_attrs
+from ._dataset import assemble, cf_header, variable_attrs
 from .integrate import DEFAULT_METHOD, METHODS, check_method, kernels, unpack
 from .model import Model, Variable
 from .models import get_model
@@ -247,4 +247,4 @@ def _dataset(m: Model, full, positions, opts: Options, names, fate, n_rev, n_ste
         attrs[f"phasemap_initial_{name}"] = value
     coords = {"t": xr.Variable("t", np.asarray(ts, dtype=float),
                                {"long_name": "time", "units": "s"})}
-    return xr.Dataset(data, coords, attrs)
+    return assemble(data, coords, attrs)

@@ -34,3 +34,16 @@ def test_layers_for_takes_a_name_or_a_model():
     assert by_name == phasemap.layers_for(phasemap.MODELS["hinge_pendulum"])
     assert {"fate", "phi_rest", "n_reversals", "t_rest", "t_final"} <= set(by_name)
     assert "x_rest" not in phasemap.layers_for("elliptic_pendulum")  # its stick is not rest
+
+
+def test_the_trajectory_dataset_is_what_xarray_would_build():
+    import xarray as xr
+
+    ds = phasemap.simulate("hinge_pendulum", 10.0, phi=1.0, omega=0.0, delta=0.1)
+    # built directly, it is what xarray's own constructor (merge, default indexes) builds
+    merged = xr.Dataset({n: ds[n].variable for n in ds.data_vars},
+                        {n: ds[n].variable for n in ds.coords}, ds.attrs)
+    xr.testing.assert_identical(ds, merged)
+    assert list(ds.xindexes) == list(merged.xindexes) == ["t"]
+    assert ds.xindexes["t"].equals(merged.xindexes["t"])
+    assert float(ds.phi.sel(t=0.0)) == 1.0  # the index works
