@@ -16,7 +16,6 @@ module lists the other modules its kernels call in ``SOURCES``.
 from __future__ import annotations
 
 import hashlib
-import pathlib
 import sys
 import types
 
@@ -28,7 +27,6 @@ from . import events
 from .model import Model
 
 _CACHE: dict[tuple[str, str], object] = {}
-_DIGESTS: dict[tuple[str, ...], str] = {}
 _BUILT: dict = {}
 
 
@@ -70,26 +68,18 @@ def remember(key, model: Model, build):
 
 
 def source_hash(model: Model, *modules) -> str:
-    """Hash of the model's module, the shared numerics and events, and ``modules``.
-
-    Computed once per process for each model and set of modules: the sources do
-    not change under a running process, and a short simulate() call would
-    otherwise spend most of its time reading and hashing them.
-    """
-    files = (sys.modules[model.candidates[0].func.py_func.__module__], nx, events, _codegen,
-             sys.modules[__name__], *modules)
+    """Hash of the model's module, the shared numerics and events, this module and
+    ``modules`` (the engines look their kernels up once per process, see
+    :func:`remember`, so a call after the first does not hash)."""
+    h = hashlib.sha256()
+    for module in (sys.modules[model.candidates[0].func.py_func.__module__], nx, events,
+                   _codegen, sys.modules[__name__], *modules):
+        h.update(_codegen.file_digest(module.__file__))
     # the generated contract's module name hashes its text and what it imports:
     # a compiled kernel that calls it must not outlive it (declared models are
     # generated files whose names change with the declaration)
-    key = (model.contract.__name__, *(m.__name__ for m in files))
-    digest = _DIGESTS.get(key)
-    if digest is None:
-        h = hashlib.sha256()
-        for module in files:
-            h.update(pathlib.Path(module.__file__).read_bytes())
-        h.update(model.contract.__name__.encode())
-        digest = _DIGESTS[key] = h.hexdigest()[:12]
-    return digest
+    h.update(model.contract.__name__.encode())
+    return h.hexdigest()[:12]
 
 
 def contract_constants(model: Model) -> dict:
