@@ -67,7 +67,7 @@ from .. import _dop853, _dopri5
 from .. import _numerics as nx
 from .. import events as ev
 from .._codegen import _F1, _F2, _F3, _I1, _I2, set_cell
-from .._compile import contract_constants, remember, specialize
+from .._compile import contract_constants, grow, remember, specialize
 from ..grid import pack_axes
 from ..model import Model
 from . import templates as tp
@@ -141,6 +141,73 @@ def _fate_driver(integrate):
         driver = _FATE_DRIVERS[sig] = njit(fsig, parallel=True, cache=True,
                                            error_model="numpy")(_fate_drive)
     return driver
+
+
+def _batch_drive(integrate, y_slot, v, y0s, t_end, rtol, atol, h_max, max_steps, max_events,
+                 save, t_eval):
+    """Integrate from every row of ``y0s`` (one compiled call for a sweep of starts).
+
+    Returns ``(head, points, point_end, events, event_end, y_eval, eval_end)``:
+    ``head`` one row (fate, t, n_reversals, n_steps) per start; the rows of
+    start i of ``points``, ``events`` and ``y_eval`` (see
+    ``templates._integrate_template``) are those before ``*_end[i]`` and from
+    ``*_end[i - 1]`` on, stacked start after start.
+    """
+    n, ny = y0s.shape
+    head = np.empty((n, 4))
+    point_end = np.empty(n, dtype=np.int64)
+    event_end = np.empty(n, dtype=np.int64)
+    eval_end = np.empty(n, dtype=np.int64)
+    pts = np.empty((0, 2 + ny))
+    evs = np.empty((0, 3 + ny))
+    yev = np.empty((0, ny))
+    n_pts = n_evs = n_yev = 0
+    for i in range(n):
+        y0 = y0s[i].copy()
+        for j in range(y_slot.shape[0]):
+            if y_slot[j] >= 0:
+                v[y_slot[j]] = y0[j]
+        res = integrate(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, save, t_eval)
+        head[i, 0] = res[0]
+        head[i, 1] = res[1]
+        head[i, 2] = res[3]
+        head[i, 3] = res[4]
+        p, e, ye = res[5], res[6], res[7]
+        pts = grow(pts, n_pts + p.shape[0])
+        pts[n_pts:n_pts + p.shape[0]] = p
+        n_pts += p.shape[0]
+        evs = grow(evs, n_evs + e.shape[0])
+        evs[n_evs:n_evs + e.shape[0]] = e
+        n_evs += e.shape[0]
+        yev = grow(yev, n_yev + ye.shape[0])
+        yev[n_yev:n_yev + ye.shape[0]] = ye
+        n_yev += ye.shape[0]
+        point_end[i] = n_pts
+        event_end[i] = n_evs
+        eval_end[i] = n_yev
+    return head, pts[:n_pts], point_end, evs[:n_evs], event_end, yev[:n_yev], eval_end
+
+
+_BATCH_DRIVERS: dict = {}
+
+
+def _batch_driver(integrate):
+    """The batch driver for integrators of ``integrate``'s signature (compiled once)."""
+    sig = integrate.nopython_signatures[0]
+    driver = _BATCH_DRIVERS.get(sig)
+    if driver is None:
+        args = (nb_types.FunctionType(sig), _I1, _F1, _F2, *INTEGRATE_ARGS[2:])
+        driver = _BATCH_DRIVERS[sig] = njit(args, cache=True, error_model="numpy")(
+            _batch_drive)
+    return driver
+
+
+def run_batch(model: Model, method: str, v: np.ndarray, y0s: np.ndarray, *args):
+    """Integrate from every row of ``y0s`` in one compiled call (see :func:`_batch_drive`);
+    ``args`` are the integrator's from ``t_end`` on."""
+    integrate, _ = kernels(model, method)
+    y_slot = stage_kernels(model).constants["Y_SLOT"]
+    return _batch_driver(integrate)(integrate, y_slot, v, y0s, *args)
 
 
 def check_method(method, model_name: str) -> str:
