@@ -92,8 +92,8 @@ def setup(name, values):
     m = get_model(name)
     full = {k: float(v) for k, v in m.complete(values).items()}
     lo, hi = phase._checked_range(m, "phi", full["phi"], None)
-    return m, full, lo, hi, phase._kernel(m), m.input_vector(full), \
-        phase._velocity_reference(m, full)
+    return m, full, lo, hi, phase.kernel(m), m.input_vector(full), \
+        phase.velocity_reference(m, full)
 
 
 def runners(name, values, t_end, before):

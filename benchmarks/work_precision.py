@@ -135,13 +135,106 @@ def limits(rows, systems) -> list[str]:
         "(`phasemap_DOP853`) answers it. Time of phasemap's DOPRI5 over its DOP853 at equal "
         "error (above 1: DOP853 is faster): " + ("; ".join(gain) if gain else "not measured")
         + ".",
-        "- `simulate` adds about 1 ms per call (validation and the xarray Dataset) to the "
-        "kernel, more than the integration itself costs on these problems at moderate "
-        "tolerances.",
+        "- `simulate` adds validation and the xarray Dataset to the kernel: the section "
+        "'simulate() at the public call' splits a call into its parts.",
         "- DOP853 at 1e-13 is the tight references themselves (error 0 there, not drawn); "
         "errors below ten times a reference's floor are not compared ('(floor)').",
     ]
     return lines
+
+
+def _median_time(fn, rounds: int) -> float:
+    ts = []
+    for _ in range(rounds):
+        t0 = time.perf_counter()
+        fn()
+        ts.append(time.perf_counter() - t0)
+    return statistics.median(ts)
+
+
+def public_call(rounds: int = 200) -> tuple[str, list]:
+    """simulate() at the public call on the frictionless hinge (phi = 1, t_end = 20,
+    DOP853 at rtol = atol = 1e-9) against solve_ivp's DOP853 with a velocity event,
+    the per-call cost split into the kernel, the Dataset and the rest, and the batch
+    form against a call per start.  Alternating rounds, medians."""
+    import numpy as np
+    from scipy.integrate import solve_ivp
+
+    import phasemap
+    from phasemap.integrate import kernels
+
+    sim = sys.modules["phasemap.simulate"]  # the module (phasemap.simulate is the function)
+
+    kw, opts = dict(phi=1.0, omega=0.0, delta=0.0), dict(t_end=20.0, rtol=1e-9,
+                                                          method="DOP853")
+    m = phasemap.get_model("hinge_pendulum")
+    g, l = float(m.complete(kw)["g"]), float(m.complete(kw)["l"])
+    integrate, _ = kernels(m, "DOP853")
+    full, positions = sim.split_values(m, kw)
+    v, y0, te = m.input_vector(full), np.array([1.0, 0.0]), np.empty(0)
+    names = [x.name for x in sim.integrated_variables(m)]
+    checked = sim.Options(**opts).checked(m.name)
+
+    def kernel():
+        return integrate(v, y0, 20.0, 1e-9, 1e-9, math.inf, 1_000_000, 10_000, True, te)
+
+    res = kernel()
+    cols = sim._columns(res[5], res[6], res[7], None)
+
+    def dataset():
+        return sim._dataset(m, full, positions, checked, names, int(res[0]), int(res[3]),
+                            int(res[4]), *cols)
+
+    def public():
+        return phasemap.simulate("hinge_pendulum", **opts, **kw)
+
+    def velocity(t, y):
+        return y[1]
+
+    def scipy_run():
+        return solve_ivp(lambda t, y: (y[1], -g / l * math.sin(y[0])), (0.0, 20.0),
+                         [1.0, 0.0], method="DOP853", rtol=1e-9, atol=1e-9, events=velocity)
+
+    starts = np.linspace(0.2, 2.8, 64)
+
+    def batch():
+        return phasemap.simulate("hinge_pendulum", t_end=10.0, phi=starts, omega=0.0)
+
+    def loop():
+        return [phasemap.simulate("hinge_pendulum", t_end=10.0, phi=p, omega=0.0)
+                for p in starts]
+
+    for fn in (public, batch, scipy_run):
+        fn()
+    t = {k: [] for k in ("kernel", "dataset", "public", "scipy", "batch", "loop")}
+    for _ in range(5):
+        t["kernel"].append(_median_time(kernel, rounds))
+        t["dataset"].append(_median_time(dataset, rounds))
+        t["public"].append(_median_time(public, rounds))
+        t["scipy"].append(_median_time(scipy_run, max(3, rounds // 40)))
+        t["batch"].append(_median_time(batch, 3))
+        t["loop"].append(_median_time(loop, 3))
+    t = {k: statistics.median(x) for k, x in t.items()}
+    overhead = t["public"] - t["kernel"] - t["dataset"]
+    ratio = t["scipy"] / t["public"]
+    targets = [("simulate() >= 20x solve_ivp (DOP853, velocity event) on the frictionless "
+                "hinge", f"{ratio:.0f}x", ratio >= 20),
+               ("per-call overhead <= 100 us beyond the kernel and the Dataset",
+                f"{overhead * 1e6:.0f} us", overhead <= 100e-6)]
+    lines = [
+        "| part of a simulate() call | time |",
+        "| --- | --- |",
+        f"| the kernel (DOP853, {int(res[4])} steps) | {t['kernel'] * 1e6:.0f} us |",
+        f"| the Dataset | {t['dataset'] * 1e6:.0f} us |",
+        f"| the rest (validation, look-ups, columns) | {overhead * 1e6:.0f} us |",
+        f"| simulate() | {t['public'] * 1e6:.0f} us |",
+        f"| solve_ivp DOP853 with a velocity event | {t['scipy'] * 1e3:.2f} ms |",
+        "",
+        f"Batch form: 64 starts (phi 0.2 ... 2.8, t_end = 10, DOPRI5 1e-8) in one call "
+        f"{t['batch'] * 1e3:.1f} ms, one call per start {t['loop'] * 1e3:.1f} ms "
+        f"({t['loop'] / t['batch']:.1f}x).",
+    ]
+    return "\n".join(lines), targets
 
 
 def main():
@@ -153,7 +246,26 @@ def main():
     ap.add_argument("--no-write", action="store_true", help="print only")
     ap.add_argument("--figure-only", action="store_true",
                     help="redraw the figure from work_precision.csv, time nothing")
+    ap.add_argument("--calls-only", action="store_true",
+                    help="time only simulate() at the public call (section 'simulate() at "
+                    "the public call')")
     args = ap.parse_args()
+    load_start = os.getloadavg()
+    table, targets = public_call(40 if args.quick else 200)
+    calls = "\n".join([
+        "## simulate() at the public call (`benchmarks/work_precision.py --calls-only`)", "",
+        f"Machine: {machine()}; load average {load_start[0]:.1f} at the start, "
+        f"{os.getloadavg()[0]:.1f} at the end; one thread (a trajectory is serial). "
+        "The frictionless hinge pendulum (phi = 1, omega = 0, delta = 0, t_end = 20 s, "
+        "DOP853, rtol = atol = 1e-9); alternating rounds, medians of 5.", "",
+        table, "", "| target | measured | met |", "| --- | --- | --- |",
+        *[f"| {what} | {value} | {'met' if ok else 'missed'} |"
+          for what, value, ok in targets], ""])
+    print(calls)
+    if not args.no_write:
+        write_section(calls, "## simulate() at the public call")
+    if args.calls_only:
+        return
     if args.figure_only:
         print("figure:", *figure(read_csv(HERE / "work_precision.csv"), HERE / "work_precision"))
         return

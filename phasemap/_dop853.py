@@ -18,7 +18,7 @@ precision):
 * Hairer's stiffness test with the stages 12 and 13 (both at t + h): h |lambda|
   ~ h ||f(y1) - f(y12)|| / ||y1 - y12||, against the stability boundary 6.1.
 
-The contracts of ``_step_template`` and ``_dense_template`` are those of
+The contracts of ``step_template`` and ``dense_template`` are those of
 :mod:`phasemap._dopri5`.  Stage i of ``dop853.f`` (1-based) is row i - 1 of
 the stage array ``K``; the systems are autonomous, so the nodes c_i are not
 needed.
@@ -199,7 +199,7 @@ D7_15 = -39.17726167561544
 D7_16 = -149.72683625798564
 
 
-def _step_template(v, y, h, mode, K, yt, y1, rtol, atol):
+def step_template(v, y, h, mode, K, yt, y1, rtol, atol):
     """One DOP853 step; returns the error norm (see :mod:`phasemap._dopri5`)."""
     ny = y.shape[0]
     for i in range(ny):
@@ -264,7 +264,7 @@ def _step_template(v, y, h, mode, K, yt, y1, rtol, atol):
     return e
 
 
-def _dense_template(v, y, y1, h, mode, K, yt, r):
+def dense_template(v, y, y1, h, mode, K, yt, r):
     """The order-7 continuous extension of the step y -> y1 into ``r`` (8 rows)."""
     ny = y.shape[0]
     for i in range(ny):

@@ -10,17 +10,17 @@ A method module gives the integrator template (see
 compiled per model with the model's right-hand side ``RHS`` as a global, and
 the constants below.
 
-``_step_template(v, y, h, mode, K, yt, y1, rtol, atol) -> error norm``
+``step_template(v, y, h, mode, K, yt, y1, rtol, atol) -> error norm``
     One step of size ``h`` from ``y`` with ``K[0] = f(y)``: the stages into
     ``K``, the solution into ``y1``, and the RMS error norm over
     ``atol + rtol max(|y|, |y1|)``.  When the norm is at most 1 (the step is
     accepted) ``K[FSAL] = f(y1)``, ``yt`` is the point of stage ``FSAL - 1``
     (so that ``h |K[FSAL] - K[FSAL-1]| / |y1 - yt|`` estimates h |lambda| for
     Hairer's stiffness test) and ``v`` holds ``y1`` and its derived inputs.
-``_dense_template(v, y, y1, h, mode, K, yt, r)``
+``dense_template(v, y, y1, h, mode, K, yt, r)``
     After an accepted step, the ``N_DENSE`` rows of the continuous extension
     into ``r``: ``y(t + theta h) = r0 + theta (r1 + (1 - theta) (r2 + theta
-    (r3 + ...)))`` (:func:`phasemap.integrate._dense`).  It may call ``RHS``
+    (r3 + ...)))`` (:func:`phasemap.integrate.templates.dense`).  It may call ``RHS``
     (``v`` and ``yt`` are then overwritten).
 """
 
@@ -61,7 +61,7 @@ D1, D3, D4, D5, D6, D7 = (-12715105075.0 / 11282082432.0, 87487479700.0 / 327004
                           -1453857185.0 / 822651844.0, 69997945.0 / 29380423.0)
 
 
-def _step_template(v, y, h, mode, K, yt, y1, rtol, atol):
+def step_template(v, y, h, mode, K, yt, y1, rtol, atol):
     """One Dormand-Prince 5(4) step; returns the error norm (see the module docstring)."""
     ny = y.shape[0]
     for i in range(ny):
@@ -93,7 +93,7 @@ def _step_template(v, y, h, mode, K, yt, y1, rtol, atol):
     return np.sqrt(acc / ny)
 
 
-def _dense_template(v, y, y1, h, mode, K, yt, r):
+def dense_template(v, y, y1, h, mode, K, yt, r):
     """Hairer's order-4 continuous extension of the step y -> y1 into ``r`` (5 rows)."""
     for i in range(y.shape[0]):
         dy = y1[i] - y[i]

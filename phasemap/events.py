@@ -45,6 +45,7 @@ Events that end it (the *fate*):
 from __future__ import annotations
 
 import enum
+import math
 
 from numba import njit
 
@@ -88,6 +89,25 @@ def fate_without_unique(n, lost, singular):
     if n == nx.N_CONTINUUM:
         return CONTINUUM
     return INDETERMINATE
+
+
+@njit(cache=True, error_model="numpy", forceinline=True)
+def first_admissible(out):
+    """The first row of the classified rows ``out`` that is a solution (admissible, or a
+    separation from a one-sided contact), or -1: the branch a unique motion takes."""
+    for b in range(out.shape[0]):
+        st = out[b, nx.STATUS]
+        if st == nx.ADMISSIBLE or st == nx.SEPARATION:
+            return b
+    return -1
+
+
+@njit(cache=True, error_model="numpy", forceinline=True)
+def summary(out, stick):
+    """(n_solutions, first admissible branch, contact_lost, singular) of classified rows
+    (``stick``: the row of the stick branch, -1 if none)."""
+    n, stag, lost, sing = nx.summarize(out, stick)
+    return n, first_admissible(out), lost, sing
 
 
 class Event(enum.IntEnum):
@@ -159,3 +179,26 @@ FATE_VALUES = tuple(int(e) for e in Event if e.terminal)
 FATE_MEANINGS = " ".join(e.name.lower() for e in Event if e.terminal)
 EVENT_VALUES = tuple(int(e) for e in Event)
 EVENT_MEANINGS = " ".join(e.name.lower() for e in Event)
+
+
+def end_message(model, fate: Event, state=None) -> str:
+    """The fate's message; at an edge of the domain, which edge and what it means.
+
+    ``state`` maps names of the integrated variables to their values at the end
+    (any subset); a value equal to a finite bound of its variable names that edge
+    and, where :attr:`phasemap.Dynamics.edges` says, what reaching it means.
+    """
+    if fate != Event.LEFT_DOMAIN or state is None:
+        return fate.message
+    dyn = model.dynamics
+    known = {**model.variables, **{p.name: p for p in dyn.positions}}
+    for name, value in state.items():
+        var = known[name]
+        for side, bound in enumerate((var.lower, var.upper)):
+            if math.isfinite(bound) and value == bound:
+                meaning = dyn.edges.get(var.name, ("", ""))[side]
+                return (f"{fate.message}: {var.name} reached {bound:.6g} {var.units}"
+                        + (f" ({meaning})" if meaning else ""))
+    if model.domain_text:
+        return f"{fate.message}: {model.domain_text}"
+    return fate.message

@@ -26,7 +26,7 @@ import xarray as xr
 
 from . import _numerics as nx
 from ._codegen import content_hash
-from ._dataset import cf_header, declaration_hash, variable_attrs
+from ._dataset import assemble, cf_header, declaration_hash, variable_attrs
 from .grid import evaluate
 from .integrate import run_fate_map
 from .layers import Outcome, layers_for
@@ -397,26 +397,7 @@ class Scene:
         attrs = {**cf_header(m), "phasemap_scene": json.dumps(self.spec())}
         for name, value in self.fixed.items():
             attrs[f"phasemap_fixed_{name}"] = value
-        return _assemble(data_vars, coords, attrs)
-
-
-def _assemble(data_vars: dict, coords: dict, attrs: dict) -> xr.Dataset:
-    """The Dataset of ``data_vars`` over the dimension coordinates ``coords``.
-
-    What ``xr.Dataset(data_vars, coords, attrs)`` builds (the tests check it),
-    built directly: the variables are already aligned on the coordinates, so
-    xarray's merge and alignment (a few tenths of a millisecond, more than
-    the kernel of a small map) have nothing to do.  No array is copied.
-    """
-    import pandas as pd  # loaded with xarray
-
-    indexes = {name: xr.indexes.PandasIndex(pd.Index(var.values), name, coord_dtype=var.dtype)
-               for name, var in coords.items()}
-    variables = {}
-    for name, var in coords.items():
-        variables.update(indexes[name].create_variables({name: var}))
-    variables.update(data_vars)
-    return xr.Dataset._construct_direct(variables, set(coords), attrs=attrs, indexes=indexes)
+        return assemble(data_vars, coords, attrs)
 
 
 #: The most cells a spec read from a file may describe (:meth:`Scene.from_spec`) ...

@@ -15,8 +15,8 @@ import numpy as np
 import xarray as xr
 
 from . import events as ev
-from ._dataset import cf_header, variable_attrs
-from .integrate import DEFAULT_METHOD, METHODS, check_method, kernels, unpack
+from ._dataset import assemble, cf_header, variable_attrs
+from .integrate import DEFAULT_METHOD, METHODS, check_method, kernels, run_batch, unpack
 from .model import Model, Variable
 from .models import get_model
 
@@ -132,7 +132,10 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     **values:
         initial state and parameters by name (``phasemap models`` lists them);
         missing names take the model's defaults.  The elliptic pendulum also
-        takes the slider position ``x`` (default 0).
+        takes the slider position ``x`` (default 0).  **Batch form:** initial
+        values given as 1-D arrays of one length (parameters stay scalars)
+        integrate every start in one compiled call, each exactly as a call of
+        its own would.
 
     Returns
     -------
@@ -145,6 +148,15 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
         the fate, when the motion cannot start); the last is the fate.
         ``attrs["end_reason"]`` names the fate, ``attrs["end_message"]``
         explains it.
+
+        In the batch form, one Dataset with a ``start`` dimension: the
+        variables above on (``start``, ``t``) with ``t_eval`` (NaN past a
+        motion's end), else on (``start``, ``point``) with ``t`` a variable
+        beside them; the events on (``start``, ``event``); ``n_points`` and
+        ``n_events`` count each start's rows (the rest is padding: NaN, and -1
+        for branches and kinds); ``end_reason`` (a fate code, see
+        :class:`phasemap.Event`), ``n_reversals``, ``n_steps`` and
+        ``initial_<name>`` are variables on ``start``.
 
     Raises
     ------
@@ -160,14 +172,16 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     ('rest', 3)
     >>> abs(float(ds.phi[-1])) <= 0.1                  # rest needs l |sin phi| <= delta
     True
+    >>> sweep = phasemap.simulate("hinge_pendulum", t_end=10.0, phi=[0.5, 1.0, 2.5],
+    ...                           omega=0.0, delta=0.1)
+    >>> sweep.n_reversals.values.tolist()
+    [1, 3, 5]
     """
     m = get_model(model)
     opts = Options(t_end, rtol, atol, max_step, max_steps, max_events, method).checked(m.name)
-    for k, val in values.items():
-        if np.ndim(val) != 0:
-            raise ValueError(f"{m.name}: {k} must be a scalar for simulate(); "
-                             "for grids of initial conditions use a Scene with fate layers")
-    full, positions = split_values(m, values)
+    starts = _starts(m, values)
+    full, positions = split_values(m, {k: (val[0] if k in starts else val)
+                                       for k, val in values.items()})
     if t_eval is None:
         te = np.empty(0)
     else:
@@ -179,15 +193,29 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
                 te.size and (te[0] < 0 or te[-1] > opts.t_end)):
             raise ValueError(f"{m.name}: t_eval must be a sorted 1-D sequence of times in "
                              f"[0, t_end = {opts.t_end:g}]")
-    integrate, _ = kernels(m, opts.method)
     names = [v.name for v in integrated_variables(m)]
     y0 = np.array([positions[n] if n in positions else float(full[n]) for n in names])
     v = m.input_vector(full)
-    fate, t, y, n_rev, n_steps, points, events, y_eval = integrate(
-        v, y0, opts.t_end, opts.rtol, opts.atol, opts.max_step, opts.max_steps,
-        opts.max_events, t_eval is None, te)
+    run = (opts.t_end, opts.rtol, opts.atol, opts.max_step, opts.max_steps, opts.max_events,
+           t_eval is None, te)
+    if starts:
+        y0s = np.repeat(y0[None, :], len(next(iter(starts.values()))), axis=0)
+        for j, n in enumerate(names):
+            if n in starts:
+                y0s[:, j] = starts[n]
+        return _batch(m, full, positions, opts, names, y0s, te if t_eval is not None else None,
+                      run_batch(m, opts.method, v.copy(), y0s, *run))
+    integrate, _ = kernels(m, opts.method)
+    fate, t, y, n_rev, n_steps, points, events, y_eval = integrate(v, y0, *run)
+    return _dataset(m, full, positions, opts, names, int(fate), int(n_rev), int(n_steps),
+                    *_columns(points, events, y_eval, te if t_eval is not None else None))
+
+
+def _columns(points, events, y_eval, te):
+    """``(ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode)`` of one motion; at the requested times
+    ``te`` (None: at the saved points)."""
     ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode = unpack(points, events)
-    if t_eval is not None:
+    if te is not None:
         ts = te[:len(y_eval)]
         ys = y_eval
         # the branch at t: the one after the last event at or before t that
@@ -198,69 +226,148 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
             ms = ev_mode[started][np.maximum(at, 0)]
         else:
             ms = np.full(len(ts), -1.0)
-    return _dataset(m, full, positions, opts, names, int(fate), int(n_rev), int(n_steps),
-                    ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode)
+    return ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode
 
 
-def end_message(m: Model, fate: ev.Event, y=None) -> str:
-    """The fate's message; at an edge of the domain, which edge and what it means."""
-    if fate != ev.Event.LEFT_DOMAIN or y is None:
-        return fate.message
-    variables = integrated_variables(m)
-    edges = m.dynamics.edges
-    for var, value in zip(variables, y):
-        for side, bound in enumerate((var.lower, var.upper)):
-            if math.isfinite(bound) and value == bound:
-                meaning = edges.get(var.name, ("", ""))[side]
-                return (f"{fate.message}: {var.name} reached {bound:.6g} {var.units}"
-                        + (f" ({meaning})" if meaning else ""))
-    if m.domain_text:
-        return f"{fate.message}: {m.domain_text}"
-    return fate.message
+def _starts(m: Model, values: Mapping) -> dict[str, np.ndarray]:
+    """The initial-state values given as 1-D arrays (the batch form), checked: one
+    length for all, every start in the domain, the parameters scalars."""
+    known = {**m.variables, **{p.name: p for p in _dynamics(m).positions}}
+    state = {v.name for v in m.state} | {p.name for p in _dynamics(m).positions}
+    starts = {}
+    for k, val in values.items():
+        nd = np.ndim(val)
+        if nd == 0:
+            continue
+        if k not in state or nd != 1 or np.size(val) == 0:
+            raise ValueError(f"{m.name}: {k} must be a scalar for simulate()"
+                             + (", or a 1-D array of initial values (the batch form)"
+                                if k in state else " (it is a parameter)")
+                             + "; for grids of initial conditions use a Scene with fate "
+                             "layers")
+        starts[k] = val
+    sizes = {k: np.size(a) for k, a in starts.items()}
+    if len(set(sizes.values())) > 1:
+        raise ValueError(f"{m.name}: the arrays of initial values must have one length, got "
+                         + ", ".join(f"{k}: {n}" for k, n in sizes.items()))
+    for k, a in starts.items():
+        known[k].check(m.name, a)
+        starts[k] = np.asarray(a, dtype=float)
+    return starts
 
 
-def _dataset(m: Model, full, positions, opts: Options, names, fate, n_rev, n_steps, ts, ys,
-             ms, ev_t, ev_kind, ev_y, ev_mode) -> xr.Dataset:
-    variables = integrated_variables(m)
-    branch_values = np.arange(-1, len(m.branches), dtype=np.int8)
+def _motion_variables(m: Model, t_dims, event_dims, ys, ms, ev_t, ev_kind, ev_y, ev_mode):
+    """The variables of motions: the state and branch on ``t_dims``, the events table on
+    ``event_dims`` (the last axis of ``ys`` and ``ev_y`` runs over the integrated state)."""
     branch_attrs = {"long_name": "active branch of the friction law",
-                    "flag_values": branch_values,
+                    "flag_values": np.arange(-1, len(m.branches), dtype=np.int8),
                     "flag_meanings": " ".join(["none", *m.branches])}
-    kind_attrs = {"long_name": "kind of event", "flag_values": np.array(ev.EVENT_VALUES,
-                                                                        dtype=np.int8),
+    kind_attrs = {"long_name": "kind of event",
+                  "flag_values": np.array(ev.EVENT_VALUES, dtype=np.int8),
                   "flag_meanings": ev.EVENT_MEANINGS}
     data = {
-        "branch": xr.Variable("t", np.asarray(ms, dtype=np.int8), branch_attrs),
-        "event_t": xr.Variable("event", ev_t, {"long_name": "time of the event",
-                                               "units": "s"}),
-        "event_kind": xr.Variable("event", ev_kind.astype(np.int8), kind_attrs),
-        "event_branch": xr.Variable("event", ev_mode.astype(np.int8),
+        "branch": xr.Variable(t_dims, np.asarray(ms, dtype=np.int8), branch_attrs),
+        "event_t": xr.Variable(event_dims, ev_t, {"long_name": "time of the event",
+                                                  "units": "s"}),
+        "event_kind": xr.Variable(event_dims, ev_kind.astype(np.int8), kind_attrs),
+        "event_branch": xr.Variable(event_dims, ev_mode.astype(np.int8),
                                     {**branch_attrs,
                                      "long_name": "active branch after the event"}),
     }
-    for j, var in enumerate(variables):
-        data[var.name] = xr.Variable("t", ys[:, j], variable_attrs(var))
+    for j, var in enumerate(integrated_variables(m)):
+        data[var.name] = xr.Variable(t_dims, ys[..., j], variable_attrs(var))
         data[f"event_{var.name}"] = xr.Variable(
-            "event", ev_y[:, j], {"long_name": f"{var.long_name} at the event",
-                                  "units": var.units})
-    fate_event = ev.Event(fate)
+            event_dims, ev_y[..., j], {"long_name": f"{var.long_name} at the event",
+                                       "units": var.units})
+    return data
+
+
+def _motion_attrs(m: Model, full, positions, opts: Options, skip=()) -> dict:
+    """The global attributes of motions after their header: how they were integrated
+    and from what (the initial values and parameters, but those named in ``skip``)."""
     attrs = {
-        **cf_header(m, "trajectory", "phasemap.simulate"),
-        "end_reason": fate_event.name.lower(),
-        "end_message": end_message(m, fate_event, ev_y[-1] if len(ev_y) else None),
-        "n_reversals": np.int32(n_rev),
-        "n_steps": np.int64(n_steps),
         "integrator": f"{METHODS[opts.method].DESCRIPTION}, events by classification",
         # the coordinate and velocity of the phase plane (the first degree of freedom)
         "phasemap_phase_plane": " ".join(m.dynamics.coordinates[0][:2]),
     }
     for k, value in opts.as_dict().items():
         attrs[f"phasemap_{k}"] = value
+    state = {v.name for v in m.state}
     for name in m.names:
-        key = "initial" if name in {v.name for v in m.state} else "fixed"
-        attrs[f"phasemap_{key}_{name}"] = float(full[name])
+        if name not in skip:
+            key = "initial" if name in state else "fixed"
+            attrs[f"phasemap_{key}_{name}"] = float(full[name])
     for name, value in positions.items():
-        attrs[f"phasemap_initial_{name}"] = value
+        if name not in skip:
+            attrs[f"phasemap_initial_{name}"] = value
+    return attrs
+
+
+def _dataset(m: Model, full, positions, opts: Options, names, fate, n_rev, n_steps, ts, ys,
+             ms, ev_t, ev_kind, ev_y, ev_mode) -> xr.Dataset:
+    data = _motion_variables(m, "t", "event", ys, ms, ev_t, ev_kind, ev_y, ev_mode)
+    fate_event = ev.Event(fate)
+    attrs = {
+        **cf_header(m, "trajectory", "phasemap.simulate"),
+        "end_reason": fate_event.name.lower(),
+        "end_message": ev.end_message(m, fate_event, dict(zip(names, ev_y[-1]))
+                                      if len(ev_y) else None),
+        "n_reversals": np.int32(n_rev),
+        "n_steps": np.int64(n_steps),
+        **_motion_attrs(m, full, positions, opts),
+    }
     coords = {"t": xr.Variable("t", np.asarray(ts, dtype=float),
                                {"long_name": "time", "units": "s"})}
-    return xr.Dataset(data, coords, attrs)
+    return assemble(data, coords, attrs)
+
+
+def _batch(m: Model, full, positions, opts: Options, names, y0s, te, result) -> xr.Dataset:
+    """The Dataset of a batch of motions (see :func:`simulate`) from the batch driver's
+    ``result`` (:func:`phasemap.integrate.run_batch`); ``te``: the requested times, or
+    None (every saved point)."""
+    head, points, point_end, events, event_end, y_eval, eval_end = result
+    n, ny = y0s.shape
+    cuts = [np.concatenate([[0], ends]) for ends in (point_end, event_end, eval_end)]
+    per = [_columns(points[cuts[0][i]:cuts[0][i + 1]], events[cuts[1][i]:cuts[1][i + 1]],
+                    y_eval[cuts[2][i]:cuts[2][i + 1]], te) for i in range(n)]
+    n_t = len(te) if te is not None else max(len(c[0]) for c in per)
+    n_ev = max(len(c[3]) for c in per)
+    ts, ys, ms = np.full((n, n_t), np.nan), np.full((n, n_t, ny), np.nan), np.full((n, n_t), -1)
+    ev_t, ev_kind = np.full((n, n_ev), np.nan), np.full((n, n_ev), -1.0)
+    ev_y, ev_mode = np.full((n, n_ev, ny), np.nan), np.full((n, n_ev), -1.0)
+    for i, (t_i, y_i, m_i, et_i, ek_i, ey_i, em_i) in enumerate(per):
+        k, e = len(t_i), len(et_i)
+        ts[i, :k], ys[i, :k], ms[i, :k] = t_i, y_i, m_i
+        ev_t[i, :e], ev_kind[i, :e], ev_y[i, :e], ev_mode[i, :e] = et_i, ek_i, ey_i, em_i
+    t_dims = ("start", "t") if te is not None else ("start", "point")
+    data = _motion_variables(m, t_dims, ("start", "event"), ys, ms, ev_t, ev_kind, ev_y,
+                             ev_mode)
+    counts = {"n_points": ("states reported", np.array([len(c[0]) for c in per])),
+              "n_events": ("events", event_end - cuts[1][:-1])}
+    data |= {
+        "end_reason": xr.Variable("start", head[:, 0].astype(np.int8), {
+            "long_name": "how the motion ended",
+            "flag_values": np.array(ev.FATE_VALUES, dtype=np.int8),
+            "flag_meanings": ev.FATE_MEANINGS}),
+        "n_reversals": xr.Variable("start", head[:, 2].astype(np.int32), {
+            "long_name": "number of reversals", "units": "1"}),
+        "n_steps": xr.Variable("start", head[:, 3].astype(np.int64), {
+            "long_name": "number of steps", "units": "1"}),
+        **{k: xr.Variable("start", v.astype(np.int64), {"long_name": f"number of {what}",
+                                                          "units": "1"})
+           for k, (what, v) in counts.items()},
+    }
+    known = {**m.variables, **{p.name: p for p in m.dynamics.positions}}
+    for j, name in enumerate(names):
+        data[f"initial_{name}"] = xr.Variable("start", y0s[:, j].copy(), {
+            "long_name": f"initial {known[name].long_name}", "units": known[name].units})
+    time = {"long_name": "time", "units": "s"}
+    coords = {"start": xr.Variable("start", np.arange(n, dtype=np.int32),
+                                   {"long_name": "index of the initial state", "units": "1"})}
+    if te is not None:
+        coords["t"] = xr.Variable("t", te.copy(), time)
+    else:
+        data["t"] = xr.Variable(t_dims, ts, time)
+    attrs = {**cf_header(m, "trajectory", "phasemap.simulate"),
+             **_motion_attrs(m, full, positions, opts, skip=names)}
+    return assemble(data, coords, attrs)
