@@ -178,8 +178,17 @@ class Equations:
 
     # -- sampling the declared domain ------------------------------------------
 
-    def sample(self):
-        """Random values for every symbol, inside the declared domains."""
+    def bound_expr(self, c, side: str):
+        """A coordinate's ``lower`` or ``upper`` bound as a sympy expression of the
+        parameters; None where it is infinite."""
+        import sympy as sp
+
+        b = getattr(c, side)
+        if isinstance(b, (int, float)):
+            return sp.Float(b) if math.isfinite(b) else None
+        return sym(b)
+
+    def _draw(self):
         vals = {}
         rng = self._rng
         for p in self.S.parameters:
@@ -188,18 +197,67 @@ class Equations:
             lo = max(lo, p.default * 0.5 if p.default > 0 else lo)
             vals[p.name] = rng.uniform(lo, hi if hi > lo else lo + 1.0)
         for c in self.S.coordinates:
-            lo = c.lower if math.isfinite(c.lower) else c.default - math.pi
-            hi = c.upper if math.isfinite(c.upper) else c.default + math.pi
-            vals[c.name] = rng.uniform(lo, hi)
+            lo, hi = (self._bound_value(c, side, vals) for side in ("lower", "upper"))
+            lo = lo if math.isfinite(lo) else (hi if math.isfinite(hi) else c.default) - math.pi
+            hi = hi if math.isfinite(hi) else lo + 2 * math.pi
+            vals[c.name] = rng.uniform(lo, hi) if hi > lo else lo
             if c.rate:
                 vals[c.rate.name] = rng.uniform(-2.0, 2.0)
         return vals
+
+    def _bound_value(self, c, side, vals) -> float:
+        import sympy as sp
+
+        e = self.bound_expr(c, side)
+        if e is None:
+            return math.inf if side == "upper" else -math.inf
+        return float(e.xreplace({sp.Symbol(k, real=True): v for k, v in vals.items()}))
+
+    def _accepted(self, vals) -> bool:
+        """Whether the declaration's ``check`` accepts the sample (no check: always)."""
+        if self.S.check is None:
+            return True
+        try:
+            self.S.check(dict(vals))
+        except ValueError:
+            return False
+        return True
+
+    def sample(self):
+        """Random values for every symbol, inside the declared domains and accepted by the
+        declaration's ``check`` (a ValueError naming the system if it accepts none)."""
+        for _ in range(200):
+            vals = self._draw()
+            if self._accepted(vals):
+                return vals
+        fail(self.S, "check", "rejects every state sampled from the declared domains: "
+             "declare the domains (bounds) of the coordinates and parameters it asks for")
+
+    def parameter_points(self) -> list[dict]:
+        """Parameter values: 16 samples, each parameter at each of its finite bounds, and
+        all of them at their lower, then at their upper bounds."""
+        names = [p.name for p in self.S.parameters]
+        pts = [{k: v for k, v in self.sample().items() if k in names} for _ in range(16)]
+        base = dict(pts[0])
+        for side in ("lower", "upper"):
+            corner = dict(base)
+            for p in self.S.parameters:
+                b = getattr(p, side)
+                if math.isfinite(b):
+                    pts.append({**base, p.name: b})
+                    corner[p.name] = b
+            pts.append(corner)
+        return pts
 
     def points(self) -> list[dict]:
         """Fixed sample points: 16 random ones, and each coordinate at its finite bounds."""
         pts = [self.sample() for _ in range(16)]
         for c in self.S.coordinates:
-            pts += [{**self.sample(), c.name: b} for b in (c.lower, c.upper) if math.isfinite(b)]
+            for side in ("lower", "upper"):
+                pt = self.sample()
+                b = self._bound_value(c, side, pt)
+                if math.isfinite(b):
+                    pts.append({**pt, c.name: b})
         return pts
 
     def at(self, e, pts) -> np.ndarray:
