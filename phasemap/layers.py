@@ -103,7 +103,7 @@ def _registry(model: Model) -> dict[str, Layer]:
                                  units="s", fate=True)
         if model.dynamics.stick_is_rest:
             for c in model.dynamics.coordinates:
-                var = model.variables[c[0]]
+                var = model.variable(c[0])
                 layers[f"{c[0]}_rest"] = Layer(f"{c[0]}_rest", "float64",
                                                f"{var.long_name} at rest", units=var.units,
                                                fate=True)

@@ -355,6 +355,13 @@ class Model:
     def variables(self) -> dict[str, Variable]:
         return {v.name: v for v in self.state + self.params}
 
+    def variable(self, name: str) -> Variable:
+        """The :class:`Variable` of ``name``: a state variable, a parameter, or a position the
+        model integrates but does not take as an input (``dynamics.positions``: a point
+        block's position on an incline, whose equations depend on its velocity only)."""
+        extra = {v.name: v for v in (self.dynamics.positions if self.dynamics else ())}
+        return {**extra, **self.variables}[name]
+
     @property
     def defaults(self) -> dict[str, float]:
         return {v.name: float(v.default) for v in self.state + self.params}

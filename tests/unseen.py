@@ -67,10 +67,10 @@ def leaning_ladder(lower=None):
                             PointContact("wall", (xc - l * s, yc + l * c),
                                          normal=(sp.cos(be), sp.sin(be)), friction=f2)))
 
-def ledge_rod():
+def ledge_rod(theta=0.5):
     f, l, g, m = _common()
     h = Parameter("h", "m", "height of the ledge", 1.0, 0.0, 2.0)
-    th = Coordinate("theta", "rad", "angle of the rod to the floor", 0.5)
+    th = Coordinate("theta", "rad", "angle of the rod to the floor", theta)
     x = Coordinate("x", "m", "end A along the floor",
                    rate=Rate("xdot", "m s-1", "velocity of the rod", scale=sp.sqrt(g * l)))
     y = Coordinate("y", "m", "height of end A")

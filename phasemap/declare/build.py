@@ -119,8 +119,43 @@ def _variable(x, **kw):
 
 
 def _bounded(x):
-    return _variable(x, default=float(x.default), lower=x.lower, upper=x.upper,
+    """The Variable of a quantity; a bound that is an expression of the parameters is
+    left infinite here and checked by the model's ``check`` (:func:`_bounds_check`)."""
+    lo, hi = (b if isinstance(b, (int, float)) else sign * math.inf
+              for b, sign in ((x.lower, -1), (x.upper, 1)))
+    return _variable(x, default=float(x.default), lower=float(lo), upper=float(hi),
                      lower_open=x.lower_open, upper_open=x.upper_open)
+
+
+def _bounds_check(S):
+    """``check(values)`` of the coordinates' bounds that are expressions of the
+    parameters (None if there are none): a ValueError naming the coordinate and the bound."""
+    import sympy as sp
+
+    tests = []
+    for c in S.coordinates:
+        for side, b, is_open in (("lower", c.lower, c.lower_open), ("upper", c.upper,
+                                                                    c.upper_open)):
+            if isinstance(b, (int, float)):
+                continue
+            e = sym(b)
+            names = sorted(s.name for s in e.free_symbols)
+            f = sp.lambdify([sp.Symbol(n, real=True) for n in names], e, "numpy")
+            tests.append((c.name, side, is_open, e, names, f))
+    if not tests:
+        return None
+
+    def check(values):
+        for name, side, is_open, e, names, f in tests:
+            x = np.asarray(values[name], float)
+            bound = f(*(np.asarray(values[n], float) for n in names))
+            below = (x <= bound if is_open else x < bound) if side == "lower" else \
+                (x >= bound if is_open else x > bound)
+            if np.any(below):
+                raise ValueError(f"{S.name}: {name} is outside its domain: its {side} bound "
+                                 f"is {e} (= {np.max(bound) if side == 'lower' else np.min(bound):g})")
+
+    return check
 
 
 def _variables(S, spec):
@@ -175,16 +210,29 @@ def _domain_text(spec) -> str:
 
 
 def _checks(S, spec, module):
-    """The model's Python-level domain check: the declaration's own, and ``inside``."""
+    """The model's Python-level domain check: the declaration's own, the coordinates'
+    bounds that are expressions, and ``inside``, in that order."""
+    parts = [c for c in (S.check, _bounds_check(S), _inside_check(S, spec, module))
+             if c is not None]
+    if len(parts) <= 1:
+        return parts[0] if parts else None
+
+    def check(values):
+        for part in parts:
+            part(values)
+
+    return check
+
+
+def _inside_check(S, spec, module):
+    """``check(values)`` of the generated ``inside`` (None if the module has none)."""
     inside = getattr(module, "inside", None)
     if inside is None:
-        return S.check
+        return None
     names = list(inspect.signature(inside.py_func).parameters)
     text = _domain_text(spec)
 
     def check(values):
-        if S.check is not None:
-            S.check(values)
         vals = {}
         for n in names:
             src = n[4:] if n.startswith(("sin_", "cos_")) else n

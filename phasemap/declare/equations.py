@@ -113,14 +113,7 @@ class Equations:
         dq = [q[i] for i in dep if any(q[i] in g.free_symbols for g in gaps)]
         pos_sub = {}
         if dq:
-            sols = sp.solve(gaps, dq, dict=True)
-            if len(sols) != 1:
-                fail(S, "contacts", "closing the contacts must fix the dependent "
-                     f"coordinates {', '.join(map(str, dq))} uniquely; sympy found "
-                     f"{len(sols)} solution(s)")
-            pos_sub = sols[0]
-            if set(pos_sub) != set(dq):
-                fail(S, "contacts", f"the gaps do not fix {', '.join(map(str, dq))}")
+            pos_sub = self._closed_positions(gaps, dq)
         vsols = sp.solve(constraints, [qd[i] for i in dep], dict=True)
         if len(vsols) != 1 or len(vsols[0]) != len(dep):
             fail(S, "contacts", "the contact constraints must fix the velocities of "
@@ -132,6 +125,66 @@ class Equations:
             return sp.sympify(e).xreplace(vel_sub).xreplace(pos_sub)
 
         return on
+
+    def _closed_positions(self, gaps, dq) -> dict:
+        """The dependent coordinates ``dq`` where every gap is closed, as a substitution.
+
+        An angle that enters the gaps only through its sine and cosine is solved for
+        them (with ``sin^2 + cos^2 = 1``: a polynomial system, where a contact that
+        fixes an angle, a block lying flat on two corners, has two solutions).  Where
+        there are several, the one nearest the declared defaults is taken (the
+        coordinates' ``default``, at the parameters' defaults); a ValueError when
+        none is, or two are equally near, says how to choose.
+        """
+        import sympy as sp
+
+        S, names = self.S, ", ".join(map(str, dq))
+        sub, unknowns, sc = {}, [], {}
+        for x in dq:
+            if any(g.has(sp.sin(x), sp.cos(x)) for g in gaps):
+                sc[x] = (sp.Dummy(f"s_{x}", real=True), sp.Dummy(f"c_{x}", real=True))
+                sub.update({sp.sin(x): sc[x][0], sp.cos(x): sc[x][1]})
+                unknowns += list(sc[x])
+            else:
+                unknowns.append(x)
+        polys = [sp.expand(g).xreplace(sub) for g in gaps]
+        if any(x in p.free_symbols for p in polys for x in sc):   # not only sin and cos
+            sc, polys, unknowns = {}, gaps, list(dq)
+        sols = sp.solve(polys + [s * s + c * c - 1 for s, c in sc.values()], unknowns,
+                        dict=True)
+        sols = [x for x in sols if set(x) == set(unknowns)]
+        if not sols:
+            fail(S, "contacts", f"closing the contacts does not fix {names} (sympy found no "
+                 "solution of the gaps = 0)")
+        out = []
+        for x in sols:
+            d = {q: x[q] for q in dq if q not in sc}
+            for q, (s, c) in sc.items():
+                d.update({sp.sin(q): x[s], sp.cos(q): x[c], q: sp.atan2(x[s], x[c])})
+            out.append(d)
+        return out[0] if len(out) == 1 else self._nearest_default(out, dq)
+
+    def _nearest_default(self, sols, dq) -> dict:
+        """Of several closures, the one nearest the declared defaults (see above)."""
+        import sympy as sp
+
+        S = self.S
+        at = {sp.Symbol(p.name, real=True): sp.Float(p.default) for p in S.parameters}
+        want = {sp.Symbol(c.name, real=True): float(c.default) for c in S.coordinates}
+        dist, shown = [], []
+        for d in sols:
+            vals = {q: complex(sp.sympify(d[q]).xreplace(at).evalf()) for q in dq}
+            shown.append(", ".join(f"{q} = {v.real:.6g}" for q, v in vals.items()))
+            real = all(abs(v.imag) <= 1e-12 for v in vals.values())
+            dist.append(sum(min(abs(v.real - want[q] + k * 2 * math.pi) for k in (-1, 0, 1))
+                            for q, v in vals.items()) if real else math.inf)
+        order = sorted(range(len(sols)), key=dist.__getitem__)
+        best = order[0]
+        if not math.isfinite(dist[best]) or abs(dist[order[1]] - dist[best]) <= 1e-9:
+            fail(S, "contacts", f"closing the contacts fixes {', '.join(map(str, dq))} in "
+                 f"{len(sols)} ways at the parameters' defaults ({'; '.join(shown)}): give "
+                 "the coordinates defaults nearest the configuration you mean")
+        return sols[best]
 
     def _close_channels(self):
         """Each channel as ``(w, bias, v)``: its velocity ``v = w . qd`` and its acceleration
