@@ -32,12 +32,17 @@ EXAMPLES = {
         ("phasemap simulate elliptic_pendulum phi=1 xdot=1 f=0.3 --t-end 5", ""),
     ],
     "info": [("phasemap info elliptic.nc", "axes, fixed values, cells per class")],
+    "plot": [("phasemap plot elliptic.nc -o elliptic --size two", "elliptic.pdf and .png")],
     "cfcheck": [("phasemap cfcheck elliptic.nc", "CF compliance, offline")],
     "table": [("phasemap table", "the paper's key states, classified")],
     "models": [("phasemap models", "models, variables, units and defaults")],
     "classify": [
         ("phasemap classify elliptic_pendulum phi=0.8 xdot=-1 f=4", ""),
         ("phasemap classify hinge_pendulum phi=0.05 omega=0 delta=0.1", ""),
+    ],
+    "cache": [
+        ("phasemap cache info", "where compiled kernels are kept, and how much"),
+        ("phasemap cache clear", "delete them all (they compile again on use)"),
     ],
 }
 
@@ -142,7 +147,8 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                    help="integrator setting of the fate layers: t_end, rtol, atol, max_step, "
                    "max_steps, max_events, method (DOPRI5 or DOP853) (repeatable)")
     p.add_argument("--chunk-cells", type=int, default=None, metavar="N",
-                   help="cells per block (default: about a quarter second of work)")
+                   help="cells per block (default: each block about a quarter second of "
+                   "work, sized as the work goes)")
     p.add_argument("--overwrite", action="store_true", help="replace OUT.nc if it exists")
     p.add_argument("--yes", action="store_true", help="go ahead with a large atlas (above "
                    "10^9 cells or an hour)")
@@ -167,6 +173,13 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                             "values and the cells in each class; for a trajectory its "
                             "times and events; for a phase curve its stages.")
     p.add_argument("path")
+    p = subs["plot"] = _sub(sub, "plot", "draw an atlas, trajectory or phase curve as PDF and "
+                            "PNG", "Draws the figure ds.phasemap.plot() draws (a 3-D atlas: "
+                            "one map per value of its shortest axis) into STEM.pdf and STEM.png.")
+    p.add_argument("path", metavar="FILE.nc")
+    p.add_argument("-o", "--output", metavar="STEM", help="default: FILE without .nc")
+    p.add_argument("--size", choices=["one", "two"], default="one", help="a journal's one "
+                   "column (3.5 in, the default) or two columns (7.2 in)")
     p = subs["cfcheck"] = _sub(sub, "cfcheck", "check a file against the CF conventions, "
                                "offline", "Runs cfchecks (pip install cfchecker) on FILE with "
                                "local stand-ins for the tables it would download; a "
@@ -177,6 +190,13 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                                 "equations for the senior derivatives at one state.")
     p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
     p.add_argument("values", nargs="*", metavar="NAME=VALUE")
+    p = subs["cache"] = _sub(sub, "cache", "show or clear the kernel cache: phasemap cache "
+                             "info|clear", "The kernel cache holds the code phasemap generates "
+                             "and what numba compiles from it and from phasemap's own "
+                             "integrators, under one least-recently-used size bound "
+                             "(PHASEMAP_CACHE_MAX_MB).  info lists its folders, entries and "
+                             "size; clear deletes every entry.")
+    p.add_argument("action", choices=["info", "clear"])
     return parser, subs
 
 
@@ -186,9 +206,10 @@ def main(argv: list[str] | None = None) -> int:
     if extra:  # the subcommand's own usage, not the top level's
         (subs.get(args.command) or parser).error(f"unrecognized arguments: {' '.join(extra)}")
     from . import progress
+    from .atlas import Terminated, removed_on_signals
 
     try:
-        with progress.enable():
+        with progress.enable(), removed_on_signals():
             return _run(args)
     except ValueError as err:
         if args.command == "tour":
@@ -198,6 +219,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("\nphasemap: interrupted; no partial file was left", file=sys.stderr)
         return 130
+    except Terminated as stop:
+        print(f"\nphasemap: {stop}; no partial file was left", file=sys.stderr)
+        return stop.code
 
 
 def _run(args) -> int:
@@ -218,6 +242,10 @@ def _run(args) -> int:
         from .atlas import describe_atlas
 
         print(describe_atlas(args.path))
+    elif args.command == "plot":
+        from .plot.command import plot_file
+
+        print("wrote " + ", ".join(map(str, plot_file(args.path, args.output, args.size))))
     elif args.command == "cfcheck":
         from .cfcheck import cfcheck
 
@@ -228,7 +256,19 @@ def _run(args) -> int:
         from .classify import classify
 
         print(classify(args.model, **_parse_values(args.values)))
+    elif args.command == "cache":
+        print(_cache(args.action))
     return 0
+
+
+def _cache(action: str) -> str:
+    from . import cache
+    from .progress import human_bytes
+
+    if action == "clear":
+        files, freed = cache.clear()
+        return f"removed {files} files ({human_bytes(freed)}) from the kernel cache"
+    return cache.info().text()
 
 
 def _parse_values(items: list[str], words: tuple[str, ...] = ()) -> dict[str, float]:
@@ -277,6 +317,7 @@ def _atlas(args) -> str:
     from . import blocks
     from .atlas import destination
     from .models import get_model
+    from .progress import human_duration
     from .scene import Scene
 
     model = get_model(args.model)
@@ -311,9 +352,9 @@ def _atlas(args) -> str:
     est = blocks.estimate(scene, args.chunk_cells, timed=True)
     print(est.text(scene), file=sys.stderr)
     if est.seconds > blocks.YES_SECONDS and not args.yes:
-        raise ValueError(f"this atlas would take about {blocks._duration(est.seconds)}; "
+        raise ValueError(f"this atlas would take about {human_duration(est.seconds)}; "
                          "pass --yes to go ahead")
-    blocks.write_scene(scene, out, block_cells=est.block_cells, overwrite=args.overwrite)
+    blocks.write_scene(scene, out, block_cells=args.chunk_cells, overwrite=args.overwrite)
     return f"wrote {out} ({scene.size} cells, layers {', '.join(scene.layers)})"
 
 
@@ -345,7 +386,7 @@ def _simulate(args) -> str:
     lines.append(f"{ds.attrs['end_reason']}: {ds.attrs['end_message']} "
                  f"({int(ds.attrs['n_steps'])} steps, {ds.sizes['t']} saved points)")
     if out is not None:
-        write_atlas(ds, out)
+        write_atlas(ds, out, overwrite=args.overwrite)
         lines.append(f"wrote {out}")
     return "\n".join(lines)
 
