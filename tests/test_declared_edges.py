@@ -138,3 +138,20 @@ def test_a_system_whose_only_state_is_a_velocity_maps_and_simulates():
     assert (ds.n_solutions.values == 1).all()
     run = phasemap.simulate(m, t_end=5.0, xdot=1.0, f=0.6, alpha=0.4)
     assert run.attrs["end_reason"] == "rest"
+
+
+def test_a_declared_system_without_default_axes_maps_its_classes():
+    """The README's own rod (docs/examples/own_system.py, no default_axes): the friction
+    axis reaches f = 2, past the paradox of the rod sliding back (f > 4/3), so that
+    `phasemap atlas my_rod.py --set xdot=-1` draws it; it used to map f in [0, 1], where
+    every cell is unique."""
+    import numpy as np
+    from pathlib import Path
+
+    m = phasemap.get_model(Path(__file__).resolve().parents[1] / "docs" / "examples"
+                           / "own_system.py")
+    axes = dict(m.default_axes)
+    assert axes == {"theta": (0.0, PI, 512), "f": (0.0, 2.0, 512)}
+    ds = phasemap.Scene(m, axes={k: np.linspace(lo, hi, 48) for k, (lo, hi, _) in axes.items()},
+                        fixed={"xdot": -1.0, "omega": 0.0}, layers=["n_solutions"]).compute()
+    assert set(np.unique(ds.n_solutions.values)) == {0, 1}
