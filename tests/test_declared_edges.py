@@ -155,3 +155,23 @@ def test_a_declared_system_without_default_axes_maps_its_classes():
     ds = phasemap.Scene(m, axes={k: np.linspace(lo, hi, 48) for k, (lo, hi, _) in axes.items()},
                         fixed={"xdot": -1.0, "omega": 0.0}, layers=["n_solutions"]).compute()
     assert set(np.unique(ds.n_solutions.values)) == {0, 1}
+
+
+@pytest.mark.parametrize("name, values", [
+    ("painleve_rod", dict(theta=1.0, omega=0.0, xdot=-1.0, f=0.3, l=1.0, g=9.81, m=0.0)),
+    ("elliptic_pendulum", dict(phi=0.7, omega=0.5, xdot=1.0, f=0.3, l=0.0, g=9.81, m=1.0)),
+])
+def test_a_non_finite_acceleration_or_reaction_is_never_a_solution(name, values):
+    """Past the input checks (a zero mass, a zero length: the kernels' own rule, declared
+    and hand-written alike), a row whose accelerations or reactions are not finite is
+    not counted: no solution here, where a NaN acceleration used to count as one."""
+    import numpy as np
+
+    from phasemap import _numerics as nx
+
+    m = phasemap.get_model(name)
+    out = np.full((len(m.branches), m.n_fields), np.nan)
+    m.point(m.input_vector(values), out)
+    counted = np.isin(out[:, nx.STATUS], (nx.ADMISSIBLE, nx.SEPARATION, nx.CONTINUUM))
+    assert np.isfinite(out[counted, nx.FIRST_ACC:]).all()
+    assert nx.summarize(out, m.stick_branch)[0] == 0
