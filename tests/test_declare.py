@@ -529,3 +529,14 @@ def test_conditions_need_a_declaration_or_a_twin():
 
     with pytest.raises(TypeError, match="'ladder' is not a declared system or model"):
         conditions(ladder.MODEL)
+
+
+def test_a_classification_holds_branch_results_not_branch_definitions():
+    """Two classes were named Branch: the result of classify is BranchResult (the old name
+    kept as an alias), the candidate's definition stays phasemap.model.Branch."""
+    from phasemap import model
+
+    got = phasemap.classify("hinge_pendulum", phi=0.05, omega=0.0)
+    assert got.candidates and all(type(b) is phasemap.BranchResult for b in got.candidates)
+    assert phasemap.Branch is phasemap.BranchResult
+    assert model.Branch is not phasemap.BranchResult
