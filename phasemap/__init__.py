@@ -5,7 +5,7 @@ The public API is re-exported here explicitly.
 
 from ._version import __version__
 from .atlas import describe_atlas, open_atlas, write_atlas
-from .classify import Branch, Classification, classify
+from .classify import Branch, BranchResult, Classification, classify
 from .events import Event
 from .layers import Layer, layers_for
 from .model import BranchStatus, Derived, Dynamics, Model, Solvability, Variable
@@ -29,6 +29,7 @@ def __getattr__(name: str):
 __all__ = [
     "MODELS",
     "Branch",
+    "BranchResult",
     "BranchStatus",
     "Classification",
     "Derived",

@@ -293,6 +293,8 @@ def _variable(v: Variable) -> list:
 def manifest(S, model: Model) -> dict | None:
     """What :func:`build` needs to rebuild ``model`` from its generated module, as JSON
     data; None when the model cannot be rebuilt without its declaration."""
+    if any(not isinstance(b, (int, float)) for c in S.coordinates for b in (c.lower, c.upper)):
+        return None  # a bound that is an expression is checked through sympy
     module = sys.modules[model.velocity_scale.py_func.__module__]
     prefix = "phasemap_kernel_"
     check = None

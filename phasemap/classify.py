@@ -17,8 +17,9 @@ from .models import get_model
 
 
 @dataclass(frozen=True)
-class Branch:
-    """One candidate branch at one state: its status, accelerations and reactions.
+class BranchResult:
+    """One candidate branch at one state: its status, accelerations and reactions (the
+    result; :class:`phasemap.model.Branch` is the candidate's definition).
 
     Attributes
     ----------
@@ -54,6 +55,9 @@ class Branch:
                                BranchStatus.SEPARATION)
 
 
+#: The old name of :class:`BranchResult`, kept so that existing code keeps working.
+Branch = BranchResult
+
 @dataclass(frozen=True)
 class Classification:
     """The answer of :func:`classify` at one point of state and parameter space.
@@ -88,8 +92,8 @@ class Classification:
     stagnation: bool
     contact_lost: bool
     singular: bool
-    branches: tuple[Branch, ...]
-    candidates: tuple[Branch, ...]
+    branches: tuple[BranchResult, ...]
+    candidates: tuple[BranchResult, ...]
 
     @property
     def solvability(self) -> Solvability:
@@ -165,11 +169,11 @@ def classify(model: str | Model, **values: float) -> Classification:
     )
 
 
-def _branch(m: Model, b: int, row: np.ndarray) -> Branch:
+def _branch(m: Model, b: int, row: np.ndarray) -> BranchResult:
     na = len(m.accelerations)
     acc = row[nx.FIRST_ACC:nx.FIRST_ACC + na]
     rea = row[nx.FIRST_ACC + na:]
-    return Branch(
+    return BranchResult(
         name=m.branches[b],
         status=BranchStatus(int(row[nx.STATUS])),
         singular=bool(row[nx.SINGULAR]),

@@ -155,7 +155,7 @@ def _registry(model: Model) -> dict[str, Layer]:
                                  outcome=lambda o: np.where(o.fate == ev.REST, o.t_final, np.nan))
         if model.dynamics.stick_is_rest:
             for j, c in enumerate(model.dynamics.coordinates):
-                var = model.variables[c[0]]
+                var = model.variable(c[0])
                 layers[f"{c[0]}_rest"] = Layer(f"{c[0]}_rest", "float64",
                                                f"{var.long_name} at rest", units=var.units,
                                                fate=True, outcome=lambda o, j=j: o.positions[j])

@@ -1,13 +1,18 @@
 """The model contract: what one mechanical system tells the rest of phasemap.
 
-A model is one module under :mod:`phasemap.models` that builds a :class:`Model`.
-Everything else (``classify``, the grid evaluator, the atlas writer, the CLI)
-reads only this object, so a fifth system needs one new module and one line in
-:mod:`phasemap.models`.
+Everything (``classify``, the grid evaluator, the atlas writer, the CLI, the
+integrator) reads only a :class:`Model`.  **Declare first**: a new system is a
+:class:`phasemap.declare.System` (its coordinates, bodies, potential and
+contacts, a few lines; see :mod:`phasemap.declare`), in a module of
+:mod:`phasemap.systems` with one line in ``phasemap.models.DECLARED``, or in
+any file passed where a model name is accepted.  phasemap derives its
+branches and generates this contract.  Write a model by hand only for what a
+declaration cannot say, or for speed where a map is pinned bit for bit (the
+elliptic and hinge pendulums run by hand, their declarations are twins).
 
-For developers
---------------
-A new model provides:
+A model written by hand
+-----------------------
+A hand-written model provides:
 
 ``state``, ``params``
     :class:`Variable` tuples: name, UDUNITS units, long name, default and the
@@ -428,6 +433,13 @@ class Model:
     @property
     def variables(self) -> dict[str, Variable]:
         return {v.name: v for v in self.state + self.params}
+
+    def variable(self, name: str) -> Variable:
+        """The :class:`Variable` of ``name``: a state variable, a parameter, or a position the
+        model integrates but does not take as an input (``dynamics.positions``: a point
+        block's position on an incline, whose equations depend on its velocity only)."""
+        extra = {v.name: v for v in (self.dynamics.positions if self.dynamics else ())}
+        return {**extra, **self.variables}[name]
 
     @property
     def defaults(self) -> dict[str, float]:

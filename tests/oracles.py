@@ -41,10 +41,14 @@ relative distance of any decisive quantity from its threshold, so that tests
 can stay away from ties.
 
 Public API (all return an :class:`Answer`):
-    painleve_rod(theta, omega, xdot, f, l, g, m)
+    painleve_rod(theta, omega, xdot, f, l, g, m, k=None)   (k: radius of gyration)
     ladder(phi, omega, f, l, g, m)
     wheel(phi, omega, delta, r, l, rho, g, m)
     rod_on_step(theta, omega, f, l, h, g, m, f_edge=None)
+    corner_block(psi, omega, sdot, f, a, b, alpha, g, m)
+    leaning_ladder(phi, omega, f1, f2, beta, l, g, m)
+    ledge_rod(xdot, f, l, h, g, m)
+    incline_point(xdot, f, alpha, g, m)
 and the closed forms painleve_rod_threshold(), painleve_rod_B(theta, f, s).
 """
 
@@ -221,22 +225,25 @@ def enumerate_modes(q, qd, M, Q, contacts, force_scale, acc_scale, length, vscal
             continue
         z0, v = sol
         lo, hi = -math.inf, math.inf
+        open_lo = open_hi = False      # a strict inequality leaves its end out
         ok = True
         for cvec, d, tol, strict in ineq:
             a0 = float(cvec @ z0) - d
             a1 = 0.0 if v is None else float(cvec @ v)
             thr = tol if strict else -tol
             if v is None or abs(a1) <= 1e-12 * (abs(a0) + 1.0):
-                rel = abs(a0) / (tol / RTOL)
+                rel = abs(a0) / (tol / RTOL) if tol > 0 else (math.inf if a0 else 0.0)
                 if rel > 1e-11:     # structural zeros (e.g. a start the kinematics forbids) are exact ties
                     margin = min(margin, rel)
                 if a0 <= thr if strict else a0 < thr:
                     ok = False
             elif a1 > 0:
-                lo = max(lo, (thr - a0) / a1)
+                t = (thr - a0) / a1
+                lo, open_lo = (t, strict) if t > lo else (lo, open_lo or (t == lo and strict))
             else:
-                hi = min(hi, (thr - a0) / a1)
-        if not ok or lo > hi:
+                t = (thr - a0) / a1
+                hi, open_hi = (t, strict) if t < hi else (hi, open_hi or (t == hi and strict))
+        if not ok or lo > hi or (lo == hi and (open_lo or open_hi)):
             continue
         cont = False
         indet = False
@@ -322,8 +329,10 @@ def _rot(th):
     return np.cos(th), np.sin(th)
 
 
-def painleve_rod(theta, omega, xdot, f, l, g, m):
+def painleve_rod(theta, omega, xdot, f, l, g, m, k=None):
     """The classic Painleve rod: uniform rod (length 2l, J = m l^2/3), end A on a rough floor.
+
+    ``k``: the radius of gyration about the centre (J = m k^2; default l / sqrt 3).
 
     theta in (0, pi) is the counter-clockwise angle from the +x axis to the rod
     direction A -> C, so C = A + l (cos theta, sin theta); xdot is A's velocity
@@ -338,7 +347,7 @@ def painleve_rod(theta, omega, xdot, f, l, g, m):
     c, s = math.cos(theta), math.sin(theta)
     q = np.array([0.0, l * s, theta])
     qd = np.array([xdot - l * s * omega, l * c * omega, omega])
-    M = np.diag([m, m, m * l * l / 3.0])
+    M = np.diag([m, m, m * l * l / 3.0 if k is None else m * k * k])
     Q = np.array([0.0, -m * g, 0.0])
     w2 = omega * omega + xdot * xdot / (l * l)
     ans = enumerate_modes(q, qd, M, Q, [floor], m * (g + l * w2) * (1.0 + f), g + l * w2, l,
@@ -468,3 +477,102 @@ def rod_on_step(theta, omega, f, l, h, g, m, f_edge=None):
     for md in ans.modes:
         md.extra = {"theta_ddot": md.qdd[2], "N_floor": md.N[0], "N_edge": md.N[1]}
     return ans
+
+
+def _body_point(r):
+    """Velocity functions of the body point at ``r(q)`` from the centre (q = (xc, yc, theta)):
+    (vx, vy) = (xc' - theta' r_y, yc' + theta' r_x)."""
+    def v(q, qd):
+        rx, ry = r(q)
+        return qd[0] - qd[2] * ry, qd[1] + qd[2] * rx
+    return v
+
+
+def _on_surface(name, v, normal, f):
+    """A one-sided point contact with the velocity function ``v`` on a flat surface with
+    the unit ``normal`` (slip positive along the normal turned clockwise)."""
+    nx_, ny_ = normal
+    return Contact(name, vn=lambda q, qd: nx_ * v(q, qd)[0] + ny_ * v(q, qd)[1],
+                   vt=lambda q, qd: ny_ * v(q, qd)[0] - nx_ * v(q, qd)[1], f=f)
+
+
+def corner_block(psi, omega, sdot, f, a, b, alpha, g, m):
+    """A block (2a wide, 2b high, J = m (a^2 + b^2)/3) balanced on its corner P on a rough
+    incline of angle alpha (normal n = (-sin alpha, cos alpha)).
+
+    The block's bottom makes the angle psi with the incline (body angle alpha + psi);
+    the centre is C = P + R(alpha + psi) (a, b).  P moves along the incline with sdot.
+    """
+    th = alpha + psi
+    n = (-math.sin(alpha), math.cos(alpha))
+    t = (math.cos(alpha), math.sin(alpha))
+
+    def r(q):                                   # P - C
+        c, s = _rot(q[2])
+        return -(a * c - b * s), -(a * s + b * c)
+
+    corner = _on_surface("corner", _body_point(r), n, f)
+    c, s = math.cos(th), math.sin(th)
+    d = (a * c - b * s, a * s + b * c)          # C - P
+    q = np.array([d[0], d[1], th])
+    qd = np.array([sdot * t[0] - omega * d[1], sdot * t[1] + omega * d[0], omega])
+    M = np.diag([m, m, m * (a * a + b * b) / 3.0])
+    Q = np.array([0.0, -m * g, 0.0])
+    L = math.hypot(a, b)
+    w2 = omega * omega + sdot * sdot / (L * L)
+    return enumerate_modes(q, qd, M, Q, [corner], m * (g + L * w2) * (1.0 + f), g + L * w2, L,
+                           math.sqrt(g * L) + abs(sdot) + L * abs(omega))
+
+
+def leaning_ladder(phi, omega, f1, f2, beta, l, g, m):
+    """A ladder (2l, J = m l^2/3) with its foot on a rough floor (f1) and its top against a
+    rough wall (f2) that leans back from the vertical by beta: the wall is the line
+    through the origin with the normal n = (cos beta, sin beta).
+
+    phi is the ladder's angle from the vertical (its body angle): foot
+    P1 = C + l (sin phi, -cos phi) on y = 0, top P2 = C - l (sin phi, -cos phi) on the
+    wall, so C = (l sin phi - 2 l cos phi tan beta, l cos phi).
+    """
+    n = (math.cos(beta), math.sin(beta))
+    foot = _on_surface("floor", _body_point(lambda q: (l * np.sin(q[2]), -l * np.cos(q[2]))),
+                       (0.0, 1.0), f1)
+    top = _on_surface("wall", _body_point(lambda q: (-l * np.sin(q[2]), l * np.cos(q[2]))),
+                      n, f2)
+    c, s, tb = math.cos(phi), math.sin(phi), math.tan(beta)
+    q = np.array([l * s - 2 * l * c * tb, l * c, phi])
+    qd = np.array([(l * c + 2 * l * s * tb) * omega, -l * s * omega, omega])
+    M = np.diag([m, m, m * l * l / 3.0])
+    Q = np.array([0.0, -m * g, 0.0])
+    w2 = omega * omega
+    return enumerate_modes(q, qd, M, Q, [foot, top], m * (g + l * w2) * (1.0 + max(f1, f2)),
+                           g + l * w2, l, math.sqrt(g * l) + l * abs(omega))
+
+
+def ledge_rod(xdot, f, l, h, g, m):
+    """A uniform rod (2l, J = m l^2/3) with its end A on a rough floor and its end B on a
+    rough ledge at the height h < 2l (both one-sided, friction f): its angle to the floor
+    is fixed, sin(theta) = h / (2 l), and it slides with xdot."""
+    th = math.asin(h / (2 * l))
+    foot = _on_surface("A", _body_point(lambda q: (-l * np.cos(q[2]), -l * np.sin(q[2]))),
+                       (0.0, 1.0), f)
+    end = _on_surface("B", _body_point(lambda q: (l * np.cos(q[2]), l * np.sin(q[2]))),
+                      (0.0, 1.0), f)
+    q = np.array([l * math.cos(th), l * math.sin(th), th])
+    qd = np.array([xdot, 0.0, 0.0])
+    M = np.diag([m, m, m * l * l / 3.0])
+    Q = np.array([0.0, -m * g, 0.0])
+    return enumerate_modes(q, qd, M, Q, [foot, end], m * g * (1.0 + f) + m * xdot * xdot / l,
+                           g + xdot * xdot / l, l, math.sqrt(g * l) + abs(xdot))
+
+
+def incline_point(xdot, f, alpha, g, m):
+    """A point mass on a rough incline of angle alpha (normal (-sin alpha, cos alpha)),
+    moving along it with the velocity xdot of its x coordinate."""
+    n = (-math.sin(alpha), math.cos(alpha))
+    point = _on_surface("P", lambda q, qd: (qd[0], qd[1]), n, f)
+    q = np.zeros(2)
+    qd = np.array([xdot, xdot * math.tan(alpha)])
+    M = np.diag([m, m])
+    Q = np.array([0.0, -m * g])
+    return enumerate_modes(q, qd, M, Q, [point], m * g * (1.0 + f), g, 1.0,
+                           math.sqrt(g) + abs(xdot))

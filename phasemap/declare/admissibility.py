@@ -25,7 +25,11 @@ The contract of one :class:`Condition` ``c``
 * ``c.rest_only``: the condition applies only at zero relative velocity (a
   slip starting from rest); the expression is written with that velocity 0.
 * ``c.where`` (or None): the condition applies only where ``c.where > 0``.
-* Where a condition does not apply it counts as holding.  A branch is
+* Where a condition does not apply it counts as holding.
+* The rows that exist only on an edge of the domain (``..._at_phi_max``, where a
+  contact is at rest while the system moves: :mod:`phasemap.declare.edges`) have
+  no conditions here: they apply on a line ``q = q*`` of a map, its border, where
+  the tracer meets them as the end of the domain, not as a boundary it follows.  A branch is
   admissible (status ``ADMISSIBLE`` or ``SEPARATION``) exactly where it applies
   (at rest, or moving in its ``direction``; :func:`presence` tells the
   ``_moving_neg`` copies apart) and all its conditions hold;
@@ -283,7 +287,8 @@ def _build(S) -> tuple[Condition, ...]:
     d = derive(S)
     out = []
     for row in d.candidates:
-        out += _Branch(d, row).conditions()
+        if row.edge is None:
+            out += _Branch(d, row).conditions()
     out += [_without_poles(Condition(label, None, "domain", e, scale_of(e), ">= 0"))
             for (e, _), label in zip(d.eqs.domain, d.eqs.domain_labels)]
     names = [c.name for c in out]
@@ -300,7 +305,7 @@ class _Branch:
         import sympy as sp
 
         self.d, self.row = d, row
-        self.sol = d.solutions[row.kinds]
+        self.sol = d.solutions[row.key]
         self.p = self.sol.problem
         self.names = d.S.names
         self.branch = str(self.names.get(row.name, row.name))
@@ -350,7 +355,7 @@ class _Branch:
 
         sol = self.sol
         if sol.family is not None:
-            D, P, _ = sol.family[0]
+            D, P = sol.family[0].D, sol.family[0].P
             R = sum((scale_of(e) for e in P), sp.Integer(0))
             self.nL, self.sL, self.dL = list(P), [R] * len(P), D
         elif self.p.squared is not None:
@@ -392,7 +397,7 @@ class _Branch:
         sol, b = self.sol, self.branch
         if sol.family is not None and len(sol.family) > 1:
             return []  # singular only where both parametrisations' minors vanish: points
-        D = sol.family[0][0] if sol.family is not None else sol.D
+        D = sol.family[0].D if sol.family is not None else sol.D
         if self.p.squared is None:
             return [Condition(f"coef_{b}", b, "coefficient", D, scale_of(D), "!= 0")]
         A = self.roots.A
@@ -439,7 +444,7 @@ class _Branch:
     def _family(self) -> list[Condition]:
         import sympy as sp
 
-        D, P, Dd = self.sol.family[0]
+        D, P, Dd = self.sol.family[0].D, self.sol.family[0].P, self.sol.family[0].Dd
         R = self.sL[0]
         lines = []
         for form in self.p.forms:

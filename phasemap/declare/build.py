@@ -5,12 +5,15 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import itertools
 import json
 import math
+from collections.abc import Mapping
 
 import numpy as np
 
 from .. import _codegen
+from .. import _numerics as nx
 from .._declared import checks, declare_sources
 from .._version import __version__
 from ..model import Branch, Derived, Dynamics, Model, Variable
@@ -83,6 +86,7 @@ def build_model(S) -> Model:
     module = generated(S)
     spec = json.loads(module.SPEC)
     state, params, moving = _variables(S, spec)
+    explored = _default_axes(S, state, params, spec["scale_args"])
     reactions = _reactions(S, spec)
     renamed = [str(S.names.get(row[0], row[0])) for row in spec["rows"]]
     _check_distinct(S, renamed, reactions)
@@ -94,7 +98,7 @@ def build_model(S) -> Model:
                                           for c in moving),
                         positions=positions, stick_is_rest=len(moving) == 1,
                         edges=dict(S.edges))
-    return Model(
+    model = Model(
         name=S.name, title=S.title, citation=S.citation, state=state, params=params,
         derived=tuple(Derived(nm, src, getattr(np, fn)) for nm, src, fn in spec["derived"]),
         candidates=candidates, accelerations=_accelerations(moving),
@@ -102,15 +106,16 @@ def build_model(S) -> Model:
         coefficient=Variable("coef", "1", "determinant of the branch's contact problem, "
                              "relative to the magnitude of its terms"),
         velocity=spec["velocity"], velocity_scale=module.velocity_scale,
-        default_axes=dict(S.default_axes) or _default_axes(S, state, params),
-        dynamics=dynamics,
-        check=checks(S.name, S.check, getattr(module, "inside", None), _domain_text(spec)),
+        default_axes=dict(S.default_axes) or explored,
+        dynamics=dynamics, check=_checks(S, spec, module),
         declaration=S, inside=getattr(module, "inside", None),
         domain_text=_domain_text(spec),
         # every sign a mode's law depends on (a slip's, a two-sided contact's normal
         # force's) is fixed by the mode, so a reaction changing sign ends the mode's
         # stage instead of bending its law
         kinks=())
+    explored.model = model
+    return model
 
 
 def _variable(x, **kw):
@@ -121,8 +126,43 @@ def _variable(x, **kw):
 
 
 def _bounded(x):
-    return _variable(x, default=float(x.default), lower=x.lower, upper=x.upper,
+    """The Variable of a quantity; a bound that is an expression of the parameters is
+    left infinite here and checked by the model's ``check`` (:func:`_bounds_check`)."""
+    lo, hi = (b if isinstance(b, (int, float)) else sign * math.inf
+              for b, sign in ((x.lower, -1), (x.upper, 1)))
+    return _variable(x, default=float(x.default), lower=float(lo), upper=float(hi),
                      lower_open=x.lower_open, upper_open=x.upper_open)
+
+
+def _bounds_check(S):
+    """``check(values)`` of the coordinates' bounds that are expressions of the
+    parameters (None if there are none): a ValueError naming the coordinate and the bound."""
+    import sympy as sp
+
+    tests = []
+    for c in S.coordinates:
+        for side, b, is_open in (("lower", c.lower, c.lower_open), ("upper", c.upper,
+                                                                    c.upper_open)):
+            if isinstance(b, (int, float)):
+                continue
+            e = sym(b)
+            names = sorted(s.name for s in e.free_symbols)
+            f = sp.lambdify([sp.Symbol(n, real=True) for n in names], e, "numpy")
+            tests.append((c.name, side, is_open, e, names, f))
+    if not tests:
+        return None
+
+    def check(values):
+        for name, side, is_open, e, names, f in tests:
+            x = np.asarray(values[name], float)
+            bound = f(*(np.asarray(values[n], float) for n in names))
+            below = (x <= bound if is_open else x < bound) if side == "lower" else \
+                (x >= bound if is_open else x > bound)
+            if np.any(below):
+                raise ValueError(f"{S.name}: {name} is outside its domain: its {side} bound "
+                                 f"is {e} (= {np.max(bound) if side == 'lower' else np.min(bound):g})")
+
+    return check
 
 
 def _variables(S, spec):
@@ -176,23 +216,105 @@ def _domain_text(spec) -> str:
             + " leaves the body's edge (the contact no longer exists)")
 
 
+def _checks(S, spec, module):
+    """The model's Python-level domain check: the declaration's own and the generated
+    ``inside`` (:func:`phasemap._declared.checks`, shared with a model loaded from the
+    cache), then the coordinates' bounds that are expressions."""
+    base = checks(S.name, S.check, getattr(module, "inside", None), _domain_text(spec))
+    bounds = _bounds_check(S)
+    if bounds is None or base is None:
+        return bounds or base
+
+    def check(values):
+        base(values)
+        bounds(values)
+
+    return check
+
+
 def _per_s2(units: str) -> str:
     return "s-2" if units == "1" else f"{units} s-2"
 
 
-def _default_axes(S, state, params):
-    """A first map: the first state variable with a finite domain against the first friction law."""
-    axes = {}
-    for v in state:
-        if math.isfinite(v.lower) and math.isfinite(v.upper):
-            axes[v.name] = (v.lower, v.upper, 512)
-            break
+def _default_axes(S, state, params, scale_args):
+    """A first map where the declaration gives none: the first state position with a
+    finite domain (else its default +- pi) against the first contact's friction
+    parameter (none if the law is not one parameter), over the range that holds the
+    system's classes (:class:`ExploredAxes`: decided on first use)."""
+    first = next((v for v in state if math.isfinite(v.lower) and math.isfinite(v.upper)),
+                 None)
+    if first is not None:
+        position = (first.name, (first.lower, first.upper))
     else:
-        v = state[0]
-        axes[v.name] = (float(v.default) - math.pi, float(v.default) + math.pi, 512)
+        v = next((v for v in state if v.name in {c.name for c in S.coordinates}), state[0])
+        position = (v.name, (float(v.default) - math.pi, float(v.default) + math.pi))
     law = S.contacts[0].law_expr()
-    for p in params:
-        if law.is_Symbol and p.name == law.name:
-            axes[p.name] = (max(p.lower, 0.0), max(2.0 * p.default, 1.0), 512)
-            break
-    return axes
+    friction = next((p for p in params if law.is_Symbol and p.name == law.name), None)
+    return ExploredAxes(position, friction, scale_args)
+
+
+class ExploredAxes(Mapping):
+    """The default axes of a declared system without ``default_axes``, read off a coarse
+    exploratory raster the first time they are asked for.
+
+    The rule: the position axis spans its domain.  The friction axis starts at its
+    lower bound; its upper end is the smallest of 1, 2, 4, 8 (within its domain) up
+    to which every class (the pair n_solutions, stagnation) has appeared that a raster
+    finds of 22 positions inside the domain x 24 friction values over [lower, 8], at
+    the relative velocity zero and +-1 times its scale, every other value at its
+    default: a paradox that needs f > 4/3 (the Painleve rod sliding back) is on the
+    map whichever velocity the user then fixes.  512 x 512 cells.
+    """
+
+    def __init__(self, position, friction, scale_args):
+        self._position, self._friction, self._scale_args = position, friction, scale_args
+        self._axes = None
+        #: the model it explores (set once the model is built)
+        self.model = None
+
+    def _explore(self) -> dict:
+        name, (lo, hi) = self._position
+        axes = {name: (lo, hi, 512)}
+        p = self._friction
+        if p is None or self.model is None:
+            return axes
+        f_lo = max(p.lower, 0.0)
+        ends = [x for x in (1.0, 2.0, 4.0, 8.0) if x > f_lo and x <= p.upper] or [p.upper]
+        first_seen = self._first_seen(name, lo, hi, p.name, f_lo, ends[-1])
+        need = max(first_seen.values(), default=f_lo)
+        axes[p.name] = (f_lo, next((x for x in ends if x >= need), ends[-1]), 512)
+        return axes
+
+    def _first_seen(self, name, lo, hi, fname, f_lo, f_hi) -> dict:
+        """Each class's smallest friction on the raster."""
+        m = self.model
+        out = np.full((len(m.branches), m.n_fields), np.nan)
+        values = dict(m.defaults)
+        scale = float(m.velocity_scale(*(values[a] for a in self._scale_args)))
+        seen: dict = {}
+        for x, f, s in itertools.product(np.linspace(lo, hi, 24)[1:-1] if lo < hi else [lo],
+                                         np.linspace(f_lo, f_hi, 24), (0.0, 1.0, -1.0)):
+            values.update({name: float(x), fname: float(f), m.velocity: s * scale})
+            try:
+                m.complete(values)
+            except ValueError:
+                continue
+            m.point(m.input_vector(values), out)
+            n, stagnation, _, _ = nx.summarize(out, m.stick_branch)
+            key = (int(n), bool(stagnation))
+            seen[key] = min(seen.get(key, math.inf), float(f))
+        return seen
+
+    def _get(self) -> dict:
+        if self._axes is None:
+            self._axes = self._explore()
+        return self._axes
+
+    def __getitem__(self, key):
+        return self._get()[key]
+
+    def __iter__(self):
+        return iter(self._get())
+
+    def __len__(self) -> int:
+        return len(self._get())

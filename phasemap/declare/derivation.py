@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .edges import Edge, edge_candidates, find_edges, on_edge
 from .equations import Equations
 from .modes import Candidate, candidates, slip_velocity
 from .solvers import Solution, problem, solve
@@ -19,10 +20,13 @@ from .solvers import Solution, problem, solve
 class Derivation:
     """Everything derived from a declaration, before code is printed.
 
-    ``solutions`` maps each mode-kind combination (one per generated branch
-    function, ``mode_0``, ``mode_1``... in order of first use) to its
-    :class:`~phasemap.declare.solvers.Solution`; several candidate branches
-    share one function and differ in its arguments (slip sign, N sign, root).
+    ``solutions`` maps each mode-kind combination and edge (a candidate's
+    ``key``: one generated branch function each, ``mode_0``, ``mode_1``... in
+    order of first use) to its :class:`~phasemap.declare.solvers.Solution`;
+    several candidate branches share one function and differ in its arguments
+    (slip sign, N sign, root).  ``factors`` holds each contact's slip factor
+    ``k_c`` and ``edges`` the :class:`~phasemap.declare.edges.Edge` s where some
+    vanish; the candidates that exist only there come after the others.
     """
 
     S: object
@@ -31,6 +35,13 @@ class Derivation:
     kappa: dict
     candidates: list[Candidate]
     solutions: dict
+    factors: dict
+    edges: list[Edge]
+
+    @property
+    def still(self) -> set:
+        """The contacts that are at rest on some edge (their slips start there too)."""
+        return {c for e in self.edges for c in e.contacts}
 
     @property
     def positions(self):
@@ -64,10 +75,20 @@ def derive(S) -> Derivation:
 
 def _derive(S) -> Derivation:
     eqs = Equations(S)
-    eqs.velocity, eqs.kappa = slip_velocity(eqs)
+    eqs.velocity, eqs.kappa, factors = slip_velocity(eqs)
     rows = candidates(S, eqs.kappa)
+    edges = find_edges(eqs, factors)
+    for edge in edges:
+        rows += edge_candidates(S, eqs.kappa, edge, rows)
     solutions: dict[tuple, Solution] = {}
     for row in rows:
-        if row.kinds not in solutions:
-            solutions[row.kinds] = solve(eqs, problem(eqs, row.kinds, f"mode_{len(solutions)}"))
-    return Derivation(S, eqs, eqs.velocity, eqs.kappa, rows, solutions)
+        if row.key in solutions:
+            continue
+        fname = f"mode_{len(solutions)}"
+        if row.edge is None:
+            solutions[row.key] = solve(eqs, problem(eqs, row.kinds, fname))
+        else:
+            at = on_edge(eqs, edges[row.edge])
+            solutions[row.key] = solve(at, problem(at, row.kinds, fname, at_rest=False),
+                                       edge=True)
+    return Derivation(S, eqs, eqs.velocity, eqs.kappa, rows, solutions, factors, edges)

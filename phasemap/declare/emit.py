@@ -4,6 +4,7 @@ generated module of a declared system (see GUIDE section 6 for why a real file).
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass, field
 
 from .. import _numerics as nx
 from .algebra import scale_in, scale_of
@@ -40,6 +41,8 @@ def printer():
             pb = self._print(b)
             if x.is_Integer:
                 k = int(x)
+                if k < 0:  # numba raises ZeroDivisionError for 0.0 ** -k, whatever its error model
+                    return f"(1.0/{self._print(b ** -k)})"
                 if k == 2:
                     return f"(({pb})*({pb}))"
                 return f"(({pb})**{k})"
@@ -85,22 +88,68 @@ def _symbols(prefix, k):
     return [sp.Symbol(f"{prefix}{i}", real=True) for i in range(k)]
 
 
-def row_code(sol, eqs, inputs_of) -> tuple[list[str], set]:
+@dataclass(frozen=True)
+class RowContext:
+    """Where a row applies and when its contacts are at rest.
+
+    ``edge``: the :class:`phasemap.declare.edges.Edge` a row exists on (None:
+    everywhere); ``still``: per contact that is at rest on some edge, its slip
+    factor ``k_c`` (an ordinary row tests a start of its slip wherever ``k_c``
+    vanishes, not only at rest).
+    """
+
+    edge: object = None
+    still: dict = field(default_factory=dict)
+
+    def rest_of(self, contact: str) -> str:
+        """The code of "contact is at rest" in the row."""
+        if self.edge is not None and contact in self.edge.contacts:
+            return "True"
+        return f"_k_rest_{contact}" if contact in self.still else "rest"
+
+
+def row_code(sol, eqs, inputs_of, ctx: RowContext = RowContext()) -> tuple[list[str], set]:
     """The branch function's body lines for the solution ``sol``, and the inputs it reads."""
     w = _Writer(inputs_of)
     p = sol.problem
     L = [u[2] for u in p.unknowns]
     Ls = _symbols("_k_Ls", len(L))
+    _where(w, sol, ctx)
     if sol.family is not None:
-        _family(w, sol, L, Ls, eqs.S)
+        _family(w, sol, eqs, L, Ls, ctx)
     elif p.squared is not None:
         _joint(w, sol, L, Ls)
     else:
         _regular(w, sol, L, Ls)
     Q = _accelerations(w, sol, L, Ls)
-    _admissible(w, sol, eqs, Q, L, Ls)
+    _admissible(w, sol, eqs, Q, L, Ls, ctx)
     w.emit([(f"_k_r{i}", e) for i, e in enumerate(p.reactions)])
     return w.lines, w.used
+
+
+def _where(w, sol, ctx: RowContext):
+    """``_k_edge`` (the row's edge holds: its contacts' slip factors vanish, and the state
+    is near it) and ``_k_rest_<c>`` (contact c is at rest: at rest, or where its factor
+    vanishes), for the contacts the row's requirements start."""
+    from .edges import NEAR, edge_flag
+
+    if ctx.edge is None:
+        w.lines.append("_k_edge = True")
+    else:
+        factors, scales, near = edge_flag(ctx.edge)
+        w.emit([(f"_k_ef{i}", k) for i, k in enumerate(factors)]
+               + [(f"_k_efs{i}", s) for i, s in enumerate(scales)] + [("_k_near", near)])
+        w.lines.append("_k_edge = " + " & ".join(
+            [f"(abs(_k_ef{i}) <= {TOL} * _k_efs{i})" for i in range(len(factors))]
+            + [f"(_k_near <= {NEAR!r})"]))
+    started = {r.contact for r in sol.problem.requirements
+               if isinstance(r, Accelerates) and r.rest_only}
+    for c in sorted(started & set(ctx.still)):
+        if ctx.rest_of(c) == "True":
+            continue
+        k = ctx.still[c]
+        w.emit([(f"_k_kf_{c}", k), (f"_k_kfs_{c}", scale_of(k))])
+        w.lines.append(f"_k_rest_{c} = rest | (abs(_k_kf_{c}) <= {TOL} * _k_kfs_{c})")
 
 
 def _regular(w, sol, L, Ls):
@@ -159,35 +208,92 @@ def _joint(w, sol, L, Ls):
         w.lines.append(f"{Ls[i]} = (_k_as{i} + _k_bs{i} * abs(_k_mu)) / abs(_k_D)")
 
 
-def _family(w, sol, L, Ls, S):
+def _family(w, sol, eqs, L, Ls, ctx: RowContext):
     """The statically indeterminate family ``L_j = (P_j + Dd_j t) / D`` (P = 0, Dd = D
-    for the parameter), the interval of ``t`` where every form holds, and its middle."""
+    for the parameter), on the best conditioned of its parametrisations, the interval
+    of ``t`` where every form holds (and, as they are affine in ``t`` too, every
+    acceleration's sign), and its middle.  ``_k_real``: the family exists (its dropped
+    equation holds); ``_k_moves``: its admissible members differ in their
+    accelerations (a continuum)."""
     k = len(L)
-    for r, (D, Pj, Ddj) in enumerate(sol.family):
-        w.emit([(f"_k_D_{r}", D), (f"_k_Ds_{r}", scale_of(D))]
-               + [(f"_k_P{j}_{r}", e) for j, e in enumerate(Pj)]
-               + [(f"_k_PS{j}_{r}", scale_of(e)) for j, e in enumerate(Pj)]
-               + [(f"_k_Dd{j}_{r}", e) for j, e in enumerate(Ddj)])
-    picked = ["_k_D", "_k_Ds"] + [f"_k_{x}{j}" for x in ("P", "PS", "Dd") for j in range(k)]
-    if len(sol.family) == 1:
-        w.lines += [f"{x} = {x}_0" for x in picked]
-    else:
-        w.lines.append("_k_use = abs(_k_D_0) * _k_Ds_1 >= abs(_k_D_1) * _k_Ds_0")
-        w.lines += [f"{x} = {x}_0 if _k_use else {x}_1" for x in picked]
+    fields = ["_k_D", "_k_Ds"] + [f"_k_{x}{j}" for x in ("P", "PS", "Dd") for j in range(k)]
+    for r, fam in enumerate(sol.family):
+        w.emit([(f"_k_D_{r}", fam.D), (f"_k_Ds_{r}", scale_of(fam.D))]
+               + [(f"_k_P{j}_{r}", e) for j, e in enumerate(fam.P)]
+               + [(f"_k_PS{j}_{r}", scale_of(e)) for j, e in enumerate(fam.P)]
+               + [(f"_k_Dd{j}_{r}", e) for j, e in enumerate(fam.Dd)])
+    w.lines += [f"{x} = {x}_0" for x in fields]
+    for r in range(1, len(sol.family)):
+        # the larger minor, relative to the magnitude of its terms
+        w.lines.append(f"_k_use = abs(_k_D_{r}) * _k_Ds > abs(_k_D) * _k_Ds_{r}")
+        w.lines += [f"{x} = {x}_{r} if _k_use else {x}" for x in fields]
     w.lines += [f"_k_sing = abs(_k_D) <= {TOL} * _k_Ds", "_k_cont = False", "_k_real = True",
                 "_k_coef = _k_D / _k_Ds",
                 "_k_R = " + " + ".join(f"_k_PS{j}" for j in range(k)) + " + 0.0"]
+    if sol.consistency is not None:
+        # the family exists where adj(K) rhs vanishes
+        c = sol.consistency
+        w.emit([(f"_k_C{j}", e) for j, e in enumerate(c)]
+               + [(f"_k_Cs{j}", scale_of(e)) for j, e in enumerate(c)])
+        w.lines.append("_k_real = " + " & ".join(
+            f"(abs(_k_C{j}) <= {TOL} * _k_Cs{j})" for j in range(len(c))))
     fam = {j: (f"_k_P{j} / _k_D", f"_k_Dd{j} / _k_D") for j in range(k)}
     w.lines.append("_k_lo, _k_hi = -np.inf, np.inf")
     for form in sol.problem.forms:
-        _restrict(w, form, fam, family_coefficients(form, L, S, sol.problem.fname))
-    w.lines.append("_k_fam = _k_lo < _k_hi")
+        _restrict(w, form, fam, family_coefficients(form, L, eqs.S, sol.problem.fname))
+    Q0, Q1, Qs = _family_accelerations(w, sol, L, Ls)
+    for ci, req in enumerate(sol.problem.requirements):
+        if isinstance(req, Accelerates):
+            _restrict_acceleration(w, eqs, sol, ci, req, Q0, Q1, Qs, ctx)
+    # a single member is admissible where every condition it meets is inclusive (the
+    # tolerances are zero where every term is: no load at all)
+    strict = any(f.strict is not False for f in sol.problem.forms) or any(
+        isinstance(r, Accelerates) for r in sol.problem.requirements)
+    w.lines.append(f"_k_fam = _k_lo {'<' if strict else '<='} _k_hi")
     w.lines.append("_k_t = 0.5 * (_k_lo + _k_hi) if (_k_lo > -np.inf) & (_k_hi < np.inf) "
                    "else (_k_lo if _k_lo > -np.inf else (_k_hi if _k_hi < np.inf else 0.0))")
+    if sol.moves:
+        w.lines.append("_k_moves = " + " | ".join(
+            f"(abs({q1}) * (_k_hi - _k_lo) > {TOL} * {qs})" for q1, qs in zip(Q1, Qs)))
     for i in range(k):
         a, b = fam[i]
         w.lines.append(f"{L[i]} = {a} + ({b}) * _k_t")
         w.lines.append(f"{Ls[i]} = _k_R / abs(_k_D)")
+
+
+def _family_accelerations(w, sol, L, Ls):
+    """The accelerations of the family's member ``t``, ``Q0 + Q1 t``, and their scales:
+    the names of the emitted locals."""
+    import sympy as sp
+
+    k, n = len(L), sol.problem.n
+    t = sp.Symbol("_k_tfam", real=True)
+    D = sp.Symbol("_k_D", real=True)
+    member = {L[j]: (sp.Symbol(f"_k_P{j}", real=True) + sp.Symbol(f"_k_Dd{j}", real=True) * t)
+              / D for j in range(k)}
+    acc, accs = accelerations(sol, L, Ls)
+    moving = [a.xreplace(member) for a in acc]
+    ls = {Ls[j]: sp.Symbol("_k_R", real=True) / sp.Abs(D) for j in range(k)}
+    w.emit([(f"_k_Qa{j}", moving[j].subs(t, 0)) for j in range(n)]
+           + [(f"_k_Qb{j}", sp.diff(moving[j], t)) for j in range(n)]
+           + [(f"_k_Qc{j}", accs[j].xreplace(ls)) for j in range(n)])
+    return ([f"_k_Qa{j}" for j in range(n)], [f"_k_Qb{j}" for j in range(n)],
+            [f"_k_Qc{j}" for j in range(n)])
+
+
+def _restrict_acceleration(w, eqs, sol, ci, req, Q0, Q1, Qs, ctx):
+    """Intersect the family's interval with a channel's acceleration of the required sign
+    (strictly; a start only where its contact is at rest)."""
+    import sympy as sp
+
+    q0, q1, qs = ([sp.Symbol(x, real=True) for x in names] for names in (Q0, Q1, Qs))
+    a0, s = channel_acceleration(eqs, sol, req.contact, req.channel, q0, qs)
+    a1, _ = channel_acceleration(eqs, sol, req.contact, req.channel, q1, qs, unit=0)
+    sign = 1 if req.sign is None else req.sign
+    w.emit([(f"_k_ca{ci}", sign * a0), (f"_k_cb{ci}", sign * a1), (f"_k_cs{ci}", s)])
+    applies = ctx.rest_of(req.contact) if req.rest_only else "True"
+    w.lines.append(f"_k_lo, _k_hi = restrict_affine(_k_ca{ci} - {TOL} * _k_cs{ci} if {applies} "
+                   f"else 1.0, _k_cb{ci} if {applies} else 0.0, _k_lo, _k_hi)")
 
 
 def family_coefficients(form, L, S, fname):
@@ -276,19 +382,22 @@ def channel_acceleration(eqs, sol, contact, key, Q, Qs, unit=1):
     return a, s
 
 
-def _admissible(w, sol, eqs, Q, L, Ls):
+def _admissible(w, sol, eqs, Q, L, Ls, ctx: RowContext):
     """``_k_ok``: every requirement of the mode combination holds (ties as documented in
-    :mod:`phasemap._numerics`)."""
+    :mod:`phasemap._numerics`); a family's are in its interval already."""
     p = sol.problem
     Qs = _symbols("_k_Qs", p.n)
     conds = []
+    if sol.family is not None:
+        conds.append("_k_fam")
     for ci, req in enumerate(p.requirements):
-        if not isinstance(req, Accelerates):
+        if not isinstance(req, Accelerates) or sol.family is not None:
             continue
         a, s = channel_acceleration(eqs, sol, req.contact, req.channel, Q, Qs)
         w.emit([(f"_k_ca{ci}", a), (f"_k_cs{ci}", s)])
         if req.rest_only:
-            conds.append(f"((not rest) | ({req.sign} * _k_ca{ci} > {TOL} * _k_cs{ci}))")
+            conds.append(f"((not {ctx.rest_of(req.contact)}) | "
+                         f"({req.sign} * _k_ca{ci} > {TOL} * _k_cs{ci}))")
         else:
             conds.append(f"(_k_ca{ci} > {TOL} * _k_cs{ci})")
     if sol.family is None:
@@ -298,11 +407,11 @@ def _admissible(w, sol, eqs, Q, L, Ls):
             strict = form.strict
             conds.append((gt if strict else ge) if isinstance(strict, bool)
                          else f"({ge} if {strict} > 0.0 else {gt})")
-    else:
-        conds.append("_k_fam")
     if p.squared is not None:
         conds.append("_k_keep")
     w.lines.append("_k_ok = " + (" & ".join(conds) if conds else "True"))
+    if not sol.moves:
+        w.lines.append("_k_moves = False")
 
 
 # -- the generated module ---------------------------------------------------------
@@ -310,7 +419,10 @@ def _admissible(w, sol, eqs, Q, L, Ls):
 def module_source(S) -> str:
     """The generated module's source text (from the derivation of ``S``)."""
     d = derive(S)
-    code = {kinds: row_code(sol, d.eqs, d.inputs_of) for kinds, sol in d.solutions.items()}
+    still = {c: d.factors[c] for c in sorted(d.still)}
+    code = {key: row_code(sol, d.eqs, d.inputs_of,
+                          RowContext(None if key[1] is None else d.edges[key[1]], still))
+            for key, sol in d.solutions.items()}
     inputs, state_pos, derived = _inputs(S, d, set().union(*(u for _, u in code.values())))
     scale_expr = velocity_scale_expr(S, d.velocity)
     scale_args = sorted(s.name for s in scale_expr.free_symbols)
@@ -318,16 +430,16 @@ def module_source(S) -> str:
            "import math", "import numpy as np", "from numba import njit",
            "from phasemap._numerics import restrict_affine", "", "NAN = np.nan", ""]
     out += _velocity_scale(scale_expr, scale_args) + _inside(d, inputs)
-    for kinds, sol in d.solutions.items():
-        out += _branch_function(S, sol, *code[kinds], inputs)
+    for key, sol in d.solutions.items():
+        out += _branch_function(S, sol, *code[key], inputs)
     spec = {
         "velocity": str(d.velocity),
         "inputs": inputs,
         "state_positions": [c.name for c in state_pos],
         "derived": derived,
         "scale_args": scale_args,
-        "rows": [(r.name, r.direction, int(r.presence), d.solutions[r.kinds].problem.fname,
-                  _row_args(d.solutions[r.kinds].problem, r)) for r in d.candidates],
+        "rows": [(r.name, r.direction, int(r.presence), d.solutions[r.key].problem.fname,
+                  _row_args(d.solutions[r.key].problem, r)) for r in d.candidates],
         "kappa": d.kappa,
         "domain": sorted({nm for _, nm in d.eqs.domain}),
         "n_acc": len(d.positions),
@@ -394,11 +506,19 @@ def _branch_function(S, sol, body, used, inputs) -> list[str]:
             f"def {p.fname}({', '.join(params)}):",
             f'    """Modes {modes}."""',
             *("    " + ln for ln in body),
-            "    _k_absent = ((_k_presence == 1.0) & (not rest)) | ((_k_presence == 2.0) & rest)",
+            "    _k_absent = ((_k_presence == 1.0) & (not rest)) | ((_k_presence == 2.0) & rest)"
+            " | (not _k_edge)",
+            # a non-finite acceleration or reaction is never a solution, whatever the
+            # declaration (a zero mass, an overflow)
+            "    _k_fin = " + " & ".join(
+                [f"np.isfinite(_k_Q{j})" for j in acc_idx]
+                + [f"np.isfinite(_k_r{i})" for i in range(len(p.reactions))] + ["True"]),
+            "    _k_real = _k_real & _k_fin",
             "    _k_bad = _k_sing | _k_absent | (not _k_real)",
             f"    _k_st = {nx.ABSENT} if _k_absent else (({nx.CONTINUUM} if _k_cont else "
             f"{nx.NO_SOLUTION}) if _k_sing else ({nx.NO_SOLUTION} if not _k_real else "
-            f"({ok_status} if _k_ok else {nx.INADMISSIBLE})))",
+            f"(({nx.CONTINUUM} if _k_moves else {ok_status}) if _k_ok else "
+            f"{nx.INADMISSIBLE})))",
             "    return (_k_st, 1.0 if (_k_sing & (not _k_absent)) else 0.0,",
             "            NAN if _k_absent else _k_coef,",
             *[f"            NAN if _k_bad else _k_Q{j}," for j in acc_idx],

@@ -113,14 +113,7 @@ class Equations:
         dq = [q[i] for i in dep if any(q[i] in g.free_symbols for g in gaps)]
         pos_sub = {}
         if dq:
-            sols = sp.solve(gaps, dq, dict=True)
-            if len(sols) != 1:
-                fail(S, "contacts", "closing the contacts must fix the dependent "
-                     f"coordinates {', '.join(map(str, dq))} uniquely; sympy found "
-                     f"{len(sols)} solution(s)")
-            pos_sub = sols[0]
-            if set(pos_sub) != set(dq):
-                fail(S, "contacts", f"the gaps do not fix {', '.join(map(str, dq))}")
+            pos_sub = self._closed_positions(gaps, dq)
         vsols = sp.solve(constraints, [qd[i] for i in dep], dict=True)
         if len(vsols) != 1 or len(vsols[0]) != len(dep):
             fail(S, "contacts", "the contact constraints must fix the velocities of "
@@ -132,6 +125,66 @@ class Equations:
             return sp.sympify(e).xreplace(vel_sub).xreplace(pos_sub)
 
         return on
+
+    def _closed_positions(self, gaps, dq) -> dict:
+        """The dependent coordinates ``dq`` where every gap is closed, as a substitution.
+
+        An angle that enters the gaps only through its sine and cosine is solved for
+        them (with ``sin^2 + cos^2 = 1``: a polynomial system, where a contact that
+        fixes an angle, a block lying flat on two corners, has two solutions).  Where
+        there are several, the one nearest the declared defaults is taken (the
+        coordinates' ``default``, at the parameters' defaults); a ValueError when
+        none is, or two are equally near, says how to choose.
+        """
+        import sympy as sp
+
+        S, names = self.S, ", ".join(map(str, dq))
+        sub, unknowns, sc = {}, [], {}
+        for x in dq:
+            if any(g.has(sp.sin(x), sp.cos(x)) for g in gaps):
+                sc[x] = (sp.Dummy(f"s_{x}", real=True), sp.Dummy(f"c_{x}", real=True))
+                sub.update({sp.sin(x): sc[x][0], sp.cos(x): sc[x][1]})
+                unknowns += list(sc[x])
+            else:
+                unknowns.append(x)
+        polys = [sp.expand(g).xreplace(sub) for g in gaps]
+        if any(x in p.free_symbols for p in polys for x in sc):   # not only sin and cos
+            sc, polys, unknowns = {}, gaps, list(dq)
+        sols = sp.solve(polys + [s * s + c * c - 1 for s, c in sc.values()], unknowns,
+                        dict=True)
+        sols = [x for x in sols if set(x) == set(unknowns)]
+        if not sols:
+            fail(S, "contacts", f"closing the contacts does not fix {names} (sympy found no "
+                 "solution of the gaps = 0)")
+        out = []
+        for x in sols:
+            d = {q: x[q] for q in dq if q not in sc}
+            for q, (s, c) in sc.items():
+                d.update({sp.sin(q): x[s], sp.cos(q): x[c], q: sp.atan2(x[s], x[c])})
+            out.append(d)
+        return out[0] if len(out) == 1 else self._nearest_default(out, dq)
+
+    def _nearest_default(self, sols, dq) -> dict:
+        """Of several closures, the one nearest the declared defaults (see above)."""
+        import sympy as sp
+
+        S = self.S
+        at = {sp.Symbol(p.name, real=True): sp.Float(p.default) for p in S.parameters}
+        want = {sp.Symbol(c.name, real=True): float(c.default) for c in S.coordinates}
+        dist, shown = [], []
+        for d in sols:
+            vals = {q: complex(sp.sympify(d[q]).xreplace(at).evalf()) for q in dq}
+            shown.append(", ".join(f"{q} = {v.real:.6g}" for q, v in vals.items()))
+            real = all(abs(v.imag) <= 1e-12 for v in vals.values())
+            dist.append(sum(min(abs(v.real - want[q] + k * 2 * math.pi) for k in (-1, 0, 1))
+                            for q, v in vals.items()) if real else math.inf)
+        order = sorted(range(len(sols)), key=dist.__getitem__)
+        best = order[0]
+        if not math.isfinite(dist[best]) or abs(dist[order[1]] - dist[best]) <= 1e-9:
+            fail(S, "contacts", f"closing the contacts fixes {', '.join(map(str, dq))} in "
+                 f"{len(sols)} ways at the parameters' defaults ({'; '.join(shown)}): give "
+                 "the coordinates defaults nearest the configuration you mean")
+        return sols[best]
 
     def _close_channels(self):
         """Each channel as ``(w, bias, v)``: its velocity ``v = w . qd`` and its acceleration
@@ -178,8 +231,17 @@ class Equations:
 
     # -- sampling the declared domain ------------------------------------------
 
-    def sample(self):
-        """Random values for every symbol, inside the declared domains."""
+    def bound_expr(self, c, side: str):
+        """A coordinate's ``lower`` or ``upper`` bound as a sympy expression of the
+        parameters; None where it is infinite."""
+        import sympy as sp
+
+        b = getattr(c, side)
+        if isinstance(b, (int, float)):
+            return sp.Float(b) if math.isfinite(b) else None
+        return sym(b)
+
+    def _draw(self):
         vals = {}
         rng = self._rng
         for p in self.S.parameters:
@@ -188,18 +250,67 @@ class Equations:
             lo = max(lo, p.default * 0.5 if p.default > 0 else lo)
             vals[p.name] = rng.uniform(lo, hi if hi > lo else lo + 1.0)
         for c in self.S.coordinates:
-            lo = c.lower if math.isfinite(c.lower) else c.default - math.pi
-            hi = c.upper if math.isfinite(c.upper) else c.default + math.pi
-            vals[c.name] = rng.uniform(lo, hi)
+            lo, hi = (self._bound_value(c, side, vals) for side in ("lower", "upper"))
+            lo = lo if math.isfinite(lo) else (hi if math.isfinite(hi) else c.default) - math.pi
+            hi = hi if math.isfinite(hi) else lo + 2 * math.pi
+            vals[c.name] = rng.uniform(lo, hi) if hi > lo else lo
             if c.rate:
                 vals[c.rate.name] = rng.uniform(-2.0, 2.0)
         return vals
+
+    def _bound_value(self, c, side, vals) -> float:
+        import sympy as sp
+
+        e = self.bound_expr(c, side)
+        if e is None:
+            return math.inf if side == "upper" else -math.inf
+        return float(e.xreplace({sp.Symbol(k, real=True): v for k, v in vals.items()}))
+
+    def _accepted(self, vals) -> bool:
+        """Whether the declaration's ``check`` accepts the sample (no check: always)."""
+        if self.S.check is None:
+            return True
+        try:
+            self.S.check(dict(vals))
+        except ValueError:
+            return False
+        return True
+
+    def sample(self):
+        """Random values for every symbol, inside the declared domains and accepted by the
+        declaration's ``check`` (a ValueError naming the system if it accepts none)."""
+        for _ in range(200):
+            vals = self._draw()
+            if self._accepted(vals):
+                return vals
+        fail(self.S, "check", "rejects every state sampled from the declared domains: "
+             "declare the domains (bounds) of the coordinates and parameters it asks for")
+
+    def parameter_points(self) -> list[dict]:
+        """Parameter values: 16 samples, each parameter at each of its finite bounds, and
+        all of them at their lower, then at their upper bounds."""
+        names = [p.name for p in self.S.parameters]
+        pts = [{k: v for k, v in self.sample().items() if k in names} for _ in range(16)]
+        base = dict(pts[0])
+        for side in ("lower", "upper"):
+            corner = dict(base)
+            for p in self.S.parameters:
+                b = getattr(p, side)
+                if math.isfinite(b):
+                    pts.append({**base, p.name: b})
+                    corner[p.name] = b
+            pts.append(corner)
+        return pts
 
     def points(self) -> list[dict]:
         """Fixed sample points: 16 random ones, and each coordinate at its finite bounds."""
         pts = [self.sample() for _ in range(16)]
         for c in self.S.coordinates:
-            pts += [{**self.sample(), c.name: b} for b in (c.lower, c.upper) if math.isfinite(b)]
+            for side in ("lower", "upper"):
+                pt = self.sample()
+                b = self._bound_value(c, side, pt)
+                if math.isfinite(b):
+                    pts.append({**pt, c.name: b})
         return pts
 
     def at(self, e, pts) -> np.ndarray:

@@ -31,10 +31,17 @@ class Candidate:
     direction: float
     presence: Presence
     modes: tuple[Mode, ...]
+    #: the index of the :class:`phasemap.declare.edges.Edge` it exists on (None: everywhere)
+    edge: int | None = None
 
     @property
     def kinds(self) -> tuple[str, ...]:
         return tuple(m.kind for m in self.modes)
+
+    @property
+    def key(self) -> tuple:
+        """What one generated function solves: the mode kinds, and the edge."""
+        return (self.kinds, self.edge)
 
     def args(self) -> list[float]:
         """The constants the row passes first to its function (presence, then per-contact
@@ -43,11 +50,18 @@ class Candidate:
 
 
 def slip_velocity(eqs):
-    """The one state velocity every contact slips with, and each contact's sign of it."""
+    """The one state velocity every contact slips with, each contact's sign of it, and its
+    slip factor: contact c slips with ``k_c(q) v`` (``k_c`` of the sign ``kappa_c`` over the
+    domain, zero at most on its edges, :mod:`phasemap.declare.edges`).
+
+    The sign is read at sample points of the declared domain that pass the
+    declaration's ``check``; a factor that vanishes at a point counts with the
+    sign it has elsewhere.
+    """
     import sympy as sp
 
     S = eqs.S
-    velocity, kappa = None, {}
+    velocity, kappa, factors = None, {}, {}
     for c in S.contacts:
         v = sp.expand(eqs.channels[c.name][c.slip_channel][2])
         involved = []
@@ -73,8 +87,10 @@ def slip_velocity(eqs):
             kappa[c.name] = -1
         else:
             fail(S, f"contact {c.name!r}", f"its slip velocity {v} changes sign against "
-                 f"{r} inside the domain: restrict the domain of the coordinates")
-    return velocity, kappa
+                 f"{r} inside the domain: restrict the domain of the coordinates (their "
+                 "bounds, which may be parameters or expressions, or check=)")
+        factors[c.name] = k
+    return velocity, kappa, factors
 
 
 def candidates(S, kappa: dict) -> list[Candidate]:

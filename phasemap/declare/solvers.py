@@ -34,7 +34,14 @@ class Solution:
     the squared law's moment, if any), ``qnums`` the accelerations' numerators
     over ``D`` where they are solved together with the reactions (saddle point;
     otherwise the accelerations are ``aM (hx + W L) / dM``), and ``family`` the
-    statically indeterminate parametrisations ``(D, P, Dd)``: ``L = (P + Dd t) / D``.
+    statically indeterminate parametrisations (:class:`Family`), of which the
+    generated code takes the best conditioned at each state; ``moves``: the
+    accelerations depend on the family's parameter (on an edge only, where a
+    member of the family that satisfies every condition is one of a continuum);
+    ``consistency``: where the family exists only at some states (on an edge
+    where two constraints coincide, and agree only at some velocities), the
+    numerators of Cramer's rule on the whole singular problem, ``adj(K) rhs``,
+    which vanish together exactly there (None: it exists at every state).
     """
 
     problem: LinearProblem
@@ -46,13 +53,30 @@ class Solution:
     nums: list | None = None
     qnums: list | None = None
     family: list | None = None
+    moves: bool = False
+    consistency: list | None = None
 
 
-def problem(eqs, kinds: tuple, fname: str) -> LinearProblem:
-    """The linear problem of the mode kinds ``kinds`` (one per contact)."""
+@dataclass
+class Family:
+    """One parametrisation of a one-parameter family of reactions: ``L = (P + Dd t) / D``,
+    ``D`` the minor of the contact problem it solves with (rows I, columns J)."""
+
+    D: object
+    P: list
+    Dd: list
+
+
+def problem(eqs, kinds: tuple, fname: str, at_rest: bool = True) -> LinearProblem:
+    """The linear problem of the mode kinds ``kinds`` (one per contact).
+
+    ``at_rest``: a sticking contact means the state is at rest (the velocity is
+    set to zero); not so on an edge, where a contact sticks while the system
+    moves (:mod:`phasemap.declare.edges`).
+    """
     import sympy as sp
 
-    zero = {eqs.velocity: sp.Integer(0)} if STICK in kinds else {}
+    zero = {eqs.velocity: sp.Integer(0)} if STICK in kinds and at_rest else {}
     p = LinearProblem(kinds, fname, eqs.n, zero, extra=[sp.Integer(0)] * eqs.n)
     for c, kind in zip(eqs.S.contacts, kinds):
         mode = Mode(kind)
@@ -62,8 +86,11 @@ def problem(eqs, kinds: tuple, fname: str) -> LinearProblem:
     return p
 
 
-def solve(eqs, p: LinearProblem) -> Solution:
-    """The closed-form solution of ``p`` (see the module docstring for the solvers)."""
+def solve(eqs, p: LinearProblem, edge: bool = False) -> Solution:
+    """The closed-form solution of ``p`` (see the module docstring for the solvers);
+    ``edge``: a row of an edge (:mod:`phasemap.declare.edges`), whose contacts need not
+    share one slip direction, and whose family of reactions may be inconsistent at some
+    states or move the accelerations."""
     import sympy as sp
 
     n, k = p.n, len(p.unknowns)
@@ -84,23 +111,38 @@ def solve(eqs, p: LinearProblem) -> Solution:
         return sol
     K = (C * aM * W).applyfunc(sp.expand)
     rhs = (-(C * aM * hv) - dM * cb).applyfunc(sp.expand)
-    regular = solve_regular(eqs, p, K, rhs)
+    regular = solve_regular(eqs, p, K, rhs, shared=not edge)
     if regular is not None:
         sol.D, sol.nums = regular
         return sol
-    sol.family = solve_indeterminate(eqs, p, K, rhs, aM * W)
-    sol.D = sol.family[0][0]
+    sol.family, sol.moves, consistent = solve_indeterminate(eqs, p, K, rhs, aM * W, edge)
+    sol.D = sol.family[0].D
+    if not consistent:
+        # not reduced: a common factor (omega**2) is the condition itself
+        sol.consistency = [sp.expand(cramer(K, rhs, i)) for i in range(k)]
     return sol
 
 
-def solve_regular(eqs, p: LinearProblem, K, rhs):
+def solve_regular(eqs, p: LinearProblem, K, rhs, shared: bool = True):
     """``(D, numerators)`` of ``K L = rhs`` by Cramer's rule, or None where ``K`` is
-    singular on the whole domain (statically indeterminate)."""
+    singular on the whole domain (statically indeterminate).  ``shared``: the contacts
+    that slip share one direction (:func:`one_direction`)."""
     D = K.det(method="berkowitz")
-    if not np.max(np.abs(eqs.numeric(D / scale_of(D), 12))) > 1e-9:
+    if _vanishes(eqs, D):
         return None
     D, *nums = reduced([D] + [cramer(K, rhs, i) for i in range(len(p.unknowns))])
-    return one_direction(eqs, p, D, nums)
+    return one_direction(eqs, p, D, nums) if shared else (D, nums)
+
+
+def _vanishes(eqs, e) -> bool:
+    """Whether ``e`` vanishes identically (relative to its scale, at random samples: a
+    nonzero function of the state does not vanish at random points)."""
+    import sympy as sp
+
+    e = sp.sympify(e)
+    if e == 0:
+        return True
+    return not np.max(np.abs(eqs.numeric(e / (scale_of(e) + 1e-300), 12))) > 1e-9
 
 
 def one_direction(eqs, p: LinearProblem, D, nums):
@@ -147,17 +189,21 @@ def solve_saddle(eqs, p: LinearProblem, M, W, C, hv, cb):
     return D, nums[:n], nums[n:]
 
 
-def solve_indeterminate(eqs, p: LinearProblem, K, rhs, aMW):
-    """The one-parameter family of reactions where ``K`` is singular: a list of one or
-    two parametrisations ``(Dp, P, Dd)``, ``L = (P + Dd t) / Dp``.
+def solve_indeterminate(eqs, p: LinearProblem, K, rhs, aMW, edge: bool = False):
+    """The one-parameter family of reactions where ``K`` is singular: its
+    parametrisations (:class:`Family`) and whether it moves the accelerations.
 
     The family is parametrised by one reaction j0 with equation i0 dropped, by
-    Cramer on the minor Dp that is left.  Every minor may vanish somewhere in
-    the domain (the ladder: one at phi = 0, where the floor's normal is the
-    wall's tangent, another at phi = pi/2): then two parametrisations are
-    generated and the one with the larger |Dp| is taken at run time.  The
-    reported reactions, the middle of the admissible segment, do not depend on
-    the parametrisation.
+    Cramer on the minor that is left.  Each minor may vanish somewhere in the
+    domain (the ladder: one at phi = 0, where the floor's normal is the wall's
+    tangent, another at phi = pi/2), so the choice is left to the state: every
+    minor that does not vanish identically is kept (one of each set of minors
+    equal up to a constant factor; for a symmetric ``K``, the principal minors
+    suffice, which are the others' largest), and the generated code takes the
+    one that is largest relative to the magnitude of its terms.  Where ``K`` has
+    rank k - 1 some minor is nonzero, so every state is decided.  The reported
+    reactions, the middle of the admissible segment, do not depend on the
+    parametrisation.
     """
     S, k = eqs.S, len(p.unknowns)
     if p.squared is not None:
@@ -167,34 +213,58 @@ def solve_indeterminate(eqs, p: LinearProblem, K, rhs, aMW):
     if not choices:
         fail(S, f"mode {p.fname}", "the reactions are indeterminate with a family of "
              "more than one parameter: not supported")
-    best = max(range(len(choices)), key=lambda a: (np.min(choices[a][4]), -a))
-    picked = [best]
-    if np.min(choices[best][4]) < 1e-6:
-        pair = max(itertools.combinations(range(len(choices)), 2), key=lambda ab: (
-            np.min(np.maximum(choices[ab[0]][4], choices[ab[1]][4])), -ab[0], -ab[1]))
-        picked = list(pair)
-    return [_parametrisation(eqs, p, K, rhs, aMW, *choices[a][:4]) for a in picked]
+    families, moves, consistent = [], False, True
+    for I, J, sub, Dp in choices:
+        fam, moving, holds = _parametrisation(eqs, p, K, rhs, aMW, I, J, sub, Dp)
+        if (moving or not holds) and not edge:
+            fail(S, f"mode {p.fname}", "the reactions are indeterminate and the "
+                 "accelerations depend on them (a continuum of motions): not supported")
+        families.append(fam)
+        moves |= moving
+        consistent &= holds
+    return families, moves, consistent
 
 
 def _minors(eqs, K, k):
-    """The (k-1)-minors of ``K`` that do not vanish identically, with their sizes at the
-    sample points (relative to their scales)."""
-    pts = eqs.points()
+    """The (k-1)-minors of ``K`` a family is parametrised by: ``(I, J, sub, D)``, none of
+    them identically zero nor a constant multiple of another (principal minors only
+    for a symmetric ``K``)."""
+    import sympy as sp
+
+    rows = list(itertools.combinations(range(k), k - 1))
+    symmetric = (K - K.T).applyfunc(sp.expand) == sp.zeros(k, k)
+    pairs = [(I, I) for I in rows] if symmetric else [(I, J) for I in rows for J in rows]
     choices = []
-    for I in itertools.combinations(range(k), k - 1):
-        for J in itertools.combinations(range(k), k - 1):
-            sub = K.extract(list(I), list(J))
-            Dp = sub.det(method="berkowitz")
-            if Dp == 0:
-                continue
-            size = np.abs(eqs.at(Dp / scale_of(Dp), pts))
-            if np.max(size) >= 1e-9:
-                choices.append((I, J, sub, Dp, size))
+    for I, J in pairs:
+        sub = K.extract(list(I), list(J))
+        Dp = sub.det(method="berkowitz")
+        if _vanishes(eqs, Dp):
+            continue
+        if any(_proportional(eqs, Dp, other[3]) for other in choices):
+            continue
+        choices.append((I, J, sub, Dp))
     return choices
 
 
+def _proportional(eqs, a, b) -> bool:
+    """Whether ``a / b`` is a constant (the same number at random samples; exactly, where
+    sympy cancels it to a number): two such minors vanish together."""
+    import sympy as sp
+
+    ratio = sp.cancel(a / b)
+    if not ratio.free_symbols:
+        return True
+    signs = [x for x in ratio.free_symbols if x.name.startswith(("_k_sig", "_k_rho"))]
+    for sign in itertools.product((1, -1), repeat=len(signs)):
+        r = eqs.numeric(ratio.xreplace(dict(zip(signs, sign))), 6)
+        if not (np.all(np.isfinite(r)) and np.ptp(r) <= 1e-9 * np.max(np.abs(r))):
+            return False
+    return True
+
+
 def _parametrisation(eqs, p, K, rhs, aMW, I, J, sub, Dp):
-    """The family on the minor ``sub`` (rows I, columns J of K): ``(Dp, P, Dd)``."""
+    """The family on the minor ``sub`` (rows I, columns J of K), whether the accelerations
+    depend on its parameter, and whether the equation it drops holds at every state."""
     import sympy as sp
 
     k = len(p.unknowns)
@@ -203,28 +273,24 @@ def _parametrisation(eqs, p, K, rhs, aMW, I, J, sub, Dp):
     P0 = [cramer(sub, rhs.extract(list(I), [0]), a) for a in range(k - 1)]
     dcol = -K.extract(list(I), [j0])
     d = [cramer(sub, dcol, a) for a in range(k - 1)]
-    # the dropped equation must hold for the whole family, and the
-    # accelerations must not depend on the family's parameter
     lam_d = [sp.Integer(0)] * k
     lam_p = [sp.Integer(0)] * k
     for a, j in enumerate(J):
         lam_d[j], lam_p[j] = d[a], P0[a]
     lam_d[j0] = Dp
+    # the dropped equation: for the direction it holds (K is singular); for the particular
+    # member it may not (then the family exists only where the residual vanishes)
     row_p = sum(K[i0, j] * lam_p[j] for j in range(k)) - rhs[i0] * Dp
     row_d = sum(K[i0, j] * lam_d[j] for j in range(k))
-    acc_d = aMW * sp.Matrix(lam_d)
-    checks = [row_p, row_d, *acc_d]
-    bad = [e for e in checks if e != 0 and np.max(np.abs(
-        eqs.numeric(e / (scale_of(e) + 1), 8))) > 1e-9]
-    if bad:
-        fail(eqs.S, f"mode {p.fname}", "the reactions are indeterminate and the "
-             "accelerations depend on them (a continuum of motions): not supported")
+    if not _vanishes(eqs, row_d):
+        raise AssertionError(f"{p.fname}: the family's direction leaves the dropped equation")
+    moves = not all(_vanishes(eqs, e) for e in aMW * sp.Matrix(lam_d))
     Dp, *pd = reduced([Dp, *P0, *d])
     P, Dd = [sp.Integer(0)] * k, [sp.Integer(0)] * k
     for a, j in enumerate(J):
         P[j], Dd[j] = pd[a], pd[k - 1 + a]
     Dd[j0] = Dp
-    return Dp, P, Dd
+    return Family(Dp, P, Dd), moves, _vanishes(eqs, row_p)
 
 
 @dataclass

@@ -2,13 +2,20 @@
 
 from __future__ import annotations
 
+import builtins
 import keyword
+import math
 import re
 
 from .api import Body, Coordinate, Parameter, sym
 from .law import ContactLaw
 
 IDENT = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
+
+#: Names the generated module uses itself (a parameter named ``abs`` would shadow
+#: the builtin inside the kernels): Python's builtins and the module's globals.
+RESERVED = frozenset(dir(builtins)) | {"rest", "math", "np", "njit", "NAN",
+                                       "restrict_affine", "velocity_scale", "inside", "SPEC"}
 
 
 def fail(system, part: str, why: str):
@@ -21,15 +28,16 @@ def validate(S) -> None:
         raise ValueError(f"a system's name must be an identifier, got {S.name!r}")
     known = _declared_names(S)
     _check_present(S)
+    at = _check_values(S)
     expr = _expression_check(S, known)
-    _check_bodies(S, expr)
-    expr("potential", S.potential)
+    _check_bodies(S, expr, at)
+    _check_potential(S, expr)
     for k, e in S.forces.items():
         nm = k.name if isinstance(k, Coordinate) else k
         if nm not in {c.name for c in S.coordinates}:
             fail(S, "forces", f"{nm!r} is not a coordinate")
         expr(f"force on {nm}", e)
-    _check_contacts(S, expr)
+    _check_contacts(S, expr, at)
 
 
 def _declared_names(S) -> set[str]:
@@ -43,10 +51,13 @@ def _declared_names(S) -> set[str]:
             if not isinstance(it, cls):
                 fail(S, f"{kind}s", f"{it!r} is not a {cls.__name__}")
             for nm in [it.name] + ([it.rate.name] if kind == "coordinate" and it.rate else []):
-                if not IDENT.match(nm) or keyword.iskeyword(nm) or nm in ("rest",) \
+                if not IDENT.match(nm) or keyword.iskeyword(nm) \
                         or nm.startswith(("sin_", "cos_")):
-                    fail(S, f"{kind} {nm!r}", "a name must be an identifier (not 'rest', "
-                         "not starting with sin_ or cos_)")
+                    fail(S, f"{kind} {nm!r}", "a name must be an identifier (not starting "
+                         "with sin_ or cos_)")
+                if nm in RESERVED:
+                    fail(S, f"{kind} {nm!r}", "the name is one the generated code uses (a "
+                         "Python builtin or one of rest, math, np, NAN, ...): rename it")
                 if nm in names:
                     fail(S, f"{kind} {nm!r}", f"the name is already used by a {names[nm]}")
                 names[nm] = kind
@@ -63,6 +74,87 @@ def _check_present(S) -> None:
     if not S.contacts:
         fail(S, "contacts", "declare at least one contact (a point contact, a rolling "
              "contact or a joint): without dry friction phasemap has nothing to map")
+
+
+def _number(x) -> float | None:
+    """``x`` as a float, or None where it is not a real number."""
+    try:
+        return float(x)
+    except (TypeError, ValueError, OverflowError):
+        return None
+
+
+def _check_values(S):
+    """Defaults finite and inside their domains, bounds ordered, a coordinate's bounds
+    numbers or expressions of the parameters; returns ``at(e)``: an expression's value
+    at the defaults (None where it is not a real number there)."""
+    import sympy as sp
+
+    params = {p.name for p in S.parameters}
+    defaults = {}
+    for kind, items in (("parameter", S.parameters), ("coordinate", S.coordinates)):
+        for it in items:
+            part = f"{kind} {it.name!r}"
+            d = _number(it.default)
+            if d is None or not math.isfinite(d):
+                fail(S, part, f"its default must be a finite number, got {it.default!r}")
+            defaults[it.name] = d
+            if it.rate is not None if kind == "coordinate" else False:
+                r = _number(it.rate.default)
+                if r is None or not math.isfinite(r):
+                    fail(S, f"rate {it.rate.name!r}", "its default must be a finite number, "
+                         f"got {it.rate.default!r}")
+                defaults[it.rate.name] = r
+    subs = {sp.Symbol(k, real=True): sp.Float(v) for k, v in defaults.items()}
+
+    def at(e):
+        x = sym(e).xreplace(subs)
+        return _number(x) if not x.free_symbols else None
+
+    for kind, items in (("parameter", S.parameters), ("coordinate", S.coordinates)):
+        for it in items:
+            part = f"{kind} {it.name!r}"
+            lo, hi = (_bound(S, part, side, getattr(it, side), params if kind == "coordinate"
+                             else set(), at) for side in ("lower", "upper"))
+            if lo > hi:
+                fail(S, part, f"its lower bound {lo:g} is above its upper bound {hi:g}")
+            d = defaults[it.name]
+            if d < lo or d > hi or (d == lo and it.lower_open) or (d == hi and it.upper_open):
+                fail(S, part, f"its default {d:g} is outside its domain "
+                     f"{'(' if it.lower_open else '['}{lo:g}, {hi:g}"
+                     f"{')' if it.upper_open else ']'}")
+    return at
+
+
+def _bound(S, part, side, b, params, at) -> float:
+    """A bound's value at the defaults: a number, or (``params`` not empty) a Parameter or
+    an expression of the parameters."""
+    import sympy as sp
+
+    x = _number(b)
+    if x is not None and not math.isnan(x):
+        return x
+    try:
+        e = sym(b)
+    except (sp.SympifyError, TypeError):
+        e = None
+    names = {s.name for s in e.free_symbols} if e is not None else None
+    if e is None or not names or not names <= params:
+        what = "a number or an expression of the parameters" if params else "a number"
+        fail(S, part, f"its {side} bound must be {what}, got {b!r}")
+    x = at(e)
+    if x is None or math.isnan(x):
+        fail(S, part, f"its {side} bound {e} is not a real number at the parameters' defaults")
+    return x
+
+
+def _check_potential(S, expr) -> None:
+    rates = {c.rate.name for c in S.coordinates if c.rate}
+    used = sorted(s.name for s in expr("potential", S.potential).free_symbols
+                  if s.name in rates)
+    if used:
+        fail(S, "potential", f"depends on the rate {used[0]!r}: a potential energy depends on "
+             "the positions only (give velocity-dependent forces in forces=)")
 
 
 def _expression_check(S, known):
@@ -82,7 +174,7 @@ def _expression_check(S, known):
     return expr
 
 
-def _check_bodies(S, expr) -> None:
+def _check_bodies(S, expr, at) -> None:
     import sympy as sp
 
     rates = {sp.Symbol(c.rate.name, real=True) for c in S.coordinates if c.rate}
@@ -97,9 +189,23 @@ def _check_bodies(S, expr) -> None:
                 fail(S, f"body {i} {part}", "must not depend on a rate")
         if sym(b.mass) == 0:
             fail(S, f"body {i} mass", "is zero (a missing mass term)")
+        for part, e, positive in (("mass", b.mass, True), ("inertia", b.inertia, False)):
+            x = at(e)
+            if x is not None and (x < 0 or (positive and x == 0)):
+                fail(S, f"body {i} {part}", f"is {x:g} at the defaults: a {part} must be "
+                     f"{'positive' if positive else 'at least 0'}")
+        _mass_domain(S, i, b.mass)
 
 
-def _check_contacts(S, expr) -> None:
+def _mass_domain(S, i, mass) -> None:
+    """A mass that is one parameter: its domain must exclude 0."""
+    p = next((p for p in S.parameters if sym(mass) == sym(p)), None)
+    if p is not None and (p.lower < 0 or (p.lower == 0 and not p.lower_open)):
+        fail(S, f"body {i} mass", f"the domain of {p.name!r} includes masses <= 0: declare "
+             "lower=0.0, lower_open=True")
+
+
+def _check_contacts(S, expr, at) -> None:
     seen = set()
     for c in S.contacts:
         if not isinstance(c, ContactLaw):
@@ -108,6 +214,10 @@ def _check_contacts(S, expr) -> None:
             fail(S, f"contact {c.name!r}", "a contact needs a unique identifier as its name")
         seen.add(c.name)
         c.validate(lambda part, why: fail(S, part, why), expr)
+        x = at(c.law_expr())
+        if x is not None and x < 0:
+            fail(S, f"contact {c.name!r} {c.friction_field}", f"is {x:g} at the defaults: a "
+                 "friction coefficient must be at least 0")
     if sum(c.squared_law for c in S.contacts) > 1:
         fail(S, "contacts", "at most one Joint with friction is supported (two friction "
              "moments make a system of quadratic equations)")

@@ -97,7 +97,9 @@ def slide(sigma, rho, rest, omega, f, l, g, m, sin_phi, cos_phi):
     sign_ok = (q_zero | (q * lam > 0.0)) if rho > 0.0 else ((not q_zero) & (q * lam < 0.0))
     x_scale = (2.0 * l * w2 * (1.0 + f) + 2.0 * f * g + g) / abs(lam)
     start_ok = (not rest) | (sigma * xdd > TOL * x_scale)
-    st = ADMISSIBLE if (sign_ok & start_ok) else INADMISSIBLE
+    # a non-finite acceleration or reaction is never a solution
+    finite = np.isfinite(xdd) & np.isfinite(pdd) & np.isfinite(n)
+    st = (ADMISSIBLE if (sign_ok & start_ok) else INADMISSIBLE) if finite else NO_SOLUTION
     return (st_singular if singular else st, 1.0 if singular else 0.0, lam,
             NAN if singular else xdd, NAN if singular else pdd,
             NAN if singular else n, NAN if singular else -k * f * n)
@@ -112,7 +114,10 @@ def stick(omega, f, l, g, m, sin_phi, cos_phi):
     fr = -m * sp * (g * cp + 2.0 * l * w2)
     scale = m * (1.0 + f) * (2.0 * g + 2.0 * l * w2)
     ok = abs(fr) <= f * abs(n) + TOL * scale
-    return (ADMISSIBLE if ok else INADMISSIBLE, 0.0, NAN, 0.0, -0.5 * g * sp / l, n, fr)
+    pdd = -0.5 * g * sp / l
+    st = (ADMISSIBLE if ok else INADMISSIBLE) if np.isfinite(pdd) & np.isfinite(n) & \
+        np.isfinite(fr) else NO_SOLUTION
+    return (st, 0.0, NAN, 0.0, pdd, n, fr)
 
 
 @njit(cache=True, error_model="numpy", forceinline=True)

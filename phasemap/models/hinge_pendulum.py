@@ -86,6 +86,8 @@ def turn(sigma, rest, omega, delta, l, g, m, sin_phi, cos_phi):
     u = -sigma * delta * abs(qn) / math.sqrt(coef) if coef > 0.0 else 0.0
     a = (u - g * sp) / l
     start_ok = (not rest) | (sigma * a > TOL * (abs(u) + g) / l)
+    # a non-finite acceleration or reaction is never a solution
+    solvable = solvable & np.isfinite(a) & np.isfinite(m * qn) & np.isfinite(m * u)
     st = (ADMISSIBLE if start_ok else INADMISSIBLE) if solvable else NO_SOLUTION
     fields = (not singular) & solvable
     return (st_singular if singular else st, 1.0 if singular else 0.0, coef,
@@ -96,7 +98,8 @@ def turn(sigma, rest, omega, delta, l, g, m, sin_phi, cos_phi):
 def stick(delta, l, g, m, sin_phi, cos_phi):
     """The stick branch: rest is possible iff l |sin phi| <= delta (35)."""
     ok = g * (delta - l * abs(sin_phi)) >= -TOL * g * (delta + l)
-    return (ADMISSIBLE if ok else INADMISSIBLE, 0.0, NAN, 0.0 if ok else NAN,
+    st = (ADMISSIBLE if ok else INADMISSIBLE) if np.isfinite(m * g) else NO_SOLUTION
+    return (st, 0.0, NAN, 0.0 if ok else NAN,
             m * g * cos_phi if ok else NAN, m * g * sin_phi if ok else NAN)
 
 
