@@ -279,10 +279,6 @@ class Model:
     #: branch's stage (a contact that would pull) or does not enter the law (the
     #: wheel's friction force) is not one.  None: every reaction (safe, and slower).
     kinks: tuple[str, ...] | None = None
-    #: A hand-written model's declared twin: the module of a declaration (defining
-    #: ``SYSTEM``) of the same physics, whose admissibility conditions the bifurcation
-    #: tracer follows (:mod:`phasemap.bifurcation`); its class still comes from this model.
-    twin: str | None = None
 
     # -- branches and the generated contract --------------------------------
     @property

@@ -1,7 +1,7 @@
 """The bifurcation set of a map as exact curves (being built)."""
 
-from .boundaries import boundaries
+from .tracing import boundaries
 from .conditions import Condition
-from .threshold import Threshold, threshold
+from .thresholds import Threshold, threshold
 
 __all__ = ["Condition", "Threshold", "boundaries", "threshold"]

@@ -21,10 +21,12 @@ vector ``v`` of the model (the fixed values already in it).
 Vertex buffers
 --------------
 ``vf[n] = (u, w, residual, error)`` and
-``vi[n] = (curve, kind, condition, other, left, right)``: what a vertex is
-(:data:`REGULAR`, :data:`CROSSING`...), the condition it lies on, the other
-condition or axis that defines a special point, and the layer's class on
-each side (-1 where a side is not sampled: at a crossing or an end).
+``vi[n] = (curve, kind, condition, other, left, right, owned)``: what a vertex
+is (:data:`REGULAR`, :data:`CROSSING`...), the condition it lies on, the other
+condition or axis that defines a special point, the layer's class on each
+side (-1 where a side is not sampled: at a crossing or an end), and whether
+the stretch is this condition's (0 where a condition that ranks first vanishes
+there too).
 ``curves[c] = (condition, first, stop, closed)``; ``counts = (vertices,
 curves, overflow)``.
 """
@@ -63,6 +65,10 @@ ANGLE = 0.15
 RESIDUAL = 1e-12
 #: Newton iterations per solve.
 MAX_IT = 40
+#: A condition whose value at a curve's vertex is below this fraction of its tie scale
+#: vanishes there too: its zero set runs with the curve (the stretch is traced once, by
+#: the condition that ranks first).
+COVANISH = 1e-10
 #: A curve longer than this (in slices) is stopped: it does not close.
 MAX_LENGTH = 1000.0
 
@@ -79,7 +85,7 @@ def _solve2(a, b, c, d, r0, r1):
 
 
 @njit(cache=True, error_model="numpy")
-def _push(vf, vi, counts, u, w, res, err, curve, kind, cond, other, left, right):
+def _push(vf, vi, counts, u, w, res, err, curve, kind, cond, other, left, right, owned=1):
     """Append one vertex; set the overflow flag when the buffer is full."""
     n = counts[0]
     if n >= vf.shape[0]:
@@ -88,6 +94,7 @@ def _push(vf, vi, counts, u, w, res, err, curve, kind, cond, other, left, right)
     vf[n, 0], vf[n, 1], vf[n, 2], vf[n, 3] = u, w, res, err
     vi[n, 0], vi[n, 1], vi[n, 2], vi[n, 3], vi[n, 4], vi[n, 5] = (curve, kind, cond, other,
                                                                   left, right)
+    vi[n, 6] = owned
     counts[0] = n + 1
 
 
@@ -156,6 +163,22 @@ def _seed(seeds, m, k, u, w, kind):
 
 
 @njit(cache=True, error_model="numpy")
+def _owned(k, grp, active, cv, cs, mark, ua, wa, ub, wb):
+    """Whether the curve of k traces the stretch from (ua, wa) to (ub, wb), whose end's
+    condition values are cv: 0 where a condition that ranks first vanishes there too
+    (its zero set runs with this curve; it traces the stretch), and the cells of the
+    conditions that rank after k and vanish too are marked as traced."""
+    owned = 1
+    for j in range(cv.shape[0]):
+        if active[j] and grp[j, 0] != grp[k, 0] and abs(cv[j]) <= COVANISH * cs[j]:
+            if grp[j, 1] < grp[k, 1]:
+                owned = 0
+            else:
+                _mark(mark, j, ua, wa, ub, wb)
+    return owned
+
+
+@njit(cache=True, error_model="numpy")
 def _inside(u, w, slack):
     return (u >= -slack) & (u <= 1.0 + slack) & (w >= -slack) & (w <= 1.0 + slack)
 
@@ -199,10 +222,38 @@ def _hess_template(k, v, ix, iy, geo, u, w, g, H):
             H[ix, iy] * geo[1] * geo[3], H[iy, iy] * geo[3] * geo[3])
 
 
-def _sides_template(v, out, layer, ix, iy, geo, u, w, tu, tw, eps):
-    """The classes left and right of the direction (tu, tw) at (u, w), ``eps`` away."""
-    left = CLASS_AT(v, out, layer, ix, iy, geo, u - eps * tw, w + eps * tu)
-    right = CLASS_AT(v, out, layer, ix, iy, geo, u + eps * tw, w - eps * tu)
+def _side_template(k, grp, active, v, g, out, layer, ix, iy, geo, u, w, su, sw, scr):
+    """The class at (su, sw), a side sample of the curve point (u, w) whose condition
+    values are in ``scr[0]``: -1 outside the slice, or where another condition's zero
+    set passes between the two (the sample would see that condition's class change,
+    not this curve's: near a crossing, or where the curves nearly touch).  A zero set
+    through (u, w) itself (far closer than the sample) runs with this curve there."""
+    if not _inside(su, sw, 0.0):
+        return -1
+    v[ix] = geo[0] + su * geo[1]
+    v[iy] = geo[2] + sw * geo[3]
+    VALUES(v, scr[1], scr[2])
+    eps = math.hypot(su - u, sw - w)
+    for j in range(NC):
+        if active[j] and grp[j, 0] != grp[k, 0] and (scr[0, j] > 0.0) != (scr[1, j] > 0.0):
+            c, s, cu, cw = GRAD(j, v, ix, iy, geo, u, w, g)
+            if abs(c) > 1e-3 * eps * math.hypot(cu, cw):
+                return -1
+    v[ix] = geo[0] + su * geo[1]
+    v[iy] = geo[2] + sw * geo[3]
+    return CLASS(v, out, layer)
+
+
+def _sides_template(k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw, eps, scr):
+    """The classes left and right of the direction (tu, tw) at the curve point (u, w),
+    ``eps`` away (-1 for a side that cannot be sampled, see SIDE)."""
+    v[ix] = geo[0] + u * geo[1]
+    v[iy] = geo[2] + w * geo[3]
+    VALUES(v, scr[0], scr[2])
+    left = SIDE(k, grp, active, v, g, out, layer, ix, iy, geo, u, w, u - eps * tw,
+                w + eps * tu, scr)
+    right = SIDE(k, grp, active, v, g, out, layer, ix, iy, geo, u, w, u + eps * tw,
+                 w - eps * tu, scr)
     return left, right
 
 
@@ -323,7 +374,8 @@ def _side_eps(s, n, h):
     return min(eps, 0.25 * h, 1e-3)
 
 
-def _bisect_template(k, v, ix, iy, geo, g, out, layer, ua, wa, ub, wb, la, ra, h):
+def _bisect_template(k, grp, active, v, ix, iy, geo, g, out, layer, ua, wa, ub, wb, la, ra, h,
+                     scr):
     """Where between the curve points a and b the side classes stop being (la, ra):
     bisection on the curve (the corrector, constrained along a -> b).  Returns the
     point just after the change and its tangent."""
@@ -340,7 +392,8 @@ def _bisect_template(k, v, ix, iy, geo, g, out, layer, ua, wa, ub, wb, la, ra, h
         if not ok:
             break
         tu, tw, n, s = TANGENT(k, v, ix, iy, geo, g, pu, pw, du, dw)
-        left, right = SIDES(v, out, layer, ix, iy, geo, pu, pw, tu, tw, _side_eps(s, n, h))
+        left, right = SIDES(k, grp, active, v, g, out, layer, ix, iy, geo, pu, pw, tu, tw,
+                             _side_eps(s, n, h), scr)
         if left == la and right == ra:
             lo = mid
         else:
@@ -360,7 +413,7 @@ def _explain_template(k, grp, active, v, ix, iy, geo, g, H, cv, cs, u, w, tol_u,
     best = -1
     dist = 1e-6
     for j in range(NC):
-        if (not active[j]) or grp[j] == grp[k]:
+        if (not active[j]) or grp[j, 0] == grp[k, 0]:
             continue
         c, s, cu, cw = GRAD(j, v, ix, iy, geo, u, w, g)
         n = math.hypot(cu, cw)
@@ -398,7 +451,35 @@ def _exit_template(k, v, ix, iy, geo, g, u, w, qu, qw, tol_u, tol_w):
     return ok, min(max(eu, 0.0), 1.0), min(max(ew, 0.0), 1.0), res, err
 
 
-def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs,
+def _jump_template(k, v, ix, iy, geo, g, H, u, w, tu, tw):
+    """Past a singular point of the curve near (u, w) (where grad c vanishes on c = 0:
+    two branches of the zero set cross) along (tu, tw).  Returns (ok, the singular
+    point, its residual, the first point beyond it on the branch that goes on)."""
+    pu, pw = u, w
+    for it in range(MAX_IT):
+        c, s, cu, cw, huu, huw, hww = HESS(k, v, ix, iy, geo, pu, pw, g, H)
+        du, dw = _solve2(huu, huw, huw, hww, -cu, -cw)
+        if not math.isfinite(du):
+            return False, pu, pw, np.inf, u, w
+        pu += du
+        pw += dw
+        if abs(du) + abs(dw) <= 1e-15:
+            break
+    c, s, cu, cw, huu, huw, hww = HESS(k, v, ix, iy, geo, pu, pw, g, H)
+    res = abs(c) / s
+    if res > 1e3 * RESIDUAL or math.hypot(pu - u, pw - w) > 1e-3 or not _inside(pu, pw, 0.0):
+        return False, pu, pw, res, u, w
+    d = 1e-7
+    while d <= 1e-3:
+        ok, qu, qw, r, st = CORRECT(k, v, ix, iy, geo, g, pu + d * tu, pw + d * tw, tu, tw)
+        if ok and math.hypot(qu - pu - d * tu, qw - pw - d * tw) <= 0.25 * d \
+                and _inside(qu, qw, 0.0):
+            return True, pu, pw, res, qu, qw
+        d *= 10.0
+    return False, pu, pw, res, u, w
+
+
+def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, scr,
                     su, sw, tu0, tw0, h0, closing, curve, vf, vi, counts, mark, tol_u, tol_w):
     """Follow condition ``k`` from the curve point (su, sw) along (tu0, tw0).
 
@@ -414,7 +495,8 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
     VALUES(v, cv0, cs)
     c, s, cu, cw = GRAD(k, v, ix, iy, geo, u, w, g)
     n0 = math.hypot(cu, cw)
-    la, ra = SIDES(v, out, layer, ix, iy, geo, u, w, tu, tw, _side_eps(s, n0, h))
+    la, ra = SIDES(k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw, _side_eps(s, n0, h),
+                   scr)
     travelled = 0.0
     steps = 0
     # special points found on one step: (s along the step, u, w, residual, error), (kind, other)
@@ -449,8 +531,28 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
             if h > H_MIN:
                 h *= 0.5
                 continue
-            _push(vf, vi, counts, u, w, 0.0, 0.0, curve, STALL, k, -1, la, ra)
-            return -1
+            # a singular point (two branches of the zero set cross): step over it
+            okj, pu, pw, rj, qu, qw = JUMP(k, v, ix, iy, geo, g, H, u, w, tu, tw)
+            if not okj:
+                _push(vf, vi, counts, u, w, 0.0, 0.0, curve, STALL, k, -1, la, ra)
+                return -1
+            _mark(mark, k, u, w, qu, qw)
+            _push(vf, vi, counts, pu, pw, rj, 0.0, curve, CROSSING, k, k, -1, -1)
+            qtu, qtw, qn, qs = TANGENT(k, v, ix, iy, geo, g, qu, qw, tu, tw)
+            lb, rb = SIDES(k, grp, active, v, g, out, layer, ix, iy, geo, qu, qw, qtu, qtw,
+                           _side_eps(qs, qn, 1e-4), scr)
+            c, s, cu, cw = GRAD(k, v, ix, iy, geo, qu, qw, g)
+            VALUES(v, cv0, cs)
+            _push(vf, vi, counts, qu, qw, abs(c) / s, 0.0, curve, REGULAR, k, -1, lb, rb,
+                  _owned(k, grp, active, cv0, cs, mark, u, w, qu, qw))
+            u, w, tu, tw = qu, qw, qtu, qtw
+            if lb >= 0 and rb >= 0:
+                la, ra = lb, rb
+            h = 1e-4
+            v[ix] = geo[0] + u * geo[1]
+            v[iy] = geo[2] + w * geo[3]
+            VALUES(v, cv0, cs)
+            continue
         # a loop: the step passes its start again
         if closing and steps >= 3 and travelled > 2.0 * h:
             du, dw = qu - u, qw - w
@@ -470,10 +572,13 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
         nsp = 0
         du, dw = qu - u, qw - w
         length2 = du * du + dw * dw
+        owned = _owned(k, grp, active, cv1, cs, mark, u, w, qu, qw)
         for j in range(NC):
-            if (not active[j]) or grp[j] == grp[k]:
+            if (not active[j]) or grp[j, 0] == grp[k, 0]:
                 continue
-            if cv0[j] * cv1[j] < 0.0 or (cv1[j] == 0.0 and cv0[j] != 0.0):
+            if abs(cv0[j]) <= COVANISH * cs[j] or abs(cv1[j]) <= COVANISH * cs[j]:
+                continue  # j vanishes with this curve here: no crossing
+            if cv0[j] * cv1[j] < 0.0:
                 a = cv0[j] / (cv0[j] - cv1[j])
                 ok2, xu, xw, res2, err2 = SOLVE(0, k, j, v, ix, iy, geo, g, H, u + a * du, w + a * dw,
                                                 tol_u, tol_w)
@@ -513,13 +618,16 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
                     nsp = _note(spf, spi, nsp, t, fu, fw, FOLD_X if axis == 0 else FOLD_Y, axis,
                                 resf, errf)
         # the new vertex's sides; a change that no crossing explains is located
-        lb, rb = SIDES(v, out, layer, ix, iy, geo, qu, qw, qtu, qtw, _side_eps(qs, qn, h))
+        lb, rb = SIDES(k, grp, active, v, g, out, layer, ix, iy, geo, qu, qw, qtu, qtw,
+                       _side_eps(qs, qn, h), scr)
         crossings = 0
         for i in range(nsp):
             if spi[i, 0] == CROSSING:
                 crossings += 1
-        if (lb != la or rb != ra) and crossings == 0:
-            xu, xw = BISECT(k, v, ix, iy, geo, g, out, layer, u, w, qu, qw, la, ra, h)
+        known = lb >= 0 and rb >= 0
+        if known and la >= 0 and ra >= 0 and (lb != la or rb != ra) and crossings == 0:
+            xu, xw = BISECT(k, grp, active, v, ix, iy, geo, g, out, layer, u, w, qu, qw, la, ra,
+                            h, scr)
             j, okx, xu2, xw2, resx, errx = EXPLAIN(k, grp, active, v, ix, iy, geo, g, H, cv1, cs,
                                                    xu, xw, tol_u, tol_w)
             t = ((xu - u) * du + (xw - w) * dw) / length2
@@ -544,15 +652,15 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
             left, right = -1, -1
             if kind == FOLD_X or kind == FOLD_Y:
                 ftu, ftw, fn, fs = TANGENT(k, v, ix, iy, geo, g, spf[a, 1], spf[a, 2], tu, tw)
-                left, right = SIDES(v, out, layer, ix, iy, geo, spf[a, 1], spf[a, 2], ftu, ftw,
-                                    _side_eps(fs, fn, h))
+                left, right = SIDES(k, grp, active, v, g, out, layer, ix, iy, geo, spf[a, 1],
+                                    spf[a, 2], ftu, ftw, _side_eps(fs, fn, h), scr)
             _push(vf, vi, counts, spf[a, 1], spf[a, 2], spf[a, 3], spf[a, 4], curve, kind, k,
                   spi[a, 1], left, right)
         _mark(mark, k, u, w, qu, qw)
         if steps < 0:  # the loop closed: its last vertex is its first
             _push(vf, vi, counts, qu, qw, res, 0.0, curve, REGULAR, k, -1, -1, -1)
             return 1
-        _push(vf, vi, counts, qu, qw, res, 0.0, curve, REGULAR, k, -1, lb, rb)
+        _push(vf, vi, counts, qu, qw, res, 0.0, curve, REGULAR, k, -1, lb, rb, owned)
         travelled += math.sqrt(length2)
         steps += 1
         # the next step from the curvature here
@@ -563,7 +671,8 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
             hn = min(hn, math.sqrt(8.0 * CHORD / kappa), ANGLE / kappa)
         h = max(min(hn, 2.0 * h), H_MIN)
         u, w, tu, tw = qu, qw, qtu, qtw
-        la, ra = lb, rb
+        if known:
+            la, ra = lb, rb
         for j in range(NC):
             cv0[j] = cv1[j]
 
@@ -584,6 +693,7 @@ def _trace_template(seeds, grp, active, v, ix, iy, geo, layer, vf, vi, counts, c
     cv0 = np.empty(NC)
     cv1 = np.empty(NC)
     cs = np.empty(NC)
+    scr = np.empty((3, NC))
     n = mark.shape[1]
     traced = 0
     for i in range(seeds.shape[0]):
@@ -609,7 +719,8 @@ def _trace_template(seeds, grp, active, v, ix, iy, geo, layer, vf, vi, counts, c
         h = H_MAX
         if kappa > 0.0:
             h = min(h, math.sqrt(8.0 * CHORD / kappa), ANGLE / kappa)
-        left, right = SIDES(v, out, layer, ix, iy, geo, u, w, tu, tw, _side_eps(s, gn, h))
+        left, right = SIDES(k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw,
+                            _side_eps(s, gn, h), scr)
         if require_sides and left == right:
             continue
         if counts[1] >= curves.shape[0]:
@@ -618,7 +729,7 @@ def _trace_template(seeds, grp, active, v, ix, iy, geo, layer, vf, vi, counts, c
         curve = counts[1]
         counts[1] += 1
         first = counts[0]
-        back = MARCH(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, u, w,
+        back = MARCH(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, scr, u, w,
                      -tu, -tw, h, True, curve, vf, vi, counts, mark, tol_u, tol_w)
         # the backward half, reversed: its special points keep their meaning, and the
         # sides swap with the direction of travel
@@ -627,19 +738,22 @@ def _trace_template(seeds, grp, active, v, ix, iy, geo, layer, vf, vi, counts, c
         while a < b:
             for q in range(4):
                 vf[a, q], vf[b, q] = vf[b, q], vf[a, q]
-            for q in range(6):
+            for q in range(7):
                 vi[a, q], vi[b, q] = vi[b, q], vi[a, q]
             a += 1
             b -= 1
         for q in range(first, counts[0]):
             vi[q, 4], vi[q, 5] = vi[q, 5], vi[q, 4]
         c0, s0, cu0, cw0 = GRAD(k, v, ix, iy, geo, u, w, g)
-        _push(vf, vi, counts, u, w, abs(c0) / s0, 0.0, curve, REGULAR, k, -1, left, right)
+        VALUES(v, cv0, cs)
+        _push(vf, vi, counts, u, w, abs(c0) / s0, 0.0, curve, REGULAR, k, -1, left, right,
+              _owned(k, grp, active, cv0, cs, mark, u, w, u, w))
         closed = 0
         if back == 1:
             closed = 1
         else:
-            MARCH(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, u, w, tu, tw,
+            MARCH(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, scr, u, w, tu,
+                  tw,
                   h, False, curve, vf, vi, counts, mark, tol_u, tol_w)
         curves[curve, 0] = k
         curves[curve, 1] = first
@@ -754,12 +868,41 @@ def _minimum_template(k, v, ix, iy, geo, u, w, radius):
 
 @njit(cache=True, error_model="numpy")
 def _known(vi, q):
-    """The side classes at vertex q, or (-1, -1) where they were not sampled."""
+    """The side classes at vertex q, (-1, -1) where they were not sampled, (-2, -2) on
+    a stretch that another condition traces."""
     kind = vi[q, 1]
+    if kind == REGULAR and vi[q, 6] == 0:
+        return -2, -2
     if (kind == REGULAR or kind == FOLD_X or kind == FOLD_Y or kind == TANGENCY) \
             and vi[q, 4] >= 0 and vi[q, 5] >= 0:
         return vi[q, 4], vi[q, 5]
     return -1, -1
+
+
+@njit(cache=True, error_model="numpy")
+def _forget_isolated(vi, a, b):
+    """Forget the sides of a vertex whose classes differ from those of the vertices
+    with sampled sides before and after it, where those two agree: a class pair seen
+    at one vertex only is a sample that straddles another condition (at a tangency),
+    not a stretch of boundary."""
+    prev = -1
+    for q in range(a, b):
+        if _known(vi, q)[0] < 0:
+            continue
+        nxt = -1
+        for r in range(q + 1, b):
+            if _known(vi, r)[0] >= 0:
+                nxt = r
+                break
+        if prev >= 0 and nxt >= 0 and _known(vi, q)[0] >= 0:
+            p0, p1 = _known(vi, prev)
+            n0, n1 = _known(vi, nxt)
+            q0, q1 = _known(vi, q)
+            if p0 == n0 and p1 == n1 and (q0 != p0 or q1 != p1):
+                vi[q, 4] = -1
+                vi[q, 5] = -1
+                continue
+        prev = q
 
 
 @njit(cache=True, error_model="numpy")
@@ -791,10 +934,15 @@ def assemble(vf, vi, curves, ncurves):
         k, a, b, closed = curves[c, 0], curves[c, 1], curves[c, 2], curves[c, 3]
         if b - a < 2:
             continue
+        _forget_isolated(vi, a, b)
         # break points: a crossing (or an unexplained change) where the sides change
         nb = 0
         for q in range(a, b):
             kind = vi[q, 1]
+            if kind == REGULAR and q > a and vi[q - 1, 1] == REGULAR and vi[q, 6] != vi[q - 1, 6]:
+                breaks[nb] = q  # the stretch passes to or from another condition
+                nb += 1
+                continue
             if kind != CROSSING and kind != CHANGE:
                 continue
             before = (-1, -1)
@@ -921,7 +1069,8 @@ def uncovered(classes, pv, pp):
 _TEMPLATES = (
     ("CLASS", "_class_template", True), ("CLASS_AT", "_class_at_template", True),
     ("GRAD", "_grad_template", True), ("HESS", "_hess_template", True),
-    ("SIDES", "_sides_template", True), ("CORRECT", "_correct_template", False),
+    ("SIDE", "_side_template", False), ("SIDES", "_sides_template", False),
+    ("CORRECT", "_correct_template", False), ("JUMP", "_jump_template", False),
     ("PROJECT", "_project_template", False), ("SYSTEM", "_system_template", True),
     ("SOLVE", "_solve_template", False), ("EDGE", "_edge_template", False),
     ("TANGENT", "_tangent_template", True), ("BISECT", "_bisect_template", False),

@@ -3,8 +3,8 @@
 A class boundary of a map is the zero set of one scalar **condition** that
 decides a branch's admissibility (GUIDE section 7).  A declared system lists
 its own (:func:`phasemap.declare.conditions`); a hand-written model uses the
-conditions of its declared twin (:attr:`phasemap.Model.twin`), while its class
-still comes from its own kernels.  To these the model's relative velocity is
+conditions of its declared twin (:data:`phasemap.systems.seeds.TWINS`), while
+its class still comes from its own kernels.  To these the model's relative velocity is
 added (a ``velocity`` condition): where it changes sign the candidate branches
 change.
 
@@ -86,32 +86,37 @@ class Condition:
 # -- where conditions come from -------------------------------------------------------
 
 def declared_model(model: Model) -> Model:
-    """The declared model whose conditions describe ``model``: itself, or its twin.
+    """The declared model whose conditions describe ``model``: itself, or its twin (a
+    declaration of the same physics whose branches carry the hand model's names,
+    :data:`phasemap.systems.seeds.TWINS`).
 
-    ValueError when the model is hand-written and names no declared twin.
+    ValueError when the model is hand-written and has no declared twin.
     """
     if model.declaration is not None:
         return model
-    twin = getattr(model, "twin", None)
-    if not twin:
-        raise ValueError(
-            f"{model.name}: the bifurcation set needs the model's conditions; it is "
-            "hand-written and names no declared twin (Model.twin): declare the system "
-            "(phasemap.declare) or pass conditions= explicitly")
     import importlib
 
+    from ..systems import seeds
+
+    twin = getattr(seeds, "TWINS", {}).get(model.name)
+    if twin is None:
+        raise ValueError(
+            f"{model.name}: the bifurcation set needs the model's conditions; it is "
+            "hand-written and has no declared twin (phasemap.systems.seeds.TWINS): declare "
+            "the system (phasemap.declare) or pass conditions= explicitly")
     return importlib.import_module(twin).SYSTEM.model
 
 
 def conditions_of(model: Model) -> tuple:
-    """Every condition of ``model`` (its declaration's or its twin's), and its velocity's."""
-    source = declared_model(model)
+    """Every condition of ``model`` (its declaration's, or its twin's in the hand model's
+    names) and its relative velocity's."""
+    declared_model(model)
     try:
         from ..declare import conditions
     except ImportError:
         raise ValueError(f"{model.name}: this phasemap.declare provides no conditions(); "
                          "pass conditions= explicitly") from None
-    return tuple(conditions(source)) + (velocity_condition(model),)
+    return tuple(conditions(model)) + (velocity_condition(model),)
 
 
 def velocity_condition(model: Model) -> Condition:

@@ -30,9 +30,9 @@ import numpy as np
 import xarray as xr
 
 from ..model import Model
-from .boundaries import header, parse_range
+from .tracing import header, parse_range
 from .conditions import compiled
-from .threshold import Threshold, _Spec, threshold
+from .thresholds import Threshold, _Spec, threshold
 
 #: Largest distance of a chord from the curve, as a fraction of the ranges.
 CHORD = 5e-5

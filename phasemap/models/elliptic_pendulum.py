@@ -165,5 +165,4 @@ MODEL = Model(
         positions=(Variable("x", "m", "position of the slider along the guide", "x", 0.0),),
         stick_is_rest=False),
     default_axes={"phi": (-math.pi, math.pi, 512), "f": (0.0, 6.0, 512)},
-    twin="phasemap.systems.seeds.elliptic_pendulum",
 )

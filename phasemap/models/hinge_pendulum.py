@@ -142,7 +142,6 @@ MODEL = Model(
     velocity_scale=velocity_scale,
     dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),)),
     default_axes={"phi": (-math.pi, math.pi, 512), "delta": (0.0, 1.5, 512)},
-    twin="phasemap.systems.seeds.hinge_pendulum",
 )
 
 

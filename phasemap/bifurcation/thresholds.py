@@ -14,7 +14,7 @@ from ..layers import layers_for
 from ..model import Model
 from ..models import get_model
 from . import _trace as T
-from .boundaries import LAYERS, Slice, Traced, condition_name, make_slice, parse_range, trace
+from .tracing import LAYERS, Slice, Traced, condition_name, make_slice, parse_range, trace
 from .conditions import compiled
 
 #: Samples of a one-dimensional threshold's line.

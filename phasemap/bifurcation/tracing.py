@@ -221,7 +221,7 @@ class _Buffers:
 
     def __init__(self, nc: int, vertices: int = 1 << 14, curves: int = 1 << 10):
         self.vf = np.empty((vertices, 4))
-        self.vi = np.empty((vertices, 6), dtype=np.int64)
+        self.vi = np.ones((vertices, 7), dtype=np.int64)
         self.curves = np.empty((curves, 4), dtype=np.int64)
         self.counts = np.zeros(3, dtype=np.int64)
 
@@ -250,7 +250,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     v = sl.base.copy()
     seeds = fns["SEEDS"](active, v, ix, iy, geo, seed_nodes)
     nc = len(sl.conds)
-    grp = group.astype(np.int64)
+    grp = _ranked(sl.conds, group)
     buf = _Buffers(nc)
     mark = np.zeros((nc, seed_nodes - 1, seed_nodes - 1), dtype=np.int8)
     while True:
@@ -285,6 +285,22 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
             if len(bad):
                 raise ValueError(_uncovered_message(sl, layer, classes, bad, axes))
     return traced
+
+
+#: Which condition traces a stretch where several vanish together: the first kind here
+#: (a start from rest is where a stick ends, so the stick's limit names it).
+KIND_RANK = ("coefficient", "normal", "gap", "friction_limit", "family", "discriminant", "root",
+             "domain", "velocity", "start")
+
+
+def _ranked(conds: Conditions, group: np.ndarray) -> np.ndarray:
+    """Per condition: its group (conditions proportional in the slice) and its rank."""
+    order = sorted(range(len(conds)), key=lambda k: (KIND_RANK.index(conds.kinds[k])
+                                                      if conds.kinds[k] in KIND_RANK
+                                                      else len(KIND_RANK), k))
+    rank = np.empty(len(conds), dtype=np.int64)
+    rank[order] = np.arange(len(conds))
+    return np.stack([group.astype(np.int64), rank], axis=1)
 
 
 def _assembled(buf: _Buffers, group, active) -> Traced:
