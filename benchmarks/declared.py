@@ -216,7 +216,7 @@ spec = json.loads(sys.argv[1])
 T = {}
 t = time.perf_counter()
 import numpy as np, phasemap
-import phasemap.declare as d
+import phasemap.declare.build as d
 from phasemap.grid import evaluate
 from phasemap.layers import layers_for
 T["import phasemap"] = time.perf_counter() - t
@@ -225,14 +225,14 @@ if spec["declared"]:
     import sympy
     T["import sympy"] = time.perf_counter() - t
 spent = [0.0]
-_derive = d._derive
+_derive = d.module_source
 def _timed(S):
     t = time.perf_counter()
     try:
         return _derive(S)
     finally:
         spent[0] += time.perf_counter() - t
-d._derive = _timed
+d.module_source = _timed
 t = time.perf_counter()
 m = (phasemap.get_model(spec["model"]) if spec["declared"] else
      importlib.import_module("phasemap.models." + spec["model"]).MODEL)

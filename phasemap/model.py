@@ -302,9 +302,7 @@ class Model:
         # another process (a dask worker) has not imported: ship the
         # declaration, which rebuilds the model from the kernel cache there.
         if self.declaration is not None:
-            from .declare import _model_of
-
-            return _model_of, (self.declaration,)
+            return _declared_model, (self.declaration,)
         return super().__reduce_ex__(protocol)
 
     def __getstate__(self):
@@ -399,6 +397,12 @@ class Model:
         for j, d in enumerate(self.derived):
             v[len(self.names) + j] = d.func(float(values[d.source]))
         return v
+
+
+def _declared_model(declaration) -> Model:
+    """The model of a declaration (how a declared model is unpickled): the declaration
+    rebuilds it, from the kernel cache."""
+    return declaration.model
 
 
 def _fmt(x: float) -> str:

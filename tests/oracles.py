@@ -210,40 +210,11 @@ def enumerate_modes(q, qd, M, Q, contacts, force_scale, acc_scale, length, vscal
             if c.rolling:
                 A[row + 1, :nq] = Gt[i]          # no slip
                 b[row + 1] = -gt0[i]
-                if mode == "rest":
-                    A[row + 2, :nq] = Gr[i]
-                    b[row + 2] = -gr0[i]
-                    for sgn in (1.0, -1.0):      # delta N - sgn K >= 0
-                        cc = np.zeros(nz)
-                        cc[jN] = c.delta
-                        cc[jK] = -sgn
-                        ineq.append((cc, 0.0, tolK, False))
-                else:
-                    s = 1.0 if mode == "roll+" else -1.0
-                    A[row + 2, jK] = 1.0
-                    A[row + 2, jN] = s * c.delta
-                    if abs(rhos[i]) <= VTOL * vscale:
-                        cr = np.zeros(nz)
-                        cr[:nq] = s * Gr[i]
-                        ineq.append((cr, -s * gr0[i], tolR, True))
+                law = (row + 2, jK, Gr[i], gr0[i], c.delta, rhos[i], tolK, tolR)
             else:
                 A[row + 2, jK] = 1.0             # no couple at a point contact
-                if mode == "stick":
-                    A[row + 1, :nq] = Gt[i]
-                    b[row + 1] = -gt0[i]
-                    for sgn in (1.0, -1.0):      # f N - sgn F >= 0
-                        cc = np.zeros(nz)
-                        cc[jN] = c.f
-                        cc[jF] = -sgn
-                        ineq.append((cc, 0.0, tolF, False))
-                else:
-                    s = 1.0 if mode == "slip+" else -1.0
-                    A[row + 1, jF] = 1.0
-                    A[row + 1, jN] = s * c.f
-                    if abs(vts[i]) <= VTOL * vscale:
-                        ct = np.zeros(nz)
-                        ct[:nq] = s * Gt[i]
-                        ineq.append((ct, -s * gt0[i], tolA, True))
+                law = (row + 1, jF, Gt[i], gt0[i], c.f, vts[i], tolF, tolA)
+            _friction_law(A, b, ineq, jN, mode, vscale, *law)
             row += 3
         sol = _solve_family(A, b)
         if sol is None:
@@ -295,6 +266,31 @@ def enumerate_modes(q, qd, M, Q, contacts, force_scale, acc_scale, length, vscal
     rest_combo = tuple("rest" if c.rolling else "stick" for c in contacts)
     stagnation = any(md.modes == rest_combo for md in admissible)
     return Answer(n, stagnation, admissible, tuple(c.name for c in contacts), margin)
+
+
+def _friction_law(A, b, ineq, jN, mode, vscale, r, jX, G, g0, coeff, v, tol_cone, tol_start):
+    """Row ``r`` of a kept contact's friction law on the unknown ``jX`` (F, or a rolling
+    couple K) whose channel has the velocity Jacobian ``G``, drift ``g0`` and velocity ``v``:
+    at rest (``stick``, ``rest``) the channel's acceleration is zero and ``coeff N -+ X >= 0``;
+    moving in direction s (``slip+``, ``roll-``...) ``X = -s coeff N``, and from rest the
+    channel must start in direction s."""
+    nq = len(G)
+    if mode in ("stick", "rest"):
+        A[r, :nq] = G
+        b[r] = -g0
+        for sgn in (1.0, -1.0):      # coeff N - sgn X >= 0
+            cc = np.zeros(A.shape[1])
+            cc[jN] = coeff
+            cc[jX] = -sgn
+            ineq.append((cc, 0.0, tol_cone, False))
+        return
+    s = 1.0 if mode.endswith("+") else -1.0
+    A[r, jX] = 1.0
+    A[r, jN] = s * coeff
+    if abs(v) <= VTOL * vscale:
+        ct = np.zeros(A.shape[1])
+        ct[:nq] = s * G
+        ineq.append((ct, -s * g0, tol_start, True))
 
 
 def _solve_family(A, b):

@@ -4,6 +4,7 @@ and with an independent numpy solve; malformed declarations get clear errors."""
 from __future__ import annotations
 
 import dataclasses
+import doctest
 import importlib
 import math
 import subprocess
@@ -272,3 +273,175 @@ def test_phase_curve_and_simulate_agree_where_a_contact_is_left():
                                                              abs=1e-7)
     ax = curve.phasemap.plot().axes[0]  # labelled with the model's own symbols
     assert ax.get_xlabel() == r"$\theta$ (rad)" and ax.get_ylabel().startswith(r"$\omega$")
+
+
+# -- the conditions the bifurcation tracer reads (phasemap.declare.admissibility) ----------
+
+#: declared built-ins, the twins (as files) and the hand models they stand in for
+CONDITION_MODELS = ["ladder", "wheel", "painleve_rod", "rod_on_step",
+                    str(SEEDS / "elliptic_pendulum.py"), str(SEEDS / "hinge_pendulum.py"),
+                    "elliptic_pendulum", "hinge_pendulum"]
+
+
+def _states(m, rng, n):
+    """``n`` random states of ``m`` (a third at rest), as arrays, and where it is at rest."""
+    cols = {name: [] for name in m.names}
+    for i in range(n):
+        values = _sample(m, rng, i % 3 == 0)
+        if m.name == "rod_on_step":
+            values["h"] = rng.uniform(0.2, 0.8) * 2 * values["l"] * math.sin(values["theta"])
+            values["theta"] = rng.uniform(0.05, math.pi / 2 - 0.02) if i % 7 else 0.02
+        for k in cols:
+            cols[k].append(values[k])
+    cols = {k: np.array(v) for k, v in cols.items()}
+    return cols, cols[m.velocity] == 0.0
+
+
+@pytest.mark.parametrize("name", CONDITION_MODELS)
+def test_conditions_decide_the_generated_branches(name):
+    """2000 random states, a third at rest, ties included: wherever a branch applies, it is
+    admissible (ADMISSIBLE or SEPARATION) exactly where all its conditions hold, and a
+    state is in the model's domain exactly where the domain conditions hold."""
+    from phasemap.declare import conditions
+
+    m = phasemap.get_model(name)
+    conds = conditions(m)
+    values, rest = _states(m, np.random.default_rng(5), 2000)
+    held = {c.name: c.holds(values, rest) for c in conds}
+    by_branch = {b: [c for c in conds if c.branch == b] for b in m.branches}
+    assert {c.branch for c in conds} <= set(m.branches) | {None}
+    inside = np.ones(len(rest), bool)
+    for c in conds:
+        inside &= held[c.name] if c.branch is None else True
+    out = np.full((len(m.branches), m.n_fields), np.nan)
+    outcomes = {True: 0, False: 0}
+    for i in range(len(rest)):
+        v = m.input_vector({k: float(x[i]) for k, x in values.items()})
+        m.derive(v)
+        assert bool(m.contract.domain(v)) == bool(inside[i]), i
+        if not inside[i]:
+            continue
+        m.point(v, out)
+        for b, branch in enumerate(m.branches):
+            if out[b, nx.STATUS] == nx.ABSENT:
+                continue
+            admissible = out[b, nx.STATUS] in (nx.ADMISSIBLE, nx.SEPARATION)
+            assert admissible == all(held[c.name][i] for c in by_branch[branch]), \
+                (branch, {k: float(x[i]) for k, x in values.items()})
+            outcomes[admissible] += 1
+    assert outcomes[True] > 1000 and outcomes[False] > 1000
+
+
+@pytest.mark.parametrize("name", ["ladder", "wheel", "rod_on_step",
+                                  str(SEEDS / "elliptic_pendulum.py")])
+def test_a_condition_named_after_a_layer_has_the_layer_sign(name):
+    """coef_<branch> and <reaction>_<branch> name the atlas layers: at 500 random states the
+    condition's value has the sign of the layer's quantity (of -N for a two-sided contact's
+    negative branch, whose condition is -N > 0)."""
+    from phasemap.declare import conditions
+    from phasemap.layers import layers_for
+
+    m = phasemap.get_model(name)
+    layers = layers_for(m)
+    named = [c for c in conditions(m) if c.name in layers]
+    assert {c.kind for c in named} == {"coefficient", "normal"}
+    values, rest = _states(m, np.random.default_rng(8), 500)
+    out = np.full((len(m.branches), m.n_fields), np.nan)
+    signs = {c.name: set() for c in named}
+    for i in range(len(rest)):
+        state = {k: float(x[i]) for k, x in values.items()}
+        v = m.input_vector(state)
+        m.derive(v)
+        if not m.contract.domain(v):
+            continue
+        m.point(v, out)
+        for c in named:
+            layer = out[layers[c.name].branch, layers[c.name].column]
+            mine = float(c.value({k: state[k] for k in c.symbols}))
+            if np.isfinite(layer) and abs(layer) > 1e-9 and abs(mine) > 1e-9 * float(
+                    c._evaluated(state)[1]):
+                signs[c.name].add(np.sign(layer) * np.sign(mine))
+    for c in named:
+        want = {-1.0} if c.kind == "normal" and c.sense == "> 0" else {1.0}
+        assert signs[c.name] == want, c.name
+
+
+def test_the_painleve_rods_conditions_are_its_closed_forms():
+    """The rod sliding with xdot < 0: its coefficient is (1 + 3 cos^2 - 3 f sin cos) / 3, whose
+    zero set bounds the paradox, and its normal force vanishes where g = l sin(theta)
+    omega^2 (Genot and Brogliato 1999); from rest the slide must start backwards."""
+    from phasemap.declare import conditions
+    from phasemap.systems.painleve_rod import SYSTEM
+
+    c = {x.name: x for x in conditions(SYSTEM)}
+    th, f, g, l, om = sp.symbols("theta f g l omega", real=True)
+    coef = c["coef_A_slip_neg"]
+    assert coef.kind == "coefficient" and coef.sense == "!= 0" and coef.branch == "A_slip_neg"
+    assert sp.expand(coef.expr - (1 + 3 * sp.cos(th) ** 2 - 3 * f * sp.sin(th) * sp.cos(th))) == 0
+    normal = c["N_A_A_slip_neg"]
+    assert sp.cancel(normal.expr / (g - l * sp.sin(th) * om ** 2)).free_symbols == {
+        sp.Symbol("m", real=True)}
+    assert sp.cancel(normal.divisor / coef.expr).is_positive and normal.sense == ">= 0"
+    start = c["start_A_A_slip_neg"]
+    assert start.rest_only and start.strict and "xdot" not in start.symbols
+    assert c["gap_A_A_separated_moving_neg"].branch == "A_separated_moving_neg"
+    from phasemap.declare.admissibility import presence
+    assert presence(SYSTEM)["A_separated_moving_neg"] == 2 and presence(SYSTEM)["stick"] == 1
+    result = doctest.testmod(importlib.import_module("phasemap.declare.admissibility"))
+    assert result.attempted >= 5 and result.failed == 0
+
+
+def test_the_seed_systems_conditions_are_their_closed_forms():
+    """The ladder's static zone phi = 2 arctan f is where two bounds of its family of
+    reactions meet; the hinge's stagnation zone l |sin phi| = delta is its stick limit;
+    the elliptic pendulum's coefficient is lambda_k = 1 + sin^2 - k f sin cos."""
+    from phasemap.declare import conditions
+
+    ladder = {c.name: c for c in conditions(phasemap.get_model("ladder"))}
+    family = ladder["family_limit_neg_floor_limit_neg_wall_stick"]
+    rng = np.random.default_rng(1)
+    f = rng.uniform(0.05, 0.95, 200)
+    at = dict(phi=2 * np.arctan(f), omega=0 * f, f=f, l=rng.uniform(0.3, 2, 200),
+              g=rng.uniform(1, 12, 200), m=rng.uniform(0.3, 3, 200))
+    expr, scale, _, where = family._evaluated(at)
+    assert np.all(np.abs(expr) <= 1e-12 * scale) and np.all(where > 0)
+    hinge = {c.name: c for c in conditions(phasemap.get_model("hinge_pendulum"))}
+    d, l, phi = sp.symbols("delta l phi", real=True)
+    assert sp.cancel(hinge["limit_hinge_stick"].expr / (d ** 2 - l ** 2 * sp.sin(phi) ** 2)) \
+        .free_symbols == set(sp.symbols("g m", real=True))
+    elliptic = {c.name: c for c in conditions(phasemap.get_model("elliptic_pendulum"))}
+    f, k = sp.Symbol("f", real=True), 1  # slide_pos_Npos: k = sgn(N xdot) = 1
+    lam = 1 + sp.sin(phi) ** 2 - k * f * sp.sin(phi) * sp.cos(phi)
+    assert sp.simplify(elliptic["coef_slide_pos_Npos"].expr / lam).is_Number
+
+
+def test_twins_name_their_branches_and_reactions_as_the_hand_models():
+    """The elliptic and hinge twins carry the hand modules' branch names (and the elliptic
+    one its reactions N, F): at 2000 random states each named branch is admissible in the
+    twin exactly where it is in the hand module, with the same reactions."""
+    for seed in ("elliptic_pendulum", "hinge_pendulum"):
+        hand = phasemap.get_model(seed)
+        twin = phasemap.get_model(SEEDS / f"{seed}.py")
+        assert set(hand.branches) <= set(twin.branches)
+        shared = [r.name for r in hand.reactions if r.name in {t.name for t in twin.reactions}]
+        assert shared == (["N", "F"] if seed == "elliptic_pendulum" else [])
+        rng = np.random.default_rng(4)
+        for i in range(2000):
+            values = _sample(hand, rng, i % 3 == 0)
+            h, t = _rows(hand, values, False), _rows(twin, values, False)
+            for b, name in enumerate(hand.branches):
+                tb = twin.branches.index(name)
+                assert (h[b, 0] == nx.ADMISSIBLE) == (t[tb, 0] == nx.ADMISSIBLE), (name, values)
+                for r in shared:
+                    hc = hand.first_reaction + [x.name for x in hand.reactions].index(r)
+                    tc = twin.first_reaction + [x.name for x in twin.reactions].index(r)
+                    if h[b, 0] == nx.ADMISSIBLE:
+                        assert t[tb, tc] == pytest.approx(h[b, hc], rel=1e-7, abs=1e-9)
+
+
+def test_conditions_need_a_declaration_or_a_twin():
+    from phasemap.declare import conditions
+    from phasemap.models import ladder
+
+    with pytest.raises(TypeError, match="'ladder' is not a declared system or model"):
+        conditions(ladder.MODEL)

@@ -1,5 +1,6 @@
 """Painleve's elliptic pendulum, declared: a slider on a rough two-sided guide carrying a
-pendulum.  The hand derivation (phasemap.models.elliptic_pendulum) runs; this checks it."""
+pendulum.  The hand derivation (phasemap.models.elliptic_pendulum) runs; this is its twin,
+with its branch and reaction names (``slide_pos_Npos``..., ``N``, ``F``)."""
 
 import sympy as sp
 
@@ -28,4 +29,7 @@ SYSTEM = System(
     bodies=(Body(m, (x, y)), Body(m, B)),
     potential=m * g * y + m * g * B[1],
     contacts=(PointContact("guide", (x, y), normal=(0, 1), friction=f, sided="two"),),
+    names={"guide_slip_pos_Npos": "slide_pos_Npos", "guide_slip_pos_Nneg": "slide_pos_Nneg",
+           "guide_slip_neg_Npos": "slide_neg_Npos", "guide_slip_neg_Nneg": "slide_neg_Nneg",
+           "N_guide": "N", "F_guide": "F"},
 )

@@ -1,7 +1,15 @@
 """The pendulum with dry friction in its hinge (Lapshin 2021), declared: a point mass on a
 weightless rod whose hinge has a friction moment delta |R|.  The hand derivation
-(phasemap.models.hinge_pendulum) runs; this checks it.  The pivot (xp, yp) is a
-coordinate of the weightless rod, fixed by the joint."""
+(phasemap.models.hinge_pendulum) runs; this is its twin.  The pivot (xp, yp) is a
+coordinate of the weightless rod, fixed by the joint.
+
+Its branches carry the hand module's names: the squared friction law has two roots
+per direction, and the one that can satisfy the unsquared law (``M`` opposing the
+rotation) is the hand module's ``turn_pos`` (the first root) or ``turn_neg`` (the
+second); the other root of each is ``turn_pos_other_root``, ``turn_neg_other_root``,
+admissible only where the hinge's reaction vanishes.  The reactions stay the joint's
+(``Rx_hinge``, ``Ry_hinge`` in the fixed frame, and the moment ``M_hinge``): the hand
+module's ``R_n``, ``R_t`` are components along and across the rod, not a renaming."""
 
 import sympy as sp
 
@@ -26,5 +34,8 @@ SYSTEM = System(
     bodies=(Body(m, bob),),
     potential=m * g * bob[1],
     contacts=(Joint("hinge", (xp, yp), angle=phi, friction_radius=delta),),
+    names={"hinge_turn_pos": "turn_pos", "hinge_turn_neg_root2": "turn_neg",
+           "hinge_turn_pos_root2": "turn_pos_other_root",
+           "hinge_turn_neg": "turn_neg_other_root"},
     default_axes={"phi": (-float(sp.pi), float(sp.pi), 512), "delta": (0.0, 1.5, 512)},
 )

@@ -1,0 +1,459 @@
+r"""The admissibility conditions of a declared model's branches, for the bifurcation tracer.
+
+A class boundary of a map (``n_solutions``, ``stagnation``, ``contact_lost``)
+is where one scalar condition that decides a branch's status changes sign
+(GUIDE section 7).  :func:`conditions` lists every such condition of a
+declared model, per candidate branch, in the model's row order and with the
+model's own (possibly renamed) branch and reaction names, as sympy
+expressions of the model's inputs.  They are built from the same contact-law
+requirements (:mod:`phasemap.declare.law`) and the same solved rows
+(:mod:`phasemap.declare.solvers`) as the generated branch functions, so they
+are the same physics.
+
+The contract of one :class:`Condition` ``c``
+--------------------------------------------
+* ``c.expr`` is smooth where the row is defined and has no poles: a quotient
+  such as a reaction ``n / D`` is given by its numerator ``n``, and the
+  denominator's sign enters through ``c.divisor``.  The tested value is
+  ``v = sgn(c.divisor) * c.expr`` (``divisor`` 1: ``v = c.expr``).
+* ``c.sense`` says which side is admissible, with the tie ``tol = 1e-12 *
+  c.scale`` (``c.scale`` is the magnitude of the terms of ``c.expr``, as the
+  kernels compute it): ``">= 0"``, ``v >= -tol`` (ties admissible);
+  ``"> 0"``, ``v > tol`` (ties not); ``"!= 0"``, ``|v| > tol`` (a coefficient
+  of the senior derivative: its zero set is where the branch is singular).
+  ``c.strict`` is ``c.sense == "> 0"``.
+* ``c.rest_only``: the condition applies only at zero relative velocity (a
+  slip starting from rest); the expression is written with that velocity 0.
+* ``c.where`` (or None): the condition applies only where ``c.where > 0``.
+* Where a condition does not apply it counts as holding.  A branch is
+  admissible (status ``ADMISSIBLE`` or ``SEPARATION``) exactly where it applies
+  (at rest, or moving in its ``direction``; :func:`presence` tells the
+  ``_moving_neg`` copies apart) and all its conditions hold;
+  :meth:`Condition.holds` evaluates one with numpy.
+
+Kinds and names (``<b>`` the branch's name, ``<c>`` a contact's)
+----------------------------------------------------------------
+``coefficient``
+    ``coef_<b>``, the coefficient of the senior derivative, the quantity of the
+    atlas layer ``coef_<b>`` (``!= 0``).  A turning joint's row has two:
+    ``det_<b>``, the determinant of its linear part, and ``coef_<b>``, the
+    leading coefficient of its squared law.
+``normal``
+    ``<N>_<b>`` (``<N>`` the reaction's model name, as in the layer
+    ``N_floor_<b>``): a one-sided contact's ``N >= 0``, or a two-sided
+    contact's assumed sign (``N >= 0``, or ``-N > 0``).
+``friction_limit``
+    ``limit_pos_<c>_<b>`` and ``limit_neg_<c>_<b>``, the two sides of a cone
+    ``f N -+ F >= 0`` (a rolling contact: ``delta N -+ M``); a two-sided contact's
+    ``limit_<c>_<b>``, ``f^2 N^2 - F^2 >= 0``; a joint's ``limit_<c>_<b>``,
+    ``delta^2 |R|^2 - M^2 >= 0``.
+``start``
+    ``start_<c>_<b>``: a slip from rest starts in its direction (``> 0``,
+    ``rest_only``).
+``gap``
+    ``gap_<c>_<b>``: a separated contact's gap accelerates open (``> 0``).
+``family``
+    ``family_<i>_<j>_<b>``, a statically indeterminate row (the ladder at rest):
+    its reactions are ``L = (P + Dd t) / D`` and every form ``i`` is
+    ``g0_i + g1_i t`` (``g0_i``, ``g1_i`` numerators over ``D``).  The family is
+    nonempty iff every lower bound of ``t`` lies below every upper bound; the pair
+    ``(i, j)`` gives ``expr = g0_j g1_i - g0_i g1_j``, ``divisor = D g1_i``, so
+    that ``v`` is form ``j`` at the member where form ``i`` is tight, and applies
+    ``where = -g1_i g1_j > 0`` (one bound below, one above).  Its zero set is
+    where the two bounds meet (the ladder's static zone phi = 2 arctan f).  A form
+    whose slope vanishes identically (a ray) adds no pair; the tie is the
+    kernel's where both forms are inclusive.
+``discriminant``, ``root``
+    a turning joint's ``disc_<c>_<b>`` (the squared law has real roots:
+    ``>= 0``, ``> 0`` for the second root so that a double root counts once) and
+    ``root_<c>_<b>`` (the kept root opposes the rotation: ``-sigma M >= 0``).
+``domain``
+    ``domain_low_<c>``, ``domain_high_<c>`` (branch None): where the contact
+    exists (a corner on a body's edge); outside, the state is not in the model.
+
+Example
+-------
+The Painleve rod sliding back (``xdot < 0``): its coefficient vanishes where
+``1 + 3 cos^2 theta - 3 f sin theta cos theta = 0``; past it (``f = 2``,
+``theta = 1.1``) the normal force the slide needs is negative: a paradox.
+
+>>> from phasemap.declare import conditions
+>>> from phasemap.systems.painleve_rod import SYSTEM
+>>> c = {c.name: c for c in conditions(SYSTEM)}
+>>> c["coef_A_slip_neg"].expr
+-3*f*sin(theta)*cos(theta) + 3*cos(theta)**2 + 1
+>>> normal = c["N_A_A_slip_neg"]
+>>> normal.kind, normal.sense, normal.expr
+('normal', '>= 0', g*m/3 - l*m*omega**2*sin(theta)/3)
+>>> normal.divisor
+-f*sin(theta)*cos(theta) + cos(theta)**2 + 1/3
+>>> state = dict(theta=1.1, omega=0.0, f=2.0, g=9.81, l=1.0, m=1.0)
+>>> bool(c["coef_A_slip_neg"].holds(state)), bool(normal.holds(state))
+(True, False)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import _numerics as nx
+from .algebra import pythagorean, scale_in, scale_of
+from .derivation import derive
+from .emit import accelerations, channel_acceleration, family_coefficients
+from .law import Accelerates
+from .modes import Presence
+from .solvers import joint_parts, solve_joint
+from .system import System
+from .validation import validate
+
+SENSES = ("!= 0", ">= 0", "> 0")
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One scalar condition that decides a branch's status (see the module docstring)."""
+
+    name: str
+    branch: str | None
+    kind: str
+    expr: object
+    scale: object
+    sense: str
+    rest_only: bool = False
+    divisor: object = 1
+    where: object = None
+
+    @property
+    def strict(self) -> bool:
+        return self.sense == "> 0"
+
+    @property
+    def symbols(self) -> tuple[str, ...]:
+        """The input names it reads (coordinates, rates, parameters)."""
+        import sympy as sp
+
+        parts = [self.expr, self.scale, self.divisor] + ([self.where] if self.where is not None
+                                                         else [])
+        return tuple(sorted({s.name for p in parts for s in sp.sympify(p).free_symbols}))
+
+    def value(self, values) -> np.ndarray:
+        """``sgn(divisor) * expr`` at ``values`` (a mapping of input names to numbers or
+        arrays)."""
+        expr, _, divisor, _ = self._evaluated(values)
+        return np.sign(divisor) * expr
+
+    def holds(self, values, rest=False) -> np.ndarray:
+        """Where the condition holds at ``values`` (``rest``: the relative velocity is
+        zero there); True where it does not apply."""
+        expr, scale, divisor, where = self._evaluated(values)
+        v, tie = np.sign(divisor) * expr, nx.TOL * scale
+        with np.errstate(invalid="ignore"):
+            ok = {"!= 0": np.abs(v) > tie, ">= 0": v >= -tie, "> 0": v > tie}[self.sense]
+            if where is not None:
+                ok = ok | ~(where > 0)
+        if self.rest_only:
+            ok = ok | ~np.asarray(rest, bool)
+        return ok
+
+    def _evaluated(self, values):
+        f = _numpy_function(self)
+        with np.errstate(all="ignore"):
+            out = f(*(np.asarray(values[n], float) for n in self.symbols))
+        return out[0], out[1], out[2], (out[3] if self.where is not None else None)
+
+
+@functools.lru_cache(maxsize=None)
+def _numpy_function(c: Condition):
+    import sympy as sp
+
+    args = [sp.Symbol(n, real=True) for n in c.symbols]
+    parts = [c.expr, c.scale, c.divisor, c.where if c.where is not None else 0]
+    return sp.lambdify(args, [sp.sympify(p) for p in parts], "numpy")
+
+
+# -- building them ------------------------------------------------------------------
+
+_CACHE: dict[int, tuple] = {}
+
+
+def conditions(system_or_model) -> tuple[Condition, ...]:
+    """Every condition that decides a branch's status, per branch in row order, then the
+    domain's; for a :class:`phasemap.declare.System`, a declared :class:`phasemap.Model`,
+    or a hand-written model with a declared twin (:data:`phasemap.systems.seeds.TWINS`,
+    whose branches carry the hand model's names: the twin's conditions of those
+    branches, in the hand model's row order).  Derived with sympy once per declaration.
+
+    TypeError for a model with neither a declaration nor a twin.
+    """
+    S, hand = _declaration(system_or_model)
+    cached = _CACHE.get(id(S))
+    if cached is None or cached[0] is not S:
+        cached = (S, _build(S))
+        _CACHE[id(S)] = cached
+    if hand is None:
+        return cached[1]
+    by_branch = {}
+    for c in cached[1]:
+        by_branch.setdefault(c.branch, []).append(c)
+    return tuple(c for b in [*hand.branches, None] for c in by_branch.get(b, []))
+
+
+def presence(system_or_model) -> dict[str, Presence]:
+    """Per branch (the model's names), where it applies: moving in its direction and
+    from rest, only at rest, or only while moving."""
+    S, hand = _declaration(system_or_model)
+    out = {S.names.get(r.name, r.name): r.presence for r in derive(S).candidates}
+    return out if hand is None else {b: out[b] for b in hand.branches}
+
+
+def _declaration(x):
+    """The declaration behind ``x``, and the hand model it stands in for (or None)."""
+    import importlib
+
+    from ..systems.seeds import TWINS  # the registry of twins, beside the declarations
+
+    if isinstance(x, System):
+        return x, None
+    S = getattr(x, "declaration", None)
+    if S is not None:
+        return S, None
+    twin = TWINS.get(getattr(x, "name", None))
+    if twin is None:
+        raise TypeError(f"conditions: {getattr(x, 'name', x)!r} is not a declared system or "
+                        "model, and has no declared twin (phasemap.systems.seeds.TWINS)")
+    S = importlib.import_module(twin).SYSTEM
+    missing = sorted(set(x.branches) - set(S.model.branches))
+    if missing:
+        raise TypeError(f"conditions: the twin of {x.name!r} has no branch {missing[0]!r}")
+    return S, x
+
+
+def _build(S) -> tuple[Condition, ...]:
+    validate(S)
+    d = derive(S)
+    out = []
+    for row in d.candidates:
+        out += _Branch(d, row).conditions()
+    out += [_without_poles(Condition(label, None, "domain", e, scale_of(e), ">= 0"))
+            for (e, _), label in zip(d.eqs.domain, d.eqs.domain_labels)]
+    names = [c.name for c in out]
+    clash = sorted({n for n in names if names.count(n) > 1})
+    if clash:
+        raise AssertionError(f"{S.name}: two conditions named {clash[0]!r}")
+    return tuple(out)
+
+
+class _Branch:
+    """The conditions of one candidate branch, from its solved row."""
+
+    def __init__(self, d, row):
+        import sympy as sp
+
+        self.d, self.row = d, row
+        self.sol = d.solutions[row.kinds]
+        self.p = self.sol.problem
+        self.names = d.S.names
+        self.branch = str(self.names.get(row.name, row.name))
+        self.constants = {}
+        for c, m in zip(d.S.contacts, row.modes):
+            for kind, x in (("sig", m.slip), ("rho", m.normal), ("root", m.root)):
+                if x and m.moves:
+                    self.constants[sp.Symbol(f"_k_{kind}_{c.name}", real=True)] = sp.Integer(x)
+        self.L = [u[2] for u in self.p.unknowns]
+        self._numerators()
+
+    def conditions(self) -> list[Condition]:
+        conds = self._coefficients() + self._joint()
+        conds += self._family() if self.sol.family is not None else self._forms()
+        conds += self._accelerations()
+        return [c for c in map(self._fixed, conds) if not _always(c)]
+
+    def _name(self, label: str) -> str:
+        return f"{self.names.get(label, label)}_{self.branch}"
+
+    def _fixed(self, c: Condition) -> Condition:
+        """The row's constants (slip sign, N sign, root) in place; rest: velocity 0."""
+        import sympy as sp
+
+        sub = dict(self.constants)
+        if c.rest_only:
+            sub[self.d.velocity] = sp.Integer(0)
+
+        def fix(e):
+            return None if e is None else sp.sympify(e).xreplace(sub)
+
+        c = _without_poles(Condition(c.name, c.branch, c.kind, fix(c.expr), fix(c.scale),
+                                     c.sense, c.rest_only, fix(c.divisor), fix(c.where)))
+        if c.kind != "coefficient":
+            return c
+        # reduced by sin^2 + cos^2 = 1, without a constant factor: the same quantity, and
+        # the kernel's tie
+        content, expr = pythagorean(c.expr, self.d.eqs.q).as_content_primitive()
+        return dataclasses.replace(c, expr=expr, scale=c.scale / abs(content))
+
+    # -- the row's quantities as numerators over common denominators ----------------
+
+    def _numerators(self):
+        """The unknowns ``L = nL / dL`` and accelerations ``Q = nQ / dQ``, with the
+        scales of the numerators (the kernel's scales times ``|dL|``, ``|dQ|``)."""
+        import sympy as sp
+
+        sol = self.sol
+        if sol.family is not None:
+            D, P, _ = sol.family[0]
+            R = sum((scale_of(e) for e in P), sp.Integer(0))
+            self.nL, self.sL, self.dL = list(P), [R] * len(P), D
+        elif self.p.squared is not None:
+            a, b, _, _ = joint_parts(sol)
+            mu = self.p.squared.moment
+            self.nL = [x + y * mu for x, y in zip(a, b)]
+            self.sL = [scale_of(x) + scale_of(y) * sp.Abs(mu) for x, y in zip(a, b)]
+            self.dL = sol.D
+        else:
+            self.nL, self.sL, self.dL = list(sol.nums), [scale_of(e) for e in sol.nums], sol.D
+        self.nQ, self.sQ = accelerations(sol, self.nL, self.sL, over=False)
+        self.dQ = sol.D if sol.qnums is not None else sol.dM * sol.D
+        if self.p.squared is not None:
+            self._without_moment()
+
+    def _without_moment(self):
+        """Substitute the kept root ``M = m / (2 A)`` of the squared law and clear ``2 A``."""
+        import sympy as sp
+
+        root = self.constants[self.p.squared.root]
+        self.roots = solve_joint(self.sol, root)
+        A, m, mu = self.roots.A, self.roots.moment, self.p.squared.moment
+        t = sp.Dummy("abs_mu")
+
+        def clear(e):
+            return 2 * A * e.subs(mu, 0) + m * sp.diff(e, mu)
+
+        def clear_scale(s):
+            s = sp.sympify(s).xreplace({sp.Abs(mu): t})
+            return 2 * sp.Abs(A) * s.subs(t, 0) + sp.Abs(m) * sp.diff(s, t)
+
+        self.nL, self.sL = [clear(e) for e in self.nL], [clear_scale(s) for s in self.sL]
+        self.nQ, self.sQ = [clear(e) for e in self.nQ], [clear_scale(s) for s in self.sQ]
+        self.dL, self.dQ = 2 * A * self.dL, 2 * A * self.dQ
+
+    # -- the conditions by kind -----------------------------------------------------
+
+    def _coefficients(self) -> list[Condition]:
+        sol, b = self.sol, self.branch
+        if sol.family is not None and len(sol.family) > 1:
+            return []  # singular only where both parametrisations' minors vanish: points
+        D = sol.family[0][0] if sol.family is not None else sol.D
+        if self.p.squared is None:
+            return [Condition(f"coef_{b}", b, "coefficient", D, scale_of(D), "!= 0")]
+        A = self.roots.A
+        return [Condition(f"det_{b}", b, "coefficient", D, scale_of(D), "!= 0"),
+                Condition(f"coef_{b}", b, "coefficient", A, self.roots.scales["A"], "!= 0")]
+
+    def _joint(self) -> list[Condition]:
+        import sympy as sp
+
+        sq = self.p.squared
+        if sq is None:
+            return []
+        r, b = self.roots, self.branch
+        first = self.constants[sq.root] < 0
+        # the kernel: sigma M <= TOL (delta |a| / |D| + |M|), M = m / (2 A), times 2 |A|
+        keep_scale = (2 * sp.Abs(r.A) * r.scales["moment_terms"] / sp.Abs(self.sol.D)
+                      + sp.Abs(r.moment))
+        return [Condition(f"disc_{sq.contact}_{b}", b, "discriminant", r.disc,
+                          r.scales["disc"], ">= 0" if first else "> 0"),
+                Condition(f"root_{sq.contact}_{b}", b, "root", -sq.sign * r.moment, keep_scale,
+                          ">= 0", divisor=r.A)]
+
+    def _sense(self, strict) -> str:
+        strict = strict if isinstance(strict, bool) else bool(self.constants[strict] < 0)
+        return "> 0" if strict else ">= 0"
+
+    def _forms(self) -> list[Condition]:
+        import sympy as sp
+
+        sub = dict(zip(self.L, self.nL))
+        out = []
+        for form in self.p.forms:
+            e = form.smooth_expr
+            poly = sp.Poly(e, *self.L)
+            if not poly.is_homogeneous:
+                raise AssertionError(f"{form.label}: a form must be homogeneous in the reactions")
+            degree = poly.total_degree()
+            scale = scale_in(form.expr, self.L, self.sL) * sp.sympify(form.factor).xreplace(sub)
+            out.append(Condition(self._name(form.label), self.branch, form.kind,
+                                 e.xreplace(sub), scale, self._sense(form.strict),
+                                 divisor=self.dL ** (degree % 2)))
+        return out
+
+    def _family(self) -> list[Condition]:
+        import sympy as sp
+
+        D, P, Dd = self.sol.family[0]
+        R = self.sL[0]
+        lines = []
+        for form in self.p.forms:
+            c = family_coefficients(form, self.L, self.d.S, self.p.fname)
+            g0 = sum((ci * x for ci, x in zip(c, P)), sp.Integer(0))
+            g1 = sp.expand(sum((ci * x for ci, x in zip(c, Dd)), sp.Integer(0)))
+            if g1 != 0:
+                lines.append((form, g0, g1))
+        out = []
+        for (fi, g0i, g1i), (fj, g0j, g1j) in ((a, b) for k, a in enumerate(lines)
+                                               for b in lines[k + 1:]):
+            det = sp.expand(g0j * g1i - g0i * g1j)
+            if det == 0:
+                continue
+            strict = self._sense(fi.strict) == "> 0" or self._sense(fj.strict) == "> 0"
+            out.append(Condition(f"family_{self.names.get(fi.label, fi.label)}_"
+                                 f"{self._name(fj.label)}", self.branch, "family", det,
+                                 R * (sp.Abs(g1i) + sp.Abs(g1j)), "> 0" if strict else ">= 0",
+                                 divisor=D * g1i, where=-g1i * g1j))
+        return out
+
+    def _accelerations(self) -> list[Condition]:
+        out = []
+        for req in self.p.requirements:
+            if not isinstance(req, Accelerates):
+                continue
+            a, s = channel_acceleration(self.d.eqs, self.sol, req.contact, req.channel,
+                                        self.nQ, self.sQ, unit=self.dQ)
+            sign = 1 if req.sign is None else req.sign
+            out.append(Condition(self._name(req.label), self.branch,
+                                 "start" if req.rest_only else "gap", sign * a, s, "> 0",
+                                 rest_only=req.rest_only, divisor=self.dQ))
+        return out
+
+
+def _without_poles(c: Condition) -> Condition:
+    """``c`` with the denominators that closing the contacts leaves (the rod on a step's
+    ``cot theta``) cleared: ``n / d`` becomes ``n`` and ``d`` joins the divisor (the sign)
+    and the scale (the tie), so that the tested side and the tie are unchanged."""
+    import sympy as sp
+
+    def split(e):
+        e = sp.sympify(e)
+        if any(p.exp.is_negative and p.base.free_symbols for p in e.atoms(sp.Pow)):
+            return sp.fraction(sp.together(e))
+        return e, sp.Integer(1)
+
+    num, den = split(c.expr)
+    div_n, div_d = split(c.divisor)
+    if den == 1 and div_d == 1:
+        return c
+    return dataclasses.replace(c, expr=num, scale=c.scale * sp.Abs(den),
+                               divisor=div_n * div_d * den)
+
+
+def _always(c: Condition) -> bool:
+    """A condition that holds everywhere (a constant on its admissible side)."""
+    import sympy as sp
+
+    if c.where is not None or not all(sp.sympify(e).is_Number
+                                      for e in (c.expr, c.divisor, c.scale)):
+        return False
+    return bool(c.holds({}))

@@ -1,0 +1,104 @@
+"""Symbolic helpers of the derivation: magnitudes of terms, reductions, Cramer's rule."""
+
+from __future__ import annotations
+
+
+def scale_of(e):
+    """The magnitude of the terms of ``e``: what its rounding error is relative to.
+
+    Sums add the scales of their terms, products multiply them, sin and cos
+    count as 1 (their rounding error is absolute), a denominator counts with
+    its own magnitude, and the sign symbols (slip directions) as 1.
+    """
+    import sympy as sp
+
+    if e.is_Number:
+        return abs(e)
+    if e.is_Symbol:
+        return sp.Integer(1) if e.name.startswith(("_k_sig", "_k_rho", "_k_root")) else sp.Abs(e)
+    if e.is_Add:
+        return sp.Add(*(scale_of(a) for a in e.args))
+    if e.is_Mul:
+        return sp.Mul(*(scale_of(a) for a in e.args))
+    if e.is_Pow:
+        b, x = e.args
+        if x.is_Integer and x > 0:
+            return scale_of(b) ** x
+        if x.is_Integer:
+            return sp.Abs(b) ** x
+        if x == sp.Rational(1, 2):
+            return sp.sqrt(scale_of(b))
+        return sp.Abs(e)
+    if isinstance(e, (sp.sin, sp.cos)):
+        return sp.Integer(1)
+    if isinstance(e, sp.Abs):
+        return scale_of(e.args[0])
+    return sp.Abs(e)
+
+
+def scale_in(form, L, Ls):
+    """The scale of an expression of the unknowns ``L``: their scales ``Ls`` stand in for them."""
+    import sympy as sp
+
+    sub = {L[i]: Ls[i] for i in range(len(L))}
+    return scale_of(form).xreplace({sp.Abs(L[i]): Ls[i] for i in range(len(L))}).xreplace(sub)
+
+
+def cramer(K, rhs, i):
+    """The numerator of unknown ``i`` of ``K x = rhs`` by Cramer's rule."""
+    Ki = K.copy()
+    Ki[:, i] = rhs
+    return Ki.det(method="berkowitz")
+
+
+def pythagorean(e, angles):
+    """``e`` reduced modulo sin(q)^2 + cos(q)^2 = 1 for every coordinate q, and factored
+    (a constant times sin^2 + cos^2 becomes the constant).  Left as it is when it is
+    not a polynomial in the sines and cosines."""
+    import sympy as sp
+
+    sub, back, ideal, gens = {}, {}, [], []
+    for q in angles:
+        if not e.has(sp.sin(q), sp.cos(q)):
+            continue
+        s, c = sp.Dummy(f"s_{q}"), sp.Dummy(f"c_{q}")
+        sub.update({sp.sin(q): s, sp.cos(q): c})
+        back.update({s: sp.sin(q), c: sp.cos(q)})
+        ideal.append(s ** 2 + c ** 2 - 1)
+        gens += [s, c]
+    if not gens:
+        return sp.factor(e)
+    p = sp.expand(e.xreplace(sub))
+    if p.has(*angles):  # sin(2 q), sin(q + a), ...: not a polynomial in s, c
+        return e
+    try:
+        _, rem = sp.reduced(p, ideal, *gens)
+    except sp.polys.polyerrors.PolynomialError:
+        return e
+    return sp.factor(rem).xreplace(back)
+
+
+def _monomial(e):
+    """The monomial factor common to the terms of ``e`` (such as m**4 l**4)."""
+    import sympy as sp
+
+    f = sp.factor_terms(sp.expand(e))
+    if not f.is_Mul:
+        return sp.Integer(1)
+    return sp.Mul(*(a for a in f.args if a.is_Symbol or (a.is_Pow and a.args[0].is_Symbol
+                                                         and a.args[1].is_Integer)))
+
+
+def reduced(exprs):
+    """``exprs`` (a quotient's denominator and numerators) divided by their common
+    monomial factor, so that no power of a parameter larger than needed is formed
+    (m**5 overflows for m = 1e62)."""
+    import sympy as sp
+
+    monos = [_monomial(e) for e in exprs if e != 0]
+    common = monos[0]
+    for mo in monos[1:]:
+        common = sp.gcd(common, mo)
+    if common == 1:
+        return list(exprs)
+    return [sp.expand(e / common) for e in exprs]

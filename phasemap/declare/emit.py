@@ -1,0 +1,414 @@
+"""The code emitter: each solved mode combination as a numba branch function, and the
+generated module of a declared system (see GUIDE section 6 for why a real file)."""
+
+from __future__ import annotations
+
+import json
+
+from .. import _numerics as nx
+from .algebra import scale_in, scale_of
+from .api import sym
+from .derivation import derive
+from .law import Accelerates
+from .solvers import joint_parts
+from .validation import fail
+
+TOL = f"{nx.TOL!r}"
+
+#: Statuses of a generated row, as the module prints them.
+_STATUS = {"ADMISSIBLE": nx.ADMISSIBLE, "SEPARATION": nx.SEPARATION}
+
+
+def printer():
+    """A sympy printer for numba: float literals everywhere (no mixed int/float tuples),
+    integer powers as products."""
+    import sympy as sp
+    from sympy.printing.pycode import PythonCodePrinter
+
+    class Printer(PythonCodePrinter):
+        def _print_Integer(self, e):
+            return f"{int(e)}.0"
+
+        def _print_Rational(self, e):
+            return f"({int(e.p)}.0/{int(e.q)}.0)"
+
+        def _print_Half(self, e):
+            return "0.5"
+
+        def _print_Pow(self, e, rational=False):
+            b, x = e.args
+            pb = self._print(b)
+            if x.is_Integer:
+                k = int(x)
+                if k == 2:
+                    return f"(({pb})*({pb}))"
+                return f"(({pb})**{k})"
+            if x == sp.Rational(1, 2):
+                return f"math.sqrt({pb})"
+            if x == -sp.Rational(1, 2):
+                return f"(1.0/math.sqrt({pb}))"
+            return f"(({pb})**({self._print(x)}))"
+
+        def _print_Abs(self, e):
+            return f"abs({self._print(e.args[0])})"
+
+    return Printer({"fully_qualified_modules": True})
+
+
+class _Writer:
+    """The body lines of one branch function, and the input names they read."""
+
+    def __init__(self, inputs_of):
+        import sympy as sp
+
+        self.inputs_of = inputs_of
+        self.printer = printer()
+        self.lines: list[str] = []
+        self.used: set = set()
+        self.fresh = sp.numbered_symbols("_k_x")
+
+    def emit(self, pairs):
+        """Assign ``name = expr`` for (name, sympy expr) pairs, with common subexpressions."""
+        import sympy as sp
+
+        exprs = [self.inputs_of(e) for _, e in pairs]
+        for e in exprs:
+            self.used.update(s.name for s in e.free_symbols)
+        reps, red = sp.cse(exprs, symbols=self.fresh, order="none")
+        self.lines += [f"{s} = {self.printer.doprint(e)}" for s, e in reps]
+        self.lines += [f"{a} = {self.printer.doprint(e)}" for (a, _), e in zip(pairs, red)]
+
+
+def _symbols(prefix, k):
+    import sympy as sp
+
+    return [sp.Symbol(f"{prefix}{i}", real=True) for i in range(k)]
+
+
+def row_code(sol, eqs, inputs_of) -> tuple[list[str], set]:
+    """The branch function's body lines for the solution ``sol``, and the inputs it reads."""
+    w = _Writer(inputs_of)
+    p = sol.problem
+    L = [u[2] for u in p.unknowns]
+    Ls = _symbols("_k_Ls", len(L))
+    if sol.family is not None:
+        _family(w, sol, L, Ls, eqs.S)
+    elif p.squared is not None:
+        _joint(w, sol, L, Ls)
+    else:
+        _regular(w, sol, L, Ls)
+    Q = _accelerations(w, sol, L, Ls)
+    _admissible(w, sol, eqs, Q, L, Ls)
+    w.emit([(f"_k_r{i}", e) for i, e in enumerate(p.reactions)])
+    return w.lines, w.used
+
+
+def _regular(w, sol, L, Ls):
+    """The unknowns by Cramer's rule: ``L_i = n_i / D``."""
+    k = len(L)
+    w.emit([("_k_D", sol.D), ("_k_Ds", scale_of(sol.D))]
+           + [(f"_k_n{i}", e) for i, e in enumerate(sol.nums)]
+           + [(f"_k_ns{i}", scale_of(e)) for i, e in enumerate(sol.nums)])
+    w.lines.append(f"_k_sing = abs(_k_D) <= {TOL} * _k_Ds")
+    w.lines.append("_k_cont = " + " & ".join(
+        [f"(abs(_k_n{i}) <= {TOL} * _k_ns{i})" for i in range(k)] or ["False"]))
+    for i in range(k):
+        w.lines.append(f"{L[i]} = _k_n{i} / _k_D")
+        w.lines.append(f"{Ls[i]} = _k_ns{i} / abs(_k_D)")
+    w.lines.append("_k_real = True")
+    w.lines.append("_k_coef = _k_D / _k_Ds")
+
+
+def _joint(w, sol, L, Ls):
+    """The unknowns affine in the friction moment, and the moment from the squared law
+    (:class:`phasemap.declare.solvers.JointRoots` states the same quantities over D)."""
+    n0, n1, X, Y = joint_parts(sol)
+    sq = sol.problem.squared
+    w.emit([("_k_D", sol.D), ("_k_Ds", scale_of(sol.D))]
+           + [(f"_k_a{i}", e) for i, e in enumerate(n0)]
+           + [(f"_k_as{i}", scale_of(e)) for i, e in enumerate(n0)]
+           + [(f"_k_b{i}", e) for i, e in enumerate(n1)]
+           + [(f"_k_bs{i}", scale_of(e)) for i, e in enumerate(n1)])
+    w.emit([("_k_dl", sq.coefficient)])
+    sig, root = sq.sign, sq.root
+    w.lines += [
+        "_k_sing0 = abs(_k_D) <= " + TOL + " * _k_Ds",
+        f"_k_ax, _k_ay = _k_a{X} / _k_D, _k_a{Y} / _k_D",
+        f"_k_bx, _k_by = _k_b{X} / _k_D, _k_b{Y} / _k_D",
+        f"_k_sx, _k_sy = _k_as{X} / abs(_k_D), _k_as{Y} / abs(_k_D)",
+        "_k_d2 = _k_dl * _k_dl",
+        "_k_A = 1.0 - _k_d2 * (_k_bx * _k_bx + _k_by * _k_by)",
+        "_k_As = 1.0 + _k_d2 * (_k_bx * _k_bx + _k_by * _k_by)",
+        "_k_B = -2.0 * _k_d2 * (_k_ax * _k_bx + _k_ay * _k_by)",
+        "_k_Bs = 2.0 * _k_d2 * (_k_sx * abs(_k_bx) + _k_sy * abs(_k_by))",
+        "_k_C = -_k_d2 * (_k_ax * _k_ax + _k_ay * _k_ay)",
+        "_k_Cs = _k_d2 * (_k_sx * _k_sx + _k_sy * _k_sy)",
+        "_k_disc = _k_B * _k_B - 4.0 * _k_A * _k_C",
+        "_k_discs = _k_Bs * _k_Bs + 4.0 * _k_As * _k_Cs",
+        f"_k_sing = _k_sing0 | (abs(_k_A) <= {TOL} * _k_As)",
+        f"_k_cont = (abs(_k_B) <= {TOL} * _k_Bs) & (abs(_k_C) <= {TOL} * _k_Cs)",
+        f"_k_real = _k_disc >= -{TOL} * _k_discs",
+        f"_k_mu = (-_k_B + {root} * math.sqrt(max(_k_disc, 0.0))) / (2.0 * _k_A)",
+        "_k_mus = _k_dl * math.sqrt(_k_sx * _k_sx + _k_sy * _k_sy) + abs(_k_mu)",
+        f"_k_keep = ({sig} * _k_mu <= {TOL} * _k_mus) & (({root} < 0.0) | "
+        f"(_k_disc > {TOL} * _k_discs))",
+        "_k_coef = _k_A",
+    ]
+    for i in range(len(L)):
+        w.lines.append(f"{L[i]} = (_k_a{i} + _k_b{i} * _k_mu) / _k_D")
+        w.lines.append(f"{Ls[i]} = (_k_as{i} + _k_bs{i} * abs(_k_mu)) / abs(_k_D)")
+
+
+def _family(w, sol, L, Ls, S):
+    """The statically indeterminate family ``L_j = (P_j + Dd_j t) / D`` (P = 0, Dd = D
+    for the parameter), the interval of ``t`` where every form holds, and its middle."""
+    k = len(L)
+    for r, (D, Pj, Ddj) in enumerate(sol.family):
+        w.emit([(f"_k_D_{r}", D), (f"_k_Ds_{r}", scale_of(D))]
+               + [(f"_k_P{j}_{r}", e) for j, e in enumerate(Pj)]
+               + [(f"_k_PS{j}_{r}", scale_of(e)) for j, e in enumerate(Pj)]
+               + [(f"_k_Dd{j}_{r}", e) for j, e in enumerate(Ddj)])
+    picked = ["_k_D", "_k_Ds"] + [f"_k_{x}{j}" for x in ("P", "PS", "Dd") for j in range(k)]
+    if len(sol.family) == 1:
+        w.lines += [f"{x} = {x}_0" for x in picked]
+    else:
+        w.lines.append("_k_use = abs(_k_D_0) * _k_Ds_1 >= abs(_k_D_1) * _k_Ds_0")
+        w.lines += [f"{x} = {x}_0 if _k_use else {x}_1" for x in picked]
+    w.lines += [f"_k_sing = abs(_k_D) <= {TOL} * _k_Ds", "_k_cont = False", "_k_real = True",
+                "_k_coef = _k_D / _k_Ds",
+                "_k_R = " + " + ".join(f"_k_PS{j}" for j in range(k)) + " + 0.0"]
+    fam = {j: (f"_k_P{j} / _k_D", f"_k_Dd{j} / _k_D") for j in range(k)}
+    w.lines.append("_k_lo, _k_hi = -np.inf, np.inf")
+    for form in sol.problem.forms:
+        _restrict(w, form, fam, family_coefficients(form, L, S, sol.problem.fname))
+    w.lines.append("_k_fam = _k_lo < _k_hi")
+    w.lines.append("_k_t = 0.5 * (_k_lo + _k_hi) if (_k_lo > -np.inf) & (_k_hi < np.inf) "
+                   "else (_k_lo if _k_lo > -np.inf else (_k_hi if _k_hi < np.inf else 0.0))")
+    for i in range(k):
+        a, b = fam[i]
+        w.lines.append(f"{L[i]} = {a} + ({b}) * _k_t")
+        w.lines.append(f"{Ls[i]} = _k_R / abs(_k_D)")
+
+
+def family_coefficients(form, L, S, fname):
+    """The coefficients of a form linear in the unknowns ``L`` (a ValueError otherwise)."""
+    import sympy as sp
+
+    coeffs = [sp.diff(form.expr, L[i]) for i in range(len(L))]
+    if any(cf.free_symbols & set(L) for cf in coeffs):
+        fail(S, f"mode {fname}", "a nonlinear friction limit on indeterminate reactions is "
+             "not supported")
+    return coeffs
+
+
+def _restrict(w, form, fam, coeffs):
+    """Intersect the interval of the family's parameter with ``form >= 0`` (or > 0)."""
+    c_names = []
+    for i, cf in enumerate(coeffs):
+        if cf != 0:
+            nmc = f"_k_c{len(w.lines)}_{i}"
+            w.emit([(nmc, cf)])
+            c_names.append((i, nmc))
+    g0 = " + ".join(f"{cn} * ({fam[i][0]})" for i, cn in c_names) or "0.0"
+    g1 = " + ".join(f"{cn} * ({fam[i][1]})" for i, cn in c_names) or "0.0"
+    g1s = " + ".join(f"abs({cn} * ({fam[i][1]}))" for i, cn in c_names) or "0.0"
+    strict = form.strict
+    shift = (f"{'-' if strict is True else ''}{TOL} * _k_R / abs(_k_D)"
+             if isinstance(strict, bool) else
+             f"({TOL} if {strict} > 0.0 else -{TOL}) * _k_R / abs(_k_D)")
+    # a slope that cancels to rounding is zero (a ray, not a far endpoint)
+    w.lines.append(f"_k_sl = {g1}")
+    w.lines.append(f"_k_sl = _k_sl if abs(_k_sl) > {TOL} * ({g1s}) else 0.0")
+    w.lines.append(f"_k_lo, _k_hi = restrict_affine({g0} + {shift}, _k_sl, _k_lo, _k_hi)")
+
+
+def accelerations(sol, L, Ls, over=True):
+    """The accelerations and their scales, in the unknowns ``L`` and their scales ``Ls``
+    (solved together with the reactions: in ``_k_D`` and the moment ``_k_mu``).
+
+    ``over=False``: the numerators over the common denominator instead, ``dM D``
+    (``D`` the row's determinant) or, solved together, ``D``; ``L`` and ``Ls`` are
+    then the numerators over ``D``, and the scales are multiplied by ``|dM D|``.
+    """
+    import sympy as sp
+
+    n, k = sol.problem.n, len(L)
+    one = sp.Integer(1)
+    if sol.qnums is None:
+        unit, unit_s, den = (one, one, sol.dM) if over else (sol.D, sp.Abs(sol.D), one)
+        gen = [unit * sol.hx[a] + sum((sol.W[a, i] * L[i] for i in range(k)), sp.Integer(0))
+               for a in range(n)]
+        gens = [scale_of(sol.hx[a]) * unit_s + sum(
+            (scale_of(sol.W[a, i]) * Ls[i] for i in range(k)), sp.Integer(0)) for a in range(n)]
+        acc = [sum((sol.aM[j, a] * gen[a] for a in range(n)), sp.Integer(0)) / den
+               for j in range(n)]
+        accs = [sum((scale_of(sol.aM[j, a]) * gens[a] for a in range(n)), sp.Integer(0))
+                / sp.Abs(den) for j in range(n)]
+        return acc, accs
+    D = sp.Symbol("_k_D", real=True) if over else one
+    mu = sol.problem.squared.moment if sol.problem.squared is not None else None
+    if mu is None:
+        return [e / D for e in sol.qnums], [scale_of(e) / sp.Abs(D) for e in sol.qnums]
+    q0 = [e.subs(mu, 0) for e in sol.qnums]
+    q1 = [sp.diff(e, mu) for e in sol.qnums]
+    return ([(a + b * mu) / D for a, b in zip(q0, q1)],
+            [(scale_of(a) + scale_of(b) * sp.Abs(mu)) / sp.Abs(D) for a, b in zip(q0, q1)])
+
+
+def _accelerations(w, sol, L, Ls):
+    n = sol.problem.n
+    Q, Qs = _symbols("_k_Q", n), _symbols("_k_Qs", n)
+    acc, accs = accelerations(sol, L, Ls)
+    w.emit([(str(Q[j]), acc[j]) for j in range(n)] + [(str(Qs[j]), accs[j]) for j in range(n)])
+    return Q
+
+
+def channel_acceleration(eqs, sol, contact, key, Q, Qs, unit=1):
+    """A channel's acceleration ``w . Q + bias`` and its scale, in the accelerations ``Q``
+    and their scales ``Qs`` (numerators over ``unit``: the bias times ``unit``)."""
+    import sympy as sp
+
+    w, b, _ = eqs.channels[contact][key]
+    b = b.xreplace(sol.problem.zero)
+    n = sol.problem.n
+    a = sum((w[j] * Q[j] for j in range(n)), sp.Integer(0)) + b * unit
+    s = sum((scale_of(w[j]) * Qs[j] for j in range(n)), sp.Integer(0)) + scale_of(b) * abs(unit)
+    return a, s
+
+
+def _admissible(w, sol, eqs, Q, L, Ls):
+    """``_k_ok``: every requirement of the mode combination holds (ties as documented in
+    :mod:`phasemap._numerics`)."""
+    p = sol.problem
+    Qs = _symbols("_k_Qs", p.n)
+    conds = []
+    for ci, req in enumerate(p.requirements):
+        if not isinstance(req, Accelerates):
+            continue
+        a, s = channel_acceleration(eqs, sol, req.contact, req.channel, Q, Qs)
+        w.emit([(f"_k_ca{ci}", a), (f"_k_cs{ci}", s)])
+        if req.rest_only:
+            conds.append(f"((not rest) | ({req.sign} * _k_ca{ci} > {TOL} * _k_cs{ci}))")
+        else:
+            conds.append(f"(_k_ca{ci} > {TOL} * _k_cs{ci})")
+    if sol.family is None:
+        for fi, form in enumerate(p.forms):
+            w.emit([(f"_k_g{fi}", form.expr), (f"_k_gs{fi}", scale_in(form.expr, L, Ls))])
+            gt, ge = f"(_k_g{fi} > {TOL} * _k_gs{fi})", f"(_k_g{fi} >= -{TOL} * _k_gs{fi})"
+            strict = form.strict
+            conds.append((gt if strict else ge) if isinstance(strict, bool)
+                         else f"({ge} if {strict} > 0.0 else {gt})")
+    else:
+        conds.append("_k_fam")
+    if p.squared is not None:
+        conds.append("_k_keep")
+    w.lines.append("_k_ok = " + (" & ".join(conds) if conds else "True"))
+
+
+# -- the generated module ---------------------------------------------------------
+
+def module_source(S) -> str:
+    """The generated module's source text (from the derivation of ``S``)."""
+    d = derive(S)
+    code = {kinds: row_code(sol, d.eqs, d.inputs_of) for kinds, sol in d.solutions.items()}
+    inputs, state_pos, derived = _inputs(S, d, set().union(*(u for _, u in code.values())))
+    scale_expr = velocity_scale_expr(S, d.velocity)
+    scale_args = sorted(s.name for s in scale_expr.free_symbols)
+    out = [f'"""Generated by phasemap.declare from the declaration of {S.name}: do not edit."""',
+           "import math", "import numpy as np", "from numba import njit",
+           "from phasemap._numerics import restrict_affine", "", "NAN = np.nan", ""]
+    out += _velocity_scale(scale_expr, scale_args) + _inside(d, inputs)
+    for kinds, sol in d.solutions.items():
+        out += _branch_function(S, sol, *code[kinds], inputs)
+    spec = {
+        "velocity": str(d.velocity),
+        "inputs": inputs,
+        "state_positions": [c.name for c in state_pos],
+        "derived": derived,
+        "scale_args": scale_args,
+        "rows": [(r.name, r.direction, int(r.presence), d.solutions[r.kinds].problem.fname,
+                  _row_args(d.solutions[r.kinds].problem, r)) for r in d.candidates],
+        "kappa": d.kappa,
+        "domain": sorted({nm for _, nm in d.eqs.domain}),
+        "n_acc": len(d.positions),
+    }
+    out += [f"SPEC = {json.dumps(spec)!r}", ""]
+    return "\n".join(out)
+
+
+def _inputs(S, d, used):
+    """The model's inputs (state positions the equations use, rates, parameters, then
+    the sines and cosines they use), the state positions, and the derived inputs."""
+    state_pos = [c for c in d.positions if c.name in used
+                 or f"sin_{c.name}" in used or f"cos_{c.name}" in used]
+    derived = [(f"{fn}_{c.name}", c.name, fn) for c in state_pos for fn in ("sin", "cos")
+               if f"{fn}_{c.name}" in used]
+    inputs = ([c.name for c in state_pos] + [c.rate.name for c in d.positions]
+              + [p.name for p in S.parameters] + [x[0] for x in derived])
+    return inputs, state_pos, derived
+
+
+def _row_args(p, row) -> list[float]:
+    """The constants a row passes first to its function."""
+    vals = row.args()
+    assert len(vals) == len(p.args), (vals, p.args)
+    return vals
+
+
+def _velocity_scale(scale_expr, scale_args) -> list[str]:
+    import sympy as sp
+
+    return ['@njit(cache=True, error_model="numpy", forceinline=True)',
+            f"def velocity_scale({', '.join(scale_args)}):",
+            f"    return {printer().doprint(sp.Float(1) * scale_expr)}", ""]
+
+
+def _inside(d, inputs) -> list[str]:
+    """``inside(...)``: every domain edge of the contacts holds (ties inside)."""
+    import sympy as sp
+
+    if not d.eqs.domain:
+        return []
+    P = printer()
+    conds = [d.inputs_of(e) for e, _ in d.eqs.domain]
+    scales = [d.inputs_of(scale_of(e)) for e, _ in d.eqs.domain]
+    reps, red = sp.cse(conds + scales, symbols=sp.numbered_symbols("_k_x"), order="none")
+    used = {x.name for e in conds + scales for x in e.free_symbols}
+    args = [nm for nm in inputs if nm in used]
+    k = len(conds)
+    return (['@njit(cache=True, error_model="numpy", forceinline=True)',
+             f"def inside({', '.join(args)}):"]
+            + [f"    {a} = {P.doprint(b)}" for a, b in reps]
+            + ["    return " + " & ".join(
+                f"(({P.doprint(red[i])}) >= -{TOL} * ({P.doprint(red[k + i])}))"
+                for i in range(k)), ""])
+
+
+def _branch_function(S, sol, body, used, inputs) -> list[str]:
+    p = sol.problem
+    params = p.args + ["rest"] + [nm for nm in inputs if nm in used]
+    ok_status = _STATUS["SEPARATION" if "sep" in p.kinds else "ADMISSIBLE"]
+    acc_idx = [i for i, c in enumerate(S.coordinates) if c.rate]
+    modes = ", ".join(f"{c.name}: {k}" for c, k in zip(S.contacts, p.kinds))
+    return ['@njit(cache=True, error_model="numpy", forceinline=True)',
+            f"def {p.fname}({', '.join(params)}):",
+            f'    """Modes {modes}."""',
+            *("    " + ln for ln in body),
+            "    _k_absent = ((_k_presence == 1.0) & (not rest)) | ((_k_presence == 2.0) & rest)",
+            "    _k_bad = _k_sing | _k_absent | (not _k_real)",
+            f"    _k_st = {nx.ABSENT} if _k_absent else (({nx.CONTINUUM} if _k_cont else "
+            f"{nx.NO_SOLUTION}) if _k_sing else ({nx.NO_SOLUTION} if not _k_real else "
+            f"({ok_status} if _k_ok else {nx.INADMISSIBLE})))",
+            "    return (float(_k_st), 1.0 if (_k_sing & (not _k_absent)) else 0.0,",
+            "            NAN if _k_absent else _k_coef,",
+            *[f"            NAN if _k_bad else _k_Q{j}," for j in acc_idx],
+            *[f"            NAN if _k_bad else _k_r{i}," for i in range(len(p.reactions))],
+            "            )", ""]
+
+
+def velocity_scale_expr(S, velocity):
+    """The declared scale of the slip velocity's rate."""
+    for c in S.coordinates:
+        if c.rate and c.rate.name == str(velocity):
+            return sym(c.rate.scale)
+    raise AssertionError(velocity)
