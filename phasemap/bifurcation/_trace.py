@@ -1067,13 +1067,13 @@ def uncovered(classes, pv, pp):
 # -- the compiled tracer of one model and condition set ---------------------------------
 
 _TEMPLATES = (
-    ("CLASS", "_class_template", True), ("CLASS_AT", "_class_at_template", True),
-    ("GRAD", "_grad_template", True), ("HESS", "_hess_template", True),
+    ("CLASS", "_class_template", False), ("CLASS_AT", "_class_at_template", False),
+    ("GRAD", "_grad_template", False), ("HESS", "_hess_template", False),
     ("SIDE", "_side_template", False), ("SIDES", "_sides_template", False),
     ("CORRECT", "_correct_template", False), ("JUMP", "_jump_template", False),
-    ("PROJECT", "_project_template", False), ("SYSTEM", "_system_template", True),
+    ("PROJECT", "_project_template", False), ("SYSTEM", "_system_template", False),
     ("SOLVE", "_solve_template", False), ("EDGE", "_edge_template", False),
-    ("TANGENT", "_tangent_template", True), ("BISECT", "_bisect_template", False),
+    ("TANGENT", "_tangent_template", False), ("BISECT", "_bisect_template", False),
     ("EXPLAIN", "_explain_template", False), ("EXIT", "_exit_template", False),
     ("MARCH", "_march_template", False), ("MINIMUM", "_minimum_template", False),
     ("TRACE", "_trace_template", False), ("SEEDS", "_seeds_template", False),

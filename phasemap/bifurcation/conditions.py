@@ -223,8 +223,9 @@ def _source_key(model: Model) -> str:
     """What decides a model's conditions, without deriving them: the declared model's
     generated module (its name hashes the declaration) and the code that lists them."""
     source = declared_model(model)
-    parts = [sys.modules[source.candidates[0].func.py_func.__module__].__name__,
-             model.velocity, model.velocity_scale.py_func.__module__]
+    parts = [_module_of(source.candidates[0].func).__name__, model.velocity,
+             hashlib.sha256(pathlib.Path(_module_of(model.velocity_scale).__file__)
+                            .read_bytes()).hexdigest()]
     from .. import declare
 
     root = pathlib.Path(declare.__file__)
@@ -232,6 +233,11 @@ def _source_key(model: Model) -> str:
     for f in files:
         parts.append(hashlib.sha256(f.read_bytes()).hexdigest())
     return "\n".join(parts)
+
+
+def _module_of(func):
+    """The module a (jitted) function was defined in."""
+    return sys.modules[getattr(func, "py_func", func).__module__]
 
 
 def _explicit_key(conds) -> str:
@@ -243,33 +249,19 @@ def _explicit_key(conds) -> str:
 
 
 def _printer():
+    """The declared systems' printer (:func:`phasemap.declare.emit.printer`), with a
+    negative integer power as a float division: inf where the base vanishes (numba's
+    ``x ** -k`` raises ZeroDivisionError there, as Python's does)."""
     import sympy as sp
-    from sympy.printing.pycode import PythonCodePrinter
 
-    class Printer(PythonCodePrinter):
-        """Float literals (numba needs no mixed int/float tuples), small powers as products."""
+    from ..declare.emit import printer
 
-        def _print_Integer(self, e):
-            return f"{int(e)}.0"
-
-        def _print_Rational(self, e):
-            return f"({int(e.p)}.0/{int(e.q)}.0)"
-
+    class Printer(type(printer())):
         def _print_Pow(self, e, rational=False):
             b, x = e.args
-            pb = self._print(b)
-            if x.is_Integer and 2 <= int(x) <= 4:
-                return "(" + "*".join([f"({pb})"] * int(x)) + ")"
-            if x == -1:
-                return f"(1.0/({pb}))"
-            if x == sp.Rational(1, 2):
-                return f"math.sqrt({pb})"
-            if x == -sp.Rational(1, 2):
-                return f"(1.0/math.sqrt({pb}))"
-            return f"(({pb})**({self._print(x)}))"
-
-        def _print_Abs(self, e):
-            return f"abs({self._print(e.args[0])})"
+            if x.is_Integer and x < 0:
+                return f"(1.0/{self._print(sp.Pow(b, -x, evaluate=False))})"
+            return super()._print_Pow(e, rational)
 
     return Printer({"fully_qualified_modules": True})
 

@@ -170,33 +170,30 @@ def _active(sl: Slice, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray
         v[ix] = sl.lo[0] + u * (sl.hi[0] - sl.lo[0])
         v[iy] = sl.lo[1] + w * (sl.hi[1] - sl.lo[1])
         C.module.values(v, vals[p], scales)
-    finite = np.all(np.isfinite(vals), axis=0)
-    spread = np.ptp(np.where(np.isfinite(vals), vals, 0.0), axis=0)
-    size = np.max(np.abs(np.where(np.isfinite(vals), vals, 0.0)), axis=0)
-    active &= ~(finite & (spread <= 1e-13 * size))
+    vals = np.where(np.isfinite(vals), vals, np.nan)
+    size = np.nanmax(np.abs(vals), axis=0, initial=0.0)
+    active &= ~(np.ptp(vals, axis=0) <= 1e-13 * size)  # constant (NaN: not constant)
+    # c_k proportional to c_j: c_k(p) c_j(0) = c_k(0) c_j(p) at every point p
+    ref = vals[0]
+    cross = np.abs(vals[:, :, None] * ref[None, None, :] - ref[None, :, None] * vals[:, None, :])
+    terms = np.abs(vals[:, :, None] * ref[None, None, :]) + np.abs(ref[None, :, None]
+                                                                     * vals[:, None, :])
+    with np.errstate(invalid="ignore"):
+        same = np.all(cross <= 1e-9 * terms, axis=0) & (np.abs(ref)[:, None] > 0) \
+            & (np.abs(ref)[None, :] > 0)
     group = np.arange(nc)
     for k in range(nc):
-        if not active[k]:
-            continue
-        for j in range(k):
-            if not active[j] or group[j] != j:
-                continue
-            a, b = vals[:, k], vals[:, j]
-            ok = np.isfinite(a) & np.isfinite(b) & (np.abs(b) > 0)
-            if ok.sum() < 6:
-                continue
-            r = a[ok] / b[ok]
-            if np.ptp(r) <= 1e-9 * np.max(np.abs(r)):
-                group[k] = j
+        if active[k]:
+            earlier = np.flatnonzero(same[k, :k] & active[:k])
+            if len(earlier):
+                group[k] = earlier[0]
                 active[k] = False
-                break
     return active, group
 
 
 def _velocity_scale(m: Model, v: np.ndarray) -> float:
-    import inspect
-
-    names = list(inspect.signature(m.velocity_scale.py_func).parameters)
+    code = m.velocity_scale.py_func.__code__
+    names = code.co_varnames[:code.co_argcount]
     return float(m.velocity_scale(*(v[m.inputs.index(n)] for n in names)))
 
 
@@ -391,9 +388,9 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
     data = {
         sl.x: V("vertex", px, {"units": xv.units, "long_name": xv.long_name}),
         sl.y: V("vertex", py, {"units": yv.units, "long_name": yv.long_name}),
-        "piece": V("vertex", traced.pp.astype(np.int32),
-                   {"long_name": "piece the vertex belongs to (index along dimension piece)"}),
     }
+    piece = V("vertex", traced.pp.astype(np.int32),
+              {"long_name": "piece the vertex belongs to (index along dimension piece)"})
     pieces = traced.pieces
     flags = {k: v for k, v in reg.attrs.items() if k in ("flag_values", "flag_meanings")}
     data["condition"] = V("piece", np.array([condition_name(sl, traced, int(k))
@@ -442,7 +439,7 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
                    phasemap_axes=json.dumps({sl.x: [sl.lo[0], sl.hi[0]],
                                              sl.y: [sl.lo[1], sl.hi[1]]}),
                    phasemap_tol=tol)
-    return xr.Dataset(data, attrs=attrs)
+    return xr.Dataset(data, coords={"piece": piece}, attrs=attrs)
 
 
 def boundaries(model, axes: Mapping, fixed: Mapping | None = None, layer: str = "n_solutions",
