@@ -1,14 +1,17 @@
-"""The compiled tracer: templates specialised per model and condition set.
+"""The compiled tracer: one set of numba functions for every model.
 
-Every template reads the model's functions and the generated conditions from
-globals, as :mod:`phasemap._compile` does for the integrator:
+What is particular to a model reaches the tracer as first-class functions, in
+the tuple ``F`` (:data:`FUNCTIONS`), as :func:`phasemap._codegen.driver` takes
+a scene's ``cells``: so the tracer compiles once (and is cached on disk), and a
+new model or slice compiles only its small generated condition module.
 
-``VALUES``, ``GRADIENT``, ``HESSIAN``, ``NC``, ``NV``
-    the generated condition module (:mod:`phasemap.bifurcation.conditions`):
-    the conditions' values, and their derivatives in the model's ``NV`` names
-    (the slice's axes are the names at the input slots ``ix`` and ``iy``);
-``POINT``, ``DERIVE``, ``STICK``
-    the model's contract (every candidate row at a state) and its stick row.
+``F[0](x, out, scale)``, ``F[1](k, x, g)``, ``F[2](k, x, g, H)``
+    the generated condition module (:mod:`phasemap.bifurcation.conditions`)
+    of the slice's two axes: every condition's value and tie scale; one
+    condition's value, tie scale and gradient (and Hessian) in (x, y);
+``F[3](v, out, layer)``
+    the model's class at a state, from its own ``point`` and ``summarize``
+    (:func:`classifier`).
 
 Coordinates
 -----------
@@ -34,9 +37,11 @@ curves, overflow)``.
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.core.errors import NumbaExperimentalFeatureWarning
 
 from .. import _numerics as nx
 
@@ -183,7 +188,7 @@ def _inside(u, w, slack):
     return (u >= -slack) & (u <= 1.0 + slack) & (w >= -slack) & (w <= 1.0 + slack)
 
 
-# -- templates (model globals) --------------------------------------------------------
+# -- the model's class: a template (its globals are the model's contract) -----------------
 
 def _class_template(v, out, layer):
     """The layer's class at the state ``v`` (names set; derived inputs are filled)."""
@@ -199,30 +204,34 @@ def _class_template(v, out, layer):
     return 1 if sing else 0
 
 
-def _class_at_template(v, out, layer, ix, iy, geo, u, w):
+@njit(cache=True, error_model="numpy")
+def _class_at(F, v, out, layer, ix, iy, geo, u, w):
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
-    return CLASS(v, out, layer)
+    return F[3](v, out, layer)
 
 
-def _grad_template(k, v, ix, iy, geo, u, w, g):
+@njit(cache=True, error_model="numpy")
+def _grad(F, k, v, ix, iy, geo, u, w, g):
     """Condition ``k`` at (u, w): (value, scale, d/du, d/dw)."""
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
-    c, s = GRADIENT(k, v, g)
-    return c, s, g[ix] * geo[1], g[iy] * geo[3]
+    c, s = F[1](k, v, g)
+    return c, s, g[0] * geo[1], g[1] * geo[3]
 
 
-def _hess_template(k, v, ix, iy, geo, u, w, g, H):
+@njit(cache=True, error_model="numpy")
+def _hess(F, k, v, ix, iy, geo, u, w, g, H):
     """Condition ``k`` at (u, w): (value, scale, c_u, c_w, c_uu, c_uw, c_ww)."""
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
-    c, s = HESSIAN(k, v, g, H)
-    return (c, s, g[ix] * geo[1], g[iy] * geo[3], H[ix, ix] * geo[1] * geo[1],
-            H[ix, iy] * geo[1] * geo[3], H[iy, iy] * geo[3] * geo[3])
+    c, s = F[2](k, v, g, H)
+    return (c, s, g[0] * geo[1], g[1] * geo[3], H[0, 0] * geo[1] * geo[1],
+            H[0, 1] * geo[1] * geo[3], H[1, 1] * geo[3] * geo[3])
 
 
-def _side_template(k, grp, active, v, g, out, layer, ix, iy, geo, u, w, su, sw, scr):
+@njit(cache=True, error_model="numpy")
+def _side(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, su, sw, scr):
     """The class at (su, sw), a side sample of the curve point (u, w) whose condition
     values are in ``scr[0]``: -1 outside the slice, or where another condition's zero
     set passes between the two (the sample would see that condition's class change,
@@ -232,38 +241,40 @@ def _side_template(k, grp, active, v, g, out, layer, ix, iy, geo, u, w, su, sw, 
         return -1
     v[ix] = geo[0] + su * geo[1]
     v[iy] = geo[2] + sw * geo[3]
-    VALUES(v, scr[1], scr[2])
+    F[0](v, scr[1], scr[2])
     eps = math.hypot(su - u, sw - w)
-    for j in range(NC):
+    for j in range(active.shape[0]):
         if active[j] and grp[j, 0] != grp[k, 0] and (scr[0, j] > 0.0) != (scr[1, j] > 0.0):
-            c, s, cu, cw = GRAD(j, v, ix, iy, geo, u, w, g)
+            c, s, cu, cw = _grad(F, j, v, ix, iy, geo, u, w, g)
             if abs(c) > 1e-3 * eps * math.hypot(cu, cw):
                 return -1
     v[ix] = geo[0] + su * geo[1]
     v[iy] = geo[2] + sw * geo[3]
-    return CLASS(v, out, layer)
+    return F[3](v, out, layer)
 
 
-def _sides_template(k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw, eps, scr):
+@njit(cache=True, error_model="numpy")
+def _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw, eps, scr):
     """The classes left and right of the direction (tu, tw) at the curve point (u, w),
     ``eps`` away (-1 for a side that cannot be sampled, see SIDE)."""
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
-    VALUES(v, scr[0], scr[2])
-    left = SIDE(k, grp, active, v, g, out, layer, ix, iy, geo, u, w, u - eps * tw,
+    F[0](v, scr[0], scr[2])
+    left = _side(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, u - eps * tw,
                 w + eps * tu, scr)
-    right = SIDE(k, grp, active, v, g, out, layer, ix, iy, geo, u, w, u + eps * tw,
+    right = _side(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, u + eps * tw,
                  w - eps * tu, scr)
     return left, right
 
 
-def _correct_template(k, v, ix, iy, geo, g, pu, pw, du, dw):
+@njit(cache=True, error_model="numpy")
+def _correct(F, k, v, ix, iy, geo, g, pu, pw, du, dw):
     """Newton on c = 0 and (du, dw) . (x - p) = 0 from p: the curve's point whose
     projection on the direction (du, dw) is p's.  Returns (ok, u, w, residual, step)."""
     u, w = pu, pw
     last = np.inf
     for it in range(MAX_IT):
-        c, s, cu, cw = GRAD(k, v, ix, iy, geo, u, w, g)
+        c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
         if not (math.isfinite(c) and math.isfinite(cu) and math.isfinite(cw)):
             return False, u, w, np.inf, np.inf
         r = du * (u - pu) + dw * (w - pw)
@@ -275,15 +286,16 @@ def _correct_template(k, v, ix, iy, geo, g, pu, pw, du, dw):
         last = abs(a) + abs(b)
         if last <= 1e-15 or (last <= 1e-13 and abs(c) <= 0.01 * RESIDUAL * s):
             break
-    c, s, cu, cw = GRAD(k, v, ix, iy, geo, u, w, g)
+    c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
     res = abs(c) / s if s > 0.0 else abs(c)
     return res <= RESIDUAL, u, w, res, last
 
 
-def _project_template(k, v, ix, iy, geo, g, u, w):
+@njit(cache=True, error_model="numpy")
+def _project(F, k, v, ix, iy, geo, g, u, w):
     """The nearest point of c = 0 to (u, w), by Newton along the gradient."""
     for it in range(MAX_IT):
-        c, s, cu, cw = GRAD(k, v, ix, iy, geo, u, w, g)
+        c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
         n2 = cu * cu + cw * cw
         if not (math.isfinite(c) and n2 > 0.0):
             return False, u, w
@@ -293,11 +305,12 @@ def _project_template(k, v, ix, iy, geo, g, u, w):
         w += b
         if abs(a) + abs(b) <= 1e-15:
             break
-    c, s, cu, cw = GRAD(k, v, ix, iy, geo, u, w, g)
+    c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
     return abs(c) <= RESIDUAL * s, u, w
 
 
-def _system_template(what, k, j, v, ix, iy, geo, g, H, u, w):
+@njit(cache=True, error_model="numpy")
+def _system(F, what, k, j, v, ix, iy, geo, g, H, u, w):
     """A special point's two defining equations at (u, w), their Jacobian and residual:
     ``(F0, F1, dF0/du, dF0/dw, dF1/du, dF1/dw, residual)``.
 
@@ -306,22 +319,23 @@ def _system_template(what, k, j, v, ix, iy, geo, g, H, u, w):
     residual is relative to the tie scales, a derivative's to the gradient's norm.
     """
     if what == 0:
-        c1, s1, a1, b1 = GRAD(k, v, ix, iy, geo, u, w, g)
-        c2, s2, a2, b2 = GRAD(j, v, ix, iy, geo, u, w, g)
+        c1, s1, a1, b1 = _grad(F, k, v, ix, iy, geo, u, w, g)
+        c2, s2, a2, b2 = _grad(F, j, v, ix, iy, geo, u, w, g)
         return c1, c2, a1, b1, a2, b2, max(abs(c1) / s1, abs(c2) / s2)
-    c, s, cu, cw, huu, huw, hww = HESS(k, v, ix, iy, geo, u, w, g, H)
+    c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, u, w, g, H)
     n = max(math.hypot(cu, cw), 1e-300)
     if what == 1:
         return c, cw, cu, cw, huw, hww, max(abs(c) / s, abs(cw) / n)
     return c, cu, cu, cw, huu, huw, max(abs(c) / s, abs(cu) / n)
 
 
-def _solve_template(what, k, j, v, ix, iy, geo, g, H, u, w, tol_u, tol_w):
+@njit(cache=True, error_model="numpy")
+def _solve(F, what, k, j, v, ix, iy, geo, g, H, u, w, tol_u, tol_w):
     """Newton on the defining equations ``what`` (see SYSTEM) from (u, w), to a step
     below 1e-3 of the tolerances: (ok, u, w, residual, last step in tolerances)."""
     err = np.inf
     for it in range(MAX_IT):
-        f0, f1, a, b, c, d, res = SYSTEM(what, k, j, v, ix, iy, geo, g, H, u, w)
+        f0, f1, a, b, c, d, res = _system(F, what, k, j, v, ix, iy, geo, g, H, u, w)
         du, dw = _solve2(a, b, c, d, -f0, -f1)
         if not math.isfinite(du):
             return False, u, w, np.inf, np.inf
@@ -330,15 +344,16 @@ def _solve_template(what, k, j, v, ix, iy, geo, g, H, u, w, tol_u, tol_w):
         err = max(abs(du) / tol_u, abs(dw) / tol_w)
         if err <= 1e-3:
             break
-    res = SYSTEM(what, k, j, v, ix, iy, geo, g, H, u, w)[6]
+    res = _system(F, what, k, j, v, ix, iy, geo, g, H, u, w)[6]
     return err <= 1.0, u, w, res, err
 
 
-def _edge_template(k, v, ix, iy, geo, g, u, w, fixed_u, tol_u, tol_w):
+@njit(cache=True, error_model="numpy")
+def _edge(F, k, v, ix, iy, geo, g, u, w, fixed_u, tol_u, tol_w):
     """Newton on c = 0 along an edge (u fixed when ``fixed_u``, else w) from (u, w)."""
     err = np.inf
     for it in range(MAX_IT):
-        c, s, cu, cw = GRAD(k, v, ix, iy, geo, u, w, g)
+        c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
         d = cw if fixed_u else cu
         if d == 0.0 or not math.isfinite(c):
             return False, u, w, np.inf, np.inf
@@ -351,13 +366,14 @@ def _edge_template(k, v, ix, iy, geo, g, u, w, fixed_u, tol_u, tol_w):
             err = abs(step) / tol_u
         if err <= 1e-3:
             break
-    c, s, cu, cw = GRAD(k, v, ix, iy, geo, u, w, g)
+    c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
     return err <= 1.0, u, w, abs(c) / s, err
 
 
-def _tangent_template(k, v, ix, iy, geo, g, u, w, su, sw):
+@njit(cache=True, error_model="numpy")
+def _tangent(F, k, v, ix, iy, geo, g, u, w, su, sw):
     """The unit tangent at (u, w), oriented along (su, sw); (0, 0) where c has no gradient."""
-    c, s, cu, cw = GRAD(k, v, ix, iy, geo, u, w, g)
+    c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
     n = math.hypot(cu, cw)
     if not (n > 0.0):
         return 0.0, 0.0, n, s
@@ -374,7 +390,8 @@ def _side_eps(s, n, h):
     return min(eps, 0.25 * h, 1e-3)
 
 
-def _bisect_template(k, grp, active, v, ix, iy, geo, g, out, layer, ua, wa, ub, wb, la, ra, h,
+@njit(cache=True, error_model="numpy")
+def _bisect(F, k, grp, active, v, ix, iy, geo, g, out, layer, ua, wa, ub, wb, la, ra, h,
                      scr):
     """Where between the curve points a and b the side classes stop being (la, ra):
     bisection on the curve (the corrector, constrained along a -> b).  Returns the
@@ -387,12 +404,12 @@ def _bisect_template(k, grp, active, v, ix, iy, geo, g, out, layer, ua, wa, ub, 
     u, w = ub, wb
     for it in range(60):
         mid = 0.5 * (lo + hi)
-        ok, pu, pw, res, st = CORRECT(k, v, ix, iy, geo, g, ua + mid * (ub - ua),
+        ok, pu, pw, res, st = _correct(F, k, v, ix, iy, geo, g, ua + mid * (ub - ua),
                                       wa + mid * (wb - wa), du, dw)
         if not ok:
             break
-        tu, tw, n, s = TANGENT(k, v, ix, iy, geo, g, pu, pw, du, dw)
-        left, right = SIDES(k, grp, active, v, g, out, layer, ix, iy, geo, pu, pw, tu, tw,
+        tu, tw, n, s = _tangent(F, k, v, ix, iy, geo, g, pu, pw, du, dw)
+        left, right = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, pu, pw, tu, tw,
                              _side_eps(s, n, h), scr)
         if left == la and right == ra:
             lo = mid
@@ -404,29 +421,31 @@ def _bisect_template(k, grp, active, v, ix, iy, geo, g, out, layer, ua, wa, ub, 
     return u, w
 
 
-def _explain_template(k, grp, active, v, ix, iy, geo, g, H, cv, cs, u, w, tol_u, tol_w):
+@njit(cache=True, error_model="numpy")
+def _explain(F, k, grp, active, v, ix, iy, geo, g, H, cv, cs, u, w, tol_u, tol_w):
     """The condition (other than k's group) that vanishes nearest (u, w) and its
     crossing with k there: (j, ok, u, w, residual, error); j = -1 if none is near."""
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
-    VALUES(v, cv, cs)
+    F[0](v, cv, cs)
     best = -1
     dist = 1e-6
-    for j in range(NC):
+    for j in range(active.shape[0]):
         if (not active[j]) or grp[j, 0] == grp[k, 0]:
             continue
-        c, s, cu, cw = GRAD(j, v, ix, iy, geo, u, w, g)
+        c, s, cu, cw = _grad(F, j, v, ix, iy, geo, u, w, g)
         n = math.hypot(cu, cw)
         if n > 0.0 and abs(c) / n < dist:
             dist = abs(c) / n
             best = j
     if best < 0:
         return -1, False, u, w, np.inf, np.inf
-    ok, pu, pw, res, err = SOLVE(0, k, best, v, ix, iy, geo, g, H, u, w, tol_u, tol_w)
+    ok, pu, pw, res, err = _solve(F, 0, k, best, v, ix, iy, geo, g, H, u, w, tol_u, tol_w)
     return best, ok, pu, pw, res, err
 
 
-def _exit_template(k, v, ix, iy, geo, g, u, w, qu, qw, tol_u, tol_w):
+@njit(cache=True, error_model="numpy")
+def _exit(F, k, v, ix, iy, geo, g, u, w, qu, qw, tol_u, tol_w):
     """Where the curve from (u, w) (inside) towards (qu, qw) (outside) crosses the
     slice's edge: Newton along the edge the chord crosses first."""
     t_exit = np.inf
@@ -446,18 +465,19 @@ def _exit_template(k, v, ix, iy, geo, g, u, w, qu, qw, tol_u, tol_w):
                 t_exit, fixed_u, eu, ew = t, False, u + t * du, edge
     if not math.isfinite(t_exit):
         return False, u, w, np.inf, np.inf
-    ok, eu, ew, res, err = EDGE(k, v, ix, iy, geo, g, eu, ew, fixed_u, tol_u, tol_w)
+    ok, eu, ew, res, err = _edge(F, k, v, ix, iy, geo, g, eu, ew, fixed_u, tol_u, tol_w)
     ok = ok and _inside(eu, ew, 1e-12)
     return ok, min(max(eu, 0.0), 1.0), min(max(ew, 0.0), 1.0), res, err
 
 
-def _jump_template(k, v, ix, iy, geo, g, H, u, w, tu, tw):
+@njit(cache=True, error_model="numpy")
+def _jump(F, k, v, ix, iy, geo, g, H, u, w, tu, tw):
     """Past a singular point of the curve near (u, w) (where grad c vanishes on c = 0:
     two branches of the zero set cross) along (tu, tw).  Returns (ok, the singular
     point, its residual, the first point beyond it on the branch that goes on)."""
     pu, pw = u, w
     for it in range(MAX_IT):
-        c, s, cu, cw, huu, huw, hww = HESS(k, v, ix, iy, geo, pu, pw, g, H)
+        c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, pu, pw, g, H)
         du, dw = _solve2(huu, huw, huw, hww, -cu, -cw)
         if not math.isfinite(du):
             return False, pu, pw, np.inf, u, w
@@ -465,13 +485,13 @@ def _jump_template(k, v, ix, iy, geo, g, H, u, w, tu, tw):
         pw += dw
         if abs(du) + abs(dw) <= 1e-15:
             break
-    c, s, cu, cw, huu, huw, hww = HESS(k, v, ix, iy, geo, pu, pw, g, H)
+    c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, pu, pw, g, H)
     res = abs(c) / s
     if res > 1e3 * RESIDUAL or math.hypot(pu - u, pw - w) > 1e-3 or not _inside(pu, pw, 0.0):
         return False, pu, pw, res, u, w
     d = 1e-7
     while d <= 1e-3:
-        ok, qu, qw, r, st = CORRECT(k, v, ix, iy, geo, g, pu + d * tu, pw + d * tw, tu, tw)
+        ok, qu, qw, r, st = _correct(F, k, v, ix, iy, geo, g, pu + d * tu, pw + d * tw, tu, tw)
         if ok and math.hypot(qu - pu - d * tu, qw - pw - d * tw) <= 0.25 * d \
                 and _inside(qu, qw, 0.0):
             return True, pu, pw, res, qu, qw
@@ -479,7 +499,8 @@ def _jump_template(k, v, ix, iy, geo, g, H, u, w, tu, tw):
     return False, pu, pw, res, u, w
 
 
-def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, scr,
+@njit(cache=True, error_model="numpy")
+def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, scr,
                     su, sw, tu0, tw0, h0, closing, curve, vf, vi, counts, mark, tol_u, tol_w):
     """Follow condition ``k`` from the curve point (su, sw) along (tu0, tw0).
 
@@ -492,16 +513,16 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
     h = h0
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
-    VALUES(v, cv0, cs)
-    c, s, cu, cw = GRAD(k, v, ix, iy, geo, u, w, g)
+    F[0](v, cv0, cs)
+    c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
     n0 = math.hypot(cu, cw)
-    la, ra = SIDES(k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw, _side_eps(s, n0, h),
+    la, ra = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw, _side_eps(s, n0, h),
                    scr)
     travelled = 0.0
     steps = 0
     # special points found on one step: (s along the step, u, w, residual, error), (kind, other)
-    spf = np.empty((NC + 4, 5))
-    spi = np.empty((NC + 4, 2), dtype=np.int64)
+    spf = np.empty((active.shape[0] + 4, 5))
+    spi = np.empty((active.shape[0] + 4, 2), dtype=np.int64)
     while True:
         if counts[2]:
             return -1
@@ -510,10 +531,10 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
             return -1
         pu = u + h * tu
         pw = w + h * tw
-        ok, qu, qw, res, st = CORRECT(k, v, ix, iy, geo, g, pu, pw, tu, tw)
+        ok, qu, qw, res, st = _correct(F, k, v, ix, iy, geo, g, pu, pw, tu, tw)
         if (ok and not _inside(qu, qw, 0.0)) or (not ok and not _inside(pu, pw, 0.0)):
             # the curve leaves the slice within this step: end on the edge it crosses
-            ok, qu, qw, res, err = EXIT(k, v, ix, iy, geo, g, u, w, qu if ok else pu,
+            ok, qu, qw, res, err = _exit(F, k, v, ix, iy, geo, g, u, w, qu if ok else pu,
                                         qw if ok else pw, tol_u, tol_w)
             if ok and math.hypot(qu - u, qw - w) <= 2.0 * h:
                 _mark(mark, k, u, w, qu, qw)
@@ -524,7 +545,7 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
                 continue
             _push(vf, vi, counts, u, w, 0.0, 0.0, curve, STALL, k, -1, la, ra)
             return -1
-        qtu, qtw, qn, qs = TANGENT(k, v, ix, iy, geo, g, qu, qw, tu, tw)
+        qtu, qtw, qn, qs = _tangent(F, k, v, ix, iy, geo, g, qu, qw, tu, tw)
         turn = qtu * tu + qtw * tw
         jump = math.hypot(qu - pu, qw - pw)
         if not ok or qn == 0.0 or turn < math.cos(2.0 * ANGLE) or jump > 0.25 * h:
@@ -532,17 +553,17 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
                 h *= 0.5
                 continue
             # a singular point (two branches of the zero set cross): step over it
-            okj, pu, pw, rj, qu, qw = JUMP(k, v, ix, iy, geo, g, H, u, w, tu, tw)
+            okj, pu, pw, rj, qu, qw = _jump(F, k, v, ix, iy, geo, g, H, u, w, tu, tw)
             if not okj:
                 _push(vf, vi, counts, u, w, 0.0, 0.0, curve, STALL, k, -1, la, ra)
                 return -1
             _mark(mark, k, u, w, qu, qw)
             _push(vf, vi, counts, pu, pw, rj, 0.0, curve, CROSSING, k, k, -1, -1)
-            qtu, qtw, qn, qs = TANGENT(k, v, ix, iy, geo, g, qu, qw, tu, tw)
-            lb, rb = SIDES(k, grp, active, v, g, out, layer, ix, iy, geo, qu, qw, qtu, qtw,
+            qtu, qtw, qn, qs = _tangent(F, k, v, ix, iy, geo, g, qu, qw, tu, tw)
+            lb, rb = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, qu, qw, qtu, qtw,
                            _side_eps(qs, qn, 1e-4), scr)
-            c, s, cu, cw = GRAD(k, v, ix, iy, geo, qu, qw, g)
-            VALUES(v, cv0, cs)
+            c, s, cu, cw = _grad(F, k, v, ix, iy, geo, qu, qw, g)
+            F[0](v, cv0, cs)
             _push(vf, vi, counts, qu, qw, abs(c) / s, 0.0, curve, REGULAR, k, -1, lb, rb,
                   _owned(k, grp, active, cv0, cs, mark, u, w, qu, qw))
             u, w, tu, tw = qu, qw, qtu, qtw
@@ -551,7 +572,7 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
             h = 1e-4
             v[ix] = geo[0] + u * geo[1]
             v[iy] = geo[2] + w * geo[3]
-            VALUES(v, cv0, cs)
+            F[0](v, cv0, cs)
             continue
         # a loop: the step passes its start again
         if closing and steps >= 3 and travelled > 2.0 * h:
@@ -568,19 +589,19 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
         # special points between (u, w) and (q): crossings, folds
         v[ix] = geo[0] + qu * geo[1]
         v[iy] = geo[2] + qw * geo[3]
-        VALUES(v, cv1, cs)
+        F[0](v, cv1, cs)
         nsp = 0
         du, dw = qu - u, qw - w
         length2 = du * du + dw * dw
         owned = _owned(k, grp, active, cv1, cs, mark, u, w, qu, qw)
-        for j in range(NC):
+        for j in range(active.shape[0]):
             if (not active[j]) or grp[j, 0] == grp[k, 0]:
                 continue
             if abs(cv0[j]) <= COVANISH * cs[j] or abs(cv1[j]) <= COVANISH * cs[j]:
                 continue  # j vanishes with this curve here: no crossing
             if cv0[j] * cv1[j] < 0.0:
                 a = cv0[j] / (cv0[j] - cv1[j])
-                ok2, xu, xw, res2, err2 = SOLVE(0, k, j, v, ix, iy, geo, g, H, u + a * du, w + a * dw,
+                ok2, xu, xw, res2, err2 = _solve(F, 0, k, j, v, ix, iy, geo, g, H, u + a * du, w + a * dw,
                                                 tol_u, tol_w)
                 t = ((xu - u) * du + (xw - w) * dw) / length2
                 if not (ok2 and -0.25 <= t <= 1.25):
@@ -589,16 +610,16 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
                     ln = math.sqrt(length2)
                     for it in range(60):
                         mid = 0.5 * (lo + hi)
-                        okc, mu, mw, r3, s3 = CORRECT(k, v, ix, iy, geo, g, u + mid * du,
+                        okc, mu, mw, r3, s3 = _correct(F, k, v, ix, iy, geo, g, u + mid * du,
                                                       w + mid * dw, du / ln, dw / ln)
-                        cj, sj, aj, bj = GRAD(j, v, ix, iy, geo, mu, mw, g)
+                        cj, sj, aj, bj = _grad(F, j, v, ix, iy, geo, mu, mw, g)
                         if (cj < 0.0) == (cv0[j] < 0.0):
                             lo = mid
                         else:
                             hi = mid
                         if (hi - lo) * ln < 1e-3 * min(tol_u, tol_w):
                             break
-                    ok2, xu, xw, res2, err2 = SOLVE(0, k, j, v, ix, iy, geo, g, H, mu, mw,
+                    ok2, xu, xw, res2, err2 = _solve(F, 0, k, j, v, ix, iy, geo, g, H, mu, mw,
                                                     tol_u, tol_w)
                     t = ((xu - u) * du + (xw - w) * dw) / length2
                     if not (ok2 and -0.25 <= t <= 1.25):
@@ -609,7 +630,7 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
             a1 = qtu if axis == 0 else qtw
             if a0 * a1 < 0.0:
                 a = a0 / (a0 - a1)
-                okf, fu, fw, resf, errf = SOLVE(1 + axis, k, -1, v, ix, iy, geo, g, H, u + a * du,
+                okf, fu, fw, resf, errf = _solve(F, 1 + axis, k, -1, v, ix, iy, geo, g, H, u + a * du,
                                                 w + a * dw, tol_u, tol_w)
                 t = ((fu - u) * du + (fw - w) * dw) / length2
                 if okf and -0.25 <= t <= 1.25 and _inside(fu, fw, 1e-12):
@@ -618,7 +639,7 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
                     nsp = _note(spf, spi, nsp, t, fu, fw, FOLD_X if axis == 0 else FOLD_Y, axis,
                                 resf, errf)
         # the new vertex's sides; a change that no crossing explains is located
-        lb, rb = SIDES(k, grp, active, v, g, out, layer, ix, iy, geo, qu, qw, qtu, qtw,
+        lb, rb = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, qu, qw, qtu, qtw,
                        _side_eps(qs, qn, h), scr)
         crossings = 0
         for i in range(nsp):
@@ -626,9 +647,9 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
                 crossings += 1
         known = lb >= 0 and rb >= 0
         if known and la >= 0 and ra >= 0 and (lb != la or rb != ra) and crossings == 0:
-            xu, xw = BISECT(k, grp, active, v, ix, iy, geo, g, out, layer, u, w, qu, qw, la, ra,
+            xu, xw = _bisect(F, k, grp, active, v, ix, iy, geo, g, out, layer, u, w, qu, qw, la, ra,
                             h, scr)
-            j, okx, xu2, xw2, resx, errx = EXPLAIN(k, grp, active, v, ix, iy, geo, g, H, cv1, cs,
+            j, okx, xu2, xw2, resx, errx = _explain(F, k, grp, active, v, ix, iy, geo, g, H, cv1, cs,
                                                    xu, xw, tol_u, tol_w)
             t = ((xu - u) * du + (xw - w) * dw) / length2
             if j >= 0 and okx:
@@ -637,7 +658,7 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
                 nsp = _note(spf, spi, nsp, t, xu, xw, CHANGE, -1, np.nan, np.nan)
             v[ix] = geo[0] + qu * geo[1]
             v[iy] = geo[2] + qw * geo[3]
-            VALUES(v, cv1, cs)
+            F[0](v, cv1, cs)
         # append the special points in order along the step, then the new vertex
         for a in range(nsp):
             best = a
@@ -651,8 +672,8 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
             kind = spi[a, 0]
             left, right = -1, -1
             if kind == FOLD_X or kind == FOLD_Y:
-                ftu, ftw, fn, fs = TANGENT(k, v, ix, iy, geo, g, spf[a, 1], spf[a, 2], tu, tw)
-                left, right = SIDES(k, grp, active, v, g, out, layer, ix, iy, geo, spf[a, 1],
+                ftu, ftw, fn, fs = _tangent(F, k, v, ix, iy, geo, g, spf[a, 1], spf[a, 2], tu, tw)
+                left, right = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, spf[a, 1],
                                     spf[a, 2], ftu, ftw, _side_eps(fs, fn, h), scr)
             _push(vf, vi, counts, spf[a, 1], spf[a, 2], spf[a, 3], spf[a, 4], curve, kind, k,
                   spi[a, 1], left, right)
@@ -664,7 +685,7 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
         travelled += math.sqrt(length2)
         steps += 1
         # the next step from the curvature here
-        c, s, cu, cw, huu, huw, hww = HESS(k, v, ix, iy, geo, qu, qw, g, H)
+        c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, qu, qw, g, H)
         kappa = abs(qtu * qtu * huu + 2.0 * qtu * qtw * huw + qtw * qtw * hww) / qn
         hn = H_MAX
         if kappa > 0.0:
@@ -673,12 +694,12 @@ def _march_template(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, 
         u, w, tu, tw = qu, qw, qtu, qtw
         if known:
             la, ra = lb, rb
-        for j in range(NC):
+        for j in range(active.shape[0]):
             cv0[j] = cv1[j]
 
 
-def _trace_template(seeds, grp, active, v, ix, iy, geo, layer, vf, vi, counts, curves, mark,
-                    tol_u, tol_w, require_sides):
+def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
+               tol_u, tol_w, require_sides):
     """Trace a curve from each seed ``(k, u, w)`` not on a curve already traced.
 
     A seed's point is projected onto its condition's zero set; it is skipped
@@ -687,13 +708,13 @@ def _trace_template(seeds, grp, active, v, ix, iy, geo, layer, vf, vi, counts, c
     both sides of the curve there (not a boundary).  Returns the number of
     curves traced.
     """
-    g = np.empty(NV)
-    H = np.empty((NV, NV))
-    out = np.empty((NB, NF))
-    cv0 = np.empty(NC)
-    cv1 = np.empty(NC)
-    cs = np.empty(NC)
-    scr = np.empty((3, NC))
+    g = np.empty(2)
+    H = np.empty((2, 2))
+    nc = active.shape[0]
+    cv0 = np.empty(nc)
+    cv1 = np.empty(nc)
+    cs = np.empty(nc)
+    scr = np.empty((3, nc))
     n = mark.shape[1]
     traced = 0
     for i in range(seeds.shape[0]):
@@ -703,23 +724,23 @@ def _trace_template(seeds, grp, active, v, ix, iy, geo, layer, vf, vi, counts, c
         if _seen(mark, k, u0, w0):
             continue
         if seeds[i, 3] == 1.0:
-            ok, u0, w0 = MINIMUM(k, v, ix, iy, geo, u0, w0, 2.0 / n)
+            ok, u0, w0 = _minimum(F, k, v, ix, iy, geo, u0, w0, 2.0 / n)
             if not ok:
                 continue
-        ok, u, w = PROJECT(k, v, ix, iy, geo, g, u0, w0)
+        ok, u, w = _project(F, k, v, ix, iy, geo, g, u0, w0)
         if not ok or not _inside(u, w, 0.0) or math.hypot(u - u0, w - w0) > 4.0 / n:
             continue
         if _seen(mark, k, u, w):
             continue
-        tu, tw, gn, s = TANGENT(k, v, ix, iy, geo, g, u, w, 1.0, 0.0)
+        tu, tw, gn, s = _tangent(F, k, v, ix, iy, geo, g, u, w, 1.0, 0.0)
         if gn == 0.0 or tu == 0.0 and tw == 0.0:
             continue
-        c, s, cu, cw, huu, huw, hww = HESS(k, v, ix, iy, geo, u, w, g, H)
+        c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, u, w, g, H)
         kappa = abs(tu * tu * huu + 2.0 * tu * tw * huw + tw * tw * hww) / gn
         h = H_MAX
         if kappa > 0.0:
             h = min(h, math.sqrt(8.0 * CHORD / kappa), ANGLE / kappa)
-        left, right = SIDES(k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw,
+        left, right = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw,
                             _side_eps(s, gn, h), scr)
         if require_sides and left == right:
             continue
@@ -729,7 +750,7 @@ def _trace_template(seeds, grp, active, v, ix, iy, geo, layer, vf, vi, counts, c
         curve = counts[1]
         counts[1] += 1
         first = counts[0]
-        back = MARCH(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, scr, u, w,
+        back = _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, scr, u, w,
                      -tu, -tw, h, True, curve, vf, vi, counts, mark, tol_u, tol_w)
         # the backward half, reversed: its special points keep their meaning, and the
         # sides swap with the direction of travel
@@ -744,15 +765,15 @@ def _trace_template(seeds, grp, active, v, ix, iy, geo, layer, vf, vi, counts, c
             b -= 1
         for q in range(first, counts[0]):
             vi[q, 4], vi[q, 5] = vi[q, 5], vi[q, 4]
-        c0, s0, cu0, cw0 = GRAD(k, v, ix, iy, geo, u, w, g)
-        VALUES(v, cv0, cs)
+        c0, s0, cu0, cw0 = _grad(F, k, v, ix, iy, geo, u, w, g)
+        F[0](v, cv0, cs)
         _push(vf, vi, counts, u, w, abs(c0) / s0, 0.0, curve, REGULAR, k, -1, left, right,
               _owned(k, grp, active, cv0, cs, mark, u, w, u, w))
         closed = 0
         if back == 1:
             closed = 1
         else:
-            MARCH(k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, scr, u, w, tu,
+            _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, scr, u, w, tu,
                   tw,
                   h, False, curve, vf, vi, counts, mark, tol_u, tol_w)
         curves[curve, 0] = k
@@ -763,22 +784,22 @@ def _trace_template(seeds, grp, active, v, ix, iy, geo, layer, vf, vi, counts, c
     return traced
 
 
-def _seeds_template(active, v, ix, iy, geo, n):
+def _seeds_all(F, active, v, ix, iy, geo, n):
     """Seeds on an n x n raster of nodes (the slice's edges included): every sign change
     of an active condition between neighbouring nodes, and every node where a
     condition's magnitude has a local minimum without a sign change around it (a loop
     smaller than a cell).  Returns rows (condition, u, w, kind: 0 sign change, 1 minimum).
     """
-    cv = np.empty((n, n, NC))
-    cs = np.empty(NC)
+    cv = np.empty((n, n, active.shape[0]))
+    cs = np.empty(active.shape[0])
     for i in range(n):
         for j in range(n):
             v[ix] = geo[0] + (i / (n - 1)) * geo[1]
             v[iy] = geo[2] + (j / (n - 1)) * geo[3]
-            VALUES(v, cv[i, j], cs)
+            F[0](v, cv[i, j], cs)
     seeds = np.empty((64, 4))
     m = 0
-    for k in range(NC):
+    for k in range(active.shape[0]):
         if not active[k]:
             continue
         for i in range(n):
@@ -812,16 +833,17 @@ def _seeds_template(active, v, ix, iy, geo, n):
     return seeds[:m]
 
 
-def _minimum_template(k, v, ix, iy, geo, u, w, radius):
+@njit(cache=True, error_model="numpy")
+def _minimum(F, k, v, ix, iy, geo, u, w, radius):
     """From a node where |c_k| is least among its neighbours: the zero set of c_k
     nearby, if c_k changes sign near its stationary point.  Newton on grad c = 0
     (exact Hessian), then on c along the direction of least curvature.  Returns
     (ok, u, w): a point of the zero set."""
-    g = np.empty(NV)
-    H = np.empty((NV, NV))
+    g = np.empty(2)
+    H = np.empty((2, 2))
     u0, w0 = u, w
     for it in range(MAX_IT):
-        c, s, cu, cw, huu, huw, hww = HESS(k, v, ix, iy, geo, u, w, g, H)
+        c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, u, w, g, H)
         a, b = _solve2(huu, huw, huw, hww, -cu, -cw)
         if not math.isfinite(a):
             return False, u, w
@@ -831,8 +853,8 @@ def _minimum_template(k, v, ix, iy, geo, u, w, radius):
             return False, u, w
         if abs(a) + abs(b) <= 1e-15:
             break
-    c0, s, cu, cw, huu, huw, hww = HESS(k, v, ix, iy, geo, u, w, g, H)
-    cn, sn, cun, cwn = GRAD(k, v, ix, iy, geo, u0, w0, g)
+    c0, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, u, w, g, H)
+    cn, sn, cun, cwn = _grad(F, k, v, ix, iy, geo, u0, w0, g)
     if c0 * cn >= 0.0:
         return False, u, w
     # along an eigenvector of the Hessian whose curvature has the sign of -c0
@@ -853,7 +875,7 @@ def _minimum_template(k, v, ix, iy, geo, u, w, radius):
         ew /= en
         t = math.sqrt(2.0 * abs(c0 / lam))
         for it in range(MAX_IT):
-            c, s, cu, cw = GRAD(k, v, ix, iy, geo, u + t * eu, w + t * ew, g)
+            c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u + t * eu, w + t * ew, g)
             d = cu * eu + cw * ew
             if d == 0.0 or not math.isfinite(c):
                 break
@@ -1064,42 +1086,79 @@ def uncovered(classes, pv, pp):
     return out[:n]
 
 
-# -- the compiled tracer of one model and condition set ---------------------------------
+# -- the compiled tracer: entry points with the model's functions as arguments --------------
 
-_TEMPLATES = (
-    ("CLASS", "_class_template", False), ("CLASS_AT", "_class_at_template", False),
-    ("GRAD", "_grad_template", False), ("HESS", "_hess_template", False),
-    ("SIDE", "_side_template", False), ("SIDES", "_sides_template", False),
-    ("CORRECT", "_correct_template", False), ("JUMP", "_jump_template", False),
-    ("PROJECT", "_project_template", False), ("SYSTEM", "_system_template", False),
-    ("SOLVE", "_solve_template", False), ("EDGE", "_edge_template", False),
-    ("TANGENT", "_tangent_template", False), ("BISECT", "_bisect_template", False),
-    ("EXPLAIN", "_explain_template", False), ("EXIT", "_exit_template", False),
-    ("MARCH", "_march_template", False), ("MINIMUM", "_minimum_template", False),
-    ("TRACE", "_trace_template", False), ("SEEDS", "_seeds_template", False),
-)
+_F1 = types.Array(types.float64, 1, "C")
+_F2 = types.Array(types.float64, 2, "C")
+_I1 = types.Array(types.int64, 1, "C")
+_I2 = types.Array(types.int64, 2, "C")
+_B1 = types.Array(types.boolean, 1, "C")
+_B3 = types.Array(types.int8, 3, "C")
+#: ``values(x, out, scale)`` of a generated condition module.
+VALUES_SIG = types.void(_F1, _F1, _F1)
+#: ``gradient(k, x, g)``: (value, tie scale); the gradient in the module's variables into g.
+GRADIENT_SIG = types.UniTuple(types.float64, 2)(types.int64, _F1, _F1)
+#: ``hessian(k, x, g, H)``: the same, and the Hessian into H.
+HESSIAN_SIG = types.UniTuple(types.float64, 2)(types.int64, _F1, _F1, _F2)
+#: ``classify(v, out, layer)``: the layer's class at the input vector v (a model's).
+CLASS_SIG = types.int64(_F1, _F2, types.int64)
+#: The functions a trace calls, passed as first-class functions: one compiled tracer
+#: serves every model and condition set.
+with warnings.catch_warnings():  # numba calls first-class functions experimental
+    warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
+    FUNCTIONS = types.Tuple((types.FunctionType(VALUES_SIG), types.FunctionType(GRADIENT_SIG),
+                             types.FunctionType(HESSIAN_SIG), types.FunctionType(CLASS_SIG)))
 
-_TRACERS: dict = {}
+_ENTRIES: dict = {}
 
 
-def tracer(model, conds) -> dict:
-    """The tracer's compiled functions for ``model`` and its compiled conditions
-    ``conds`` (:class:`phasemap.bifurcation.conditions.Conditions`):
-    ``{"TRACE": ..., "SEEDS": ..., "CLASS_AT": ..., ...}``."""
+def entries() -> dict:
+    """The tracer's entry points, compiled once (cached on disk): ``trace`` and ``seeds``."""
+    if not _ENTRIES:
+        sig_trace = types.int64(FUNCTIONS, _F2, _I2, _B1, _F1, _F2, types.int64, types.int64,
+                                _F1, types.int64, _F2, _I2, _I1, _I2, _B3, types.float64,
+                                types.float64, types.boolean)
+        sig_seeds = _F2(FUNCTIONS, _B1, _F1, types.int64, types.int64, _F1, types.int64)
+        with warnings.catch_warnings():  # numba calls first-class functions experimental
+            warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
+            trace = njit(sig_trace, cache=True, error_model="numpy")(_trace_all)
+            seeds = njit(sig_seeds, cache=True, error_model="numpy")(_seeds_all)
+        _ENTRIES["trace"] = _quiet(trace)
+        _ENTRIES["seeds"] = _quiet(seeds)
+    return _ENTRIES
+
+
+def _quiet(fn):
+    """``fn`` called without numba's warning that first-class functions are experimental
+    (typing the tuple of functions warns at every call)."""
+    def call(*args):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
+            return fn(*args)
+    return call
+
+
+_CLASSIFIERS: dict = {}
+
+
+def classifier(model):
+    """The model's ``classify(v, out, layer)`` (its own point and summarize), compiled
+    with :data:`CLASS_SIG` so that a trace can take it as an argument."""
     from .._compile import specialize
 
-    key = (id(model), conds.tag)
-    hit = _TRACERS.get(key)
+    hit = _CLASSIFIERS.get(id(model))
     if hit is not None and hit[0] is model:
         return hit[1]
     contract = model.contract
-    consts = dict(VALUES=conds.module.values, GRADIENT=conds.module.gradient,
-                  HESSIAN=conds.module.hessian, POINT=contract.point,
-                  DERIVE=contract.derive_inline, STICK=model.stick_branch, NC=len(conds),
-                  NV=len(model.names), NB=len(model.candidates), NF=model.n_fields)
-    module = globals()
-    for name, template, inline in _TEMPLATES:
-        consts[name] = specialize(module[template], model, f"bif_{name.lower()}_{conds.tag}",
-                                  inline=inline, **consts)
-    _TRACERS[key] = (model, consts)
-    return consts
+    fn = specialize(_class_template, model, "bif_class", POINT=contract.point,
+                    DERIVE=contract.derive_inline, STICK=model.stick_branch)
+    fn.compile(CLASS_SIG)
+    _CLASSIFIERS[id(model)] = (model, fn)
+    return fn
+
+
+def functions(model, conds) -> tuple:
+    """The tuple of functions a trace of ``model`` with the two-variable condition module
+    ``conds`` takes (:data:`FUNCTIONS`)."""
+    mod = conds.module
+    return (mod.values, mod.gradient, mod.hessian, classifier(model))

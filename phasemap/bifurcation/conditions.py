@@ -12,8 +12,8 @@ Each condition is made smooth before it is differentiated: an ``Abs(u)`` in
 it is split into the sign cases ``u`` and ``-u`` (both zero sets together are
 the original's), so that Newton's method and the fold conditions see smooth
 functions.  sympy then differentiates every condition with respect to the
-variables of the model (a slice's axes, a threshold's parameters and a
-further one to follow it in are all among them), and the value, gradient and Hessian are printed as numba
+variables a computation moves in (the two axes of a slice, a threshold's
+parameters), and the value, gradient and Hessian are printed as numba
 functions into a real ``.py`` file in the kernel cache (GUIDE section 6),
 named after a hash of what decides them, and imported:
 
@@ -157,7 +157,7 @@ def _smooth(cond) -> list[Condition]:
 # -- the generated module ---------------------------------------------------------------
 
 class Conditions:
-    """The conditions of one model with their derivatives in its ``variables``, compiled.
+    """The conditions of one model with their derivatives in ``variables``, compiled.
 
     ``module``: the generated module (``values``, ``gradient``, ``hessian``);
     ``names``, ``branches``, ``kinds``, ``rest_only``: per condition, in the
@@ -183,15 +183,20 @@ class Conditions:
 _COMPILED: dict = {}
 
 
-def compiled(model: Model, conditions=None) -> Conditions:
-    """The model's conditions with exact derivatives in every variable of the model.
+def compiled(model: Model, variables, conditions=None) -> Conditions:
+    """The model's conditions with exact derivatives in ``variables`` (names of the model:
+    a slice's two axes, a threshold's parameters).
 
     ``conditions``: a sequence of :class:`Condition` to use instead of the
     model's own (the velocity condition is added to them too).  Generated
-    once per model and conditions (sympy runs only then), then loaded from the
-    kernel cache.
+    once per model, variables and conditions (sympy runs only then), then
+    loaded from the kernel cache.
     """
-    variables = tuple(model.names)
+    variables = tuple(variables)
+    for name in variables:
+        if name not in model.names:
+            raise ValueError(f"{model.name}: {name!r} is not a variable of the model; "
+                             f"allowed: {', '.join(model.names)}")
     quick = (id(model), variables, id(conditions))
     hit = _COMPILED.get(quick)
     if hit is not None and hit[0] is model and hit[1] is conditions:
@@ -246,6 +251,13 @@ def _explicit_key(conds) -> str:
     return "\n".join(repr((c.name, c.branch, c.kind, sp.srepr(sp.sympify(c.expr)),
                            sp.srepr(sp.sympify(c.scale)), bool(c.strict), bool(c.rest_only)))
                      for c in conds)
+
+
+#: The signatures of the generated entry points, as the tracer calls them
+#: (:data:`phasemap.bifurcation._trace.FUNCTIONS`).
+_VALUES = "void(float64[::1], float64[::1], float64[::1])"
+_GRADIENT = "UniTuple(float64, 2)(int64, float64[::1], float64[::1])"
+_HESSIAN = "UniTuple(float64, 2)(int64, float64[::1], float64[::1], float64[:, ::1])"
 
 
 def _printer():
@@ -334,7 +346,8 @@ def _generate(model: Model, variables: tuple[str, ...], conds) -> str:
     # values and scales of every condition
     pairs = [(f"_out[{k}]", e) for k, e in enumerate(exprs)]
     pairs += [(f"_scale[{k}]", scale_of(s)) for k, s in enumerate(scales)]
-    out += ['@njit(cache=True, error_model="numpy")', "def values(_x, _out, _scale):",
+    out += [f'@njit("{_VALUES}", cache=True, error_model="numpy")',
+            "def values(_x, _out, _scale):",
             '    """Every condition\'s value into out, its tie scale into scale."""',
             f"    _vscale = {vsc}"]
     out += body(pairs) + ["", ""]
@@ -352,8 +365,8 @@ def _generate(model: Model, variables: tuple[str, ...], conds) -> str:
                     + [(f"_H[{i}, {j}]", d) for (i, j), d in hess.items()])
         out += [f"    _H[{j}, {i}] = _H[{i}, {j}]" for (i, j) in hess if i != j]
         out += ["    return _c, _s", "", ""]
-    for what, args in (("gradient", "_x, _g"), ("hessian", "_x, _g, _H")):
-        out += ['@njit(cache=True, error_model="numpy")', f"def {what}(_k, {args}):",
+    for what, args, sig in (("gradient", "_x, _g", _GRADIENT), ("hessian", "_x, _g, _H", _HESSIAN)):
+        out += [f'@njit("{sig}", cache=True, error_model="numpy")', f"def {what}(_k, {args}):",
                 f'    """Condition k: (value, tie scale), its {what} into the arrays."""']
         for k in range(len(conds)):
             out += [f"    {'if' if k == 0 else 'elif'} _k == {k}:",

@@ -171,7 +171,7 @@ def threshold_curve(m: Model, param: str, layer: str, value: int, over, fixed, s
     if len(spec.others) > 1:
         raise ValueError(f"{m.name}: along needs at most one name ranged over besides "
                          f"{param!r}")
-    C = compiled(m, conditions)
+    C = compiled(m, (*spec.others, param, name), conditions)
     base = m.input_vector(m.complete({**spec.fixed, **{n: r[0] for n, r in spec.ranges.items()}}))
     prange = spec.ranges[param]
     span_p = prange[1] - prange[0]

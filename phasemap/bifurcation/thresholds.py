@@ -85,7 +85,7 @@ def threshold(model, param: str, layer: str = "n_solutions", value: int = 0,
     over:
         ``{name: (lo, hi)}``: the ranges searched; ``param``'s own range may be
         given here too (otherwise the model's default map's, or its domain if
-        that is finite).  One other name: the exact boundaries of that slice
+        that is finite).  At most one other name: the exact boundaries of that slice
         are traced (:func:`phasemap.boundaries`); none: the line of ``param``.
     fixed:
         values of the other variables (the rest take the model's defaults).
@@ -124,11 +124,7 @@ def threshold(model, param: str, layer: str = "n_solutions", value: int = 0,
     spec = _Spec.make(m, param, layer, value, over, fixed, side, tol)
     if len(spec.others) == 0:
         return _line(spec, conditions)
-    if len(spec.others) == 1:
-        return _plane(spec, conditions)
-    from .kkt import threshold_kkt
-
-    return threshold_kkt(spec, conditions)
+    return _plane(spec, conditions)
 
 
 @dataclass
@@ -190,6 +186,9 @@ class _Spec:
         if param not in ranges:
             ranges[param] = _default_range(m, param)
         others = [n for n in ranges if n != param]
+        if len(others) > 1:
+            raise ValueError(f"{m.name}: over ranges at most one name besides {param!r} "
+                             f"(a slice), got {', '.join(others)}")
         return _Spec(m, param, layer, value, ranges, others, fixed, side, tol)
 
 
@@ -312,7 +311,7 @@ def _class_at(m: Model, v: np.ndarray, slot: int, x: float, layer: str) -> int:
 def _line(spec: _Spec, conditions) -> Threshold | None:
     m, p = spec.model, spec.param
     lo, hi = spec.ranges[p]
-    C = compiled(m, conditions)
+    C = compiled(m, (p,), conditions)
     full = m.complete({**spec.fixed, p: np.array([lo, hi])})
     fixed = {n: float(v) for n, v in full.items() if n != p}
     samples = np.linspace(lo, hi, LINE_SAMPLES + 1)
@@ -325,7 +324,7 @@ def _line(spec: _Spec, conditions) -> Threshold | None:
     for i, x in enumerate(samples):
         v[slot] = x
         C.module.values(v, values[i], scales)
-    g = np.empty(len(m.names))
+    g = np.empty(1)
 
     def root(k, a, b):
         """c_k = 0 between samples a and b, by Newton from the secant point."""
@@ -334,9 +333,9 @@ def _line(spec: _Spec, conditions) -> Threshold | None:
         for it in range(T.MAX_IT):
             v[slot] = x
             c, s = C.module.gradient(k, v, g)
-            if g[slot] == 0.0 or not math.isfinite(c):
+            if g[0] == 0.0 or not math.isfinite(c):
                 return None
-            step = -c / g[slot]
+            step = -c / g[0]
             x += step
             if abs(step) <= 1e-3 * spec.tol:
                 break

@@ -45,7 +45,7 @@ class Slice:
     hi: np.ndarray
     fixed: dict
     conds: Conditions
-    fns: dict
+    fns: tuple  # the functions a trace takes (phasemap.bifurcation._trace.FUNCTIONS)
     base: np.ndarray  # the input vector with the fixed values
 
     @property
@@ -118,8 +118,8 @@ def make_slice(model, axes: Mapping, fixed: Mapping | None, conditions=None) -> 
                names[1]: np.array([lo[1], hi[1]]).reshape(1, -1)}
     full = m.complete({**fixed, **corners})
     fixed = {n: float(v) for n, v in full.items() if n not in axes}
-    conds = compiled(m, conditions)
-    fns = T.tracer(m, conds)
+    conds = compiled(m, tuple(names), conditions)
+    fns = T.functions(m, conds)
     base = m.input_vector({**fixed, names[0]: lo[0], names[1]: lo[1]})
     return Slice(m, names[0], names[1], np.array(lo), np.array(hi), fixed, conds, fns, base)
 
@@ -235,6 +235,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     bound a class; no check against the raster).
     """
     fns, m = sl.fns, sl.model
+    run = T.entries()
     code = _LAYER_CODE[layer]
     rng = np.random.default_rng(20261123)
     active, group = _active(sl, rng)
@@ -245,14 +246,15 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     geo = sl.geo
     tol_u, tol_w = tol / geo[1], tol / geo[3]
     v = sl.base.copy()
-    seeds = fns["SEEDS"](active, v, ix, iy, geo, seed_nodes)
+    seeds = run["seeds"](fns, active, v, ix, iy, geo, seed_nodes)
+    out = np.empty((len(m.candidates), m.n_fields))
     nc = len(sl.conds)
     grp = _ranked(sl.conds, group)
     buf = _Buffers(nc)
     mark = np.zeros((nc, seed_nodes - 1, seed_nodes - 1), dtype=np.int8)
     while True:
-        fns["TRACE"](seeds, grp, active, v, ix, iy, geo, code, buf.vf, buf.vi, buf.counts,
-                     buf.curves, mark, tol_u, tol_w, only is None)
+        run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
+                     buf.counts, buf.curves, mark, tol_u, tol_w, only is None)
         if not buf.counts[2]:
             break
         buf = buf.grown()
@@ -272,7 +274,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
                     for q in range(len(sel) - 1):
                         T._mark(fine, int(traced.pieces[p, 1]), sel[q, 0], sel[q, 1],
                                 sel[q + 1, 0], sel[q + 1, 1])
-                fns["TRACE"](rescue, grp, active, v, ix, iy, geo, code, buf.vf, buf.vi,
+                run["trace"](fns, rescue, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
                              buf.counts, buf.curves, fine, tol_u, tol_w, True)
                 if buf.counts[2]:
                     raise RuntimeError(f"{m.name}: more than {buf.vf.shape[0]} vertices")
@@ -321,7 +323,7 @@ def _rescue_seeds(sl: Slice, active, bad, n: int) -> np.ndarray:
     a = np.empty(nc)
     b = np.empty(nc)
     s = np.empty(nc)
-    g = np.empty(len(sl.model.names))
+    g = np.empty(2)
     rows = []
     for i, j, di, dj in bad:
         ua, wa = (i + 0.5) / n, (j + 0.5) / n
@@ -335,8 +337,10 @@ def _rescue_seeds(sl: Slice, active, bad, n: int) -> np.ndarray:
                 t = a[k] / (a[k] - b[k])
                 rows.append((k, ua + t * (ub - ua), wa + t * (wb - wa), 0.0))
                 continue
-            c, sc, cu, cw = sl.fns["GRAD"](k, v, ix, iy, sl.geo, ua, wa, g)
-            if math.hypot(cu, cw) * 2.0 / n >= abs(c):
+            v[ix] = sl.lo[0] + ua * (sl.hi[0] - sl.lo[0])
+            v[iy] = sl.lo[1] + wa * (sl.hi[1] - sl.lo[1])
+            c, sc = C.module.gradient(k, v, g)
+            if math.hypot(g[0] * sl.geo[1], g[1] * sl.geo[3]) * 2.0 / n >= abs(c):
                 rows.append((k, ua, wa, 0.0))
     return np.array(rows, dtype=float).reshape(-1, 4)
 
