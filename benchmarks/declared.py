@@ -1,18 +1,18 @@
 """Declared systems against the hand-written models: map throughput, cold start, per call.
 
 Issue 12 asks for the declarations (:mod:`phasemap.declare`) to be what runs,
-unless a hand module stays for a measured reason.  This script measures, on
-``--threads`` numba threads (default 2):
+unless a hand module stays for a measured reason.  This script measures:
 
-* **grid throughput** (Mcell/s) of 2-D maps of side ``--side`` (default
-  2048) over the cases of ``benchmarks/grid.py`` (same axes, same fixed
-  values), for the hand module and its declaration
+* **grid throughput** (Mcell/s) of the grid kernel alone, on 2-D maps of side
+  ``--side`` (default 2048) over the cases of ``benchmarks/grid.py`` (same
+  axes, same fixed values), for the hand module and its declaration
   (``phasemap/systems/seeds/*.py``), layer ``n_solutions`` and all four
   summary layers, at the moving state of the case and at zero slip velocity
-  (rest: the stick and both slip-start rows are candidates too).  The
-  Painleve rod is declared only; it is compared with a NumPy whole-array
-  version of its classification (derived by hand below, checked cell by cell
-  against the kernel, all four layers);
+  (rest: the stick and both slip-start rows are candidates too), per thread
+  (one numba thread) and on every thread.  The Painleve rod is declared only;
+  it is compared with a NumPy whole-array version of its classification
+  (``numpy_rod`` in ``benchmarks/grid.py``, checked cell by cell against the
+  kernel, all four layers);
 * **cold start**: fresh processes, first with empty kernel and numba caches
   (``PHASEMAP_CACHE_DIR``, ``NUMBA_CACHE_DIR``: sympy derivation of the
   declaration, then compilation of its generated file at the first
@@ -40,15 +40,13 @@ import tempfile
 import time
 
 import numba
-import numpy as np
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import phasemap  # noqa: E402
-from grid import CASES, ROOT, hand_model, machine, run_numba, timed, write_section  # noqa: E402
+from grid import (CASES, SEEDS, Kernel, hand_model, load, machine, median_times,  # noqa: E402
+                  numpy_rod, scene_args, write_section)
 from phasemap.layers import SUMMARY  # noqa: E402
 
-SEEDS = ROOT / "phasemap" / "systems" / "seeds"
-ROD_CASE = ("f", (0.0, 3.0), {"omega": 1.0, "xdot": -1.0}, ("theta", (0.0, np.pi / 2)))
 #: model -> (declared model: a path or a registered name, map case, short motion)
 SYSTEMS = {
     "ladder": (str(SEEDS / "ladder.py"), CASES["ladder"],
@@ -56,63 +54,13 @@ SYSTEMS = {
     "wheel": (str(SEEDS / "wheel.py"), CASES["wheel"], {"phi": 1.0, "omega": 0.0}),
     "elliptic_pendulum": (str(SEEDS / "elliptic_pendulum.py"), CASES["elliptic_pendulum"],
                           {"phi": 1.0, "omega": 0.0, "xdot": 0.5}),
-    "painleve_rod": ("painleve_rod", ROD_CASE,
+    "hinge_pendulum": (str(SEEDS / "hinge_pendulum.py"), CASES["hinge_pendulum"],
+                       {"phi": 1.0, "omega": 0.0, "delta": 0.1}),
+    "painleve_rod": ("painleve_rod", CASES["painleve_rod"],
                      {"theta": 1.0, "omega": 0.0, "xdot": -1.0, "f": 0.5}),
 }
 T_MOTION = 1.0
 TOL = 1e-12
-
-
-# ------------------------------------------------- NumPy reference: the rod -----
-def numpy_rod(theta, f, omega, xdot, l, g, m):
-    """n_solutions, stagnation, contact_lost, singular of the Painleve rod (NumPy).
-
-    Derived by hand (Newton-Euler about the centre G = (x + l cos, l sin)):
-    m xG'' = F, m yG'' = N - m g, (m l^2/3) theta'' = l (sin F - cos N).
-    Kept contact (y'' = 0), slipping in direction s (F = -s f N):
-    N (1 + 3 cos^2 + 3 s f sin cos) = m (g - l omega^2 sin);
-    x'' = -s f N/m - 3 l sin N (cos + s f sin)/(m l) + l cos omega^2.
-    Stick (x'' = 0): theta'' = -3 g cos/(4 l), N = m g (1 - 3 cos^2/4) - m l omega^2 sin,
-    F = m (3 g sin cos/4 - l omega^2 cos).  Separated (N = F = 0):
-    y'' = l omega^2 sin - g > 0.  Tolerances: the magnitudes of the generated code.
-    """
-    sn, c = np.sin(theta)[:, None], np.cos(theta)[:, None]
-    w2 = omega * omega
-    rest = xdot == 0.0
-    shape = np.broadcast_shapes(sn.shape, np.shape(f))
-    n = np.zeros(shape, np.int8)
-    cont = np.zeros(shape, bool)
-    sing = np.zeros(shape, bool)
-    n0 = m * (g - l * w2 * sn) / 3.0
-    ns0 = m * (w2 * l + g) / 3.0
-    for s in ((1.0, -1.0) if rest else (float(np.sign(xdot)),)):
-        d = c * c + s * f * sn * c + 1.0 / 3.0
-        singular = np.abs(d) <= TOL * (np.abs(f) + 4.0 / 3.0)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            nn = n0 / d
-            nscale = ns0 / np.abs(d)
-        ok = nn >= -TOL * nscale
-        if rest:  # the slip must start in its direction
-            xdd = -s * f * nn / m - 3.0 * sn * nn * (c + s * f * sn) / m + l * c * w2
-            xscale = 3.0 / m * (nscale * (1.0 + 4.0 * f / 3.0) + 7.0 / 3.0 * m * l * w2
-                                + 2.0 * m * g)
-            ok &= s * xdd > TOL * xscale
-        n += (~singular & ok).astype(np.int8)
-        cont |= singular & (np.abs(n0) <= TOL * ns0)
-        sing |= singular
-    lost = np.broadcast_to(l * w2 * sn - g > TOL * 7.0 * (g + l * w2), shape)
-    n += lost.astype(np.int8)
-    if rest:
-        nn = m * g * (1.0 - 0.75 * c * c) - m * l * w2 * sn
-        ff = m * (0.75 * g * sn * c - l * w2 * c)
-        ns, fs = m * g + 1.75 * m * l * w2, 0.75 * m * g + 1.75 * m * l * w2
-        stag = ((nn >= -TOL * ns) & (f * nn - ff >= -TOL * (f * ns + fs))
-                & (f * nn + ff >= -TOL * (f * ns + fs)))
-        n += stag.astype(np.int8)
-    else:
-        stag = np.zeros(shape, bool)
-    code = np.where(cont, 3, np.where(n >= 3, 4, n)).astype(np.int8)
-    return code, stag.astype(np.int8), lost.astype(np.int8), np.broadcast_to(sing, shape).astype(np.int8)
 
 
 def run_numpy_rod(n, state, all_layers=False):
@@ -122,16 +70,20 @@ def run_numpy_rod(n, state, all_layers=False):
 
 
 def rod_scene(n, state):
-    from grid import scene_args
     return scene_args("painleve_rod", n, m=phasemap.MODELS["painleve_rod"], state=state,
-                      case=ROD_CASE)
+                      case=CASES["painleve_rod"])
 
 
 # ------------------------------------------------------------ helpers -----
 def models(name):
     """(label, Model) pairs of one system: the hand module if any, then the declaration."""
-    out = [("hand", hand_model(name))] if name in CASES else []
+    out = [("hand", hand_model(name))] if has_hand(name) else []
     return out + [("declared", phasemap.get_model(SYSTEMS[name][0]))]
+
+
+def has_hand(name) -> bool:
+    """Whether a system has a hand-written module (its declaration is then a seed)."""
+    return (SEEDS / f"{name}.py").exists()
 
 
 def rest_state(m):
@@ -152,37 +104,40 @@ def count_rows(m, state):
 
 # ------------------------------------------------------------- throughput -----
 def throughput(side, repeat):
+    """Per system and state: seconds of each version's kernel (``n_solutions`` and the four
+    summary layers) on one thread and on all, alternating, medians."""
+    nt = numba.config.NUMBA_NUM_THREADS
     rows = []
     for name, (_, case, _) in SYSTEMS.items():
         ms = models(name)
         for regime in ("moving", "rest"):
             state = {} if regime == "moving" else rest_state(ms[0][1])
-            runs = {}
+            runs, kernels = {}, {}
             for label, m in ms:
+                _, axes, fixed = scene_args(name, side, m=m, state=state, case=case)
                 for key, layers in ((label, ("n_solutions",)), (label + "4", SUMMARY)):
-                    runs[key] = (lambda m=m, layers=layers, state=state:
-                                 run_numba(name, side, layers, m=m, state=state, case=case))
-                    runs[key]()  # compile / load
+                    k = kernels[key] = Kernel(m, axes, fixed, layers)
+                    k.run()  # compile / load
+                    runs[(key, 1)] = (k.run, 1)
+                    if key == label:
+                        runs[(key, nt)] = (k.run, nt)
             if name == "painleve_rod":
-                runs["numpy"] = lambda state=state: run_numpy_rod(side, state)
-                runs["numpy4"] = lambda state=state: run_numpy_rod(side, state, True)
-                got = runs["declared4"]()
-                ref = runs["numpy4"]()
+                runs[("numpy", 1)] = (lambda state=state: run_numpy_rod(side, state), 1)
+                runs[("numpy4", 1)] = (lambda state=state: run_numpy_rod(side, state, True), 1)
+                ref = run_numpy_rod(side, state, True)
                 for layer, r in zip(SUMMARY, ref):
-                    bad = int((r != got[layer]).sum())
+                    bad = int((r != kernels["declared4"].result(layer)).sum())
                     assert bad == 0, f"rod {regime}: NumPy and kernel differ in {bad} cells of {layer}"
                 differ = 0
             else:
-                differ = int((runs["hand"]() != runs["declared"]()).sum())
-            times = {k: [] for k in runs}
-            for _ in range(repeat):
-                for k, fn in runs.items():  # alternate the methods within each repeat
-                    times[k].append(timed(fn)[0])
-            rate = {k: side * side / statistics.median(v) for k, v in times.items()}
+                differ = int((kernels["hand"].result("n_solutions")
+                              != kernels["declared"].result("n_solutions")).sum())
+            med = median_times(runs, repeat)
+            rate = {k: side * side / v for k, v in med.items()}
             nrows = {label: count_rows(m, {**case[2], **state}) for label, m in ms}
             rows.append((name, regime, rate, nrows, differ))
-            print(name, regime, {k: round(v / 1e6, 1) for k, v in rate.items()}, nrows, differ,
-                  flush=True)
+            print(name, regime, {f"{k[0]} {k[1]}": round(v / 1e6, 1) for k, v in rate.items()},
+                  nrows, differ, flush=True)
     return rows
 
 
@@ -265,7 +220,7 @@ def cold(repeat):
     rows = []
     for name, (decl, case, motion) in SYSTEMS.items():
         axes = {case[3][0] if len(case) > 3 else "phi": (0.0, 1.0), case[0]: case[1]}
-        variants = ([("hand", name)] if name in CASES else []) + [("declared", decl)]
+        variants = ([("hand", name)] if has_hand(name) else []) + [("declared", decl)]
         res = {label: {"empty": [], "warm": []} for label, _ in variants}
         for _ in range(repeat):
             for label, model in variants:
@@ -284,50 +239,56 @@ def cold(repeat):
 
 
 # ------------------------------------------------------------------ report -----
-def report(args, tp, pc, cs):
-    thr = args.threads
+def report(args, tp, pc, cs, loads):
+    nt = numba.config.NUMBA_NUM_THREADS
     mc = lambda x: f"{x / 1e6:.0f}" if x >= 1e7 else f"{x / 1e6:.1f}"  # noqa: E731
     lines = [
         "## Declared systems (`benchmarks/declared.py`)",
         "",
-        f"Machine: {machine()}.",
+        f"Machine: {machine()}. Load average {loads[0]} at the start, {loads[1]} at the end. "
+        f"Command: `python benchmarks/declared.py {' '.join(sys.argv[1:])}`.",
         f"Hand-written models (`phasemap/models/`) against their declarations "
         f"(`phasemap/systems/seeds/`, generated by `phasemap.declare`), and the declared "
         f"Painleve rod against a NumPy version of its classification (checked cell by cell, "
-        f"all four layers). {thr} numba threads; the 2 cores were shared with other jobs, "
-        f"so times are noisy: methods alternate within each repeat and the tables give "
-        f"medians of {args.repeat} repeats (cold start: {args.cold_repeat}). Compilation is "
-        "excluded from throughput and per-call times.",
+        f"all four layers). Other jobs share the cores, so times are noisy: methods alternate "
+        f"within each repeat and the tables give medians of {args.repeat} repeats (cold "
+        f"start: {args.cold_repeat}). Compilation is excluded from throughput and per-call "
+        "times.",
         "",
-        f"### Grid throughput, {args.side}^2 maps (Mcell/s)",
+        f"### Grid kernels, {args.side}^2 maps (Mcell/s)",
         "",
         "Axes and fixed values of `benchmarks/grid.py` (the rod: theta in [0, pi/2] x f in "
         "[0, 3], omega = 1, xdot = -1). *moving*: the case's state; *rest*: its slip velocity "
         "set to 0, where the stick and both slip-start rows are candidates. *rows*: candidate "
         "rows at that velocity (hand / declared). *cells differ*: cells where the hand and "
         "declared `n_solutions` disagree (the declaration counts separation; the hand models "
-        "do not).",
+        f"do not). Per thread: one numba thread (NumPy runs on one); {nt} threads beside.",
         "",
-        "| model | state | rows | `n_solutions` hand | declared | declared / hand | "
-        "4 layers hand | declared | declared / hand | cells differ |",
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+        f"| model | state | rows | `n_solutions` hand | declared | declared / hand | "
+        f"hand, {nt} threads | declared, {nt} threads | 4 layers hand | declared | "
+        "declared / hand | cells differ |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for name, regime, r, nrows, differ in tp:
         base = "numpy" if name == "painleve_rod" else "hand"
         lab = "NumPy " if base == "numpy" else ""
         rows_txt = " / ".join(str(nrows[k]) for k in nrows)
-        diff_txt = "checked: 0" if base == "numpy" else f"{differ} ({100 * differ / args.side ** 2:.1f} %)"
+        diff_txt = ("checked: 0" if base == "numpy"
+                    else f"{differ} ({100 * differ / args.side ** 2:.1f} %)")
+        base_n = f"{lab}{mc(r[(base, 1)])}" if base == "numpy" else mc(r[("hand", nt)])
         lines.append(
-            f"| {name} | {regime} | {rows_txt} | {lab}{mc(r[base])} | {mc(r['declared'])} | "
-            f"{r['declared'] / r[base]:.2f} | {lab}{mc(r[base + '4'])} | "
-            f"{mc(r['declared4'])} | {r['declared4'] / r[base + '4']:.2f} | {diff_txt} |")
-    ratio = {(name, regime): r["declared"] / r["hand"] for name, regime, r, _, _ in tp
-             if name in ("elliptic_pendulum", "hinge_pendulum") and "hand" in r}
+            f"| {name} | {regime} | {rows_txt} | {lab}{mc(r[(base, 1)])} | "
+            f"{mc(r[('declared', 1)])} | {r[('declared', 1)] / r[(base, 1)]:.2f} | "
+            f"{'-' if base == 'numpy' else base_n} | {mc(r[('declared', nt)])} | "
+            f"{lab}{mc(r[(base + '4', 1)])} | {mc(r[('declared4', 1)])} | "
+            f"{r[('declared4', 1)] / r[(base + '4', 1)]:.2f} | {diff_txt} |")
+    ratio = {(name, regime): r[("declared", 1)] / r[("hand", 1)] for name, regime, r, _, _ in tp
+             if name in ("elliptic_pendulum", "hinge_pendulum") and ("hand", 1) in r}
     slower = ", ".join(f"{n} {regime} {x:.2f}" for (n, regime), x in ratio.items())
     lines += [
         "",
         "(For the rod the *hand* columns hold the NumPy reference: the ratio is "
-        "kernel / NumPy.)",
+        "kernel / NumPy, per thread.)",
         "",
         "**Which runs.** The ladder and the wheel run as their declarations (their maps "
         "count leaving a contact, the *cells differ* column; the hand modules are "
@@ -335,7 +296,7 @@ def report(args, tp, pc, cs):
         "hinge pendulums run their hand modules: their contacts cannot open, so their "
         "declarations agree with them state by state (tests/test_declare.py; 0 cells "
         f"differ above), the hand kernel is as fast or faster (declared / hand, "
-        f"`n_solutions`: {slower}; the hinge is not timed here), and the hand modules "
+        f"`n_solutions` per thread: {slower}), and the hand modules "
         "report the reactions the paper uses (the hinge's R_n, R_t along and across the "
         "rod). The ladder's rest map differs on one edge, phi = pi/2 (the bar lying flat), "
         "where the floor end cannot start to slip in the declaration and the hand module "
@@ -395,14 +356,14 @@ def main():
     ap.add_argument("--side", type=int, default=2048)
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--cold-repeat", type=int, default=2)
-    ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--no-write", action="store_true", help="print only")
     args = ap.parse_args()
-    numba.set_num_threads(min(args.threads, numba.config.NUMBA_NUM_THREADS))
+    loads = [load()]
     tp = throughput(args.side, args.repeat)
     pc = calls(args.repeat)
     cs = cold(args.cold_repeat)
-    text = report(args, tp, pc, cs)
+    loads.append(load())
+    text = report(args, tp, pc, cs, loads)
     print(text)
     if not args.no_write:
         write_section(text, "## Declared systems")

@@ -1,39 +1,45 @@
-"""Grid throughput: cells per second of the numba kernel against three reference points.
+"""Grid throughput where users stand: every model's ``n_solutions`` map, per thread and on 2.
 
-For each model, a 2-D map over (phi, f), or (phi, delta) where there is no f,
-at a moving state (the relative velocity is not zero), layer ``n_solutions``
-(and, in a second table, all four summary layers at once):
+For each built-in system, a 2-D map of side ``--side`` over (phi, f), (phi, delta) or
+(theta, f) at a moving state (the case's fixed values below), layer ``n_solutions``:
 
-* **numba**: ``phasemap.Scene(...).compute()``'s kernel, through ``grid.evaluate``
-  (the generated kernel of :mod:`phasemap._codegen`);
-* **previous kernel**: the kernel phasemap had before the per-point contract
-  was rebuilt (issue 9): one out-of-line ``point(v, out)`` call per cell into
-  heap scratch rows, then the array-based ``summarize``; it runs here on the
-  generated ``point``, so it computes exactly the same classification;
-* **numpy**: the same classification written with NumPy whole-array operations
-  (for this benchmark only; checked cell by cell against the kernel);
-* **store loop**: a kernel with the generated kernel's loop structure (prange
-  over the outer axis, the inner axis read from its array) whose body only
-  stores an int8 computed from the inner value: the roofline of a kernel that
-  must read its axis and write int8.  (A memset is faster still, and says
-  nothing about a kernel that classifies.)
+* **kernel**: the generated grid kernel (:func:`phasemap._codegen.run_grid`, what
+  ``Scene.compute()`` runs) into arrays allocated once;
+* **public**: ``phasemap.Scene(...).compute()`` as a user calls it: validation, the
+  kernel, the Dataset;
+* **NumPy**: the same classification with whole-array NumPy (written for this
+  benchmark, checked cell by cell against the kernel first), which runs on one thread;
+* **store loop**: ``out[i, j] = a[i] * b[j] > 0.5`` compiled by numba, one thread: a
+  loop that stores one int8 per cell from trivial arithmetic, the ceiling of any map
+  of that shape;
+* **NumPy store**: ``(a[:, None] * b) > 0.5`` in NumPy: NumPy's own ceiling.  A NumPy
+  version within 3x of it is memory-bound (its time is the arrays it writes), and
+  the 30x target does not apply to it.
 
-Compilation is excluded (every kernel is warmed first) and reported separately
-as cold start: a fresh process importing phasemap and classifying one tiny
-grid, once with numba's on-disk cache warm and once with an empty cache.
-Methods alternate within one run and the table reports medians of
-``--repeat`` runs.  Writes the table into ../BENCHMARKS.md.
+Each system runs in the version ``Scene`` runs (declared for the ladder, the wheel
+and the rods; the hand modules for the elliptic and hinge pendulums), and in the
+other version where both exist.  *Per thread* is ``numba.set_num_threads(1)``
+against one-thread NumPy; the 2-thread figures stand beside them, never against
+them.  Methods alternate within each repeat; the tables give medians.  Compilation
+is excluded (every kernel runs once first).  A second table times the public call
+of a small map (``--small``), where the call's own cost shows.  The assembly of
+every kernel that runs is checked (compiled fresh in a child process) for what
+the hot loop must not hold: gathers, scalar byte stores, calls.
 
-    python benchmarks/grid.py [--sizes 256 1024 2048 4096] [--repeat 5]
+    python benchmarks/grid.py [--side 2048] [--small 256] [--repeat 7]
+
+Writes the section "Grid throughput" of ../BENCHMARKS.md.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import pathlib
 import platform
 import re
+import shlex
 import statistics
 import subprocess
 import sys
@@ -42,26 +48,40 @@ import time
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 import phasemap
-from phasemap import _numerics as nx
-from phasemap._compile import specialize
-from phasemap.grid import evaluate, pack_axes
-from phasemap.layers import SUMMARY, layers_for
+from phasemap._codegen import grid_kernel, run_grid
+from phasemap.grid import pack_axes
+from phasemap.layers import layers_for
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
+SEEDS = ROOT / "phasemap" / "systems" / "seeds"
 TOL = 1e-12
-CASES = {  # model: (second axis, its range, fixed values)
+CASES = {  # model: (second axis, its range, fixed values[, (first axis, its range)])
     "ladder": ("f", (0.0, 3.0), {"omega": 1.0}),
     "wheel": ("delta", (0.0, 1.0), {"omega": 1.0}),
     "elliptic_pendulum": ("f", (0.0, 6.0), {"omega": 0.5, "xdot": 1.0}),
     "hinge_pendulum": ("delta", (0.0, 1.5), {"omega": 1.0}),
+    "painleve_rod": ("f", (0.0, 3.0), {"omega": 1.0, "xdot": -1.0}, ("theta", (0.0, np.pi / 2))),
+    "rod_on_step": ("f", (0.0, 2.0), {"omega": 1.0}, ("theta", (0.45, 1.55))),
 }
+#: The systems whose hand module runs; the others run their declarations.
+HAND_RUNS = ("elliptic_pendulum", "hinge_pendulum")
+#: Issue 22's share of the store loop per thread, by model (the declared rows are longer).
+SHARE_TARGET = {"elliptic_pendulum": 25.0, "hinge_pendulum": 25.0, "ladder": 10.0,
+                "wheel": 10.0}
+#: Issue 22's kernel / NumPy per thread, where NumPy is not memory-bound.
+NUMPY_TARGET = 30.0
+#: A NumPy version within this factor of NumPy's store expression is memory-bound.
+MEMORY_BOUND = 3.0
+#: Issue 22's cost of the public call beyond its kernel, at the small side (seconds).
+OVERHEAD_TARGET = 1e-3
 
 
 # ------------------------------------------------------ NumPy references -----
 def numpy_ladder(phi, f, omega, l, g, m):
+    """The hand ladder (phasemap.models.ladder: no separation modes)."""
     sp, cp = np.sin(phi)[:, None], np.cos(phi)[:, None]
     s, w2 = np.sign(omega), omega * omega
     d = 2.0 - f * f
@@ -77,12 +97,11 @@ def numpy_ladder(phi, f, omega, l, g, m):
     tol = TOL * inv * (g + l * w2 + l * np.abs(a)) * (1.0 + f)
     ok = (nf >= -tol) & (nw >= -tol)
     n = np.where(singular, np.where(np.abs(rhs) <= TOL * rhs_scale, 3, 0), ok)
-    lost = ~singular & ~ok
-    return (n.astype(np.int8), lost.astype(np.int8),
-            np.broadcast_to(singular, n.shape).astype(np.int8))
+    return n.astype(np.int8)
 
 
 def numpy_wheel(phi, delta, omega, r, l, rho, g, m):
+    """The wheel rolling (moving: the hand module and the declaration agree cell by cell)."""
     sp, cp = np.sin(phi)[:, None], np.cos(phi)[:, None]
     s, w2 = np.sign(omega), omega * omega
     coef = rho * rho + r * r + l * l - 2.0 * r * l * cp + delta * s * l * sp
@@ -93,8 +112,7 @@ def numpy_wheel(phi, delta, omega, r, l, rho, g, m):
     n_normal = m * (g + l * (sp * a + cp * w2))
     ok = n_normal >= -TOL * m * (g + l * w2 + l * np.abs(a))
     rhs_zero = np.abs(rhs) <= TOL * (l * (r + delta) * w2 + g * l + delta * g)
-    n = np.where(singular, np.where(rhs_zero, 3, 0), ok).astype(np.int8)
-    return n, (~singular & ~ok).astype(np.int8), singular.astype(np.int8)
+    return np.where(singular, np.where(rhs_zero, 3, 0), ok).astype(np.int8)
 
 
 def numpy_elliptic(phi, f, omega, xdot, l, g, m):
@@ -104,7 +122,6 @@ def numpy_elliptic(phi, f, omega, xdot, l, g, m):
     q_zero = np.abs(q) <= TOL * (g + l * w2)
     n = np.zeros(np.broadcast_shapes(sp.shape, np.shape(f)), dtype=np.int8)
     cont = np.zeros(n.shape, dtype=bool)
-    sing = np.zeros(n.shape, dtype=bool)
     for rho in (1.0, -1.0):
         k = sigma * rho
         lam = 1.0 + sp * sp - k * f * sp * cp
@@ -112,8 +129,7 @@ def numpy_elliptic(phi, f, omega, xdot, l, g, m):
         ok = (q_zero | (q * lam > 0)) if rho > 0 else (~q_zero & (q * lam < 0))
         n += (~singular & ok).astype(np.int8)
         cont |= singular & q_zero
-        sing |= singular
-    return np.where(cont, 3, n).astype(np.int8), np.zeros(n.shape, np.int8), sing.astype(np.int8)
+    return np.where(cont, 3, n).astype(np.int8)
 
 
 def numpy_hinge(phi, delta, omega, l, g, m):
@@ -123,100 +139,85 @@ def numpy_hinge(phi, delta, omega, l, g, m):
     singular = np.abs(coef) <= TOL * (l * l + delta * delta)
     qn_zero = np.abs(l * w2 + g * cp) <= TOL * (l * w2 + g)
     n = np.where(coef > 0, 1, np.where(qn_zero, 1, 0))
-    n = np.where(singular, np.where(qn_zero, 3, 0), n).astype(np.int8)
-    return n, np.zeros(n.shape, np.int8), np.broadcast_to(singular, n.shape).astype(np.int8)
+    return np.where(singular, np.where(qn_zero, 3, 0), n).astype(np.int8)
 
 
-NUMPY = {"ladder": numpy_ladder, "wheel": numpy_wheel, "elliptic_pendulum": numpy_elliptic,
-         "hinge_pendulum": numpy_hinge}
+def numpy_rod(theta, f, omega, xdot, l, g, m):
+    """n_solutions, stagnation, contact_lost, singular of the Painleve rod (NumPy).
+
+    Derived by hand (Newton-Euler about the centre G = (x + l cos, l sin)):
+    m xG'' = F, m yG'' = N - m g, (m l^2/3) theta'' = l (sin F - cos N).
+    Kept contact (y'' = 0), slipping in direction s (F = -s f N):
+    N (1 + 3 cos^2 + 3 s f sin cos) = m (g - l omega^2 sin);
+    x'' = -s f N/m - 3 l sin N (cos + s f sin)/(m l) + l cos omega^2.
+    Stick (x'' = 0): theta'' = -3 g cos/(4 l), N = m g (1 - 3 cos^2/4) - m l omega^2 sin,
+    F = m (3 g sin cos/4 - l omega^2 cos).  Separated (N = F = 0):
+    y'' = l omega^2 sin - g > 0.  Tolerances: the magnitudes of the generated code.
+    """
+    sn, c = np.sin(theta)[:, None], np.cos(theta)[:, None]
+    w2 = omega * omega
+    rest = xdot == 0.0
+    shape = np.broadcast_shapes(sn.shape, np.shape(f))
+    n = np.zeros(shape, np.int8)
+    cont = np.zeros(shape, bool)
+    sing = np.zeros(shape, bool)
+    n0 = m * (g - l * w2 * sn) / 3.0
+    ns0 = m * (w2 * l + g) / 3.0
+    for s in ((1.0, -1.0) if rest else (float(np.sign(xdot)),)):
+        d = c * c + s * f * sn * c + 1.0 / 3.0
+        singular = np.abs(d) <= TOL * (np.abs(f) + 4.0 / 3.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            nn = n0 / d
+            nscale = ns0 / np.abs(d)
+        ok = nn >= -TOL * nscale
+        if rest:  # the slip must start in its direction
+            xdd = -s * f * nn / m - 3.0 * sn * nn * (c + s * f * sn) / m + l * c * w2
+            xscale = 3.0 / m * (nscale * (1.0 + 4.0 * f / 3.0) + 7.0 / 3.0 * m * l * w2
+                                + 2.0 * m * g)
+            ok &= s * xdd > TOL * xscale
+        n += (~singular & ok).astype(np.int8)
+        cont |= singular & (np.abs(n0) <= TOL * ns0)
+        sing |= singular
+    lost = np.broadcast_to(l * w2 * sn - g > TOL * 7.0 * (g + l * w2), shape)
+    n += lost.astype(np.int8)
+    if rest:
+        nn = m * g * (1.0 - 0.75 * c * c) - m * l * w2 * sn
+        ff = m * (0.75 * g * sn * c - l * w2 * c)
+        ns, fs = m * g + 1.75 * m * l * w2, 0.75 * m * g + 1.75 * m * l * w2
+        stag = ((nn >= -TOL * ns) & (f * nn - ff >= -TOL * (f * ns + fs))
+                & (f * nn + ff >= -TOL * (f * ns + fs)))
+        n += stag.astype(np.int8)
+    else:
+        stag = np.zeros(shape, bool)
+    code = np.where(cont, 3, np.where(n >= 3, 4, n)).astype(np.int8)
+    return (code, stag.astype(np.int8), lost.astype(np.int8),
+            np.broadcast_to(sing, shape).astype(np.int8))
 
 
-@njit(parallel=True, cache=True)
-def store_loop(base, outer_values, inner_values, out):
-    """The roofline: the generated kernel's loop structure, storing an int8 per cell."""
-    n0 = outer_values.shape[0]
-    n1 = inner_values.shape[0]
-    for i in prange(n0):
-        v = base.copy()
-        v[0] = outer_values[i]
-        x = v[0]
-        for j in range(n1):
-            out[i * n1 + j] = np.int8(inner_values[j] > x)
-
-
-# The previous grid kernel (before issue 9), kept here as the baseline column.
-POINT = None
-STICK = -1
-N_BRANCHES = 0
-N_FIELDS = 0
-BLOCK = 2048
+#: model -> (NumPy function, which versions it reproduces cell by cell)
+NUMPY = {"ladder": (numpy_ladder, ("hand",)), "wheel": (numpy_wheel, ("hand", "declared")),
+         "elliptic_pendulum": (numpy_elliptic, ("hand", "declared")),
+         "hinge_pendulum": (numpy_hinge, ("hand", "declared")),
+         "painleve_rod": (lambda *a, **k: numpy_rod(*a, **k)[0], ("declared",))}
 
 
 @njit(cache=True)
-def _set_axis(v, d, i, axis_slot, axis_values, deriv_slot, deriv_values):
-    v[axis_slot[d]] = axis_values[d, i]
-    for k in range(deriv_slot.shape[1]):
-        if deriv_slot[d, k] >= 0:
-            v[deriv_slot[d, k]] = deriv_values[d, k, i]
+def store_loop(a, b, out):
+    """The ceiling of a map: one int8 per cell from trivial arithmetic on the two axes."""
+    for i in range(a.size):
+        for j in range(b.size):
+            out[i, j] = a[i] * b[j] > 0.5
 
 
-def _previous_template(base, shape, axis_slot, axis_values, deriv_slot, deriv_values, summary):
-    """The previous kernel's loop, n_solutions only: blocks of cells, out-of-line calls."""
-    ndim = shape.shape[0]
-    ncells = 1
-    for d in range(ndim):
-        ncells *= shape[d]
-    nblocks = (ncells + BLOCK - 1) // BLOCK
-    for blk in prange(nblocks):
-        v = base.copy()
-        out = np.empty((N_BRANCHES, N_FIELDS))
-        idx = np.empty(ndim, dtype=np.int64)
-        start = blk * BLOCK
-        stop = min(start + BLOCK, ncells)
-        rem = start
-        for d in range(ndim - 1, -1, -1):
-            idx[d] = rem % shape[d]
-            rem //= shape[d]
-        for d in range(ndim):
-            _set_axis(v, d, idx[d], axis_slot, axis_values, deriv_slot, deriv_values)
-        for cell in range(start, stop):
-            POINT(v, out)
-            n, stag, lost, sing = nx.summarize(out, STICK)
-            summary[cell] = n
-            d = ndim - 1
-            while d >= 0:
-                idx[d] += 1
-                if idx[d] < shape[d]:
-                    _set_axis(v, d, idx[d], axis_slot, axis_values, deriv_slot, deriv_values)
-                    break
-                idx[d] = 0
-                _set_axis(v, d, 0, axis_slot, axis_values, deriv_slot, deriv_values)
-                d -= 1
+def numpy_store(a, b):
+    return (a[:, None] * b) > 0.5
 
 
-def run_previous(model, n):
-    m, axes, fixed = scene_args(model, n)
-    kernel = specialize(_previous_template, m, "benchmark_previous_grid", parallel=True,
-                        POINT=m.point, STICK=m.stick_branch, N_BRANCHES=len(m.branches),
-                        N_FIELDS=m.n_fields)
-    out = np.empty(n * n, dtype=np.int8)
-    kernel(*pack_axes(m, axes, fixed), out)
-    return out.reshape(n, n)
-
-
-def run_store(model, n):
-    m, axes, fixed = scene_args(model, n)
-    names = list(axes)
-    out = np.empty(n * n, dtype=np.int8)
-    store_loop(np.zeros(len(m.inputs)), axes[names[0]], axes[names[1]], out)
-    return out
-
-
-# ------------------------------------------------------------------ runs -----
+# ------------------------------------------------------------- the cases -----
 def hand_model(name):
-    """The hand-written kernel of a seed system (the ladder and the wheel run as their
-    declarations, which also count separation; benchmarks/declared.py compares the two),
-    or the registered model of any other name."""
+    """The hand-written module of a seed system (the ladder and the wheel run as their
+    declarations; the hand modules are references), or the registered model of any
+    other name."""
     import importlib
 
     if name in ("ladder", "wheel", "elliptic_pendulum", "hinge_pendulum"):
@@ -224,17 +225,32 @@ def hand_model(name):
     return phasemap.MODELS[name]
 
 
+def versions(name):
+    """(label, Model) of a system: the version Scene runs first (the registered model),
+    then the other one where both exist."""
+    runs = phasemap.get_model(name)
+    if not (SEEDS / f"{name}.py").exists():
+        return [(runs_as(name), runs)]
+    if runs_as(name) == "hand":
+        return [("hand", runs), ("declared", phasemap.get_model(str(SEEDS / f"{name}.py")))]
+    return [("declared", runs), ("hand", hand_model(name))]
+
+
+def runs_as(name) -> str:
+    return "hand" if name in HAND_RUNS else "declared"
+
+
 def scene_args(model, n, m=None, state=None, case=None):
     """The model, axes and fixed values of ``model``'s map of side ``n``.
 
-    ``m`` replaces the registered model (a declared version of it), ``state``
+    ``m`` replaces the registered model (another version of it), ``state``
     overrides values of the case (another velocity), ``case`` replaces
     ``CASES[model]``; a fourth element ``(name, (lo, hi))`` of a case names the
     first axis (default: phi).
     """
     case = case or CASES[model]
     name2, (lo, hi), fixed = case[:3]
-    m = hand_model(model) if m is None else m
+    m = phasemap.get_model(model) if m is None else m
     full = {**m.defaults, **fixed, **(state or {})}
     if len(case) > 3:
         name1, (lo1, hi1) = case[3]
@@ -247,31 +263,166 @@ def scene_args(model, n, m=None, state=None, case=None):
     return m, axes, full
 
 
-def run_numba(model, n, layers=("n_solutions",), **scene):
-    """The kernel's map (``scene``: keywords of :func:`scene_args`)."""
-    m, axes, fixed = scene_args(model, n, **scene)
-    reg = layers_for(m)
-    got = evaluate(m, axes, fixed, [reg[k] for k in layers])
-    return got["n_solutions"] if len(layers) == 1 else got
+class Kernel:
+    """The grid kernel of a scene with its inputs laid out once: ``run()`` is the kernel
+    alone, as ``Scene.compute()`` runs it, into arrays allocated once."""
+
+    def __init__(self, m, axes, fixed, layers=("n_solutions",)):
+        names = list(axes)
+        inner = names[-1]
+        reg = layers_for(m)
+        wanted = [reg[k] for k in layers]
+        flag_layers = [l for l in wanted if l.is_summary]
+        field_layers = [l for l in wanted if not l.is_summary]
+        self.layers = flag_layers + field_layers
+        self.cells = grid_kernel(m, tuple(self.layers), inner)
+        iv = np.array(axes[inner], dtype=float)
+        ideriv = np.array([d.func(iv) for d in m.derived if d.source == inner],
+                          dtype=float).reshape(-1, iv.size)
+        ncells = int(np.prod([len(a) for a in axes.values()]))
+        self.shape = tuple(len(a) for a in axes.values())
+        self.flags = np.empty((len(flag_layers), ncells), np.int8)
+        self.fields = np.empty((len(field_layers), ncells))
+        packed = pack_axes(m, {n: axes[n] for n in names[:-1]},
+                           {k: v for k, v in fixed.items() if k != inner})
+        self.args = (*packed, iv, ideriv, self.flags, self.fields)
+
+    def run(self):
+        run_grid(self.cells, *self.args)
+
+    def result(self, name):
+        k = [l.name for l in self.layers].index(name)
+        nf = len(self.flags)
+        return (self.flags[k] if k < nf else self.fields[k - nf]).reshape(self.shape)
 
 
-def run_numpy(model, n, all_layers=False):
-    """The NumPy reference: n_solutions, or (n_solutions, contact_lost, singular)."""
-    m, axes, fixed = scene_args(model, n)
-    name2 = CASES[model][0]
-    args = {k: v for k, v in fixed.items()}
-    args[name2] = axes[name2][None, :]
-    res = NUMPY[model](axes["phi"], **args)
-    if not all_layers:
-        return res[0]
-    # stagnation is identically 0 at a moving state; NumPy still stores it
-    return res[0], np.zeros(res[0].shape, np.int8), res[1], res[2]
+def public(m, axes, fixed):
+    """The call a user makes: a Scene built and computed."""
+    return phasemap.Scene(m, axes=axes, fixed=fixed, layers=["n_solutions"]).compute()
 
 
-def timed(fn, *args):
-    t = time.perf_counter()
-    result = fn(*args)
-    return time.perf_counter() - t, result
+def run_numpy(model, axes, fixed):
+    fn = NUMPY[model][0]
+    names = list(axes)
+    return fn(axes[names[0]], **{**fixed, names[1]: axes[names[1]][None, :]})
+
+
+# ----------------------------------------------------------------- timing -----
+def median_times(runs: dict, repeat: int) -> dict:
+    """Median seconds of each ``(function, threads)`` in ``runs``, alternating them."""
+    times = {k: [] for k in runs}
+    for _ in range(repeat):
+        for key, (fn, threads) in runs.items():
+            numba.set_num_threads(threads)
+            t = time.perf_counter()
+            fn()
+            times[key].append(time.perf_counter() - t)
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    return {k: statistics.median(v) for k, v in times.items()}
+
+
+def measure(side: int, repeat: int, with_numpy: bool):
+    """Per model and version: seconds of the kernel and the public call on 1 and N threads,
+    NumPy, and the two store references, all in one alternating run."""
+    nthreads = numba.config.NUMBA_NUM_THREADS
+    a, b = np.linspace(0.0, 1.0, side), np.linspace(0.0, 1.0, side)
+    out = np.empty((side, side), np.int8)
+    store_loop(a, b, out)  # compile / load
+    runs = {"store": (lambda: store_loop(a, b, out), 1)}
+    if with_numpy:
+        runs["numpy store"] = (lambda: numpy_store(a, b), 1)
+    checked = {}
+    for name in CASES:
+        for label, m in versions(name):
+            _, axes, fixed = scene_args(name, side, m=m)
+            k = Kernel(m, axes, fixed)
+            k.run()
+            got = k.result("n_solutions")
+            assert np.array_equal(got, public(m, axes, fixed).n_solutions.values), name
+            runs[(name, label, "kernel", 1)] = (k.run, 1)
+            runs[(name, label, "kernel", nthreads)] = (k.run, nthreads)
+            runs[(name, label, "public", 1)] = (lambda m=m, a=axes, f=fixed: public(m, a, f), 1)
+            runs[(name, label, "public", nthreads)] = (
+                lambda m=m, a=axes, f=fixed: public(m, a, f), nthreads)
+            if with_numpy and name in NUMPY and label in NUMPY[name][1]:
+                ref = run_numpy(name, axes, fixed)
+                bad = int((ref != got).sum())
+                assert bad == 0, f"{name} ({label}): NumPy and the kernel differ in {bad} cells"
+                checked[(name, label)] = True
+                runs[(name, "numpy")] = (lambda n=name, a=axes, f=fixed: run_numpy(n, a, f), 1)
+            elif with_numpy and name in NUMPY:
+                runs.setdefault((name, "numpy"), (
+                    lambda n=name, a=axes, f=fixed: run_numpy(n, a, f), 1))
+    med = median_times(runs, repeat)
+    return med, checked
+
+
+# --------------------------------------------------------------- assembly -----
+ASM_CHILD = r"""
+import collections, json, re, sys
+import phasemap
+from phasemap._codegen import grid_kernel
+from phasemap.layers import layers_for
+spec = json.loads(sys.argv[1])
+m = phasemap.get_model(spec["model"])
+cells = grid_kernel(m, (layers_for(m)["n_solutions"],), spec["inner"])
+lines = cells.inspect_asm(cells.signatures[0]).splitlines()
+# the kernel itself, not the wrappers numba adds after it (boxing from Python)
+ends = [i for i, l in enumerate(lines) if re.match(r"^(_ZN7cpython|cfunc\.)", l)]
+lines = lines[:ends[0]] if ends else lines
+labels = {}
+for i, l in enumerate(lines):
+    h = re.match(r"^(\.LBB\d+_\d+):", l)
+    if h:
+        labels[h.group(1)] = i
+spans = []
+for i, l in enumerate(lines):
+    j = re.match(r"^\s+j\w+\s+(\.LBB\d+_\d+)", l)
+    if j and labels.get(j.group(1), i) < i:
+        spans.append((labels[j.group(1)], i))
+# the innermost loops (no other loop inside), with and without vector registers
+inner = [(a, b) for a, b in spans
+         if not any((c, d) != (a, b) and a <= c and d <= b for c, d in spans)]
+ops = {(a, b): [x.split()[0] for x in lines[a:b + 1]
+                if x.startswith("\t") and not x.startswith("\t.")] for a, b in inner}
+vector = [ops[k] for k in inner if "ymm" in "\n".join(lines[k[0]:k[1] + 1])]
+c = collections.Counter(op for body in vector for op in body)
+calls = sum(op.startswith("call") for body in ops.values() for op in body)
+print(json.dumps({"vector loops": len(vector), "scalar loops": len(inner) - len(vector),
+                  "gathers": sum(v for k, v in c.items() if "gather" in k),
+                  "byte stores": c["vpextrb"] + c["movb"], "calls": calls,
+                  "divisions": c["vdivpd"], "lengths": sorted(len(b) for b in vector)}))
+"""
+
+
+def assembly(name, inner):
+    """What the vectorised loops of the kernel that ``Scene`` runs hold, compiled fresh in
+    a child process (numba does not show the assembly of code it loaded from its cache)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        env = dict(os.environ, NUMBA_CACHE_DIR=tmp)
+        out = subprocess.run([sys.executable, "-c", ASM_CHILD,
+                              json.dumps({"model": name, "inner": inner})],
+                             env=env, capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+# ---------------------------------------------------------------- reports -----
+def machine() -> str:
+    cpu = platform.processor() or "unknown CPU"
+    try:
+        for line in pathlib.Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return (f"{os.cpu_count()} cores, {cpu}; Python {platform.python_version()}, "
+            f"numba {numba.__version__}, numpy {np.__version__}")
+
+
+def load() -> str:
+    """The load average over the last minute, and the cores it is shared among."""
+    return f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores"
 
 
 GRID_START = ("import time; t=time.perf_counter(); import numpy as np, phasemap; "
@@ -292,213 +443,159 @@ def cold_start(empty_cache: bool, code: str = GRID_START) -> float:
     return float(out.stdout.strip().splitlines()[-1])
 
 
-def machine() -> str:
-    cpu = platform.processor() or "unknown CPU"
-    try:
-        for line in pathlib.Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return (f"{os.cpu_count()} cores, {cpu}; Python {platform.python_version()}, "
-            f"numba {numba.__version__}, numpy {np.__version__}")
+def mc(seconds: float, cells: int) -> str:
+    rate = cells / seconds / 1e6
+    return f"{rate:.0f}" if rate >= 10 else f"{rate:.1f}"
+
+
+def verdict(ok: bool) -> str:
+    return "met" if ok else "**missed**"
+
+
+def report(args, big, small, checked, asm, loads) -> str:
+    n, s = args.side, args.small
+    cells = n * n
+    nt = numba.config.NUMBA_NUM_THREADS
+    command = "python benchmarks/grid.py " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    store, npstore = big["store"], big["numpy store"]
+    lines = [
+        "## Grid throughput (`benchmarks/grid.py`)",
+        "",
+        f"Machine: {machine()}. Load average {loads[0]} at the start, {loads[1]} at the end "
+        "(other jobs share these cores: the ratios compare methods within one run, "
+        "alternating, medians of "
+        f"{args.repeat}). Command: `{command}`.",
+        "",
+        f"### `n_solutions` maps of side {n} (Mcell/s)",
+        "",
+        f"A moving state of each system (axes and fixed values: `CASES` in the script); "
+        f"*runs* is the version `Scene` runs, *reference* the other one. *kernel*: the "
+        f"generated grid kernel alone; *public*: `Scene(...).compute()`. Per thread: one "
+        f"numba thread against NumPy, which runs on one; {nt} threads beside. The store "
+        f"loop (`out[i, j] = a[i] * b[j] > 0.5`, one thread) runs at "
+        f"{mc(store, cells)} Mcell/s, NumPy's store expression at {mc(npstore, cells)}.",
+        "",
+        f"| model | version | kernel 1 thread | public 1 thread | kernel {nt} threads | "
+        f"public {nt} threads | NumPy | kernel / store loop | kernel / NumPy | "
+        f"NumPy / NumPy store |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    shares, numpy_ratio, bound = {}, {}, {}
+    for name in CASES:
+        for label, _ in versions(name):
+            k1 = big[(name, label, "kernel", 1)]
+            kn = big[(name, label, "kernel", nt)]
+            p1 = big[(name, label, "public", 1)]
+            pn = big[(name, label, "public", nt)]
+            npy = big.get((name, "numpy"))
+            role = "runs" if label == runs_as(name) else "reference"
+            share = 100 * store / k1
+            if npy is not None:
+                ratio = f"{npy / k1:.1f}x" + ("" if (name, label) in checked else " (a)")
+                nps = f"{npstore / npy:.2f}"
+            else:
+                ratio = nps = "-"
+            if role == "runs":
+                shares[name] = share
+                if npy is not None:
+                    numpy_ratio[name] = (npy / k1, (name, label) in checked)
+                    bound[name] = npy / npstore < MEMORY_BOUND
+            lines.append(
+                f"| {name} | {label} ({role}) | {mc(k1, cells)} | {mc(p1, cells)} | "
+                f"{mc(kn, cells)} | {mc(pn, cells)} | "
+                f"{mc(npy, cells) if npy else '-'} | {share:.1f} % | {ratio} | {nps} |")
+    lines += [
+        "",
+        "(a) The NumPy version is the hand ladder's, which does not count separation "
+        "modes (it is checked cell by cell against the hand kernel); the declaration "
+        "computes four candidate rows where it computes one, so the ratio understates "
+        "the declared kernel against a NumPy version of the same rows.",
+        "",
+        f"### The public call on a small map, side {s} (ms)",
+        "",
+        "*beyond*: the public call's time minus the kernel's, on the same thread count.",
+        "",
+        f"| model | kernel 1 thread | public 1 thread | beyond | kernel {nt} threads | "
+        f"public {nt} threads | beyond |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
+    beyond = {}
+    for name in CASES:
+        label = runs_as(name)
+        k1, p1 = small[(name, label, "kernel", 1)], small[(name, label, "public", 1)]
+        kn, pn = small[(name, label, "kernel", nt)], small[(name, label, "public", nt)]
+        beyond[name] = max(p1 - k1, pn - kn)
+        lines.append(f"| {name} | {k1 * 1e3:.3f} | {p1 * 1e3:.3f} | {(p1 - k1) * 1e3:.3f} | "
+                     f"{kn * 1e3:.3f} | {pn * 1e3:.3f} | {(pn - kn) * 1e3:.3f} |")
+    lines += [
+        "",
+        "### The hot loops' assembly",
+        "",
+        "Each kernel that runs, compiled fresh: its innermost loops (one per velocity "
+        "regime: at rest, moving forward, backward; and the short loops that unpack or "
+        "finish a row), those that use AVX2 `ymm` registers (vectorised) and those that do "
+        "not, with what the vectorised ones must not hold (gathers, scalar byte stores), "
+        "calls in any innermost loop, packed divisions, and each vectorised loop's length "
+        "in instructions (4 cells per pass, or 16 where LLVM interleaves).",
+        "",
+        "| model | vectorised loops | scalar loops | gathers | scalar byte stores | calls | "
+        "`vdivpd` | instructions per vectorised loop |",
+        "|---|---:|---:|---:|---:|---:|---:|---|",
+    ]
+    for name, a in asm.items():
+        lines.append(f"| {name} | {a['vector loops']} | {a['scalar loops']} | {a['gathers']} | "
+                     f"{a['byte stores']} | {a['calls']} | {a['divisions']} | "
+                     f"{', '.join(map(str, a['lengths']))} |")
+    lines += ["", "### Against the targets (issue 22)", "",
+              "| target | model | measured | verdict |", "|---|---|---:|---|"]
+    for name, goal in SHARE_TARGET.items():
+        lines.append(f"| kernel >= {goal:.0f} % of the store loop, per thread | {name} "
+                     f"({runs_as(name)}) | {shares[name]:.1f} % | "
+                     f"{verdict(shares[name] >= goal)} |")
+    for name, (ratio, same) in numpy_ratio.items():
+        if bound[name]:
+            lines.append(f"| kernel >= {NUMPY_TARGET:.0f}x NumPy, per thread | {name} | "
+                         f"{ratio:.1f}x | does not apply: NumPy is memory-bound here |")
+        else:
+            note = "" if same else " (a)"
+            lines.append(f"| kernel >= {NUMPY_TARGET:.0f}x NumPy, per thread | {name} | "
+                         f"{ratio:.1f}x{note} | {verdict(ratio >= NUMPY_TARGET)} |")
+    for name, t in beyond.items():
+        lines.append(f"| public call <= {OVERHEAD_TARGET * 1e3:.0f} ms beyond its kernel at "
+                     f"{s}^2 | {name} | {t * 1e3:.2f} ms | {verdict(t <= OVERHEAD_TARGET)} |")
+    clean = all(a["gathers"] == 0 and a["byte stores"] == 0 and a["calls"] == 0
+                for a in asm.values())
+    lines += [
+        f"| no gathers, scalar byte stores or calls in the vectorised loops | all that run | "
+        f"see above | {verdict(clean)} |",
+        "| every layer set bit-identical to the per-point path | all six | "
+        "tests/test_kernels.py | met |",
+        "| no copy of the result after the kernel | - | tests/test_grid_scene.py | met |",
+        "",
+    ]
+    return "\n".join(lines)
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--sizes", type=int, nargs="+", default=[256, 1024, 2048, 4096])
-    ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--numpy-max", type=int, default=2048,
-                    help="largest side for the NumPy reference (memory)")
+    ap.add_argument("--side", type=int, default=2048)
+    ap.add_argument("--small", type=int, default=256)
+    ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--no-asm", action="store_true", help="skip the assembly check")
     ap.add_argument("--no-write", action="store_true", help="print only")
     args = ap.parse_args()
-
-    threads_all = numba.config.NUMBA_NUM_THREADS
-    rows = []
-    for model in CASES:
-        run_numba(model, 16)  # compile / load
-        run_numba(model, 16, SUMMARY)
-        run_previous(model, 16)
-        run_store(model, 16)
-        for n in args.sizes:
-            ref = run_numpy(model, n) if n <= args.numpy_max else None
-            got = run_numba(model, n)
-            prev = run_previous(model, n)
-            assert np.array_equal(prev, got), f"{model} {n}: previous and new kernels differ"
-            if ref is not None:
-                mismatch = int((ref != got).sum())
-                assert mismatch == 0, f"{model} {n}: NumPy and numba differ in {mismatch} cells"
-                ref4 = run_numpy(model, n, True)
-                got4 = run_numba(model, n, SUMMARY)
-                for name, r in zip(SUMMARY, ref4):
-                    assert np.array_equal(r, got4[name]), f"{model} {n}: {name} differs"
-            keys = ["numba1", "numbaN", "prevN", "numpy", "storeN", "all4N", "numpy4"]
-            times = {k: [] for k in keys}
-            for _ in range(args.repeat):  # alternate the methods within the run
-                numba.set_num_threads(1)
-                times["numba1"].append(timed(run_numba, model, n)[0])
-                numba.set_num_threads(threads_all)
-                times["numbaN"].append(timed(run_numba, model, n)[0])
-                times["prevN"].append(timed(run_previous, model, n)[0])
-                times["storeN"].append(timed(run_store, model, n)[0])
-                times["all4N"].append(timed(run_numba, model, n, SUMMARY)[0])
-                if ref is not None:
-                    times["numpy"].append(timed(run_numpy, model, n)[0])
-                    times["numpy4"].append(timed(run_numpy, model, n, True)[0])
-            med = {k: statistics.median(v) if v else float("nan") for k, v in times.items()}
-            cells = n * n
-            rate = {k: cells / med[k] for k in keys}
-            rows.append((model, n, rate))
-            print(f"{model:18s} {n:5d}  " + "  ".join(f"{k} {rate[k] / 1e6:8.1f}" for k in keys),
-                  flush=True)
-    cold_warm, cold_empty = cold_start(False), cold_start(True)
-
-    def mc(x):
-        return f"{x / 1e6:.1f}" if np.isfinite(x) else "not run"
-
-    def ratio(a, b):
-        return f"{a / b:.1f}x" if np.isfinite(a / b) else "-"
-
-    lines = [
-        "## Grid throughput (`benchmarks/grid.py`)",
-        "",
-        f"Machine: {machine()}.",
-        f"2-D maps (phi x f, or phi x delta), moving state; medians of {args.repeat} "
-        "alternating runs; compilation excluded. Mcell/s = 10^6 cells per second. Every kernel "
-        "is checked cell by cell against the NumPy reference (and the previous kernel) first.",
-        "",
-        "### Layer `n_solutions`",
-        "",
-        f"| model | side | numba 1 thread | numba {threads_all} threads | previous kernel "
-        f"({threads_all} threads) | NumPy | store loop ({threads_all} threads) | "
-        "numba / NumPy | numba / previous | share of store loop |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
-    ]
-    for model, n, r in rows:
-        lines.append(f"| {model} | {n}^2 | {mc(r['numba1'])} | {mc(r['numbaN'])} | "
-                     f"{mc(r['prevN'])} | {mc(r['numpy'])} | {mc(r['storeN'])} | "
-                     f"{ratio(r['numbaN'], r['numpy'])} | {ratio(r['numbaN'], r['prevN'])} | "
-                     f"{100 * r['numbaN'] / r['storeN']:.0f} % |")
-    lines += [
-        "",
-        "### All four summary layers at once",
-        "",
-        "`n_solutions`, `stagnation`, `contact_lost`, `singular` in one pass, against NumPy "
-        "computing the same four arrays.",
-        "",
-        f"| model | side | numba {threads_all} threads | NumPy | numba / NumPy |",
-        "|---|---:|---:|---:|---:|",
-    ]
-    for model, n, r in rows:
-        lines.append(f"| {model} | {n}^2 | {mc(r['all4N'])} | {mc(r['numpy4'])} | "
-                     f"{ratio(r['all4N'], r['numpy4'])} |")
-    lines += [
-        "",
-        f"Cold start (fresh process: import phasemap and map 8 cells of the ladder): "
-        f"{cold_warm:.2f} s with the kernel caches warm, {cold_empty:.2f} s with empty "
-        f"caches (code generation and full compilation).",
-        "",
-    ]
-    lines += targets(rows, threads_all, cold_warm, cold_empty)
-    text = "\n".join(lines)
+    loads = [load()]
+    big, checked = measure(args.side, args.repeat, with_numpy=True)
+    small, _ = measure(args.small, max(args.repeat, 25), with_numpy=False)
+    asm = {}
+    if not args.no_asm:
+        for name in CASES:
+            asm[name] = assembly(name, CASES[name][0])
+    loads.append(load())
+    text = report(args, big, small, checked, asm, loads)
     print(text)
     if not args.no_write:
         write_section(text, "## Grid throughput")
-
-
-#: Issue 9's targets: n_solutions against NumPy (the elliptic pendulum's is higher).
-TARGET = {"elliptic_pendulum": 15.0}
-SHORT = {"elliptic_pendulum": "elliptic", "hinge_pendulum": "hinge"}
-
-
-def targets(rows, threads, cold_warm, cold_empty) -> list[str]:
-    """The targets of issue 9 at the largest side with a NumPy reference, met or not, and
-    what limits the kernel where one is missed."""
-    at = {}
-    for model, n, r in rows:
-        if np.isfinite(r["numpy"]) and (model not in at or n > at[model][0]):
-            at[model] = (n, r)
-    models = [m for m in CASES if m in at]
-    if not models:
-        return []
-    side = max(at[m][0] for m in models)
-
-    def verdict(value, goal, unit):
-        ok = value >= goal
-        return f"{value:.1f}{unit} {'met' if ok else 'missed'}"
-
-    head = "| target | " + " | ".join(SHORT.get(m, m) for m in models) + " |"
-    lines = ["### Against the targets (issue 9), and what limits the kernel", "",
-             f"At {side}^2, {threads} threads, against NumPy in the same process:", "", head, "|---|" + "---:|" * len(models)]
-    lines.append("| `n_solutions` >= 10x NumPy (>= 15x elliptic) | " + " | ".join(
-        verdict(at[m][1]["numbaN"] / at[m][1]["numpy"], TARGET.get(m, 10.0), "x")
-        for m in models) + " |")
-    lines.append("| `n_solutions` >= 25 % of the store loop | " + " | ".join(
-        verdict(100 * at[m][1]["numbaN"] / at[m][1]["storeN"], 25.0, " %") for m in models)
-        + " |")
-    lines.append("| all four summary layers >= 5x NumPy | " + " | ".join(
-        verdict(at[m][1]["all4N"] / at[m][1]["numpy4"], 5.0, "x") for m in models) + " |")
-    lines.append("| gain over the previous kernel (same process) | " + " | ".join(
-        f"{at[m][1]['numbaN'] / at[m][1]['prevN']:.1f}x" for m in models) + " |")
-    r = {m: at[m][1] for m in models}
-    lines += [
-        "",
-        f"Cold start with warm caches (above), target 3 s: "
-        f"{'met' if cold_warm <= 3.0 else 'missed'} (`import phasemap` no longer imports "
-        f"matplotlib; `phasemap.plot` loads it on first use).",
-        "",
-        "- **What changed** (issue 9): branch functions return their rows and are written "
-        "without control flow; the grid kernel is generated per (layer set, innermost axis) "
-        "with every other input a scalar local; when the innermost axis does not move the "
-        "relative velocity, one loop per velocity regime computes only the branches that can "
-        "apply; several summary layers are packed into one byte per cell (one store stream "
-        "per loop, which LLVM vectorises: AVX2 `vdivpd`/`vblendvpd` in the loop, checked in "
-        "the assembly). One prange driver, compiled once, takes each generated `cells` "
-        "function as a first-class function.",
-    ]
-    if "hinge_pendulum" in r:
-        h = r["hinge_pendulum"]
-        lines.append(
-            f"- **The hinge pendulum's NumPy reference is four comparisons** on a (1, n) "
-            f"parameter row broadcast over the grid: at {h['numpy'] / 1e6:.0f} Mcell/s it is "
-            f"near NumPy's own store rate, and the kernel ({h['numbaN'] / 1e6:.0f} Mcell/s, "
-            f"{100 * h['numbaN'] / h['storeN']:.0f} % of the store loop) cannot be 10x faster "
-            "than a memory-bound NumPy expression; the same holds for its four layers.")
-    if "elliptic_pendulum" in r:
-        e = r["elliptic_pendulum"]
-        lines.append(
-            f"- **The elliptic pendulum** ({e['numbaN'] / e['numpy']:.1f}x NumPy, "
-            f"{100 * e['numbaN'] / e['storeN']:.0f} % of the store loop): its two slide "
-            f"branches cost three divisions each per cell; {threads} threads gave "
-            f"{e['numbaN'] / e['numba1']:.1f}x one thread in this run.")
-    if "ladder" in r:
-        la = r["ladder"]
-        lines.append(
-            f"- **The ladder** (declared; it counts a released contact) computes its "
-            f"reactions (affine forms and their tolerances) to decide contact loss for "
-            f"`n_solutions`: {la['numba1'] / 1e6:.0f} Mcell/s per thread, "
-            f"{100 * la['numbaN'] / la['storeN']:.0f} % of the store loop.")
-    spread = []
-    for m in models:
-        shares = [100 * rr["numbaN"] / rr["storeN"] for mm, n, rr in rows if mm == m and n >= 1024]
-        if shares:
-            spread.append(f"{SHORT.get(m, m)} {min(shares):.0f}-{max(shares):.0f} %")
-    lines += [
-        "- The store loop is itself noisy on these shared cores: the share of it across the "
-        "sides from 1024^2 up is " + ", ".join(spread) + " in this run, so a share near 25 % "
-        "is met in one run and missed in the next.",
-        f"- Thread scaling ({threads} threads over one) is "
-        + ", ".join(f"{SHORT.get(m, m)} {r[m]['numbaN'] / r[m]['numba1']:.1f}x" for m in models)
-        + " here: the two cores are virtual and other jobs may share them.",
-        "- **A first `phasemap tour` on empty caches** (numba's and the kernel cache), "
-        "measured once when the kernels were rebuilt: 135 s, against 149 s for the same "
-        "studies on the previous kernels (branch `issue-11` at 67215c6). Not slower: met. Its "
-        "11 grid kernels compile in about 3 s each; the shared fate driver (3 s, once) "
-        "replaces a 15 s parfor compile per model.",
-        "",
-    ]
-    return lines
 
 
 def write_section(text: str, heading: str) -> None:

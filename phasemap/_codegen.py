@@ -39,6 +39,7 @@ import tempfile
 import threading
 
 import numba
+import numba.extending
 import numpy as np
 from numba import prange
 
@@ -123,12 +124,16 @@ class _Source:
                                                    else f"i_{n}") for n in names]
         return f"BR{b}({', '.join(args)})"
 
-    def head(self, ind: str) -> list[str]:
+    def velocity_tolerance(self) -> str:
+        """The magnitude below which the relative velocity counts as zero."""
+        return f"{nx.TOL!r} * VSCALE({', '.join(f'i_{n}' for n in self.scale_names)})"
+
+    def head(self, ind: str, tolerance: str | None = None) -> list[str]:
         """Lines that define ``rest`` (the velocity is zero) and ``vb`` (the velocity
-        the branches see: exactly 0 at rest)."""
+        the branches see: exactly 0 at rest); ``tolerance`` names a local that holds
+        :meth:`velocity_tolerance` already."""
         vel = f"i_{self.model.velocity}"
-        scale = ", ".join(f"i_{n}" for n in self.scale_names)
-        return [f"{ind}rest = abs({vel}) <= {nx.TOL!r} * VSCALE({scale})",
+        return [f"{ind}rest = abs({vel}) <= {tolerance or self.velocity_tolerance()}",
                 f"{ind}vb = 0.0 if rest else {vel}"]
 
     def applies(self, b: int) -> str:
@@ -141,28 +146,35 @@ class _Source:
             return f"rest | ({vel} < 0.0)"
         return "rest"
 
-    def rows(self, ind: str, regime: str | None = None) -> list[str]:
+    def rows(self, ind: str, regime: str | None = None, tolerance: str | None = None
+             ) -> list[str]:
         """Lines that compute the candidate rows, without control flow (for SIMD).
 
-        Defines ``s{b}`` (status, 0 where absent), ``z{b}`` (singular flag) and
-        ``r{b}`` (the row tuple, meaningful where ``a{b}``: the branch applies).
-        With ``regime`` ("rest", "pos" or "neg": the velocity is zero, positive
-        or negative for the whole loop, and ``rest``, ``vb`` are set before it)
-        only the branches that apply are computed; the others get ``s{b} = 0``
-        and no ``r{b}``.
+        Defines ``s{b}`` (status as an integer, 0 where absent), ``z{b}``
+        (singular flag) and ``r{b}`` (the row tuple, meaningful where ``a{b}``:
+        the branch applies).  A branch function returns its status as an
+        integer, so that the summary compares integers and LLVM folds each
+        status test into the branch's own conditions (a float status works, at
+        the cost of selecting and comparing doubles).  With ``regime``
+        ("rest", "pos" or "neg": the velocity is zero, positive or negative
+        for the whole loop, and ``vb`` is set before it) only the branches that
+        apply are computed, with ``rest`` a constant; the others get
+        ``s{b} = 0`` and no ``r{b}``.  ``tolerance``: see :meth:`head`.
         """
         out = []
         for b in self.active(regime):
-            out += [f"r{b} = {self.call(b, 'rest', 'vb')}"]
+            rest = "rest" if regime is None else repr(regime == "rest")
+            out += [f"r{b} = {self.call(b, rest, 'vb')}"]
             if regime is None:
                 out += [f"a{b} = {self.applies(b)}",
-                        f"s{b} = r{b}[0] if a{b} else 0.0",
+                        f"s{b} = r{b}[0] if a{b} else 0",
                         f"z{b} = r{b}[1] if a{b} else 0.0"]
             else:
                 out += [f"s{b} = r{b}[0]", f"z{b} = r{b}[1]"]
         for b in set(range(len(self.model.candidates))) - set(self.active(regime)):
-            out += [f"s{b} = 0.0", f"z{b} = 0.0"]
-        return (self.head(ind) if regime is None else []) + [ind + line for line in out]
+            out += [f"s{b} = 0", f"z{b} = 0.0"]
+        return ((self.head(ind, tolerance) if regime is None else [])
+                + [ind + line for line in out])
 
     def active(self, regime: str | None) -> list[int]:
         """The branches that can apply in ``regime`` (all of them for None and rest)."""
@@ -176,28 +188,41 @@ class _Source:
         return [f"{ind}i_{n} = v[{k}]" for k, n in enumerate(self.inputs) if n not in skip]
 
     def summary(self, ind: str, names) -> list[str]:
-        """Lines that reduce the rows to the requested summaries (locals ``q_<name>``)."""
-        nb = len(self.model.candidates)
+        """Lines that reduce the rows to the requested summaries (integer locals
+        ``q_<name>``, one per summary layer of :data:`phasemap.layers.SUMMARY_LAYERS`).
+
+        They stay 64-bit integers, as wide as the lanes of the double-precision
+        rows, until one narrowing at the store: each early narrowing of a vector
+        mask to bytes costs shuffles.
+        """
         out = []
-        if "n_solutions" in names:
-            adm = " + ".join(f"((s{b} == {nx.ADMISSIBLE}.0) | (s{b} == {nx.SEPARATION}.0))"
-                             for b in range(nb))
-            cont = " | ".join(f"(s{b} == {nx.CONTINUUM}.0)" for b in range(nb))
-            out += [f"nadm = np.int8({adm})",
-                    f"q_n_solutions = np.int8({nx.N_CONTINUUM}) if ({cont}) else "
-                    f"(np.int8({nx.N_THREE_OR_MORE}) if nadm >= 3 else nadm)"]
-        if "stagnation" in names:
-            stick = self.model.stick_branch
-            out.append(f"q_stagnation = np.int8(s{stick} == {nx.ADMISSIBLE}.0)" if stick >= 0
-                       else "q_stagnation = np.int8(0)")
-        if "contact_lost" in names:
-            lost = " | ".join(f"(s{b} == {nx.CONTACT_LOST}.0) | (s{b} == {nx.SEPARATION}.0)"
-                              for b in range(nb))
-            out.append(f"q_contact_lost = np.int8({lost})")
-        if "singular" in names:
-            sing = " | ".join(f"(z{b} != 0.0)" for b in range(nb))
-            out.append(f"q_singular = np.int8({sing})")
+        for name in names:
+            *pre, value = getattr(self, "_" + name)()
+            out += [*pre, f"q_{name} = {value}"]
         return [ind + line for line in out]
+
+    def _any(self, statuses) -> str:
+        return " | ".join(f"(s{b} == {st})" for b in range(len(self.model.candidates))
+                          for st in statuses)
+
+    def _n_solutions(self) -> list[str]:
+        nb = len(self.model.candidates)
+        n = " + ".join(f"((s{b} == {nx.ADMISSIBLE}) | (s{b} == {nx.SEPARATION}))"
+                       for b in range(nb))
+        return [f"nadm = {n}",
+                f"{nx.N_CONTINUUM} if ({self._any([nx.CONTINUUM])}) else "
+                f"({nx.N_THREE_OR_MORE} if nadm >= 3 else nadm)"]
+
+    def _stagnation(self) -> list[str]:
+        stick = self.model.stick_branch
+        return [f"int(s{stick} == {nx.ADMISSIBLE})" if stick >= 0 else "0"]
+
+    def _contact_lost(self) -> list[str]:
+        return [f"int({self._any([nx.CONTACT_LOST, nx.SEPARATION])})"]
+
+    def _singular(self) -> list[str]:
+        nb = len(self.model.candidates)
+        return ["int(" + " | ".join(f"(z{b} != 0.0)" for b in range(nb)) + ")"]
 
 
 def _deps(model) -> list[pathlib.Path]:
@@ -290,18 +315,22 @@ def contract(model):
     body += src.head("    ")
     for b in range(nb):
         body += [f"    if {src.applies(b)}:",
-                 f"        r = {src.call(b, 'rest', 'vb')}"]
-        body += [f"        out[{b}, {j}] = r[{j}]" for j in range(nf)]
+                 f"        r{b} = {src.call(b, 'rest', 'vb')}"]
+        body += [f"        out[{b}, {j}] = r{b}[{j}]" for j in range(nf)]
         body += ["    else:", f"        out[{b}, 0] = 0.0", f"        out[{b}, 1] = 0.0"]
         body += [f"        out[{b}, {j}] = NAN" for j in range(2, nf)]
     bodies["point(v, out)"] = body
-    body = ['    """Branch b along its stage, as its row tuple (for the integrator)."""']
+    # The integrator indexes the row with runtime columns: a tuple of floats,
+    # the status (an integer in a branch function's row) included.
+    body = ['    """Branch b along its stage, as its row tuple of floats (for the integrator)."""']
     body += src.load("    ")
     for b, spec in enumerate(model.candidates):
         rest = "True" if spec.direction == 0 else "False"
         call = src.call(b, rest, "i_" + model.velocity)
         body.append("    else:" if b == nb - 1 else f"    {'if' if b == 0 else 'elif'} b == {b}:")
-        body.append(f"        r = {call}")
+        body.append(f"        r{b} = {call}")
+        rest_of_row = ", ".join(f"r{b}[{j}]" for j in range(1, nf))
+        body.append(f"        r = (float(r{b}[0]), {rest_of_row})")
     body.append("    return r")
     bodies["branch_row(v, b)"] = body
     bodies["branch(v, b, row)"] = [
@@ -363,22 +392,31 @@ def set_cell(v, cell, shape, axis_slot, axis_values, deriv_slot, deriv_values):
                 v[deriv_slot[d, k]] = deriv_values[d, k, i]
 
 
-def _drive(cells, base, outer_shape, outer_slot, outer_values, outer_dslot, outer_dvalues,
-           inner_values, inner_deriv, flags, fields):
-    """Run ``cells`` over every outer cell (and chunk of the inner axis), in parallel."""
+#: Parallel tasks per thread (see :func:`driver`): each takes a contiguous run of
+#: (outer cell, inner chunk) items and copies the fixed inputs once for all of them.
+TASKS_PER_THREAD = 4
+
+
+def _drive(cells, ntasks, base, outer_shape, outer_slot, outer_values, outer_dslot,
+           outer_dvalues, inner_values, inner_deriv, flags, fields):
+    """Run ``cells`` over every outer cell (and chunk of the inner axis), in parallel
+    as ``ntasks`` tasks (fewer if there are fewer items)."""
     nod = outer_shape.shape[0]
     nouter = 1
     for d in range(nod):
         nouter *= outer_shape[d]
     ninner = inner_values.shape[0]
     nchunks = (ninner + CHUNK - 1) // CHUNK
-    for task in prange(nouter * nchunks):
-        o = task // nchunks
-        lo = (task % nchunks) * CHUNK
+    nitems = nouter * nchunks
+    ntasks = max(1, min(nitems, ntasks))
+    for task in prange(ntasks):
         v = base.copy()
-        set_cell(v, o, outer_shape, outer_slot, outer_values, outer_dslot, outer_dvalues)
-        cells(v, o * ninner, lo, min(lo + CHUNK, ninner), inner_values, inner_deriv, flags,
-              fields)
+        for item in range(task * nitems // ntasks, (task + 1) * nitems // ntasks):
+            o = item // nchunks
+            lo = (item % nchunks) * CHUNK
+            set_cell(v, o, outer_shape, outer_slot, outer_values, outer_dslot, outer_dvalues)
+            cells(v, o * ninner, lo, min(lo + CHUNK, ninner), inner_values, inner_deriv, flags,
+                  fields)
 
 
 _DRIVER = []
@@ -390,12 +428,49 @@ def driver():
     It takes the scene's generated ``cells`` as a first-class function, so
     numba's parfor machinery (a few seconds of compile time, mostly spent
     re-optimising the loop body it inlines) runs once, not once per scene shape.
+    It releases the GIL: a worker thread takes it to find the address of a
+    ``cells`` passed by address (:func:`run_grid`), and with the calling thread
+    holding it a 2-thread map waited 20-30 ms for it.
     """
     if not _DRIVER:
-        sig = numba.void(numba.types.FunctionType(CELLS_SIGNATURE), _F1, _I1, _I1, _F2, _I2, _F3,
-                         _F1, _F2, _B2, _F2)
-        _DRIVER.append(numba.njit(sig, parallel=True, cache=True, error_model="numpy")(_drive))
+        sig = numba.void(numba.types.FunctionType(CELLS_SIGNATURE), numba.int64, _F1, _I1, _I1,
+                         _F2, _I2, _F3, _F1, _F2, _B2, _F2)
+        _DRIVER.append(numba.njit(sig, parallel=True, nogil=True, cache=True,
+                                  error_model="numpy")(_drive))
     return _DRIVER[0]
+
+
+class _FirstClass(numba.types.CompileResultWAP):
+    """A generated ``cells`` as the driver takes it: its compiled address, and its
+    numba type made once (numba would build a new type at every call)."""
+
+    def __init__(self, cells):
+        super().__init__(cells.overloads[CELLS_SIGNATURE.args])
+        self.numba_type = numba.types.FunctionType(self.signature())
+
+
+@numba.extending.typeof_impl.register(_FirstClass)
+def _typeof_first_class(value, context):
+    return value.numba_type
+
+
+_FIRST_CLASS: dict = {}
+
+
+def run_grid(cells, base, outer_shape, outer_slot, outer_values, outer_dslot, outer_dvalues,
+             inner_values, inner_deriv, flags, fields) -> None:
+    """Run the generated ``cells`` (:func:`grid_kernel`) over a grid with :func:`driver`.
+
+    The driver gets ``cells`` as its compiled address: passed as the jitted
+    function, numba would type it again at every call (0.1 to 0.3 ms, more
+    than a small map's cells).
+    """
+    first_class = _FIRST_CLASS.get(cells)
+    if first_class is None:
+        first_class = _FIRST_CLASS[cells] = _FirstClass(cells)
+    driver()(first_class, TASKS_PER_THREAD * numba.get_num_threads(), base, outer_shape,
+             outer_slot, outer_values, outer_dslot, outer_dvalues, inner_values, inner_deriv,
+             flags, fields)
 
 
 _KERNELS: dict = {}
@@ -424,44 +499,48 @@ def _generate_grid_kernel(model, layers, inner: str):
     src = _Source(model)
     inner_derived = [d for d in model.derived if d.source == inner]
     skip = {inner} | {d.name for d in inner_derived}
-    summaries = [l.name for l in layers if l.is_summary]
+    flag_layers = [l for l in layers if l.is_summary]
+    field_layers = [l for l in layers if not l.is_summary]
     lines = _header(src, f"Grid kernel ({', '.join(l.name for l in layers)}; inner {inner})")
     lines += ["from phasemap._codegen import CELLS_SIGNATURE", "",
               '@njit(CELLS_SIGNATURE, cache=True, error_model="numpy")',
               "def cells(v, first, lo, hi, inner_values, inner_deriv, flags, fields):",
               '    """Cells lo..hi of the inner axis at the outer state v; outputs from first."""']
-    flag_layers = [l for l in layers if l.is_summary]
-    field_layers = [l for l in layers if not l.is_summary]
+    lines += src.load("    ", skip)
+    # The loops index slices from 0 (``for j in range(n)``): an index such as
+    # ``first + j`` may be negative for all LLVM knows, and numba's wraparound
+    # for it turns vector loads into gathers and vector stores into bytes.
+    lines += ["    n = hi - lo", f"    x_{inner} = inner_values[lo:hi]"]
+    lines += [f"    x_{d.name} = inner_deriv[{k}, lo:hi]" for k, d in enumerate(inner_derived)]
+    out = "first + lo:first + hi"
+    lines += [f"    flags_{k} = flags[{k}, {out}]" for k in range(len(flag_layers))]
+    lines += [f"    fields_{k} = fields[{k}, {out}]" for k in range(len(field_layers))]
     # One store stream per loop vectorises; several (rows of one array, which
     # LLVM cannot prove disjoint) do not.  So several summary layers are packed
-    # into one byte per cell (n_solutions in bits 0-2, then one bit each) and
-    # unpacked by one short loop per layer.
+    # into one byte per cell, at the bit positions of the layer registry, in
+    # the first layer's row, and unpacked by one short loop per layer.
     packed = len(flag_layers) > 1
-    shift = {"n_solutions": 0, "stagnation": 3, "contact_lost": 4, "singular": 5}
-    mask = {"n_solutions": 7, "stagnation": 1, "contact_lost": 1, "singular": 1}
-    lines += src.load("    ", skip)
-    if packed:
-        lines.append("    code = np.empty(hi - lo, dtype=np.int8)")
+    tolerance = None  # or the local holding the zero-velocity tolerance of every cell
 
     def loop(ind: str, regime: str | None) -> list[str]:
-        body = [f"{ind}for j in range(lo, hi):", f"{ind}    i_{inner} = inner_values[j]"]
-        body += [f"{ind}    i_{d.name} = inner_deriv[{k}, j]"
-                 for k, d in enumerate(inner_derived)]
-        body += src.rows(ind + "    ", regime)
-        body += src.summary(ind + "    ", summaries)
+        body = [f"{ind}for j in range(n):", f"{ind}    i_{inner} = x_{inner}[j]"]
+        body += [f"{ind}    i_{d.name} = x_{d.name}[j]" for d in inner_derived]
+        body += src.rows(ind + "    ", regime, tolerance)
+        body += src.summary(ind + "    ", [l.name for l in flag_layers])
         if packed:
-            bits = " | ".join(f"(q_{l.name} << {shift[l.name]})" for l in flag_layers)
-            body.append(f"{ind}    code[j - lo] = np.int8({bits})")
+            bits = " | ".join(f"(q_{l.name} << {l.shift})" if l.shift else f"q_{l.name}"
+                              for l in flag_layers)
+            body.append(f"{ind}    flags_0[j] = np.int8({bits})")
         elif flag_layers:
-            body.append(f"{ind}    flags[0, first + j] = q_{flag_layers[0].name}")
+            body.append(f"{ind}    flags_0[j] = np.int8(q_{flag_layers[0].name})")
         active = src.active(regime)
         for k, layer in enumerate(field_layers):
             b, col = layer.branch, layer.column
-            keep = f"((s{b} == {nx.ADMISSIBLE}.0) | (s{b} == {nx.SEPARATION}.0))"
+            keep = f"((s{b} == {nx.ADMISSIBLE}) | (s{b} == {nx.SEPARATION}))"
             if not layer.admissible_only:
-                keep = f"(s{b} != {nx.ABSENT}.0)"
+                keep = f"(s{b} != {nx.ABSENT})"
             value = f"r{b}[{col}] if {keep} else NAN" if b in active else "NAN"
-            body.append(f"{ind}    fields[{k}, first + j] = {value}")
+            body.append(f"{ind}    fields_{k}[j] = {value}")
         return body
 
     if inner != model.velocity and inner not in src.scale_names:
@@ -473,13 +552,14 @@ def _generate_grid_kernel(model, layers, inner: str):
                   f"    elif i_{model.velocity} > 0.0:", *loop("        ", "pos"),
                   "    else:", *loop("        ", "neg")]
     else:
+        if inner not in src.scale_names:  # the same zero-velocity tolerance in every cell
+            lines.append(f"    vtol = {src.velocity_tolerance()}")
+            tolerance = "vtol"
         lines += loop("    ", None)
-    if packed:
-        for k, layer in enumerate(flag_layers):
-            lines += [f"    out = flags[{k}]",
-                      "    for j in range(lo, hi):",
-                      f"        out[first + j] = (code[j - lo] >> {shift[layer.name]}) & "
-                      f"{mask[layer.name]}"]
+    if packed:  # the first layer's row last: the others read the packed byte from it
+        for k, layer in reversed(list(enumerate(flag_layers))):
+            bits = f"(flags_0[j] >> {layer.shift})" if layer.shift else "flags_0[j]"
+            lines += ["    for j in range(n):", f"        flags_{k}[j] = {bits} & {layer.mask}"]
     key = "_".join(l.name for l in layers)
     tag = hashlib.sha256(f"{key}|{inner}".encode()).hexdigest()[:8]
     return _load(model, f"grid_{inner}_{tag}", "\n".join(lines) + "\n").cells

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Sequence
 
 import xarray as xr
 
+from ._dataset import dataset_kind
 from .model import Model
 from .models import get_model
 
@@ -43,12 +44,10 @@ class PhasemapAccessor:
     def kind(self) -> str:
         """``"map"``, ``"profile"``, ``"fate"``, ``"phase_curve"`` or ``"trajectory"``.
 
-        See :func:`phasemap.plot.atlas_kind`; ValueError for a Dataset that is
-        not a phasemap atlas.
+        See :func:`phasemap._dataset.dataset_kind` (no matplotlib needed);
+        ValueError for a Dataset that is not a phasemap atlas.
         """
-        from .plot import atlas_kind
-
-        return atlas_kind(self._ds)
+        return dataset_kind(self._ds)
 
     @property
     def model(self) -> Model:

@@ -48,6 +48,7 @@ from typing import Iterator, Mapping
 import numpy as np
 import xarray as xr
 
+from ._dataset import CONVENTIONS, motion_kind
 from ._version import __version__
 
 __all__ = [
@@ -60,9 +61,6 @@ __all__ = [
     "open_atlas",
     "write_atlas",
 ]
-
-#: The CF version every atlas declares (see the module docstring for why 1.8).
-CONVENTIONS = "CF-1.8"
 
 #: Upper bound on the uncompressed size of one netCDF chunk of a layer.
 CHUNK_BYTES = 1 << 20
@@ -399,8 +397,8 @@ def _check_is_atlas(ds: xr.Dataset, where: str) -> None:
 
 
 def _describe(ds: xr.Dataset, where: str) -> str:
-    kind = ds.attrs.get("phasemap_kind")
-    if kind in ("trajectory", "phase_curve"):
+    kind = motion_kind(ds)
+    if kind is not None:
         return _describe_motion(ds, where, kind)
     return _describe_grid(ds, where)
 

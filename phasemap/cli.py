@@ -32,6 +32,7 @@ EXAMPLES = {
         ("phasemap simulate elliptic_pendulum phi=1 xdot=1 f=0.3 --t-end 5", ""),
     ],
     "info": [("phasemap info elliptic.nc", "axes, fixed values, cells per class")],
+    "plot": [("phasemap plot elliptic.nc -o elliptic --size two", "elliptic.pdf and .png")],
     "cfcheck": [("phasemap cfcheck elliptic.nc", "CF compliance, offline")],
     "table": [("phasemap table", "the paper's key states, classified")],
     "models": [("phasemap models", "models, variables, units and defaults")],
@@ -167,6 +168,13 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                             "values and the cells in each class; for a trajectory its "
                             "times and events; for a phase curve its stages.")
     p.add_argument("path")
+    p = subs["plot"] = _sub(sub, "plot", "draw an atlas, trajectory or phase curve as PDF and "
+                            "PNG", "Draws the figure ds.phasemap.plot() draws (a 3-D atlas: "
+                            "one map per value of its shortest axis) into STEM.pdf and STEM.png.")
+    p.add_argument("path", metavar="FILE.nc")
+    p.add_argument("-o", "--output", metavar="STEM", help="default: FILE without .nc")
+    p.add_argument("--size", choices=["one", "two"], default="one", help="a journal's one "
+                   "column (3.5 in, the default) or two columns (7.2 in)")
     p = subs["cfcheck"] = _sub(sub, "cfcheck", "check a file against the CF conventions, "
                                "offline", "Runs cfchecks (pip install cfchecker) on FILE with "
                                "local stand-ins for the tables it would download; a "
@@ -218,6 +226,10 @@ def _run(args) -> int:
         from .atlas import describe_atlas
 
         print(describe_atlas(args.path))
+    elif args.command == "plot":
+        from .plot.command import plot_file
+
+        print("wrote " + ", ".join(map(str, plot_file(args.path, args.output, args.size))))
     elif args.command == "cfcheck":
         from .cfcheck import cfcheck
 

@@ -8,20 +8,23 @@ set, inner axis) and is cached on disk.
 
 Layout
 ------
-Cells are taken in C order.  ``prange`` runs over the outer cells (every
-axis but the last) times chunks of the inner axis; each task copies the fixed
-inputs, sets its outer axes and reads every input into a scalar local once.
-The inner loop then only loads the inner axis value (and its derived inputs
-such as sin(phi), computed once per axis value here) and evaluates the
-inlined branch functions: no calls, no heap scratch, and nothing that the
-requested layers do not need.
+Cells are taken in C order.  The items of work are the outer cells (every
+axis but the last) times chunks of the inner axis; ``prange`` runs a few
+tasks per thread over contiguous runs of them, each copying the fixed inputs
+once.  For each item the kernel sets its outer axes, reads every input into a
+scalar local, and runs one loop per velocity regime over the inner axis: it
+only loads the inner axis value (and its derived inputs such as sin(phi),
+computed once per axis value here) and evaluates the inlined branch
+functions, with statuses compared as integers and indices from zero: no
+calls, no heap scratch, and nothing that the requested layers do not need.
+The result arrays are the Dataset's (no copy).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ._codegen import driver, grid_kernel
+from ._codegen import grid_kernel, run_grid
 from .layers import Layer, layers_for
 from .model import Model
 
@@ -89,7 +92,7 @@ def evaluate(model: Model, axes: dict[str, np.ndarray], fixed: dict[str, float],
     flags = np.empty((len(flag_layers), ncells), dtype=np.int8)
     fields = np.empty((len(field_layers), ncells))
     cells = grid_kernel(model, tuple(flag_layers + field_layers), inner)
-    driver()(cells, base, shape, axis_slot, axis_values, deriv_slot, deriv_values, inner_values,
+    run_grid(cells, base, shape, axis_slot, axis_values, deriv_slot, deriv_values, inner_values,
              inner_deriv, flags, fields)
     out = {l.name: flags[k].reshape(grid) for k, l in enumerate(flag_layers)}
     out.update({l.name: fields[k].reshape(grid) for k, l in enumerate(field_layers)})

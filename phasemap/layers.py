@@ -23,14 +23,14 @@ Layers of a model:
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
+
 import numpy as np
 
 from . import _numerics as nx
 from . import events as ev
 from .model import Model, Solvability
-
-SUMMARY = ("n_solutions", "stagnation", "contact_lost", "singular")
 
 
 @dataclass(frozen=True)
@@ -47,10 +47,18 @@ class Layer:
     column: int = -1  # ... and the column of out[branch] to copy
     admissible_only: bool = True  # NaN unless the branch is admissible
     fate: bool = False  # computed by integrating from each cell (see phasemap.integrate)
+    #: Summary layers: the position of the layer's bits in the byte a grid kernel
+    #: packs several summaries into (see :data:`SUMMARY_LAYERS`).
+    shift: int = -1
 
     @property
     def is_summary(self) -> bool:
         return self.branch < 0 and not self.fate
+
+    @property
+    def mask(self) -> int:
+        """The bits a summary's flag values need, as a mask (7 for the values 0-4)."""
+        return (1 << max(self.flag_values).bit_length()) - 1
 
     @property
     def attrs(self) -> dict:
@@ -63,24 +71,43 @@ class Layer:
         return attrs
 
 
-_REGISTRIES: dict[str, dict[str, Layer]] = {}
+def _packed(layers: list[Layer]) -> tuple[Layer, ...]:
+    """The summary layers with their bits placed one after another in one byte."""
+    out, shift = [], 0
+    for layer in layers:
+        out.append(dataclasses.replace(layer, shift=shift))
+        shift += layer.mask.bit_length()
+    if shift > 8:
+        raise ValueError(f"the summary layers need {shift} bits; a grid kernel packs them "
+                         "into one byte")
+    return tuple(out)
+
+
+#: The per-point answers every model offers, in the order of the registry, with
+#: their bit positions in a grid kernel's packed byte.
+SUMMARY_LAYERS = _packed([
+    Layer("n_solutions", "int8", "number of solutions of the motion equations for the senior "
+          "derivatives", flag_values=tuple(int(s) for s in Solvability),
+          flag_meanings=" ".join(s.name.lower() for s in Solvability)),
+    Layer("stagnation", "int8", "zero relative velocity and the stick branch is admissible",
+          flag_values=(0, 1), flag_meanings="no yes"),
+    Layer("contact_lost", "int8", "a branch needs a one-sided contact to pull",
+          flag_values=(0, 1), flag_meanings="no yes"),
+    Layer("singular", "int8", "the coefficient of the senior derivative vanishes",
+          flag_values=(0, 1), flag_meanings="no yes"),
+])
+#: Their names.
+SUMMARY = tuple(l.name for l in SUMMARY_LAYERS)
+
+#: id(model) -> (model, its layers): two versions of a system (a hand module and its
+#: declaration) share a name but not their branches.
+_REGISTRIES: dict[int, tuple[Model, dict[str, Layer]]] = {}
 
 
 def _registry(model: Model) -> dict[str, Layer]:
-    if model.name in _REGISTRIES:
-        return _REGISTRIES[model.name]
-    layers = {
-        "n_solutions": Layer(
-            "n_solutions", "int8", "number of solutions of the motion equations for the senior "
-            "derivatives", flag_values=tuple(int(s) for s in Solvability),
-            flag_meanings=" ".join(s.name.lower() for s in Solvability)),
-        "stagnation": Layer("stagnation", "int8", "zero relative velocity and the stick branch "
-                            "is admissible", flag_values=(0, 1), flag_meanings="no yes"),
-        "contact_lost": Layer("contact_lost", "int8", "a branch needs a one-sided contact to pull",
-                              flag_values=(0, 1), flag_meanings="no yes"),
-        "singular": Layer("singular", "int8", "the coefficient of the senior derivative vanishes",
-                          flag_values=(0, 1), flag_meanings="no yes"),
-    }
+    if id(model) in _REGISTRIES:
+        return _REGISTRIES[id(model)][1]
+    layers = {l.name: l for l in SUMMARY_LAYERS}
     for b, branch in enumerate(model.branches):
         for j, var in enumerate(model.accelerations + model.reactions):
             name = f"{var.name}_{branch}"
@@ -107,7 +134,7 @@ def _registry(model: Model) -> dict[str, Layer]:
                 layers[f"{c[0]}_rest"] = Layer(f"{c[0]}_rest", "float64",
                                                f"{var.long_name} at rest", units=var.units,
                                                fate=True)
-    _REGISTRIES[model.name] = layers
+    _REGISTRIES[id(model)] = (model, layers)
     return layers
 
 

@@ -40,9 +40,11 @@ A new model provides:
 Branch functions
 ----------------
 A branch function is ``@numba.njit(cache=True, forceinline=True, error_model="numpy")``,
-takes scalars and **returns** its row as a tuple of floats laid out as in
+takes scalars and **returns** its row as a tuple laid out as in
 :mod:`phasemap._numerics`: ``(status, singular, coefficient,
-accelerations..., reactions...)``, NaN for what it does not determine.  Its
+accelerations..., reactions...)``, the status an integer code (so that the
+grid kernel compares integers), the rest floats, NaN for what it does not
+determine.  Its
 first parameters receive ``Branch.args`` (such as the slip direction); the
 others are named after model inputs (``phi``, ``f``, ``sin_phi``...), and a
 parameter named ``rest`` receives whether the branch starts from zero
@@ -148,6 +150,14 @@ class Variable:
     lower_open: bool = False
     upper_open: bool = False
 
+    def _fine(self, x: float) -> bool:
+        """Whether the number ``x`` passes every test of :meth:`check` (which explains a
+        failure)."""
+        return (math.isfinite(x) and abs(x) <= MAX_MAGNITUDE
+                and not (self.lower == 0.0 and self.lower_open and 0.0 < x < MIN_POSITIVE)
+                and (x > self.lower if self.lower_open else x >= self.lower)
+                and (x < self.upper if self.upper_open else x <= self.upper))
+
     def domain_text(self) -> str:
         lo = "(" if self.lower_open else "["
         hi = ")" if self.upper_open else "]"
@@ -155,6 +165,8 @@ class Variable:
 
     def check(self, model: str, value) -> None:
         """Raise ValueError unless every element of ``value`` is finite and in the domain."""
+        if isinstance(value, (int, float)) and self._fine(float(value)):
+            return  # a plain number in the domain: no array to build (a Scene checks several)
         try:
             a = np.asarray(value, dtype=float)
         except (TypeError, ValueError):

@@ -136,7 +136,6 @@ velocity are read from the declaration.
 
 from __future__ import annotations
 
-import datetime as _dt
 import inspect
 import math
 
@@ -148,7 +147,7 @@ from . import _numerics as nx
 from . import events as ev
 from ._compile import specialize
 from .integrate import _grow
-from ._version import __version__
+from ._dataset import cf_header, squared_units
 from .model import Model
 from .models import get_model
 
@@ -1334,7 +1333,7 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
     data |= {
         "omega_squared": xr.Variable("point", u, {
             "long_name": f"square of the {var_omega.long_name}",
-            "units": _squared_units(var_omega.units)}),
+            "units": squared_units(var_omega.units)}),
         "point_stage": xr.Variable("point", index, {
             "long_name": "index of the stage the point belongs to", "units": "1"}),
         "stage_sign": xr.Variable("stage", signs, {
@@ -1356,17 +1355,8 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
     from .simulate import end_message
 
     last = ev.Event(int(reasons[-1]))
-    now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     attrs = {
-        "Conventions": "CF-1.8",
-        "title": f"phasemap phase curve: {m.title}",
-        "source": f"phasemap {__version__}",
-        "history": f"{now} created by phasemap.phase_curve {__version__}",
-        "references": m.citation,
-        "phasemap_kind": "phase_curve",
-        "phasemap_model": m.name,
-        "phasemap_version": __version__,
-        "date_created": now,
+        **cf_header(m, "phase_curve", "phasemap.phase_curve"),
         "method": METHOD,
         "end_reason": last.name.lower(),
         "end_message": end_message(m, last, (float(stages[-1, 4]),)),
@@ -1381,14 +1371,3 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
     for v in m.params:
         attrs[f"phasemap_fixed_{v.name}"] = float(full[v.name])
     return xr.Dataset(data, coords, attrs)
-
-
-def _squared_units(units: str) -> str:
-    """UDUNITS spelling of the square of ``units`` ("rad s-1" -> "rad2 s-2")."""
-    out = []
-    for part in units.split():
-        name = part.rstrip("-0123456789")
-        power = part[len(name):] or "1"
-        p = 2 * int(power)
-        out.append(name if p == 1 else f"{name}{p}")
-    return " ".join(out)

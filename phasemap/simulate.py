@@ -7,7 +7,6 @@ returns a self-describing :class:`xarray.Dataset`.
 
 from __future__ import annotations
 
-import datetime as _dt
 import math
 from dataclasses import dataclass
 from typing import Mapping, Sequence
@@ -16,8 +15,7 @@ import numpy as np
 import xarray as xr
 
 from . import events as ev
-from ._version import __version__
-from .atlas import CONVENTIONS
+from ._dataset import cf_header, variable_attrs
 from .integrate import DEFAULT_METHOD, METHODS, check_method, kernels, unpack
 from .model import Model, Variable
 from .models import get_model
@@ -241,23 +239,13 @@ def _dataset(m: Model, full, positions, opts: Options, names, fate, n_rev, n_ste
                                      "long_name": "active branch after the event"}),
     }
     for j, var in enumerate(variables):
-        attrs = {"long_name": var.long_name, "units": var.units}
-        data[var.name] = xr.Variable("t", ys[:, j], attrs)
+        data[var.name] = xr.Variable("t", ys[:, j], variable_attrs(var))
         data[f"event_{var.name}"] = xr.Variable(
             "event", ev_y[:, j], {"long_name": f"{var.long_name} at the event",
                                   "units": var.units})
-    now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     fate_event = ev.Event(fate)
     attrs = {
-        "Conventions": CONVENTIONS,
-        "title": f"phasemap trajectory: {m.title}",
-        "source": f"phasemap {__version__}",
-        "history": f"{now} created by phasemap.simulate {__version__}",
-        "references": m.citation,
-        "phasemap_kind": "trajectory",
-        "phasemap_model": m.name,
-        "phasemap_version": __version__,
-        "date_created": now,
+        **cf_header(m, "trajectory", "phasemap.simulate"),
         "end_reason": fate_event.name.lower(),
         "end_message": end_message(m, fate_event, ev_y[-1] if len(ev_y) else None),
         "n_reversals": np.int32(n_rev),

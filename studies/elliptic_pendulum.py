@@ -35,8 +35,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from matplotlib import patheffects
 from matplotlib.lines import Line2D
-from matplotlib.patches import Patch
+from matplotlib.ticker import MaxNLocator
 
 import phasemap
 from phasemap import plot as pplot
@@ -233,17 +234,22 @@ def stick_slip_motion(out, files):
 
 # --------------------------------------------------------------------------- figures
 
-LAMBDA_STYLE = {1.0: {"color": "black", "lw": 0.9, "ls": "-"},
-                -1.0: {"color": "black", "lw": 0.9, "ls": (0, (3.0, 1.5))}}
-SHARP_STYLE = {"color": "black", "lw": 1.1, "ls": (0, (6.0, 1.5, 1.0, 1.5))}
-PAPER_STYLE = {"color": "black", "lw": 1.2, "ls": (0, (1.0, 1.2))}
+#: The reference curves: black, told apart by their dashes (pplot.DASHES), haloed in white.
+_REF = {"color": "black", "lw": 0.9, "path_effects": pplot.HALO}
+LAMBDA_STYLE = {1.0: {**_REF, "ls": pplot.DASHES[0]}, -1.0: {**_REF, "ls": pplot.DASHES[1]}}
+SHARP_STYLE = {**_REF, "lw": 1.1, "ls": pplot.DASHES[3]}
+PAPER_STYLE = {**_REF, "lw": 1.1, "ls": pplot.DASHES[2]}
 #: The symbols the legends use.
-KEY = [r"$\lambda_k = 1 + \sin^2\varphi - kf\sin\varphi\cos\varphi$, the coefficient of "
+KEY = [r"$\lambda_k = 1 + \sin^2\varphi - k f\,\sin\varphi\,\cos\varphi$, the coefficient of "
        r"$N$ in (23)", r"$k = \mathrm{sgn}(N\dot x)$: $\lambda_{+1}$ for $N\dot x > 0$, "
        r"$\lambda_{-1}$ for $N\dot x < 0$", r"$\lambda_k = 0$ is the singular set"]
-Q_STYLE = {"color": pplot.OKABE_ITO["bluish_green"], "lw": 1.1, "ls": "-"}
-STICK_LS = (0, (1.0, 1.5))
-STICK_SHADE = {"color": pplot.OKABE_ITO["bluish_green"], "alpha": 0.12, "lw": 0}
+Q_STYLE = {**_REF, "ls": pplot.DASHES[4]}
+#: The motion drawn over a map: a thick black line on a white halo.
+MOTION_STYLE = {"color": "black", "lw": 1.6,
+                "path_effects": [patheffects.withStroke(linewidth=3.2, foreground="white"),
+                                 patheffects.Normal()]}
+#: The slider's stick phases: the stagnation look (hatched), in time.
+STICK_LABEL = r"stagnation: the slider sticks ($\dot x \equiv 0$)"
 
 
 def _thin(ds, limit=700):
@@ -341,92 +347,101 @@ def figure_phi_omega(maps, motion, size="two_column"):
             ax.plot(phi, w, **Q_STYLE)
             ax.plot(phi, -w, **Q_STYLE)
             ax.set_ylim(-8.0, 8.0)
-        # the motion: sticking (xdot = 0) dotted, sliding right solid, the event marked
+        # the motion while the slider slides right (xdot > 0: this map); while it sticks
+        # (xdot = 0) the state is on neither map: the path breaks there, and the stick and
+        # slip events mark where it leaves the map and comes back
         ax = axes[0]
         stick = motion.branch.values == STICK
-        x, y = _wrapped(np.where(stick, motion.phi.values, np.nan),
-                        np.where(stick, motion.omega.values, np.nan))
-        ax.plot(x, y, color="black", ls=STICK_LS, lw=1.0, zorder=7)
         x, y = _wrapped(np.where(stick, np.nan, motion.phi.values),
                         np.where(stick, np.nan, motion.omega.values))
-        ax.plot(x, y, color="white", lw=2.6, zorder=6)
-        ax.plot(x, y, color="black", lw=1.2, zorder=7)
-        kind = phasemap.Event(int(motion.event_kind[-1])).name.lower()
-        marker, colour = pplot.EVENT_MARKERS[kind]
-        ev = {"phi": float(motion.event_phi[-1]), "omega": float(motion.event_omega[-1])}
-        ax.plot(*_wrapped([ev["phi"]], [ev["omega"]]), marker=marker, ms=7, mfc=colour,
-                mec="white", mew=0.8, ls="none", zorder=8)
-        ax.plot(*_wrapped([float(motion.phi[0])], [float(motion.omega[0])]), marker="o",
-                ms=4.5, mfc="white", mec="black", mew=0.8, ls="none", zorder=8)
+        ax.plot(x, y, zorder=5, **MOTION_STYLE)
+        kinds = [phasemap.Event(int(k)).name.lower() for k in motion.event_kind.values]
+        for kind in ("stick", "slip"):
+            at = [i for i, k in enumerate(kinds) if k == kind]
+            pplot.mark_event(ax, kind, *_wrapped(motion.event_phi.values[at],
+                                                 motion.event_omega.values[at]))
+        kind = kinds[-1]
+        pplot.mark_event(ax, kind, *_wrapped([float(motion.event_phi[-1])],
+                                             [float(motion.event_omega[-1])]))
+        pplot.mark_event(ax, "start", *_wrapped([float(motion.phi[0])],
+                                                [float(motion.omega[0])]))
         lines = [Line2D([], [], label=r"$\lambda_{+1} = 0$ (singular)", **LAMBDA_STYLE[1.0]),
                  Line2D([], [], label=r"$\lambda_{-1} = 0$ (singular)", **LAMBDA_STYLE[-1.0]),
                  Line2D([], [], label=r"$g + l\cos\varphi\,\omega^2 = 0$", **Q_STYLE),
-                 Line2D([], [], color="black", lw=1.2, label=r"motion, sliding ($\dot x > 0$)"),
-                 Line2D([], [], color="black", lw=1.0, ls=STICK_LS,
-                        label=r"sticking ($\dot x = 0$, other map)"),
-                 Line2D([], [], marker=marker, ms=6, mfc=colour, mec="white", ls="none",
-                        label=kind)]
+                 Line2D([], [], label=r"motion, sliding ($\dot x > 0$)", **MOTION_STYLE),
+                 pplot.event_handle("start"),
+                 pplot.event_handle("stick", r"stick: leaves the map ($\dot x = 0$)"),
+                 pplot.event_handle("slip", "slip: back on the map"),
+                 pplot.event_handle(kind)]
         handles = cats + lines
         start = [t for t in pplot.fixed_values(motion) if "_0$" in t]
-        pplot.figure_legend(fig, handles, ncols=_columns(size, 5), title=_fixed(
+        pplot.figure_legend(fig, handles, ncols=_columns(size, 4), title=_fixed(
             maps["right"], fig, "the motion from " + ", ".join(start)))
         pplot.define_symbols(fig, KEY)
     return fig
 
 
 def figure_motion(ds, states, inset: float | None = None, size="two_column"):
-    """A trajectory with its events marked and the slider's stick phases shaded.
+    """A trajectory with its events marked and the slider's stick phases hatched.
 
-    ``inset``: a zoom of the first panel on [0, inset] s, for a stick phase
-    that starts too soon after t = 0 to be seen at the scale of the motion.
+    ``inset``: a panel more, below, of the first state over [0, inset] s, for
+    a stick phase that starts too soon after t = 0 to be seen at the scale of
+    the motion.
     """
-    fig = pplot.trajectory_figure(ds, states=states, size=size)
+    import matplotlib.pyplot as plt
+
     stick = ds.branch.values == STICK
     t = ds.t.values
     edges = np.flatnonzero(np.diff(np.r_[0, stick.astype(int), 0]))
+    width = pplot.width_of(size)
+    n = len(states)
     with pplot.style():
-        for ax in fig.axes:
+        fig = plt.figure(figsize=(width, 1.3 + 1.1 * (n + (1 if inset else 0))),
+                         layout="constrained")
+        grid = fig.add_gridspec(n + (1 if inset else 0), 1)
+        axes = [fig.add_subplot(grid[0])]
+        axes += [fig.add_subplot(grid[i], sharex=axes[0]) for i in range(1, n)]
+        pplot.trajectory_figure(ds, states=states, ax=axes, size=size)
+        for ax in axes:
             for a, b in zip(edges[::2], edges[1::2]):
-                ax.axvspan(t[a], t[b - 1], zorder=0, **STICK_SHADE)
-        ax = fig.axes[0]
+                pplot.stagnation_span(ax, t[a], t[b - 1])
+        ax = axes[0]
         leg = ax.get_legend()
-        title = leg.get_title().get_text()
         handles = list(leg.legend_handles)
         for h, txt in zip(handles, leg.get_texts()):
             h.set_label(txt.get_text())
-        handles.append(Patch(label=r"slider sticks ($\dot x \equiv 0$)", **STICK_SHADE))
-        if inset:
-            handles.append(Line2D([], [], ls="none", label=f"inset: the first {inset * 1e3:g} ms"))
+        handles.append(pplot.stagnation_patch(STICK_LABEL))
         leg.remove()
-        new = ax.legend(handles, [h.get_label() for h in handles], loc="lower left",
-                        bbox_to_anchor=(0.0, 1.02), borderaxespad=0, ncols=2, title=title,
-                        alignment="left")
-        new._phasemap_above = True
+        pplot.figure_legend(fig, handles, title=pplot.fixed_values_text(ds, 0.95 * width),
+                            ncols=_columns(size, 4))
         if inset:
-            _zoom(ax, ds, states[0], inset, stick)
+            zoom = fig.add_subplot(grid[n])
+            _zoom(zoom, ds, states[0], inset, stick)
+            axes.append(zoom)
+        for a in axes:
+            a.set_title("", loc="left")
+        pplot.label_panels(axes)
+        if inset:
+            zoom.set_title(f"(d) the first {inset * 1e3:g} ms", loc="left")
     return fig
 
 
-def _zoom(ax, ds, name, t_max, stick):
-    """An inset of ``name`` over the first ``t_max`` seconds, time in ms, events marked."""
+def _zoom(zoom, ds, name, t_max, stick):
+    """``name`` over the first ``t_max`` seconds, time in ms, events marked."""
     sel = ds.t.values <= t_max
     t_ms = ds.t.values[sel] * 1e3
-    # high in the panel, so that its labels stay clear of the slider's xdot = 0 stretch
-    zoom = ax.inset_axes([0.22, 0.56, 0.36, 0.36])
     edges = np.flatnonzero(np.diff(np.r_[0, stick[sel].astype(int), 0]))
     for a, b in zip(edges[::2], edges[1::2]):
-        zoom.axvspan(t_ms[a], t_ms[min(b, t_ms.size - 1)], zorder=0, **STICK_SHADE)
+        pplot.stagnation_span(zoom, t_ms[a], t_ms[min(b, t_ms.size - 1)])
     zoom.plot(t_ms, ds[name].values[sel], color="black", lw=1.0)
     kinds = [phasemap.Event(int(k)).name.lower() for k in ds.event_kind.values]
     for k, te, ye in zip(kinds, ds.event_t.values, ds[f"event_{name}"].values):
         if k not in ("start", "horizon") and te <= t_max:
-            marker, colour = pplot.EVENT_MARKERS[k]
-            zoom.plot(te * 1e3, ye, marker=marker, ms=3.5, mfc="white", mec=colour, mew=0.8,
-                      ls="none", clip_on=False, zorder=5)
+            pplot.mark_event(zoom, k, te * 1e3, ye)
     zoom.set_xlim(0.0, t_max * 1e3)
-    zoom.set_xlabel(r"$t$ (ms)", labelpad=1)
-    zoom.tick_params(labelsize=7)
-    zoom.xaxis.label.set_fontsize(7)
+    zoom.set_xlabel(r"$t$ (ms)")
+    zoom.set_ylabel(pplot.axis_label(ds, name))
+    zoom.yaxis.set_major_locator(MaxNLocator(nbins=4, min_n_ticks=3))
 
 
 # --------------------------------------------------------------------------- the study

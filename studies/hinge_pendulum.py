@@ -32,7 +32,6 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import to_hex
 from matplotlib.lines import Line2D
-from matplotlib.patches import Patch, Rectangle
 
 import phasemap
 from phasemap import plot as pplot
@@ -60,9 +59,12 @@ DELTA_LABEL = r"$\delta/l$  ($l$ = 1 m)"
 #: What delta and l are, for the key under a figure.
 DELTA_KEY = [r"$\delta$: radius of the hinge's friction circle (friction moment "
              r"$\delta|R|$)", r"$l$: rod length"]
-ZONE = pplot.OKABE_ITO["bluish_green"]
-#: Colours of the phase curves: the Okabe-Ito ones that are not the zone's green.
-CURVE_COLOURS = [pplot.OKABE_ITO[k] for k in ("blue", "orange", "vermillion", "reddish_purple")]
+#: The looks of the phase curves (and of the weightless runs), one per start: a colour
+#: none of the study's classes fills, and a dash pattern, so that greyscale tells them apart.
+CURVE_LOOKS = [{"color": pplot.OKABE_ITO[c], "ls": pplot.DASHES[i]}
+               for i, c in enumerate(("blue", "orange", "black", "reddish_purple"))]
+#: The curve l omega^2 + g cos phi = 0 (the hinge reaction vanishes): a reference curve.
+FREE_STYLE = {"color": "black", "lw": 1.4, "ls": pplot.DASHES[1], "path_effects": pplot.HALO}
 
 
 def free_angle(omega):
@@ -147,7 +149,7 @@ def weightless(out, files):
 
 def fate_map(quick, out, files):
     """Fate, rest angle and number of swings from every (phi0, omega0) of a grid."""
-    n = 161 if quick else 241  # odd: phi = 0 on the grid; a cell under 4 px at 300 dpi
+    n = 241 if quick else 481  # odd: phi = 0 on the grid; a cell under 3 px at 300 dpi
     ds = phasemap.Scene(NAME, axes={"phi": np.linspace(-math.pi, math.pi, n),
                                     "omega": np.linspace(-9.0, 9.0, n)},
                         fixed={"delta": DELTA, "l": L},
@@ -161,24 +163,10 @@ def fate_map(quick, out, files):
 
 
 def _zone_bands(ax, lo, hi, delta):
-    """Shade l |sin phi| <= delta around every multiple of pi in [lo, hi]."""
+    """Hatch l |sin phi| <= delta (stagnation) around every multiple of pi in [lo, hi]."""
     half = math.asin(min(delta / L, 1.0))
     for k in range(math.floor(lo / math.pi) - 1, math.ceil(hi / math.pi) + 2):
-        ax.axvspan(k * math.pi - half, k * math.pi + half, color=ZONE, alpha=0.18, lw=0,
-                   zorder=0)
-
-
-def _replace_legend(ax, handles, title, ncols=None):
-    """A legend above ``ax``, left-aligned with it and headed by ``title``, in place of the
-    one there; ``ncols`` wide (default: as many columns as fit the panel)."""
-    if ax.get_legend() is not None:
-        ax.get_legend().remove()
-    labels = [h.get_label() for h in handles]
-    width = 0.95 * ax.get_figure().get_figwidth() * ax.get_position().width
-    legend = ax.legend(handles, labels, loc="lower left", bbox_to_anchor=(0.0, 1.02),
-                       borderaxespad=0, ncols=ncols or pplot.legend_columns(labels, width),
-                       title=title, alignment="left")
-    legend._phasemap_above = True
+        pplot.stagnation_span(ax, k * math.pi - half, k * math.pi + half)
 
 
 def _wide(size) -> bool:
@@ -193,70 +181,65 @@ def figure_rest(ds, size="two_column"):
         ax = fig.axes[0]
         phi = np.linspace(-math.pi, math.pi, 2001)
         ax.plot(phi, L * np.abs(np.sin(phi)), color="black", lw=1.0)
-        ax.axhline(L, color="black", lw=0.8, ls=(0, (3.0, 1.5)))
+        ax.axhline(L, color="black", lw=0.8, ls=pplot.DASHES[1])
         ax.set_ylabel(DELTA_LABEL)
         leg = ax.get_legend()
         cats = list(leg.legend_handles)
         for h, t in zip(cats, leg.get_texts()):
-            h.set_label({"yes": "rest possible", "no": "no rest"}.get(t.get_text(), t.get_text()))
+            h.set_label(t.get_text())
         handles = cats + [
             Line2D([], [], color="black", lw=1.0, label=r"$l|\sin\varphi| = \delta$, i.e. (35)"),
-            Line2D([], [], color="black", lw=0.8, ls=(0, (3.0, 1.5)),
+            Line2D([], [], color="black", lw=0.8, ls=pplot.DASHES[1],
                    label=r"$\delta = l$: singular")]
-        _replace_legend(ax, handles, pplot.fixed_values_text(ds, 0.95 * fig.get_figwidth()),
-                        ncols=2)
+        pplot.legend_above(ax, handles, title=pplot.fixed_values_text(
+            ds, 0.9 * fig.get_figwidth()), ncols=2)
         pplot.define_symbols(fig, DELTA_KEY)
     return fig
 
 
 def figure_moving(by_delta, by_omega, size="two_column"):
-    """No solution for delta > l, except where l omega^2 + g cos phi = 0."""
-    free = pplot.OKABE_ITO["yellow"]
+    """No solution for delta > l, except where l omega^2 + g cos phi = 0.
+
+    One panel over (phi, delta/l) at omega = 2 rad/s.  The map over (phi,
+    omega) at delta/l = 1.5 is one class (none) but for that curve, where the
+    hinge reaction vanishes; the key says so rather than drawing a panel of
+    one colour (the study checks every cell of it).
+    """
     cont = pplot.CATEGORY_COLOURS["continuum"]
     with pplot.style():
-        fig, axes = pplot.panels(2, size, height=3.1, panel_height=2.2, extra=1.6)
-        pplot.map_figure(by_delta, "n_solutions", x="phi", ax=axes[0])
-        pplot.map_figure(by_omega, "n_solutions", x="phi", ax=axes[1])
+        fig = pplot.map_figure(by_delta, "n_solutions", x="phi", size=size)
+        ax = fig.axes[0]
+        leg = ax.get_legend()
         handles = {}
-        for ax in axes:
-            leg = ax.get_legend()
-            for h, t in zip(leg.legend_handles, leg.get_texts()):
-                h.set_label(t.get_text())
-                handles.setdefault(t.get_text(), h)
-            leg.remove()
-        ax = axes[0]
+        for h, t in zip(leg.legend_handles, leg.get_texts()):
+            h.set_label(t.get_text())
+            handles[t.get_text()] = h
         angles = free_angle(OMEGA_MOVING)
         for a in angles:
-            ax.plot([a, a], [L, by_delta.delta.values[-1]], color=free, lw=1.6,
-                    solid_capstyle="butt")
+            ax.plot([a, a], [L, by_delta.delta.values[-1]], solid_capstyle="butt",
+                    **FREE_STYLE)
         ax.plot(angles, [L] * len(angles), ls="none", marker="*", ms=8, mfc=cont, mec="black",
                 mew=0.5, zorder=6, clip_on=False)
         ax.set_ylabel(DELTA_LABEL)
-        ax.set_title(rf"(a) $\omega$ = {OMEGA_MOVING:g} rad s$^{{-1}}$", loc="left")
-        ax = axes[1]
-        for lo, hi in ((-math.pi, -math.pi / 2), (math.pi / 2, math.pi)):
-            phi = np.linspace(lo, hi, 1001)
-            w = np.sqrt(np.maximum(-G * np.cos(phi) / L, 0.0))
-            ax.plot(phi, w, color=free, lw=1.6)
-            ax.plot(phi, -w, color=free, lw=1.6)
-        ax.set_title(rf"(b) $\delta/l$ = {DELTA_ABOVE / L:g}", loc="left")
-        # the continuum is two cells: marked by stars rather than a patch nobody can see
         cats = [handles[k] for k in ("none", "unique") if k in handles]
         cats += [h for k, h in handles.items() if k.startswith("singular")]
         items = cats + [
-            Line2D([], [], color=free, lw=1.6,
-                   label=r"$l\omega^2 + g\cos\varphi = 0$: unique ($R = 0$)"),
+            Line2D([], [], label=r"$l\omega^2 + g\cos\varphi = 0$: unique ($R = 0$)",
+                   **FREE_STYLE),
             Line2D([], [], ls="none", marker="*", ms=8, mfc=cont, mec="black", mew=0.5,
                    label=r"continuum ($\delta = l$ on that curve)")]
-        pplot.figure_legend(fig, items, ncols=3 if _wide(size) else 1,
-                            title=rf"$l$ = {L:g} m, $g$ = {G:g} m s$^{{-2}}$, $m$ = 1 kg")
-        pplot.define_symbols(fig, DELTA_KEY)
+        pplot.legend_above(ax, items, title=pplot.fixed_values_text(
+            by_delta, 0.9 * fig.get_figwidth()), ncols=2 if _wide(size) else 1)
+        pplot.define_symbols(fig, DELTA_KEY + [
+            rf"over ($\varphi$, $\omega$) at $\delta/l$ = {DELTA_ABOVE / L:g}",
+            r"none but on $l\omega^2 + g\cos\varphi = 0$"])
     return fig
 
 
 def figure_phase(curves, size="two_column"):
     """The phase curves (a), and (b) the zone at phi = 0 enlarged, where three of them come
-    to rest within 0.1 rad of each other (their rest squares would overlap in (a))."""
+    to rest within 0.1 rad of each other (their rest squares would overlap in (a): there
+    they are left to (b), whose window (a) outlines)."""
     with pplot.style():
         width = pplot.width_of(size)
         if _wide(size):
@@ -269,13 +252,14 @@ def figure_phase(curves, size="two_column"):
         for i, ds in enumerate(curves):
             before = len(ax.lines)
             pplot.phase_curve_figure(ds, ax=ax)
-            colour = CURVE_COLOURS[i % len(CURVE_COLOURS)]
+            look = CURVE_LOOKS[i % len(CURVE_LOOKS)]
             for line in ax.lines[before:]:
                 # the curve is black and drawn with a line; the markers and zero line stay
                 if line.get_linestyle() != "None" and to_hex(line.get_color()) == "#000000":
-                    line.set_color(colour)
+                    line.set_color(look["color"])
+                    line.set_linestyle(look["ls"])
             phi0, omega0 = SWINGS[i]
-            starts.append(Line2D([], [], color=colour, lw=1.0,
+            starts.append(Line2D([], [], lw=1.0, **look,
                                  label=rf"$\varphi_0$ = {phi0:g} rad, "
                                        rf"$\omega_0$ = {omega0:g} rad s$^{{-1}}$"))
         lo = min(float(ds.phi.min()) for ds in curves)
@@ -290,8 +274,7 @@ def figure_phase(curves, size="two_column"):
             h.set_label(t.get_text())
         leg.remove()
         _zoom_on_zone(ax, zoom)
-        zone = Patch(color=ZONE, alpha=0.18, lw=0,
-                     label=rf"stagnation zone (35), $\delta/l$ = {DELTA / L:g}")
+        zone = pplot.stagnation_patch(rf"stagnation: zone (35), $\delta/l$ = {DELTA / L:g}")
         head = pplot.fixed_values_text(curves[0].drop_attrs().assign_attrs(
             {k: v for k, v in curves[0].attrs.items() if "initial" not in k}), 0.95 * width)
         pplot.figure_legend(fig, starts + events + [zone], title=head,
@@ -303,8 +286,9 @@ def figure_phase(curves, size="two_column"):
 
 
 def _zoom_on_zone(ax, zoom):
-    """Draw ``ax``'s curves and markers again in ``zoom``, on the zone at phi = 0, and mark
-    that window in ``ax``."""
+    """Draw ``ax``'s curves and markers again in ``zoom``, on the zone at phi = 0; outline
+    that window in ``ax``, joined to ``zoom``, and leave the rest markers inside it to
+    ``zoom``."""
     half = math.asin(min(DELTA / L, 1.0))
     x0, x1, y0, y1 = -1.3 * half, 1.3 * half, -0.8, 0.8
     for line in ax.lines:
@@ -314,62 +298,82 @@ def _zoom_on_zone(ax, zoom):
                   ms=line.get_markersize(), mfc=line.get_markerfacecolor(),
                   mec=line.get_markeredgecolor(), mew=line.get_markeredgewidth(),
                   zorder=line.get_zorder())
-    zoom.axvspan(-half, half, color=ZONE, alpha=0.18, lw=0)
+        if line.get_marker() == "s":  # rest
+            x, y = np.asarray(x, float), np.asarray(y, float)
+            if np.all((x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)):
+                line.set_visible(False)
+    pplot.stagnation_span(zoom, -half, half)
     zoom.set_xlim(x0, x1)
     zoom.set_ylim(y0, y1)
     zoom.set_xlabel(r"$\varphi$ (rad)")
     zoom.set_ylabel(r"$\omega$ (rad s$^{-1}$)")
-    ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec="0.3", lw=0.6,
-                           zorder=6))
+    ax.indicate_inset((x0, y0, x1 - x0, y1 - y0), inset_ax=zoom, edgecolor="0.3", lw=0.6,
+                      alpha=1.0, zorder=6)
+
+
+#: simulate's states, every few steps: small crosses, not the start's ring.
+SIMULATE_DOTS = {"ls": "none", "marker": "x", "ms": 2.6, "mec": "black", "mew": 0.6}
 
 
 def figure_weightless(runs, size="two_column"):
-    """phi, omega and the error of simulate against the exact solution (36), g = 0.
+    """phi and omega of simulate against the exact solution (36), g = 0, and the error of
+    each, in its own unit: (a) phi, (b) omega, (c) |d phi|, (d) |d omega|.
 
-    Each start is one colour, named in the legend by its initial state; the
-    heading above states what both share.
+    Each start is one look (colour and dashes), named in the legend by its
+    initial state; the heading above states what both share.
     """
-    colours = [pplot.OKABE_ITO["vermillion"], pplot.OKABE_ITO["blue"]]
+    from matplotlib.ticker import LogLocator
+
     width = pplot.width_of(size)
+    wide = _wide(size)
     with pplot.style():
-        fig, axes = plt.subplots(3, 1, figsize=(width, 3.9 if _wide(size) else 4.6),
-                                 sharex=True, layout="constrained")
-        worst = 0.0
-        for ds, (phi0, omega0), colour in zip(runs, WEIGHTLESS, colours):
+        fig, grid = plt.subplots(2 if wide else 4, 2 if wide else 1,
+                                 figsize=(width, 3.9 if wide else 6.4), sharex=True,
+                                 layout="constrained", squeeze=False)
+        axes = list(grid.T.ravel()) if wide else list(grid.ravel())  # phi, omega, errors
+        errors = []
+        for ds, (phi0, omega0), look in zip(runs, WEIGHTLESS, CURVE_LOOKS):
             t = ds.t.values
             tt = np.linspace(0.0, t[-1], 400)
-            p, w = weightless_motion(tt, phi0, omega0, DELTA_WEIGHTLESS, L)
-            axes[0].plot(tt, p, color=colour, lw=2.4, alpha=0.4, solid_capstyle="butt")
-            axes[1].plot(tt, w, color=colour, lw=2.4, alpha=0.4, solid_capstyle="butt")
+            exact = weightless_motion(tt, phi0, omega0, DELTA_WEIGHTLESS, L)
             every = max(1, t.size // 25)
-            dots = {"ls": "none", "marker": "o", "ms": 2.2, "mfc": "white", "mec": "black",
-                    "mew": 0.6}
-            axes[0].plot(t[::every], ds.phi.values[::every], **dots)
-            axes[1].plot(t[::every], ds.omega.values[::every], **dots)
-            pe, we = weightless_motion(t, phi0, omega0, DELTA_WEIGHTLESS, L)
-            err = np.maximum(np.abs(ds.phi.values - pe), np.abs(ds.omega.values - we))
-            worst = max(worst, float(err.max()))
-            axes[2].semilogy(t[1:], err[1:], color=colour, lw=0.9)
-        axes[0].set_ylabel(r"$\varphi$ (rad)")
-        axes[1].set_ylabel(r"$\omega$ (rad s$^{-1}$)")
-        axes[2].set_ylabel(r"error $\epsilon$")
-        axes[2].set_ylim(worst * 1e-3, worst * 5)
-        axes[2].set_xlabel(r"$t$ (s)")
-        axes[2].set_xlim(0.0, max(float(ds.t[-1]) for ds in runs))
+            dots = SIMULATE_DOTS
+            at = weightless_motion(t, phi0, omega0, DELTA_WEIGHTLESS, L)
+            for k, (name, ex, ref) in enumerate(zip(("phi", "omega"), exact, at)):
+                axes[k].plot(tt, ex, lw=2.4, alpha=0.45, solid_capstyle="butt", **look)
+                axes[k].plot(t[::every], ds[name].values[::every], **dots)
+                err = np.abs(ds[name].values - ref)
+                errors.append(err[1:])
+                axes[k + 2].semilogy(t[1:], np.maximum(err[1:], 1e-300), lw=0.9, **look)
+        worst = max(float(e.max()) for e in errors)
+        best = min(float(e[e > 0].min()) for e in errors if (e > 0).any())
+        for k, (label, what) in enumerate(((r"$\varphi$ (rad)", "angle"),
+                                           (r"$\omega$ (rad s$^{-1}$)", "angular velocity"),
+                                           (r"$|\Delta\varphi|$ (rad)", "error of the angle"),
+                                           (r"$|\Delta\omega|$ (rad s$^{-1}$)",
+                                            "error of the angular velocity"))):
+            axes[k].set_ylabel(label)
+            axes[k].set_title(what, loc="left")
+        lo = 10.0 ** math.floor(math.log10(max(best, worst * 1e-6)))
+        hi = 10.0 ** math.ceil(math.log10(worst))
+        for a in axes[2:]:
+            a.set_ylim(lo, hi)
+            a.yaxis.set_major_locator(LogLocator(base=10.0, numticks=12))
+        for a in (axes[1], axes[3]) if wide else axes[3:]:
+            a.set_xlabel(r"$t$ (s)")
+        for a in axes:
+            a.set_xlim(0.0, max(float(ds.t[-1]) for ds in runs))
         fig.align_ylabels(axes)
-        for ax, what in zip(axes, ("angle", "angular velocity", "error of simulate")):
-            ax.set_title(what, loc="left")
         pplot.label_panels(axes)
-        handles = [Line2D([], [], color=c, lw=2.4, alpha=0.4,
+        handles = [Line2D([], [], lw=2.4, alpha=0.45, **look,
                           label=rf"exact (36) from $\varphi_0$ = {_signed(p0)} rad, "
                                 rf"$\omega_0$ = {_signed(w0)} rad s$^{{-1}}$")
-                   for c, (p0, w0) in zip(colours, WEIGHTLESS)]
-        handles.append(Line2D([], [], ls="none", marker="o", ms=2.5, mfc="white", mec="black",
-                              label="simulate (every few steps)"))
+                   for look, (p0, w0) in zip(CURVE_LOOKS, WEIGHTLESS)]
+        handles.append(Line2D([], [], label="simulate (every few steps)", **SIMULATE_DOTS))
         pplot.figure_legend(fig, handles, ncols=1,
-                            title=rf"$g$ = 0, $\delta$ = {DELTA_WEIGHTLESS:g} m, $l$ = {L:g} m")
-        pplot.define_symbols(fig, [r"$\epsilon = \max(|\Delta\varphi|, |\Delta\omega|)$, "
-                                   r"$\Delta$: simulate minus (36), in rad and rad s$^{-1}$"])
+                            title=rf"$g$ = 0 m s$^{{-2}}$, $\delta$ = {DELTA_WEIGHTLESS:g} m, "
+                                  rf"$l$ = {L:g} m")
+        pplot.define_symbols(fig, [r"$\Delta$: simulate minus the exact solution (36)"])
     return fig
 
 

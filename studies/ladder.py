@@ -194,6 +194,10 @@ def static_zone_claims(rest: xr.Dataset) -> list[Claim]:
     ]
 
 
+#: The closed-form boundary of the static zone, a reference curve.
+REST_BOUNDARY = {"color": "black", "lw": 1.0, "ls": pplot.DASHES[1], "path_effects": pplot.HALO}
+
+
 def solvability_figure(atlas: xr.Dataset, size="two_column"):
     """n_solutions over (phi, f) at each omega, overlays, f = sqrt 2 and 2 arctan f."""
     from matplotlib.lines import Line2D
@@ -207,11 +211,7 @@ def solvability_figure(atlas: xr.Dataset, size="two_column"):
             collect_legend(ax, handles)
             if w == 0.0:
                 ff = np.linspace(0.0, 1.0, 200)
-                ax.plot(2 * np.arctan(ff), ff, color=pplot.OKABE_ITO["bluish_green"], lw=1.4,
-                        zorder=4)
-            ax.annotate(r"$f = \sqrt{2}$", (math.pi / 2, SQRT2), xytext=(-2, 3),
-                        textcoords="offset points", ha="right", va="bottom",
-                        bbox={"boxstyle": "square,pad=0.1", "fc": "white", "ec": "none"})
+                ax.plot(2 * np.arctan(ff), ff, zorder=4, **REST_BOUNDARY)
             ax.set_title(rf"({'abc'[k]}) $\omega$ = {w:g} rad s$^{{-1}}$", loc="left")
         pplot.outer_labels(axes)
         n = atlas.n_solutions.transpose("f", ...).values
@@ -219,9 +219,10 @@ def solvability_figure(atlas: xr.Dataset, size="two_column"):
         off_line = np.abs(atlas.f.values - SQRT2) > 1e-12
         if "none" in handles and not ((n == 0) & ~lost)[off_line].any():
             handles[r"none (on $f = \sqrt{2}$ only)"] = handles.pop("none")
-        handles[r"$\varphi = 2\arctan f$ (rest boundary)"] = Line2D(
-            [], [], color=pplot.OKABE_ITO["bluish_green"], lw=1.4)
-        order = ["unique", "contact lost", "a branch loses contact", "stagnation"]
+        if "singular" in handles:  # the coefficient 2 - f^2 of (8) vanishes
+            handles[r"singular: $f = \sqrt{2}$"] = handles.pop("singular")
+        handles[r"$\varphi = 2\,\arctan f$ (rest boundary)"] = Line2D([], [], **REST_BOUNDARY)
+        order = ["unique", "contact lost", "a contact would pull", "stagnation"]
         keys = sorted(handles, key=lambda s: order.index(s) if s in order else len(order))
         pplot.figure_legend(fig, [handles[k] for k in keys], keys, ncols=_half(keys, size),
                             title=pplot.fixed_values_text(atlas, 0.95 * fig.get_figwidth()))
@@ -263,36 +264,49 @@ def _half(labels, size) -> int | None:
 
 
 def portrait_figure(regions: xr.Dataset, curves, size="two_column"):
+    """(a) below sqrt 2: phase curves omega^2(phi) to rest or contact loss, over the region
+    where a contact would pull; (b) above sqrt 2: no sliding motion at all, every state
+    with omega > 0 indeterminate or leaving a contact, drawn as the map it is."""
     from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
 
     blue = pplot.OKABE_ITO["blue"]
+    c_zero = {"color": "black", "lw": 0.9, "ls": pplot.DASHES[2], "path_effects": pplot.HALO}
     with pplot.style():
         fig, axes = pplot.panels(len(PORTRAIT_F), size, height=3.3, panel_height=2.3,
                                  extra=1.9)
         handles: dict[str, object] = {}
         for k, (ax, f) in enumerate(zip(axes, PORTRAIT_F)):
             reg = regions.sel(f=f)
-            _pull_region(ax, f, U_TOP[f], blue, check=reg)
-            for pc in curves[f]:
-                pplot.phase_curve_figure(pc, squared=True, ax=ax)
+            if f < SQRT2:
+                _pull_region(ax, f, U_TOP[f], blue, check=reg)
+                for pc in curves[f]:
+                    pplot.phase_curve_figure(pc, squared=True, ax=ax)
+                    collect_legend(ax, handles)
+                title = rf"$f$ = {f:g} < $\sqrt{{2}}$, $2\,\arctan f$ = {2 * math.atan(f):.2f} rad"
+            else:
+                _squared_map(ax, reg)
                 collect_legend(ax, handles)
+                for pc in curves[f]:  # each start is indeterminate at once: no curve
+                    pplot.mark_event(ax, str(pc.attrs["end_reason"]), float(pc.phi[0]),
+                                     float(pc.omega[0]) ** 2)
+                handles.setdefault("indeterminate", pplot.event_handle("indeterminate"))
+                title = (rf"$f$ = {f:g} > $\sqrt{{2}}$: no sliding motion from any start "
+                         r"($\omega > 0$)")
             _, a, b = _coefficients(f, 1.0, corrected=True)
             pp = np.linspace(0.0, math.pi / 2, 200)
-            ax.plot(pp, a * np.sin(pp) + b * np.cos(pp), color=pplot.OKABE_ITO["black"],
-                    lw=0.9, ls=(0, (1.0, 1.5)), zorder=2)
+            ax.plot(pp, a * np.sin(pp) + b * np.cos(pp), zorder=2, **c_zero)
             ax.set_xlim(0.0, math.pi / 2)
             ax.set_ylim(0.0, U_TOP[f])
-            side = "<" if f < SQRT2 else ">"
-            ax.set_title(rf"({'ab'[k]}) $f$ = {f:g} {side} $\sqrt{{2}}$,  "
-                         rf"$2\arctan f$ = {2 * math.atan(f):.2f} rad", loc="left")
+            ax.set_ylabel(r"$\omega^2$ (rad$^{2}$ s$^{-2}$)")
+            ax.set_title(pplot.wrap([f"({'ab'[k]}) " + title], 0.45 * pplot.width_of(size)
+                                    if pplot.width_of(size) >= pplot.WIDE else
+                                    0.95 * pplot.width_of(size)), loc="left")
         if "left domain" in handles:
             handles[r"lying flat ($\varphi = \pi/2$)"] = handles.pop("left domain")
-        handles["a contact would pull"] = Patch(facecolor="none", edgecolor=blue,
-                                                hatch="\\\\\\\\", linewidth=0.6, ls="--")
-        handles[r"$c = 0$: $\omega^2 = a\sin\varphi + b\cos\varphi$"] = Line2D(
-            [], [], color=pplot.OKABE_ITO["black"], lw=0.9, ls=(0, (1.0, 1.5)))
-        order = ["start", "rest", "contact lost", r"lying flat ($\varphi = \pi/2$)"]
+        handles.setdefault("a contact would pull", pplot.overlay_patch("contact_lost"))
+        handles[r"$c = 0$: $\omega^2 = a\,\sin\varphi + b\,\cos\varphi$"] = Line2D([], [], **c_zero)
+        order = ["start", "rest", "contact lost", r"lying flat ($\varphi = \pi/2$)",
+                 "indeterminate", "two"]
         keys = sorted(handles, key=lambda s: order.index(s) if s in order else len(order))
         pplot.figure_legend(fig, [handles[k] for k in keys], keys, ncols=_half(keys, size),
                             title=r"$\omega > 0$ (sliding down), $l$ = 1 m, "
@@ -301,10 +315,20 @@ def portrait_figure(regions: xr.Dataset, curves, size="two_column"):
     return fig
 
 
+def _squared_map(ax, reg: xr.Dataset) -> None:
+    """n_solutions of ``reg`` over (phi, omega^2), contact_lost hatched."""
+    u = reg.omega.values ** 2
+    ds = reg[["n_solutions", "contact_lost"]].assign_coords(omega=u).rename(
+        omega="omega_squared")
+    ds["omega_squared"].attrs = {"units": "rad2 s-2", "long_name": "square of the angular "
+                                 "velocity", "phasemap_symbol": r"\omega^2"}
+    pplot.map_figure(ds, "n_solutions", x="phi", ax=ax)
+
+
 #: The symbols of the first integral, for the key under a figure.
 INTEGRAL_KEY = [
-            r"first integral of (8): $\omega^2 = c\,e^{\lambda\varphi} + a\sin\varphi"
-            r" + b\cos\varphi$",
+            r"first integral of (8): $\omega^2 = c\,e^{\lambda\varphi} + a\,\sin\varphi"
+            r" + b\,\cos\varphi$",
             r"$\lambda = 6f/(2 - f^2)$",
             r"$a = -6fg(5 - 4f^2)/(lq)$",
             r"$b = -3g(2 - 15f^2 + f^4)/(lq)$",
@@ -332,10 +356,11 @@ def _pull_region(ax, f: float, u_top: float, colour: str, check: xr.Dataset) -> 
     low = np.minimum(n1, n2)
     if not (low < 0).any():
         return
+    look = pplot.OVERLAYS["contact_lost"]
     ax.contourf(pp, uu, low, levels=[low.min() - 1.0, 0.0], colors="none",
-                hatches=["\\\\\\\\"]).set_hatchcolor(colour)
-    ax.contour(pp, uu, low, levels=[0.0], colors=[colour], linewidths=0.6,
-               linestyles="dashed")
+                hatches=[look.hatch]).set_hatchcolor(look.colour)
+    ax.contour(pp, uu, low, levels=[0.0], colors=[look.colour], linewidths=0.6,
+               linestyles=look.linestyle)
 
 
 # --------------------------------------------------------------------------- errata
@@ -487,9 +512,14 @@ def first_integral_claims(runs) -> list[Claim]:
 
 
 def first_integral_figure(runs, size="two_column"):
+    """The first integral as printed and corrected against a time integration of (8), to
+    where the motion ends (a contact is lost: the curves end there)."""
     from matplotlib.lines import Line2D
 
-    oi = pplot.OKABE_ITO
+    printed = {"color": "black", "lw": 1.0, "ls": pplot.DASHES[1], "path_effects": pplot.HALO}
+    corrected = {"color": "black", "lw": 1.0, "ls": pplot.DASHES[0]}
+    steps = {"ls": "none", "marker": "o", "ms": 3.0, "mfc": "none", "mec": pplot.GREY,
+             "mew": 0.8}
     with pplot.style():
         fig, axes = pplot.panels(2, size, height=3.0, panel_height=2.0, extra=1.6)
         for k, (ax, run) in enumerate(zip(axes, runs)):
@@ -500,33 +530,35 @@ def first_integral_figure(runs, size="two_column"):
             else:
                 lam, a, b = _coefficients(run["f"], run["l"], True, with_l=False)
                 wrong = r"printed $a$, $b$ lack $1/l$"
-            ax.plot(pp, _integral(pp, run["phi0"], run["omega0"], lam, a, b),
-                    color=oi["vermillion"], ls="--", lw=1.0)
+            ax.plot(pp, _integral(pp, run["phi0"], run["omega0"], lam, a, b), **printed)
             lam, a, b = _coefficients(run["f"], run["l"], True)
-            ax.plot(pp, _integral(pp, run["phi0"], run["omega0"], lam, a, b),
-                    color=oi["black"], lw=1.0)
+            ax.plot(pp, _integral(pp, run["phi0"], run["omega0"], lam, a, b), **corrected)
             every = max(1, run["phi"].size // 25)
-            ax.plot(run["phi"][::every], run["u"][::every], ls="none", marker="o", ms=3.0,
-                    mfc="none", mec=oi["blue"], mew=0.7)
+            ax.plot(run["phi"][::every], run["u"][::every], **steps)
+            pplot.mark_event(ax, run["end"], run["event_phi"][-1], run["event_u"][-1])
             ax.set_xlabel(r"$\varphi$ (rad)")
             ax.set_ylabel(r"$\omega^2$ (rad$^{2}$ s$^{-2}$)")
             ax.set_title(rf"({'ab'[k]}) $l$ = {run['l']:g} m, $\omega_0$ = {run['omega0']:.3g} "
                          rf"rad s$^{{-1}}$:" + "\n" + wrong, loc="left")
-        pplot.figure_legend(fig, [Line2D([], [], color=oi["vermillion"], ls="--", lw=1.0),
-                    Line2D([], [], color=oi["black"], lw=1.0),
-                    Line2D([], [], ls="none", marker="o", ms=3.0, mfc="none", mec=oi["blue"],
-                           mew=0.7)],
-                   ["first integral as printed",
-                    r"corrected: $b$ with $-15f^2$, $a$ and $b$ over $l$",
-                    "time integration of (8)"], ncols=3 if pplot.width_of(size) >= pplot.WIDE
-                            else 1,
+        end = runs[0]["end"].replace("_", " ")
+        pplot.figure_legend(fig, [Line2D([], [], **printed), Line2D([], [], **corrected),
+                                  Line2D([], [], **steps), pplot.event_handle(runs[0]["end"])],
+                            ["first integral as printed",
+                             r"corrected: $b$ with $-15f^2$, $a$ and $b$ over $l$",
+                             "time integration of (8)",
+                             f"{end}: the motion ends, the curves too"],
+                            ncols=2 if pplot.width_of(size) >= pplot.WIDE else 1,
                             title=pplot.wrap([r"$\omega > 0$", *(
                                 rf"${k}$ = {v}" for k, v in (
                                     ("f", f"{runs[0]['f']:g}"),
                                     (r"\varphi_0", f"{runs[0]['phi0']:g} rad"),
                                     ("g", r"9.81 m s$^{-2}$"), ("m", "1 kg")))],
                                 0.95 * fig.get_figwidth()))
-        pplot.define_symbols(fig, INTEGRAL_KEY)
+        ends = " and ".join(f"{r['event_phi'][-1]:.2f} rad ({'ab'[i]})"
+                            for i, r in enumerate(runs))
+        pplot.define_symbols(fig, INTEGRAL_KEY + [
+            "(8) holds while both contacts push",
+            rf"a contact is lost at $\varphi$ = {ends}"])
     return fig
 
 

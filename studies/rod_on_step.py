@@ -188,15 +188,28 @@ def _plain(ds):
     return ds[[v for v in ("n_solutions", "stagnation", "contact_lost") if v in ds]]
 
 
-def _legend(fig, handles, size, ds):
-    if "a branch loses contact" in handles:  # here: an admissible separation
-        handles["a solution leaves the floor or the edge"] = handles.pop("a branch loses contact")
-    order = ["unique", "none", "two", "three or more", "continuum",
-             "a solution leaves the floor or the edge", "stagnation"]
+#: The step's height as every figure states it: one form, one precision.
+H_TEXT = rf"$h/l$ = 25/(6$\sqrt{{7}}$) = {H_STAR / L:.5g}"
+#: What "a contact would pull" means here: the solution leaves the floor or the edge.
+PULL_KEY = "a contact would pull: the solution leaves the floor or the edge"
+#: The reference curves: black, told apart by their dashes, haloed in white.
+S3_STYLE = {"color": "black", "lw": 1.0, "ls": pplot.DASHES[1], "path_effects": pplot.HALO}
+FLOOR_STYLE = {"color": "black", "lw": 1.2, "ls": pplot.DASHES[3], "path_effects": pplot.HALO}
+STAR_STYLE = {"ls": "none", "marker": "*", "ms": 8, "mfc": "white", "mec": "black", "mew": 0.6}
+
+
+def _legend(fig, handles, size, ds, h_text: str | None = H_TEXT):
+    """One legend over the panels, headed by what was held fixed: the step's height as
+    ``h_text`` (h/l, the form every figure uses), not as h in metres."""
+    order = ["unique", "none", "two", "three or more", "continuum", "a contact would pull",
+             "stagnation"]
     keys = sorted(handles, key=lambda s: order.index(s) if s in order else len(order))
     ncols = -(-len(keys) // 2) if _wide(size) else 2
+    plain = ds.drop_attrs().assign_attrs({k: v for k, v in ds.attrs.items()
+                                          if not k.endswith("_h")})
+    items = pplot.fixed_values(plain) + ([h_text] if h_text else [])
     pplot.figure_legend(fig, [handles[k] for k in keys], keys, ncols=ncols,
-                        title=pplot.fixed_values_text(ds, 0.95 * fig.get_figwidth()))
+                        title=pplot.wrap(items, 0.95 * fig.get_figwidth()))
 
 
 def figure_rest(rest, low, size="two_column"):
@@ -208,20 +221,24 @@ def figure_rest(rest, low, size="two_column"):
             pplot.map_figure(_plain(ds), "n_solutions", x="theta", ax=ax)
             study.collect_legend(ax, handles)
             h = float(ds.attrs["phasemap_fixed_h"])
-            ax.set_title(rf"({'ab'[k]}) $h/l$ = {h / L:.4g}", loc="left")
+            ax.set_title(f"({'ab'[k]}) " + (H_TEXT if h == H_STAR else rf"$h/l$ = {h / L:.5g}"),
+                         loc="left")
         pplot.outer_labels(axs)
-        _legend(fig, handles, size, rest.drop_attrs().assign_attrs(
-            {k: v for k, v in rest.attrs.items() if not k.endswith("_h")}))
-        pplot.define_symbols(fig, KEY)
+        _legend(fig, handles, size, rest, h_text=None)
+        pplot.define_symbols(fig, KEY + [PULL_KEY])
     return fig
 
 
 def figure_motion(ds, size="two_column"):
-    """n_solutions in motion at h*, the zero sets of (S3) and of the one-contact rod."""
-    black, green = pplot.OKABE_ITO["black"], pplot.OKABE_ITO["bluish_green"]
+    """n_solutions in motion at h*, the zero sets of (S3) and of the one-contact rod.
+
+    Sliding down (a, b) the panels share their axes; sliding up (c) the only
+    paradox sits in a corner, and the panel shows that corner.
+    """
     with pplot.style():
-        fig, axs = pplot.panels(len(OMEGAS), size, height=3.4, panel_height=2.1, extra=1.9,
-                                sharex=True, sharey=True)
+        fig, axs = pplot.panels(len(OMEGAS), size, height=3.4, panel_height=2.1, extra=1.9)
+        axs[1].sharex(axs[0])
+        axs[1].sharey(axs[0])
         handles: dict[str, object] = {}
         th = np.linspace(float(ds.theta[0]), float(ds.theta[-1]), 600)
         ff = np.linspace(0.0, 2.0, 600)
@@ -230,55 +247,68 @@ def figure_motion(ds, size="two_column"):
             pplot.map_figure(_plain(ds.sel(omega=w)), "n_solutions", x="theta", ax=ax)
             study.collect_legend(ax, handles)
             s = 1 if w > 0 else -1
-            ax.contour(th, ff, coefficient_s3(T, F, H_STAR, s), levels=[0.0], colors=[black],
-                       linewidths=1.0, linestyles="dashed", zorder=5)
+            ax.contour(th, ff, coefficient_s3(T, F, H_STAR, s), levels=[0.0],
+                       colors=[S3_STYLE["color"]], linewidths=S3_STYLE["lw"],
+                       linestyles=[S3_STYLE["ls"]], zorder=5).set_path_effects(pplot.HALO)
             if s < 0:
-                ax.plot(th, painleve_f(th), color=green, lw=1.3, zorder=5)
-                ax.plot([THETA_STAR], [F_STAR], ls="none", marker="*", ms=8, mfc="white",
-                        mec="black", mew=0.6, zorder=6)
-            ax.set_ylim(0.0, 2.0)
+                ax.plot(th, painleve_f(th), zorder=5, **FLOOR_STYLE)
+                ax.plot([THETA_STAR], [F_STAR], zorder=6, **STAR_STYLE)
+                ax.set_ylim(0.0, 2.0)
+            else:
+                _corner(ax, ds.sel(omega=w))
             value = f"{w:g}".replace("-", "\u2212")
             ax.set_title(rf"({'abc'[k]}) $\omega$ = {value} rad s$^{{-1}}$", loc="left")
         pplot.outer_labels(axs)
-        handles["(S3) = 0: both contacts slipping"] = Line2D([], [], color=black, lw=1.0,
-                                                                ls="dashed")
-        handles[r"floor alone: $f = (1 + 3\cos^2\theta)/(3\sin\theta\cos\theta)$"] = Line2D(
-            [], [], color=green, lw=1.3)
-        handles[r"$f^* = 2/\sqrt{3}$, $\tan\theta^* = 5/\sqrt{3}$"] = Line2D(
-            [], [], ls="none", marker="*", ms=8, mfc="white", mec="black", mew=0.6)
+        handles["(S3) = 0: both contacts slipping"] = Line2D([], [], **S3_STYLE)
+        handles[r"floor alone: $f = (1 + 3\cos^2\theta)/(3\sin\theta\,\cos\theta)$"] = \
+            Line2D([], [], **FLOOR_STYLE)
+        handles[r"$f^* = 2/\sqrt{3}$, $\tan\theta^* = 5/\sqrt{3}$"] = Line2D([], [],
+                                                                            **STAR_STYLE)
         _legend(fig, handles, size, ds)
-        pplot.define_symbols(fig, [rf"$h/l = 25/(6\sqrt{{7}})$ = {H_STAR / L:.4f}"] + KEY)
+        pplot.define_symbols(fig, KEY + [PULL_KEY])
     return fig
+
+
+def _corner(ax, ds) -> None:
+    """Limit ``ax`` to the cells of ``ds`` with other than one solution, and a margin."""
+    n = ds.n_solutions.transpose("f", "theta").values
+    jj, ii = np.nonzero(n != 1)
+    if not ii.size:
+        return
+    th, f = ds.theta.values, ds.f.values
+    lo_t = th[max(ii.min() - 40, 0)]
+    lo_f = f[max(jj.min() - 40, 0)]
+    ax.set_xlim(lo_t, th[-1])
+    ax.set_ylim(lo_f, f[-1])
 
 
 def figure_slide(ds, t_off, size="two_column"):
     """theta(t) and omega(t) of the rod sliding down from rest until it leaves the step."""
-    oi = pplot.OKABE_ITO
+    motion = {"color": "black", "lw": 1.2}
+    leave = {"color": "black", "lw": 0.9, "ls": pplot.DASHES[1]}
     with pplot.style():
         fig, axs = pplot.panels(2, size, height=2.9, panel_height=1.8, extra=1.4, sharex=True)
         t = ds.t.values
-        axs[0].plot(t, ds.theta.values, color=oi["blue"], lw=1.2)
-        axs[0].axhline(theta_min(H_STAR), color=oi["vermillion"], lw=0.9, ls="dashed")
+        axs[0].plot(t, ds.theta.values, **motion)
+        axs[0].axhline(theta_min(H_STAR), **leave)
         axs[0].set_ylabel(r"$\theta$ (rad)")
-        axs[1].plot(t, ds.omega.values, color=oi["blue"], lw=1.2)
+        axs[1].plot(t, ds.omega.values, **motion)
         axs[1].set_ylabel(r"$\omega$ (rad s$^{-1}$)")
         for ax, what in zip(axs, ("angle", "angular velocity")):
-            ax.axvline(t_off, color=oi["vermillion"], lw=0.9, ls="dashed")
+            ax.axvline(t_off, **leave)
             ax.set_xlim(0.0, t_off * 1.02)
             ax.set_xlabel(r"$t$ (s)")
             ax.set_title(what, loc="left")
         pplot.outer_labels(axs)
         pplot.label_panels(axs)
-        head = pplot.wrap([rf"$\theta_0$ = {THETA_SLIDE:g} rad", r"$\omega_0$ = 0;",
-                           rf"$f$ = {F_SLIDE:g}", rf"$h/l$ = {H_STAR / L:.4f}",
+        head = pplot.wrap([rf"$\theta_0$ = {THETA_SLIDE:g} rad",
+                           r"$\omega_0$ = 0 rad s$^{-1}$;", rf"$f$ = {F_SLIDE:g}", H_TEXT,
                            rf"$l$ = {L:g} m", rf"$g$ = {G:g} m s$^{{-2}}$", "$m$ = 1 kg"],
                           0.95 * fig.get_figwidth()).replace(";,", ";")
-        pplot.figure_legend(fig, [
-            Line2D([], [], color=oi["blue"], lw=1.2),
-            Line2D([], [], color=oi["vermillion"], lw=0.9, ls="dashed")],
-            ["simulate: both contacts slipping",
-             rf"$2l\sin\theta = h$: the rod leaves the step ($t$ = {t_off:.3f} s)"],
-            ncols=2 if _wide(size) else 1, title=head)
+        pplot.figure_legend(fig, [Line2D([], [], **motion), Line2D([], [], **leave)],
+                            ["simulate: both contacts slipping",
+                             rf"$2l\sin\theta = h$: the rod leaves the step ($t$ = {t_off:.3f} s)"],
+                            ncols=2 if _wide(size) else 1, title=head)
     return fig
 
 

@@ -59,8 +59,8 @@ def main(argv=None) -> list[Claim]:
     args = arguments(__doc__, argv)
     out = args.out
     files, claims = [], []
-    n_phi, n_delta, n_omega, n_fate = (241, 151, 200, 160) if args.quick else \
-        (1441, 601, 800, 241)
+    n_phi, n_delta, n_omega, n_fate = (241, 151, 200, 240) if args.quick else \
+        (1441, 601, 800, 481)
 
     # -- stagnation zones (15) over (phi, delta/l) ----------------------------------
     stag = phasemap.Scene(
@@ -148,51 +148,50 @@ def maps_figure(stag: xr.Dataset, bounce: xr.Dataset, n: dict, size="two_column"
     """(a) the zones (15) over (phi, delta/l) at rest; (b) the bounce region (12)."""
     from matplotlib.lines import Line2D
 
-    oi = pplot.OKABE_ITO
+    black = pplot.OKABE_ITO["black"]
+    zone = {"color": black, "lw": 0.9, "ls": pplot.DASHES[1], "path_effects": pplot.HALO}
+    newton = {"color": black, "lw": 0.9, "ls": pplot.DASHES[0], "path_effects": pplot.HALO}
+    printed = {"color": black, "lw": 0.9, "ls": pplot.DASHES[2], "path_effects": pplot.HALO}
     with pplot.style():
         fig, (a, b) = pplot.panels(2, size, height=3.3, panel_height=2.6, extra=0.9)
         pplot.map_figure(_per_l(stag), "stagnation", x="phi", ax=a)
         pp = np.linspace(-math.pi, math.pi, 721)
-        a.plot(pp, np.abs(np.sin(pp)), color=oi["black"], lw=0.8, ls="--")
-        a.axhline(1.0, color=oi["black"], lw=0.6, ls=":")
+        a.plot(pp, np.abs(np.sin(pp)), **zone)
+        a.axhline(1.0, color=black, lw=0.6, ls=pplot.DASHES[2])
         a.set_ylabel(r"$\delta/l$")
-        a.set_title(r"(a) at rest, $\omega$ = 0", loc="left")
-        _relabel_legend(a, {"no": "rest impossible", "yes": "rest possible"}, [
-            (Line2D([], [], color=oi["black"], lw=0.8, ls="--"), r"$|\sin\varphi| = \delta/l$"),
-            (Line2D([], [], color=oi["black"], lw=0.6, ls=":"), r"$\delta = l$")])
+        a.set_title(r"(a) at rest, $\omega$ = 0 rad s$^{-1}$", loc="left")
+        pplot.legend_above(a, _entries(a) + [
+            Line2D([], [], label=r"$|\sin\varphi| = \delta/l$", **zone),
+            Line2D([], [], color=black, lw=0.6, ls=pplot.DASHES[2], label=r"$\delta = l$")],
+            ncols=2)
 
         # n_solutions with contact_lost hatched: rolling on (N >= 0), a hop (the rolling
         # would pull; hatched), or neither (N < 0 and free flight closes the gap: none)
         pplot.map_figure(bounce, "n_solutions", x="phi", ax=b)
         phi, w = bounce.phi.values, bounce.omega.values
-        b.contour(phi, w, n["unreduced"].T, levels=[0.0], colors=[oi["black"]],
-                  linewidths=0.8)
-        b.contour(phi, w, n["printed_13"].T, levels=[0.0], colors=[oi["vermillion"]],
-                  linewidths=0.9, linestyles="dashed")
+        b.contour(phi, w, n["unreduced"].T, levels=[0.0], colors=[black], linewidths=0.9,
+                  linestyles=[newton["ls"]]).set_path_effects(pplot.HALO)
+        b.contour(phi, w, n["printed_13"].T, levels=[0.0], colors=[black], linewidths=0.9,
+                  linestyles=[printed["ls"]]).set_path_effects(pplot.HALO)
         b.set_title(rf"(b) bounce (12), $\delta/l$ = {LOW:g}", loc="left")
-        _relabel_legend(b, {"unique": r"rolls ($N \geq 0$) or hops",
-                            "none": r"none: $N < 0$, no hop",
-                            "a branch loses contact": "hops"}, [
-            (Line2D([], [], color=oi["black"], lw=0.8), r"$N = 0$, Newton–Euler"),
-            (Line2D([], [], color=oi["vermillion"], lw=0.9, ls="--"),
-             r"$N = 0$, (13) as printed")])
+        names = {"unique": r"rolls ($N \geq 0$) or hops", "none": r"none: $N < 0$, no hop"}
+        pplot.legend_above(b, _entries(b, names) + [
+            Line2D([], [], label=r"$N = 0$, Newton–Euler", **newton),
+            Line2D([], [], label=r"$N = 0$, (13) as printed", **printed)], ncols=2)
         pplot.define_symbols(fig, [pplot.fixed_values_text(stag.drop_vars("delta"))
-                                   .replace(r"$\omega$ = 0 rad s$^{-1}$, ", ""), *KEY])
+                                   .replace(r"$\omega$ = 0 rad s$^{-1}$, ", ""), *KEY,
+                                   "a contact would pull: the wheel hops"])
     return fig
 
 
-def _relabel_legend(ax, names: dict, extra: list) -> None:
-    """Rename the entries of the legend above ``ax`` and append ``extra`` (handle, label)."""
+def _entries(ax, names: dict | None = None) -> list:
+    """The handles of the legend above ``ax``, renamed by ``names`` (label -> new label)."""
     legend = ax.get_legend()
-    handles = list(legend.legend_handles) + [h for h, _ in extra]
-    labels = [names.get(t.get_text(), t.get_text()) for t in legend.get_texts()]
-    labels += [t for _, t in extra]
-    title = ax.get_title(loc="left")
-    legend.remove()
-    ax.set_title("", loc="left")
-    new = ax.legend(handles, labels, loc="lower left", bbox_to_anchor=(0.0, 1.02), ncols=2,
-                    title=title, alignment="left", borderaxespad=0.0)
-    new._phasemap_above = True
+    out = []
+    for h, t in zip(legend.legend_handles, legend.get_texts()):
+        h.set_label((names or {}).get(t.get_text(), t.get_text()))
+        out.append(h)
+    return out
 
 
 # --------------------------------------------------------------------------- portraits
@@ -247,9 +246,7 @@ def portrait_figure(curves, run: xr.Dataset, size="two_column"):
     the three are stacked.
     """
     import matplotlib.pyplot as plt
-    from matplotlib.patches import Patch
 
-    green = pplot.OKABE_ITO["bluish_green"]
     width = pplot.width_of(size)
     wide = width >= pplot.WIDE
     with pplot.style():
@@ -262,14 +259,12 @@ def portrait_figure(curves, run: xr.Dataset, size="two_column"):
             ax = axes[key]
             lo = min(float(pc.phi.min()) for pc in curves[ratio]) - 0.3
             hi = max(float(pc.phi.max()) for pc in curves[ratio]) + 0.3
-            pp = np.linspace(lo, hi, 4000)
-            zone = np.where(np.abs(np.sin(pp)) <= ratio, 0.0, np.nan)
-            ax.plot(pp, zone, color=green, lw=4.0, alpha=0.5, solid_capstyle="butt",
-                    zorder=1)
+            _zone_spans(ax, lo, hi, ratio)
             for pc in curves[ratio]:
                 pplot.phase_curve_figure(pc, ax=ax)
                 collect_legend(ax, handles)
             ax.set_xlim(lo, hi)
+            pplot.angle_ticks(ax)
             ax.set_title(rf"({key}) $\delta/l$ = {ratio:g}"
                          + (" < 1: damped oscillation" if ratio < 1 else
                             r" $\geq$ 1: one way only"), loc="left")
@@ -277,18 +272,27 @@ def portrait_figure(curves, run: xr.Dataset, size="two_column"):
         pplot.trajectory_figure(run, states="phi", ax=ax)
         collect_legend(ax, handles)
         half = math.asin(LOW)
-        ax.axhspan(-half, half, color=green, alpha=0.3, lw=0, zorder=0)
+        pplot.stagnation_span(ax, -half, half, axis="y")
         ax.set_title(pplot.wrap([
             rf"(c) the motion of (a) from $\varphi_0$ = {STARTS[LOW][0][0]:g} rad",
             rf"$\omega_0$ = {STARTS[LOW][0][1]:g} rad s$^{{-1}}$ in time (simulate)"],
             0.95 * width), loc="left")
-        handles[r"zone (15): $|\sin\varphi| \leq \delta/l$"] = Patch(
-            facecolor=green, alpha=0.5, lw=0)
+        handles[r"stagnation: $|\sin\varphi| \leq \delta/l$ (15)"] = pplot.stagnation_patch()
         pplot.figure_legend(fig, list(handles.values()), list(handles),
                             ncols=len(handles) if wide else None,
                             title=pplot.wrap(_fixed_items(), 0.95 * width))
         pplot.define_symbols(fig, KEY)
     return fig
+
+
+def _zone_spans(ax, lo: float, hi: float, ratio: float) -> None:
+    """Hatch the zones (15), |sin phi| <= delta/l, about each multiple of pi in [lo, hi]."""
+    half = math.asin(min(ratio, 1.0))
+    if half >= math.pi / 2:
+        pplot.stagnation_span(ax, lo, hi)
+        return
+    for k in range(math.floor(lo / math.pi) - 1, math.ceil(hi / math.pi) + 2):
+        pplot.stagnation_span(ax, k * math.pi - half, k * math.pi + half)
 
 
 def _fixed_items() -> list[str]:
@@ -422,8 +426,6 @@ def fates_figure(fates, size="two_column"):
     many reversals the wheel stops.  Side by side at two-column width (colour
     bars on the right), stacked at one-column width (colour bars underneath).
     """
-    from matplotlib.patches import Patch
-
     low, high = fates[LOW], fates[HIGH]
     differ = int((low.fate != high.fate).sum())
     wide = pplot.width_of(size) >= pplot.WIDE
@@ -447,10 +449,9 @@ def fates_figure(fates, size="two_column"):
                                    rf"rest angle, $\delta/l$ = {HIGH:g}")):
             ax.set_title(text, loc="left")
         pplot.label_panels(axes)
-        handles.append(Patch(facecolor="white", edgecolor=pplot.GREY, linewidth=0.4))
-        labels.append("(c) blank: contact lost")
         pplot.figure_legend(fig, handles, labels, title=pplot.wrap(
-            _fixed_items() + [rf"at $\delta/l$ = {HIGH:g} the fate differs from (a) in "
+            _fixed_items() + [rf"$t_\mathrm{{end}}$ = {T_END:g} s",
+                              rf"at $\delta/l$ = {HIGH:g} the fate differs from (a) in "
                               f"{differ} of {low.fate.size} cells"],
             0.95 * fig.get_figwidth()).replace(" kg,", " kg;"))
         pplot.define_symbols(fig, KEY)

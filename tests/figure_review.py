@@ -15,17 +15,38 @@ The layout review is geometric, on the drawn figure at its printed size:
   annotations) overlap;
 * no text or legend lies over another panel's plotting area; an inset's
   texts may lie over its parent panel but must not cross its lines;
-* panel letters (a), (b), ... sit above their panels, at the same offset
-  from each panel's left edge.
+* panel letters (a), (b), ... sit above their panels, at one offset (across
+  and up) from each panel's top left corner;
+* a colour bar's range holds the data drawn (beyond it only behind an arrow,
+  and only a tail of at most :data:`TAIL` of the cells);
+* the entries of a legend are told apart in greyscale by their style (dash,
+  marker, hatch, fill or a grey level at least :data:`GREY_STEP` apart), not
+  by colour alone;
+* no label box or legend lies over plotted data (lines, markers, meshes,
+  filled regions) inside a panel;
+* every axis and every stated value ("$\\omega$ = 0 rad s$^{-1}$") has its
+  unit, unless the quantity is dimensionless (:func:`dimensionless`).
+
+Across the figures of one study (:func:`check`): one meaning, one look.  A
+legend label has one look (colour, hatch, dashes, marker) in every figure; a
+filled class or a marker's look names one label; and a colour that fills a
+class is not the colour of a curve or marker that means something else.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
 import itertools
 import re
 
+import matplotlib.colors as mcolors
+import numpy as np
+from matplotlib.collections import Collection
+from matplotlib.image import AxesImage
 from matplotlib.legend import Legend
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
 from phasemap import plot as pplot
 from phasemap import study
@@ -34,6 +55,12 @@ from phasemap import study
 MIN_POINTS = 7.0
 #: Slack in pixels (at the figure's dpi) for boxes that merely touch.
 SLACK = 1.0
+#: The largest share of a colour map's cells that may lie beyond its colour bar (behind
+#: an arrow): the tail that a robust range (2nd-98th percentile) leaves out on one side.
+TAIL = 0.02
+#: The least difference in grey level (0 black .. 1 white) that tells two colours apart
+#: in a greyscale print.
+GREY_STEP = 0.1
 
 
 @contextlib.contextmanager
@@ -45,7 +72,8 @@ def recording():
         panels = [a for a in fig.axes if a.get_label() != "<colorbar>" and a.axison
                   and a.get_position().height > 0.2 and a.get_position().width > 0.15]
         seen[name] = {"texts": pplot.figure_texts(fig), "panels": len(panels),
-                      "width": fig.get_figwidth(), "problems": layout_problems(fig)}
+                      "width": fig.get_figwidth(), "problems": layout_problems(fig),
+                      "looks": legend_looks(fig)}
         return original(fig, out, name)
 
     study.save_figure = save
@@ -70,6 +98,8 @@ def check(seen: dict[str, dict], exempt_fixed=()) -> None:
         spelled = _SPELLED.search(plain)
         assert spelled is None, (name, f"{spelled and spelled.group(0)!r}: a symbol spelled out")
         assert not what["problems"], (name, what["problems"])
+    problems = look_problems({name: what["looks"] for name, what in seen.items()})
+    assert not problems, problems
 
 
 #: A Greek letter's name given a value outside mathtext ("rho = 0.5 m"): a missing symbol.
@@ -190,6 +220,10 @@ def layout_problems(fig) -> list[str]:
         if _shrunk(b1).overlaps(_shrunk(b2)):
             problems.append(f"{w1} overlaps {w2}")
     problems += _letter_problems(fig, renderer)
+    problems += colour_bar_problems(fig)
+    problems += greyscale_problems(fig)
+    problems += covering_problems(fig, renderer, texts)
+    problems += unit_problems(fig)
     return problems
 
 
@@ -197,10 +231,11 @@ _LETTER = re.compile(r"\(([a-z])\)")
 
 
 def _letter_problems(fig, renderer) -> list[str]:
-    """Panel letters above their panels, at one offset from each panel's left edge."""
+    """Panel letters above their panels, at one offset (across and up) from each panel's
+    top left corner: wherever a letter is (a panel's title, a legend's title, a text)."""
     found = []
     for ax in fig.axes:
-        candidates = [ax._left_title]
+        candidates = [ax._left_title, *ax.texts]
         if ax.get_legend() is not None:
             candidates.append(ax.get_legend().get_title())
         for t in candidates:
@@ -211,9 +246,330 @@ def _letter_problems(fig, renderer) -> list[str]:
     for letter, box, ax in found:
         if box.y0 < ax.bbox.y1 - SLACK:
             problems.append(f"panel letter {letter} is not above its panel")
-        offsets.append((letter, box.x0 - ax.bbox.x0))
-    if offsets:
-        lo, hi = min(o for _, o in offsets), max(o for _, o in offsets)
-        if hi - lo > 2.0 * SLACK + 1.0:
-            problems.append(f"panel letters at different offsets from their panels: {offsets}")
+        offsets.append((letter, box.x0 - ax.bbox.x0, box.y0 - ax.bbox.y1))
+    for i, what in ((1, "across"), (2, "up")):
+        if offsets:
+            values = [o[i] for o in offsets]
+            if max(values) - min(values) > 2.0 * SLACK + 1.0:
+                problems.append(f"panel letters at different offsets {what} from their panels: "
+                                + ", ".join(f"{o[0]} {o[i]:.0f} px" for o in offsets))
+    return problems
+
+
+# --------------------------------------------------------------------------- colour bars
+
+
+def colour_bar_problems(fig) -> list[str]:
+    """Colour bars whose range does not hold the data they colour.
+
+    Values beyond a colour bar's end are allowed only behind an arrow at that
+    end (``extend``) and only as a tail of at most :data:`TAIL` of the cells.
+    """
+    problems = []
+    for ax in _all_axes(fig):
+        bar = getattr(ax, "_colorbar", None)
+        if bar is None or bar.mappable is None:
+            continue
+        data = np.ma.masked_invalid(np.ma.asarray(bar.mappable.get_array(), dtype=float))
+        values = data.compressed()
+        if not values.size:
+            continue
+        norm = bar.mappable.norm
+        lo, hi = (norm.boundaries[0], norm.boundaries[-1]) if hasattr(norm, "boundaries") \
+            else (norm.vmin, norm.vmax)
+        label = bar.ax.get_ylabel() or bar.ax.get_xlabel() or "a colour bar"
+        for side, beyond, arrow in (("below", values < lo, bar.extend in ("min", "both")),
+                                    ("above", values > hi, bar.extend in ("max", "both"))):
+            share = float(beyond.mean())
+            if share and not (arrow and share <= TAIL):
+                problems.append(f"colour bar {label[:40]!r}: {beyond.sum()} of {values.size} "
+                                f"cells ({100 * share:.1f} %) lie {side} its range "
+                                f"[{lo:.4g}, {hi:.4g}]" + ("" if arrow else ", with no arrow"))
+    return problems
+
+
+# --------------------------------------------------------------------------- greyscale
+
+
+def grey(colour) -> float:
+    """The grey level of ``colour`` printed in greyscale (0 black, 1 white), composited on
+    white; 1 for no colour."""
+    if colour is None or (isinstance(colour, str) and colour.lower() == "none"):
+        return 1.0
+    r, g, b, a = mcolors.to_rgba(colour)
+    level = 0.299 * r + 0.587 * g + 0.114 * b
+    return a * level + (1.0 - a)
+
+
+def _dashes(line) -> tuple:
+    style = line.get_linestyle()
+    if style in ("None", "none", " ", ""):
+        return ()
+    offset, pattern = line._unscaled_dash_pattern
+    return tuple(round(x, 1) for x in (pattern or ()))
+
+
+def _grey_look(handle) -> tuple | None:
+    """What of a legend handle's look survives greyscale: (style, grey levels)."""
+    if isinstance(handle, Line2D):
+        marker = handle.get_marker()
+        marker = None if marker in ("None", "none", "", " ", None) else str(marker)
+        line = bool(_dashes(handle)) or handle.get_linestyle() not in ("None", "none", " ", "")
+        style = ("line", _dashes(handle) if line else None, round(handle.get_linewidth(), 1)
+                 if line else None, marker, round(handle.get_markersize()) if marker else None)
+        greys = ([grey(handle.get_color())] if line else []) + \
+            ([grey(handle.get_markerfacecolor()), grey(handle.get_markeredgecolor())]
+             if marker else [])
+        return style, greys
+    if isinstance(handle, Patch):
+        hatch = handle.get_hatch() or None
+        greys = [grey(handle.get_facecolor())]
+        if hatch:
+            greys.append(grey(handle.get_hatchcolor()))
+        return ("patch", hatch, handle.get_linestyle()), greys
+    return None
+
+
+def _legends(fig) -> list:
+    legends = []
+    for f in [fig, *fig.subfigs]:
+        legends += list(f.legends)
+    legends += [ax.get_legend() for ax in _all_axes(fig) if ax.get_legend() is not None]
+    return legends
+
+
+def greyscale_problems(fig) -> list[str]:
+    """Legend entries of one figure that only colour tells apart: same dashes, marker,
+    hatch and size, and every grey level within :data:`GREY_STEP`."""
+    entries = {}
+    for legend in _legends(fig):
+        for handle, text in zip(legend.legend_handles, legend.get_texts()):
+            look = _grey_look(handle)
+            if look is not None and text.get_text():
+                entries.setdefault(text.get_text(), look)
+    problems = []
+    for (a, (sa, ga)), (b, (sb, gb)) in itertools.combinations(entries.items(), 2):
+        if sa == sb and len(ga) == len(gb) and \
+                all(abs(x - y) < GREY_STEP for x, y in zip(ga, gb)):
+            problems.append(f"{a!r} and {b!r} differ by colour alone (greyscale alike)")
+    return problems
+
+
+# --------------------------------------------------------------------------- labels over data
+
+
+def _data_boxes(ax, renderer):
+    """(what, test) of each plotted artist of ``ax``: ``test(box)`` tells whether a
+    display-space box covers some of it."""
+    out = []
+    for line in ax.get_lines():
+        if not line.get_visible() or not len(line.get_xdata()):
+            continue
+        path = line.get_transform().transform_path(line.get_path())
+        has_line = line.get_linestyle() not in ("None", "none", " ", "")
+        has_marker = line.get_marker() not in ("None", "none", "", " ", None)
+        clip = ax.bbox
+
+        def test(box, path=path, has_line=has_line, has_marker=has_marker, clip=clip):
+            inner = _shrunk(box)
+            if has_line and path.intersects_bbox(inner, filled=False):
+                return True
+            if has_marker or not has_line:
+                v = path.vertices
+                inside = (v[:, 0] > inner.x0) & (v[:, 0] < inner.x1) & \
+                    (v[:, 1] > inner.y0) & (v[:, 1] < inner.y1)
+                return bool(inside.any())
+            return False
+        out.append((line.get_label() if not line.get_label().startswith("_") else "a line",
+                    test))
+    for artist in [*ax.collections, *ax.images]:
+        if not artist.get_visible() or not isinstance(artist, (Collection, AxesImage)):
+            continue
+        try:
+            extent = artist.get_window_extent(renderer)
+        except (RuntimeError, ValueError):
+            continue
+        if not np.all(np.isfinite([extent.x0, extent.y0, extent.x1, extent.y1])):
+            continue
+        extent = extent.intersection(extent, ax.bbox) or extent
+
+        def test(box, extent=extent):
+            return _shrunk(box).overlaps(extent)
+        out.append((type(artist).__name__, test))
+    return out
+
+
+def covering_problems(fig, renderer, texts=None) -> list[str]:
+    """A text or legend inside a panel that lies over what the panel plots."""
+    problems = []
+    texts = _texts(fig, renderer) if texts is None else texts
+    for what, box, owner, _ in texts:
+        if owner is None or not (what.startswith("text in") or what.startswith("legend of")):
+            continue
+        if not _shrunk(box).overlaps(owner.bbox):
+            continue
+        for name, covers in _data_boxes(owner, renderer):
+            if covers(box):
+                problems.append(f"{what} lies over plotted data ({name})")
+                break
+    return problems
+
+
+# --------------------------------------------------------------------------- units
+
+
+@functools.lru_cache(maxsize=1)
+def _dimensionless_symbols() -> frozenset:
+    from phasemap.models import MODELS
+
+    out = set()
+    for m in MODELS.values():
+        for v in m.variables.values():
+            if str(v.units).strip() in ("1", ""):
+                out.add(v.symbol or v.name)
+    return frozenset(out)
+
+
+def dimensionless(symbol: str) -> bool:
+    """Whether the mathtext ``symbol`` (without ``$``) names a dimensionless quantity: a
+    model variable with units 1 (``f``), a ratio of like quantities (``\\delta/l``), or
+    one of those with a subscript."""
+    symbol = symbol.strip()
+    if "/" in symbol:
+        return True
+    base = re.sub(r"_(\{[^}]*\}|.)$", "", symbol).strip("{} ")
+    return symbol in _dimensionless_symbols() or base in _dimensionless_symbols()
+
+
+#: A value stated in a text: "$symbol$ = number", and what follows it.
+_STATED = re.compile(r"\$([^$]+)\$ = (\$?[\u2212\-]?[\d.]+(?:\\times10\^\{[\u2212\-]?\d+\})?\$?)"
+                     r"(?P<after>[^,;\n)]*)")
+#: Words of an axis label that are counts or categories (no unit).
+_COUNTS = re.compile(r"^(number|count|reversals|number of)\b", re.IGNORECASE)
+
+
+def _axis_has_unit(label: str) -> bool:
+    if re.search(r"\([^()]*[A-Za-z][^()]*\)\s*$", label.replace("$", "")):
+        return True  # "... (rad s^{-1})"
+    head = label.split("(")[0].strip()
+    symbols = re.findall(r"\$([^$]+)\$", head)
+    if symbols and all(dimensionless(s) for s in symbols) and \
+            not head.replace("$", "").strip(" ,").split()[len(symbols):]:
+        return True  # "$f$", "$\\delta/l$"
+    return bool(_COUNTS.match(head.replace("$", "").strip()))
+
+
+def unit_problems(fig) -> list[str]:
+    """Axis labels without a unit and stated values without one (see :func:`dimensionless`).
+
+    An axis whose ticks are words (categories) needs none; neither does a
+    count ("Number of ...").
+    """
+    problems = []
+    for ax in _all_axes(fig):
+        if not ax.get_visible() or not ax.axison:
+            continue
+        for axis, label in ((ax.xaxis, ax.get_xlabel()), (ax.yaxis, ax.get_ylabel())):
+            if not label.strip():
+                continue
+            words = [t.get_text() for t in axis.get_ticklabels()
+                     if re.search(r"[A-Za-z]{2,}", re.sub(r"\\[A-Za-z]+", "", t.get_text()))]
+            if words:
+                continue  # categories
+            if not _axis_has_unit(label.split("\n")[0] if ax.get_label() != "<colorbar>"
+                                  else label.replace("\n", " ")):
+                problems.append(f"axis label '{label}' has no unit")
+    for text in pplot.figure_texts(fig):
+        for m in _STATED.finditer(text):
+            symbol, after = m.group(1), m.group("after")
+            if "=" in symbol or dimensionless(symbol):
+                continue
+            if not re.match(r"\s*(\$?\^|[A-Za-z$\\])", after):
+                problems.append(f"the value ${symbol}$ = {m.group(2)} has no unit")
+    return problems
+
+
+# --------------------------------------------------------------------------- one look per meaning
+
+
+def _hex(colour) -> str:
+    if colour is None or (isinstance(colour, str) and colour.lower() == "none"):
+        return "none"
+    rgba = mcolors.to_rgba(colour)
+    return "none" if rgba[3] == 0 else mcolors.to_hex(rgba, keep_alpha=rgba[3] < 1)
+
+
+def _look(handle) -> tuple | None:
+    """(kind, look) of a legend handle: what a reader sees of it, colours included."""
+    if isinstance(handle, Line2D):
+        marker = handle.get_marker()
+        marker = None if marker in ("None", "none", "", " ", None) else str(marker)
+        line = handle.get_linestyle() not in ("None", "none", " ", "")
+        if marker and not line:
+            return "marker", (marker, _hex(handle.get_markerfacecolor()),
+                              _hex(handle.get_markeredgecolor()))
+        return "line", (_hex(handle.get_color()), _dashes(handle), marker,
+                        _hex(handle.get_markerfacecolor()) if marker else None)
+    if isinstance(handle, Patch):
+        hatch = handle.get_hatch() or None
+        return "patch", (_hex(handle.get_facecolor()), hatch,
+                         _hex(handle.get_hatchcolor()) if hatch else None)
+    return None
+
+
+def legend_looks(fig) -> dict[tuple[str, str], tuple]:
+    """{(kind, label): look} of every legend entry of ``fig`` (see :func:`_look`)."""
+    out = {}
+    for legend in _legends(fig):
+        for handle, text in zip(legend.legend_handles, legend.get_texts()):
+            look = _look(handle)
+            if look is not None and text.get_text().strip():
+                out[(look[0], text.get_text().strip())] = look[1]
+    return out
+
+
+_NEUTRAL = {"none", "#000000", "#ffffff", "#999999", "#dddddd", "#555555"}
+
+#: Names of one meaning in two layers: a Painleve inconsistency is ``none`` in an
+#: n_solutions map and ``no solution`` in a fate map; indeterminacy ``two`` and
+#: ``indeterminate``.
+SYNONYMS = {"no solution": "none", "indeterminate": "two"}
+
+
+def meaning(label: str) -> str:
+    """What a legend label names: its head, before a colon or a parenthesis that qualifies
+    it ("none: $N < 0$, no hop" names "none"), synonyms made one."""
+    head = re.split(r":|\s\(", label, maxsplit=1)[0].strip()
+    return SYNONYMS.get(head, head)
+
+
+def look_problems(looks_by_figure: dict[str, dict]) -> list[str]:
+    """Across the figures of a study: a label with two looks, a filled class or a marker
+    look with two labels, or a class's fill colour on a curve or marker that means
+    something else (a colour means one thing)."""
+    problems = []
+    seen: dict[tuple[str, str], tuple[tuple, str]] = {}
+    names: dict[tuple[str, tuple], tuple[str, str]] = {}
+    fills: dict[str, tuple[str, str]] = {}
+    for figure, looks in looks_by_figure.items():
+        for (kind, label), look in looks.items():
+            first = seen.setdefault((kind, label), (look, figure))
+            if first[0] != look:
+                problems.append(f"{label!r} looks different in {first[1]} and {figure}")
+            if kind in ("patch", "marker"):
+                other = names.setdefault((kind, look), (label, figure))
+                if meaning(other[0]) != meaning(label):
+                    problems.append(f"one look, two meanings: {other[0]!r} ({other[1]}) and "
+                                    f"{label!r} ({figure})")
+            if kind == "patch" and look[0] not in _NEUTRAL:
+                fills.setdefault(look[0], (label, figure))
+    for figure, looks in looks_by_figure.items():
+        for (kind, label), look in looks.items():
+            if kind == "patch":
+                continue
+            colours = {look[0]} if kind == "line" else {look[1]}
+            for colour in colours - _NEUTRAL:
+                if colour in fills and meaning(fills[colour][0]) != meaning(label):
+                    problems.append(f"{label!r} ({figure}) is drawn in the colour of the class "
+                                    f"{fills[colour][0]!r} ({fills[colour][1]})")
     return problems

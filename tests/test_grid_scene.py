@@ -106,7 +106,8 @@ def test_only_requested_layers_are_stored():
 def test_metadata_comes_from_the_registry_and_the_model():
     ds = phasemap.Scene("elliptic_pendulum", axes={"phi": np.linspace(-1, 1, 3), "f": [1.0, 4.0]},
                         fixed={"xdot": 1.0}, layers=["n_solutions", "N_slide_pos_Npos"]).compute()
-    assert ds.phi.attrs == {"units": "rad", "long_name": "angle of the bar from the downward vertical"}
+    assert ds.phi.attrs == {"units": "rad", "long_name": "angle of the bar from the downward vertical",
+                            "phasemap_symbol": r"\varphi"}
     assert ds.n_solutions.dtype == np.int8
     assert list(ds.n_solutions.attrs["flag_values"]) == [0, 1, 2, 3, 4]
     assert ds.n_solutions.attrs["flag_meanings"] == "none unique two continuum three_or_more"
@@ -114,6 +115,27 @@ def test_metadata_comes_from_the_registry_and_the_model():
     assert ds.attrs["phasemap_model"] == "elliptic_pendulum"
     assert ds.attrs["phasemap_fixed_xdot"] == 1.0
     assert ds.attrs["Conventions"] == phasemap.atlas.CONVENTIONS
+
+
+def test_the_dataset_holds_the_kernels_arrays_as_xarray_would_build_it():
+    from phasemap.grid import evaluate
+
+    scene = phasemap.Scene("hinge_pendulum", axes={"phi": np.linspace(-3, 3, 7),
+                                                   "omega": [-1.0, 0.0, 2.0]},
+                           layers=["n_solutions", "stagnation", "R_n_stick"])
+    reg = phasemap.layers_for(scene.model)
+    arrays = evaluate(scene.model, scene.axes, scene.fixed, [reg[n] for n in scene.layers])
+    ds = scene._dataset(arrays)
+    for name, a in arrays.items():  # no copy after the kernel
+        assert np.shares_memory(ds[name].values, a)
+    # built directly, it is what xarray's own constructor (merge, default indexes) builds
+    merged = xr.Dataset({n: ds[n].variable for n in ds.data_vars},
+                        {n: ds[n].variable for n in ds.coords}, ds.attrs)
+    xr.testing.assert_identical(ds, merged)
+    assert list(ds.xindexes) == list(merged.xindexes) == ["phi", "omega"]
+    for n in ds.xindexes:
+        assert ds.xindexes[n].equals(merged.xindexes[n])
+    assert ds.sel(omega=0.0).n_solutions.dims == ("phi",)  # the indexes work
 
 
 def test_spec_recomputes_the_same_atlas():

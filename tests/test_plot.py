@@ -8,6 +8,7 @@ drawn and saved as PNG and PDF with warnings turned into errors.
 
 from __future__ import annotations
 
+import pathlib
 import warnings
 
 import matplotlib
@@ -26,6 +27,9 @@ import phasemap
 import phasemap.accessor  # registers ds.phasemap
 from phasemap import events
 from phasemap import plot as pplot
+
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(autouse=True)
@@ -228,7 +232,9 @@ def quiet(func, *args, **kw):
 
 
 def legend_texts(ax) -> list[str]:
-    legend = ax.get_legend()
+    """The entries of the legend that serves ``ax``: its own, or its figure's (a figure of
+    several panels that share one legend)."""
+    legend = ax.get_legend() or (ax.figure.legends[0] if ax.figure.legends else None)
     assert legend is not None, "no legend"
     return [t.get_text() for t in legend.get_texts()]
 
@@ -278,8 +284,10 @@ def test_the_accessor_draws_the_figure_of_each_kind(elliptic_map, hinge_profile)
     assert len(fig.axes) == 2
     assert [t.get_text() for t in fig.axes[0].get_yticklabels()] == \
         ["none", "unique", "two", "continuum", "three or more"]
-    fig = fate_dataset().phasemap.plot()
-    assert legend_texts(fig.axes[0]) == present_meanings(fate_dataset().fate)
+    fig = fate_dataset().phasemap.plot()  # the fate map and each fate layer it was given
+    fates = present_meanings(fate_dataset().fate)
+    assert legend_texts(fig.axes[0])[:len(fates)] == fates
+    assert len([a for a in fig.axes if a.get_label() != "<colorbar>"]) == 4
     fig = phase_curve_dataset().phasemap.plot()
     assert legend_texts(fig.axes[0]) == ["start", "reversal", "rest"]
     fig = trajectory_dataset().phasemap.plot()
@@ -506,7 +514,7 @@ def test_profile_of_one_float_layer(tmp_path):
 
 def test_fate_map_lists_only_the_fates_present(tmp_path):
     ds = _roundtrip_plain(fate_dataset(), tmp_path / "fate.nc")
-    fig = quiet(ds.phasemap.plot)
+    fig = quiet(ds.phasemap.plot, extra=[])
     assert legend_texts(fig.axes[0]) == ["rest", "contact lost", "no solution", "horizon"]
     assert_legend_outside(fig, fig.axes[0])
     render(fig, tmp_path)
@@ -522,7 +530,8 @@ def test_fate_map_with_a_second_panel(extra, size, tmp_path):
     # second panel at two-column width, under it at one-column width
     wide = size == "two_column"
     label = cbar_ax.get_ylabel() if wide else cbar_ax.get_xlabel()
-    assert label == pplot.axis_label(fate_dataset(), extra)
+    assert label == ("Reversals before rest" if extra == "n_reversals"  # drawn at rest only
+                     else pplot.axis_label(fate_dataset(), extra))
     fig.canvas.draw()
     bar, panel = cbar_ax.get_window_extent(), extra_ax.get_window_extent()
     assert bar.x0 >= panel.x1 if wide else bar.y1 <= panel.y0
@@ -634,18 +643,18 @@ def test_work_precision_one_panel_per_system_one_line_per_method(size, tmp_path)
         assert len(a.lines[0].get_xdata()) == 4  # the zero-error row is left out
         assert a.get_xlabel() in ("", "Run time per trajectory (s)" if size == "two_column"
                                   else "Run time (s)")
-        assert a.get_ylabel() in ("", r"Final-state error $\|\Delta y\|_\infty$")
+        assert a.get_ylabel() in ("", r"Final-state error $\|\Delta y\|_\infty$ (SI)")
     # one legend above the panels: the method names are too long for the free fourth slot
     # of the one-column grid, which is removed
     legend = fig.legends[0]
     assert len(fig.axes) == 3
     assert [t.get_text() for t in legend.get_texts()] == names
-    assert "$y$: the state in SI units" in fig._supxlabel.get_text()  # y is defined
+    assert "$y$: the state (rad, rad s$^{-1}$" in fig._supxlabel.get_text()  # y is defined
     assert ("per trajectory" in fig._supxlabel.get_text()) == (size == "one_column")
     assert figure_review.layout_problems(fig) == []
     render(fig, tmp_path)
     fig = quiet(pplot.work_precision_figure, work_precision_table(), error="error_l2")
-    assert fig.axes[0].get_ylabel() == "$L_2$ error along the motion"
+    assert fig.axes[0].get_ylabel() == "$L_2$ error along the motion (SI)"
 
 
 @pytest.mark.parametrize("size", ["one_column", "two_column"])
@@ -724,7 +733,8 @@ def test_save_figure_into_a_missing_folder(tmp_path):
 # --------------------------------------------------------------------------- docs
 
 
-@pytest.mark.parametrize("module", ["phasemap.plot", "phasemap.accessor"])
+@pytest.mark.parametrize("module", ["phasemap.plot", "phasemap.accessor", "phasemap._dataset",
+                                    "phasemap.plot.command"])
 def test_docstring_examples(module):
     import doctest
     import importlib
@@ -838,16 +848,17 @@ def test_fate_map_states_its_parameters_and_rings_inverted_rests(tmp_path):
     render(fig, tmp_path)
 
 
-def test_inverted_rests_on_a_fine_fate_map_are_dots_a_cell_wide(tmp_path):
-    """Rings would cover a fine map (such rests line up along curves there): dots instead."""
+def test_inverted_rests_on_a_fine_fate_map_are_thin_rings_two_cells_wide(tmp_path):
+    """Wide rings would cover a fine map (such rests line up along curves there): thin
+    rings two cells wide instead, hollow, so that none reads as a reversal dot."""
     ds = fate_dataset().interp(phi=np.linspace(-np.pi, np.pi, 400), method="nearest")
     ds["phi_rest"][:, 0] = 3.0
     fig = quiet(ds.phasemap.plot, extra="n_reversals", size="two_column")
     marks = [l for l in fig.axes[0].lines if l.get_marker() == "o"]
     assert len(marks) == 1 and len(marks[0].get_xdata()) == 400
-    assert marks[0].get_markerfacecolor() != "none"
+    assert marks[0].get_markerfacecolor() == "none"
     cell = pplot._panel_width(fig.axes[0]) * 72.0 / 400
-    assert marks[0].get_markersize() <= max(cell, 1.0)
+    assert marks[0].get_markersize() <= max(2.0 * cell, 1.5)
     assert r"rest inverted ($\cos\varphi_\mathrm{rest} < 0$)" in legend_texts(fig.axes[0])
     render(fig, tmp_path)
 
@@ -897,3 +908,137 @@ def test_hatched_classes_are_hatched_on_the_map(elliptic_map):
     assert patches["two"].get_hatch() == pplot.CATEGORY_HATCHES["two"]
     assert patches["none"].get_hatch() == pplot.CATEGORY_HATCHES["none"]
     assert patches["unique"].get_hatch() is None
+
+
+# --------------------------------------------------------------------------- issue 26: fate layers, boundaries, phasemap plot
+
+
+@pytest.fixture(scope="module")
+def wheel_fates(tmp_path_factory) -> xr.Dataset:
+    """A small fate map of the wheel, written and read back: rest, hops, reversals."""
+    ds = phasemap.Scene("wheel", axes={"phi": np.linspace(-3.1, 3.1, 24),
+                                       "omega": np.linspace(-8.0, 8.0, 20)},
+                        fixed={"delta": 0.05}, layers=["fate", "phi_rest", "n_reversals"],
+                        options={"t_end": 5.0}).compute()
+    return _roundtrip(ds, tmp_path_factory.mktemp("atlas") / "fates.nc")
+
+
+def test_the_fate_map_draws_each_fate_layer_and_states_t_end(wheel_fates, tmp_path):
+    fig = quiet(wheel_fates.phasemap.plot, size="two_column")
+    panels = [a for a in fig.axes if a.get_label() != "<colorbar>"]
+    bars = [a for a in fig.axes if a.get_label() == "<colorbar>"]
+    assert len(panels) == 3 and len(bars) == 2  # fate, phi_rest, n_reversals
+    assert [a.get_title(loc="left")[:3] for a in panels] == ["(a)", "(b)", "(c)"]
+    legend = fig.legends[0]
+    assert r"$t_\mathrm{end}$ = 5 s" in legend.get_title().get_text()
+    # a count is drawn only where the motion came to rest: no hop reads as "0 reversals"
+    fate = wheel_fates.fate.transpose("omega", "phi").values
+    assert (fate != phasemap.Event.REST).any()
+    counts = [c for c in panels[2].collections if c.get_array() is not None][0]
+    shown = np.ma.getmaskarray(counts.get_array()).reshape(fate.shape)
+    assert np.array_equal(shown, fate != phasemap.Event.REST)
+    assert "blank: did not come to rest" in legend_texts(panels[0])
+    assert figure_review.layout_problems(fig) == []
+    render(fig, tmp_path)
+
+
+def test_exact_boundaries_are_drawn_over_the_cells(ladder_map):
+    """The hook for the bifurcation-set tracer: pieces with vertex coordinates, one curve
+    each, over the stair of the cells."""
+    f = np.linspace(0.0, 0.6, 40)
+    pieces = xr.Dataset({"phi": ("vertex", np.r_[2 * np.arctan(f), [0.2, 0.4]]),
+                         "f": ("vertex", np.r_[f, [1.0, 1.1]]),
+                         "piece": ("vertex", np.r_[np.zeros(40, int), [1, 1]])})
+    fig = quiet(pplot.map_figure, ladder_map, boundaries=pieces)
+    ax = fig.axes[0]
+    curves = [l for l in ax.lines if l.get_label() != "_nolegend_" and len(l.get_xdata()) > 1]
+    assert sorted(len(l.get_xdata()) for l in curves) == [2, 40]
+    np.testing.assert_allclose(curves[0].get_ydata() if len(curves[0].get_xdata()) == 40
+                               else curves[1].get_ydata(), f)
+    assert "class boundary" in legend_texts(ax)
+    with pytest.raises(ValueError, match="boundaries need piece on dimension 'vertex'"):
+        pplot.map_figure(ladder_map, boundaries=pieces.drop_vars("piece"))
+
+
+def test_a_declared_system_is_labelled_as_a_built_in_one(tmp_path):
+    """Issue 23 item 6: symbols and units come from the atlas itself, so a system that is
+    not registered (the README's rod) is drawn with them after a round trip."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "own_system", ROOT / "docs" / "examples" / "own_system.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    model = module.SYSTEM.model
+    with pytest.raises(ValueError):
+        phasemap.get_model(model.name)  # not registered: the figure cannot ask the registry
+    ds = phasemap.Scene(model, axes={"theta": np.linspace(0.05, 1.5, 30),
+                                     "f": np.linspace(0.0, 2.0, 20)},
+                        fixed={"xdot": -1.0, "omega": 0.0}).compute()
+    ds = _roundtrip(ds, tmp_path / "rod.nc")
+    assert ds.theta.attrs["phasemap_symbol"] == r"\theta"
+    fig = quiet(ds.phasemap.plot)
+    ax = fig.axes[0]
+    assert ax.get_xlabel() == r"$\theta$ (rad)" and ax.get_ylabel() == "$f$"
+    heading = ax.get_legend().get_title().get_text().replace("\n", " ")
+    assert r"$\omega$ = 0 rad s$^{-1}$" in heading and r"$\dot x$ = −1 m s$^{-1}$" in heading
+    assert "$g$ = 9.81 m s$^{-2}$" in heading
+    assert figure_review.unit_problems(fig) == []
+    motion = phasemap.simulate(model, theta=1.0, omega=0.0, xdot=1.0, f=0.3, t_end=0.5)
+    fig = quiet(motion.phasemap.plot, phase_plane=True)
+    assert fig.axes[0].get_xlabel() == r"$\theta$ (rad)"
+    assert r"$\theta_0$ = 1 rad" in fig.axes[0].get_legend().get_title().get_text()
+
+
+def test_phasemap_plot_on_the_command_line(ladder_map, tmp_path):
+    import subprocess
+    import sys
+
+    from matplotlib.image import imread
+
+    run = [sys.executable, "-m", "phasemap.cli", "plot"]
+    three = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 20),
+                                           "f": np.linspace(0, 2, 15), "omega": [0.0, 1.0]}
+                           ).compute()
+    files = {"map.nc": ladder_map, "cube.nc": three,
+             "curve.nc": phase_curve_dataset(), "motion.nc": trajectory_dataset()}
+    for name, ds in files.items():
+        phasemap.write_atlas(ds, tmp_path / name)
+    done = subprocess.run(run + [str(tmp_path / "map.nc")], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == f"wrote {tmp_path / 'map.pdf'}, {tmp_path / 'map.png'}"
+    assert imread(tmp_path / "map.png").shape[1] == pytest.approx(3.5 * 300, abs=2)
+    for name in ("cube", "curve", "motion"):
+        done = subprocess.run(run + [str(tmp_path / f"{name}.nc"), "-o",
+                                     str(tmp_path / f"{name}_wide"), "--size", "two"],
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        assert (tmp_path / f"{name}_wide.pdf").read_bytes()[:5] == b"%PDF-"
+        assert imread(tmp_path / f"{name}_wide.png").shape[1] == pytest.approx(7.2 * 300,
+                                                                             abs=2)
+    (tmp_path / "notes.nc").write_text("not netCDF")
+    for args, message in (([str(tmp_path / "notes.nc")], "not a readable netCDF file"),
+                          ([str(tmp_path / "missing.nc")], "no such file"),
+                          ([str(tmp_path / "map.nc"), "--size", "poster"], "invalid choice")):
+        done = subprocess.run(run + args, capture_output=True, text=True)
+        assert done.returncode == 2 and message in done.stderr, done.stderr
+        assert "Traceback" not in done.stderr
+
+
+def test_a_three_dimensional_atlas_is_one_map_per_value_of_its_shortest_axis():
+    from phasemap.plot.command import figure_of
+
+    cube = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 20),
+                                          "f": np.linspace(0, 2, 15),
+                                          "omega": [0.0, 1.0, 3.0]}).compute()
+    fig = quiet(figure_of, cube, "two_column")
+    panels = [a for a in fig.axes if a.axison]
+    assert [a.get_title(loc="left") for a in panels] == [
+        r"(a) $\omega$ = 0 rad s$^{-1}$", r"(b) $\omega$ = 1 rad s$^{-1}$",
+        r"(c) $\omega$ = 3 rad s$^{-1}$"]
+    assert figure_review.layout_problems(fig) == []
+    long = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 12),
+                                          "f": np.linspace(0, 2, 8),
+                                          "omega": np.linspace(0, 3, 7)}).compute()
+    with pytest.raises(ValueError, match="'omega' has 7 values \\(at most 6\\)"):
+        figure_of(long)

@@ -37,8 +37,8 @@ if __name__ == "__main__":
                            fixed={"xdot": -1.0, "omega": 0.0})
     atlas = scene.compute()
     fig = atlas.phasemap.plot()
-    fig.savefig("own_system_map.png", dpi=150)
+    fig.savefig("own_system_map.png", dpi=300)
     motion = phasemap.simulate(model, theta=1.0, omega=0.0, xdot=1.0, f=0.3, t_end=2.0)
     fig = motion.phasemap.plot(phase_plane=True)   # theta against omega, events marked
-    fig.savefig("own_system_motion.png", dpi=150)
+    fig.savefig("own_system_motion.png", dpi=300)
     print(atlas.n_solutions.attrs["long_name"], "and", motion.attrs.get("fate", ""))

@@ -399,7 +399,7 @@ def _branch_function(S, sol, body, used, inputs) -> list[str]:
             f"    _k_st = {nx.ABSENT} if _k_absent else (({nx.CONTINUUM} if _k_cont else "
             f"{nx.NO_SOLUTION}) if _k_sing else ({nx.NO_SOLUTION} if not _k_real else "
             f"({ok_status} if _k_ok else {nx.INADMISSIBLE})))",
-            "    return (float(_k_st), 1.0 if (_k_sing & (not _k_absent)) else 0.0,",
+            "    return (_k_st, 1.0 if (_k_sing & (not _k_absent)) else 0.0,",
             "            NAN if _k_absent else _k_coef,",
             *[f"            NAN if _k_bad else _k_Q{j}," for j in acc_idx],
             *[f"            NAN if _k_bad else _k_r{i}," for i in range(len(p.reactions))],

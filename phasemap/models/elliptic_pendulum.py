@@ -98,7 +98,7 @@ def slide(sigma, rho, rest, omega, f, l, g, m, sin_phi, cos_phi):
     x_scale = (2.0 * l * w2 * (1.0 + f) + 2.0 * f * g + g) / abs(lam)
     start_ok = (not rest) | (sigma * xdd > TOL * x_scale)
     st = ADMISSIBLE if (sign_ok & start_ok) else INADMISSIBLE
-    return (float(st_singular if singular else st), 1.0 if singular else 0.0, lam,
+    return (st_singular if singular else st, 1.0 if singular else 0.0, lam,
             NAN if singular else xdd, NAN if singular else pdd,
             NAN if singular else n, NAN if singular else -k * f * n)
 
@@ -112,7 +112,7 @@ def stick(omega, f, l, g, m, sin_phi, cos_phi):
     fr = -m * sp * (g * cp + 2.0 * l * w2)
     scale = m * (1.0 + f) * (2.0 * g + 2.0 * l * w2)
     ok = abs(fr) <= f * abs(n) + TOL * scale
-    return (float(ADMISSIBLE if ok else INADMISSIBLE), 0.0, NAN, 0.0, -0.5 * g * sp / l, n, fr)
+    return (ADMISSIBLE if ok else INADMISSIBLE, 0.0, NAN, 0.0, -0.5 * g * sp / l, n, fr)
 
 
 @njit(cache=True, error_model="numpy", forceinline=True)

@@ -88,7 +88,7 @@ def turn(sigma, rest, omega, delta, l, g, m, sin_phi, cos_phi):
     start_ok = (not rest) | (sigma * a > TOL * (abs(u) + g) / l)
     st = (ADMISSIBLE if start_ok else INADMISSIBLE) if solvable else NO_SOLUTION
     fields = (not singular) & solvable
-    return (float(st_singular if singular else st), 1.0 if singular else 0.0, coef,
+    return (st_singular if singular else st, 1.0 if singular else 0.0, coef,
             a if fields else NAN, m * qn if fields else NAN, m * u if fields else NAN)
 
 
@@ -96,7 +96,7 @@ def turn(sigma, rest, omega, delta, l, g, m, sin_phi, cos_phi):
 def stick(delta, l, g, m, sin_phi, cos_phi):
     """The stick branch: rest is possible iff l |sin phi| <= delta (35)."""
     ok = g * (delta - l * abs(sin_phi)) >= -TOL * g * (delta + l)
-    return (float(ADMISSIBLE if ok else INADMISSIBLE), 0.0, NAN, 0.0 if ok else NAN,
+    return (ADMISSIBLE if ok else INADMISSIBLE, 0.0, NAN, 0.0 if ok else NAN,
             m * g * cos_phi if ok else NAN, m * g * sin_phi if ok else NAN)
 
 

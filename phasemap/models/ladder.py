@@ -109,7 +109,7 @@ def slide(s, rest, omega, f, l, g, m, sin_phi, cos_phi):
     n_scale = inv * (g + l * w2 + l * abs(a)) * (1.0 + f)
     lost = (nf < -TOL * n_scale) | (nw < -TOL * n_scale)
     st = (CONTACT_LOST if lost else ADMISSIBLE) if start_ok else INADMISSIBLE
-    return (float(st_singular if singular else st), 1.0 if singular else 0.0, d,
+    return (st_singular if singular else st, 1.0 if singular else 0.0, d,
             NAN if singular else a, NAN if singular else nf, NAN if singular else nw)
 
 
@@ -120,7 +120,7 @@ def stick(f, g, m, sin_phi, cos_phi):
     margin = g * (2.0 * f * cp - (1.0 - f * f) * sp)
     scale = g * (2.0 * f + abs(1.0 - f * f))
     ok = margin >= -TOL * scale
-    return (float(ADMISSIBLE if ok else INADMISSIBLE), 0.0, NAN, 0.0 if ok else NAN,
+    return (ADMISSIBLE if ok else INADMISSIBLE, 0.0, NAN, 0.0 if ok else NAN,
             0.5 * m * g * (1.0 + cp) if ok else NAN, 0.5 * m * g * sp if ok else NAN)
 
 

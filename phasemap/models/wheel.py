@@ -92,7 +92,7 @@ def roll(sigma, rest, omega, delta, r, l, rho, g, m, sin_phi, cos_phi):
     start_ok = (not rest) | (sigma * a > TOL * rhs_scale / abs(coef))
     lost = n < -TOL * m * (g + l * w2 + l * abs(a))
     st = (CONTACT_LOST if lost else ADMISSIBLE) if start_ok else INADMISSIBLE
-    return (float(st_singular if singular else st), 1.0 if singular else 0.0, coef,
+    return (st_singular if singular else st, 1.0 if singular else 0.0, coef,
             NAN if singular else a, NAN if singular else n,
             NAN if singular else m * ((r - l * cp) * a + l * sp * w2))
 
@@ -101,7 +101,7 @@ def roll(sigma, rest, omega, delta, r, l, rho, g, m, sin_phi, cos_phi):
 def stick(delta, l, g, m, sin_phi):
     """The stick branch: rest is possible iff l |sin phi| <= delta (15)."""
     ok = g * (delta - l * abs(sin_phi)) >= -TOL * g * (delta + l)
-    return (float(ADMISSIBLE if ok else INADMISSIBLE), 0.0, NAN, 0.0 if ok else NAN,
+    return (ADMISSIBLE if ok else INADMISSIBLE, 0.0, NAN, 0.0 if ok else NAN,
             m * g if ok else NAN, 0.0 if ok else NAN)
 
 
