@@ -352,7 +352,7 @@ def _dataset(spec: _Spec, along: str, arange, pieces, points, tol) -> xr.Dataset
     data["point_residual"] = V("point", np.array(pres, dtype=float),
                                {"units": "1", "long_name": "residual of the point"})
     fixed = {n: v for n, v in spec.fixed.items() if n != along}
-    attrs = header(m, f"threshold of {spec.param} along {along}", "threshold", fixed,
+    attrs = header(m, "threshold", fixed,
                    phasemap_param=spec.param, phasemap_layer=spec.layer,
                    phasemap_value=spec.value, phasemap_side=spec.side,
                    phasemap_over=json.dumps(spec.ranges),

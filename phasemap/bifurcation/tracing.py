@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import datetime as _dt
 import json
 import math
 from dataclasses import dataclass
@@ -12,8 +11,7 @@ import numpy as np
 import xarray as xr
 
 from .. import _numerics as nx
-from .._version import __version__
-from ..atlas import CONVENTIONS
+from .._dataset import cf_header
 from ..grid import evaluate
 from ..layers import layers_for
 from ..model import Model
@@ -74,21 +72,10 @@ def parse_range(m: Model, what: str, value) -> tuple[float, float]:
     return lo, hi
 
 
-def header(m: Model, title: str, kind: str, fixed: Mapping, **extra) -> dict:
-    """The global attributes of a result: an atlas's CF header, provenance and fixed values."""
-    now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-    attrs = {
-        "Conventions": CONVENTIONS,
-        "title": f"phasemap {title}: {m.title}",
-        "source": f"phasemap {__version__}",
-        "history": f"{now} created by phasemap {__version__} (phasemap.{kind})",
-        "references": m.citation,
-        "phasemap_model": m.name,
-        "phasemap_version": __version__,
-        "phasemap_kind": kind,
-        **extra,
-        "date_created": now,
-    }
+def header(m: Model, kind: str, fixed: Mapping, **extra) -> dict:
+    """The global attributes of a result: the CF header every phasemap Dataset carries
+    (:func:`phasemap._dataset.cf_header`), then ``extra`` and the fixed values."""
+    attrs = cf_header(m, kind) | extra
     for name, value in fixed.items():
         attrs[f"phasemap_fixed_{name}"] = value
     return attrs
@@ -439,7 +426,7 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
     data["point_error"] = V("point", pf[:, 3] * tol,
                             {"units": "1", "long_name": "size of the last Newton step in the "
                              "point's coordinates (an error estimate, in axis units)"})
-    attrs = header(m, "boundaries", "boundaries", sl.fixed, phasemap_layer=layer,
+    attrs = header(m, "boundaries", sl.fixed, phasemap_layer=layer,
                    phasemap_axes=json.dumps({sl.x: [sl.lo[0], sl.hi[0]],
                                              sl.y: [sl.lo[1], sl.hi[1]]}),
                    phasemap_tol=tol)
