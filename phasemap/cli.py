@@ -9,6 +9,7 @@ import sys
 import textwrap
 
 from ._version import __version__
+from .bifurcation import command as _bif
 
 #: Examples per subcommand; ``phasemap --help`` shows them all, each
 #: subcommand's help only its own.
@@ -41,6 +42,7 @@ EXAMPLES = {
         ("phasemap classify hinge_pendulum phi=0.05 omega=0 delta=0.1", ""),
     ],
 }
+EXAMPLES |= _bif.EXAMPLES  # phasemap boundaries, phasemap threshold
 
 
 def examples(*commands: str) -> str:
@@ -185,6 +187,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                                 "equations for the senior derivatives at one state.")
     p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
     p.add_argument("values", nargs="*", metavar="NAME=VALUE")
+    subs |= _bif.add_parsers(sub, _sub, models)
     return parser, subs
 
 
@@ -240,6 +243,8 @@ def _run(args) -> int:
         from .classify import classify
 
         print(classify(args.model, **_parse_values(args.values)))
+    elif args.command in ("boundaries", "threshold"):
+        print(_bif.run(args, _parse_values))
     return 0
 
 

@@ -213,7 +213,9 @@ def compiled(model: Model, variables, conditions=None) -> Conditions:
         def make():
             return given
     h = hashlib.sha256(key_text.encode())
-    h.update(repr((model.name, model.inputs, variables)).encode())
+    # the generated file imports the model's velocity scale by its module's name
+    h.update(repr((model.name, model.inputs, variables,
+                   _module_of(model.velocity_scale).__name__)).encode())
     h.update(pathlib.Path(__file__).read_bytes())
     h.update(f"{numba.__version__} {np.__version__} {__version__}".encode())
     stem = f"{model.name}_conditions_{h.hexdigest()[:16]}"
