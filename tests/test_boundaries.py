@@ -265,3 +265,25 @@ def test_threshold_bad_input(kw, match):
             "conditions": ROD, **kw}
     with pytest.raises(ValueError, match=match):
         threshold("painleve_rod", **args)
+
+
+def test_map_figure_draws_the_exact_boundary():
+    """ds.phasemap.plot(boundaries=True): the map's slice traced, its piece drawn as a
+    curve on the rod's coefficient (not the raster's stair)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ds = phasemap.Scene("painleve_rod", axes={"theta": np.linspace(0.2, 1.5, 24),
+                                              "f": np.linspace(0.0, 3.0, 24)},
+                        fixed=SLIDE_BACK, layers=["n_solutions"]).compute()
+    fig = ds.phasemap.plot(x="theta", boundaries=True)
+    try:
+        curves = [ln for ln in fig.axes[0].lines if len(ln.get_xdata()) > 20]
+        assert len(curves) == 1
+        th, f = (np.asarray(a, float) for a in curves[0].get_data())
+        c, s = np.cos(th), np.sin(th)
+        assert np.max(np.abs(1 / 3 + c**2 - f * s * c) / (4 / 3 + f)) <= 1e-12
+    finally:
+        plt.close(fig)

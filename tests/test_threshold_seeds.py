@@ -18,60 +18,36 @@ import numpy as np
 import pytest
 
 import phasemap
-from phasemap.facts import elliptic_threshold, wheel_singular_delta
+from phasemap.bifurcation import claims
 
 P = math.pi
-
-#: (threshold's arguments, closed form of the value, closed form of the point)
-CASES = {
-    "elliptic no solution": (
-        dict(model="elliptic_pendulum", param="f", value=0, over={"phi": (0.0, P / 2),
-                                                                  "f": (0.0, 6.0)},
-             fixed={"xdot": 1.0, "omega": 0.0}),
-        elliptic_threshold(), {"phi": 0.5 * math.atan(elliptic_threshold())}, "fold_f"),
-    "ladder slide coefficient": (
-        dict(model="ladder", param="f", layer="singular", value=1, over={"f": (0.0, 3.0)},
-             fixed={"phi": 0.7, "omega": 1.0}),
-        math.sqrt(2.0), {}, "root"),
-    "ladder static zone": (
-        dict(model="ladder", param="phi", layer="stagnation", value=1, side="max",
-             over={"phi": (0.0, P / 2)}, fixed={"omega": 0.0, "f": 0.5}),
-        2.0 * math.atan(0.5), {}, "root"),
-    "hinge delta = l": (
-        dict(model="hinge_pendulum", param="delta", layer="singular", value=1,
-             over={"delta": (0.0, 1.5)}, fixed={"phi": 0.5, "omega": 1.0, "l": 1.0}),
-        1.0, {}, "root"),
-    "hinge stagnation zone": (
-        dict(model="hinge_pendulum", param="phi", layer="stagnation", value=1, side="max",
-             over={"phi": (0.0, P / 2)}, fixed={"omega": 0.0, "delta": 0.5, "l": 1.0}),
-        math.asin(0.5), {}, "root"),
-    "wheel singular bracket": (
-        dict(model="wheel", param="delta", layer="singular", value=1,
-             over={"phi": (-P, P), "delta": (0.0, 3.0)},
-             fixed={"omega": 1.0, "r": 1.0, "l": 0.5, "rho": 0.5}),
-        wheel_singular_delta(1.0, 0.5, 0.5), {}, "fold_delta"),
-}
+CASES = {f"{c.study}: {c.what}": c for c in claims.CASES}
 
 
-@pytest.mark.parametrize("case", list(CASES))
-def test_threshold_closed_form(case):
-    kw, value, at, kind = CASES[case]
-    t = phasemap.threshold(**kw)
-    assert t is not None and t.kind == kind
-    assert abs(t.value - value) <= 1e-10, (t, value)
-    for name, want in at.items():
-        assert abs(t.at[name] - want) <= 1e-10, (t, name, want)
+@pytest.mark.parametrize("name", list(CASES))
+def test_threshold_closed_form(name):
+    case = CASES[name]
+    t = phasemap.threshold(**case.call)
+    assert t is not None and t.kind == case.kind
+    assert abs(t.value - case.value) <= 1e-10, (t, case.value)
+    for var, want in case.at.items():
+        assert abs(t.at[var] - want) <= 1e-10, (t, var, want)
     assert t.residual <= 1e-12
     if math.isfinite(t.bound):  # the raster's best cell bounds the exact value
         assert (t.value <= t.bound) if t.side == "min" else (t.value >= t.bound)
 
 
+def test_the_studies_claims():
+    (c,) = claims.threshold_claims("elliptic_pendulum")
+    assert c.verdict == "agrees" and "2.828427124746" in c.measured and c.paper.startswith("f = 2")
+
+
 def test_wheel_bracket_point():
     """The wheel's bracket rho^2 + r^2 + l^2 - 2 r l cos phi + delta l sin phi (rolling
     one way) is least where tan phi = -delta / (2 r): the fold lies there."""
-    kw, value, _, _ = CASES["wheel singular bracket"]
-    t = phasemap.threshold(**kw)
-    phi = t.at["phi"]
+    case = CASES["wheel: singular bracket first vanishes"]
+    t = phasemap.threshold(**case.call)
+    phi, value = t.at["phi"], case.value
     assert abs(math.tan(phi) + value / 2.0) <= 1e-9 or abs(math.tan(phi) - value / 2.0) <= 1e-9
 
 

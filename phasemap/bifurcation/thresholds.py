@@ -59,6 +59,11 @@ class Threshold:
     bound: float = math.nan
     side: str = "min"
 
+    def __post_init__(self):
+        # plain floats: the numbers print and compare as they read
+        object.__setattr__(self, "value", float(self.value))
+        object.__setattr__(self, "at", {str(k): float(v) for k, v in self.at.items()})
+
     def __repr__(self) -> str:
         at = ", ".join(f"{k}={v:.12g}" for k, v in self.at.items())
         return (f"Threshold({self.param} {'>=' if self.side == 'min' else '<='} "
