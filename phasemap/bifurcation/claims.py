@@ -46,12 +46,12 @@ CASES = (
          dict(model="ladder", param="phi", layer="stagnation", value=1, side="max",
               over={"phi": (0.0, P / 2)}, fixed={"omega": 0.0, "f": 0.5}),
          2.0 * math.atan(0.5), "root"),
-    # the turning coefficient of (33) is l^2 - delta^2 up to a positive factor
+    # the turning coefficient (33) vanishes where the friction arm delta reaches l
     Case("hinge_pendulum", "turning coefficient vanishes", "delta = l",
          dict(model="hinge_pendulum", param="delta", layer="singular", value=1,
               over={"delta": (0.0, 1.5)}, fixed={"phi": 0.5, "omega": 1.0, "l": 1.0}),
          1.0, "root"),
-    # rest holds where the friction moment delta m g |cos| ... covers l |sin phi| <= delta
+    # at rest the hinge's moment delta |N| holds the weight's moment while l |sin phi| <= delta
     Case("hinge_pendulum", "stagnation zone (omega = 0, delta = 0.5) ends", "l |sin phi| = delta",
          dict(model="hinge_pendulum", param="phi", layer="stagnation", value=1, side="max",
               over={"phi": (0.0, P / 2)}, fixed={"omega": 0.0, "delta": 0.5, "l": 1.0}),
