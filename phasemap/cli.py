@@ -41,6 +41,10 @@ EXAMPLES = {
         ("phasemap classify elliptic_pendulum phi=0.8 xdot=-1 f=4", ""),
         ("phasemap classify hinge_pendulum phi=0.05 omega=0 delta=0.1", ""),
     ],
+    "cache": [
+        ("phasemap cache info", "where compiled kernels are kept, and how much"),
+        ("phasemap cache clear", "delete them all (they compile again on use)"),
+    ],
 }
 EXAMPLES |= _bif.EXAMPLES  # phasemap boundaries, phasemap threshold
 
@@ -145,7 +149,8 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                    help="integrator setting of the fate layers: t_end, rtol, atol, max_step, "
                    "max_steps, max_events, method (DOPRI5 or DOP853) (repeatable)")
     p.add_argument("--chunk-cells", type=int, default=None, metavar="N",
-                   help="cells per block (default: about a quarter second of work)")
+                   help="cells per block (default: each block about a quarter second of "
+                   "work, sized as the work goes)")
     p.add_argument("--overwrite", action="store_true", help="replace OUT.nc if it exists")
     p.add_argument("--yes", action="store_true", help="go ahead with a large atlas (above "
                    "10^9 cells or an hour)")
@@ -187,6 +192,13 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                                 "equations for the senior derivatives at one state.")
     p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
     p.add_argument("values", nargs="*", metavar="NAME=VALUE")
+    p = subs["cache"] = _sub(sub, "cache", "show or clear the kernel cache: phasemap cache "
+                             "info|clear", "The kernel cache holds the code phasemap generates "
+                             "and what numba compiles from it and from phasemap's own "
+                             "integrators, under one least-recently-used size bound "
+                             "(PHASEMAP_CACHE_MAX_MB).  info lists its folders, entries and "
+                             "size; clear deletes every entry.")
+    p.add_argument("action", choices=["info", "clear"])
     subs |= _bif.add_parsers(sub, _sub, models)
     return parser, subs
 
@@ -197,9 +209,10 @@ def main(argv: list[str] | None = None) -> int:
     if extra:  # the subcommand's own usage, not the top level's
         (subs.get(args.command) or parser).error(f"unrecognized arguments: {' '.join(extra)}")
     from . import progress
+    from .atlas import Terminated, removed_on_signals
 
     try:
-        with progress.enable():
+        with progress.enable(), removed_on_signals():
             return _run(args)
     except ValueError as err:
         if args.command == "tour":
@@ -209,6 +222,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("\nphasemap: interrupted; no partial file was left", file=sys.stderr)
         return 130
+    except Terminated as stop:
+        print(f"\nphasemap: {stop}; no partial file was left", file=sys.stderr)
+        return stop.code
 
 
 def _run(args) -> int:
@@ -243,9 +259,21 @@ def _run(args) -> int:
         from .classify import classify
 
         print(classify(args.model, **_parse_values(args.values)))
+    elif args.command == "cache":
+        print(_cache(args.action))
     elif args.command in ("boundaries", "threshold"):
         print(_bif.run(args, _parse_values))
     return 0
+
+
+def _cache(action: str) -> str:
+    from . import cache
+    from .progress import human_bytes
+
+    if action == "clear":
+        files, freed = cache.clear()
+        return f"removed {files} files ({human_bytes(freed)}) from the kernel cache"
+    return cache.info().text()
 
 
 def _parse_values(items: list[str], words: tuple[str, ...] = ()) -> dict[str, float]:
@@ -294,6 +322,7 @@ def _atlas(args) -> str:
     from . import blocks
     from .atlas import destination
     from .models import get_model
+    from .progress import human_duration
     from .scene import Scene
 
     model = get_model(args.model)
@@ -328,9 +357,9 @@ def _atlas(args) -> str:
     est = blocks.estimate(scene, args.chunk_cells, timed=True)
     print(est.text(scene), file=sys.stderr)
     if est.seconds > blocks.YES_SECONDS and not args.yes:
-        raise ValueError(f"this atlas would take about {blocks._duration(est.seconds)}; "
+        raise ValueError(f"this atlas would take about {human_duration(est.seconds)}; "
                          "pass --yes to go ahead")
-    blocks.write_scene(scene, out, block_cells=est.block_cells, overwrite=args.overwrite)
+    blocks.write_scene(scene, out, block_cells=args.chunk_cells, overwrite=args.overwrite)
     return f"wrote {out} ({scene.size} cells, layers {', '.join(scene.layers)})"
 
 
@@ -362,7 +391,7 @@ def _simulate(args) -> str:
     lines.append(f"{ds.attrs['end_reason']}: {ds.attrs['end_message']} "
                  f"({int(ds.attrs['n_steps'])} steps, {ds.sizes['t']} saved points)")
     if out is not None:
-        write_atlas(ds, out)
+        write_atlas(ds, out, overwrite=args.overwrite)
         lines.append(f"wrote {out}")
     return "\n".join(lines)
 

@@ -42,6 +42,7 @@ import numpy as np
 
 from .. import _codegen
 from .._version import __version__
+from ..cache import load_module
 from ..model import Model
 
 __all__ = ["Condition", "Conditions", "conditions_of", "compiled"]
@@ -219,7 +220,7 @@ def compiled(model: Model, variables, conditions=None) -> Conditions:
     h.update(pathlib.Path(__file__).read_bytes())
     h.update(f"{numba.__version__} {np.__version__} {__version__}".encode())
     stem = f"{model.name}_conditions_{h.hexdigest()[:16]}"
-    module = _codegen.load_module(stem, lambda: _generate(model, variables, make()))
+    module = load_module(stem, lambda: _generate(model, variables, make()))
     result = Conditions(model, variables, module)
     # the conditions object is kept with its entry, so that its id is not reused
     _COMPILED[quick] = (model, conditions, result)
