@@ -18,11 +18,16 @@ from . import accessor as _accessor  # noqa: F401  (registers Dataset.phasemap)
 
 def __getattr__(name: str):
     """``phasemap.plot`` is imported (with matplotlib, half a second) on first use: a
-    script that maps, integrates or writes atlases does not pay for it."""
+    script that maps, integrates or writes atlases does not pay for it; so are
+    ``phasemap.boundaries`` and ``phasemap.threshold`` (:mod:`phasemap.bifurcation`)."""
     if name == "plot":
         import importlib
 
         return importlib.import_module(".plot", __name__)
+    if name in ("boundaries", "threshold"):  # sympy and the tracer load on first use
+        from . import bifurcation
+
+        return getattr(bifurcation, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
@@ -41,6 +46,7 @@ __all__ = [
     "Solvability",
     "Variable",
     "__version__",
+    "boundaries",
     "classify",
     "describe_atlas",
     "get_model",
@@ -49,5 +55,6 @@ __all__ = [
     "phase_curve",
     "plot",
     "simulate",
+    "threshold",
     "write_atlas",
 ]

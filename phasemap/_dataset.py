@@ -67,7 +67,8 @@ KINDS = ("map", "profile", "fate", "phase_curve", "trajectory")
 MOTIONS = ("phase_curve", "trajectory")
 
 #: The title of each producer's Dataset, by kind (``phasemap_kind``; ``atlas`` for a Scene's).
-_TITLES = {"atlas": "atlas", "trajectory": "trajectory", "phase_curve": "phase curve"}
+_TITLES = {"atlas": "atlas", "trajectory": "trajectory", "phase_curve": "phase curve",
+           "boundaries": "boundaries", "threshold": "threshold curve"}
 
 
 def _now() -> str:

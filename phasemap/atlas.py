@@ -140,6 +140,9 @@ def cf_encoding(ds: xr.Dataset, chunks: Mapping[str, int] | None = None, *,
     for name in ds.coords:
         encoding[str(name)] = {"_FillValue": None}
     for name, var in ds.data_vars.items():
+        if var.dtype.kind in "OUS":  # text: CF's character arrays (CF-1.8 has no string type)
+            encoding[str(name)] = {"dtype": "S1", "char_dim_name": f"{name}_length"}
+            continue
         enc: dict = {"_FillValue": _fill_value(var.dtype)}
         if var.ndim > 0:
             start = _dask_chunk_shape(var) or var.shape

@@ -9,6 +9,7 @@ import sys
 import textwrap
 
 from ._version import __version__
+from .bifurcation import command as _bif
 
 #: Examples per subcommand; ``phasemap --help`` shows them all, each
 #: subcommand's help only its own.
@@ -45,6 +46,7 @@ EXAMPLES = {
         ("phasemap cache clear", "delete them all (they compile again on use)"),
     ],
 }
+EXAMPLES |= _bif.EXAMPLES  # phasemap boundaries, phasemap threshold
 
 
 def examples(*commands: str) -> str:
@@ -197,6 +199,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                              "(PHASEMAP_CACHE_MAX_MB).  info lists its folders, entries and "
                              "size; clear deletes every entry.")
     p.add_argument("action", choices=["info", "clear"])
+    subs |= _bif.add_parsers(sub, _sub, models)
     return parser, subs
 
 
@@ -258,6 +261,8 @@ def _run(args) -> int:
         print(classify(args.model, **_parse_values(args.values)))
     elif args.command == "cache":
         print(_cache(args.action))
+    elif args.command in ("boundaries", "threshold"):
+        print(_bif.run(args, _parse_values))
     return 0
 
 

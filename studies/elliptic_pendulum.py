@@ -40,6 +40,7 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
 import phasemap
+from phasemap.bifurcation.claims import threshold_claims
 from phasemap import plot as pplot
 from phasemap import study
 from phasemap.study import Claim, verdict
@@ -545,6 +546,7 @@ def main(argv=None) -> list[Claim]:
                                                            size=size), out,
                                 f"{NAME}_stick_slip", sizes)
 
+    claims += threshold_claims("elliptic_pendulum")  # exact, beside the closed form
     study.finish("Painleve's elliptic pendulum", claims, files)
     return claims
 

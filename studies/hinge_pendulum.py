@@ -34,6 +34,7 @@ from matplotlib.colors import to_hex
 from matplotlib.lines import Line2D
 
 import phasemap
+from phasemap.bifurcation.claims import threshold_claims
 from phasemap import plot as pplot
 from phasemap import study
 from phasemap.models.hinge_pendulum import weightless_motion
@@ -527,6 +528,7 @@ def main(argv=None) -> list[Claim]:
                        ("fates", lambda size: figure_fates(fates, size))):
         files += study.save_figures(draw, out, f"{NAME}_{name}", args.sizes)
 
+    claims += threshold_claims("hinge_pendulum")  # exact, beside the closed form
     study.finish("Pendulum with hinge friction", claims, files)
     return claims
 

@@ -32,6 +32,7 @@ import numpy as np
 import xarray as xr
 
 import phasemap
+from phasemap.bifurcation.claims import threshold_claims
 from phasemap import plot as pplot
 from phasemap.study import (Claim, arguments, collect_legend, finish, save_atlas,
                             save_figures, verdict)
@@ -93,6 +94,7 @@ def main(argv=None) -> list[Claim]:
     files += save_figures(lambda size: first_integral_figure(integrals, size), out,
                           "ladder_first_integral", args.sizes)
 
+    claims += threshold_claims("ladder")  # exact, beside the closed form
     finish("ladder study", claims, files)
     return claims
 

@@ -25,6 +25,7 @@ import math
 import numpy as np
 
 import phasemap
+from phasemap.bifurcation.claims import threshold_claims
 from phasemap import workprecision as wp
 from phasemap.study import Claim, arguments, finish, save_atlas, save_figures, verdict
 
@@ -121,6 +122,7 @@ def main(argv=None) -> list[Claim]:
                         "-", ", ".join(kinds),
                         verdict(set(kinds) <= {"rest", "contact_lost", "no_solution"},
                                 "finding")))
+    claims += threshold_claims("painleve_rod")  # exact, beside the closed form
     finish("overview", claims, files)
     return claims
 

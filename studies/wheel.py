@@ -32,6 +32,7 @@ import numpy as np
 import xarray as xr
 
 import phasemap
+from phasemap.bifurcation.claims import threshold_claims
 from phasemap.facts import wheel_singular_delta
 from phasemap import plot as pplot
 from phasemap.study import (Claim, arguments, collect_legend, finish, save_atlas,
@@ -109,6 +110,7 @@ def main(argv=None) -> list[Claim]:
     files.append(save_atlas(sing, out, "wheel_singular", STUDY))
     claims += singular_claims(sing)
 
+    claims += threshold_claims("wheel")  # exact, beside the closed form
     finish("wheel study", claims, files)
     return claims
 

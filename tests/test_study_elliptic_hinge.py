@@ -27,6 +27,7 @@ EXPECTED = {
         ("Q = g + l cos(phi) omega^2 < 0, f = 4", "finding"),
         ("a motion from a unique state hits a paradox", "finding"),
         ("at v = 0 sliding can cease (after (5))", "agrees"),
+        ("elliptic_pendulum: no solution (xdot > 0) first exists (phasemap.threshold)", "agrees"),
     ],
     "hinge_pendulum": [
         ("stagnation zone (35), delta < l", "agrees"),
@@ -38,6 +39,9 @@ EXPECTED = {
         ("falling into (35) with omega = 0, the pendulum stops", "agrees"),
         ("g = 0: omega = omega0/(1 + omega0 k t) (36)", "agrees"),
         ("every motion ends at rest in the zone", "agrees"),
+        ("hinge_pendulum: turning coefficient vanishes (phasemap.threshold)", "agrees"),
+        ("hinge_pendulum: stagnation zone (omega = 0, delta = 0.5) ends (phasemap.threshold)",
+         "agrees"),
     ],
 }
 

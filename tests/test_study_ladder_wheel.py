@@ -49,6 +49,8 @@ EXPECTED = {
         ("ladder first integral, b", "erratum"),
         ("ladder first integral, a and b", "erratum"),
         ("ladder: (8) has a first integral", "agrees"),
+        ("ladder: slide coefficient vanishes (phasemap.threshold)", "agrees"),
+        ("ladder: static zone (omega = 0, f = 0.5) ends (phasemap.threshold)", "agrees"),
     ],
     "wheel": [
         ("wheel: stagnation zone (15)", "agrees"),
@@ -63,6 +65,7 @@ EXPECTED = {
         ("wheel fate map, delta/l = 1.2: no reversal", "agrees"),
         ("wheel: bracket of (13) can vanish", "finding"),
         ("wheel: (13) has no solution where its bracket vanishes", "agrees"),
+        ("wheel: singular bracket first vanishes (phasemap.threshold)", "agrees"),
     ],
 }
 

@@ -377,7 +377,7 @@ def _default_map_layer(ds: xr.Dataset) -> str:
 def map_figure(ds: xr.Dataset, layer: str | None = None, *, x: str | None = None, ax=None,
                size: str | float = "one_column", overlays: bool = True,
                all_categories: bool = False, robust: bool = True,
-               colorbar: str = "right", boundaries: xr.Dataset | None = None) -> Figure:
+               colorbar: str = "right", boundaries: xr.Dataset | bool | None = None) -> Figure:
     """A 2-D map of one layer of an atlas.
 
     A categorical layer (``flag_values``/``flag_meanings``; default
@@ -396,7 +396,9 @@ def map_figure(ds: xr.Dataset, layer: str | None = None, *, x: str | None = None
 
     ``boundaries`` draws exact class boundaries over the cells (see
     :func:`draw_boundaries`): the pieces the bifurcation-set tracer returns,
-    so that a boundary is a curve, not the stair of the grid's cells.
+    so that a boundary is a curve, not the stair of the grid's cells;
+    ``boundaries=True`` traces them for this map's slice
+    (:func:`phasemap.bifurcation.overlay.map_boundaries`).
     """
     if layer is None:
         atlas_kind(ds)  # a clear error for what is not an atlas at all
@@ -425,7 +427,11 @@ def map_figure(ds: xr.Dataset, layer: str | None = None, *, x: str | None = None
                              location=colorbar, units=_units(ds, layer))
         if overlays:
             handles += _overlays(a, ds, layer, xdim, ydim, xc, yc, shown=shown)
-        if boundaries is not None:
+        if boundaries is True:
+            from ..bifurcation.overlay import map_boundaries
+
+            boundaries = map_boundaries(ds, layer, xdim, ydim)
+        if boundaries is not None and boundaries is not False:
             handles += draw_boundaries(a, boundaries, xdim, ydim)
         _label_axis(a, ds, "x", xdim, _edges(xc))
         _label_axis(a, ds, "y", ydim, _edges(yc))

@@ -1,0 +1,131 @@
+"""The bifurcation set of a slice to 1e-10 beside a 512^2 raster of the same slice.
+
+For each model, one slice (two axes, the fixed values, a layer): the median wall
+time of ``phasemap.boundaries(..., tol=1e-10)`` (seeding raster, tracing, special
+points, and the 128^2 completeness check, all included) beside the median of
+``Scene(model, 512 x 512 axes of the same slice, layers=[layer]).compute()``,
+both with warm caches (one untimed call first).  Per thread first
+(``numba.set_num_threads(1)``), then the raster on 2 threads (the tracer is serial).
+The table goes to BENCHMARKS.md, section "Boundaries".
+
+    python benchmarks/boundaries.py [--repeat 5] [--no-write]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import pathlib
+import platform
+import statistics
+import sys
+import time
+
+import numba
+import numpy as np
+
+import phasemap
+from grid import write_section  # benchmarks/grid.py: one BENCHMARKS.md section writer
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+P = math.pi
+#: model: (axes, fixed, layer)
+SLICES = {
+    "painleve_rod": ({"theta": (0.2, 1.5), "f": (0.0, 3.0)}, {"xdot": -1.0, "omega": 0.0},
+                     "n_solutions"),
+    "elliptic_pendulum": ({"phi": (-P, P), "f": (0.0, 6.0)}, {"xdot": 1.0, "omega": 0.0},
+                          "n_solutions"),
+    "ladder": ({"phi": (0.05, 1.5), "f": (0.05, 3.0)}, {"omega": 0.0}, "stagnation"),
+    "hinge_pendulum": ({"phi": (-3.0, 3.0), "delta": (0.05, 1.4)}, {"omega": 0.0},
+                       "stagnation"),
+    "wheel": ({"phi": (-P, P), "delta": (0.0, 1.0)}, {"omega": 0.0}, "stagnation"),
+}
+N = 512
+
+
+def timed(fn, repeat: int) -> tuple[float, float]:
+    """(median, best) wall time of ``repeat`` warm calls: the best is the one least
+    disturbed by other work on a shared machine."""
+    fn()
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), min(times)
+
+
+def row(name: str, repeat: int) -> dict:
+    axes, fixed, layer = SLICES[name]
+    grid = {n: np.linspace(lo, hi, N) for n, (lo, hi) in axes.items()}
+
+    def exact():
+        return phasemap.boundaries(name, axes, fixed=fixed, layer=layer, tol=1e-10)
+
+    def raster():
+        return phasemap.Scene(name, axes=grid, fixed=fixed, layers=[layer]).compute()
+
+    numba.set_num_threads(1)
+    b = exact()
+    t_exact = timed(exact, repeat)
+    t_raster1 = timed(raster, repeat)
+    numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+    t_raster2 = timed(raster, repeat)
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    return dict(model=name, slice=", ".join(f"{n} {lo:.3g}..{hi:.3g}" for n, (lo, hi)
+                                            in axes.items()),
+                fixed=", ".join(f"{k} = {v:g}" for k, v in fixed.items()), layer=layer,
+                pieces=b.sizes["piece"], vertices=b.sizes["vertex"], points=b.sizes["point"],
+                worst=float(b.point_residual.max()) if b.sizes["point"] else 0.0,
+                exact=t_exact, raster1=t_raster1, raster2=t_raster2)
+
+
+def _t(pair) -> str:
+    return f"{pair[0]:.4f} ({pair[1]:.4f})"
+
+
+def table(rows: list[dict], repeat: int) -> str:
+    lines = [
+        "## Boundaries (`benchmarks/boundaries.py`)",
+        "",
+        f"`phasemap.boundaries(..., tol=1e-10)` of one slice per model (its pieces, crossings, "
+        f"folds and ends; the 33^2 seeding raster and the 128^2 completeness check included) "
+        f"beside a {N}^2 `Scene.compute()` of the same slice and layer: median (best) of "
+        f"{repeat} warm runs on {platform.machine()}, {os.cpu_count()} cores shared with other work, "
+        f"numba {numba.__version__}.  The tracer is serial; the raster is timed on 1 thread "
+        "and on 2.",
+        "",
+        "| model | slice | fixed | layer | pieces | vertices | points | worst point residual "
+        f"| boundaries (s) | {N}^2 raster, 1 thread (s) | ratio | raster, 2 threads (s) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        lines.append(f"| {r['model']} | {r['slice']} | {r['fixed']} | {r['layer']} | "
+                     f"{r['pieces']} | {r['vertices']} | {r['points']} | {r['worst']:.1e} | "
+                     f"{_t(r['exact'])} | {_t(r['raster1'])} | "
+                     f"{r['exact'][1] / r['raster1'][1]:.1f} | {_t(r['raster2'])} |")
+    lines += ["", "ratio: best boundaries / best raster (1 thread); below 1 the exact set is "
+              "cheaper."]
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--only", help="models, comma separated")
+    ap.add_argument("--no-write", action="store_true")
+    args = ap.parse_args(argv)
+    names = args.only.split(",") if args.only else list(SLICES)
+    rows = []
+    for name in names:
+        rows.append(row(name, args.repeat))
+        print(rows[-1], file=sys.stderr, flush=True)
+    text = table(rows, args.repeat)
+    print(text)
+    if not args.no_write:
+        write_section(text, "## Boundaries")
+
+
+if __name__ == "__main__":
+    main()

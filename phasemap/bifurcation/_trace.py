@@ -1,0 +1,1164 @@
+"""The compiled tracer: one set of numba functions for every model.
+
+What is particular to a model reaches the tracer as first-class functions, in
+the tuple ``F`` (:data:`FUNCTIONS`), as :func:`phasemap._codegen.driver` takes
+a scene's ``cells``: so the tracer compiles once (and is cached on disk), and a
+new model or slice compiles only its small generated condition module.
+
+``F[0](x, out, scale)``, ``F[1](k, x, g)``, ``F[2](k, x, g, H)``
+    the generated condition module (:mod:`phasemap.bifurcation.conditions`)
+    of the slice's two axes: every condition's value and tie scale; one
+    condition's value, tie scale and gradient (and Hessian) in (x, y);
+``F[3](v, out, layer)``
+    the model's class at a state, from its own ``point`` and ``summarize``
+    (:func:`classifier`).
+
+Coordinates
+-----------
+The tracer works in the unit square: ``u = (x - x_lo) / (x_hi - x_lo)`` and
+``w`` likewise, so that step lengths, curvature and the chord error of a
+vertex are fractions of the slice.  ``geo = (x_lo, x_span, y_lo, y_span)``
+and the input slots ``ix``, ``iy`` place a point of the square in the input
+vector ``v`` of the model (the fixed values already in it).
+
+Vertex buffers
+--------------
+``vf[n] = (u, w, residual, error)`` and
+``vi[n] = (curve, kind, condition, other, left, right, owned)``: what a vertex
+is (:data:`REGULAR`, :data:`CROSSING`...), the condition it lies on, the other
+condition or axis that defines a special point, the layer's class on each
+side (-1 where a side is not sampled: at a crossing or an end), and whether
+the stretch is this condition's (0 where a condition that ranks first vanishes
+there too).
+``curves[c] = (condition, first, stop, closed)``; ``counts = (vertices,
+curves, overflow)``.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+from numba import njit, types
+from numba.core.errors import NumbaExperimentalFeatureWarning
+
+from .. import _numerics as nx
+
+# vertex kinds
+REGULAR = 0
+CROSSING = 1
+FOLD_X = 2
+FOLD_Y = 3
+END = 4
+TANGENCY = 5
+#: the class on a side changes where no condition vanishes (the conditions are incomplete)
+CHANGE = 6
+#: the curve could not be continued (its gradient vanishes: a singular point)
+STALL = 7
+
+#: Largest distance of a chord from its curve, as a fraction of the slice.
+CHORD = 5e-5
+#: Longest step (a fraction of the slice): crossings and class changes between two
+#: vertices are found from the signs at the vertices.
+H_MAX = 1.0 / 48.0
+#: Shortest step before a curve is declared stalled.
+H_MIN = 1e-9
+#: Largest turn of the tangent over one step (rad).
+ANGLE = 0.15
+#: A vertex lies on its condition to this fraction of the condition's tie scale.
+RESIDUAL = 1e-12
+#: Newton iterations per solve.
+MAX_IT = 40
+#: A condition whose value at a curve's vertex is below this fraction of its tie scale
+#: vanishes there too: its zero set runs with the curve (the stretch is traced once, by
+#: the condition that ranks first).
+COVANISH = 1e-10
+#: A curve longer than this (in slices) is stopped: it does not close.
+MAX_LENGTH = 1000.0
+
+
+# -- helpers without model globals ---------------------------------------------------
+
+@njit(cache=True, error_model="numpy")
+def _solve2(a, b, c, d, r0, r1):
+    """The solution of [[a, b], [c, d]] z = (r0, r1); NaN when singular."""
+    det = a * d - b * c
+    if det == 0.0 or not math.isfinite(det):
+        return np.nan, np.nan
+    return (r0 * d - b * r1) / det, (a * r1 - r0 * c) / det
+
+
+@njit(cache=True, error_model="numpy")
+def _push(vf, vi, counts, u, w, res, err, curve, kind, cond, other, left, right, owned=1):
+    """Append one vertex; set the overflow flag when the buffer is full."""
+    n = counts[0]
+    if n >= vf.shape[0]:
+        counts[2] = 1
+        return
+    vf[n, 0], vf[n, 1], vf[n, 2], vf[n, 3] = u, w, res, err
+    vi[n, 0], vi[n, 1], vi[n, 2], vi[n, 3], vi[n, 4], vi[n, 5] = (curve, kind, cond, other,
+                                                                  left, right)
+    vi[n, 6] = owned
+    counts[0] = n + 1
+
+
+@njit(cache=True, error_model="numpy")
+def _mark(mark, k, ua, wa, ub, wb):
+    """Mark every cell of the raster ``mark[k]`` (n x n cells over the unit square)
+    that the segment from (ua, wa) to (ub, wb) passes through (Amanatides and Woo)."""
+    n = mark.shape[1]
+    x0, y0, x1, y1 = ua * n, wa * n, ub * n, wb * n
+    i = min(max(int(math.floor(x0)), 0), n - 1)
+    j = min(max(int(math.floor(y0)), 0), n - 1)
+    i1 = min(max(int(math.floor(x1)), 0), n - 1)
+    j1 = min(max(int(math.floor(y1)), 0), n - 1)
+    dx, dy = x1 - x0, y1 - y0
+    si = 1 if dx > 0.0 else -1
+    sj = 1 if dy > 0.0 else -1
+    tx = ((i + (1 if si > 0 else 0)) - x0) / dx if dx != 0.0 else np.inf
+    ty = ((j + (1 if sj > 0 else 0)) - y0) / dy if dy != 0.0 else np.inf
+    ddx = 1.0 / abs(dx) if dx != 0.0 else np.inf
+    ddy = 1.0 / abs(dy) if dy != 0.0 else np.inf
+    mark[k, i, j] = 1
+    for it in range(4 * n + 4):
+        if i == i1 and j == j1:
+            break
+        if tx < ty:
+            i += si
+            tx += ddx
+        else:
+            j += sj
+            ty += ddy
+        if i < 0 or j < 0 or i >= n or j >= n:
+            break
+        mark[k, i, j] = 1
+
+
+@njit(cache=True, error_model="numpy")
+def _seen(mark, k, u, w):
+    """A cell of ``mark[k]`` within 1e-4 of (u, w) is marked."""
+    n = mark.shape[1]
+    for a in (-1e-4, 1e-4):
+        for b in (-1e-4, 1e-4):
+            i = min(max(int((u + a) * n), 0), n - 1)
+            j = min(max(int((w + b) * n), 0), n - 1)
+            if mark[k, i, j]:
+                return True
+    return False
+
+
+@njit(cache=True, error_model="numpy")
+def _note(spf, spi, n, s, u, w, kind, other, res, err):
+    """Record special point n of a step: where along it (s), where, what, how well."""
+    spf[n, 0], spf[n, 1], spf[n, 2], spf[n, 3], spf[n, 4] = s, u, w, res, err
+    spi[n, 0], spi[n, 1] = kind, other
+    return n + 1
+
+
+@njit(cache=True, error_model="numpy")
+def _seed(seeds, m, k, u, w, kind):
+    """Append the seed (k, u, w, kind) as row m, growing the array when it is full."""
+    if m >= seeds.shape[0]:
+        bigger = np.empty((2 * seeds.shape[0], 4))
+        bigger[:m] = seeds[:m]
+        seeds = bigger
+    seeds[m, 0], seeds[m, 1], seeds[m, 2], seeds[m, 3] = k, u, w, kind
+    return seeds, m + 1
+
+
+@njit(cache=True, error_model="numpy")
+def _owned(k, grp, active, cv, cs, mark, ua, wa, ub, wb):
+    """Whether the curve of k traces the stretch from (ua, wa) to (ub, wb), whose end's
+    condition values are cv: 0 where a condition that ranks first vanishes there too
+    (its zero set runs with this curve; it traces the stretch), and the cells of the
+    conditions that rank after k and vanish too are marked as traced."""
+    owned = 1
+    for j in range(cv.shape[0]):
+        if active[j] and grp[j, 0] != grp[k, 0] and abs(cv[j]) <= COVANISH * cs[j]:
+            if grp[j, 1] < grp[k, 1]:
+                owned = 0
+            else:
+                _mark(mark, j, ua, wa, ub, wb)
+    return owned
+
+
+@njit(cache=True, error_model="numpy")
+def _inside(u, w, slack):
+    return (u >= -slack) & (u <= 1.0 + slack) & (w >= -slack) & (w <= 1.0 + slack)
+
+
+# -- the model's class: a template (its globals are the model's contract) -----------------
+
+def _class_template(v, out, layer):
+    """The layer's class at the state ``v`` (names set; derived inputs are filled)."""
+    DERIVE(v)
+    POINT(v, out)
+    n, stag, lost, sing = nx.summarize(out, STICK)
+    if layer == 0:
+        return n
+    if layer == 1:
+        return 1 if stag else 0
+    if layer == 2:
+        return 1 if lost else 0
+    return 1 if sing else 0
+
+
+@njit(cache=True, error_model="numpy")
+def _class_at(F, v, out, layer, ix, iy, geo, u, w):
+    v[ix] = geo[0] + u * geo[1]
+    v[iy] = geo[2] + w * geo[3]
+    return F[3](v, out, layer)
+
+
+@njit(cache=True, error_model="numpy")
+def _grad(F, k, v, ix, iy, geo, u, w, g):
+    """Condition ``k`` at (u, w): (value, scale, d/du, d/dw)."""
+    v[ix] = geo[0] + u * geo[1]
+    v[iy] = geo[2] + w * geo[3]
+    c, s = F[1](k, v, g)
+    return c, s, g[0] * geo[1], g[1] * geo[3]
+
+
+@njit(cache=True, error_model="numpy")
+def _hess(F, k, v, ix, iy, geo, u, w, g, H):
+    """Condition ``k`` at (u, w): (value, scale, c_u, c_w, c_uu, c_uw, c_ww)."""
+    v[ix] = geo[0] + u * geo[1]
+    v[iy] = geo[2] + w * geo[3]
+    c, s = F[2](k, v, g, H)
+    return (c, s, g[0] * geo[1], g[1] * geo[3], H[0, 0] * geo[1] * geo[1],
+            H[0, 1] * geo[1] * geo[3], H[1, 1] * geo[3] * geo[3])
+
+
+@njit(cache=True, error_model="numpy")
+def _side(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, su, sw, scr):
+    """The class at (su, sw), a side sample of the curve point (u, w) whose condition
+    values are in ``scr[0]``: -1 outside the slice, or where another condition's zero
+    set passes between the two (the sample would see that condition's class change,
+    not this curve's: near a crossing, or where the curves nearly touch).  A zero set
+    through (u, w) itself (far closer than the sample) runs with this curve there."""
+    if not _inside(su, sw, 0.0):
+        return -1
+    v[ix] = geo[0] + su * geo[1]
+    v[iy] = geo[2] + sw * geo[3]
+    F[0](v, scr[1], scr[2])
+    eps = math.hypot(su - u, sw - w)
+    for j in range(active.shape[0]):
+        if active[j] and grp[j, 0] != grp[k, 0] and (scr[0, j] > 0.0) != (scr[1, j] > 0.0):
+            c, s, cu, cw = _grad(F, j, v, ix, iy, geo, u, w, g)
+            if abs(c) > 1e-3 * eps * math.hypot(cu, cw):
+                return -1
+    v[ix] = geo[0] + su * geo[1]
+    v[iy] = geo[2] + sw * geo[3]
+    return F[3](v, out, layer)
+
+
+@njit(cache=True, error_model="numpy")
+def _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw, eps, scr):
+    """The classes left and right of the direction (tu, tw) at the curve point (u, w),
+    ``eps`` away (-1 for a side that cannot be sampled, see SIDE)."""
+    v[ix] = geo[0] + u * geo[1]
+    v[iy] = geo[2] + w * geo[3]
+    F[0](v, scr[0], scr[2])
+    left = _side(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, u - eps * tw,
+                w + eps * tu, scr)
+    right = _side(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, u + eps * tw,
+                 w - eps * tu, scr)
+    return left, right
+
+
+@njit(cache=True, error_model="numpy")
+def _correct(F, k, v, ix, iy, geo, g, pu, pw, du, dw):
+    """Newton on c = 0 and (du, dw) . (x - p) = 0 from p: the curve's point whose
+    projection on the direction (du, dw) is p's.  Returns (ok, u, w, residual, step)."""
+    u, w = pu, pw
+    last = np.inf
+    for it in range(MAX_IT):
+        c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
+        if not (math.isfinite(c) and math.isfinite(cu) and math.isfinite(cw)):
+            return False, u, w, np.inf, np.inf
+        r = du * (u - pu) + dw * (w - pw)
+        a, b = _solve2(cu, cw, du, dw, -c, -r)
+        if not math.isfinite(a):
+            return False, u, w, np.inf, np.inf
+        u += a
+        w += b
+        last = abs(a) + abs(b)
+        if last <= 1e-15 or (last <= 1e-13 and abs(c) <= 0.01 * RESIDUAL * s):
+            break
+    c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
+    res = abs(c) / s if s > 0.0 else abs(c)
+    return res <= RESIDUAL, u, w, res, last
+
+
+@njit(cache=True, error_model="numpy")
+def _project(F, k, v, ix, iy, geo, g, u, w):
+    """The nearest point of c = 0 to (u, w), by Newton along the gradient."""
+    for it in range(MAX_IT):
+        c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
+        n2 = cu * cu + cw * cw
+        if not (math.isfinite(c) and n2 > 0.0):
+            return False, u, w
+        a = -c * cu / n2
+        b = -c * cw / n2
+        u += a
+        w += b
+        if abs(a) + abs(b) <= 1e-15:
+            break
+    c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
+    return abs(c) <= RESIDUAL * s, u, w
+
+
+@njit(cache=True, error_model="numpy")
+def _system(F, what, k, j, v, ix, iy, geo, g, H, u, w):
+    """A special point's two defining equations at (u, w), their Jacobian and residual:
+    ``(F0, F1, dF0/du, dF0/dw, dF1/du, dF1/dw, residual)``.
+
+    ``what`` 0: ``c_k = c_j = 0`` (a crossing); 1: ``c_k = 0, dc_k/dw = 0`` (the curve
+    turns back in u: a fold in u); 2: ``c_k = 0, dc_k/du = 0`` (a fold in w).  The
+    residual is relative to the tie scales, a derivative's to the gradient's norm.
+    """
+    if what == 0:
+        c1, s1, a1, b1 = _grad(F, k, v, ix, iy, geo, u, w, g)
+        c2, s2, a2, b2 = _grad(F, j, v, ix, iy, geo, u, w, g)
+        return c1, c2, a1, b1, a2, b2, max(abs(c1) / s1, abs(c2) / s2)
+    c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, u, w, g, H)
+    n = max(math.hypot(cu, cw), 1e-300)
+    if what == 1:
+        return c, cw, cu, cw, huw, hww, max(abs(c) / s, abs(cw) / n)
+    return c, cu, cu, cw, huu, huw, max(abs(c) / s, abs(cu) / n)
+
+
+@njit(cache=True, error_model="numpy")
+def _solve(F, what, k, j, v, ix, iy, geo, g, H, u, w, tol_u, tol_w):
+    """Newton on the defining equations ``what`` (see SYSTEM) from (u, w), to a step
+    below 1e-3 of the tolerances: (ok, u, w, residual, last step in tolerances)."""
+    err = np.inf
+    for it in range(MAX_IT):
+        f0, f1, a, b, c, d, res = _system(F, what, k, j, v, ix, iy, geo, g, H, u, w)
+        du, dw = _solve2(a, b, c, d, -f0, -f1)
+        if not math.isfinite(du):
+            return False, u, w, np.inf, np.inf
+        u += du
+        w += dw
+        err = max(abs(du) / tol_u, abs(dw) / tol_w)
+        if err <= 1e-3:
+            break
+    res = _system(F, what, k, j, v, ix, iy, geo, g, H, u, w)[6]
+    return err <= 1.0, u, w, res, err
+
+
+@njit(cache=True, error_model="numpy")
+def _edge(F, k, v, ix, iy, geo, g, u, w, fixed_u, tol_u, tol_w):
+    """Newton on c = 0 along an edge (u fixed when ``fixed_u``, else w) from (u, w)."""
+    err = np.inf
+    for it in range(MAX_IT):
+        c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
+        d = cw if fixed_u else cu
+        if d == 0.0 or not math.isfinite(c):
+            return False, u, w, np.inf, np.inf
+        step = -c / d
+        if fixed_u:
+            w += step
+            err = abs(step) / tol_w
+        else:
+            u += step
+            err = abs(step) / tol_u
+        if err <= 1e-3:
+            break
+    c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
+    return err <= 1.0, u, w, abs(c) / s, err
+
+
+@njit(cache=True, error_model="numpy")
+def _tangent(F, k, v, ix, iy, geo, g, u, w, su, sw):
+    """The unit tangent at (u, w), oriented along (su, sw); (0, 0) where c has no gradient."""
+    c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
+    n = math.hypot(cu, cw)
+    if not (n > 0.0):
+        return 0.0, 0.0, n, s
+    tu, tw = -cw / n, cu / n
+    if tu * su + tw * sw < 0.0:
+        tu, tw = -tu, -tw
+    return tu, tw, n, s
+
+
+@njit(cache=True, error_model="numpy")
+def _side_eps(s, n, h):
+    """How far from the curve its sides are sampled: well beyond the tie band."""
+    eps = max(1e-8, 1e-9 * s / max(n, 1e-300))
+    return min(eps, 0.25 * h, 1e-3)
+
+
+@njit(cache=True, error_model="numpy")
+def _bisect(F, k, grp, active, v, ix, iy, geo, g, out, layer, ua, wa, ub, wb, la, ra, h,
+                     scr):
+    """Where between the curve points a and b the side classes stop being (la, ra):
+    bisection on the curve (the corrector, constrained along a -> b).  Returns the
+    point just after the change and its tangent."""
+    du, dw = ub - ua, wb - wa
+    length = math.hypot(du, dw)
+    du /= length
+    dw /= length
+    lo, hi = 0.0, 1.0
+    u, w = ub, wb
+    for it in range(60):
+        mid = 0.5 * (lo + hi)
+        ok, pu, pw, res, st = _correct(F, k, v, ix, iy, geo, g, ua + mid * (ub - ua),
+                                      wa + mid * (wb - wa), du, dw)
+        if not ok:
+            break
+        tu, tw, n, s = _tangent(F, k, v, ix, iy, geo, g, pu, pw, du, dw)
+        left, right = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, pu, pw, tu, tw,
+                             _side_eps(s, n, h), scr)
+        if left == la and right == ra:
+            lo = mid
+        else:
+            hi = mid
+            u, w = pu, pw
+        if (hi - lo) * length < 1e-10:
+            break
+    return u, w
+
+
+@njit(cache=True, error_model="numpy")
+def _explain(F, k, grp, active, v, ix, iy, geo, g, H, cv, cs, u, w, tol_u, tol_w):
+    """The condition (other than k's group) that vanishes nearest (u, w) and its
+    crossing with k there: (j, ok, u, w, residual, error); j = -1 if none is near."""
+    v[ix] = geo[0] + u * geo[1]
+    v[iy] = geo[2] + w * geo[3]
+    F[0](v, cv, cs)
+    best = -1
+    dist = 1e-6
+    for j in range(active.shape[0]):
+        if (not active[j]) or grp[j, 0] == grp[k, 0]:
+            continue
+        c, s, cu, cw = _grad(F, j, v, ix, iy, geo, u, w, g)
+        n = math.hypot(cu, cw)
+        if n > 0.0 and abs(c) / n < dist:
+            dist = abs(c) / n
+            best = j
+    if best < 0:
+        return -1, False, u, w, np.inf, np.inf
+    ok, pu, pw, res, err = _solve(F, 0, k, best, v, ix, iy, geo, g, H, u, w, tol_u, tol_w)
+    return best, ok, pu, pw, res, err
+
+
+@njit(cache=True, error_model="numpy")
+def _exit(F, k, v, ix, iy, geo, g, u, w, qu, qw, tol_u, tol_w):
+    """Where the curve from (u, w) (inside) towards (qu, qw) (outside) crosses the
+    slice's edge: Newton along the edge the chord crosses first."""
+    t_exit = np.inf
+    fixed_u = True
+    eu = 0.0
+    ew = 0.0
+    du, dw = qu - u, qw - w
+    for e in range(4):
+        edge = float(e % 2)
+        if e < 2 and du != 0.0:
+            t = (edge - u) / du
+            if 0.0 <= t < t_exit:
+                t_exit, fixed_u, eu, ew = t, True, edge, w + t * dw
+        elif e >= 2 and dw != 0.0:
+            t = (edge - w) / dw
+            if 0.0 <= t < t_exit:
+                t_exit, fixed_u, eu, ew = t, False, u + t * du, edge
+    if not math.isfinite(t_exit):
+        return False, u, w, np.inf, np.inf
+    ok, eu, ew, res, err = _edge(F, k, v, ix, iy, geo, g, eu, ew, fixed_u, tol_u, tol_w)
+    ok = ok and _inside(eu, ew, 1e-12)
+    return ok, min(max(eu, 0.0), 1.0), min(max(ew, 0.0), 1.0), res, err
+
+
+@njit(cache=True, error_model="numpy")
+def _jump(F, k, v, ix, iy, geo, g, H, u, w, tu, tw):
+    """Past a singular point of the curve near (u, w) (where grad c vanishes on c = 0:
+    two branches of the zero set cross) along (tu, tw).  Returns (ok, the singular
+    point, its residual, the first point beyond it on the branch that goes on)."""
+    pu, pw = u, w
+    for it in range(MAX_IT):
+        c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, pu, pw, g, H)
+        du, dw = _solve2(huu, huw, huw, hww, -cu, -cw)
+        if not math.isfinite(du):
+            return False, pu, pw, np.inf, u, w
+        pu += du
+        pw += dw
+        if abs(du) + abs(dw) <= 1e-15:
+            break
+    c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, pu, pw, g, H)
+    res = abs(c) / s
+    if res > 1e3 * RESIDUAL or math.hypot(pu - u, pw - w) > 1e-3 or not _inside(pu, pw, 0.0):
+        return False, pu, pw, res, u, w
+    d = 1e-7
+    while d <= 1e-3:
+        ok, qu, qw, r, st = _correct(F, k, v, ix, iy, geo, g, pu + d * tu, pw + d * tw, tu, tw)
+        if ok and math.hypot(qu - pu - d * tu, qw - pw - d * tw) <= 0.25 * d \
+                and _inside(qu, qw, 0.0):
+            return True, pu, pw, res, qu, qw
+        d *= 10.0
+    return False, pu, pw, res, u, w
+
+
+@njit(cache=True, error_model="numpy")
+def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, scr,
+                    su, sw, tu0, tw0, h0, closing, curve, vf, vi, counts, mark, tol_u, tol_w):
+    """Follow condition ``k`` from the curve point (su, sw) along (tu0, tw0).
+
+    Appends the vertices after the start (the start itself is not appended)
+    and returns 1 if the curve came back to its start (a loop, only looked for
+    when ``closing``), 0 at an edge of the slice, -1 where it stalled.
+    """
+    u, w = su, sw
+    tu, tw = tu0, tw0
+    h = h0
+    v[ix] = geo[0] + u * geo[1]
+    v[iy] = geo[2] + w * geo[3]
+    F[0](v, cv0, cs)
+    c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
+    n0 = math.hypot(cu, cw)
+    la, ra = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw, _side_eps(s, n0, h),
+                   scr)
+    travelled = 0.0
+    steps = 0
+    # special points found on one step: (s along the step, u, w, residual, error), (kind, other)
+    spf = np.empty((active.shape[0] + 4, 5))
+    spi = np.empty((active.shape[0] + 4, 2), dtype=np.int64)
+    while True:
+        if counts[2]:
+            return -1
+        if travelled > MAX_LENGTH:
+            _push(vf, vi, counts, u, w, 0.0, 0.0, curve, STALL, k, -1, la, ra)
+            return -1
+        pu = u + h * tu
+        pw = w + h * tw
+        ok, qu, qw, res, st = _correct(F, k, v, ix, iy, geo, g, pu, pw, tu, tw)
+        if (ok and not _inside(qu, qw, 0.0)) or (not ok and not _inside(pu, pw, 0.0)):
+            # the curve leaves the slice within this step: end on the edge it crosses
+            ok, qu, qw, res, err = _exit(F, k, v, ix, iy, geo, g, u, w, qu if ok else pu,
+                                        qw if ok else pw, tol_u, tol_w)
+            if ok and math.hypot(qu - u, qw - w) <= 2.0 * h:
+                _mark(mark, k, u, w, qu, qw)
+                _push(vf, vi, counts, qu, qw, res, err, curve, END, k, -1, -1, -1)
+                return 0
+            if h > H_MIN:
+                h *= 0.5
+                continue
+            _push(vf, vi, counts, u, w, 0.0, 0.0, curve, STALL, k, -1, la, ra)
+            return -1
+        qtu, qtw, qn, qs = _tangent(F, k, v, ix, iy, geo, g, qu, qw, tu, tw)
+        turn = qtu * tu + qtw * tw
+        jump = math.hypot(qu - pu, qw - pw)
+        if not ok or qn == 0.0 or turn < math.cos(2.0 * ANGLE) or jump > 0.25 * h:
+            if h > H_MIN:
+                h *= 0.5
+                continue
+            # a singular point (two branches of the zero set cross): step over it
+            okj, pu, pw, rj, qu, qw = _jump(F, k, v, ix, iy, geo, g, H, u, w, tu, tw)
+            if not okj:
+                _push(vf, vi, counts, u, w, 0.0, 0.0, curve, STALL, k, -1, la, ra)
+                return -1
+            _mark(mark, k, u, w, qu, qw)
+            _push(vf, vi, counts, pu, pw, rj, 0.0, curve, CROSSING, k, k, -1, -1)
+            qtu, qtw, qn, qs = _tangent(F, k, v, ix, iy, geo, g, qu, qw, tu, tw)
+            lb, rb = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, qu, qw, qtu, qtw,
+                           _side_eps(qs, qn, 1e-4), scr)
+            c, s, cu, cw = _grad(F, k, v, ix, iy, geo, qu, qw, g)
+            F[0](v, cv0, cs)
+            _push(vf, vi, counts, qu, qw, abs(c) / s, 0.0, curve, REGULAR, k, -1, lb, rb,
+                  _owned(k, grp, active, cv0, cs, mark, u, w, qu, qw))
+            u, w, tu, tw = qu, qw, qtu, qtw
+            if lb >= 0 and rb >= 0:
+                la, ra = lb, rb
+            h = 1e-4
+            v[ix] = geo[0] + u * geo[1]
+            v[iy] = geo[2] + w * geo[3]
+            F[0](v, cv0, cs)
+            continue
+        # a loop: the step passes its start again
+        if closing and steps >= 3 and travelled > 2.0 * h:
+            du, dw = qu - u, qw - w
+            length2 = du * du + dw * dw
+            t = ((su - u) * du + (sw - w) * dw) / length2
+            if 0.0 <= t <= 1.0:
+                dist = math.hypot(u + t * du - su, w + t * dw - sw)
+                if dist <= max(0.1 * h, 1e-9) and du * tu0 + dw * tw0 > 0.0:
+                    qu, qw = su, sw
+                    qtu, qtw = tu0, tw0
+                    closing = False
+                    steps = -1  # marks the loop's end
+        # special points between (u, w) and (q): crossings, folds
+        v[ix] = geo[0] + qu * geo[1]
+        v[iy] = geo[2] + qw * geo[3]
+        F[0](v, cv1, cs)
+        nsp = 0
+        du, dw = qu - u, qw - w
+        length2 = du * du + dw * dw
+        owned = _owned(k, grp, active, cv1, cs, mark, u, w, qu, qw)
+        for j in range(active.shape[0]):
+            if (not active[j]) or grp[j, 0] == grp[k, 0]:
+                continue
+            if abs(cv0[j]) <= COVANISH * cs[j] or abs(cv1[j]) <= COVANISH * cs[j]:
+                continue  # j vanishes with this curve here: no crossing
+            if cv0[j] * cv1[j] < 0.0:
+                a = cv0[j] / (cv0[j] - cv1[j])
+                ok2, xu, xw, res2, err2 = _solve(F, 0, k, j, v, ix, iy, geo, g, H, u + a * du, w + a * dw,
+                                                tol_u, tol_w)
+                t = ((xu - u) * du + (xw - w) * dw) / length2
+                if not (ok2 and -0.25 <= t <= 1.25):
+                    # Newton went elsewhere: bisect c_j on the curve between the vertices
+                    lo, hi = 0.0, 1.0
+                    ln = math.sqrt(length2)
+                    for it in range(60):
+                        mid = 0.5 * (lo + hi)
+                        okc, mu, mw, r3, s3 = _correct(F, k, v, ix, iy, geo, g, u + mid * du,
+                                                      w + mid * dw, du / ln, dw / ln)
+                        cj, sj, aj, bj = _grad(F, j, v, ix, iy, geo, mu, mw, g)
+                        if (cj < 0.0) == (cv0[j] < 0.0):
+                            lo = mid
+                        else:
+                            hi = mid
+                        if (hi - lo) * ln < 1e-3 * min(tol_u, tol_w):
+                            break
+                    ok2, xu, xw, res2, err2 = _solve(F, 0, k, j, v, ix, iy, geo, g, H, mu, mw,
+                                                    tol_u, tol_w)
+                    t = ((xu - u) * du + (xw - w) * dw) / length2
+                    if not (ok2 and -0.25 <= t <= 1.25):
+                        xu, xw, t = mu, mw, 0.5 * (lo + hi)
+                nsp = _note(spf, spi, nsp, t, xu, xw, CROSSING, j, res2, err2)
+        for axis in range(2):
+            a0 = tu if axis == 0 else tw
+            a1 = qtu if axis == 0 else qtw
+            if a0 * a1 < 0.0:
+                a = a0 / (a0 - a1)
+                okf, fu, fw, resf, errf = _solve(F, 1 + axis, k, -1, v, ix, iy, geo, g, H, u + a * du,
+                                                w + a * dw, tol_u, tol_w)
+                t = ((fu - u) * du + (fw - w) * dw) / length2
+                if okf and -0.25 <= t <= 1.25 and _inside(fu, fw, 1e-12):
+                    fu = min(max(fu, 0.0), 1.0)
+                    fw = min(max(fw, 0.0), 1.0)
+                    nsp = _note(spf, spi, nsp, t, fu, fw, FOLD_X if axis == 0 else FOLD_Y, axis,
+                                resf, errf)
+        # the new vertex's sides; a change that no crossing explains is located
+        lb, rb = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, qu, qw, qtu, qtw,
+                       _side_eps(qs, qn, h), scr)
+        crossings = 0
+        for i in range(nsp):
+            if spi[i, 0] == CROSSING:
+                crossings += 1
+        known = lb >= 0 and rb >= 0
+        if known and la >= 0 and ra >= 0 and (lb != la or rb != ra) and crossings == 0:
+            xu, xw = _bisect(F, k, grp, active, v, ix, iy, geo, g, out, layer, u, w, qu, qw, la, ra,
+                            h, scr)
+            j, okx, xu2, xw2, resx, errx = _explain(F, k, grp, active, v, ix, iy, geo, g, H, cv1, cs,
+                                                   xu, xw, tol_u, tol_w)
+            t = ((xu - u) * du + (xw - w) * dw) / length2
+            if j >= 0 and okx:
+                nsp = _note(spf, spi, nsp, t, xu2, xw2, CROSSING, j, resx, errx)
+            else:
+                nsp = _note(spf, spi, nsp, t, xu, xw, CHANGE, -1, np.nan, np.nan)
+            v[ix] = geo[0] + qu * geo[1]
+            v[iy] = geo[2] + qw * geo[3]
+            F[0](v, cv1, cs)
+        # append the special points in order along the step, then the new vertex
+        for a in range(nsp):
+            best = a
+            for b in range(a + 1, nsp):
+                if spf[b, 0] < spf[best, 0]:
+                    best = b
+            for q in range(5):
+                spf[a, q], spf[best, q] = spf[best, q], spf[a, q]
+            for q in range(2):
+                spi[a, q], spi[best, q] = spi[best, q], spi[a, q]
+            kind = spi[a, 0]
+            left, right = -1, -1
+            if kind == FOLD_X or kind == FOLD_Y:
+                ftu, ftw, fn, fs = _tangent(F, k, v, ix, iy, geo, g, spf[a, 1], spf[a, 2], tu, tw)
+                left, right = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, spf[a, 1],
+                                    spf[a, 2], ftu, ftw, _side_eps(fs, fn, h), scr)
+            _push(vf, vi, counts, spf[a, 1], spf[a, 2], spf[a, 3], spf[a, 4], curve, kind, k,
+                  spi[a, 1], left, right)
+        _mark(mark, k, u, w, qu, qw)
+        if steps < 0:  # the loop closed: its last vertex is its first
+            _push(vf, vi, counts, qu, qw, res, 0.0, curve, REGULAR, k, -1, -1, -1)
+            return 1
+        _push(vf, vi, counts, qu, qw, res, 0.0, curve, REGULAR, k, -1, lb, rb, owned)
+        travelled += math.sqrt(length2)
+        steps += 1
+        # the next step from the curvature here
+        c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, qu, qw, g, H)
+        kappa = abs(qtu * qtu * huu + 2.0 * qtu * qtw * huw + qtw * qtw * hww) / qn
+        hn = H_MAX
+        if kappa > 0.0:
+            hn = min(hn, math.sqrt(8.0 * CHORD / kappa), ANGLE / kappa)
+        h = max(min(hn, 2.0 * h), H_MIN)
+        u, w, tu, tw = qu, qw, qtu, qtw
+        if known:
+            la, ra = lb, rb
+        for j in range(active.shape[0]):
+            cv0[j] = cv1[j]
+
+
+def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
+               tol_u, tol_w, require_sides):
+    """Trace a curve from each seed ``(k, u, w)`` not on a curve already traced.
+
+    A seed's point is projected onto its condition's zero set; it is skipped
+    where the raster cell around it is already crossed by a curve of the same
+    condition, and, with ``require_sides``, where the class is the same on
+    both sides of the curve there (not a boundary).  Returns the number of
+    curves traced.
+    """
+    g = np.empty(2)
+    H = np.empty((2, 2))
+    nc = active.shape[0]
+    cv0 = np.empty(nc)
+    cv1 = np.empty(nc)
+    cs = np.empty(nc)
+    scr = np.empty((3, nc))
+    n = mark.shape[1]
+    traced = 0
+    for i in range(seeds.shape[0]):
+        k = int(seeds[i, 0])
+        u0 = seeds[i, 1]
+        w0 = seeds[i, 2]
+        if _seen(mark, k, u0, w0):
+            continue
+        if seeds[i, 3] == 1.0:
+            ok, u0, w0 = _minimum(F, k, v, ix, iy, geo, u0, w0, 2.0 / n)
+            if not ok:
+                continue
+        ok, u, w = _project(F, k, v, ix, iy, geo, g, u0, w0)
+        if not ok or not _inside(u, w, 0.0) or math.hypot(u - u0, w - w0) > 4.0 / n:
+            continue
+        if _seen(mark, k, u, w):
+            continue
+        tu, tw, gn, s = _tangent(F, k, v, ix, iy, geo, g, u, w, 1.0, 0.0)
+        if gn == 0.0 or tu == 0.0 and tw == 0.0:
+            continue
+        c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, u, w, g, H)
+        kappa = abs(tu * tu * huu + 2.0 * tu * tw * huw + tw * tw * hww) / gn
+        h = H_MAX
+        if kappa > 0.0:
+            h = min(h, math.sqrt(8.0 * CHORD / kappa), ANGLE / kappa)
+        left, right = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw,
+                            _side_eps(s, gn, h), scr)
+        if require_sides and left == right:
+            continue
+        if counts[1] >= curves.shape[0]:
+            counts[2] = 1
+            return traced
+        curve = counts[1]
+        counts[1] += 1
+        first = counts[0]
+        back = _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, scr, u, w,
+                     -tu, -tw, h, True, curve, vf, vi, counts, mark, tol_u, tol_w)
+        # the backward half, reversed: its special points keep their meaning, and the
+        # sides swap with the direction of travel
+        a = first
+        b = counts[0] - 1
+        while a < b:
+            for q in range(4):
+                vf[a, q], vf[b, q] = vf[b, q], vf[a, q]
+            for q in range(7):
+                vi[a, q], vi[b, q] = vi[b, q], vi[a, q]
+            a += 1
+            b -= 1
+        for q in range(first, counts[0]):
+            vi[q, 4], vi[q, 5] = vi[q, 5], vi[q, 4]
+        c0, s0, cu0, cw0 = _grad(F, k, v, ix, iy, geo, u, w, g)
+        F[0](v, cv0, cs)
+        _push(vf, vi, counts, u, w, abs(c0) / s0, 0.0, curve, REGULAR, k, -1, left, right,
+              _owned(k, grp, active, cv0, cs, mark, u, w, u, w))
+        closed = 0
+        if back == 1:
+            closed = 1
+        else:
+            _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, scr, u, w, tu,
+                  tw,
+                  h, False, curve, vf, vi, counts, mark, tol_u, tol_w)
+        curves[curve, 0] = k
+        curves[curve, 1] = first
+        curves[curve, 2] = counts[0]
+        curves[curve, 3] = closed
+        traced += 1
+    return traced
+
+
+def _seeds_all(F, active, v, ix, iy, geo, n):
+    """Seeds on an n x n raster of nodes (the slice's edges included): every sign change
+    of an active condition between neighbouring nodes, and every node where a
+    condition's magnitude has a local minimum without a sign change around it (a loop
+    smaller than a cell).  Returns rows (condition, u, w, kind: 0 sign change, 1 minimum).
+    """
+    cv = np.empty((n, n, active.shape[0]))
+    cs = np.empty(active.shape[0])
+    for i in range(n):
+        for j in range(n):
+            v[ix] = geo[0] + (i / (n - 1)) * geo[1]
+            v[iy] = geo[2] + (j / (n - 1)) * geo[3]
+            F[0](v, cv[i, j], cs)
+    seeds = np.empty((64, 4))
+    m = 0
+    for k in range(active.shape[0]):
+        if not active[k]:
+            continue
+        for i in range(n):
+            for j in range(n):
+                a = cv[i, j, k]
+                for d in range(2):
+                    i2 = i + 1 if d == 0 else i
+                    j2 = j if d == 0 else j + 1
+                    if i2 >= n or j2 >= n:
+                        continue
+                    b = cv[i2, j2, k]
+                    if a * b < 0.0 or (a == 0.0 and b != 0.0):
+                        t = a / (a - b)
+                        seeds, m = _seed(seeds, m, k, (i + (t if d == 0 else 0.0)) / (n - 1),
+                                         (j + (t if d == 1 else 0.0)) / (n - 1), 0)
+                # a local minimum of |c| with one sign all around
+                lowest = True
+                for di in range(-1, 2):
+                    for dj in range(-1, 2):
+                        if di == 0 and dj == 0:
+                            continue
+                        i2 = i + di
+                        j2 = j + dj
+                        if i2 < 0 or j2 < 0 or i2 >= n or j2 >= n:
+                            continue
+                        b = cv[i2, j2, k]
+                        if b * a <= 0.0 or abs(b) <= abs(a):
+                            lowest = False
+                if lowest and a != 0.0:
+                    seeds, m = _seed(seeds, m, k, i / (n - 1), j / (n - 1), 1)
+    return seeds[:m]
+
+
+@njit(cache=True, error_model="numpy")
+def _minimum(F, k, v, ix, iy, geo, u, w, radius):
+    """From a node where |c_k| is least among its neighbours: the zero set of c_k
+    nearby, if c_k changes sign near its stationary point.  Newton on grad c = 0
+    (exact Hessian), then on c along the direction of least curvature.  Returns
+    (ok, u, w): a point of the zero set."""
+    g = np.empty(2)
+    H = np.empty((2, 2))
+    u0, w0 = u, w
+    for it in range(MAX_IT):
+        c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, u, w, g, H)
+        a, b = _solve2(huu, huw, huw, hww, -cu, -cw)
+        if not math.isfinite(a):
+            return False, u, w
+        u += a
+        w += b
+        if math.hypot(u - u0, w - w0) > radius:
+            return False, u, w
+        if abs(a) + abs(b) <= 1e-15:
+            break
+    c0, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, u, w, g, H)
+    cn, sn, cun, cwn = _grad(F, k, v, ix, iy, geo, u0, w0, g)
+    if c0 * cn >= 0.0:
+        return False, u, w
+    # along an eigenvector of the Hessian whose curvature has the sign of -c0
+    tr = huu + hww
+    det = huu * hww - huw * huw
+    disc = math.sqrt(max(0.25 * tr * tr - det, 0.0))
+    for lam in (0.5 * tr + disc, 0.5 * tr - disc):
+        if lam * c0 >= 0.0:
+            continue
+        if abs(huw) > 0.0:
+            eu, ew = lam - hww, huw
+        elif abs(huu - lam) <= abs(hww - lam):
+            eu, ew = 1.0, 0.0
+        else:
+            eu, ew = 0.0, 1.0
+        en = math.hypot(eu, ew)
+        eu /= en
+        ew /= en
+        t = math.sqrt(2.0 * abs(c0 / lam))
+        for it in range(MAX_IT):
+            c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u + t * eu, w + t * ew, g)
+            d = cu * eu + cw * ew
+            if d == 0.0 or not math.isfinite(c):
+                break
+            step = -c / d
+            t += step
+            if abs(step) <= 1e-15:
+                return _inside(u + t * eu, w + t * ew, 0.0), u + t * eu, w + t * ew
+    return False, u, w
+
+
+# -- pieces and the completeness check (no model globals) ---------------------------------
+
+@njit(cache=True, error_model="numpy")
+def _known(vi, q):
+    """The side classes at vertex q, (-1, -1) where they were not sampled, (-2, -2) on
+    a stretch that another condition traces."""
+    kind = vi[q, 1]
+    if kind == REGULAR and vi[q, 6] == 0:
+        return -2, -2
+    if (kind == REGULAR or kind == FOLD_X or kind == FOLD_Y or kind == TANGENCY) \
+            and vi[q, 4] >= 0 and vi[q, 5] >= 0:
+        return vi[q, 4], vi[q, 5]
+    return -1, -1
+
+
+@njit(cache=True, error_model="numpy")
+def _forget_isolated(vi, a, b):
+    """Forget the sides of a vertex whose classes differ from those of the vertices
+    with sampled sides before and after it, where those two agree: a class pair seen
+    at one vertex only is a sample that straddles another condition (at a tangency),
+    not a stretch of boundary."""
+    prev = -1
+    for q in range(a, b):
+        if _known(vi, q)[0] < 0:
+            continue
+        nxt = -1
+        for r in range(q + 1, b):
+            if _known(vi, r)[0] >= 0:
+                nxt = r
+                break
+        if prev >= 0 and nxt >= 0 and _known(vi, q)[0] >= 0:
+            p0, p1 = _known(vi, prev)
+            n0, n1 = _known(vi, nxt)
+            q0, q1 = _known(vi, q)
+            if p0 == n0 and p1 == n1 and (q0 != p0 or q1 != p1):
+                vi[q, 4] = -1
+                vi[q, 5] = -1
+                continue
+        prev = q
+
+
+@njit(cache=True, error_model="numpy")
+def assemble(vf, vi, curves, ncurves):
+    """Split traced curves into pieces: stretches with one class on each side, and
+    different classes.  Returns
+
+    ``(pv, pp, pq, pieces, points_f, points_i)``: the pieces' vertices ``(u, w)``, the
+    piece of each, its index in the vertex buffers, ``pieces[p] = (curve, condition, left, right, closed)``,
+    ``points_f[q] = (u, w, residual, error)`` and ``points_i[q] = (kind,
+    condition, other)`` for every crossing where a piece ends, every end on an
+    edge, every fold and stall on a piece.
+    """
+    nv = 0
+    for c in range(ncurves):
+        nv += curves[c, 2] - curves[c, 1]
+    cap = 2 * nv + 4
+    pv = np.empty((cap, 2))
+    pp = np.empty(cap, dtype=np.int64)
+    pq = np.empty(cap, dtype=np.int64)
+    pieces = np.empty((cap, 5), dtype=np.int64)
+    points_f = np.empty((cap, 4))
+    points_i = np.empty((cap, 3), dtype=np.int64)
+    m = 0
+    npieces = 0
+    npoints = 0
+    breaks = np.empty(nv + 2, dtype=np.int64)
+    for c in range(ncurves):
+        k, a, b, closed = curves[c, 0], curves[c, 1], curves[c, 2], curves[c, 3]
+        if b - a < 2:
+            continue
+        _forget_isolated(vi, a, b)
+        # break points: a crossing (or an unexplained change) where the sides change
+        nb = 0
+        for q in range(a, b):
+            kind = vi[q, 1]
+            if kind == REGULAR and q > a and vi[q - 1, 1] == REGULAR and vi[q, 6] != vi[q - 1, 6]:
+                breaks[nb] = q  # the stretch passes to or from another condition
+                nb += 1
+                continue
+            if kind != CROSSING and kind != CHANGE:
+                continue
+            before = (-1, -1)
+            for r in range(1, b - a):
+                p = q - r
+                if p < a:
+                    if not closed:
+                        break
+                    p += b - a - 1
+                before = _known(vi, p)
+                if before[0] >= 0:
+                    break
+            after = (-1, -1)
+            for r in range(1, b - a):
+                p = q + r
+                if p >= b:
+                    if not closed:
+                        break
+                    p -= b - a - 1
+                after = _known(vi, p)
+                if after[0] >= 0:
+                    break
+            if before[0] != after[0] or before[1] != after[1]:
+                breaks[nb] = q
+                nb += 1
+        # runs between break points (a closed curve's last run goes on into its first)
+        nruns = nb + 1 if (not closed or nb == 0) else nb
+        for r in range(nruns):
+            if nb == 0:
+                first, last = a, b - 1
+            elif not closed:
+                first = a if r == 0 else breaks[r - 1]
+                last = breaks[r] if r < nb else b - 1
+            else:
+                first = breaks[r]
+                last = breaks[r + 1] if r + 1 < nb else breaks[0] + (b - 1 - a)
+            # the run's classes: the first vertex inside it with sampled sides
+            left, right = -1, -1
+            for q in range(first, last + 1):
+                qq = q if q < b else q - (b - 1 - a)
+                left, right = _known(vi, qq)
+                if left >= 0:
+                    break
+            if left < 0 or left == right:
+                continue
+            piece = npieces
+            npieces += 1
+            pieces[piece, 0] = c
+            pieces[piece, 1] = k
+            pieces[piece, 2] = left
+            pieces[piece, 3] = right
+            pieces[piece, 4] = 1 if (closed and nb == 0) else 0
+            for q in range(first, last + 1):
+                qq = q if q < b else q - (b - 1 - a)
+                pv[m, 0] = vf[qq, 0]
+                pv[m, 1] = vf[qq, 1]
+                pp[m] = piece
+                pq[m] = qq
+                m += 1
+                kind = vi[qq, 1]
+                point = kind == FOLD_X or kind == FOLD_Y or kind == TANGENCY or kind == END \
+                    or kind == STALL
+                if kind == CROSSING or kind == CHANGE:
+                    for z in range(nb):
+                        point = point or breaks[z] == qq
+                if point:
+                    points_f[npoints, 0] = vf[qq, 0]
+                    points_f[npoints, 1] = vf[qq, 1]
+                    points_f[npoints, 2] = vf[qq, 2]
+                    points_f[npoints, 3] = vf[qq, 3]
+                    points_i[npoints, 0] = kind
+                    points_i[npoints, 1] = k
+                    points_i[npoints, 2] = vi[qq, 3]
+                    npoints += 1
+    return pv[:m], pp[:m], pq[:m], pieces[:npieces], points_f[:npoints], points_i[:npoints]
+
+
+@njit(cache=True, error_model="numpy")
+def uncovered(classes, pv, pp):
+    """Class changes of a raster that no piece passes within one cell of.
+
+    ``classes[i, j]`` is the class at the cell centre ((i + 1/2)/nx, (j + 1/2)/ny)
+    of the unit square; ``pv``, ``pp`` the pieces' vertices and piece indices.
+    Returns rows ``(i, j, di, dj)``: the cells (i, j) and (i + di, j + dj) differ
+    and no piece passes through the 3 x 3 cells around either.
+    """
+    nx_, ny_ = classes.shape
+    assert nx_ == ny_
+    hit = np.zeros((1, nx_, nx_), dtype=np.int8)
+    for q in range(pv.shape[0]):
+        if q + 1 < pv.shape[0] and pp[q + 1] == pp[q]:
+            _mark(hit, 0, pv[q, 0], pv[q, 1], pv[q + 1, 0], pv[q + 1, 1])
+        else:
+            _mark(hit, 0, pv[q, 0], pv[q, 1], pv[q, 0], pv[q, 1])
+    near = np.zeros((nx_, ny_), dtype=np.bool_)
+    for i in range(nx_):
+        for j in range(ny_):
+            if hit[0, i, j]:
+                for di in range(-1, 2):
+                    for dj in range(-1, 2):
+                        a, b = i + di, j + dj
+                        if 0 <= a < nx_ and 0 <= b < ny_:
+                            near[a, b] = True
+    out = np.empty((2 * nx_ * ny_, 4), dtype=np.int64)
+    n = 0
+    for i in range(nx_):
+        for j in range(ny_):
+            for d in range(2):
+                a = i + 1 if d == 0 else i
+                b = j if d == 0 else j + 1
+                if a >= nx_ or b >= ny_:
+                    continue
+                if classes[i, j] != classes[a, b] and not (near[i, j] or near[a, b]):
+                    out[n, 0] = i
+                    out[n, 1] = j
+                    out[n, 2] = a - i
+                    out[n, 3] = b - j
+                    n += 1
+    return out[:n]
+
+
+# -- the compiled tracer: entry points with the model's functions as arguments --------------
+
+_F1 = types.Array(types.float64, 1, "C")
+_F2 = types.Array(types.float64, 2, "C")
+_I1 = types.Array(types.int64, 1, "C")
+_I2 = types.Array(types.int64, 2, "C")
+_B1 = types.Array(types.boolean, 1, "C")
+_B3 = types.Array(types.int8, 3, "C")
+#: ``values(x, out, scale)`` of a generated condition module.
+VALUES_SIG = types.void(_F1, _F1, _F1)
+#: ``gradient(k, x, g)``: (value, tie scale); the gradient in the module's variables into g.
+GRADIENT_SIG = types.UniTuple(types.float64, 2)(types.int64, _F1, _F1)
+#: ``hessian(k, x, g, H)``: the same, and the Hessian into H.
+HESSIAN_SIG = types.UniTuple(types.float64, 2)(types.int64, _F1, _F1, _F2)
+#: ``classify(v, out, layer)``: the layer's class at the input vector v (a model's).
+CLASS_SIG = types.int64(_F1, _F2, types.int64)
+#: The functions a trace calls, passed as first-class functions: one compiled tracer
+#: serves every model and condition set.
+with warnings.catch_warnings():  # numba calls first-class functions experimental
+    warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
+    FUNCTIONS = types.Tuple((types.FunctionType(VALUES_SIG), types.FunctionType(GRADIENT_SIG),
+                             types.FunctionType(HESSIAN_SIG), types.FunctionType(CLASS_SIG)))
+
+_ENTRIES: dict = {}
+
+
+def entries() -> dict:
+    """The tracer's entry points, compiled once (cached on disk): ``trace`` and ``seeds``."""
+    if not _ENTRIES:
+        sig_trace = types.int64(FUNCTIONS, _F2, _I2, _B1, _F1, _F2, types.int64, types.int64,
+                                _F1, types.int64, _F2, _I2, _I1, _I2, _B3, types.float64,
+                                types.float64, types.boolean)
+        sig_seeds = _F2(FUNCTIONS, _B1, _F1, types.int64, types.int64, _F1, types.int64)
+        with warnings.catch_warnings():  # numba calls first-class functions experimental
+            warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
+            trace = njit(sig_trace, cache=True, error_model="numpy")(_trace_all)
+            seeds = njit(sig_seeds, cache=True, error_model="numpy")(_seeds_all)
+        _ENTRIES["trace"] = _quiet(trace)
+        _ENTRIES["seeds"] = _quiet(seeds)
+    return _ENTRIES
+
+
+def _quiet(fn):
+    """``fn`` called without numba's warning that first-class functions are experimental
+    (typing the tuple of functions warns at every call)."""
+    def call(*args):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
+            return fn(*args)
+    return call
+
+
+_CLASSIFIERS: dict = {}
+
+
+def classifier(model):
+    """The model's ``classify(v, out, layer)`` (its own point and summarize), compiled
+    with :data:`CLASS_SIG` so that a trace can take it as an argument."""
+    from .._compile import specialize
+
+    hit = _CLASSIFIERS.get(id(model))
+    if hit is not None and hit[0] is model:
+        return hit[1]
+    contract = model.contract
+    fn = specialize(_class_template, model, "bif_class", POINT=contract.point,
+                    DERIVE=contract.derive_inline, STICK=model.stick_branch)
+    fn.compile(CLASS_SIG)
+    _CLASSIFIERS[id(model)] = (model, fn)
+    return fn
+
+
+def functions(model, conds) -> tuple:
+    """The tuple of functions a trace of ``model`` with the two-variable condition module
+    ``conds`` takes (:data:`FUNCTIONS`)."""
+    mod = conds.module
+    return (mod.values, mod.gradient, mod.hessian, classifier(model))

@@ -1,0 +1,381 @@
+"""The conditions a tracer follows, and their exact derivatives as generated numba code.
+
+A class boundary of a map is the zero set of one scalar **condition** that
+decides a branch's admissibility (GUIDE section 7).  A declared system lists
+its own (:func:`phasemap.declare.conditions`); a hand-written model uses the
+conditions of its declared twin (:data:`phasemap.systems.seeds.TWINS`), while
+its class still comes from its own kernels.  To these the model's relative velocity is
+added (a ``velocity`` condition): where it changes sign the candidate branches
+change.
+
+Each condition is made smooth before it is differentiated: an ``Abs(u)`` in
+it is split into the sign cases ``u`` and ``-u`` (both zero sets together are
+the original's), so that Newton's method and the fold conditions see smooth
+functions.  sympy then differentiates every condition with respect to the
+variables a computation moves in (the two axes of a slice, a threshold's
+parameters), and the value, gradient and Hessian are printed as numba
+functions into a real ``.py`` file in the kernel cache (GUIDE section 6),
+named after a hash of what decides them, and imported:
+
+``values(x, out, scale)``
+    every condition's value and tie scale at the input vector ``x`` (the
+    model's :attr:`~phasemap.Model.inputs`; only the names are read);
+``gradient(k, x, g)``
+    condition ``k``'s value and tie scale, its gradient in ``g``;
+``hessian(k, x, g, H)``
+    the same, and its Hessian in ``H``.
+
+The module also holds ``SPEC``, a JSON text with each condition's name,
+branch, kind and ``rest_only``: a warm start loads the file without sympy.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import pathlib
+import sys
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from .. import _codegen
+from .._version import __version__
+from ..cache import load_module
+from ..model import Model
+
+__all__ = ["Condition", "Conditions", "conditions_of", "compiled"]
+
+#: Kinds of condition (:attr:`Condition.kind`); ``velocity`` is added here.
+KINDS = ("coefficient", "normal", "friction_limit", "start", "gap", "family", "discriminant",
+         "root", "domain", "velocity")
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One scalar condition that decides a branch's status (the shape of
+    :class:`phasemap.declare.Condition`).
+
+    ``name``
+        unique in the model, in its own names (``coef_slide_neg``, ``N_floor_stick``);
+    ``branch``
+        the branch whose status it decides ("" for the model as a whole);
+    ``kind``
+        one of :data:`KINDS`;
+    ``expr``
+        a sympy expression of the model's names (coordinates through ``sin``
+        and ``cos`` of their symbols), smooth and without poles where it
+        matters: its zero set is where the branch's status may change;
+    ``scale``
+        the tie scale: ``|expr| <= 1e-12 * scale`` counts as zero;
+    ``strict``
+        whether the admissible side is ``expr > 0`` (ties to the other side);
+    ``rest_only``
+        it applies only where the relative velocity is zero.
+    """
+
+    name: str
+    branch: str
+    kind: str
+    expr: object
+    scale: object = 1
+    strict: bool = False
+    rest_only: bool = False
+
+
+# -- where conditions come from -------------------------------------------------------
+
+def declared_model(model: Model) -> Model:
+    """The declared model whose conditions describe ``model``: itself, or its twin (a
+    declaration of the same physics whose branches carry the hand model's names,
+    :data:`phasemap.systems.seeds.TWINS`).
+
+    ValueError when the model is hand-written and has no declared twin.
+    """
+    if model.declaration is not None:
+        return model
+    import importlib
+
+    from ..systems import seeds
+
+    twin = getattr(seeds, "TWINS", {}).get(model.name)
+    if twin is None:
+        raise ValueError(
+            f"{model.name}: the bifurcation set needs the model's conditions; it is "
+            "hand-written and has no declared twin (phasemap.systems.seeds.TWINS): declare "
+            "the system (phasemap.declare) or pass conditions= explicitly")
+    return importlib.import_module(twin).SYSTEM.model
+
+
+def conditions_of(model: Model) -> tuple:
+    """Every condition of ``model`` (its declaration's, or its twin's in the hand model's
+    names) and its relative velocity's."""
+    declared_model(model)
+    try:
+        from ..declare import conditions
+    except ImportError:
+        raise ValueError(f"{model.name}: this phasemap.declare provides no conditions(); "
+                         "pass conditions= explicitly") from None
+    return tuple(conditions(model)) + (velocity_condition(model),)
+
+
+def velocity_condition(model: Model) -> Condition:
+    """The model's relative velocity as a condition: the candidates change where it does."""
+    import sympy as sp
+
+    return Condition(model.velocity, "", "velocity", sp.Symbol(model.velocity, real=True),
+                     sp.Symbol("_velocity_scale"))
+
+
+def _smooth(cond) -> list[Condition]:
+    """``cond`` without ``Abs``: one condition per sign case, each with cond's name.
+
+    Variants equal up to sign are generated once.
+    """
+    import sympy as sp
+
+    expr = sp.sympify(cond.expr)
+    variants = [expr]
+    while True:
+        absolutes = sorted({a for e in variants for a in e.atoms(sp.Abs)}, key=sp.default_sort_key)
+        if not absolutes:
+            break
+        a = absolutes[0]
+        variants = [e.xreplace({a: s * a.args[0]}) for e in variants if e.has(a) for s in (1, -1)] \
+            + [e for e in variants if not e.has(a)]
+    out, seen = [], []
+    for e in variants:
+        x = sp.expand(e)
+        if any(sp.expand(x - y) == 0 or sp.expand(x + y) == 0 for y in seen):
+            continue
+        seen.append(x)
+        out.append(Condition(cond.name, cond.branch, cond.kind, e, cond.scale,
+                             bool(cond.strict), bool(cond.rest_only)))
+    return out
+
+
+# -- the generated module ---------------------------------------------------------------
+
+class Conditions:
+    """The conditions of one model with their derivatives in ``variables``, compiled.
+
+    ``module``: the generated module (``values``, ``gradient``, ``hessian``);
+    ``names``, ``branches``, ``kinds``, ``rest_only``: per condition, in the
+    module's order; ``tag``: a short hash naming the module (kernels that call
+    it are named after it).
+    """
+
+    def __init__(self, model: Model, variables: tuple[str, ...], module):
+        self.model = model
+        self.variables = variables
+        self.module = module
+        spec = json.loads(module.SPEC)
+        self.names = tuple(c["name"] for c in spec)
+        self.branches = tuple(c["branch"] for c in spec)
+        self.kinds = tuple(c["kind"] for c in spec)
+        self.rest_only = np.array([c["rest_only"] for c in spec], dtype=bool)
+        self.tag = module.__name__.rsplit("_", 1)[-1]
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+
+_COMPILED: dict = {}
+
+
+def compiled(model: Model, variables, conditions=None) -> Conditions:
+    """The model's conditions with exact derivatives in ``variables`` (names of the model:
+    a slice's two axes, a threshold's parameters).
+
+    ``conditions``: a sequence of :class:`Condition` to use instead of the
+    model's own (the velocity condition is added to them too).  Generated
+    once per model, variables and conditions (sympy runs only then), then
+    loaded from the kernel cache.
+    """
+    variables = tuple(variables)
+    for name in variables:
+        if name not in model.names:
+            raise ValueError(f"{model.name}: {name!r} is not a variable of the model; "
+                             f"allowed: {', '.join(model.names)}")
+    quick = (id(model), variables, id(conditions))
+    hit = _COMPILED.get(quick)
+    if hit is not None and hit[0] is model and hit[1] is conditions:
+        return hit[2]
+    if conditions is None:
+        key_text = _source_key(model)
+
+        def make():
+            return conditions_of(model)
+    else:
+        given = tuple(conditions) + (velocity_condition(model),)
+        key_text = _explicit_key(given)
+
+        def make():
+            return given
+    h = hashlib.sha256(key_text.encode())
+    # the generated file imports the model's velocity scale by its module's name
+    h.update(repr((model.name, model.inputs, variables,
+                   _module_of(model.velocity_scale).__name__)).encode())
+    h.update(pathlib.Path(__file__).read_bytes())
+    h.update(f"{numba.__version__} {np.__version__} {__version__}".encode())
+    stem = f"{model.name}_conditions_{h.hexdigest()[:16]}"
+    module = load_module(stem, lambda: _generate(model, variables, make()))
+    result = Conditions(model, variables, module)
+    # the conditions object is kept with its entry, so that its id is not reused
+    _COMPILED[quick] = (model, conditions, result)
+    return result
+
+
+def _source_key(model: Model) -> str:
+    """What decides a model's conditions, without deriving them: the declared model's
+    generated module (its name hashes the declaration) and the code that lists them."""
+    source = declared_model(model)
+    parts = [_module_of(source.candidates[0].func).__name__, model.velocity,
+             hashlib.sha256(pathlib.Path(_module_of(model.velocity_scale).__file__)
+                            .read_bytes()).hexdigest()]
+    from .. import declare
+
+    root = pathlib.Path(declare.__file__)
+    files = sorted(root.parent.glob("*.py")) if root.name == "__init__.py" else [root]
+    for f in files:
+        parts.append(hashlib.sha256(f.read_bytes()).hexdigest())
+    return "\n".join(parts)
+
+
+def _module_of(func):
+    """The module a (jitted) function was defined in."""
+    return sys.modules[getattr(func, "py_func", func).__module__]
+
+
+def _explicit_key(conds) -> str:
+    import sympy as sp
+
+    return "\n".join(repr((c.name, c.branch, c.kind, sp.srepr(sp.sympify(c.expr)),
+                           sp.srepr(sp.sympify(c.scale)), bool(c.strict), bool(c.rest_only)))
+                     for c in conds)
+
+
+#: The signatures of the generated entry points, as the tracer calls them
+#: (:data:`phasemap.bifurcation._trace.FUNCTIONS`).
+_VALUES = "void(float64[::1], float64[::1], float64[::1])"
+_GRADIENT = "UniTuple(float64, 2)(int64, float64[::1], float64[::1])"
+_HESSIAN = "UniTuple(float64, 2)(int64, float64[::1], float64[::1], float64[:, ::1])"
+
+
+def _printer():
+    """The declared systems' printer (:func:`phasemap.declare.emit.printer`), with a
+    negative integer power as a float division: inf where the base vanishes (numba's
+    ``x ** -k`` raises ZeroDivisionError there, as Python's does)."""
+    import sympy as sp
+
+    from ..declare.emit import printer
+
+    class Printer(type(printer())):
+        def _print_Pow(self, e, rational=False):
+            b, x = e.args
+            if x.is_Integer and x < 0:
+                return f"(1.0/{self._print(sp.Pow(b, -x, evaluate=False))})"
+            return super()._print_Pow(e, rational)
+
+    return Printer({"fully_qualified_modules": True})
+
+
+def _generate(model: Model, variables: tuple[str, ...], conds) -> str:
+    """The generated module's text (sympy runs here, and only here)."""
+    import sympy as sp
+
+    conds = [c for cond in conds for c in _smooth(cond)]
+    names = set(model.names)
+    symbols = {}
+    for c in conds:
+        for s in sp.sympify(c.expr).free_symbols | sp.sympify(c.scale).free_symbols:
+            if s.name not in names and s.name != "_velocity_scale":
+                raise ValueError(f"{model.name}: condition {c.name!r} uses {s.name!r}, which is "
+                                 f"not a variable of the model ({', '.join(model.names)})")
+            symbols.setdefault(s.name, s)
+    # one symbol per name (a user's sympy Symbol may differ in assumptions from ours)
+    canon = {n: sp.Symbol(n, real=True) for n in names}
+
+    def canonical(e):
+        e = sp.sympify(e)
+        return e.xreplace({s: canon[s.name] for s in e.free_symbols if s.name in canon})
+
+    exprs = [canonical(c.expr) for c in conds]
+    scales = [canonical(c.scale) for c in conds]
+    var_syms = [canon[v] for v in variables]
+    slot = {n: i for i, n in enumerate(model.inputs)}
+    P = _printer()
+    fresh = sp.numbered_symbols("_t")
+    # sin and cos of an input become locals computed once
+    trig = {}
+    for e in exprs + scales:
+        for f in e.atoms(sp.sin, sp.cos):
+            if f.args[0].is_Symbol:
+                trig[f] = sp.Symbol(f"_{type(f).__name__}_{f.args[0].name}", real=True)
+
+    def load(used: set) -> list[str]:
+        lines = [f"    {n} = _x[{slot[n]}]" for n in sorted(used & names, key=slot.get)]
+        for f, s in trig.items():
+            if s.name in used:
+                lines.append(f"    {s.name} = math.{type(f).__name__}({f.args[0].name})")
+        return lines
+
+    def body(pairs) -> list[str]:
+        """Lines assigning ``target = expr`` for (target, expr), with common subexpressions."""
+        red_in = [e.xreplace(trig) for _, e in pairs]
+        reps, red = sp.cse(red_in, symbols=fresh, order="none")
+        used = set()
+        for e in red_in:
+            used |= {s.name for s in e.free_symbols}
+        # a trig local is read through its argument's name
+        used |= {f.args[0].name for f, s in trig.items() if s.name in used}
+        lines = load(used)
+        lines += [f"    {s} = {P.doprint(e)}" for s, e in reps]
+        lines += [f"    {t} = {P.doprint(e)}" for (t, _), e in zip(pairs, red)]
+        return lines
+
+    vscale = model.velocity_scale
+    vargs = _codegen._params(vscale, 0, model.inputs, f"{model.name}: velocity_scale")
+    out = [f'"""Conditions of {model.name} and their derivatives in ({", ".join(variables)}): '
+           'generated by phasemap.bifurcation, do not edit."""',
+           "import math", "import numpy as np", "from numba import njit",
+           _codegen._import(vscale, "VSCALE"), ""]
+    vsc = f"VSCALE({', '.join(f'_x[{slot[n]}]' for n in vargs)})"
+
+    def scale_of(e):
+        return e.xreplace({sp.Symbol("_velocity_scale"): sp.Symbol("_vscale")})
+
+    # values and scales of every condition
+    pairs = [(f"_out[{k}]", e) for k, e in enumerate(exprs)]
+    pairs += [(f"_scale[{k}]", scale_of(s)) for k, s in enumerate(scales)]
+    out += [f'@njit("{_VALUES}", cache=True, error_model="numpy")',
+            "def values(_x, _out, _scale):",
+            '    """Every condition\'s value into out, its tie scale into scale."""',
+            f"    _vscale = {vsc}"]
+    out += body(pairs) + ["", ""]
+    n = len(variables)
+    for k, (e, s) in enumerate(zip(exprs, scales)):
+        grad = [sp.diff(e, v) for v in var_syms]
+        hess = {(i, j): sp.diff(grad[i], var_syms[j]) for i in range(n) for j in range(i, n)}
+        out += ['@njit(cache=True, error_model="numpy")', f"def _gradient_{k}(_x, _g):",
+                f"    _vscale = {vsc}"]
+        out += body([("_c", e), ("_s", scale_of(s))] + [(f"_g[{i}]", d) for i, d in enumerate(grad)])
+        out += ["    return _c, _s", "", ""]
+        out += ['@njit(cache=True, error_model="numpy")', f"def _hessian_{k}(_x, _g, _H):",
+                f"    _vscale = {vsc}"]
+        out += body([("_c", e), ("_s", scale_of(s))] + [(f"_g[{i}]", d) for i, d in enumerate(grad)]
+                    + [(f"_H[{i}, {j}]", d) for (i, j), d in hess.items()])
+        out += [f"    _H[{j}, {i}] = _H[{i}, {j}]" for (i, j) in hess if i != j]
+        out += ["    return _c, _s", "", ""]
+    for what, args, sig in (("gradient", "_x, _g", _GRADIENT), ("hessian", "_x, _g, _H", _HESSIAN)):
+        out += [f'@njit("{sig}", cache=True, error_model="numpy")', f"def {what}(_k, {args}):",
+                f'    """Condition k: (value, tie scale), its {what} into the arrays."""']
+        for k in range(len(conds)):
+            out += [f"    {'if' if k == 0 else 'elif'} _k == {k}:",
+                    f"        return _{what}_{k}({args})"]
+        out += ["    return np.nan, np.nan", "", ""]
+    spec = [{"name": c.name, "branch": c.branch, "kind": c.kind, "rest_only": c.rest_only}
+            for c in conds]
+    out += [f"VARIABLES = {tuple(variables)!r}", f"SPEC = {json.dumps(spec)!r}", ""]
+    return "\n".join(out)

@@ -1,0 +1,502 @@
+"""``phasemap.boundaries``: the class boundaries of a 2-D slice as exact curves."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+import xarray as xr
+
+from .. import _numerics as nx
+from .._dataset import cf_header
+from ..grid import evaluate
+from ..layers import layers_for
+from ..model import Model
+from ..models import get_model
+from . import _trace as T
+from .conditions import Conditions, compiled
+
+#: Layers whose classes fill regions of a slice (``singular`` holds on curves).
+LAYERS = ("n_solutions", "stagnation", "contact_lost")
+_LAYER_CODE = {"n_solutions": 0, "stagnation": 1, "contact_lost": 2, "singular": 3}
+#: Point kinds by vertex kind (``fold_<axis>`` is filled in with the axis name).
+_KIND_NAMES = {T.CROSSING: "crossing", T.END: "end", T.TANGENCY: "tangency",
+               T.CHANGE: "change", T.STALL: "stall"}
+
+#: Nodes per side of the raster that seeds the tracing.
+SEED_NODES = 33
+#: Cells per side of the raster whose class changes every piece must explain.
+CHECK_CELLS = 128
+
+
+@dataclass
+class Slice:
+    """A validated 2-D slice: the model, its axes, fixed values and compiled pieces."""
+
+    model: Model
+    x: str
+    y: str
+    lo: np.ndarray  # (x_lo, y_lo)
+    hi: np.ndarray
+    fixed: dict
+    conds: Conditions
+    fns: tuple  # the functions a trace takes (phasemap.bifurcation._trace.FUNCTIONS)
+    base: np.ndarray  # the input vector with the fixed values
+
+    @property
+    def geo(self) -> np.ndarray:
+        return np.array([self.lo[0], self.hi[0] - self.lo[0], self.lo[1], self.hi[1] - self.lo[1]])
+
+    @property
+    def slots(self) -> tuple[int, int]:
+        inputs = self.model.inputs
+        return inputs.index(self.x), inputs.index(self.y)
+
+    def physical(self, uw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        g = self.geo
+        return g[0] + uw[..., 0] * g[1], g[2] + uw[..., 1] * g[3]
+
+
+def parse_range(m: Model, what: str, value) -> tuple[float, float]:
+    """A range ``(lo, hi)`` of finite numbers with lo < hi, or ValueError naming ``what``."""
+    try:
+        lo, hi = (float(t) for t in value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{m.name}: {what} must be a pair (lo, hi) of numbers, "
+                         f"got {value!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise ValueError(f"{m.name}: {what} must be a finite range lo < hi, got ({lo:g}, {hi:g})")
+    return lo, hi
+
+
+def header(m: Model, kind: str, fixed: Mapping, **extra) -> dict:
+    """The global attributes of a result: the CF header every phasemap Dataset carries
+    (:func:`phasemap._dataset.cf_header`), then ``extra`` and the fixed values."""
+    attrs = cf_header(m, kind) | extra
+    for name, value in fixed.items():
+        attrs[f"phasemap_fixed_{name}"] = value
+    return attrs
+
+
+def make_slice(model, axes: Mapping, fixed: Mapping | None, conditions=None) -> Slice:
+    """Validate a slice (two axes with their ranges, fixed values) and compile its tracer."""
+    m = get_model(model)
+    if not isinstance(axes, Mapping) or len(axes) != 2:
+        raise ValueError(f"{m.name}: axes must name two variables with their ranges, "
+                         f"{{x: (lo, hi), y: (lo, hi)}}; got {axes!r}")
+    fixed = dict(fixed or {})
+    names = list(axes)
+    lo, hi = [], []
+    for name in names:
+        if name not in m.variables:
+            raise ValueError(f"{m.name}: unknown variable {name!r}; allowed: {', '.join(m.names)}")
+        if name in fixed:
+            raise ValueError(f"{m.name}: {name!r} is both an axis and fixed")
+        a, b = parse_range(m, f"axis {name}", axes[name])
+        lo.append(a)
+        hi.append(b)
+    for name, value in fixed.items():
+        if np.ndim(value) != 0:
+            raise ValueError(f"{m.name}: fixed value {name} must be a scalar")
+    corners = {names[0]: np.array([lo[0], hi[0]]).reshape(-1, 1),
+               names[1]: np.array([lo[1], hi[1]]).reshape(1, -1)}
+    full = m.complete({**fixed, **corners})
+    fixed = {n: float(v) for n, v in full.items() if n not in axes}
+    conds = compiled(m, tuple(names), conditions)
+    fns = T.functions(m, conds)
+    base = m.input_vector({**fixed, names[0]: lo[0], names[1]: lo[1]})
+    return Slice(m, names[0], names[1], np.array(lo), np.array(hi), fixed, conds, fns, base)
+
+
+def _active(sl: Slice, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Which conditions can bound a class in the slice, and one representative per
+    group of conditions with the same zero set.
+
+    A condition is dropped when its branch does not apply anywhere in the slice
+    (the velocity's sign excludes it), when it holds only at rest and the
+    velocity is an axis (a line), or when it does not vary over the slice.
+    Conditions whose values are proportional at random points of the slice
+    share their zero set: one traces it.  Returns ``(active, group)``.
+    """
+    m, C = sl.model, sl.conds
+    nc = len(C)
+    velocity_axis = m.velocity in (sl.x, sl.y)
+    # the branches that apply somewhere in the slice
+    applies = np.zeros(len(m.candidates), dtype=bool)
+    out = np.empty((len(m.candidates), m.n_fields))
+    v = sl.base.copy()
+    ix, iy = sl.slots
+    probes = [(0.5, 0.5)]
+    if velocity_axis:
+        probes += [(0.0, 0.0), (1.0, 1.0), (0.0, 1.0), (1.0, 0.0)]
+    for u, w in probes:
+        v[ix] = sl.lo[0] + u * (sl.hi[0] - sl.lo[0])
+        v[iy] = sl.lo[1] + w * (sl.hi[1] - sl.lo[1])
+        m.derive(v)
+        m.point(v, out)
+        applies |= out[:, nx.STATUS] != nx.ABSENT
+    rest = (not velocity_axis) and abs(sl.fixed[m.velocity]) <= nx.TOL * _velocity_scale(m, v)
+    branch_applies = {b.name: bool(applies[i]) for i, b in enumerate(m.candidates)}
+    active = np.ones(nc, dtype=bool)
+    for k in range(nc):
+        br = C.branches[k]
+        if br and not branch_applies.get(br, True):
+            active[k] = False
+        if C.rest_only[k] and not rest:
+            active[k] = False
+        if C.kinds[k] == "velocity" and not velocity_axis:
+            active[k] = False
+    # values at random points: constant conditions, and proportional ones
+    pts = rng.uniform(0.02, 0.98, size=(12, 2))
+    vals = np.empty((len(pts), nc))
+    scales = np.empty(nc)
+    for p, (u, w) in enumerate(pts):
+        v[ix] = sl.lo[0] + u * (sl.hi[0] - sl.lo[0])
+        v[iy] = sl.lo[1] + w * (sl.hi[1] - sl.lo[1])
+        C.module.values(v, vals[p], scales)
+    vals = np.where(np.isfinite(vals), vals, np.nan)
+    size = np.nanmax(np.abs(vals), axis=0, initial=0.0)
+    active &= ~(np.ptp(vals, axis=0) <= 1e-13 * size)  # constant (NaN: not constant)
+    # c_k proportional to c_j: c_k(p) c_j(0) = c_k(0) c_j(p) at every point p
+    ref = vals[0]
+    cross = np.abs(vals[:, :, None] * ref[None, None, :] - ref[None, :, None] * vals[:, None, :])
+    terms = np.abs(vals[:, :, None] * ref[None, None, :]) + np.abs(ref[None, :, None]
+                                                                     * vals[:, None, :])
+    with np.errstate(invalid="ignore"):
+        same = np.all(cross <= 1e-9 * terms, axis=0) & (np.abs(ref)[:, None] > 0) \
+            & (np.abs(ref)[None, :] > 0)
+    group = np.arange(nc)
+    for k in range(nc):
+        if active[k]:
+            earlier = np.flatnonzero(same[k, :k] & active[:k])
+            if len(earlier):
+                group[k] = earlier[0]
+                active[k] = False
+    return active, group
+
+
+def _velocity_scale(m: Model, v: np.ndarray) -> float:
+    code = m.velocity_scale.py_func.__code__
+    names = code.co_varnames[:code.co_argcount]
+    return float(m.velocity_scale(*(v[m.inputs.index(n)] for n in names)))
+
+
+@dataclass
+class Traced:
+    """What the tracer found in a slice (unit-square coordinates)."""
+
+    pv: np.ndarray  # piece vertices (u, w)
+    pp: np.ndarray  # piece of each vertex
+    pq: np.ndarray  # index of each piece vertex in the vertex buffers
+    pieces: np.ndarray  # (curve, condition, left, right, closed)
+    points_f: np.ndarray  # (u, w, residual, error)
+    points_i: np.ndarray  # (kind, condition, other)
+    group: np.ndarray
+    active: np.ndarray
+    buf: "_Buffers"  # every traced curve, pieces or not
+    classes: np.ndarray | None = None  # the check raster (cell centres)
+
+
+class _Buffers:
+    """The growing vertex buffers of a trace."""
+
+    def __init__(self, nc: int, vertices: int = 1 << 14, curves: int = 1 << 10):
+        self.vf = np.empty((vertices, 4))
+        self.vi = np.ones((vertices, 7), dtype=np.int64)
+        self.curves = np.empty((curves, 4), dtype=np.int64)
+        self.counts = np.zeros(3, dtype=np.int64)
+
+    def grown(self) -> "_Buffers":
+        bigger = _Buffers(0, 4 * self.vf.shape[0], 4 * self.curves.shape[0])
+        return bigger
+
+
+def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
+          check_cells: int = CHECK_CELLS, only: np.ndarray | None = None) -> Traced:
+    """Trace every boundary piece of the slice and check it against a finer raster.
+
+    ``only``: a mask of the conditions to trace, whole (not only where they
+    bound a class; no check against the raster).
+    """
+    fns, m = sl.fns, sl.model
+    run = T.entries()
+    code = _LAYER_CODE[layer]
+    rng = np.random.default_rng(20261123)
+    active, group = _active(sl, rng)
+    if only is not None:
+        active = active & only
+        check_cells = 0
+    ix, iy = sl.slots
+    geo = sl.geo
+    tol_u, tol_w = tol / geo[1], tol / geo[3]
+    v = sl.base.copy()
+    seeds = run["seeds"](fns, active, v, ix, iy, geo, seed_nodes)
+    out = np.empty((len(m.candidates), m.n_fields))
+    nc = len(sl.conds)
+    grp = _ranked(sl.conds, group)
+    buf = _Buffers(nc)
+    mark = np.zeros((nc, seed_nodes - 1, seed_nodes - 1), dtype=np.int8)
+    while True:
+        run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
+                     buf.counts, buf.curves, mark, tol_u, tol_w, only is None)
+        if not buf.counts[2]:
+            break
+        buf = buf.grown()
+        mark[:] = 0
+    traced = _assembled(buf, group, active)
+    if check_cells:
+        axes = _cell_centres(sl, check_cells)
+        classes = evaluate(m, axes, sl.fixed, [layers_for(m)[layer]])[layer]
+        traced.classes = classes
+        bad = T.uncovered(classes, traced.pv, traced.pp)
+        if len(bad):
+            rescue = _rescue_seeds(sl, active, bad, check_cells)
+            if len(rescue):
+                fine = np.zeros((nc, check_cells, check_cells), dtype=np.int8)
+                for p in range(len(traced.pieces)):
+                    sel = traced.pv[traced.pp == p]
+                    for q in range(len(sel) - 1):
+                        T._mark(fine, int(traced.pieces[p, 1]), sel[q, 0], sel[q, 1],
+                                sel[q + 1, 0], sel[q + 1, 1])
+                run["trace"](fns, rescue, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
+                             buf.counts, buf.curves, fine, tol_u, tol_w, True)
+                if buf.counts[2]:
+                    raise RuntimeError(f"{m.name}: more than {buf.vf.shape[0]} vertices")
+                traced = _assembled(buf, group, active)
+                traced.classes = classes
+                bad = T.uncovered(classes, traced.pv, traced.pp)
+            if len(bad):
+                raise ValueError(_uncovered_message(sl, layer, classes, bad, axes))
+    return traced
+
+
+#: Which condition traces a stretch where several vanish together: the first kind here
+#: (a start from rest is where a stick ends, so the stick's limit names it).
+KIND_RANK = ("coefficient", "normal", "gap", "friction_limit", "family", "discriminant", "root",
+             "domain", "velocity", "start")
+
+
+def _ranked(conds: Conditions, group: np.ndarray) -> np.ndarray:
+    """Per condition: its group (conditions proportional in the slice) and its rank."""
+    order = sorted(range(len(conds)), key=lambda k: (KIND_RANK.index(conds.kinds[k])
+                                                      if conds.kinds[k] in KIND_RANK
+                                                      else len(KIND_RANK), k))
+    rank = np.empty(len(conds), dtype=np.int64)
+    rank[order] = np.arange(len(conds))
+    return np.stack([group.astype(np.int64), rank], axis=1)
+
+
+def _assembled(buf: _Buffers, group, active) -> Traced:
+    pv, pp, pq, pieces, pf, pi = T.assemble(buf.vf, buf.vi, buf.curves, int(buf.counts[1]))
+    return Traced(pv, pp, pq, pieces, pf, pi, group, active, buf)
+
+
+def _cell_centres(sl: Slice, n: int) -> dict:
+    t = (np.arange(n) + 0.5) / n
+    return {sl.x: sl.lo[0] + t * (sl.hi[0] - sl.lo[0]), sl.y: sl.lo[1] + t * (sl.hi[1] - sl.lo[1])}
+
+
+def _rescue_seeds(sl: Slice, active, bad, n: int) -> np.ndarray:
+    """Seeds for class changes of the check raster that no piece explains: each
+    active condition that changes sign between the two cells, or comes within two
+    cells of them."""
+    C = sl.conds
+    ix, iy = sl.slots
+    v = sl.base.copy()
+    nc = len(C)
+    a = np.empty(nc)
+    b = np.empty(nc)
+    s = np.empty(nc)
+    g = np.empty(2)
+    rows = []
+    for i, j, di, dj in bad:
+        ua, wa = (i + 0.5) / n, (j + 0.5) / n
+        ub, wb = (i + di + 0.5) / n, (j + dj + 0.5) / n
+        for (u, w, out) in ((ua, wa, a), (ub, wb, b)):
+            v[ix] = sl.lo[0] + u * (sl.hi[0] - sl.lo[0])
+            v[iy] = sl.lo[1] + w * (sl.hi[1] - sl.lo[1])
+            C.module.values(v, out, s)
+        for k in np.flatnonzero(active):
+            if a[k] * b[k] < 0:
+                t = a[k] / (a[k] - b[k])
+                rows.append((k, ua + t * (ub - ua), wa + t * (wb - wa), 0.0))
+                continue
+            v[ix] = sl.lo[0] + ua * (sl.hi[0] - sl.lo[0])
+            v[iy] = sl.lo[1] + wa * (sl.hi[1] - sl.lo[1])
+            c, sc = C.module.gradient(k, v, g)
+            if math.hypot(g[0] * sl.geo[1], g[1] * sl.geo[3]) * 2.0 / n >= abs(c):
+                rows.append((k, ua, wa, 0.0))
+    return np.array(rows, dtype=float).reshape(-1, 4)
+
+
+def _uncovered_message(sl, layer, classes, bad, axes) -> str:
+    x, y = axes[sl.x], axes[sl.y]
+    cells = []
+    for i, j, di, dj in bad[:5]:
+        cells.append(f"({sl.x}={x[i]:.6g}, {sl.y}={y[j]:.6g}: {classes[i, j]}) -> "
+                     f"({sl.x}={x[i + di]:.6g}, {sl.y}={y[j + dj]:.6g}: {classes[i + di, j + dj]})")
+    more = f" and {len(bad) - 5} more" if len(bad) > 5 else ""
+    return (f"{sl.model.name}: {len(bad)} class change(s) of {layer} on a {classes.shape[0]}^2 "
+            f"raster lie more than one cell from every traced piece: {'; '.join(cells)}{more}. "
+            "The conditions of the model do not explain them (a condition is missing, or a "
+            "piece is shorter than the tracer's seeds can reach)")
+
+
+# -- the Dataset ------------------------------------------------------------------------
+
+def _unique_points(traced: Traced, tol_uw: float):
+    """The points of the trace, each once (a crossing is found from both its curves)."""
+    pf, pi = traced.points_f, traced.points_i
+    keep = []
+    for q in range(len(pf)):
+        dup = False
+        for r in keep:
+            if pi[r, 0] == pi[q, 0] and abs(pf[r, 0] - pf[q, 0]) <= tol_uw \
+                    and abs(pf[r, 1] - pf[q, 1]) <= tol_uw:
+                dup = True
+                break
+        if not dup:
+            keep.append(q)
+    return np.array(keep, dtype=np.int64)
+
+
+def condition_name(sl: Slice, traced: Traced, k: int) -> str:
+    """A condition's name, with those of the conditions that share its zero set."""
+    names = [sl.conds.names[j] for j in range(len(sl.conds)) if traced.group[j] == k]
+    return ",".join(dict.fromkeys([sl.conds.names[k], *names]))
+
+
+def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
+    """The traced pieces and points as the Dataset :func:`boundaries` returns."""
+    m = sl.model
+    reg = layers_for(m)[layer]
+    xv, yv = m.variables[sl.x], m.variables[sl.y]
+    px, py = sl.physical(traced.pv)
+    V = xr.Variable
+    data = {
+        sl.x: V("vertex", px, {"units": xv.units, "long_name": xv.long_name}),
+        sl.y: V("vertex", py, {"units": yv.units, "long_name": yv.long_name}),
+    }
+    piece = V("vertex", traced.pp.astype(np.int32),
+              {"long_name": "piece the vertex belongs to (index along dimension piece)"})
+    pieces = traced.pieces
+    flags = {k: v for k, v in reg.attrs.items() if k in ("flag_values", "flag_meanings")}
+    data["condition"] = V("piece", np.array([condition_name(sl, traced, int(k))
+                                             for k in pieces[:, 1]], dtype=str),
+                          {"long_name": "the condition that vanishes on the piece"})
+    data["class_left"] = V("piece", pieces[:, 2].astype(np.int8),
+                           {"long_name": f"{layer} left of the piece (along its vertices)",
+                            **flags})
+    data["class_right"] = V("piece", pieces[:, 3].astype(np.int8),
+                            {"long_name": f"{layer} right of the piece (along its vertices)",
+                             **flags})
+    data["closed"] = V("piece", pieces[:, 4].astype(np.int8),
+                       {"long_name": "the piece is a closed loop (its last vertex is its first)",
+                        "flag_values": np.array([0, 1], np.int8), "flag_meanings": "no yes"})
+    keep = _unique_points(traced, 0.5 * tol / max(sl.geo[1], sl.geo[3]))
+    pf, pi = traced.points_f[keep], traced.points_i[keep]
+    qx, qy = sl.physical(pf[:, :2])
+    kinds = []
+    other = []
+    for kind, k, j in pi:
+        if kind == T.FOLD_X:
+            kinds.append(f"fold_{sl.x}")
+        elif kind == T.FOLD_Y:
+            kinds.append(f"fold_{sl.y}")
+        else:
+            kinds.append(_KIND_NAMES[int(kind)])
+        names = [condition_name(sl, traced, int(k))]
+        if kind in (T.CROSSING, T.TANGENCY) and j >= 0:
+            names.append(condition_name(sl, traced, int(j)))
+        other.append(" ".join(names))
+    data[f"point_{sl.x}"] = V("point", qx, {"units": xv.units, "long_name": xv.long_name})
+    data[f"point_{sl.y}"] = V("point", qy, {"units": yv.units, "long_name": yv.long_name})
+    data["point_kind"] = V("point", np.array(kinds, dtype=str),
+                           {"long_name": "kind of point: crossing, fold_<axis> (the piece turns "
+                                         "back in that axis), end (on the slice's edge), "
+                                         "tangency"})
+    data["point_condition"] = V("point", np.array(other, dtype=str),
+                                {"long_name": "the conditions that vanish at the point"})
+    data["point_residual"] = V("point", pf[:, 2],
+                               {"units": "1", "long_name": "largest residual of the point's "
+                                "defining equations, relative to their tie scales"})
+    data["point_error"] = V("point", pf[:, 3] * tol,
+                            {"units": "1", "long_name": "size of the last Newton step in the "
+                             "point's coordinates (an error estimate, in axis units)"})
+    attrs = header(m, "boundaries", sl.fixed, phasemap_layer=layer,
+                   phasemap_axes=json.dumps({sl.x: [sl.lo[0], sl.hi[0]],
+                                             sl.y: [sl.lo[1], sl.hi[1]]}),
+                   phasemap_tol=tol)
+    return xr.Dataset(data, coords={"piece": piece}, attrs=attrs)
+
+
+def boundaries(model, axes: Mapping, fixed: Mapping | None = None, layer: str = "n_solutions",
+               tol: float = 1e-10, *, conditions=None) -> xr.Dataset:
+    """The class boundaries of a 2-D slice of a map, as exact curves.
+
+    Parameters
+    ----------
+    model:
+        a model name, a declaration file's path or a :class:`phasemap.Model`.
+    axes:
+        ``{x: (lo, hi), y: (lo, hi)}``: the slice's two axes and their ranges.
+    fixed:
+        values of the other variables (the rest take the model's defaults).
+    layer:
+        the classes whose boundaries are traced: ``"n_solutions"``,
+        ``"stagnation"`` or ``"contact_lost"``.
+    tol:
+        the accuracy of every point, in each coordinate (axis units).
+    conditions:
+        the conditions to trace (:class:`phasemap.bifurcation.Condition`);
+        by default the model's own (see :mod:`phasemap.bifurcation`).
+
+    Returns
+    -------
+    xarray.Dataset
+        dimension ``vertex``: the vertices' coordinates (variables named after
+        the axes) and ``piece``, the piece each belongs to, in order along it;
+        dimension ``piece``: ``condition`` (the quantity that vanishes on it, in
+        the model's names), ``class_left`` and ``class_right`` (the layer's
+        values on either side, left of the direction of its vertices) and
+        ``closed``; dimension ``point``: ``point_<x>``, ``point_<y>``,
+        ``point_kind`` (``crossing``, ``fold_<axis>``, ``end``, ``tangency``),
+        ``point_condition``, ``point_residual`` and ``point_error``.  Its
+        attributes hold the slice's fixed values, ``phasemap_tol`` and the CF
+        header of an atlas (:func:`phasemap.write_atlas` writes it).
+
+    Raises
+    ------
+    ValueError
+        for a bad model, axis, value or layer; and where a class change of the
+        check raster lies more than one cell from every traced piece (naming
+        the cells).
+
+    Examples
+    --------
+    The Painleve rod pushed towards its end (xdot < 0): no solution beyond the
+    curve where the slide's coefficient 1 + 3 cos^2 theta - 3 f sin theta cos theta
+    vanishes, which turns back in f at f = 4/3:
+
+    >>> import phasemap
+    >>> b = phasemap.boundaries("painleve_rod", {"theta": (0.2, 1.5), "f": (0.0, 3.0)},
+    ...                         fixed={"xdot": -1.0, "omega": 0.0})   # doctest: +SKIP
+    >>> fold = b.point_kind == "fold_f"                              # doctest: +SKIP
+    >>> float(b.point_f[fold][0])                                    # doctest: +SKIP
+    1.3333333333333333
+    """
+    if layer not in LAYERS:
+        raise ValueError(f"layer must be one of {', '.join(LAYERS)} (classes that fill "
+                         f"regions), got {layer!r}")
+    try:
+        tol = float(tol)
+    except (TypeError, ValueError):
+        raise ValueError(f"tol must be a number, got {tol!r}") from None
+    if not (0.0 < tol < 1.0):
+        raise ValueError(f"tol must be in (0, 1), got {tol:g}")
+    sl = make_slice(model, axes, fixed, conditions)
+    traced = trace(sl, layer, tol)
+    return to_dataset(sl, traced, layer, tol)

@@ -1,0 +1,289 @@
+"""phasemap.boundaries and phasemap.threshold: exact pieces, points and thresholds.
+
+Each slice is traced once per module (its tracer compiles once per model and
+condition set).  The closed forms are derived here, independently of the
+tracer: the Painleve rod's coefficient and its fold (4/3 at arctan 2), its
+singular points, a loop and a loop touching the slice's edges.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import phasemap
+from phasemap.bifurcation import Condition, boundaries, threshold
+from phasemap.bifurcation import _trace
+
+from conftest import assert_atlas_round_trip
+
+TH, OM, F, L, G, M = sp.symbols("theta omega f l g m", real=True)
+
+
+def rod_conditions(coefficient=True):
+    """The Painleve rod's conditions in its generated names, derived here: the slide's
+    coefficient (the determinant of the contact problem, a third of
+    1 + 3 cos^2 - 3 sigma' f sin cos), its normal force's numerator and the gap
+    acceleration of the end lifting off (l omega^2 sin theta - g, the free rod's)."""
+    s, c = sp.sin(TH), sp.cos(TH)
+    out = []
+    for sig, b in ((1, "A_slip_pos"), (-1, "A_slip_neg")):
+        if coefficient:
+            out.append(Condition(f"coef_{b}", b, "coefficient",
+                                 sig * c * F * s + c**2 + sp.Rational(1, 3),
+                                 sp.Abs(F) + sp.Rational(4, 3)))
+        out.append(Condition(f"N_A_{b}", b, "normal", M / 3 * (G - L * OM**2 * s),
+                             sp.Abs(M) / 3 * (sp.Abs(G) + sp.Abs(L) * OM**2)))
+    out.append(Condition("gap_A_A_separated", "A_separated", "gap", L * OM**2 * s - G,
+                         sp.Abs(G) + sp.Abs(L) * OM**2, strict=True))
+    return out
+
+
+ROD = rod_conditions()
+SLIDE_BACK = {"xdot": -1.0, "omega": 0.0}
+
+
+def test_hand_conditions_are_the_rods():
+    """The coefficient used here has the sign of the model's own coef layer (its
+    generated determinant) at random states: the same physics."""
+    rng = np.random.default_rng(3)
+    theta = rng.uniform(0.05, 1.5, 400)
+    for fv in rng.uniform(0, 3, 5):
+        ds = phasemap.Scene("painleve_rod", axes={"theta": np.sort(theta)},
+                            fixed={"xdot": -1.0, "f": fv}, layers=["coef_A_slip_neg"]).compute()
+        t = np.sort(theta)
+        mine = 1 + 3 * np.cos(t) ** 2 - 3 * fv * np.sin(t) * np.cos(t)
+        assert np.all(np.sign(mine) == np.sign(ds.coef_A_slip_neg.values))
+
+
+@pytest.fixture(scope="module")
+def rod_fold():
+    return boundaries("painleve_rod", {"theta": (0.2, 1.5), "f": (0.0, 3.0)}, fixed=SLIDE_BACK,
+                      conditions=ROD)
+
+
+def test_rod_first_paradox_is_a_fold_at_four_thirds(rod_fold):
+    b = rod_fold
+    assert list(b.condition.values) == ["coef_A_slip_neg"]
+    assert (int(b.class_left[0]), int(b.class_right[0])) in ((0, 1), (1, 0))
+    fold = b.point_kind.values == "fold_f"
+    assert fold.sum() == 1
+    assert abs(float(b.point_f[fold][0]) - 4 / 3) <= 1e-10
+    assert abs(float(b.point_theta[fold][0]) - math.atan(2)) <= 1e-10
+    # it ends on the edge f = 3, where 1 + 3 cos^2 = 9 sin cos: 4 + t^2 = 9 t, t = tan theta
+    ends = np.sort(b.point_theta.values[b.point_kind.values == "end"])
+    assert np.allclose(ends, np.arctan(np.sort(np.roots([1, -9, 4]))), rtol=0, atol=1e-10)
+    assert np.all(b.point_residual.values <= 1e-12)
+    assert np.all(b.point_error.values <= 1e-10)
+
+
+def test_rod_vertices_lie_on_the_coefficient_and_follow_its_curvature(rod_fold):
+    th, f = rod_fold.theta.values, rod_fold.f.values
+    c, s = np.cos(th), np.sin(th)
+    assert np.max(np.abs(1 / 3 + c**2 - f * s * c) / (4 / 3 + f)) <= 1e-12
+    # chords stay within the tracer's chord error of the exact curve f(theta)
+    exact = (1 + 3 * np.cos(th) ** 2) / (3 * np.sin(th) * np.cos(th))
+    assert np.max(np.abs(exact - f)) <= 1e-12 * 3
+    # each chord's largest distance from the exact curve between its vertices, in the
+    # slice's units (theta spans 1.3, f 3)
+    worst = 0.0
+    for a, b in zip(range(len(th) - 1), range(1, len(th))):
+        t = np.linspace(th[a], th[b], 41)
+        u = (t - th[a]) / 1.3
+        w = ((1 + 3 * np.cos(t) ** 2) / (3 * np.sin(t) * np.cos(t)) - f[a]) / 3.0
+        du, dw = (th[b] - th[a]) / 1.3, (f[b] - f[a]) / 3.0
+        worst = max(worst, np.max(np.abs(u * dw - w * du)) / math.hypot(du, dw))
+    assert worst <= 1.5 * _trace.CHORD
+    mid = 0.5 * (th[1:] + th[:-1])
+    steps = np.hypot(np.diff(th) / 1.3, np.diff(f) / 3.0)
+    assert np.max(steps) <= _trace.H_MAX * 1.01
+    # where the curve bends most (near the fold) the vertices are closest
+    assert steps[np.argmin(np.abs(mid - math.atan(2)))] < np.median(steps)
+
+
+def test_rod_singular_points_are_crossings():
+    """In (theta, omega) at f = 2 the slide's coefficient vanishes on two lines, and its
+    normal force with the free-flight acceleration on g = l sin(theta) omega^2: they
+    cross at the singular points of Genot and Brogliato (1999)."""
+    b = boundaries("painleve_rod", {"theta": (0.1, 1.5), "omega": (-5.0, 5.0)},
+                   fixed={"xdot": -1.0, "f": 2.0}, conditions=ROD)
+    # 1 + 3 c^2 - 6 s c = 0  <=>  (1 + t^2) + 3 - 6 t = 0 with t = tan theta
+    roots = sorted(math.atan(t) for t in np.roots([1, -6, 4]))
+    cross = b.point_kind.values == "crossing"
+    got = sorted(zip(np.round(b.point_theta.values[cross], 9), b.point_omega.values[cross]))
+    want = sorted((round(r, 9), s * math.sqrt(9.81 / math.sin(r))) for r in roots for s in (1, -1))
+    assert len(got) == 4
+    for (t1, w1), (t2, w2) in zip(got, want):
+        assert abs(t1 - t2) <= 1e-9 and abs(w1 - w2) <= 1e-10
+    assert set(b.condition.values) == {"coef_A_slip_neg", "N_A_A_slip_neg"}
+    # none (0) below the normal force's curve and two (2) above it, beyond the lines
+    pairs = {tuple(sorted(p)) for p in zip(b.class_left.values, b.class_right.values)}
+    assert pairs == {(0, 1), (1, 2), (0, 2)}
+
+
+def _block():
+    """A block on a rough floor lifted by a force m g (theta^2 + omega^2) / r^2 that grows
+    with a flywheel's state: its normal force vanishes on the circle of radius r."""
+    from phasemap.declare import Body, Coordinate, Parameter, PointContact, Rate, System
+
+    f = Parameter("f", "1", "friction coefficient", default=0.5, lower=0.0)
+    r = Parameter("r", "1", "radius of the loop", default=1.0, lower=0.0, lower_open=True)
+    g = Parameter("g", "m s-2", "gravitational acceleration", default=9.81, lower=0.0)
+    m = Parameter("m", "kg", "mass of the block", default=1.0, lower=0.0, lower_open=True)
+    theta = Coordinate("theta", "rad", "angle of the flywheel",
+                       rate=Rate("omega", "rad s-1", "its angular velocity"))
+    x = Coordinate("x", "m", "position of the block",
+                   rate=Rate("xdot", "m s-1", "velocity of the block", scale=sp.sqrt(g)))
+    y = Coordinate("y", "m", "height of the block")
+    system = System("lifted_block", "a block lifted by a flywheel's force", "test",
+                    coordinates=(theta, x, y), parameters=(f, r, g, m),
+                    bodies=(Body(m, (x, y)), Body(m, (0, 0), inertia=m, angle=theta)),
+                    potential=m * g * y,
+                    forces={y: m * g * (theta**2 + theta.rate**2) / r**2},
+                    contacts=(PointContact("A", point=(x, y), normal=(0, 1), friction=f),))
+    R = sp.Symbol("r", real=True)
+    n = M * G * (1 - (TH**2 + OM**2) / R**2)
+    scale = sp.Abs(G) * (1 + (TH**2 + OM**2) / R**2)
+    conds = [Condition("N_A_A_slip_pos", "A_slip_pos", "normal", n, sp.Abs(M) * scale),
+             Condition("gap_A_A_separated", "A_separated", "gap", -n / M, scale)]
+    return system.model, conds
+
+
+@pytest.fixture(scope="module")
+def block():
+    return _block()
+
+
+def test_a_closed_loop(block):
+    model, conds = block
+    b = boundaries(model, {"theta": (-2, 2), "omega": (-2, 2)}, fixed={"xdot": 1.0},
+                   layer="contact_lost", conditions=conds)
+    assert b.sizes["piece"] == 1 and int(b.closed[0]) == 1
+    th, om = b.theta.values, b.omega.values
+    assert th[0] == th[-1] and om[0] == om[-1]
+    assert np.max(np.abs(np.hypot(th, om) - 1)) <= 1e-12
+    # the loop's left is inside (kept: 0) if it runs counter-clockwise
+    ccw = np.sum(th[:-1] * om[1:] - th[1:] * om[:-1]) > 0
+    assert (int(b.class_left[0]), int(b.class_right[0])) == ((0, 1) if ccw else (1, 0))
+    folds = sorted(zip(b.point_kind.values, np.round(b.point_theta.values, 12),
+                       np.round(b.point_omega.values, 12)))
+    assert folds == [("fold_omega", 0.0, -1.0), ("fold_omega", 0.0, 1.0),
+                     ("fold_theta", -1.0, 0.0), ("fold_theta", 1.0, 0.0)]
+
+
+def test_a_loop_touching_the_slice_edges(block):
+    """omega in (-1, 1): the unit circle touches both edges, where it turns back in omega."""
+    model, conds = block
+    b = boundaries(model, {"theta": (-2, 2), "omega": (-1, 1)}, fixed={"xdot": 1.0},
+                   layer="contact_lost", conditions=conds)
+    assert b.sizes["piece"] == 1 and int(b.closed[0]) == 1
+    kinds = sorted(b.point_kind.values)
+    assert kinds == ["fold_omega", "fold_omega", "fold_theta", "fold_theta"]
+    at_edge = b.point_kind.values == "fold_omega"
+    assert np.allclose(np.abs(b.point_omega.values[at_edge]), 1.0, rtol=0, atol=1e-12)
+
+
+def test_a_piece_ending_on_the_slice_edge(block):
+    model, conds = block
+    b = boundaries(model, {"theta": (-2, 2), "omega": (-0.5, 1.5)}, fixed={"xdot": 1.0},
+                   layer="contact_lost", conditions=conds)
+    assert b.sizes["piece"] == 1 and int(b.closed[0]) == 0
+    ends = b.point_kind.values == "end"
+    assert np.allclose(np.sort(b.point_theta.values[ends]), [-math.sqrt(0.75), math.sqrt(0.75)],
+                       rtol=0, atol=1e-10)
+    assert np.all(b.point_omega.values[ends] == -0.5)
+    assert b.omega.values[0] == -0.5 and b.omega.values[-1] == -0.5
+
+
+def test_round_trip_and_cf(rod_fold, tmp_path):
+    assert_atlas_round_trip(rod_fold, tmp_path, "boundaries.nc")
+
+
+def test_a_missing_condition_is_reported_with_its_cells():
+    with pytest.raises(ValueError, match=r"class change\(s\) of n_solutions.*theta="):
+        boundaries("painleve_rod", {"theta": (0.2, 1.5), "f": (0.0, 3.0)}, fixed=SLIDE_BACK,
+                   conditions=rod_conditions(coefficient=False))
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(axes={"theta": (0.2, 1.5)}), "two variables"),
+    (dict(axes={"theta": (0.2, 1.5), "f": (3.0, 0.0)}), "lo < hi"),
+    (dict(axes={"theta": (0.2, 1.5), "nope": (0, 1)}), "unknown variable 'nope'"),
+    (dict(axes={"theta": (0.2, 1.5), "f": (0, 3)}, fixed={"f": 1.0}), "both an axis and fixed"),
+    (dict(axes={"theta": (0.2, 1.5), "f": (0, 3)}, layer="singular"), "layer must be"),
+    (dict(axes={"theta": (0.2, 1.5), "f": (0, 3)}, tol=0.0), "tol must be"),
+    (dict(axes={"theta": (0.2, 1.5), "f": (-1, 3)}), "outside its domain"),
+])
+def test_bad_input(kw, match):
+    with pytest.raises(ValueError, match=match):
+        boundaries("painleve_rod", **{"fixed": SLIDE_BACK, "conditions": ROD, **kw})
+
+
+# -- thresholds ---------------------------------------------------------------------------
+
+def test_threshold_first_paradox():
+    t = threshold("painleve_rod", "f", value=0, over={"theta": (0.1, 1.5), "f": (0, 3)},
+                  fixed=SLIDE_BACK, conditions=ROD)
+    assert abs(t.value - 4 / 3) <= 1e-10 and abs(t.at["theta"] - math.atan(2)) <= 1e-10
+    assert t.kind == "fold_f" and t.condition == "coef_A_slip_neg" and t.residual <= 1e-12
+    # the raster's best cell bounds it from above, within a cell
+    assert t.value <= t.bound <= t.value + 3.0 / 128 * 1.5
+
+
+def test_threshold_on_a_line_and_an_empty_region():
+    t = threshold("painleve_rod", "f", value=0, over={"f": (0, 3)},
+                  fixed={**SLIDE_BACK, "theta": math.atan(2)}, conditions=ROD)
+    assert abs(t.value - 4 / 3) <= 1e-10 and t.kind == "root"
+    # sliding the other way the coefficient stays positive: no paradox in these ranges
+    assert threshold("painleve_rod", "f", value=0, over={"theta": (0.1, 1.5), "f": (0, 3)},
+                     fixed={"xdot": 1.0, "omega": 0.0}, conditions=ROD) is None
+
+
+def test_threshold_of_the_singular_set_and_a_supremum():
+    t = threshold("painleve_rod", "f", layer="singular", value=1,
+                  over={"theta": (0.1, 1.5), "f": (0, 3)}, fixed=SLIDE_BACK, conditions=ROD)
+    assert abs(t.value - 4 / 3) <= 1e-10 and t.kind == "fold_f"
+    # the unique region reaches up to the edge f = 3
+    t = threshold("painleve_rod", "f", value=1, side="max",
+                  over={"theta": (0.1, 1.5), "f": (0, 3)}, fixed=SLIDE_BACK, conditions=ROD)
+    assert t.value == 3.0 and t.kind == "edge"
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(param="nope"), "unknown variable"),
+    (dict(layer="fate"), "layer must be"),
+    (dict(value=7), "flag values"),
+    (dict(side="least"), "side must be"),
+    (dict(over={"theta": (1, 0)}), "lo < hi"),
+    (dict(fixed={"f": 1.0}), "cannot be fixed"),
+])
+def test_threshold_bad_input(kw, match):
+    args = {"param": "f", "value": 0, "over": {"theta": (0.1, 1.5)}, "fixed": SLIDE_BACK,
+            "conditions": ROD, **kw}
+    with pytest.raises(ValueError, match=match):
+        threshold("painleve_rod", **args)
+
+
+def test_map_figure_draws_the_exact_boundary():
+    """ds.phasemap.plot(boundaries=True): the map's slice traced, its piece drawn as a
+    curve on the rod's coefficient (not the raster's stair)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ds = phasemap.Scene("painleve_rod", axes={"theta": np.linspace(0.2, 1.5, 24),
+                                              "f": np.linspace(0.0, 3.0, 24)},
+                        fixed=SLIDE_BACK, layers=["n_solutions"]).compute()
+    fig = ds.phasemap.plot(x="theta", boundaries=True)
+    try:
+        curves = [ln for ln in fig.axes[0].lines if len(ln.get_xdata()) > 20]
+        assert len(curves) == 1
+        th, f = (np.asarray(a, float) for a in curves[0].get_data())
+        c, s = np.cos(th), np.sin(th)
+        assert np.max(np.abs(1 / 3 + c**2 - f * s * c) / (4 / 3 + f)) <= 1e-12
+    finally:
+        plt.close(fig)

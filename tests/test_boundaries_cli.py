@@ -1,0 +1,45 @@
+"""phasemap boundaries and phasemap threshold on the command line."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import xarray as xr
+
+PHASEMAP = [sys.executable, "-m", "phasemap.cli"]
+ROD = ["--set", "xdot=-1", "--set", "omega=0"]
+
+
+def run(*args):
+    return subprocess.run(PHASEMAP + list(args), capture_output=True, text=True, timeout=900)
+
+
+def test_threshold_prints_value_point_and_condition():
+    r = run("threshold", "painleve_rod", "f", "--over", "theta=0.1:1.5", *ROD)
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert abs(float(lines[0].split(">=")[1]) - 4 / 3) <= 1e-13
+    theta = float(lines[1].split("theta = ")[1].split(",")[0])
+    assert abs(theta - math.atan(2)) <= 1e-13
+    assert "fold_f of coef_A_slip_neg" in lines[2]
+
+
+def test_threshold_of_an_empty_region_and_a_bad_range():
+    r = run("threshold", "painleve_rod", "f", "--over", "theta=0.1:1.5", "--set", "xdot=1",
+            "--set", "omega=0")
+    assert r.returncode == 0 and "nowhere in the ranges given" in r.stdout
+    r = run("threshold", "painleve_rod", "f", "--over", "theta=1.5", *ROD)
+    assert r.returncode == 2 and "--over expects NAME=LO:HI" in r.stderr
+
+
+def test_boundaries_writes_the_pieces(tmp_path):
+    out = tmp_path / "rod.nc"
+    r = run("boundaries", "painleve_rod", "--axis", "theta=0.2:1.5", "--axis", "f=0:3", *ROD,
+            "-o", str(out))
+    assert r.returncode == 0, r.stderr
+    with xr.open_dataset(out) as ds:
+        fold = ds.point_kind.values == "fold_f"
+        assert abs(float(ds.point_f.values[fold][0]) - 4 / 3) <= 1e-10
+    assert "fold_f" in r.stdout and "theta = 1.10714871779" in r.stdout

@@ -1,0 +1,74 @@
+"""threshold(..., along=...): the first paradox of a rod with radius of gyration k.
+
+Derived here, independently of the tracer.  A rod's end A (distance l from the
+centre of mass G, angle theta to the floor) slides back (xdot < 0) on a rough
+floor: m x_G'' = F, m y_G'' = N - m g, m k^2 theta'' = l (F sin theta - N cos
+theta) with F = f N and y_A = y_G - l sin theta = 0, so y_G'' = l (cos theta
+theta'' - sin theta omega^2).  At omega = 0, eliminating theta'' gives
+N (k^2 + l^2 cos^2 - f l^2 sin cos) = m g k^2: the coefficient k^2/l^2 + cos^2 -
+f sin cos changes sign first (no solution) at the least f of
+f(theta) = (kappa (1 + t^2) + 1) / t, t = tan theta, kappa = k^2 / l^2: at
+t = sqrt((kappa + 1) / kappa), f = 2 sqrt(kappa (kappa + 1)) = 2 (k/l) sqrt(1 + k^2/l^2).
+The uniform rod (k^2 = l^2/3) gives 4/3 at arctan 2.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import phasemap
+from phasemap.declare import Body, Coordinate, Parameter, PointContact, Rate, System
+
+from conftest import assert_atlas_round_trip
+
+
+def gyration_rod():
+    """A rod whose inertia about its centre of mass is m k^2, declared with the public API."""
+    f = Parameter("f", "1", "friction coefficient", default=0.5, lower=0.0)
+    l = Parameter("l", "m", "distance of the end from the centre of mass", default=1.0,
+                  lower=0.0, lower_open=True)
+    k = Parameter("k", "m", "radius of gyration about the centre of mass", default=0.5,
+                  lower=0.0, lower_open=True)
+    g = Parameter("g", "m s-2", "gravitational acceleration", default=9.81, lower=0.0)
+    m = Parameter("m", "kg", "mass of the rod", default=1.0, lower=0.0, lower_open=True)
+    theta = Coordinate("theta", "rad", "angle of the rod to the floor", default=1.0, lower=0.0,
+                       upper=float(sp.pi),
+                       rate=Rate("omega", "rad s-1", "angular velocity", scale=sp.sqrt(g / l)))
+    x = Coordinate("x", "m", "position of end A",
+                   rate=Rate("xdot", "m s-1", "velocity of end A", scale=sp.sqrt(g * l)))
+    y = Coordinate("y", "m", "height of end A")
+    return System("gyration_rod", "a rod with radius of gyration k on a rough floor", "test",
+                  coordinates=(theta, x, y), parameters=(f, l, k, g, m),
+                  bodies=(Body(m, (x + l * sp.cos(theta), y + l * sp.sin(theta)),
+                               inertia=m * k**2, angle=theta),),
+                  potential=m * g * (y + l * sp.sin(theta)),
+                  contacts=(PointContact("A", point=(x, y), normal=(0, 1), friction=f),)).model
+
+
+@pytest.fixture(scope="module")
+def curve():
+    return phasemap.threshold(gyration_rod(), "f", value=0,
+                              over={"theta": (0.05, 1.55), "f": (0.0, 6.0)},
+                              fixed={"xdot": -1.0, "omega": 0.0, "l": 1.0},
+                              along={"k": (0.2, 1.5)})
+
+
+def test_first_paradox_along_k(curve):
+    k = curve.k.values
+    assert k[0] == 0.2 and k[-1] == 1.5 and curve.sizes["piece"] == 1
+    assert np.max(np.abs(curve.f.values - 2 * k * np.sqrt(1 + k**2))) <= 1e-10
+    assert np.max(np.abs(curve.theta.values - np.arctan(np.sqrt(1 + 1 / k**2)))) <= 1e-10
+    assert str(curve.condition.values[0]) == "coef_A_slip_neg"
+    # the uniform rod lies on it: k = 1/sqrt 3 gives 4/3
+    t = phasemap.threshold(gyration_rod(), "f", value=0,
+                           over={"theta": (0.05, 1.55), "f": (0.0, 6.0)},
+                           fixed={"xdot": -1.0, "omega": 0.0, "l": 1.0, "k": 1 / math.sqrt(3)})
+    assert abs(t.value - 4 / 3) <= 1e-10 and abs(t.at["theta"] - math.atan(2)) <= 1e-10
+
+
+def test_curve_round_trip(curve, tmp_path):
+    assert_atlas_round_trip(curve, tmp_path, "along.nc")
