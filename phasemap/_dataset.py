@@ -28,7 +28,6 @@ alone, with no code loaded (:func:`vocabulary`).
 from __future__ import annotations
 
 import datetime as _dt
-import hashlib
 import json
 import re
 from dataclasses import dataclass, field
