@@ -342,7 +342,9 @@ def test_without_overwrite_a_file_that_appeared_meanwhile_is_kept(tmp_path, monk
     assert path.read_bytes() == b"ours"
 
 
-#: A child that writes a slow dask-backed atlas (sixteen blocks of 0.2 s each).
+#: A child that writes a slow dask-backed atlas (64 blocks of 0.2 s each: several seconds
+#: even on two threads, so a signal sent from a starved parent on a loaded machine still
+#: arrives mid-write; the signal ends it long before).
 SLOW_WRITE = """
 import sys, time
 import dask.array as da, numpy as np, xarray as xr
@@ -352,7 +354,7 @@ def slow(block):
     time.sleep(0.2)
     return block
 
-data = da.zeros((64, 64), chunks=(16, 16), dtype=np.int8).map_blocks(slow, dtype=np.int8)
+data = da.zeros((64, 64), chunks=(8, 8), dtype=np.int8).map_blocks(slow, dtype=np.int8)
 ds = xr.Dataset({"n_solutions": (("phi", "f"), data, {"long_name": "solutions"})},
                 coords={"phi": ("phi", np.linspace(0, 1, 64), {"units": "rad"}),
                         "f": ("f", np.linspace(0, 1, 64), {"units": "1"})},
@@ -374,8 +376,12 @@ def test_a_signal_that_ends_the_process_leaves_no_temporary_file(tmp_path, signa
     out.mkdir()
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(
         [str(pathlib.Path(__file__).resolve().parents[1]), os.environ.get("PYTHONPATH", "")]))
+    def default_disposition():  # a signal the test runner ignores is not ignored here
+        signal.signal(getattr(signal, signame), signal.SIG_DFL)
+
     proc = subprocess.Popen([sys.executable, str(script), str(out / "atlas.nc")], env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=default_disposition)
     deadline = time.monotonic() + 120
     while not list(out.glob("*.part")):   # the write is under way
         assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
