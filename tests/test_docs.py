@@ -20,8 +20,9 @@ def test_readme_examples():
     assert result.attempted >= 8 and result.failed == 0
 
 
-@pytest.mark.parametrize("module", ["phasemap.classify", "phasemap.scene", "phasemap.simulate",
-                                    "phasemap.phase", "phasemap.plot", "phasemap.study"])
+@pytest.mark.parametrize("module", ["phasemap._args", "phasemap.classify", "phasemap.scene",
+                                    "phasemap.simulate", "phasemap.phase", "phasemap.plot",
+                                    "phasemap.study"])
 def test_docstring_examples(module):
     result = doctest.testmod(importlib.import_module(module))
     assert result.attempted >= 2 and result.failed == 0
@@ -43,7 +44,7 @@ def test_cli_table_and_errors():
     bad = subprocess.run(run + ["classify", "ladder", "phi=9"], capture_output=True, text=True)
     assert bad.returncode == 2
     assert bad.stderr.strip() == ("phasemap: error: ladder: phi = 9 is outside its domain "
-                                  "[0, 1.5708] (angle of the bar from the vertical, rad)")
+                                  "[0, 1.5707963267948966] (angle of the bar from the vertical, rad)")
     assert "Traceback" not in bad.stderr
 
 

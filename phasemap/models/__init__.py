@@ -26,6 +26,7 @@ import importlib
 import os
 from collections.abc import Mapping
 
+from .. import _args
 from ..model import Model
 from . import elliptic_pendulum, hinge_pendulum
 
@@ -82,13 +83,11 @@ def get_model(model: str | Model) -> Model:
         if key not in _FILES:
             _FILES[key] = load(model)
         return _FILES[key]
-    try:
+    if isinstance(model, str) and model in MODELS:
         return MODELS[model]
-    except (KeyError, TypeError):
-        raise ValueError(
-            f"unknown model {model!r}; available models: {', '.join(MODELS)} "
-            "(or the path of a declaration file, path/to/system.py)"
-        ) from None
+    raise ValueError(_args.unknown("model", model, MODELS, listing=(
+        f"available models: {', '.join(MODELS)}, or the path of a declaration file, "
+        "path/to/system.py")))
 
 
 __all__ = ["MODELS", "DECLARED", "get_model"]
