@@ -69,6 +69,11 @@ MAX_COUNT = int(np.iinfo(np.int64).max)
 MAX_EXPRESSION = 200
 
 
+#: Types that NumPy or Python count as numbers but that are no state or parameter
+#: (``numpy.timedelta64`` is even a NumPy integer).
+_NOT_NUMBERS = (bool, np.bool_, np.datetime64, np.timedelta64)
+
+
 class ArgumentTypeError(TypeError, ValueError):
     """An argument of the wrong type.  A ``TypeError``, and also a ``ValueError`` so that
     ``except ValueError`` catches every kind of bad input, as phasemap documents."""
@@ -96,7 +101,7 @@ def _is_real_type(value) -> bool:
     """Whether ``value`` is a real scalar of an accepted type (its size not yet checked)."""
     if isinstance(value, np.ndarray):
         return value.ndim == 0 and value.dtype.kind in "iuf"
-    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+    return isinstance(value, numbers.Real) and not isinstance(value, _NOT_NUMBERS)
 
 
 def real(name: str, value, where: str = "") -> float:
@@ -135,8 +140,9 @@ def real(name: str, value, where: str = "") -> float:
     phasemap._args.ArgumentTypeError: ladder: phi must be a real number, got True (bool)
     """
     if not _is_real_type(value):
-        what = ("a real number" if np.ndim(value) == 0 or isinstance(value, (str, bytes))
-                else "one real number, not a sequence")
+        what = ("one real number, not a sequence"
+                if not isinstance(value, (str, bytes, Mapping)) and _has_dimensions(value)
+                else "a real number")
         raise ArgumentTypeError(f"{_prefix(where)}{name} must be {what}, "
                                 f"got {_describe(value)}")
     try:
@@ -197,7 +203,7 @@ def count(name: str, value, where: str = "", *, least: int = 1,
     ...
     ValueError: ladder: max_events must be a whole number, got 2.5
     """
-    if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)):
+    if isinstance(value, (int, np.integer)) and not isinstance(value, _NOT_NUMBERS):
         n = int(value)
     elif isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iu":
         n = int(value)
@@ -341,15 +347,21 @@ def layers(given, known: Iterable[str], where: str = "", listing: str = "") -> l
     """
     if isinstance(given, str):
         given = [given]
-    if isinstance(given, (bytes, Mapping)) or not isinstance(given, Iterable):
+    if isinstance(given, (bytes, Mapping)) or not isinstance(given, Iterable) or (
+            isinstance(given, np.ndarray) and given.ndim == 0):
         raise ArgumentTypeError(f"{_prefix(where)}layers must be a layer name or a list of "
                                 f"them, got {_describe(given)}")
-    names = list(dict.fromkeys(given))
+    names = list(given)
+    for name in names:
+        if not isinstance(name, str):
+            raise ArgumentTypeError(f"{_prefix(where)}layers must be layer names (strings), "
+                                    f"got {_describe(name)}")
+    names = list(dict.fromkeys(names))
     known = list(known)
     for name in names:
         check_name("layer", name, known, where, listing)
     if not names:
-        raise ValueError(f"{_prefix(where)}a scene needs at least one layer")
+        raise ValueError(f"{_prefix(where)}layers is empty: a scene needs at least one layer")
     return names
 
 

@@ -42,7 +42,8 @@ def cfcheck(path: str | os.PathLike, timeout: float = 300) -> tuple[str, bool]:
                          "by its first bytes); cfchecks checks netCDF files")
     exe = shutil.which("cfchecks")
     if exe is None:
-        raise ValueError("cfchecks is not installed: pip install cfchecker (it needs "
+        raise ValueError("cfchecks is not installed: pip install \"phasemap[cf]\" (from a "
+                         "clone: pip install \".[cf]\"; it needs "
                          "UDUNITS-2, Debian's libudunits2-0; bash .ci/system-deps installs both)")
     with tempfile.TemporaryDirectory(prefix="phasemap-cf-") as folder:
         tables = []

@@ -184,7 +184,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
     p.add_argument("--size", choices=["one", "two"], default="one", help="a journal's one "
                    "column (3.5 in, the default) or two columns (7.2 in)")
     p = subs["cfcheck"] = _sub(sub, "cfcheck", "check a file against the CF conventions, "
-                               "offline", "Runs cfchecks (pip install cfchecker) on FILE with "
+                               "offline", "Runs cfchecks (pip install \"phasemap[cf]\") on FILE with "
                                "local stand-ins for the tables it would download; a "
                                "phasemap file uses no standard names, areas or regions.")
     p.add_argument("path")
@@ -284,19 +284,20 @@ def _parse_values(items: list[str], words: tuple[str, ...] = (), model=None) -> 
 def _number(name: str, text: str, model=None) -> float:
     """``text`` as a number for the variable ``name`` of ``model``.
 
-    A decimal that lies just outside a closed end of the variable's domain, and
-    equals that end rounded to the decimals typed (``1.5708`` for the ladder's
-    pi/2), is read as the end itself, with a note on stderr: it is what the
-    user meant, and the exact end is the only value there that the model takes.
+    A decimal of at least four significant digits that lies just outside a
+    closed end of the variable's domain, and equals that end rounded to the
+    decimals typed (``1.5708`` or ``1.571`` for the ladder's pi/2, not ``1.6``),
+    is read as the end itself, with a note on stderr: it is what the user
+    meant, and the exact end is the only value there that the model takes.
     """
     x = _args.parse_real(text, name, model.name if model is not None else "")
     var = model.variables.get(name) if model is not None else None
-    typed = re.fullmatch(r"\s*[-+]?\d*\.(\d+)\s*", text)
-    if var is None or typed is None:
+    typed = re.fullmatch(r"\s*[-+]?(\d*)\.(\d+)\s*", text)
+    if var is None or typed is None or len((typed.group(1) + typed.group(2)).lstrip("0")) < 4:
         return x
     for end, outside, side in ((var.lower, x < var.lower and not var.lower_open, "lower"),
                                (var.upper, x > var.upper and not var.upper_open, "upper")):
-        if outside and round(end, len(typed.group(1))) == x:
+        if outside and round(end, len(typed.group(2))) == x:
             print(f"phasemap: read {name}={text.strip()} as {_args.bound(end)}, the {side} "
                   f"end of its domain {var.domain_text()}", file=sys.stderr)
             return end
@@ -343,8 +344,8 @@ def _atlas(args) -> str:
         axes = {n: np.linspace(*spec) for n, spec in model.default_axes.items() if n not in fixed}
         if not axes:
             raise ValueError(f"{model.name}: every default axis is fixed; give an --axis")
-    if args.chunk_cells is not None and args.chunk_cells < 1:
-        raise ValueError(f"--chunk-cells must be at least 1, got {args.chunk_cells}")
+    if args.chunk_cells is not None:
+        _args.count("--chunk-cells", args.chunk_cells)
     layers = [x.strip() for x in args.layers.split(",") if x.strip()] if args.layers else None
     options = _parse_values(args.option, words=("method",))
     scene = Scene(model, axes=axes, fixed=fixed, layers=layers, options=options)
