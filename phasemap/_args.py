@@ -86,7 +86,9 @@ def _prefix(where: str) -> str:
 def _describe(value) -> str:
     """``value`` for a message: short, with its type where the repr does not show it."""
     if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**20:
-        digits = len(str(abs(value)))
+        # the digits without str(), which refuses integers of more than 4300 digits
+        digits = int((abs(value).bit_length() - 1) * math.log10(2)) + 1
+        digits += abs(value) >= 10**digits
         exact = abs(value) == 10 ** (digits - 1)
         return f"{'-' if value < 0 else ''}10**{digits - 1}" if exact else \
             f"an integer of {digits} digits"

@@ -17,26 +17,21 @@ Why files
 numba caches a compiled function on disk next to its source file, keyed by
 the file's path and timestamp.  Code built with ``exec`` has no file and
 recompiles in every process.  So each generated module is written once to
-the kernel cache directory (``$PHASEMAP_CACHE_DIR``, else
-``~/.cache/phasemap/kernels``), under a name that hashes the generated text
-with the sources it calls (the model's module and the shared numerics) and
-the numba version: a change to any of them makes a new file, and a stale one
-is never loaded.  Files are written atomically (a temporary name, then
-``os.replace``), so concurrent processes agree.  At most ``MAX_KERNELS``
-grid kernels are kept per model: the least recently used ones are deleted
-with their numba cache entries.
+the kernel cache (:mod:`phasemap.cache`: verified, atomic, one LRU bound
+over the whole cache), under a name that hashes the generated text with the
+sources it calls (the model's module and the shared numerics) and the numba
+version: a change to any of them makes a new file, and a stale one is never
+loaded.
 """
 
 from __future__ import annotations
 
+import functools
 import hashlib
-import importlib.util
 import inspect
 import os
 import pathlib
 import sys
-import tempfile
-import threading
 
 import numba
 import numba.extending
@@ -45,19 +40,7 @@ from numba import prange
 
 from . import _numerics as nx
 from ._version import __version__
-
-#: Grid kernels kept on disk per model (least recently used are deleted).
-MAX_KERNELS = 32
-
-_LOADED: dict[str, object] = {}
-_LOCK = threading.Lock()
-
-
-def cache_dir() -> pathlib.Path:
-    """Where generated kernel modules and their numba caches live."""
-    env = os.environ.get("PHASEMAP_CACHE_DIR")
-    root = pathlib.Path(env) if env else pathlib.Path.home() / ".cache" / "phasemap" / "kernels"
-    return root
+from .cache import load_module
 
 
 # -- what a model's code looks like as text -----------------------------------
@@ -241,58 +224,50 @@ def _load(model, kind: str, text: str):
     h = hashlib.sha256(text.encode())
     for f in _deps(model):
         h.update(f.read_bytes())
-    h.update(f"{numba.__version__} {np.__version__} {__version__}".encode())
-    stem = f"{model.name}_{kind}_{h.hexdigest()[:16]}"
-    module = load_module(stem, lambda: text)
-    if kind.startswith("grid"):
-        _prune(pathlib.Path(module.__file__).parent, model.name)
-    return module
+    h.update(_versions())
+    return load_module(f"{model.name}_{kind}_{h.hexdigest()[:16]}", lambda: text)
 
 
-def load_module(stem: str, text):
-    """The module ``stem`` of the kernel cache: written from ``text()`` if it is not
-    there yet (atomically), then imported and registered in ``sys.modules``."""
-    with _LOCK:
-        if stem in _LOADED:
-            return _LOADED[stem]
-        root = cache_dir()
-        try:
-            root.mkdir(parents=True, exist_ok=True)
-            probe = tempfile.NamedTemporaryFile(dir=root, prefix=".probe.")
-            probe.close()
-        except OSError:  # a read-only home: a private folder under the temporary directory
-            root = pathlib.Path(tempfile.gettempdir()) / f"phasemap-kernels-{os.getuid()}"
-            root.mkdir(parents=True, exist_ok=True)
-        path = root / f"{stem}.py"
-        if not path.exists():
-            body = text()
-            fd, tmp = tempfile.mkstemp(dir=root, prefix=f".{stem}.", suffix=".tmp")
-            with os.fdopen(fd, "w") as fh:
-                fh.write(body)
-            os.replace(tmp, path)
-        else:
-            os.utime(path)  # recently used
-        # numba's disk cache re-imports a function's module by name when it
-        # loads the function in a new process: register it under that name.
-        name = f"phasemap_kernel_{stem}"
-        spec = importlib.util.spec_from_file_location(name, path)
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
-        _LOADED[stem] = module
-        return module
+def _versions() -> bytes:
+    return f"{numba.__version__} {np.__version__} {__version__}".encode()
 
 
-def _prune(root: pathlib.Path, model_name: str) -> None:
-    """Keep the ``MAX_KERNELS`` most recently used grid kernels of a model."""
-    files = sorted(root.glob(f"{model_name}_grid*.py"), key=lambda p: p.stat().st_mtime,
-                   reverse=True)
-    for old in files[MAX_KERNELS:]:
-        for f in [old, *root.glob(f"__pycache__/{old.stem}.*")]:
-            try:
-                f.unlink()
-            except OSError:
-                pass
+def content_hash(model) -> str:
+    """A hash of everything that decides a model's values.
+
+    The source of every module its functions come from (for a declared model,
+    the module generated from its declaration's canonical form; for a hand
+    model, its own module), how the model calls them (branch constants,
+    inputs, derived inputs) and the versions.  Two models with one name but
+    different physics (the same system declared in two files) differ; the
+    task names of a dask graph are built from it.
+    """
+    h = hashlib.sha256()
+    for f in _deps(model):
+        h.update(file_digest(f))
+    layout = (model.name, model.inputs, model.velocity,
+              [(c.name, tuple(c.args), c.direction, c.func.py_func.__qualname__)
+               for c in model.candidates],
+              [(d.name, d.source, getattr(d.func, "__name__", repr(d.func)))
+               for d in model.derived],
+              model.velocity_scale.py_func.__qualname__,
+              getattr(getattr(model.inside, "py_func", None), "__qualname__", None))
+    h.update(repr(layout).encode())
+    h.update(_versions())
+    return h.hexdigest()[:32]
+
+
+def file_digest(path) -> bytes:
+    """SHA-256 of a source file, read once per version of it (its time and size)."""
+    path = os.fspath(path)
+    st = os.stat(path)
+    return _digest(path, st.st_mtime_ns, st.st_size)
+
+
+@functools.lru_cache(maxsize=256)
+def _digest(path: str, mtime_ns: int, size: int) -> bytes:
+    with open(path, "rb") as fh:
+        return hashlib.sha256(fh.read()).digest()
 
 
 def _header(src: _Source, what: str) -> list[str]:

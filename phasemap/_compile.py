@@ -14,7 +14,6 @@ when a function it calls does.
 from __future__ import annotations
 
 import hashlib
-import pathlib
 import sys
 import types
 
@@ -58,7 +57,7 @@ def source_hash(model: Model, *modules) -> str:
     h = hashlib.sha256()
     for module in (sys.modules[model.candidates[0].func.py_func.__module__], nx, events,
                    _codegen, *modules):
-        h.update(pathlib.Path(module.__file__).read_bytes())
+        h.update(_codegen.file_digest(module.__file__))
     # the generated contract's module name hashes its text and what it imports:
     # a compiled kernel that calls it must not outlive it (declared models are
     # generated files whose names change with the declaration)

@@ -24,9 +24,16 @@ versions up to 1.8 and reports an error for any later version string.  An
 atlas uses nothing introduced after CF-1.8.
 
 Writing is atomic: :func:`atomic_path` yields a temporary file in the
-destination folder, fsyncs it and renames it onto the destination only on
-success, so a reader never sees a half-written atlas and an interrupted write
-leaves an existing file untouched.  A chunk-by-chunk writer that opens
+destination folder (``.phasemap.<random>.part``, short whatever the name),
+fsyncs it and renames it onto the destination only on success, so a reader
+never sees a half-written atlas and an interrupted write leaves an existing
+file untouched.  Without ``overwrite`` the last step is an exclusive rename
+that fails if the destination appeared meanwhile.  The temporary file is
+removed on any exception and on every signal that ends the process (SIGINT,
+SIGTERM, SIGHUP: :func:`removed_on_signals`); one left by a process killed
+outright (SIGKILL, a power cut) is removed by the next write into its folder
+once it is a day old.  A dask-backed atlas is written by threads that all
+finish before the temporary file goes.  A chunk-by-chunk writer that opens
 ``netCDF4.Dataset`` itself reuses it::
 
     with atomic_path("atlas.nc") as tmp:
@@ -37,12 +44,18 @@ leaves an existing file untouched.  A chunk-by-chunk writer that opens
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import datetime as _dt
+import errno
 import math
 import os
 import pathlib
+import re
 import shutil
+import signal
 import tempfile
+import threading
+import time
 from typing import Iterator, Mapping
 
 import numpy as np
@@ -50,15 +63,22 @@ import xarray as xr
 
 from ._dataset import CONVENTIONS, motion_kind
 from ._version import __version__
+from .progress import human_bytes
 
 __all__ = [
     "CHUNK_BYTES",
     "CONVENTIONS",
+    "Terminated",
+    "WriteError",
     "atomic_path",
     "cf_encoding",
+    "default_chunks",
     "destination",
     "describe_atlas",
+    "no_partial_file",
     "open_atlas",
+    "prepare",
+    "removed_on_signals",
     "write_atlas",
 ]
 
@@ -71,6 +91,12 @@ _ENCODING_KEYS = ("_FillValue", "missing_value", "scale_factor", "add_offset",
 
 #: Layers are read in slabs of at most this many bytes by :func:`describe_atlas`.
 _SLAB_BYTES = 16 << 20
+
+#: Temporary files: ``.phasemap.<8 random characters>.part`` (``tempfile.mkstemp``'s).
+PART_PREFIX, PART_SUFFIX = ".phasemap.", ".part"
+#: A temporary file of ours older than this (s) is a leftover, removed when writing beside it.
+STALE_PART_SECONDS = 86400.0
+_PART = re.compile(re.escape(PART_PREFIX) + r"[a-z0-9_]{8}" + re.escape(PART_SUFFIX) + "$")
 
 
 # --------------------------------------------------------------------------- writing
@@ -120,7 +146,7 @@ def cf_encoding(ds: xr.Dataset, chunks: Mapping[str, int] | None = None, *,
             start = tuple(max(1, min(int(chunks.get(d, c)), n))
                           for d, c, n in zip(var.dims, start, var.shape))
             fixed = {i for i, d in enumerate(var.dims) if d in chunks}
-            shape = _default_chunks(start, var.dtype.itemsize, fixed=fixed)
+            shape = default_chunks(start, var.dtype.itemsize, fixed=fixed)
             enc.update(zlib=True, complevel=int(complevel), shuffle=True,
                        chunksizes=shape)
         encoding[str(name)] = enc
@@ -128,31 +154,67 @@ def cf_encoding(ds: xr.Dataset, chunks: Mapping[str, int] | None = None, *,
 
 
 def write_atlas(ds: xr.Dataset, path: str | os.PathLike, *, complevel: int = 4,
-                chunks: Mapping[str, int] | None = None) -> pathlib.Path:
+                chunks: Mapping[str, int] | None = None,
+                overwrite: bool = True) -> pathlib.Path:
     """Write an atlas to a netCDF-4 file, atomically, and return its path.
 
     ``Conventions``, ``date_created``, ``history``, ``source`` and
     ``phasemap_version`` are added when missing; every attribute already there
     is kept (integer ``flag_values`` are stored in their layer's dtype, as CF
     requires).  The caller's Dataset is not modified.  A dask-backed atlas is
-    computed chunk by chunk while it is written, never loaded whole.
+    computed chunk by chunk while it is written, never loaded whole.  With
+    ``overwrite=False`` an existing file is never replaced, even one that
+    appears while the atlas is being written.
 
     Raises
     ------
     ValueError
         before anything is computed or written, if the destination folder does
         not exist, or if the atlas carries attributes netCDF cannot store
-        (bools, None) or serialisation keys in ``.attrs``; as :class:`WriteError`
-        when writing fails (a full disk), leaving no partial file.
+        (bools, None) or serialisation keys in ``.attrs``; when ``path`` exists
+        and ``overwrite`` is false; as :class:`WriteError` when writing fails
+        (a full disk), leaving no partial file.
     """
     if not isinstance(ds, xr.Dataset):
         raise TypeError(f"write_atlas needs an xarray.Dataset, got {type(ds).__name__}")
     path = destination(path)
-    out = _prepare(ds)
+    if not overwrite and path.exists():
+        raise ValueError(_exists(path))
+    out = prepare(ds)
     encoding = cf_encoding(out, chunks, complevel=complevel)
-    with no_partial_file(path) as tmp:
-        out.to_netcdf(tmp, mode="w", format="NETCDF4", engine="netcdf4", encoding=encoding)
+    with no_partial_file(path, overwrite=overwrite) as tmp:
+        with _joined_writer_threads(out):
+            out.to_netcdf(tmp, mode="w", format="NETCDF4", engine="netcdf4", encoding=encoding)
     return path
+
+
+@contextlib.contextmanager
+def _joined_writer_threads(ds: xr.Dataset) -> Iterator[None]:
+    """Write a dask-backed ``ds`` on a thread pool of our own that has finished when the
+    block ends, error or not.
+
+    dask's threaded scheduler raises the first task error at once while other
+    tasks are still writing; those would reopen the temporary file after it
+    is removed.  Other schedulers (a distributed client) are used as they are.
+    """
+    import dask
+    import dask.threaded
+    from concurrent.futures import ThreadPoolExecutor
+
+    lazy = [v.data for v in ds.variables.values() if dask.is_dask_collection(v.data)]
+    if not lazy or dask.base.get_scheduler(collections=lazy) is not dask.threaded.get:
+        yield
+        return
+    pool = ThreadPoolExecutor(dask.config.get("num_workers", None) or os.cpu_count() or 1)
+    try:
+        with dask.config.set(pool=pool):
+            yield
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _exists(path: pathlib.Path) -> str:
+    return f"{path} exists; pass --overwrite to replace it"
 
 
 class WriteError(ValueError):
@@ -160,64 +222,195 @@ class WriteError(ValueError):
 
 
 @contextlib.contextmanager
-def no_partial_file(path: pathlib.Path) -> Iterator[pathlib.Path]:
+def no_partial_file(path: pathlib.Path, *, overwrite: bool = True) -> Iterator[pathlib.Path]:
     """:func:`atomic_path`, with I/O errors turned into a one-line :class:`WriteError`."""
     try:
-        with atomic_path(path) as tmp:
+        with atomic_path(path, overwrite=overwrite) as tmp:
             yield tmp
     except (OSError, RuntimeError) as err:
         if not isinstance(err, OSError) and not str(err).startswith("NetCDF"):
             raise  # not an I/O error: a failure of the computation
         reason = " ".join(str(err).split()) or type(err).__name__
         try:
-            free = _size(shutil.disk_usage(path.parent).free)
+            free = human_bytes(shutil.disk_usage(path.parent).free)
         except OSError:
             free = "?"
         raise WriteError(f"cannot write {path}: {reason} ({free} free on {path.parent}); "
                          "no file was left") from None
 
 
-def _size(n: float) -> str:
-    """A byte count for a person: 12 B, 3.4 MB, 2 TB."""
-    for unit in ("B", "kB", "MB", "GB", "TB"):
-        if abs(n) < 1000:
-            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.3g} {unit}"
-        n /= 1000.0
-    return f"{n:.3g} PB"
-
-
 @contextlib.contextmanager
-def atomic_path(path: str | os.PathLike) -> Iterator[pathlib.Path]:
+def atomic_path(path: str | os.PathLike, *, overwrite: bool = True) -> Iterator[pathlib.Path]:
     """Yield a temporary path next to ``path``; move it onto ``path`` on success.
 
-    The temporary file (``.<name>.<random>.part`` in the destination folder,
-    so the final rename never crosses file systems) exists, empty, when the
-    block starts; the block overwrites it and must close it.  On a normal exit
-    the file is fsynced, given the permissions a new file would get from the
-    umask, and renamed over ``path`` with :func:`os.replace`.  On any
-    exception, ``KeyboardInterrupt`` included, it is removed and ``path`` is
-    left as it was.
+    The temporary file (``.phasemap.<random>.part`` in the destination folder,
+    so the final rename never crosses file systems, and short, so any legal
+    name works) exists, empty, when the block starts; the block overwrites it
+    and must close it.  On a normal exit the file is fsynced, given the
+    permissions a new file would get from the umask, and renamed over ``path``
+    with :func:`os.replace`, or, without ``overwrite``, renamed only if
+    ``path`` does not exist at that moment.  On any exception,
+    ``KeyboardInterrupt`` included, and on a signal that ends the process
+    (:func:`removed_on_signals`), it is removed and ``path`` is left as it
+    was.  Temporary files of ours older than a day in the folder (left by a
+    killed process) are removed first.
 
     Raises
     ------
     ValueError
-        if the destination folder does not exist or ``path`` is a folder.
+        if the destination folder does not exist, ``path`` is a folder, or
+        (without ``overwrite``) ``path`` appeared meanwhile.
     """
     path = destination(path)
-    fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
-    os.close(fd)
-    tmp = pathlib.Path(name)
-    try:
-        yield tmp
-        with open(tmp, "rb") as fh:
-            os.fsync(fh.fileno())
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            tmp.unlink()
-        raise
+    _remove_stale_parts(path.parent)
+    with removed_on_signals():
+        fd, name = tempfile.mkstemp(dir=path.parent, prefix=PART_PREFIX, suffix=PART_SUFFIX)
+        os.close(fd)
+        tmp = pathlib.Path(name)
+        try:
+            yield tmp
+            with open(tmp, "rb") as fh:
+                os.fsync(fh.fileno())
+            os.chmod(tmp, 0o666 & ~_umask())
+            if overwrite:
+                os.replace(tmp, path)
+            else:
+                _rename_exclusive(tmp, path)
+        except BaseException:
+            with contextlib.suppress(FileNotFoundError):
+                tmp.unlink()
+            raise
     _fsync_folder(path.parent)
+
+
+def _remove_stale_parts(folder: pathlib.Path) -> None:
+    """Remove our temporary files in ``folder`` older than :data:`STALE_PART_SECONDS`."""
+    now = time.time()
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return
+    for entry in entries:
+        if not _PART.match(entry.name):
+            continue
+        with contextlib.suppress(OSError):
+            if entry.is_file(follow_symlinks=False) and \
+                    now - entry.stat(follow_symlinks=False).st_mtime > STALE_PART_SECONDS:
+                os.unlink(entry.path)
+
+
+def _rename_exclusive(src: pathlib.Path, dst: pathlib.Path) -> None:
+    """Rename ``src`` to ``dst`` unless ``dst`` exists, atomically (ValueError if it does).
+
+    Linux's ``renameat2(RENAME_NOREPLACE)`` where the file system has it, else a
+    hard link (which fails on an existing name) and an unlink; on a file system
+    with neither, a check followed by a rename.
+    """
+    try:
+        _renameat2_noreplace(src, dst)
+        return
+    except FileExistsError:
+        raise ValueError(_exists(dst)) from None
+    except OSError as err:
+        if err.errno not in (errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP, errno.ENOTSUP):
+            raise
+    try:
+        os.link(src, dst)
+    except FileExistsError:
+        raise ValueError(_exists(dst)) from None
+    except OSError:
+        if dst.exists():
+            raise ValueError(_exists(dst)) from None
+        os.replace(src, dst)
+        return
+    os.unlink(src)
+
+
+_RENAME_NOREPLACE = 1
+_AT_FDCWD = -100
+
+
+def _renameat2_noreplace(src: pathlib.Path, dst: pathlib.Path) -> None:
+    libc = _libc()
+    fn = getattr(libc, "renameat2", None)
+    if fn is None:
+        raise OSError(errno.ENOSYS, "renameat2 is not available")
+    if fn(_AT_FDCWD, os.fsencode(src), _AT_FDCWD, os.fsencode(dst), _RENAME_NOREPLACE) != 0:
+        code = ctypes.get_errno()
+        raise OSError(code, os.strerror(code), str(dst))
+
+
+_LIBC: list = []
+
+
+def _libc():
+    if not _LIBC:
+        try:
+            _LIBC.append(ctypes.CDLL(None, use_errno=True))
+        except OSError:
+            _LIBC.append(None)
+    return _LIBC[0]
+
+
+class Terminated(SystemExit):
+    """The process got SIGTERM or SIGHUP while a temporary file was open.
+
+    A :class:`SystemExit` with status 128 + the signal number, raised in the
+    main thread so that every ``finally`` runs (temporary files are removed)
+    and the process then ends as a terminated one would.
+    """
+
+    def __init__(self, signum: int):
+        super().__init__(128 + signum)
+        self.signum = signum
+
+    def __str__(self) -> str:
+        return f"terminated by {signal.Signals(self.signum).name}"
+
+
+#: Signals that end a process by default, turned into exceptions while work is under way.
+ENDING_SIGNALS = tuple(getattr(signal, n) for n in ("SIGTERM", "SIGHUP", "SIGINT")
+                       if hasattr(signal, n))
+_HANDLERS = {"depth": 0, "saved": {}}
+_HANDLERS_LOCK = threading.Lock()
+
+
+def _raise_terminated(signum, frame):
+    if signum == getattr(signal, "SIGINT", None):
+        raise KeyboardInterrupt
+    raise Terminated(signum)
+
+
+@contextlib.contextmanager
+def removed_on_signals() -> Iterator[None]:
+    """Inside the block, the signals that would end the process at once (SIGTERM,
+    SIGHUP, and SIGINT where it is not already ``KeyboardInterrupt``) raise
+    :class:`Terminated` (or ``KeyboardInterrupt``) instead, so that temporary files
+    are removed by the code that made them before the process ends.
+
+    Only the main thread can handle signals; elsewhere, and for signals the
+    program handles itself, nothing changes.  Blocks nest.
+    """
+    install = threading.current_thread() is threading.main_thread()
+    if install:
+        with _HANDLERS_LOCK:
+            if _HANDLERS["depth"] == 0:
+                for sig in ENDING_SIGNALS:
+                    current = signal.getsignal(sig)
+                    if current is signal.SIG_DFL:
+                        _HANDLERS["saved"][sig] = current
+                        signal.signal(sig, _raise_terminated)
+            _HANDLERS["depth"] += 1
+    try:
+        yield
+    finally:
+        if install:
+            with _HANDLERS_LOCK:
+                _HANDLERS["depth"] -= 1
+                if _HANDLERS["depth"] == 0:
+                    for sig, handler in _HANDLERS["saved"].items():
+                        signal.signal(sig, handler)
+                    _HANDLERS["saved"].clear()
 
 
 def destination(path: str | os.PathLike) -> pathlib.Path:
@@ -231,8 +424,12 @@ def destination(path: str | os.PathLike) -> pathlib.Path:
     return path
 
 
-def _prepare(ds: xr.Dataset) -> xr.Dataset:
-    """A shallow copy of ``ds`` ready to write: no stale encoding, provenance filled in."""
+def prepare(ds: xr.Dataset) -> xr.Dataset:
+    """A shallow copy of ``ds`` ready to write: no stale encoding, provenance filled in.
+
+    ValueError (one line, every problem listed) for attributes netCDF cannot
+    store and for serialisation keys in ``.attrs``.
+    """
     problems = []
     for where, attrs in [("global", ds.attrs)] + [(str(k), v.attrs) for k, v in ds.variables.items()]:
         for key, value in attrs.items():
@@ -282,8 +479,8 @@ def _dask_chunk_shape(var: xr.Variable | xr.DataArray) -> tuple[int, ...] | None
     return tuple(max(c) if len(c) else 1 for c in chunks)
 
 
-def _default_chunks(shape: tuple[int, ...], itemsize: int, limit: int = CHUNK_BYTES,
-                    fixed: set[int] = frozenset()) -> tuple[int, ...]:
+def default_chunks(shape: tuple[int, ...], itemsize: int, limit: int = CHUNK_BYTES,
+                   fixed: set[int] = frozenset()) -> tuple[int, ...]:
     """Halve the longest free side of ``shape`` until a chunk holds at most ``limit`` bytes.
 
     Sides whose index is in ``fixed`` (chosen by the caller) are never changed.

@@ -43,6 +43,10 @@ EXAMPLES = {
         ("phasemap classify elliptic_pendulum phi=0.8 xdot=-1 f=4", ""),
         ("phasemap classify hinge_pendulum phi=0.05 omega=0 delta=0.1", ""),
     ],
+    "cache": [
+        ("phasemap cache info", "where compiled kernels are kept, and how much"),
+        ("phasemap cache clear", "delete them all (they compile again on use)"),
+    ],
 }
 
 
@@ -151,7 +155,8 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                    help="integrator setting of the fate layers: t_end, rtol, atol, max_step, "
                    "max_steps, max_events, method (DOPRI5 or DOP853) (repeatable)")
     p.add_argument("--chunk-cells", type=int, default=None, metavar="N",
-                   help="cells per block (default: about a quarter second of work)")
+                   help="cells per block (default: each block about a quarter second of "
+                   "work, sized as the work goes)")
     p.add_argument("--overwrite", action="store_true", help="replace OUT.nc if it exists")
     p.add_argument("--yes", action="store_true", help="go ahead with a large atlas (above "
                    "10^9 cells or an hour)")
@@ -184,7 +189,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
     p.add_argument("--size", choices=["one", "two"], default="one", help="a journal's one "
                    "column (3.5 in, the default) or two columns (7.2 in)")
     p = subs["cfcheck"] = _sub(sub, "cfcheck", "check a file against the CF conventions, "
-                               "offline", "Runs cfchecks (pip install \"phasemap[cf]\") on FILE with "
+                               "offline", "Runs cfchecks (pip install 'phasemap[cf]') on FILE with "
                                "local stand-ins for the tables it would download; a "
                                "phasemap file uses no standard names, areas or regions.")
     p.add_argument("path")
@@ -193,6 +198,13 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                                 "equations for the senior derivatives at one state.")
     p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
     p.add_argument("values", nargs="*", metavar="NAME=VALUE")
+    p = subs["cache"] = _sub(sub, "cache", "show or clear the kernel cache: phasemap cache "
+                             "info|clear", "The kernel cache holds the code phasemap generates "
+                             "and what numba compiles from it and from phasemap's own "
+                             "integrators, under one least-recently-used size bound "
+                             "(PHASEMAP_CACHE_MAX_MB).  info lists its folders, entries and "
+                             "size; clear deletes every entry.")
+    p.add_argument("action", choices=["info", "clear"])
     return parser, subs
 
 
@@ -202,9 +214,10 @@ def main(argv: list[str] | None = None) -> int:
     if extra:  # the subcommand's own usage, not the top level's
         (subs.get(args.command) or parser).error(f"unrecognized arguments: {' '.join(extra)}")
     from . import progress
+    from .atlas import Terminated, removed_on_signals
 
     try:
-        with progress.enable():
+        with progress.enable(), removed_on_signals():
             code = _run(args)
             sys.stdout.flush()  # a closed pipe shows here, not at exit
             return code
@@ -218,6 +231,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("\nphasemap: interrupted; no partial file was left", file=sys.stderr)
         return 130
+    except Terminated as stop:
+        print(f"\nphasemap: {stop}; no partial file was left", file=sys.stderr)
+        return stop.code
 
 
 def _stdout_closed() -> int:
@@ -266,7 +282,19 @@ def _run(args) -> int:
 
         model = get_model(args.model)
         print(classify(model, **_parse_values(args.values, model=model)))
+    elif args.command == "cache":
+        print(_cache(args.action))
     return 0
+
+
+def _cache(action: str) -> str:
+    from . import cache
+    from .progress import human_bytes
+
+    if action == "clear":
+        files, freed = cache.clear()
+        return f"removed {files} files ({human_bytes(freed)}) from the kernel cache"
+    return cache.info().text()
 
 
 def _parse_values(items: list[str], words: tuple[str, ...] = (), model=None) -> dict[str, float]:
@@ -330,6 +358,7 @@ def _atlas(args) -> str:
     from . import blocks
     from .atlas import destination
     from .models import get_model
+    from .progress import human_duration
     from .scene import Scene
 
     model = get_model(args.model)
@@ -359,9 +388,9 @@ def _atlas(args) -> str:
     est = blocks.estimate(scene, args.chunk_cells, timed=True)
     print(est.text(scene), file=sys.stderr)
     if est.seconds > blocks.YES_SECONDS and not args.yes:
-        raise ValueError(f"this atlas would take about {blocks._duration(est.seconds)}; "
+        raise ValueError(f"this atlas would take about {human_duration(est.seconds)}; "
                          "pass --yes to go ahead")
-    blocks.write_scene(scene, out, block_cells=est.block_cells, overwrite=args.overwrite)
+    blocks.write_scene(scene, out, block_cells=args.chunk_cells, overwrite=args.overwrite)
     return f"wrote {out} ({scene.size} cells, layers {', '.join(scene.layers)})"
 
 
@@ -393,7 +422,7 @@ def _simulate(args) -> str:
     lines.append(f"{ds.attrs['end_reason']}: {ds.attrs['end_message']} "
                  f"({int(ds.attrs['n_steps'])} steps, {ds.sizes['t']} saved points)")
     if out is not None:
-        write_atlas(ds, out)
+        write_atlas(ds, out, overwrite=args.overwrite)
         lines.append(f"wrote {out}")
     return "\n".join(lines)
 

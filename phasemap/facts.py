@@ -35,6 +35,7 @@ def readme_facts() -> dict[str, str]:
     from ._numerics import TOL
     from .atlas import CONVENTIONS
     from .blocks import YES_CELLS
+    from .cache import DEFAULT_MAX_MB
     from .model import MAX_MAGNITUDE, MIN_POSITIVE
 
     return {
@@ -46,4 +47,5 @@ def readme_facts() -> dict[str, str]:
         "smallest positive scale": f"must be at least {MIN_POSITIVE:g}",
         "CF version": f"declare **{CONVENTIONS}**",
         "--yes threshold": f"above 10^{round(math.log10(YES_CELLS))} cells",
+        "kernel cache bound": f"{DEFAULT_MAX_MB} MB by default",
     }

@@ -24,13 +24,24 @@ Layers of a model:
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Callable, NamedTuple
 
 import numpy as np
 
 from . import _numerics as nx
 from . import events as ev
 from .model import Model, Solvability
+
+
+class Outcome(NamedTuple):
+    """What the integrator returns for a grid of initial states (one array per cell, and
+    per coordinate for ``positions``); each fate layer is read from it."""
+
+    fate: np.ndarray
+    n_reversals: np.ndarray
+    t_final: np.ndarray
+    positions: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -50,6 +61,9 @@ class Layer:
     #: Summary layers: the position of the layer's bits in the byte a grid kernel
     #: packs several summaries into (see :data:`SUMMARY_LAYERS`).
     shift: int = -1
+    #: fate layers: the layer's values from the integrator's :class:`Outcome`
+    outcome: Callable[[Outcome], np.ndarray] | None = field(default=None, compare=False,
+                                                             repr=False)
 
     @property
     def is_summary(self) -> bool:
@@ -121,19 +135,22 @@ def _registry(model: Model) -> dict[str, Layer]:
     if model.dynamics is not None:
         layers["fate"] = Layer("fate", "int8", "how the motion from this initial state ends",
                                flag_values=ev.FATE_VALUES, flag_meanings=ev.FATE_MEANINGS,
-                               fate=True)
+                               fate=True, outcome=lambda o: o.fate)
         layers["n_reversals"] = Layer("n_reversals", "int32", "number of reversals of the "
-                                      "relative velocity", units="1", fate=True)
+                                      "relative velocity", units="1", fate=True,
+                                      outcome=lambda o: o.n_reversals)
         layers["t_final"] = Layer("t_final", "float64", "time at which the motion ended (the "
-                                  "horizon if still moving)", units="s", fate=True)
+                                  "horizon if still moving)", units="s", fate=True,
+                                  outcome=lambda o: o.t_final)
         layers["t_rest"] = Layer("t_rest", "float64", "time to rest in a stagnation zone",
-                                 units="s", fate=True)
+                                 units="s", fate=True,
+                                 outcome=lambda o: np.where(o.fate == ev.REST, o.t_final, np.nan))
         if model.dynamics.stick_is_rest:
-            for c in model.dynamics.coordinates:
+            for j, c in enumerate(model.dynamics.coordinates):
                 var = model.variables[c[0]]
                 layers[f"{c[0]}_rest"] = Layer(f"{c[0]}_rest", "float64",
                                                f"{var.long_name} at rest", units=var.units,
-                                               fate=True)
+                                               fate=True, outcome=lambda o, j=j: o.positions[j])
     _REGISTRIES[id(model)] = (model, layers)
     return layers
 

@@ -11,6 +11,8 @@ that work has started); ``PHASEMAP_PROGRESS=never`` forces it off.
   a second, so the elapsed time moves even while nothing else prints.
 * :func:`status` names what the innermost :func:`activity` is doing now (the
   tour's line shows the study's current step).
+* :func:`human_bytes` and :func:`human_duration` write sizes and times for a
+  person, as the estimates print them.
 """
 
 from __future__ import annotations
@@ -35,6 +37,25 @@ def enabled() -> bool:
     if env == "never":
         return False
     return _state["on"]
+
+
+def wanted(show: bool | None = None) -> bool:
+    """Whether a library call asked for ``progress=show`` shows it: as given, or
+    (None) when :func:`enabled` or in an interactive session (stderr is a
+    terminal).  ``PHASEMAP_PROGRESS`` overrides both."""
+    env = os.environ.get("PHASEMAP_PROGRESS", "")
+    if env in ("always", "never"):
+        return env == "always"
+    if show is not None:
+        return bool(show)
+    return _state["on"] or _isatty(sys.stderr)
+
+
+def _isatty(stream) -> bool:
+    try:
+        return stream.isatty()
+    except (AttributeError, ValueError):  # replaced or closed
+        return False
 
 
 def _delay() -> float:
@@ -94,3 +115,23 @@ def status(text: str) -> None:
         line = _state["activities"][-1]
         base = line.desc.split(": ", 1)[0]
         line.set_description_str(f"{base}: {text}", refresh=False)
+
+
+def human_bytes(n: float) -> str:
+    """A byte count for a person: 12 B, 3.4 MB, 2 TB (powers of 1000)."""
+    for unit in ("B", "kB", "MB", "GB", "TB"):
+        if abs(n) < 1000:
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.3g} {unit}"
+        n /= 1000.0
+    return f"{n:.3g} PB"
+
+
+def human_duration(s: float) -> str:
+    """A duration for a person: 0.25 s, 3.5 min, 2 h, 4.17 days."""
+    if s < 60:
+        return f"{s:.2g} s"
+    if s < 3600:
+        return f"{s / 60:.2g} min"
+    if s < 86400 * 2:
+        return f"{s / 3600:.2g} h"
+    return f"{s / 86400:.3g} days"

@@ -25,22 +25,20 @@ import xarray as xr
 
 from . import _args
 from . import _numerics as nx
-from . import events as ev
-from . import progress
+from ._codegen import content_hash
 from ._dataset import cf_header, variable_attrs
 from .grid import evaluate
 from .integrate import run_fate_map
-from .layers import layers_for
+from .layers import Outcome, layers_for
 from .model import Model
 from .models import get_model
 from .simulate import Options
 
-#: Cells per slab of an eager computation with a progress bar.
-SLAB_CELLS = 1 << 21
-#: Cells per slab of an eager fate map with a progress bar (each cell is a trajectory).
-FATE_SLAB_CELLS = 1 << 14
 #: Default relative tolerance of a fate map's trajectories.
 FATE_RTOL = 1e-6
+#: Cells above which an eager map is computed in blocks (each well under a second, so
+#: that Ctrl-C and a progress bar work); a map of fewer cells is one kernel call.
+SLAB_CELLS = 1 << 26
 
 
 class Scene:
@@ -140,7 +138,6 @@ class Scene:
         for name in options or {}:
             _args.check_name("integrator option", name, Options().as_dict(), m.name)
         self.options = Options(**{"rtol": FATE_RTOL, **dict(options or {})}).checked(m.name)
-        self._fate = any(registry[n].fate for n in self.layers)
 
     # ------------------------------------------------------------------
     @property
@@ -149,7 +146,13 @@ class Scene:
 
     @property
     def size(self) -> int:
-        return int(np.prod(self.shape))
+        return int(np.prod(self.shape, dtype=np.int64))
+
+    @property
+    def has_fates(self) -> bool:
+        """Whether a layer integrates the motion from each cell (a fate map)."""
+        reg = layers_for(self.model)
+        return any(reg[n].fate for n in self.layers)
 
     def _velocity_can_be_zero(self) -> bool:
         name = self.model.velocity
@@ -168,7 +171,7 @@ class Scene:
                 axes[name] = a.tolist()
         spec = {"model": self.model.name, "axes": axes, "fixed": self.fixed,
                 "layers": list(self.layers)}
-        if self._fate:
+        if self.has_fates:
             spec["options"] = self.options.as_dict()
         return spec
 
@@ -186,72 +189,129 @@ class Scene:
         return f"Scene({self.model.name!r}, axes=({axes}), layers={list(self.layers)})"
 
     # ------------------------------------------------------------------
+    def estimate(self, timed: bool = True):
+        """What :meth:`compute` will cost, before any work: a
+        :class:`phasemap.blocks.Estimate` with ``cells``, ``bytes`` (uncompressed
+        output), ``memory`` (peak resident memory of this process with the whole
+        result in memory), ``available`` (memory free now) and, with ``timed``,
+        ``seconds`` from a timed sample of the scene's own cells (which compiles
+        the kernels first).  ``text(scene)`` says it as the command line does.
+
+        >>> import numpy as np, phasemap
+        >>> scene = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 1000),
+        ...                                        "f": np.linspace(0, 3, 1000)})
+        >>> est = scene.estimate(timed=False)
+        >>> est.cells, est.bytes      # two int8 layers
+        (1000000, 2000000)
+        """
+        from . import blocks
+
+        return blocks.estimate(self, timed=timed, eager=True)
+
     def compute(self, chunks: int | Mapping[str, int] | None = None,
-                progress: bool = False) -> xr.Dataset:
+                progress: bool | None = None) -> xr.Dataset:
         """Evaluate the scene's layers and return the atlas.
 
         With ``chunks`` (cells per axis, as an int for every axis or a mapping,
-        or ``"auto"`` for dask's choice) the Dataset is dask-backed and each block runs the same numba kernel
-        when computed, locally or on a ``dask.distributed`` cluster.  Without,
-        it is computed now; ``progress=True`` shows a progress bar on grids
-        that take more than about a second.
+        or ``"auto"`` for dask's choice) the Dataset is dask-backed and each
+        block runs the same numba kernel when computed, locally or on a ``dask.distributed`` cluster.  Without,
+        it is computed now: a map in one kernel call (in blocks above
+        :data:`SLAB_CELLS` cells), a fate map in blocks of well under a second
+        (Ctrl-C interrupts it between two), with a progress
+        bar after a second in an interactive session (``progress=True`` or
+        ``False`` decides; ``PHASEMAP_PROGRESS`` overrides).
+
+        Raises
+        ------
+        ValueError
+            before any work, if the result will not fit in memory
+            (:meth:`estimate`): compute it with ``chunks=`` or write it block by
+            block (``phasemap atlas``, :func:`phasemap.blocks.write_scene`).
         """
         if chunks is not None:
             return self._lazy(chunks)
+        from . import blocks
+
+        blocks.check_memory(self, blocks.estimate(self, eager=True))
         return self._dataset(self._eager(progress))
 
-    def _eager(self, show: bool) -> dict[str, np.ndarray]:
-        """Every layer in memory, computed block by block (a progress bar when ``show``)."""
+    def _eager(self, show: bool | None) -> dict[str, np.ndarray]:
+        """Every layer in memory: the map layers in one kernel call (up to
+        :data:`SLAB_CELLS`), the fate layers block by block (a progress bar as
+        ``show`` decides)."""
         from .blocks import compute_blocks
 
         reg = layers_for(self.model)
-        step = FATE_SLAB_CELLS if self._fate else SLAB_CELLS
-        if self.size <= step:
-            return self._evaluate(self.axes, [reg[n] for n in self.layers])
-        out = {n: np.empty(self.shape, dtype=reg[n].dtype) for n in self.layers}
-        with progress.enable(show or progress.enabled()):
-            for index, arrays in compute_blocks(self, step, f"{self.model.name} atlas"):
-                for name, arr in arrays.items():
-                    out[name][index] = arr
-        return out
+        maps = [n for n in self.layers if not reg[n].fate]
+        out = {}
+        if maps and self.size <= SLAB_CELLS:
+            out = self.evaluate(self.axes, maps)
+            maps = []
+        blocked = maps + [n for n in self.layers if reg[n].fate]
+        if blocked:
+            arrays = {n: np.empty(self.shape, dtype=reg[n].dtype) for n in blocked}
+            for index, block in compute_blocks(self, f"{self.model.name} atlas", show=show,
+                                               layers=blocked):
+                for name, a in block.items():
+                    arrays[name][index] = a
+            out.update(arrays)
+        return {n: out[n] for n in self.layers}
 
-    def _evaluate(self, axes: dict[str, np.ndarray], wanted: list) -> dict[str, np.ndarray]:
-        """The wanted layers over ``axes``: classification by the grid kernel, fates by
-        integrating from each cell."""
+    def evaluate(self, axes: Mapping[str, np.ndarray] | None = None,
+                 layers: Sequence[str] | None = None) -> dict[str, np.ndarray]:
+        """Layers over a sub-grid, as NumPy arrays: what one block of a large atlas computes.
+
+        ``axes`` gives values of every axis (a part of the scene's, in any
+        order; default the whole axes), ``layers`` some of the scene's layers
+        (default all).  Map layers come from the grid kernel, fate layers from
+        integrating from each cell; no validation beyond the scene's own.
+        """
+        axes = self.axes if axes is None else axes
+        reg = layers_for(self.model)
+        wanted = [reg[n] for n in (self.layers if layers is None else layers)]
         result = {}
         maps = [l for l in wanted if not l.fate]
         if maps:
-            result.update(evaluate(self.model, axes, self.fixed, maps))
-        if self._fate:
+            result.update(evaluate(self.model, dict(axes), self.fixed, maps))
+        fates = [l for l in wanted if l.fate]
+        if fates:
             m, o = self.model, self.options
-            dyn = m.dynamics
             # positions that are not model inputs (the slider's x) start at 0
-            y0 = np.zeros(2 * len(dyn.coordinates))
-            fate, n_rev, t_final, pos = run_fate_map(
-                m, axes, self.fixed, y0, o.t_end, o.rtol, o.atol, o.max_step, o.max_steps,
-                o.max_events, o.method)
-            rest = fate == ev.REST
-            fates = {"fate": fate, "n_reversals": n_rev, "t_final": t_final,
-                     "t_rest": np.where(rest, t_final, np.nan)}
-            for j, c in enumerate(dyn.coordinates):
-                fates[f"{c[0]}_rest"] = pos[j]
-            result.update({l.name: fates[l.name] for l in wanted if l.fate})
+            y0 = np.zeros(2 * len(m.dynamics.coordinates))
+            outcome = Outcome(*run_fate_map(
+                m, dict(axes), self.fixed, y0, o.t_end, o.rtol, o.atol, o.max_step,
+                o.max_steps, o.max_events, o.method))
+            result.update({l.name: l.outcome(outcome) for l in fates})
         return result
+
+    def template(self) -> xr.Dataset:
+        """The atlas's Dataset with every layer zero (broadcast, no memory), for a writer
+        that fills it block by block: coordinates, attributes, provenance."""
+        reg = layers_for(self.model)
+        return self._dataset({n: np.broadcast_to(np.zeros((), dtype=reg[n].dtype), self.shape)
+                              for n in self.layers})
 
     def _lazy(self, chunks) -> xr.Dataset:
         """Dask-backed layers: one blockwise task per block computes every layer once.
 
         The graph is a few blockwise layers, never materialised block by block,
-        so it builds at once whatever the number of blocks.
+        so it builds at once whatever the number of blocks.  Task names hash
+        everything that decides the values (the model's content, the scene,
+        the options and the chunks), so two scenes share a name only if they
+        share every value.
         """
         import dask.array as da
+        from dask.base import tokenize
 
         sizes = _args.chunks(chunks, dict(zip(self.axes, self.shape)), self.model.name)
         sizes = sizes if sizes == "auto" else tuple(sizes.values())
         reg = layers_for(self.model)
         ndim = len(self.axes)
         normal = da.core.normalize_chunks(sizes, self.shape, dtype=np.float64)
-        token = f"phasemap-{self.model.name}-{abs(hash(json.dumps(self.spec(), default=str)))}"
+        token = tokenize(content_hash(self.model), json.dumps(self.spec(), default=str),
+                         self.options.as_dict(), [a.tobytes() for a in self.axes.values()],
+                         normal)
+        token = f"phasemap-{self.model.name}-{token}"
         raw = da.map_blocks(_raw_block, chunks=normal, dtype=object,
                             meta=np.empty((0,) * ndim, dtype=object), name=f"{token}-blocks",
                             scene=self)
@@ -296,9 +356,7 @@ def _assemble(data_vars: dict, coords: dict, attrs: dict) -> xr.Dataset:
 def _raw_block(scene: Scene, block_info=None) -> dict[str, np.ndarray]:
     """Every layer of one dask block: the scene restricted to the block's cells."""
     where = block_info[None]["array-location"]
-    axes = {n: a[lo:hi] for (n, a), (lo, hi) in zip(scene.axes.items(), where)}
-    reg = layers_for(scene.model)
-    return scene._evaluate(axes, [reg[n] for n in scene.layers])
+    return scene.evaluate({n: a[lo:hi] for (n, a), (lo, hi) in zip(scene.axes.items(), where)})
 
 
 def _pick(block: dict, name: str) -> np.ndarray:

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pathlib
 import shutil
+import subprocess
 
 import pytest
 
@@ -61,3 +63,21 @@ def assert_atlas_round_trip(ds, folder, name: str = "atlas.nc") -> str:
     report = cfchecks(path, folder)
     assert "ERRORS detected: 0" in report and "WARNINGS given: 0" in report, report
     return report
+
+
+@contextlib.contextmanager
+def small_filesystem(folder: pathlib.Path, size: str, readonly: bool = False):
+    """A real tmpfs of ``size`` mounted on ``folder`` (root only; skipped elsewhere)."""
+    folder.mkdir()
+    opts = f"size={size}" + (",ro" if readonly else "")
+    mount = subprocess.run(["mount", "-t", "tmpfs", "-o", opts, "tmpfs", str(folder)],
+                           capture_output=True, text=True)
+    if mount.returncode != 0:
+        message = f"cannot mount a tmpfs here: {mount.stderr.strip()}"
+        if os.environ.get("CI"):
+            pytest.fail(message)
+        pytest.skip(message)
+    try:
+        yield folder
+    finally:
+        subprocess.run(["umount", "-l", str(folder)], check=False)

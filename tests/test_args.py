@@ -46,6 +46,8 @@ def test_huge_integers_are_a_value_error_not_an_overflow():
         _args.real("phi", HUGE, "hinge_pendulum")
     with pytest.raises(ValueError, match="an integer of 401 digits"):
         _args.real("phi", HUGE + 1)
+    with pytest.raises(ValueError, match=r"phi = 10\*\*5000 is too large"):  # str() refuses it
+        _args.real("phi", 10**5000)
     with pytest.raises(ValueError, match=r"axis phi\[1\] = 10\*\*400"):
         _args.reals("axis phi", [0.5, HUGE])
 
@@ -168,8 +170,8 @@ def test_phase_curve_huge_phi_says_so():
 
 
 # ------------------------------------------------------------------- fuzz -----
-AWKWARD = [HUGE, -HUGE, 10**30, 2**63, math.nan, math.inf, -math.inf, 1e308, -1e-320,
-           np.float32(0.5), np.float16(0.25), np.int8(1), np.uint64(2), np.int64(1),
+AWKWARD = [HUGE, -HUGE, 10**5000 + 1, 10**30, 2**63, math.nan, math.inf, -math.inf, 1e308,
+           -1e-320, np.float32(0.5), np.float16(0.25), np.int8(1), np.uint64(2), np.int64(1),
            np.longdouble(0.3), np.float64(np.nan), np.array(0.2), np.array(1),
            np.datetime64("2020"), np.timedelta64(1, "s"), "a", "1.0", "", None, [0.1], [],
            (0.1, 0.2), [[0.1]], [0.1, [0.2]], True, np.bool_(True), 1 + 2j, np.complex64(1),

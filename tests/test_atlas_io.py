@@ -6,8 +6,10 @@ tests exercise only :mod:`phasemap.atlas`, not the grid evaluator.
 
 from __future__ import annotations
 
+import errno
 import json
 import os
+import pathlib
 import re
 import subprocess
 
@@ -205,7 +207,7 @@ def test_default_chunks_are_capped_and_explicit_chunks_win():
 @given(shape=st.lists(st.integers(1, 5000), min_size=1, max_size=4),
        itemsize=st.sampled_from([1, 8]))
 def test_default_chunk_shape_fits(shape, itemsize):
-    chunk = atlas._default_chunks(tuple(shape), itemsize)
+    chunk = atlas.default_chunks(tuple(shape), itemsize)
     assert all(1 <= c <= n for c, n in zip(chunk, shape))
     assert np.prod(chunk, dtype=np.int64) * itemsize <= atlas.CHUNK_BYTES
 
@@ -230,13 +232,19 @@ def _failing_atlas(shape=(64, 32)):
     return ds
 
 
-def test_a_failed_write_leaves_no_file_and_no_temporary(tmp_path):
+#: Races with writer threads show in some runs only: each such test runs this many times.
+REPEATS = 10
+
+
+@pytest.mark.parametrize("attempt", range(REPEATS))
+def test_a_failed_write_leaves_no_file_and_no_temporary(tmp_path, attempt):
     with pytest.raises(RuntimeError, match="midway"):
         write_atlas(_failing_atlas(), tmp_path / "atlas.nc")
     assert folder_listing(tmp_path) == []
 
 
-def test_a_failed_write_keeps_the_existing_file(tmp_path):
+@pytest.mark.parametrize("attempt", range(REPEATS))
+def test_a_failed_write_keeps_the_existing_file(tmp_path, attempt):
     path = write_atlas(make_atlas(seed=1), tmp_path / "atlas.nc")
     original = path.read_bytes()
     with pytest.raises(RuntimeError, match="midway"):
@@ -279,6 +287,107 @@ def test_atomic_path_for_a_chunked_writer(tmp_path):
     assert folder_listing(tmp_path) == ["atlas.nc"]
     with netCDF4.Dataset(path) as nc:
         assert list(nc["phi"][:]) == [0.0, 1.0, 2.0]
+
+
+def test_our_temporary_files_older_than_a_day_are_removed_when_writing_beside_them(tmp_path):
+    day = atlas.STALE_PART_SECONDS
+    old, fresh = ".phasemap.abcd1234.part", ".phasemap.efgh5678.part"
+    others = [".notes.abcd1234.part", ".phasemap.short.part", "phasemap.abcd1234.part"]
+    for name in [old, fresh, *others]:
+        (tmp_path / name).write_bytes(b"left over")
+    stamp = os.path.getmtime(tmp_path / old) - day - 60
+    for name in [old, *others]:
+        os.utime(tmp_path / name, (stamp, stamp))
+    write_atlas(make_atlas(), tmp_path / "atlas.nc")
+    assert folder_listing(tmp_path) == sorted(["atlas.nc", fresh, *others])
+
+
+def test_a_long_legal_file_name_can_be_written(tmp_path):
+    from phasemap.blocks import check_output
+
+    name = "a" * 238 + ".nc"   # 241 bytes: open() takes it; a temporary name must be short
+    assert len(name.encode()) == 241
+    with open(tmp_path / name, "wb"):
+        pass
+    os.unlink(tmp_path / name)
+    check_output(tmp_path / name, overwrite=False)
+    path = write_atlas(make_atlas(), tmp_path / name)
+    assert folder_listing(tmp_path) == [name]
+    xr.testing.assert_identical(read_back(path), make_atlas())
+
+
+@pytest.mark.parametrize("how", ["renameat2", "link", "check and rename"])
+def test_without_overwrite_a_file_that_appeared_meanwhile_is_kept(tmp_path, monkeypatch, how):
+    """The last step is exclusive: another writer's file, created while ours was being
+    written, is never replaced (renameat2's RENAME_NOREPLACE, else a hard link)."""
+    def unsupported(*args):
+        raise OSError(errno.EINVAL, "not supported here")
+
+    if how != "renameat2":
+        monkeypatch.setattr(atlas, "_renameat2_noreplace", unsupported)
+    if how == "check and rename":
+        monkeypatch.setattr(os, "link", lambda *args: unsupported())
+    path = tmp_path / "atlas.nc"
+    with pytest.raises(ValueError, match="exists; pass --overwrite"):
+        with atomic_path(path, overwrite=False) as tmp:
+            tmp.write_bytes(b"ours")
+            path.write_bytes(b"theirs")   # another writer finished first
+    assert path.read_bytes() == b"theirs" and folder_listing(tmp_path) == ["atlas.nc"]
+    path.unlink()
+    with atomic_path(path, overwrite=False) as tmp:
+        tmp.write_bytes(b"ours")
+    assert path.read_bytes() == b"ours" and folder_listing(tmp_path) == ["atlas.nc"]
+    with pytest.raises(ValueError, match="exists; pass --overwrite"):
+        write_atlas(_failing_atlas(), path, overwrite=False)   # refused before any work
+    assert path.read_bytes() == b"ours"
+
+
+#: A child that writes a slow dask-backed atlas (sixteen blocks of 0.2 s each).
+SLOW_WRITE = """
+import sys, time
+import dask.array as da, numpy as np, xarray as xr
+import phasemap
+
+def slow(block):
+    time.sleep(0.2)
+    return block
+
+data = da.zeros((64, 64), chunks=(16, 16), dtype=np.int8).map_blocks(slow, dtype=np.int8)
+ds = xr.Dataset({"n_solutions": (("phi", "f"), data, {"long_name": "solutions"})},
+                coords={"phi": ("phi", np.linspace(0, 1, 64), {"units": "rad"}),
+                        "f": ("f", np.linspace(0, 1, 64), {"units": "1"})},
+                attrs={"phasemap_model": "ladder"})
+phasemap.write_atlas(ds, sys.argv[1])
+"""
+
+
+@pytest.mark.parametrize("attempt", range(2))
+@pytest.mark.parametrize("signame", ["SIGTERM", "SIGHUP", "SIGINT"])
+def test_a_signal_that_ends_the_process_leaves_no_temporary_file(tmp_path, signame, attempt):
+    import signal
+    import sys
+    import time
+
+    script = tmp_path / "slow_write.py"
+    script.write_text(SLOW_WRITE)
+    out = tmp_path / "out"
+    out.mkdir()
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(pathlib.Path(__file__).resolve().parents[1]), os.environ.get("PYTHONPATH", "")]))
+    proc = subprocess.Popen([sys.executable, str(script), str(out / "atlas.nc")], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not list(out.glob("*.part")):   # the write is under way
+        assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+        time.sleep(0.02)
+    time.sleep(0.3)
+    sig = getattr(signal, signame)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode != 0, err
+    if signame != "SIGINT":
+        assert proc.returncode == 128 + sig and "Traceback" not in err, err
+    assert folder_listing(out) == []
 
 
 def test_a_missing_folder_is_a_value_error_before_any_work(tmp_path):

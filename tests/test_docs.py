@@ -22,7 +22,7 @@ def test_readme_examples():
 
 @pytest.mark.parametrize("module", ["phasemap._args", "phasemap.classify", "phasemap.scene",
                                     "phasemap.simulate", "phasemap.phase", "phasemap.plot",
-                                    "phasemap.study"])
+                                    "phasemap.study", "phasemap.cache", "phasemap.blocks"])
 def test_docstring_examples(module):
     result = doctest.testmod(importlib.import_module(module))
     assert result.attempted >= 2 and result.failed == 0

@@ -211,43 +211,6 @@ def test_a_branch_function_with_an_unknown_input_is_refused():
         _codegen._params(broken.func, 1, m.inputs, "hinge_pendulum: branch 'bad'")
 
 
-def test_the_kernel_cache_keeps_the_most_recently_used(tmp_path, monkeypatch):
-    import os
-    import time
-
-    monkeypatch.setattr(_codegen, "MAX_KERNELS", 3)
-    now = time.time()
-    for k in range(5):
-        f = tmp_path / f"ladder_grid_phi_{k:08d}.py"
-        f.write_text("")
-        os.utime(f, (now - 100 + k, now - 100 + k))
-        (tmp_path / "__pycache__").mkdir(exist_ok=True)
-        (tmp_path / "__pycache__" / f"{f.stem}.kernel-1.py311.nbi").write_text("")
-    (tmp_path / "wheel_grid_phi_00000000.py").write_text("")  # another model: untouched
-    _codegen._prune(tmp_path, "ladder")
-    left = sorted(p.name for p in tmp_path.glob("ladder_grid_*.py"))
-    assert left == [f"ladder_grid_phi_{k:08d}.py" for k in (2, 3, 4)]
-    assert sorted(p.name.split(".")[0] for p in (tmp_path / "__pycache__").iterdir()) == \
-        [f"ladder_grid_phi_{k:08d}" for k in (2, 3, 4)]
-    assert (tmp_path / "wheel_grid_phi_00000000.py").exists()
-
-
-def test_an_unusable_cache_dir_falls_back_to_a_private_temporary_folder(tmp_path, monkeypatch):
-    import os
-    import pathlib
-    import tempfile
-    import time
-
-    blocker = tmp_path / "a-file"
-    blocker.write_text("")
-    monkeypatch.setenv("PHASEMAP_CACHE_DIR", str(blocker / "kernels"))  # cannot be created
-    module = _codegen._load(phasemap.MODELS["ladder"], "probe", f"X = {time.time_ns()}\n")
-    folder = pathlib.Path(module.__file__).parent
-    assert folder == pathlib.Path(tempfile.gettempdir()) / f"phasemap-kernels-{os.getuid()}"
-    assert isinstance(module.X, int)
-    pathlib.Path(module.__file__).unlink()
-
-
 def test_a_model_with_its_contract_built_still_pickles():
     # dask ships models to worker processes; the generated contract (a module)
     # stays behind and is rebuilt there

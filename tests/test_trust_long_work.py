@@ -15,6 +15,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from conftest import small_filesystem
+
 import phasemap
 from phasemap.model import MAX_MAGNITUDE, MIN_POSITIVE
 from phasemap.models import MODELS
@@ -227,8 +229,8 @@ def test_an_activity_line_ticks_while_nothing_else_prints(capsys):
 
 
 # ------------------------------------------------------ 6. Ctrl-C ------------
-def interrupt(args, cwd, ready: str):
-    """Start the CLI, wait until ``ready`` shows on stderr, send SIGINT; return
+def interrupt(args, cwd, ready: str, sig=signal.SIGINT):
+    """Start the CLI, wait until ``ready`` shows on stderr, send ``sig``; return
     (returncode, stderr)."""
     proc = subprocess.Popen(PHASEMAP + [str(a) for a in args], cwd=cwd, env=env("always"),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
@@ -240,7 +242,7 @@ def interrupt(args, cwd, ready: str):
             break
         seen += ch
     assert ready in seen, seen
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(sig)
     _, rest = proc.communicate(timeout=60)
     return proc.returncode, seen + rest
 
@@ -264,25 +266,44 @@ def test_ctrl_c_exits_130_with_one_line_and_no_partial_file(tmp_path, args, read
     assert not (tmp_path / "fates.nc").exists() and not (tmp_path / "s.nc").exists()
 
 
+FATE_ATLAS = ["atlas", "hinge_pendulum", "--axis", "phi=-3:3:3000", "--axis", "omega=-6:6:3000",
+              "--layers", "fate", "--option", "t_end=30", "--yes", "-o", "fates.nc"]
+
+
+@pytest.mark.parametrize("attempt", range(2))
+@pytest.mark.parametrize("signame", ["SIGTERM", "SIGHUP"])
+def test_sigterm_and_sighup_end_the_atlas_with_one_line_and_no_partial_file(tmp_path, signame,
+                                                                          attempt):
+    sig = getattr(signal, signame)
+    code, err = interrupt(FATE_ATLAS, tmp_path, "fates.nc:", sig)
+    assert code == 128 + sig, err
+    assert "Traceback" not in err
+    assert err.strip().splitlines()[-1] == (f"phasemap: terminated by {signame}; no partial "
+                                            "file was left")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("attempt", range(2))
+def test_two_atlases_racing_for_one_name_never_both_write_it(tmp_path, attempt):
+    """Both pass the check for an existing file before either has written it; the
+    exclusive last step lets exactly one of them write."""
+    args = ["atlas", "hinge_pendulum", "--axis", "phi=-3:3:15", "--axis", "omega=-6:6:15",
+            "--set", "delta=0", "--layers", "fate", "--option", "t_end=1000", "-o", "c.nc"]
+    procs = [subprocess.Popen(PHASEMAP + args, cwd=tmp_path, env=env("never"),
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+             for _ in range(2)]
+    results = [p.communicate(timeout=300) + (p.returncode,) for p in procs]
+    codes = sorted(r[2] for r in results)
+    assert codes == [0, 2], results
+    loser = [r for r in results if r[2] == 2][0]
+    assert loser[1].strip().splitlines()[-1] == ("phasemap: error: c.nc exists; pass "
+                                                 "--overwrite to replace it"), loser[1]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.nc"]
+    with xr.open_dataset(tmp_path / "c.nc") as ds:
+        assert ds.sizes == {"phi": 15, "omega": 15}
+
+
 # ----------------------------------------- 7. output problems found first ----
-@contextlib.contextmanager
-def small_filesystem(folder: pathlib.Path, size: str, readonly: bool = False):
-    """A real tmpfs of ``size`` mounted on ``folder`` (root only; skipped elsewhere)."""
-    folder.mkdir()
-    opts = f"size={size}" + (",ro" if readonly else "")
-    mount = subprocess.run(["mount", "-t", "tmpfs", "-o", opts, "tmpfs", str(folder)],
-                           capture_output=True, text=True)
-    if mount.returncode != 0:
-        message = f"cannot mount a tmpfs here: {mount.stderr.strip()}"
-        if os.environ.get("CI"):
-            pytest.fail(message)
-        pytest.skip(message)
-    try:
-        yield folder
-    finally:
-        subprocess.run(["umount", "-l", str(folder)], check=False)
-
-
 def test_an_existing_file_needs_overwrite(tmp_path):
     target = tmp_path / "a.nc"
     target.write_bytes(b"precious")

@@ -1,0 +1,363 @@
+"""The kernel cache (phasemap.cache): verified files, safe folders, full disks, one LRU bound.
+
+Most tests run phasemap in a child process on a cache folder of their own, so
+that a damaged, planted or full folder never touches the cache the rest of the
+suite uses, and so that what a fresh process does (a cold ``load_module``) is
+what is tested.  The child's numba cache is kept beside the generated files
+(``NUMBA_CACHE_DIR`` unset), except where a test sets it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import multiprocessing
+import os
+import pathlib
+import shutil
+import subprocess
+import sys
+import time
+
+import pytest
+
+from conftest import small_filesystem
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+#: A generated module as phasemap writes them: numba-compiled, cached on disk.
+TEXT = '''"""A probe module of the kernel cache."""
+from numba import njit
+
+
+@njit(cache=True)
+def cells(x):
+    return x + 41
+
+
+SPEC = "probe"
+'''
+STEM = "probe_grid_0123456789abcdef"
+
+
+def child(code: str, cache_dir, numba_dir=None, **env) -> subprocess.CompletedProcess:
+    """Run ``code`` in a fresh Python with PHASEMAP_CACHE_DIR=``cache_dir``."""
+    e = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR",
+                                                         "PHASEMAP_CACHE_MAX_MB")}
+    e.update(PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+             PHASEMAP_CACHE_DIR=str(cache_dir), **env)
+    if numba_dir is not None:
+        e["NUMBA_CACHE_DIR"] = str(numba_dir)
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=e, timeout=300)
+
+
+def load(stem: str = STEM) -> str:
+    """Code that loads the probe module ``stem`` and prints what it computes."""
+    return ("from phasemap._codegen import load_module\n"
+            f"m = load_module({stem!r}, lambda: {TEXT!r})\n"
+            "print(m.cells(1), m.SPEC, m.__file__)\n")
+
+
+def loaded(r: subprocess.CompletedProcess) -> pathlib.Path:
+    """The probe computed its answer; return the file it was loaded from."""
+    assert r.returncode == 0, r.stderr
+    answer, spec, path = r.stdout.split()
+    assert (answer, spec) == ("42", "probe")
+    assert "Traceback" not in r.stderr
+    return pathlib.Path(path)
+
+
+def lines(r: subprocess.CompletedProcess) -> list[str]:
+    return r.stderr.strip().splitlines()
+
+
+@pytest.fixture(scope="module")
+def warm(tmp_path_factory) -> pathlib.Path:
+    """A cache folder holding the probe module and its compiled numba files."""
+    origin = tmp_path_factory.mktemp("origin")
+    loaded(child(load(), origin))
+    assert list((origin / "__pycache__").glob(f"{STEM}.cells-*.nbi"))
+    return origin
+
+
+def copy_of(warm: pathlib.Path, where: pathlib.Path) -> pathlib.Path:
+    target = where / "cache"
+    shutil.copytree(warm, target)
+    return target
+
+
+# ------------------------------------------------------------- verified files -----
+def _hashed(body: str) -> bytes:
+    from phasemap import cache
+
+    return f"{cache.HASH_PREFIX}{hashlib.sha256(body.encode()).hexdigest()}\n{body}".encode()
+
+
+DAMAGE = {
+    "intact": lambda raw: raw,
+    "empty": lambda raw: b"",
+    "truncated": lambda raw: raw[: len(raw) * 2 // 3],
+    "garbage": lambda raw: bytes(range(256)) * 3,
+    "syntax error": lambda raw: b"def cells(:\n",
+    "missing attribute": lambda raw: b'SPEC = "probe"\n',
+    "bad code under a good hash": lambda raw: _hashed("def cells(:\n"),
+}
+
+
+@pytest.mark.parametrize("damage", list(DAMAGE))
+def test_a_damaged_module_is_generated_again_once_with_one_line(warm, tmp_path, damage):
+    root = copy_of(warm, tmp_path)
+    path = root / f"{STEM}.py"
+    path.write_bytes(DAMAGE[damage](path.read_bytes()))
+    r = child(load(), root)
+    assert loaded(r) == path
+    if damage == "intact":
+        assert r.stderr == ""   # the copy loads as it is, numba's files included
+        return
+    assert len(lines(r)) == 1 and "damaged" in r.stderr and str(path) in r.stderr, r.stderr
+    assert path.read_text() == _hashed(TEXT).decode()   # repaired for good
+    assert not list(root.glob(".*.tmp"))
+
+
+@pytest.mark.parametrize("which", ["index", "data"])
+def test_a_damaged_numba_file_is_compiled_again_with_one_line(warm, tmp_path, which):
+    root = copy_of(warm, tmp_path)
+    pattern = f"{STEM}.cells-*.nbi" if which == "index" else f"{STEM}.cells-*.nbc"
+    for f in (root / "__pycache__").glob(pattern):
+        f.write_bytes(b"\x80\x04garbage, not a pickle" * 10)
+    r = child(load(), root)
+    loaded(r)
+    assert len(lines(r)) == 1 and "numba's cache" in r.stderr and "damaged" in r.stderr, \
+        r.stderr
+    assert child(load(), root).stderr == ""   # saved again, loads cleanly
+
+
+def test_a_damaged_system_module_and_contract_leave_classify_working(tmp_path):
+    """The issue's case: classify('ladder') must survive its generated files going bad."""
+    import phasemap
+    from phasemap import cache
+
+    model = phasemap.MODELS["ladder"]
+    declared = pathlib.Path(sys.modules[model.candidates[0].func.py_func.__module__].__file__)
+    contract = pathlib.Path(model.contract.__file__)
+    root = tmp_path / "cache"
+    (root / "__pycache__").mkdir(parents=True)
+    for f, damage in ((declared, DAMAGE["truncated"]), (contract, DAMAGE["garbage"])):
+        (root / f.name).write_bytes(damage(f.read_bytes()))
+    for f in cache._numba_folder(cache.folder()).glob(f"{contract.stem}.*"):
+        shutil.copy(f, root / "__pycache__")   # the contract's compiled code stays valid
+    code = ("import phasemap\n"
+            "c = phasemap.classify('ladder', phi=0.5, omega=0.0, f=0.3)\n"
+            "print(c.n_solutions, c.stagnation)\n")
+    r = child(code, root)
+    assert r.returncode == 0 and r.stdout.split() == ["1", "True"], r.stderr
+    assert len(lines(r)) == 2 and all("damaged" in line for line in lines(r)), r.stderr
+
+
+# ------------------------------------------------------------- safe folders -------
+def test_an_unusable_cache_folder_falls_back_to_a_private_one_and_says_so_once(tmp_path):
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    two = load() + load("probe_grid_fedcba9876543210")
+    r = child(two, blocker / "kernels", TMPDIR=str(tmp))
+    assert r.returncode == 0, r.stderr
+    fallback = tmp / f"phasemap-kernels-{os.getuid()}"
+    assert r.stdout.split()[2] == str(fallback / f"{STEM}.py")
+    assert fallback.stat().st_mode & 0o777 == 0o700
+    assert len(lines(r)) == 1 and "cannot use" in r.stderr and str(fallback) in r.stderr
+
+
+@pytest.mark.parametrize("owner", ["another user", "us, writable by others"])
+def test_a_planted_fallback_folder_is_refused_and_its_code_never_runs(tmp_path, owner):
+    tmp = tmp_path / "tmp"
+    planted = tmp / f"phasemap-kernels-{os.getuid()}"
+    planted.mkdir(parents=True)
+    marker = tmp_path / "planted-code-ran"
+    (planted / f"{STEM}.py").write_text(f"open({str(marker)!r}, 'w').close()\n"
+                                        "def cells(x):\n    return 42 + x - 1\nSPEC = 'probe'\n")
+    os.chmod(planted, 0o777)
+    if owner == "another user":
+        if os.getuid() != 0:
+            pytest.skip("making a folder another user's needs root")
+        os.chown(planted, 65534, 65534)
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    r = child(load(), blocker / "kernels", TMPDIR=str(tmp))
+    path = loaded(r)
+    assert not marker.exists()
+    assert planted not in path.parents
+    words = "owned by another user" if owner == "another user" else "writable by others"
+    assert len(lines(r)) == 1 and words in r.stderr and "private" in r.stderr, r.stderr
+    assert sorted(p.name for p in tmp.iterdir()) == [planted.name]   # the private one is gone
+
+
+def fill(folder: pathlib.Path) -> None:
+    """Fill the file system of ``folder`` with a file named ballast."""
+    with contextlib.suppress(OSError), open(folder / "ballast", "wb") as fh:
+        while True:
+            fh.write(b"\0" * 4096)
+            fh.flush()
+
+
+def test_a_full_disk_under_the_cache_computes_in_a_private_folder(tmp_path):
+    with small_filesystem(tmp_path / "disk", "1m") as disk:
+        full = disk / "kernels"
+        full.mkdir()
+        fill(full)
+        tmp = tmp_path / "tmp"
+        tmp.mkdir()
+        r = child(load(), full, TMPDIR=str(tmp))
+        path = loaded(r)
+        assert full not in path.parents
+        assert len(lines(r)) == 1 and "No space left" in r.stderr, r.stderr
+        assert [p.name for p in full.rglob("*") if p.is_file()] == ["ballast"]   # no .tmp
+        assert list(tmp.iterdir()) == []
+
+
+def test_numba_files_that_cannot_be_saved_are_skipped_with_one_line(tmp_path):
+    with small_filesystem(tmp_path / "full", "1m") as full:
+        fill(full)
+        r = child(load(), tmp_path / "cache", numba_dir=full)
+        loaded(r)
+        assert len(lines(r)) == 1 and "cannot save" in r.stderr, r.stderr
+
+
+# ------------------------------------------------------------- one LRU bound ------
+def _entry(folder: pathlib.Path, name: str, size: int, age: float) -> pathlib.Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    f = folder / name
+    f.write_bytes(b"x" * size)
+    t = time.time() - age
+    os.utime(f, (t, t))
+    return f
+
+
+@pytest.fixture()
+def fake_cache(tmp_path, monkeypatch):
+    """A cache of known entries; numba's files under a NUMBA_CACHE_DIR of its own, and a
+    stand-in for phasemap's package folder (so that the real compiled files stay)."""
+    from numba.core import config
+
+    from phasemap import cache
+
+    root, package = tmp_path / "cache", tmp_path / "package"
+    package.mkdir()
+    monkeypatch.setenv("PHASEMAP_CACHE_DIR", str(root))
+    monkeypatch.setattr(config, "CACHE_DIR", str(tmp_path / "numba"))
+    monkeypatch.setattr(cache, "_PACKAGE", package)
+    generated = cache._numba_folder(root)
+    compiled = cache._numba_folder(package)
+    assert str(tmp_path / "numba") in str(generated) and generated != compiled
+    for k in range(6):   # grid kernels, oldest first, 3 files of 1000 bytes each
+        stem = f"ladder_grid_phi_{k:016x}"
+        _entry(root, f"{stem}.py", 1000, 600 - 100 * k)
+        _entry(generated, f"{stem}.cells-18.py311.nbi", 1000, 600 - 100 * k)
+        _entry(generated, f"{stem}.cells-18.py311.1.nbc", 1000, 600 - 100 * k)
+    _entry(root, "wheel_declared_00000000000000aa.py", 1000, 50)
+    for k in range(3):   # integrator kernels compiled per model
+        _entry(compiled, f"integrate.integrate_dopri5_ladder_{k:012x}-352.py311.nbi",
+               1000, 550 - 200 * k)
+    keep = _entry(compiled, "integrate.cpython-311.pyc", 5000, 1000)   # not numba's
+    return root, generated, compiled, keep
+
+
+def test_one_lru_bound_covers_generated_modules_numba_files_and_integrators(fake_cache):
+    from phasemap import cache
+
+    root, generated, compiled, keep = fake_cache
+    before = cache.info()
+    assert before.counts == {"grid": 6, "declared": 1, "compiled": 3}
+    assert before.size == 6 * 3000 + 1000 + 3 * 1000
+    cache.prune(bound=12_000)
+    left = {p.name for folder in (root, generated, compiled) for p in folder.iterdir()}
+    # oldest first: grid 0 (600 s), integrator 0 (550 s), grid 1, grid 2, integrator 1 ...
+    gone = [f"ladder_grid_phi_{k:016x}" for k in (0, 1, 2)] + \
+        [f"integrate.integrate_dopri5_ladder_{0:012x}"]
+    assert not [n for n in left if any(n.startswith(g) for g in gone)]
+    assert cache.info().size == 22_000 - 10_000 <= 12_000
+    assert any(n.startswith("ladder_grid_phi_0000000000000003") for n in left)
+    assert "wheel_declared_00000000000000aa.py" in left
+    assert keep.exists()   # Python's own files are not the cache's
+
+
+def test_clearing_removes_every_entry_and_nothing_else(fake_cache):
+    from phasemap import cache
+
+    root, generated, compiled, keep = fake_cache
+    files, freed = cache.clear()
+    assert (files, freed) == (6 * 3 + 1 + 3, 22_000)
+    assert [p for f in (root, generated, compiled) for p in f.iterdir()] == [keep]
+    assert keep.exists() and cache.info().size == 0
+
+
+def _prune_rounds(barrier, rounds: int) -> None:
+    from phasemap import cache
+
+    for _ in range(rounds):
+        barrier.wait()
+        cache.prune(bound=0)
+        barrier.wait()
+
+
+def test_processes_pruning_one_cache_at_once_never_crash(fake_cache):
+    """Four processes prune a cache of many stale entries at the same moment, 12 times:
+    files vanish under each other's feet, and no process may fail."""
+    from phasemap import cache
+
+    root, generated, compiled, _ = fake_cache
+    ctx = multiprocessing.get_context("fork")
+    rounds, n = 12, 4
+    barrier = ctx.Barrier(n + 1)
+    procs = [ctx.Process(target=_prune_rounds, args=(barrier, rounds)) for _ in range(n)]
+    for p in procs:
+        p.start()
+    for r in range(rounds):
+        for k in range(100):
+            stem = f"ladder_grid_f_{r:04x}{k:012x}"
+            _entry(root, f"{stem}.py", 10, 1000)
+            _entry(generated, f"{stem}.cells-18.py311.nbi", 10, 1000)
+            _entry(compiled, f"integrate.rhs_ladder_{r:04x}{k:08x}-40.py311.nbi", 10, 1000)
+        barrier.wait()
+        barrier.wait()
+    for p in procs:
+        p.join(timeout=120)
+    assert [p.exitcode for p in procs] == [0] * n
+    assert cache.info().size == 0
+
+
+# ------------------------------------------------------------- the command line ---
+def test_cache_info_and_clear_from_the_command_line(tmp_path, monkeypatch, capsys):
+    """With NUMBA_CACHE_DIR set, numba's files are found there, bounded and cleared."""
+    from numba.core import config
+
+    from phasemap.cli import main
+
+    root, numba_dir = tmp_path / "cache", tmp_path / "numba"
+    stems = [f"probe_{kind}_{k:016x}" for k, kind in enumerate(["declared", "contract", "grid"])]
+    r = child("".join(load(s) for s in stems), root, numba_dir)
+    assert r.returncode == 0, r.stderr
+    numba_files = list(numba_dir.rglob("probe_*.nb*"))
+    assert len(numba_files) >= 2 * len(stems)
+    # a bound of about one entry: each new module prunes the older ones, numba's files too
+    one = sum(p.stat().st_size for p in [root / f"{stems[0]}.py",
+                                        *numba_dir.rglob(f"{stems[0]}.*")])
+    more = [f"probe_grid_{k:016x}" for k in range(10, 12)]
+    r = child("".join(load(s) for s in more), root, numba_dir,
+              PHASEMAP_CACHE_MAX_MB=str(1.5 * one / 1e6))
+    assert r.returncode == 0, r.stderr
+    left = {p.name.split(".")[0] for p in [*root.glob("*.py"), *numba_dir.rglob("probe_*.nb*")]}
+    assert left == set(more)   # no orphans of the pruned entries
+
+    monkeypatch.setenv("PHASEMAP_CACHE_DIR", str(root))
+    monkeypatch.setattr(config, "CACHE_DIR", str(numba_dir))
+    assert main(["cache", "info"]) == 0
+    text = capsys.readouterr().out
+    assert f"phasemap kernel cache {root}" in text and str(numba_dir) in text
+    assert "2  grid kernels" in text and "declared" not in text
+    assert "(PHASEMAP_CACHE_MAX_MB)" in text
+    assert main(["cache", "clear"]) == 0
+    assert capsys.readouterr().out.startswith("removed ")
+    assert list(root.glob("*.py")) == [] and list(numba_dir.rglob("*.nb*")) == []
