@@ -52,6 +52,9 @@ class Options:
                                 allow_inf=True)
         counts = [_args.count(name, getattr(self, name), model)
                   for name in ("max_steps", "max_events")]
+        if not isinstance(self.method, str):
+            raise _args.ArgumentTypeError(f"{model}: method must be a string, one of "
+                                          f"{', '.join(METHODS)}, got {type(self.method).__name__}")
         check_method(self.method, model)
         return Options(t_end, rtol, atol, max_step, *counts, self.method)
 

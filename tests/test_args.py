@@ -218,15 +218,16 @@ def test_fuzz_public_entry_points(small_scene):
 
 
 def _check_call(name, call, value):
+    value_text = _args._describe(value)  # repr() refuses an integer of 5000 digits
     try:
         result = call(value)
     except (ValueError, TypeError) as err:
         text = str(err)
-        assert name in text, (name, value, text)
-        assert type(err).__module__ in ("builtins", "phasemap._args"), (name, value, text)
-        assert "numba" not in text.lower() and "Traceback" not in text, (name, value, text)
+        assert name in text, (name, value_text, text)
+        assert type(err).__module__ in ("builtins", "phasemap._args"), (name, value_text, text)
+        assert "numba" not in text.lower() and "Traceback" not in text, (name, value_text, text)
     else:
-        assert _admissible_rows_finite(result), (name, value)
+        assert _admissible_rows_finite(result), (name, value_text)
 
 
 @pytest.mark.xfail(strict=True, reason="phasemap/phase.py (the engines task's) does not call "
