@@ -149,8 +149,8 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                    help="fix a state variable or parameter; VALUE may be arithmetic with pi "
                    "(repeatable)")
     p.add_argument("--layers", metavar="A,B", help="layers to compute (default: n_solutions, "
-                   "plus stagnation where the relative velocity is zero; phasemap models "
-                   "MODEL lists them)")
+                   "plus stagnation where the relative velocity is zero; the models "
+                   "command lists them)")
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                    help="integrator setting of the fate layers: t_end, rtol, atol, max_step, "
                    "max_steps, max_events, method (DOPRI5 or DOP853) (repeatable)")
