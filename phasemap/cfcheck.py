@@ -30,15 +30,20 @@ CF_TABLES = {
 def cfcheck(path: str | os.PathLike, timeout: float = 300) -> tuple[str, bool]:
     """Run cfchecks on ``path`` offline; return ``(report, passed)``.
 
-    ``passed`` means no errors and no warnings.  ValueError when the file is
-    missing or cfchecks is not installed.
+    ``passed`` means no errors and no warnings.  ValueError, in one line, when
+    the file is missing or not netCDF, when cfchecks is not installed, or when
+    cfchecks itself fails (its traceback's last line).
     """
     path = pathlib.Path(path)
     if not path.is_file():
         raise ValueError(f"{path}: no such file")
+    if not is_netcdf(path):
+        raise ValueError(f"{path}: not a netCDF file (neither netCDF classic nor netCDF-4/HDF5 "
+                         "by its first bytes); cfchecks checks netCDF files")
     exe = shutil.which("cfchecks")
     if exe is None:
-        raise ValueError("cfchecks is not installed: pip install cfchecker (it needs "
+        raise ValueError("cfchecks is not installed: pip install \"phasemap[cf]\" (from a "
+                         "clone: pip install \".[cf]\"; it needs "
                          "UDUNITS-2, Debian's libudunits2-0; bash .ci/system-deps installs both)")
     with tempfile.TemporaryDirectory(prefix="phasemap-cf-") as folder:
         tables = []
@@ -49,6 +54,30 @@ def cfcheck(path: str | os.PathLike, timeout: float = 300) -> tuple[str, bool]:
         run = subprocess.run([exe, "--version", "auto", *tables, str(path)],
                              capture_output=True, text=True, timeout=timeout)
     report = (run.stdout + run.stderr).strip()
+    if "Traceback (most recent call last)" in report:  # cfchecks itself failed: say why
+        raise ValueError(f"{path}: cfchecks failed: {report.splitlines()[-1].strip()}")
     passed = (run.returncode == 0 and "ERRORS detected: 0" in report
               and "WARNINGS given: 0" in report)
     return report, passed
+
+
+#: The first bytes of a netCDF file: classic, 64-bit offset, 64-bit data (CDF-5), and
+#: netCDF-4 (an HDF5 signature, at 0 or after a user block of 512 * 2**k bytes).
+NETCDF_MAGIC = (b"CDF\x01", b"CDF\x02", b"CDF\x05")
+HDF5_MAGIC = b"\x89HDF\r\n\x1a\n"
+
+
+def is_netcdf(path: str | os.PathLike) -> bool:
+    """Whether ``path`` starts as a netCDF file does (classic, CDF-5 or netCDF-4/HDF5)."""
+    with open(path, "rb") as fh:
+        if fh.read(4) in NETCDF_MAGIC:
+            return True
+        offset = 0
+        while True:
+            fh.seek(offset)
+            head = fh.read(len(HDF5_MAGIC))
+            if head == HDF5_MAGIC:
+                return True
+            if len(head) < len(HDF5_MAGIC):
+                return False
+            offset = 512 if offset == 0 else 2 * offset

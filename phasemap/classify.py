@@ -6,11 +6,12 @@ shared :func:`phasemap._numerics.summarize`, which the grid evaluator calls too.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
 
+from . import _args
 from . import _numerics as nx
 from .model import BranchStatus, Model, Solvability
 from .models import get_model
@@ -94,13 +95,15 @@ class Classification:
     singular: bool
     branches: tuple[BranchResult, ...]
     candidates: tuple[BranchResult, ...]
+    #: name -> UDUNITS units of every value, acceleration and reaction (for printing).
+    units: Mapping[str, str] = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def solvability(self) -> Solvability:
         return Solvability(self.n_solutions)
 
     def __str__(self) -> str:
-        vals = ", ".join(f"{k}={v:g}" for k, v in self.values.items())
+        vals = ", ".join(f"{k}={v:g}{self._unit(k)}" for k, v in self.values.items())
         lines = [
             f"{self.model}({vals})",
             f"  n_solutions = {self.n_solutions} ({self.solvability.message})",
@@ -108,10 +111,22 @@ class Classification:
             f"singular = {self.singular}",
         ]
         width = max([10] + [len(b.name) for b in self.candidates])
-        for b in self.candidates:
-            nums = ", ".join(f"{k}={v:.6g}" for k, v in {**b.accelerations, **b.reactions}.items())
+        rows = [{**b.accelerations, **b.reactions} for b in self.candidates]
+        # a quantity within the tie tolerance of zero, relative to its largest magnitude
+        # over the candidates at this state, prints as 0 (a stick branch's 1e-15)
+        scale = {k: max((abs(r[k]) for r in rows if np.isfinite(r[k])), default=0.0)
+                 for k in (rows[0] if rows else ())}
+        for b, row in zip(self.candidates, rows):
+            nums = ", ".join(
+                f"{k}={0.0 if abs(v) <= nx.TOL * scale[k] else v:.6g}{self._unit(k)}"
+                for k, v in row.items())
             lines.append(f"  {b.name:<{width}} {b.status.name.lower():<12} {nums}")
         return "\n".join(lines)
+
+    def _unit(self, name: str) -> str:
+        """`` rad s-1`` for printing after a value; nothing for a pure number."""
+        unit = self.units.get(name, "1")
+        return "" if unit == "1" else f" {unit}"
 
 
 def classify(model: str | Model, **values: float) -> Classification:
@@ -146,10 +161,8 @@ def classify(model: str | Model, **values: float) -> Classification:
     True
     """
     m = get_model(model)
-    for k, val in values.items():
-        if np.ndim(val) != 0:
-            raise ValueError(f"{m.name}: {k} must be a scalar for classify(); "
-                             "use a Scene for arrays of values")
+    values = _args.scalars(values, m.names, m.name,
+                           " for classify(); use a Scene for arrays of values")
     full = m.complete(values)
     v = m.input_vector(full)
     out = np.full((len(m.branches), m.n_fields), np.nan)
@@ -166,6 +179,8 @@ def classify(model: str | Model, **values: float) -> Classification:
         singular=bool(singular),
         branches=tuple(b for b in candidates if b.admissible),
         candidates=candidates,
+        units={v.name: v.units for v in (*m.variables.values(), *m.accelerations,
+                                         *m.reactions)},
     )
 
 

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import shutil
 import sys
 import textwrap
 
+from . import _args
 from ._version import __version__
 from .bifurcation import command as _bif
 
@@ -21,9 +23,9 @@ EXAMPLES = {
     ],
     "atlas": [
         ("phasemap atlas elliptic_pendulum --set xdot=1 -o elliptic.nc", ""),
-        ("phasemap atlas ladder --axis phi=0:1.5708:1024 --axis f=0:3:1024 --set omega=0 "
+        ("phasemap atlas ladder --axis phi=0:pi/2:1024 --axis f=0:3:1024 --set omega=0 "
          "-o ladder.nc", ""),
-        ("phasemap atlas wheel --axis phi=-3.1416:3.1416:400 --axis delta=0:1:400 \\\n"
+        ("phasemap atlas wheel --axis phi=-pi:pi:400 --axis delta=0:1:400 \\\n"
          "        --layers n_solutions,stagnation,phi_ddot_roll_pos -o wheel.nc", ""),
         ("phasemap atlas hinge_pendulum --axis phi=-3:3:200 --axis omega=-6:6:200 \\\n"
          "        --layers fate,phi_rest,n_reversals --option t_end=30 -o fates.nc", ""),
@@ -36,7 +38,8 @@ EXAMPLES = {
     "plot": [("phasemap plot elliptic.nc -o elliptic --size two", "elliptic.pdf and .png")],
     "cfcheck": [("phasemap cfcheck elliptic.nc", "CF compliance, offline")],
     "table": [("phasemap table", "the paper's key states, classified")],
-    "models": [("phasemap models", "models, variables, units and defaults")],
+    "models": [("phasemap models", "models, variables, units and defaults"),
+               ("phasemap models ladder", "one model, with every layer it can map")],
     "classify": [
         ("phasemap classify elliptic_pendulum phi=0.8 xdot=-1 f=4", ""),
         ("phasemap classify hinge_pendulum phi=0.05 omega=0 delta=0.1", ""),
@@ -127,9 +130,11 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
     p.add_argument("--size", choices=["two_column", "one_column", "both"], default="two_column",
                    help="lay the figures out for a journal's two columns (7.2 in, the "
                    "default), one column (3.5 in, files *_one_column) or both")
-    subs["models"] = _sub(sub, "models", "list the models with their variables, units and "
-                          "defaults", "Lists every model: its state variables and parameters "
-                          "with units, defaults and domains, and its branches.")
+    p = subs["models"] = _sub(sub, "models", "list the models with their variables, units "
+                              "and defaults", "Lists every model: its state variables and "
+                              "parameters with units, defaults and domains, and its branches; "
+                              "given a MODEL, that model with the layers an atlas can hold.")
+    p.add_argument("model", nargs="?", metavar="MODEL", help=f"one of: {models}")
     p = subs["atlas"] = _sub(
         sub, "atlas", "map solvability and stagnation over a grid into a netCDF atlas",
         "Computes the layers over a grid of states and parameters, block by block, into a "
@@ -140,11 +145,14 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
     p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
     p.add_argument("--axis", action="append", default=[], metavar="NAME=START:STOP:COUNT",
                    help="an axis of COUNT values from START to STOP; STOP may be below "
-                   "START (a descending axis); repeat for more axes")
+                   "START (a descending axis); START and STOP may be arithmetic with pi "
+                   "(pi/2, -2*pi/3); repeat for more axes")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                   help="fix a state variable or parameter (repeatable)")
+                   help="fix a state variable or parameter; VALUE may be arithmetic with pi "
+                   "(repeatable)")
     p.add_argument("--layers", metavar="A,B", help="layers to compute (default: n_solutions, "
-                   "plus stagnation where the relative velocity is zero)")
+                   "plus stagnation where the relative velocity is zero; the models "
+                   "command lists them)")
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                    help="integrator setting of the fate layers: t_end, rtol, atol, max_step, "
                    "max_steps, max_events, method (DOPRI5 or DOP853) (repeatable)")
@@ -183,7 +191,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
     p.add_argument("--size", choices=["one", "two"], default="one", help="a journal's one "
                    "column (3.5 in, the default) or two columns (7.2 in)")
     p = subs["cfcheck"] = _sub(sub, "cfcheck", "check a file against the CF conventions, "
-                               "offline", "Runs cfchecks (pip install cfchecker) on FILE with "
+                               "offline", "Runs cfchecks (pip install 'phasemap[cf]') on FILE with "
                                "local stand-ins for the tables it would download; a "
                                "phasemap file uses no standard names, areas or regions.")
     p.add_argument("path")
@@ -213,7 +221,11 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         with progress.enable(), removed_on_signals():
-            return _run(args)
+            code = _run(args)
+            sys.stdout.flush()  # a closed pipe shows here, not at exit
+            return code
+    except BrokenPipeError:  # the reader left (phasemap ... | head): end quietly
+        return _stdout_closed()
     except ValueError as err:
         if args.command == "tour":
             print(subs["tour"].format_usage().rstrip(), file=sys.stderr)
@@ -227,6 +239,17 @@ def main(argv: list[str] | None = None) -> int:
         return stop.code
 
 
+def _stdout_closed() -> int:
+    """After a broken pipe on stdout: point it at the null device, so that the flush at
+    exit cannot fail again, and return 141 (128 + SIGPIPE), as a tool killed by SIGPIPE
+    would end (the recipe of Python's signal documentation)."""
+    import os
+
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    return 141
+
+
 def _run(args) -> int:
     if args.command in (None, "table"):
         print(_table())
@@ -236,7 +259,7 @@ def _run(args) -> int:
         return tour(args.out, full=args.full, studies=args.studies,
                     only=args.only.split(",") if args.only else None, size=args.size)
     elif args.command == "models":
-        print(_models())
+        print(_models(args.model))
     elif args.command == "atlas":
         print(_atlas(args))
     elif args.command == "simulate":
@@ -258,7 +281,10 @@ def _run(args) -> int:
     elif args.command == "classify":
         from .classify import classify
 
-        print(classify(args.model, **_parse_values(args.values)))
+        from .models import get_model
+
+        model = get_model(args.model)
+        print(classify(model, **_parse_values(args.values, model=model)))
     elif args.command == "cache":
         print(_cache(args.action))
     elif args.command in ("boundaries", "threshold"):
@@ -276,34 +302,49 @@ def _cache(action: str) -> str:
     return cache.info().text()
 
 
-def _parse_values(items: list[str], words: tuple[str, ...] = ()) -> dict[str, float]:
-    """NAME=VALUE items as numbers (the names in ``words`` keep their text)."""
+def _parse_values(items: list[str], words: tuple[str, ...] = (), model=None) -> dict[str, float]:
+    """NAME=VALUE items as numbers (the names in ``words`` keep their text); a VALUE
+    may be arithmetic with pi (:func:`phasemap._args.parse_real`)."""
     values = {}
     for item in items:
         name, sep, text = item.partition("=")
         if not sep or not name:
             raise ValueError(f"expected NAME=VALUE, got {item!r}")
-        if name in words:
-            values[name] = text
-            continue
-        try:
-            values[name] = float(text)
-        except ValueError:
-            raise ValueError(f"{name}: {text!r} is not a number") from None
+        values[name] = text if name in words else _number(name, text, model)
     return values
 
 
-def _parse_axis(item: str) -> tuple[str, object]:
+def _number(name: str, text: str, model=None) -> float:
+    """``text`` as a number for the variable ``name`` of ``model``.
+
+    A decimal of at least four significant digits that lies just outside a
+    closed end of the variable's domain, and equals that end rounded to the
+    decimals typed (``1.5708`` or ``1.571`` for the ladder's pi/2, not ``1.6``),
+    is read as the end itself, with a note on stderr: it is what the user
+    meant, and the exact end is the only value there that the model takes.
+    """
+    x = _args.parse_real(text, name, model.name if model is not None else "")
+    var = model.variables.get(name) if model is not None else None
+    typed = re.fullmatch(r"\s*[-+]?(\d*)\.(\d+)\s*", text)
+    if var is None or typed is None or len((typed.group(1) + typed.group(2)).lstrip("0")) < 4:
+        return x
+    for end, outside, side in ((var.lower, x < var.lower and not var.lower_open, "lower"),
+                               (var.upper, x > var.upper and not var.upper_open, "upper")):
+        if outside and round(end, len(typed.group(2))) == x:
+            print(f"phasemap: read {name}={text.strip()} as {_args.bound(end)}, the {side} "
+                  f"end of its domain {var.domain_text()}", file=sys.stderr)
+            return end
+    return x
+
+
+def _parse_axis(item: str, model=None) -> tuple[str, object]:
     import numpy as np
 
     name, sep, text = item.partition("=")
     parts = text.split(":")
     if not sep or not name or len(parts) != 3:
         raise ValueError(f"--axis expects NAME=START:STOP:COUNT, got {item!r}")
-    try:
-        start, stop = float(parts[0]), float(parts[1])
-    except ValueError:
-        raise ValueError(f"--axis {name}: START and STOP must be numbers, got {text!r}") from None
+    start, stop = (_number(name, part, model) for part in parts[:2])
     try:
         count = int(parts[2])
     except ValueError:
@@ -327,25 +368,20 @@ def _atlas(args) -> str:
 
     model = get_model(args.model)
     destination(args.output)  # the folder exists, the output is no folder
-    axes = dict(_parse_axis(a) for a in args.axis)
+    axes = dict(_parse_axis(a, model) for a in args.axis)
     if len(axes) != len(args.axis):
         raise ValueError("each --axis name may be given once")
-    fixed = _parse_values(args.set)
+    fixed = _parse_values(args.set, model=model)
     if not axes:  # the model's default map, less the names the user fixed
         import numpy as np
 
         axes = {n: np.linspace(*spec) for n, spec in model.default_axes.items() if n not in fixed}
         if not axes:
             raise ValueError(f"{model.name}: every default axis is fixed; give an --axis")
-    if args.chunk_cells is not None and args.chunk_cells < 1:
-        raise ValueError(f"--chunk-cells must be at least 1, got {args.chunk_cells}")
+    if args.chunk_cells is not None:
+        _args.count("--chunk-cells", args.chunk_cells)
     layers = [x.strip() for x in args.layers.split(",") if x.strip()] if args.layers else None
     options = _parse_values(args.option, words=("method",))
-    for name in ("max_steps", "max_events"):
-        if name in options:
-            if options[name] != int(options[name]):
-                raise ValueError(f"--option {name} must be a whole number")
-            options[name] = int(options[name])
     scene = Scene(model, axes=axes, fixed=fixed, layers=layers, options=options)
     # before any work: the destination, the disk, the size
     est = blocks.estimate(scene, args.chunk_cells)
@@ -374,7 +410,7 @@ def _simulate(args) -> str:
     model = get_model(args.model)
     if args.output:
         destination(args.output)
-    values = _parse_values(args.values)
+    values = _parse_values(args.values, model=model)
     out = check_output(args.output, overwrite=args.overwrite) if args.output else None
     with progress.activity(f"{model.name}: integrating to t = {args.t_end:g} s"):
         ds = simulate(model, args.t_end, rtol=args.rtol, method=args.method, **values)
@@ -417,17 +453,26 @@ def _table() -> str:
     return "\n".join(lines)
 
 
-def _models() -> str:
-    from .models import MODELS
+def _models(name: str | None = None) -> str:
+    from .models import MODELS, get_model
 
     lines = []
-    for m in MODELS.values():
+    for m in (MODELS.values() if name is None else [get_model(name)]):
         lines.append(f"{m.name}: {m.title}")
+        width = max(14, *(len(v.domain_text()) for v in (*m.state, *m.params)))
         for kind, group in (("state", m.state), ("param", m.params)):
             for v in group:
                 lines.append(f"  {kind}  {v.name:<6} {v.units:<8} default {v.default:<8.4g} "
-                             f"domain {v.domain_text():<14} {v.long_name}")
+                             f"domain {v.domain_text():<{width}} {v.long_name}")
         lines.append(f"  branches: {', '.join(m.branches)}")
+        if name is not None:
+            from .layers import layers_for
+
+            layers = layers_for(m)
+            lines.append(f"  layers ({len(layers)}):")
+            width = max(len(n) for n in layers)
+            lines += [f"    {n:<{width}}  {layer.attrs.get('long_name', '')}"
+                      for n, layer in layers.items()]
         lines.append("")
     return "\n".join(lines).rstrip()
 

@@ -79,6 +79,7 @@ from typing import Callable, Mapping
 
 import numpy as np
 
+from . import _args
 from . import _numerics as nx
 
 
@@ -461,14 +462,8 @@ class Model:
         Raises ValueError naming the model and the variable for an unknown
         name, a non-finite value or a value outside the domain.
         """
-        unknown = [k for k in values if k not in self.variables]
-        if unknown:
-            raise ValueError(
-                f"{self.name}: unknown variable {unknown[0]!r}; "
-                f"allowed: {', '.join(self.names)}"
-            )
         full: dict[str, object] = self.defaults
-        full.update(values)
+        full.update(_args.values(values, self.names, self.name))
         for name, var in self.variables.items():
             var.check(self.name, full[name])
         if self.check is not None:
@@ -492,13 +487,11 @@ def _declared_model(declaration) -> Model:
 
 
 def _fmt(x: float) -> str:
-    if math.isinf(x):
-        return "inf" if x > 0 else "-inf"
-    return f"{x:g}"
+    return _args.bound(x)
 
 
 def _show(a: np.ndarray) -> str:
     flat = np.ravel(a)
     if flat.size == 1:
-        return f"{flat[0]:g}"
-    return f"[{', '.join(f'{x:g}' for x in flat[:3])}{', ...' if flat.size > 3 else ''}]"
+        return _args.bound(flat[0])
+    return f"[{', '.join(map(_args.bound, flat[:3]))}{', ...' if flat.size > 3 else ''}]"

@@ -24,6 +24,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import xarray as xr
 
+from . import _args
 from . import _numerics as nx
 from ._codegen import content_hash
 from ._dataset import assemble, cf_header, declaration_hash, variable_attrs
@@ -97,6 +98,10 @@ class Scene:
                  options: Mapping[str, float] | None = None):
         self.model = get_model(model)
         m = self.model
+        for what, given in (("axes", axes), ("fixed", fixed), ("options", options)):
+            if given is not None and not isinstance(given, Mapping):
+                raise _args.ArgumentTypeError(f"{m.name}: {what} must be a mapping "
+                                              f"{{name: value}}, got {type(given).__name__}")
         if not axes:
             raise ValueError(f"{m.name}: a scene needs at least one axis; "
                              f"choose from {', '.join(m.names)}")
@@ -106,20 +111,13 @@ class Scene:
             raise ValueError(f"{m.name}: {sorted(both)[0]!r} is both an axis and fixed")
         self.axes: dict[str, np.ndarray] = {}
         for name, values in axes.items():
-            if name not in m.variables:
-                raise ValueError(f"{m.name}: unknown variable {name!r}; "
-                                 f"allowed: {', '.join(m.names)}")
-            try:
-                a = np.asarray(values, dtype=float)
-            except (TypeError, ValueError):
-                raise ValueError(f"{m.name}: axis {name} must be numbers") from None
+            a = _args.reals(f"axis {_args.check_name('variable', name, m.names, m.name)}",
+                            values, m.name)
             if a.ndim != 1 or a.size == 0:
                 raise ValueError(f"{m.name}: axis {name} must be a non-empty 1-D sequence, "
                                  f"got shape {a.shape}")
             self.axes[name] = a
-        for name, value in fixed.items():
-            if np.ndim(value) != 0:
-                raise ValueError(f"{m.name}: fixed value {name} must be a scalar")
+        fixed = _args.scalars(fixed, m.names, m.name, " as a fixed value (an axis takes arrays)")
         # Validate every value, with the axes broadcast as an open mesh so that
         # cross-variable checks (the wheel's l <= r) see every combination.
         mesh = {n: a.reshape([-1 if i == j else 1 for j in range(len(self.axes))])
@@ -135,19 +133,11 @@ class Scene:
         registry = layers_for(m)
         if layers is None:
             layers = ["n_solutions"] + (["stagnation"] if self._velocity_can_be_zero() else [])
-        layers = list(dict.fromkeys(layers))
-        for name in layers:
-            if name not in registry:
-                raise ValueError(f"{m.name}: unknown layer {name!r}; available: "
-                                 f"{', '.join(registry)}")
-        if not layers:
-            raise ValueError(f"{m.name}: a scene needs at least one layer")
-        self.layers: tuple[str, ...] = tuple(layers)
-        known = set(Options().as_dict())
-        unknown = set(options or {}) - known
-        if unknown:
-            raise ValueError(f"{m.name}: unknown integrator option {sorted(unknown)[0]!r}; "
-                             f"allowed: {', '.join(sorted(known))}")
+        self.layers: tuple[str, ...] = tuple(_args.layers(layers, registry, m.name, (
+            f"phasemap.layers_for({m.name!r}) lists its {len(registry)} layers; on the "
+            f"command line: phasemap models {m.name}")))
+        for name in options or {}:
+            _args.check_name("integrator option", name, Options().as_dict(), m.name)
         self.options = Options(**{"rtol": FATE_RTOL, **dict(options or {})}).checked(m.name)
 
     # ------------------------------------------------------------------
@@ -268,9 +258,9 @@ class Scene:
                 progress: bool | None = None) -> xr.Dataset:
         """Evaluate the scene's layers and return the atlas.
 
-        With ``chunks`` (cells per axis, as an int for every axis or a mapping)
-        the Dataset is dask-backed and each block runs the same numba kernel
-        when computed, locally or on a ``dask.distributed`` cluster.  Without,
+        With ``chunks`` (cells per axis, as an int for every axis or a mapping,
+        or ``"auto"`` for dask's choice) the Dataset is dask-backed and each
+        block runs the same numba kernel when computed, locally or on a ``dask.distributed`` cluster.  Without,
         it is computed now: a map in one kernel call (in blocks above
         :data:`SLAB_CELLS` cells), a fate map in blocks of well under a second
         (Ctrl-C interrupts it between two), with a progress
@@ -359,18 +349,11 @@ class Scene:
         import dask.array as da
         from dask.base import tokenize
 
-        if isinstance(chunks, int):
-            chunks = {n: chunks for n in self.axes}
-        unknown = set(chunks) - set(self.axes)
-        if unknown:
-            raise ValueError(f"{self.model.name}: chunks name {sorted(unknown)[0]!r}, "
-                             f"which is not an axis")
-        sizes = tuple(int(chunks.get(n, a.size)) for n, a in self.axes.items())
-        if any(c < 1 for c in sizes):
-            raise ValueError(f"{self.model.name}: chunk sizes must be >= 1, got {sizes}")
+        sizes = _args.chunks(chunks, dict(zip(self.axes, self.shape)), self.model.name)
+        sizes = sizes if sizes == "auto" else tuple(sizes.values())
         reg = layers_for(self.model)
         ndim = len(self.axes)
-        normal = da.core.normalize_chunks(sizes, self.shape)
+        normal = da.core.normalize_chunks(sizes, self.shape, dtype=np.float64)
         token = tokenize(content_hash(self.model), json.dumps(self.spec(), default=str),
                          self.options.as_dict(), [a.tobytes() for a in self.axes.values()],
                          normal)

@@ -14,6 +14,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import xarray as xr
 
+from . import _args
 from . import events as ev
 from ._dataset import assemble, cf_header, variable_attrs
 from .integrate import DEFAULT_METHOD, METHODS, check_method, kernels, run_batch, unpack
@@ -37,30 +38,25 @@ class Options:
     method: str = DEFAULT_METHOD
 
     def checked(self, model: str) -> "Options":
-        """Validated copy (``atol`` defaults to ``rtol``); ValueError on bad values."""
-        def bad(name, value, what):
-            raise ValueError(f"{model}: {name} must be {what}, got {value!r}")
-
-        for name in ("t_end", "rtol", "max_step"):
-            value = getattr(self, name)
-            if not isinstance(value, (int, float, np.floating, np.integer)) or isinstance(
-                    value, bool) or not value > 0:
-                bad(name, value, "a positive number")
-        if not math.isfinite(self.t_end):
-            bad("t_end", self.t_end, "finite")
-        if not RTOL_MIN <= self.rtol <= 0.1:
-            bad("rtol", self.rtol, f"in [{RTOL_MIN:g}, 0.1] (tighter is below double-precision "
-                "resolution)")
-        atol = self.rtol if self.atol is None else self.atol
-        if not isinstance(atol, (int, float, np.floating)) or not (0 < atol < math.inf):
-            bad("atol", atol, "a positive number")
-        for name in ("max_steps", "max_events"):
-            value = getattr(self, name)
-            if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < 1:
-                bad(name, value, "a positive integer")
+        """Validated copy (``atol`` defaults to ``rtol``); ValueError (or
+        :class:`phasemap._args.ArgumentTypeError`) naming the setting on bad values.
+        Python and NumPy numbers alike; counts may be whole floats (``1e6``)."""
+        t_end = _args.finite("t_end", self.t_end, model, lower=0.0, lower_open=True)
+        rtol = _args.real("rtol", self.rtol, model)
+        if not RTOL_MIN <= rtol <= 0.1:
+            raise ValueError(f"{model}: rtol must be in [{RTOL_MIN:g}, 0.1] (tighter is below "
+                             f"double-precision resolution), got {self.rtol!r}")
+        atol = rtol if self.atol is None else _args.finite("atol", self.atol, model, lower=0.0,
+                                                           lower_open=True)
+        max_step = _args.finite("max_step", self.max_step, model, lower=0.0, lower_open=True,
+                                allow_inf=True)
+        counts = [_args.count(name, getattr(self, name), model)
+                  for name in ("max_steps", "max_events")]
+        if not isinstance(self.method, str):
+            raise _args.ArgumentTypeError(f"{model}: method must be a string, one of "
+                                          f"{', '.join(METHODS)}, got {type(self.method).__name__}")
         check_method(self.method, model)
-        return Options(float(self.t_end), float(self.rtol), float(atol), float(self.max_step),
-                       int(self.max_steps), int(self.max_events), self.method)
+        return Options(t_end, rtol, atol, max_step, *counts, self.method)
 
     def as_dict(self) -> dict:
         return {"t_end": self.t_end, "rtol": self.rtol, "atol": self.atol,
@@ -86,19 +82,14 @@ def split_values(model: Model, values: Mapping[str, float]):
     """Validate ``values``: model variables (complete) and extra positions (default 0)."""
     dyn = _dynamics(model)
     extra = {p.name: p for p in dyn.positions}
-    mine = {k: v for k, v in values.items() if k not in extra}
+    values = _args.scalars(values, [*model.names, *extra], model.name,
+                           " for simulate(); for grids of initial conditions use a Scene "
+                           "with fate layers")
     positions = {}
     for name, var in extra.items():
-        value = values.get(name, var.default)
-        var.check(model.name, value)
-        positions[name] = float(value)
-    try:
-        full = model.complete(mine)
-    except ValueError as exc:
-        if "unknown variable" in str(exc) and extra:
-            raise ValueError(f"{exc}, {', '.join(extra)}") from None
-        raise
-    return full, positions
+        positions[name] = float(values.pop(name, var.default))
+        var.check(model.name, positions[name])
+    return model.complete(values), positions
 
 
 def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
@@ -185,10 +176,7 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     if t_eval is None:
         te = np.empty(0)
     else:
-        try:
-            te = np.asarray(t_eval, dtype=float)
-        except (TypeError, ValueError):
-            te = np.array([np.nan])
+        te = _args.reals("t_eval", t_eval, m.name)
         if te.ndim != 1 or not np.all(np.isfinite(te)) or np.any(np.diff(te) < 0) or (
                 te.size and (te[0] < 0 or te[-1] > opts.t_end)):
             raise ValueError(f"{m.name}: t_eval must be a sorted 1-D sequence of times in "
@@ -251,8 +239,8 @@ def _starts(m: Model, values: Mapping) -> dict[str, np.ndarray]:
         raise ValueError(f"{m.name}: the arrays of initial values must have one length, got "
                          + ", ".join(f"{k}: {n}" for k, n in sizes.items()))
     for k, a in starts.items():
-        known[k].check(m.name, a)
-        starts[k] = np.asarray(a, dtype=float)
+        starts[k] = _args.reals(k, a, m.name)
+        known[k].check(m.name, starts[k])
     return starts
 
 

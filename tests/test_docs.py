@@ -134,7 +134,7 @@ def test_guide_code_block_runner_catches_a_wrong_example(tmp_path):
     assert (tmp_path / "made.py").read_text() == "# made.py\nX = 1\n"
 
 
-@pytest.mark.parametrize("module", ["phasemap.classify", "phasemap.scene", "phasemap.simulate",
+@pytest.mark.parametrize("module", ["phasemap._args", "phasemap.classify", "phasemap.scene", "phasemap.simulate",
                                     "phasemap.phase", "phasemap.plot", "phasemap.study",
                                     "phasemap.atlas", "phasemap.layers", "phasemap.models",
                                     "phasemap.model", "phasemap.events", "phasemap.cache",
@@ -163,7 +163,7 @@ def test_cli_table_and_errors():
     bad = subprocess.run(run + ["classify", "ladder", "phi=9"], capture_output=True, text=True)
     assert bad.returncode == 2
     assert bad.stderr.strip() == ("phasemap: error: ladder: phi = 9 is outside its domain "
-                                  "[0, 1.5708] (angle of the bar from the vertical, rad)")
+                                  "[0, 1.5707963267948966] (angle of the bar from the vertical, rad)")
     assert "Traceback" not in bad.stderr
 
 

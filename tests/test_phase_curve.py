@@ -573,7 +573,7 @@ def test_rest_state_gives_a_one_point_curve():
     (lambda: phase_curve("hinge_pendulum", phi=np.array([0.1, 0.2]), omega=0.0),
      "phi must be a scalar"),
     (lambda: phase_curve("hinge_pendulum", phi=float("nan"), omega=0.0), "phi must be finite"),
-    (lambda: phase_curve("hinge_pendulum", phi="left", omega=0.0), "phi must be a number"),
+    (lambda: phase_curve("hinge_pendulum", phi="left", omega=0.0), "phi must be a real number"),
     (lambda: phase_curve("hinge_pendulum", phi=0.1, omega=0.0, phi_range=(1.0, 2.0)),
      "must contain phi"),
     (lambda: phase_curve("hinge_pendulum", phi=0.1, omega=0.0, phi_range=(2.0, -2.0)),

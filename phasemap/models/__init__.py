@@ -25,7 +25,7 @@ from __future__ import annotations
 import os
 from collections.abc import Mapping
 
-from .. import _declared
+from .. import _args, _declared
 from ..model import Model
 from . import elliptic_pendulum, hinge_pendulum
 
@@ -96,13 +96,11 @@ def get_model(model: str | Model) -> Model:
         return model
     if isinstance(model, (str, os.PathLike)) and str(model).endswith(".py"):
         return _declared.load(model)
-    try:
+    if isinstance(model, str) and model in MODELS:
         return MODELS[model]
-    except (KeyError, TypeError):
-        raise ValueError(
-            f"unknown model {model!r}; available models: {', '.join(MODELS)} "
-            "(or the path of a declaration file, path/to/system.py)"
-        ) from None
+    raise ValueError(_args.unknown("model", model, MODELS, listing=(
+        f"available models: {', '.join(MODELS)}, or the path of a declaration file, "
+        "path/to/system.py")))
 
 
 def builtin_model(name) -> Model:
