@@ -162,8 +162,6 @@ def test_dates_are_not_axes():
         phasemap.Scene("ladder", axes={"phi": [0.1]}, fixed={"f": np.datetime64("2020")})
 
 
-@pytest.mark.xfail(strict=True, reason="phasemap/phase.py belongs to the engines task: check "
-                   "phi and omega with phasemap._args.real before asking for both")
 def test_phase_curve_huge_phi_says_so():
     with pytest.raises(ValueError, match="hinge_pendulum: phi = 10"):
         phase_curve("hinge_pendulum", phi=HUGE)
@@ -230,10 +228,6 @@ def _check_call(name, call, value):
         assert _admissible_rows_finite(result), (name, value_text)
 
 
-@pytest.mark.xfail(strict=True, reason="phasemap/phase.py (the engines task's) does not call "
-                   "phasemap._args yet: a ragged phi, a huge or complex rtol, a huge "
-                   "max_stages get numpy's or Python's error; wire _args.scalars/real/count "
-                   "into phase_curve and remove this mark")
 def test_fuzz_phase_curve():
     """Every awkward value for each argument of phase_curve (about 300 calls)."""
     for name in ("phi", "omega", "delta", "rtol", "max_stages", "points_per_stage"):

@@ -146,6 +146,7 @@ import math
 import numpy as np
 import xarray as xr
 
+from .. import _args
 from .. import events as ev
 from .._compile import contract_constants, remember, specialize
 from .._dataset import cf_header, squared_units
@@ -252,6 +253,12 @@ _trace = trace
 
 # ---------------------------------------------------------------- public API
 
+#: The most stages of a curve (an int32 in the kernel) and points per stage (each
+#: stage's points are stored as it ends: 10^6 of them are 24 MB a stage).
+MAX_STAGES = 2 ** 31 - 1
+MAX_POINTS = 10 ** 6
+
+
 def phase_curve(model: str | Model, *, phi: float | None = None, omega: float | None = None,
                 phi_range: tuple[float, float] | None = None, max_stages: int = 50,
                 points_per_stage: int = 200, rtol: float = RTOL,
@@ -325,20 +332,16 @@ def phase_curve(model: str | Model, *, phi: float | None = None, omega: float | 
             raise ValueError(f"{m.name}: {name} is given twice")
     phi = params.pop(pos, phi) if pos != "phi" else phi
     omega = params.pop(vel, omega) if vel != "omega" else omega
+    given = {k: v for k, v in ((pos, phi), (vel, omega)) if v is not None}
+    values = _args.scalars({**given, **params}, m.names, m.name, " for phase_curve()")
     if phi is None or omega is None:
         raise ValueError(f"{m.name}: phase_curve needs the initial {pos} and {vel}")
-    values = {pos: phi, vel: omega, **params}
-    for k, val in values.items():
-        if np.ndim(val) != 0:
-            raise ValueError(f"{m.name}: {k} must be a scalar for phase_curve()")
     full = {k: float(v) for k, v in m.complete(values).items()}
     lo, hi = _checked_range(m, pos, full[pos], phi_range)
-    max_stages = _positive_int(m, "max_stages", max_stages, 1)
-    points = _positive_int(m, "points_per_stage", points_per_stage, 2)
-    try:
-        rtol = float(rtol)
-    except (TypeError, ValueError):
-        raise ValueError(f"{m.name}: rtol must be a number, got {rtol!r}") from None
+    max_stages = _args.count("max_stages", max_stages, m.name, most=MAX_STAGES)
+    points = _args.count("points_per_stage", points_per_stage, m.name, least=2,
+                         most=MAX_POINTS)
+    rtol = _args.real("rtol", rtol, m.name)
     if not RTOL <= rtol <= 1e-3:
         raise ValueError(f"{m.name}: rtol must be in [1e-14, 1e-3], got {rtol!r}")
     pts, stages = trace(m, full, (lo, hi), max_stages, points, rtol=rtol)
@@ -368,12 +371,6 @@ def _checked_range(m: Model, pos: str, phi: float, phi_range) -> tuple[float, fl
     var.check(m.name, lo)
     var.check(m.name, hi)
     return lo, hi
-
-
-def _positive_int(m: Model, name: str, value, least: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
-        raise ValueError(f"{m.name}: {name} must be an integer >= {least}, got {value!r}")
-    return int(value)
 
 
 def _signed_root(sign: float, u: float) -> float:
