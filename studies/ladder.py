@@ -349,7 +349,10 @@ def _pull_region(ax, f: float, u_top: float, colour: str, check: xr.Dataset) -> 
     phi, w = check.phi.values[:, None], check.omega.values[None, :]
     _, n1, n2 = _unreduced(phi, w, np.full(np.broadcast_shapes(phi.shape, w.shape), f), 1.0, 1.0)
     lost = np.isnan(check.phi_ddot_slide_pos.transpose("phi", "omega").values)
-    if not np.array_equal(np.minimum(n1, n2) < 0, lost):
+    # the row where the bar lies flat (phi = pi/2) is decided by the edge's own modes
+    # (the foot's slip factor vanishes there), not by the slide's closed form
+    inner = np.broadcast_to(phi < np.pi / 2, lost.shape)
+    if not np.array_equal((np.minimum(n1, n2) < 0)[inner], lost[inner]):
         raise AssertionError("the closed-form contact region differs from contact_lost")
     pp = np.linspace(0.0, math.pi / 2, 600)
     uu = np.linspace(1e-6, u_top, 600)

@@ -152,7 +152,8 @@ def test_readme_quick_start_has_exactly_two_commands():
         block = text.split("## Quick start", 1)[1].split("```bash", 1)[1].split("```", 1)[0]
         commands = [line for line in block.splitlines() if line.strip()]
         assert len(commands) == 2, page
-        assert commands[0] == "pip install . && phasemap tour"
+        assert commands[0] == ("python3 -m venv .venv && . .venv/bin/activate && "
+                               "pip install . && phasemap tour")
         assert "pytest" in commands[1] and "pytest" in (ROOT / ".ci" / "run").read_text()
 
 

@@ -169,7 +169,7 @@ def _job(p: Problem, ref: Reference, method: str, tol: float):
             return dict(error_final=fe, error_l2=l2, fate=r.fate, n_reversals=r.n_reversals,
                         n_steps=math.nan, nfev=int(r.nfev))
     elif method == "phase_curve":
-        from .phase import phase_curve
+        from ..phase import phase_curve
 
         m = get_model(p.model)
         full = m.complete({k: v for k, v in p.values.items()})
