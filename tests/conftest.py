@@ -20,10 +20,16 @@ def pytest_collection_modifyitems(config, items):
     """Under pytest-xdist (``-n``, ``--dist loadgroup``), run each test module on one
     worker, so that a module's fixtures (its compiled kernels) are built once, and every
     study on the same worker, so that the tour counts see all of them (:data:`STUDY_RUNS`)."""
+    studies = set()
     for item in items:
         module = item.nodeid.split("::")[0]
         group = "studies" if pathlib.Path(module).name.startswith("test_study_") else module
         item.add_marker(pytest.mark.xdist_group(group))
+        if group == "studies":
+            studies.add(item.nodeid)
+    # the studies are the longest group: scheduled first, one worker runs them while the
+    # other takes the rest, instead of one worker running them alone at the end
+    items.sort(key=lambda item: item.nodeid not in studies)
 
 
 def record_study(name: str, claims, out) -> None:
