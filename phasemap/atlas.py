@@ -30,7 +30,8 @@ never sees a half-written atlas and an interrupted write leaves an existing
 file untouched.  Without ``overwrite`` the last step is an exclusive rename
 that fails if the destination appeared meanwhile.  The temporary file is
 removed on any exception and on every signal that ends the process (SIGINT,
-SIGTERM, SIGHUP: :func:`removed_on_signals`); one left by a process killed
+SIGTERM, SIGHUP: :func:`removed_on_signals`; while netCDF writes, a signal is
+raised at the next safe point, :func:`signals_deferred`); one left by a process killed
 outright (SIGKILL, a power cut) is removed by the next write into its folder
 once it is a day old.  A dask-backed atlas is written by threads that all
 finish before the temporary file goes.  A chunk-by-chunk writer that opens
@@ -217,7 +218,7 @@ def write_atlas(ds: xr.Dataset, path: str | os.PathLike, *, complevel: int = 4,
     out = prepare(ds)
     encoding = cf_encoding(out, chunks, complevel=complevel)
     with no_partial_file(path, overwrite=overwrite) as tmp:
-        with _joined_writer_threads(out):
+        with signals_deferred(), _joined_writer_threads(out):
             out.to_netcdf(tmp, mode="w", format="NETCDF4", engine="netcdf4", encoding=encoding)
     return path
 
@@ -445,6 +446,61 @@ def removed_on_signals() -> Iterator[None]:
                     for sig, handler in _HANDLERS["saved"].items():
                         signal.signal(sig, handler)
                     _HANDLERS["saved"].clear()
+
+
+_DEFERRED = {"active": False, "pending": []}
+
+
+def _defer(signum, frame):
+    if _DEFERRED["pending"]:  # asked twice: stop at once
+        _raise_terminated(signum, frame)
+    _DEFERRED["pending"].append(signum)
+
+
+def _raise_pending(*_) -> None:
+    pending = _DEFERRED["pending"]
+    if pending:
+        signum = pending[0]
+        pending.clear()
+        _raise_terminated(signum, None)
+
+
+@contextlib.contextmanager
+def signals_deferred() -> Iterator[None]:
+    """Inside the block, an ending signal (SIGINT, SIGTERM, SIGHUP) is raised at the next
+    safe point instead of wherever the main thread happens to be.
+
+    netCDF writing runs in library code that holds locks; an exception raised
+    between a lock's acquire and its release (Ctrl-C during ``to_netcdf``)
+    leaves the lock held, and the file's close then waits for it forever.
+    Here the first signal is only recorded.  It is raised (as
+    ``KeyboardInterrupt`` or :class:`Terminated`) after the next dask task
+    finishes, from dask's scheduler loop in the main thread, or when the
+    block ends; a second signal is raised at once.  Handlers the program
+    installed itself, and ignored signals, are left alone.  Only the main
+    thread can handle signals; elsewhere the block changes nothing.
+    """
+    if _DEFERRED["active"] or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    from dask.callbacks import Callback
+
+    ours = (signal.SIG_DFL, signal.default_int_handler, _raise_terminated)
+    saved = {}
+    for sig in ENDING_SIGNALS:
+        current = signal.getsignal(sig)
+        if any(current is handler for handler in ours):
+            saved[sig] = current
+            signal.signal(sig, _defer)
+    _DEFERRED["active"] = True
+    try:
+        with Callback(posttask=_raise_pending):
+            yield
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
+        _DEFERRED["active"] = False
+        _raise_pending()  # also over an error of the block's own: the signal ends the work
 
 
 def destination(path: str | os.PathLike) -> pathlib.Path:

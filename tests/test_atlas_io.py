@@ -12,6 +12,8 @@ import os
 import pathlib
 import re
 import subprocess
+import threading
+import time
 
 import netCDF4
 import numpy as np
@@ -268,6 +270,63 @@ def test_an_interrupted_write_keeps_the_existing_file(tmp_path, monkeypatch):
         write_atlas(make_atlas(seed=2), path)
     assert folder_listing(tmp_path) == ["atlas.nc"]
     assert path.read_bytes() == original
+
+
+def _signalling_atlas(signum, times=1):
+    """A dask-backed atlas whose second block sends ``signum`` to this process ``times`` times
+    (from a writer thread, as a signal arrives while netCDF holds its locks)."""
+    import signal
+
+    import dask.array as da
+
+    ds = make_atlas((64, 32))
+
+    def send(block, block_info=None):
+        if block_info[0]["chunk-location"] == (0, 1):
+            for _ in range(times):
+                signal.pthread_kill(threading.main_thread().ident, signum)
+                time.sleep(0.05)
+        return block
+
+    data = da.from_array(ds["N_floor_stick"].values, chunks=(32, 16))
+    ds["N_floor_stick"] = (ds["N_floor_stick"].dims, data.map_blocks(send, dtype=float),
+                           ds["N_floor_stick"].attrs)
+    return ds
+
+
+@pytest.mark.parametrize("attempt", range(3))
+@pytest.mark.parametrize("times", [1, 2])
+def test_ctrl_c_during_a_dask_write_is_raised_at_a_safe_point(tmp_path, attempt, times):
+    # a KeyboardInterrupt raised inside netCDF's locked sections left a lock held and
+    # the file's close waiting forever; now it comes out of dask's loop or at the end
+    import signal
+
+    path = write_atlas(make_atlas(seed=1), tmp_path / "atlas.nc")
+    original = path.read_bytes()
+    before = signal.getsignal(signal.SIGINT)
+    with pytest.raises(KeyboardInterrupt):
+        write_atlas(_signalling_atlas(signal.SIGINT, times), path)
+    assert signal.getsignal(signal.SIGINT) is before
+    assert folder_listing(tmp_path) == ["atlas.nc"]
+    assert path.read_bytes() == original
+
+
+def test_a_signal_deferred_in_an_eager_block_ends_it_and_a_handler_of_our_own_is_kept():
+    import signal
+
+    with pytest.raises(KeyboardInterrupt):
+        with atlas.signals_deferred():
+            signal.raise_signal(signal.SIGINT)
+            done = True  # the block ran to its end: the signal waited
+    assert done
+    seen = []
+    previous = signal.signal(signal.SIGINT, lambda *a: seen.append(a[0]))
+    try:
+        with atlas.signals_deferred():
+            signal.raise_signal(signal.SIGINT)
+        assert seen == [signal.SIGINT]  # the program's own handler ran, nothing was raised
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def test_atomic_path_for_a_chunked_writer(tmp_path):
