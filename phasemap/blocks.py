@@ -138,6 +138,20 @@ def estimate(scene, block_cells: int | None = None, timed: bool = False,
                     available_memory())
 
 
+#: ``Scene.compute()`` that allocates less than this is not checked against the memory
+#: free: reading /proc costs more than such a map takes to compute, and no machine that
+#: has just imported phasemap lacks a MiB.
+UNCHECKED_BYTES = 1 << 20
+
+
+def eager_bytes(scene) -> int:
+    """What ``scene.compute()`` allocates: every layer of the grid and the integrator's
+    arrays of one block."""
+    reg = layers_for(scene.model)
+    per_cell = sum(np.dtype(reg[n].dtype).itemsize for n in scene.layers)
+    return scene.size * per_cell + min(scene.size, largest_block(scene)) * _fate_scratch(scene)
+
+
 def largest_block(scene) -> int:
     """The most cells a block of ``scene`` takes."""
     return FATE_BLOCK_CELLS if scene.has_fates else MAP_BLOCK_CELLS

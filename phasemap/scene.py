@@ -166,7 +166,7 @@ class Scene:
         """A JSON-ready description, enough to recompute the atlas (see :meth:`from_spec`)."""
         axes = {}
         for name, a in self.axes.items():
-            if a.size > 1 and np.allclose(a, np.linspace(a[0], a[-1], a.size), rtol=0, atol=0):
+            if a.size > 1 and np.array_equal(a, np.linspace(a[0], a[-1], a.size)):
                 axes[name] = {"start": a[0], "stop": a[-1], "count": int(a.size)}
             else:
                 axes[name] = a.tolist()
@@ -278,7 +278,8 @@ class Scene:
             return self._lazy(chunks)
         from . import blocks
 
-        blocks.check_memory(self, blocks.estimate(self, eager=True))
+        if blocks.eager_bytes(self) > blocks.UNCHECKED_BYTES:
+            blocks.check_memory(self, blocks.estimate(self, eager=True))
         return self._dataset(self._eager(progress))
 
     def _eager(self, show: bool | None) -> dict[str, np.ndarray]:
