@@ -152,12 +152,7 @@ def _active(sl: Slice, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray
     # values at random points: constant conditions, and proportional ones
     pts = rng.uniform(0.02, 0.98, size=(12, 2))
     vals = np.empty((len(pts), nc))
-    scales = np.empty(nc)
-    for p, (u, w) in enumerate(pts):
-        v[ix] = sl.lo[0] + u * (sl.hi[0] - sl.lo[0])
-        v[iy] = sl.lo[1] + w * (sl.hi[1] - sl.lo[1])
-        C.module.values(v, vals[p], scales)
-    vals = np.where(np.isfinite(vals), vals, np.nan)
+    T.entries()["survey"](sl.fns, v, ix, iy, sl.geo, pts, vals)
     size = np.nanmax(np.abs(vals), axis=0, initial=0.0)
     active &= ~(np.ptp(vals, axis=0) <= 1e-13 * size)  # constant (NaN: not constant)
     # c_k proportional to c_j: c_k(p) c_j(0) = c_k(0) c_j(p) at every point p
@@ -168,13 +163,14 @@ def _active(sl: Slice, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray
     with np.errstate(invalid="ignore"):
         same = np.all(cross <= 1e-9 * terms, axis=0) & (np.abs(ref)[:, None] > 0) \
             & (np.abs(ref)[None, :] > 0)
+    # each active condition joins the first earlier one still active with its zero set
+    same &= np.tri(nc, k=-1, dtype=bool) & active[None, :] & active[:, None]
     group = np.arange(nc)
-    for k in range(nc):
-        if active[k]:
-            earlier = np.flatnonzero(same[k, :k] & active[:k])
-            if len(earlier):
-                group[k] = earlier[0]
-                active[k] = False
+    for k in np.flatnonzero(same.any(axis=1)):
+        earlier = np.flatnonzero(same[k] & active)
+        if len(earlier):
+            group[k] = earlier[0]
+            active[k] = False
     return active, group
 
 
@@ -205,7 +201,7 @@ class _Buffers:
 
     def __init__(self, nc: int, vertices: int = 1 << 14, curves: int = 1 << 10):
         self.vf = np.empty((vertices, 4))
-        self.vi = np.ones((vertices, 7), dtype=np.int64)
+        self.vi = np.empty((vertices, 7), dtype=np.int64)
         self.curves = np.empty((curves, 4), dtype=np.int64)
         self.counts = np.zeros(3, dtype=np.int64)
 
@@ -430,7 +426,10 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
                    phasemap_axes=json.dumps({sl.x: [sl.lo[0], sl.hi[0]],
                                              sl.y: [sl.lo[1], sl.hi[1]]}),
                    phasemap_tol=tol)
-    return xr.Dataset(data, coords={"piece": piece}, attrs=attrs)
+    # built directly: the variables share their dimensions and none has an index, so
+    # xarray's merge and alignment (half the cost of a simple slice) have nothing to do
+    return xr.Dataset._construct_direct({**data, "piece": piece}, {"piece"}, attrs=attrs,
+                                        indexes={})
 
 
 def boundaries(model, axes: Mapping, fixed: Mapping | None = None, layer: str = "n_solutions",
