@@ -169,6 +169,38 @@ def _seed(seeds, m, k, u, w, kind):
 
 
 @njit(cache=True, error_model="numpy")
+def _near(near, u, w):
+    """The cell of ``near`` (n x n over the unit square) at (u, w)."""
+    n = near.shape[0]
+    return near[min(max(int(u * n), 0), n - 1), min(max(int(w * n), 0), n - 1)]
+
+
+@njit(cache=True, error_model="numpy")
+def near_changes(classes, radius):
+    """Cells of a raster within ``radius`` cells (in each axis) of a class change
+    between neighbouring cells: where a boundary of the raster's classes can pass."""
+    n0, n1 = classes.shape
+    changed = np.zeros((n0, n1), dtype=np.bool_)
+    for i in range(n0):
+        for j in range(n1):
+            if (i + 1 < n0 and classes[i + 1, j] != classes[i, j]) \
+                    or (j + 1 < n1 and classes[i, j + 1] != classes[i, j]):
+                changed[i, j] = True
+                if i + 1 < n0:
+                    changed[i + 1, j] = True
+                if j + 1 < n1:
+                    changed[i, j + 1] = True
+    near = np.zeros((n0, n1), dtype=np.bool_)
+    for i in range(n0):
+        for j in range(n1):
+            if changed[i, j]:
+                for a in range(max(i - radius, 0), min(i + radius + 1, n0)):
+                    for b in range(max(j - radius, 0), min(j + radius + 1, n1)):
+                        near[a, b] = True
+    return near
+
+
+@njit(cache=True, error_model="numpy")
 def _owned(k, grp, active, cv, cs, mark, ua, wa, ub, wb):
     """Whether the curve of k traces the stretch from (ua, wa) to (ub, wb), whose end's
     condition values are cv: 0 where a condition that ranks first vanishes there too
@@ -700,14 +732,17 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
 
 
 def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
-               tol_u, tol_w, require_sides):
+               near, tol_u, tol_w, require_sides):
     """Trace a curve from each seed ``(k, u, w)`` not on a curve already traced.
 
     A seed's point is projected onto its condition's zero set; it is skipped
     where the raster cell around it is already crossed by a curve of the same
     condition, and, with ``require_sides``, where the class is the same on
-    both sides of the curve there (not a boundary).  Returns the number of
-    curves traced.
+    both sides of the curve there (not a boundary) or where the check raster
+    has no class change near it (``near``, :func:`near_changes`: most seeds of
+    a model with many conditions lie on zero sets that bound nothing, and
+    sampling their sides costs two classifications each).  Returns the number
+    of curves traced.
     """
     g = np.empty(2)
     H = np.empty((2, 2))
@@ -731,7 +766,7 @@ def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
         ok, u, w = _project(F, k, v, ix, iy, geo, g, u0, w0)
         if not ok or not _inside(u, w, 0.0) or math.hypot(u - u0, w - w0) > 4.0 / n:
             continue
-        if _seen(mark, k, u, w):
+        if _seen(mark, k, u, w) or (require_sides and not _near(near, u, w)):
             continue
         tu, tw, gn, s = _tangent(F, k, v, ix, iy, geo, g, u, w, 1.0, 0.0)
         if gn == 0.0 or tu == 0.0 and tw == 0.0:
@@ -1110,6 +1145,7 @@ _F2 = types.Array(types.float64, 2, "C")
 _I1 = types.Array(types.int64, 1, "C")
 _I2 = types.Array(types.int64, 2, "C")
 _B1 = types.Array(types.boolean, 1, "C")
+_B2 = types.Array(types.boolean, 2, "C")
 _B3 = types.Array(types.int8, 3, "C")
 #: ``values(x, out, scale)`` of a generated condition module.
 VALUES_SIG = types.void(_F1, _F1, _F1)
@@ -1140,7 +1176,7 @@ def entries() -> dict:
     """
     if not _ENTRIES:
         sig_trace = types.int64(FUNCTIONS, _F2, _I2, _B1, _F1, _F2, types.int64, types.int64,
-                                _F1, types.int64, _F2, _I2, _I1, _I2, _B3, types.float64,
+                                _F1, types.int64, _F2, _I2, _I1, _I2, _B3, _B2, types.float64,
                                 types.float64, types.boolean)
         sig_seeds = _F2(FUNCTIONS, _B1, _F1, types.int64, types.int64, _F1, types.int64)
         sig_survey = types.void(FUNCTIONS, _F1, types.int64, types.int64, _F1, _F2, _F2)

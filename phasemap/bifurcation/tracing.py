@@ -30,6 +30,8 @@ _KIND_NAMES = {T.CROSSING: "crossing", T.END: "end", T.TANGENCY: "tangency",
 SEED_NODES = 33
 #: Cells per side of the raster whose class changes every piece must explain.
 CHECK_CELLS = 128
+#: A seed starts a piece only within this many cells of a class change of that raster.
+NEAR = 2
 
 
 @dataclass
@@ -235,17 +237,21 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     grp = _ranked(sl.conds, group)
     buf = _Buffers(nc)
     mark = np.zeros((nc, seed_nodes - 1, seed_nodes - 1), dtype=np.int8)
+    near = np.ones((1, 1), dtype=bool)
+    if check_cells:
+        axes = _cell_centres(sl, check_cells)
+        classes = np.ascontiguousarray(evaluate(m, axes, sl.fixed,
+                                                [layers_for(m)[layer]])[layer])
+        near = T.near_changes(classes, NEAR)
     while True:
         run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
-                     buf.counts, buf.curves, mark, tol_u, tol_w, only is None)
+                     buf.counts, buf.curves, mark, near, tol_u, tol_w, only is None)
         if not buf.counts[2]:
             break
         buf = buf.grown()
         mark[:] = 0
     traced = _assembled(buf, group, active)
     if check_cells:
-        axes = _cell_centres(sl, check_cells)
-        classes = evaluate(m, axes, sl.fixed, [layers_for(m)[layer]])[layer]
         traced.classes = classes
         bad = T.uncovered(classes, traced.pv, traced.pp)
         if len(bad):
@@ -258,7 +264,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
                         T._mark(fine, int(traced.pieces[p, 1]), sel[q, 0], sel[q, 1],
                                 sel[q + 1, 0], sel[q + 1, 1])
                 run["trace"](fns, rescue, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
-                             buf.counts, buf.curves, fine, tol_u, tol_w, True)
+                             buf.counts, buf.curves, fine, near, tol_u, tol_w, True)
                 if buf.counts[2]:
                     raise RuntimeError(f"{m.name}: more than {buf.vf.shape[0]} vertices")
                 traced = _assembled(buf, group, active)
