@@ -201,6 +201,59 @@ def near_changes(classes, radius):
 
 
 @njit(cache=True, error_model="numpy")
+def groups(vals, active):
+    """Drop from ``active`` the conditions constant over the sample points (rows of
+    ``vals``) and those proportional there to an earlier active one, whose zero
+    set they share: ``c_k(p) c_j(0) = c_k(0) c_j(p)`` at every point p.  Returns
+    each condition's group (the active condition that traces its zero set).
+    A NaN value is neither constant nor proportional."""
+    npts, nc = vals.shape
+    for k in range(nc):
+        lo, hi, size, defined = np.inf, -np.inf, 0.0, True
+        for p in range(npts):
+            x = vals[p, k]
+            defined = defined and x == x
+            lo = min(lo, x)
+            hi = max(hi, x)
+            size = max(size, abs(x))
+        if defined and hi - lo <= 1e-13 * size:
+            active[k] = False
+    group = np.arange(nc)
+    for k in range(nc):
+        if not active[k] or not abs(vals[0, k]) > 0.0:
+            continue
+        for j in range(k):
+            if not active[j] or not abs(vals[0, j]) > 0.0:
+                continue
+            same = True
+            for p in range(npts):
+                a = vals[p, k] * vals[0, j]
+                b = vals[0, k] * vals[p, j]
+                if not abs(a - b) <= 1e-9 * (abs(a) + abs(b)):
+                    same = False
+                    break
+            if same:
+                group[k] = j
+                active[k] = False
+                break
+    return group
+
+
+@njit(cache=True, error_model="numpy")
+def _yields(k, grp, active, F, v, ix, iy, geo, u, w, cv, cs):
+    """A condition that ranks before k vanishes with it at (u, w): the stretch there is
+    that condition's to trace (:func:`_owned`), and a seed of k there starts no piece."""
+    v[ix] = geo[0] + u * geo[1]
+    v[iy] = geo[2] + w * geo[3]
+    F[0](v, cv, cs)
+    for j in range(cv.shape[0]):
+        if active[j] and grp[j, 0] != grp[k, 0] and grp[j, 1] < grp[k, 1] \
+                and abs(cv[j]) <= COVANISH * cs[j]:
+            return True
+    return False
+
+
+@njit(cache=True, error_model="numpy")
 def _owned(k, grp, active, cv, cs, mark, ua, wa, ub, wb):
     """Whether the curve of k traces the stretch from (ua, wa) to (ub, wb), whose end's
     condition values are cv: 0 where a condition that ranks first vanishes there too
@@ -768,6 +821,8 @@ def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
             continue
         if _seen(mark, k, u, w) or (require_sides and not _near(near, u, w)):
             continue
+        if require_sides and _yields(k, grp, active, F, v, ix, iy, geo, u, w, cv0, cs):
+            continue
         tu, tw, gn, s = _tangent(F, k, v, ix, iy, geo, g, u, w, 1.0, 0.0)
         if gn == 0.0 or tu == 0.0 and tw == 0.0:
             continue
@@ -833,19 +888,36 @@ def _survey_all(F, v, ix, iy, geo, pts, vals):
                 vals[p, k] = np.nan
 
 
-def _seeds_all(F, active, v, ix, iy, geo, n):
+def _seeds_all(F, active, v, ix, iy, geo, n, near):
     """Seeds on an n x n raster of nodes (the slice's edges included): every sign change
     of an active condition between neighbouring nodes, and every node where a
     condition's magnitude has a local minimum without a sign change around it (a loop
-    smaller than a cell).  Returns rows (condition, u, w, kind: 0 sign change, 1 minimum).
+    smaller than a cell).  Only nodes within one raster cell of a cell of ``near``
+    (:func:`near_changes`) are evaluated and only they seed: a seed elsewhere
+    cannot start a curve (:func:`_trace_all`).  Returns rows (condition, u, w, kind: 0 sign
+    change, 1 minimum).
     """
     cv = np.empty((n, n, active.shape[0]))
     cs = np.empty(active.shape[0])
+    need = np.zeros((n, n), dtype=np.bool_)
+    m = near.shape[0]
     for i in range(n):
         for j in range(n):
-            v[ix] = geo[0] + (i / (n - 1)) * geo[1]
-            v[iy] = geo[2] + (j / (n - 1)) * geo[3]
-            F[0](v, cv[i, j], cs)
+            a0 = max(int((i - 1) / (n - 1) * m), 0)
+            a1 = min(int((i + 1) / (n - 1) * m), m - 1)
+            b0 = max(int((j - 1) / (n - 1) * m), 0)
+            b1 = min(int((j + 1) / (n - 1) * m), m - 1)
+            for a in range(a0, a1 + 1):
+                for b in range(b0, b1 + 1):
+                    if near[a, b]:
+                        need[i, j] = True
+                        break
+                if need[i, j]:
+                    break
+            if need[i, j]:
+                v[ix] = geo[0] + (i / (n - 1)) * geo[1]
+                v[iy] = geo[2] + (j / (n - 1)) * geo[3]
+                F[0](v, cv[i, j], cs)
     seeds = np.empty((64, 4))
     m = 0
     for k in range(active.shape[0]):
@@ -853,11 +925,13 @@ def _seeds_all(F, active, v, ix, iy, geo, n):
             continue
         for i in range(n):
             for j in range(n):
+                if not need[i, j]:
+                    continue
                 a = cv[i, j, k]
                 for d in range(2):
                     i2 = i + 1 if d == 0 else i
                     j2 = j if d == 0 else j + 1
-                    if i2 >= n or j2 >= n:
+                    if i2 >= n or j2 >= n or not need[i2, j2]:
                         continue
                     b = cv[i2, j2, k]
                     if a * b < 0.0 or (a == 0.0 and b != 0.0):
@@ -874,6 +948,9 @@ def _seeds_all(F, active, v, ix, iy, geo, n):
                         i2 = i + di
                         j2 = j + dj
                         if i2 < 0 or j2 < 0 or i2 >= n or j2 >= n:
+                            continue
+                        if not need[i2, j2]:
+                            lowest = False
                             continue
                         b = cv[i2, j2, k]
                         if b != b:
@@ -1178,11 +1255,12 @@ def entries() -> dict:
         sig_trace = types.int64(FUNCTIONS, _F2, _I2, _B1, _F1, _F2, types.int64, types.int64,
                                 _F1, types.int64, _F2, _I2, _I1, _I2, _B3, _B2, types.float64,
                                 types.float64, types.boolean)
-        sig_seeds = _F2(FUNCTIONS, _B1, _F1, types.int64, types.int64, _F1, types.int64)
+        sig_seeds = _F2(FUNCTIONS, _B1, _F1, types.int64, types.int64, _F1, types.int64, _B2)
         sig_survey = types.void(FUNCTIONS, _F1, types.int64, types.int64, _F1, _F2, _F2)
         with warnings.catch_warnings():  # numba calls first-class functions experimental
             warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
-            for name, fn, sig in (("trace", _trace_all, sig_trace), ("seeds", _seeds_all, sig_seeds),
+            for name, fn, sig in (("trace", _trace_all, sig_trace),
+                                  ("seeds", _seeds_all, sig_seeds),
                                   ("survey", _survey_all, sig_survey)):
                 _ENTRIES[name] = _entry_point(njit(sig, cache=True, error_model="numpy")(fn), sig)
     return _ENTRIES

@@ -113,7 +113,11 @@ def make_slice(model, axes: Mapping, fixed: Mapping | None, conditions=None) -> 
     return Slice(m, names[0], names[1], np.array(lo), np.array(hi), fixed, conds, fns, base)
 
 
-def _active(sl: Slice, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+#: The points of the unit square where :func:`_active` compares the conditions.
+_SURVEY = np.random.default_rng(20261123).uniform(0.02, 0.98, size=(12, 2))
+
+
+def _active(sl: Slice) -> tuple[np.ndarray, np.ndarray]:
     """Which conditions can bound a class in the slice, and one representative per
     group of conditions with the same zero set.
 
@@ -152,27 +156,10 @@ def _active(sl: Slice, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray
         if C.kinds[k] == "velocity" and not velocity_axis:
             active[k] = False
     # values at random points: constant conditions, and proportional ones
-    pts = rng.uniform(0.02, 0.98, size=(12, 2))
+    pts = _SURVEY
     vals = np.empty((len(pts), nc))
     T.entries()["survey"](sl.fns, v, ix, iy, sl.geo, pts, vals)
-    size = np.nanmax(np.abs(vals), axis=0, initial=0.0)
-    active &= ~(np.ptp(vals, axis=0) <= 1e-13 * size)  # constant (NaN: not constant)
-    # c_k proportional to c_j: c_k(p) c_j(0) = c_k(0) c_j(p) at every point p
-    ref = vals[0]
-    cross = np.abs(vals[:, :, None] * ref[None, None, :] - ref[None, :, None] * vals[:, None, :])
-    terms = np.abs(vals[:, :, None] * ref[None, None, :]) + np.abs(ref[None, :, None]
-                                                                     * vals[:, None, :])
-    with np.errstate(invalid="ignore"):
-        same = np.all(cross <= 1e-9 * terms, axis=0) & (np.abs(ref)[:, None] > 0) \
-            & (np.abs(ref)[None, :] > 0)
-    # each active condition joins the first earlier one still active with its zero set
-    same &= np.tri(nc, k=-1, dtype=bool) & active[None, :] & active[:, None]
-    group = np.arange(nc)
-    for k in np.flatnonzero(same.any(axis=1)):
-        earlier = np.flatnonzero(same[k] & active)
-        if len(earlier):
-            group[k] = earlier[0]
-            active[k] = False
+    group = T.groups(vals, active)
     return active, group
 
 
@@ -222,8 +209,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     fns, m = sl.fns, sl.model
     run = T.entries()
     code = _LAYER_CODE[layer]
-    rng = np.random.default_rng(20261123)
-    active, group = _active(sl, rng)
+    active, group = _active(sl)
     if only is not None:
         active = active & only
         check_cells = 0
@@ -231,7 +217,6 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     geo = sl.geo
     tol_u, tol_w = tol / geo[1], tol / geo[3]
     v = sl.base.copy()
-    seeds = run["seeds"](fns, active, v, ix, iy, geo, seed_nodes)
     out = np.empty((len(m.candidates), m.n_fields))
     nc = len(sl.conds)
     grp = _ranked(sl.conds, group)
@@ -243,6 +228,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
         classes = np.ascontiguousarray(evaluate(m, axes, sl.fixed,
                                                 [layers_for(m)[layer]])[layer])
         near = T.near_changes(classes, NEAR)
+    seeds = run["seeds"](fns, active, v, ix, iy, geo, seed_nodes, near)
     while True:
         run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
                      buf.counts, buf.curves, mark, near, tol_u, tol_w, only is None)
