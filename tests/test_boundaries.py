@@ -13,6 +13,7 @@ import math
 import numpy as np
 import pytest
 import sympy as sp
+import xarray as xr
 
 import phasemap
 from phasemap.bifurcation import Condition, boundaries, threshold
@@ -200,6 +201,11 @@ def test_a_piece_ending_on_the_slice_edge(block):
 
 def test_round_trip_and_cf(rod_fold, tmp_path):
     assert_atlas_round_trip(rod_fold, tmp_path, "boundaries.nc")
+    # built directly (no merge): the Dataset xarray's constructor builds from its parts
+    made = xr.Dataset({k: v.variable for k, v in rod_fold.data_vars.items()},
+                      coords={"piece": rod_fold.piece.variable}, attrs=rod_fold.attrs)
+    xr.testing.assert_identical(rod_fold, made)
+    assert dict(rod_fold.sizes) == dict(made.sizes) and rod_fold.piece.dims == ("vertex",)
 
 
 def test_a_missing_condition_is_reported_with_its_cells():

@@ -28,10 +28,17 @@ from conftest import assert_atlas_round_trip
 
 def gyration_rod():
     """A rod whose inertia about its centre of mass is m k^2, declared with the public API."""
+    k = Parameter("k", "m", "radius of gyration about the centre of mass", default=0.5,
+                  lower=0.0, lower_open=True)
+    return declared_rod("gyration_rod", "a rod with radius of gyration k on a rough floor", k,
+                        lambda m, l: m * k**2)
+
+
+def declared_rod(name, description, extra, inertia):
+    """A rod on a rough floor with the further parameter ``extra`` and the inertia
+    ``inertia(m, l)`` about its centre of mass (a sympy expression)."""
     f = Parameter("f", "1", "friction coefficient", default=0.5, lower=0.0)
     l = Parameter("l", "m", "distance of the end from the centre of mass", default=1.0,
-                  lower=0.0, lower_open=True)
-    k = Parameter("k", "m", "radius of gyration about the centre of mass", default=0.5,
                   lower=0.0, lower_open=True)
     g = Parameter("g", "m s-2", "gravitational acceleration", default=9.81, lower=0.0)
     m = Parameter("m", "kg", "mass of the rod", default=1.0, lower=0.0, lower_open=True)
@@ -41,10 +48,10 @@ def gyration_rod():
     x = Coordinate("x", "m", "position of end A",
                    rate=Rate("xdot", "m s-1", "velocity of end A", scale=sp.sqrt(g * l)))
     y = Coordinate("y", "m", "height of end A")
-    return System("gyration_rod", "a rod with radius of gyration k on a rough floor", "test",
-                  coordinates=(theta, x, y), parameters=(f, l, k, g, m),
+    return System(name, description, "test",
+                  coordinates=(theta, x, y), parameters=(f, l, extra, g, m),
                   bodies=(Body(m, (x + l * sp.cos(theta), y + l * sp.sin(theta)),
-                               inertia=m * k**2, angle=theta),),
+                               inertia=inertia(m, l), angle=theta),),
                   potential=m * g * (y + l * sp.sin(theta)),
                   contacts=(PointContact("A", point=(x, y), normal=(0, 1), friction=f),)).model
 

@@ -42,6 +42,7 @@ import warnings
 import numpy as np
 from numba import njit, types
 from numba.core.errors import NumbaExperimentalFeatureWarning
+from numba.core.types.function_type import CompileResultWAP
 
 from .. import _numerics as nx
 
@@ -165,6 +166,91 @@ def _seed(seeds, m, k, u, w, kind):
         seeds = bigger
     seeds[m, 0], seeds[m, 1], seeds[m, 2], seeds[m, 3] = k, u, w, kind
     return seeds, m + 1
+
+
+@njit(cache=True, error_model="numpy")
+def _near(near, u, w):
+    """The cell of ``near`` (n x n over the unit square) at (u, w)."""
+    n = near.shape[0]
+    return near[min(max(int(u * n), 0), n - 1), min(max(int(w * n), 0), n - 1)]
+
+
+@njit(cache=True, error_model="numpy")
+def near_changes(classes, radius):
+    """Cells of a raster within ``radius`` cells (in each axis) of a class change
+    between neighbouring cells: where a boundary of the raster's classes can pass."""
+    n0, n1 = classes.shape
+    changed = np.zeros((n0, n1), dtype=np.bool_)
+    for i in range(n0):
+        for j in range(n1):
+            if (i + 1 < n0 and classes[i + 1, j] != classes[i, j]) \
+                    or (j + 1 < n1 and classes[i, j + 1] != classes[i, j]):
+                changed[i, j] = True
+                if i + 1 < n0:
+                    changed[i + 1, j] = True
+                if j + 1 < n1:
+                    changed[i, j + 1] = True
+    near = np.zeros((n0, n1), dtype=np.bool_)
+    for i in range(n0):
+        for j in range(n1):
+            if changed[i, j]:
+                for a in range(max(i - radius, 0), min(i + radius + 1, n0)):
+                    for b in range(max(j - radius, 0), min(j + radius + 1, n1)):
+                        near[a, b] = True
+    return near
+
+
+@njit(cache=True, error_model="numpy")
+def groups(vals, active):
+    """Drop from ``active`` the conditions constant over the sample points (rows of
+    ``vals``) and those proportional there to an earlier active one, whose zero
+    set they share: ``c_k(p) c_j(0) = c_k(0) c_j(p)`` at every point p.  Returns
+    each condition's group (the active condition that traces its zero set).
+    A NaN value is neither constant nor proportional."""
+    npts, nc = vals.shape
+    for k in range(nc):
+        lo, hi, size, defined = np.inf, -np.inf, 0.0, True
+        for p in range(npts):
+            x = vals[p, k]
+            defined = defined and x == x
+            lo = min(lo, x)
+            hi = max(hi, x)
+            size = max(size, abs(x))
+        if defined and hi - lo <= 1e-13 * size:
+            active[k] = False
+    group = np.arange(nc)
+    for k in range(nc):
+        if not active[k] or not abs(vals[0, k]) > 0.0:
+            continue
+        for j in range(k):
+            if not active[j] or not abs(vals[0, j]) > 0.0:
+                continue
+            same = True
+            for p in range(npts):
+                a = vals[p, k] * vals[0, j]
+                b = vals[0, k] * vals[p, j]
+                if not abs(a - b) <= 1e-9 * (abs(a) + abs(b)):
+                    same = False
+                    break
+            if same:
+                group[k] = j
+                active[k] = False
+                break
+    return group
+
+
+@njit(cache=True, error_model="numpy")
+def _yields(k, grp, active, F, v, ix, iy, geo, u, w, cv, cs):
+    """A condition that ranks before k vanishes with it at (u, w): the stretch there is
+    that condition's to trace (:func:`_owned`), and a seed of k there starts no piece."""
+    v[ix] = geo[0] + u * geo[1]
+    v[iy] = geo[2] + w * geo[3]
+    F[0](v, cv, cs)
+    for j in range(cv.shape[0]):
+        if active[j] and grp[j, 0] != grp[k, 0] and grp[j, 1] < grp[k, 1] \
+                and abs(cv[j]) <= COVANISH * cs[j]:
+            return True
+    return False
 
 
 @njit(cache=True, error_model="numpy")
@@ -699,14 +785,17 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
 
 
 def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
-               tol_u, tol_w, require_sides):
+               near, tol_u, tol_w, require_sides):
     """Trace a curve from each seed ``(k, u, w)`` not on a curve already traced.
 
     A seed's point is projected onto its condition's zero set; it is skipped
     where the raster cell around it is already crossed by a curve of the same
     condition, and, with ``require_sides``, where the class is the same on
-    both sides of the curve there (not a boundary).  Returns the number of
-    curves traced.
+    both sides of the curve there (not a boundary) or where the check raster
+    has no class change near it (``near``, :func:`near_changes`: most seeds of
+    a model with many conditions lie on zero sets that bound nothing, and
+    sampling their sides costs two classifications each).  Returns the number
+    of curves traced.
     """
     g = np.empty(2)
     H = np.empty((2, 2))
@@ -730,7 +819,9 @@ def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
         ok, u, w = _project(F, k, v, ix, iy, geo, g, u0, w0)
         if not ok or not _inside(u, w, 0.0) or math.hypot(u - u0, w - w0) > 4.0 / n:
             continue
-        if _seen(mark, k, u, w):
+        if _seen(mark, k, u, w) or (require_sides and not _near(near, u, w)):
+            continue
+        if require_sides and _yields(k, grp, active, F, v, ix, iy, geo, u, w, cv0, cs):
             continue
         tu, tw, gn, s = _tangent(F, k, v, ix, iy, geo, g, u, w, 1.0, 0.0)
         if gn == 0.0 or tu == 0.0 and tw == 0.0:
@@ -784,19 +875,49 @@ def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
     return traced
 
 
-def _seeds_all(F, active, v, ix, iy, geo, n):
+def _survey_all(F, v, ix, iy, geo, pts, vals):
+    """Every condition's value at the points ``pts`` (rows (u, w) of the unit square)
+    into the rows of ``vals``, NaN where a value is not finite."""
+    cs = np.empty(vals.shape[1])
+    for p in range(pts.shape[0]):
+        v[ix] = geo[0] + pts[p, 0] * geo[1]
+        v[iy] = geo[2] + pts[p, 1] * geo[3]
+        F[0](v, vals[p], cs)
+        for k in range(vals.shape[1]):
+            if not math.isfinite(vals[p, k]):
+                vals[p, k] = np.nan
+
+
+def _seeds_all(F, active, v, ix, iy, geo, n, near):
     """Seeds on an n x n raster of nodes (the slice's edges included): every sign change
     of an active condition between neighbouring nodes, and every node where a
     condition's magnitude has a local minimum without a sign change around it (a loop
-    smaller than a cell).  Returns rows (condition, u, w, kind: 0 sign change, 1 minimum).
+    smaller than a cell).  Only nodes within one raster cell of a cell of ``near``
+    (:func:`near_changes`) are evaluated and only they seed: a seed elsewhere
+    cannot start a curve (:func:`_trace_all`).  Returns rows (condition, u, w, kind: 0 sign
+    change, 1 minimum).
     """
     cv = np.empty((n, n, active.shape[0]))
     cs = np.empty(active.shape[0])
+    need = np.zeros((n, n), dtype=np.bool_)
+    m = near.shape[0]
     for i in range(n):
         for j in range(n):
-            v[ix] = geo[0] + (i / (n - 1)) * geo[1]
-            v[iy] = geo[2] + (j / (n - 1)) * geo[3]
-            F[0](v, cv[i, j], cs)
+            a0 = max(int((i - 1) / (n - 1) * m), 0)
+            a1 = min(int((i + 1) / (n - 1) * m), m - 1)
+            b0 = max(int((j - 1) / (n - 1) * m), 0)
+            b1 = min(int((j + 1) / (n - 1) * m), m - 1)
+            for a in range(a0, a1 + 1):
+                for b in range(b0, b1 + 1):
+                    if near[a, b]:
+                        need[i, j] = True
+                        break
+                if need[i, j]:
+                    break
+            if need[i, j]:
+                v[ix] = geo[0] + (i / (n - 1)) * geo[1]
+                v[iy] = geo[2] + (j / (n - 1)) * geo[3]
+                F[0](v, cv[i, j], cs)
     seeds = np.empty((64, 4))
     m = 0
     for k in range(active.shape[0]):
@@ -804,19 +925,22 @@ def _seeds_all(F, active, v, ix, iy, geo, n):
             continue
         for i in range(n):
             for j in range(n):
+                if not need[i, j]:
+                    continue
                 a = cv[i, j, k]
                 for d in range(2):
                     i2 = i + 1 if d == 0 else i
                     j2 = j if d == 0 else j + 1
-                    if i2 >= n or j2 >= n:
+                    if i2 >= n or j2 >= n or not need[i2, j2]:
                         continue
                     b = cv[i2, j2, k]
                     if a * b < 0.0 or (a == 0.0 and b != 0.0):
                         t = a / (a - b)
                         seeds, m = _seed(seeds, m, k, (i + (t if d == 0 else 0.0)) / (n - 1),
                                          (j + (t if d == 1 else 0.0)) / (n - 1), 0)
-                # a local minimum of |c| with one sign all around
-                lowest = True
+                # a local minimum of |c| with one sign all around (NaN, where c is not
+                # defined, is neither lower nor a sign change)
+                lowest = a == a
                 for di in range(-1, 2):
                     for dj in range(-1, 2):
                         if di == 0 and dj == 0:
@@ -825,7 +949,12 @@ def _seeds_all(F, active, v, ix, iy, geo, n):
                         j2 = j + dj
                         if i2 < 0 or j2 < 0 or i2 >= n or j2 >= n:
                             continue
+                        if not need[i2, j2]:
+                            lowest = False
+                            continue
                         b = cv[i2, j2, k]
+                        if b != b:
+                            continue
                         if b * a <= 0.0 or abs(b) <= abs(a):
                             lowest = False
                 if lowest and a != 0.0:
@@ -1093,6 +1222,7 @@ _F2 = types.Array(types.float64, 2, "C")
 _I1 = types.Array(types.int64, 1, "C")
 _I2 = types.Array(types.int64, 2, "C")
 _B1 = types.Array(types.boolean, 1, "C")
+_B2 = types.Array(types.boolean, 2, "C")
 _B3 = types.Array(types.int8, 3, "C")
 #: ``values(x, out, scale)`` of a generated condition module.
 VALUES_SIG = types.void(_F1, _F1, _F1)
@@ -1113,29 +1243,32 @@ _ENTRIES: dict = {}
 
 
 def entries() -> dict:
-    """The tracer's entry points, compiled once (cached on disk): ``trace`` and ``seeds``."""
+    """The tracer's entry points, compiled once (cached on disk): ``trace``, ``seeds``
+    and ``survey``.
+
+    Each is the compiled overload's own entry point, called without the
+    dispatcher: typing a tuple of first-class functions at every call cost
+    0.2-0.5 ms, more than a whole trace of a simple slice.  The callers pass
+    exactly the signature's types (C-contiguous arrays, :func:`functions`).
+    """
     if not _ENTRIES:
         sig_trace = types.int64(FUNCTIONS, _F2, _I2, _B1, _F1, _F2, types.int64, types.int64,
-                                _F1, types.int64, _F2, _I2, _I1, _I2, _B3, types.float64,
+                                _F1, types.int64, _F2, _I2, _I1, _I2, _B3, _B2, types.float64,
                                 types.float64, types.boolean)
-        sig_seeds = _F2(FUNCTIONS, _B1, _F1, types.int64, types.int64, _F1, types.int64)
+        sig_seeds = _F2(FUNCTIONS, _B1, _F1, types.int64, types.int64, _F1, types.int64, _B2)
+        sig_survey = types.void(FUNCTIONS, _F1, types.int64, types.int64, _F1, _F2, _F2)
         with warnings.catch_warnings():  # numba calls first-class functions experimental
             warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
-            trace = njit(sig_trace, cache=True, error_model="numpy")(_trace_all)
-            seeds = njit(sig_seeds, cache=True, error_model="numpy")(_seeds_all)
-        _ENTRIES["trace"] = _quiet(trace)
-        _ENTRIES["seeds"] = _quiet(seeds)
+            for name, fn, sig in (("trace", _trace_all, sig_trace),
+                                  ("seeds", _seeds_all, sig_seeds),
+                                  ("survey", _survey_all, sig_survey)):
+                _ENTRIES[name] = _entry_point(njit(sig, cache=True, error_model="numpy")(fn), sig)
     return _ENTRIES
 
 
-def _quiet(fn):
-    """``fn`` called without numba's warning that first-class functions are experimental
-    (typing the tuple of functions warns at every call)."""
-    def call(*args):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
-            return fn(*args)
-    return call
+def _entry_point(dispatcher, sig):
+    """The Python-callable entry point of ``dispatcher``'s overload for ``sig``."""
+    return dispatcher.overloads[tuple(sig.args)].entry_point
 
 
 _CLASSIFIERS: dict = {}
@@ -1157,8 +1290,23 @@ def classifier(model):
     return fn
 
 
+_FUNCTIONS: dict = {}
+
+
 def functions(model, conds) -> tuple:
     """The tuple of functions a trace of ``model`` with the two-variable condition module
-    ``conds`` takes (:data:`FUNCTIONS`)."""
+    ``conds`` takes (:data:`FUNCTIONS`), made once per model and module.
+
+    Each is the address of its compiled overload (a
+    :class:`numba.core.types.function_type.CompileResultWAP`): a jitted function
+    passed as such is looked up in its dispatcher at every call (0.2 ms a call).
+    """
     mod = conds.module
-    return (mod.values, mod.gradient, mod.hessian, classifier(model))
+    hit = _FUNCTIONS.get((id(model), id(mod)))
+    if hit is not None and hit[0] is model and hit[1] is mod:
+        return hit[2]
+    fns = tuple(CompileResultWAP(fn.overloads[tuple(sig.args)])
+                for fn, sig in ((mod.values, VALUES_SIG), (mod.gradient, GRADIENT_SIG),
+                                (mod.hessian, HESSIAN_SIG), (classifier(model), CLASS_SIG)))
+    _FUNCTIONS[(id(model), id(mod))] = (model, mod, fns)
+    return fns

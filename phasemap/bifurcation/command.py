@@ -41,7 +41,7 @@ def add_parsers(sub, make, models: str) -> dict:
     p = subs["threshold"] = make(
         sub, "threshold", "the least (greatest) parameter at which a class exists, to 1e-10",
         "Finds the infimum (or supremum) of PARAM over the region where the layer takes "
-        "--value, with the ranges of --over (at most one name besides PARAM), and prints "
+        "--value, with the ranges of --over (at most two names besides PARAM), and prints "
         "the value, the point and the condition that vanishes there (phasemap.threshold).")
     p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
     p.add_argument("param", metavar="PARAM", help="the parameter whose threshold is sought")

@@ -358,3 +358,60 @@ def _dataset(spec: _Spec, along: str, arange, pieces, points, tol) -> xr.Dataset
                    phasemap_over=json.dumps(spec.ranges),
                    phasemap_along=json.dumps({along: list(arange)}), phasemap_tol=tol)
     return xr.Dataset(data, attrs=attrs)
+
+
+def threshold_volume(spec: _Spec, conditions=None) -> Threshold | None:
+    """The threshold of :func:`threshold` over two further names ``(x, a)``: the least
+    (greatest) of the threshold curve in ``a`` (:func:`threshold_curve` of the slice
+    in ``x``), made exact.
+
+    Along a piece of that curve the threshold p*(a) follows one defining system
+    (a fold, a crossing, an end), whose tangent gives dp*/da exactly.  An
+    interior extremum of p*(a) is the root of dp*/da between the best vertex's
+    neighbours, solved by Brent's method on that exact derivative (for a fold
+    of a condition c: c = c_x = c_a = 0, the fold of the boundary surface in
+    p); an extremum at a piece's end (a's range edge, a switch between
+    candidates, where the region appears) is the vertex itself, found exactly
+    by :func:`threshold_curve`.
+    """
+    from scipy.optimize import brentq
+
+    m, p = spec.model, spec.param
+    x, a = spec.others
+    ranges = {x: spec.ranges[x], p: spec.ranges[p]}
+    ds = threshold_curve(m, p, spec.layer, spec.value, ranges, spec.fixed, spec.side, spec.tol,
+                         {a: spec.ranges[a]}, conditions)
+    if ds.sizes["vertex"] == 0:
+        return None
+    pv, av, piece = ds[p].values, ds[a].values, ds.piece.values
+    i = int(np.argmin(spec.sign * pv))
+    same = np.flatnonzero(piece == piece[i])
+    t = threshold(m, p, spec.layer, spec.value, ranges, {**spec.fixed, a: float(av[i])},
+                  spec.side, spec.tol, conditions=conditions)
+    if t is None:
+        return None
+    best = t
+    if t.kind != "edge" and same[0] < i < same[-1]:
+        C = compiled(m, (x, p, a), conditions)
+        base = m.input_vector(m.complete({**spec.fixed, x: ranges[x][0], p: ranges[p][0],
+                                          a: float(av[i])}))
+        sysm = _System(spec, a, t, C, base)
+        z = sysm.unknowns(t)
+
+        def slope(s):
+            r = sysm.solve(z, s, spec.tol)
+            if r is None:
+                raise ValueError(f"{m.name}: the threshold's defining system ({t.kind} of "
+                                 f"{t.condition}) cannot be followed to {a} = {s!r}")
+            return spec.sign * float(r[2][-1])
+
+        lo, hi = float(av[i - 1]), float(av[i + 1])
+        if slope(lo) < 0.0 < slope(hi):
+            s = brentq(slope, lo, hi, xtol=1e-3 * spec.tol, rtol=4 * np.finfo(float).eps)
+            moved = _moved(spec, a, C, base, t, s, spec.tol)
+            if moved is not None and spec.sign * moved.value <= spec.sign * t.value:
+                best = Threshold(p, moved.value, {**moved.at, a: s}, moved.condition, moved.kind,
+                                 moved.residual, moved.error, math.nan, spec.side)
+    at = {**best.at, a: best.at.get(a, float(av[i]))}
+    return Threshold(p, best.value, {x: at[x], a: at[a], p: best.value}, best.condition,
+                     best.kind, best.residual, best.error, math.nan, spec.side)

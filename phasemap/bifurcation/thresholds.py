@@ -90,8 +90,14 @@ def threshold(model, param: str, layer: str = "n_solutions", value: int = 0,
     over:
         ``{name: (lo, hi)}``: the ranges searched; ``param``'s own range may be
         given here too (otherwise the model's default map's, or its domain if
-        that is finite).  At most one other name: the exact boundaries of that slice
-        are traced (:func:`phasemap.boundaries`); none: the line of ``param``.
+        that is finite).  One other name: the exact boundaries of that slice are
+        traced (:func:`phasemap.boundaries`); none: the line of ``param``; two,
+        ``x`` and ``a`` (in that order): the threshold of the slice in ``x`` is
+        followed in ``a`` (``along=``) and its extremum solved exactly (an
+        interior one where dp/da = 0 on its defining system: for a fold of a
+        condition c, c = c_x = c_a = 0).  The first of the two should be the one
+        whose slice holds the richer boundaries (it is traced; the second is
+        continued).
     fixed:
         values of the other variables (the rest take the model's defaults).
     side:
@@ -113,7 +119,7 @@ def threshold(model, param: str, layer: str = "n_solutions", value: int = 0,
     ------
     ValueError
         naming the argument: an unknown model, parameter, variable or layer, a
-        range that is empty or outside the domain, more than one name in ``over``
+        range that is empty or outside the domain, more than two names in ``over``
         besides the parameter (not supported), or a region whose extremum cannot
         be located to ``tol``.
 
@@ -137,6 +143,10 @@ def threshold(model, param: str, layer: str = "n_solutions", value: int = 0,
     spec = _Spec.make(m, param, layer, value, over, fixed, side, tol)
     if len(spec.others) == 0:
         return _line(spec, conditions)
+    if len(spec.others) == 2:
+        from .curve import threshold_volume
+
+        return threshold_volume(spec, conditions)
     return _plane(spec, conditions)
 
 
@@ -199,9 +209,10 @@ class _Spec:
         if param not in ranges:
             ranges[param] = _default_range(m, param)
         others = [n for n in ranges if n != param]
-        if len(others) > 1:
-            raise ValueError(f"{m.name}: over ranges at most one name besides {param!r} "
-                             f"(a slice), got {', '.join(others)}")
+        if len(others) > 2:
+            raise ValueError(f"{m.name}: over ranges at most two names besides {param!r}, got "
+                             f"{', '.join(others)}: fix the others (fixed=), or follow the "
+                             "threshold in one of them with along= for each value of the rest")
         return _Spec(m, param, layer, value, ranges, others, fixed, side, tol)
 
 

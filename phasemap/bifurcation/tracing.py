@@ -30,6 +30,8 @@ _KIND_NAMES = {T.CROSSING: "crossing", T.END: "end", T.TANGENCY: "tangency",
 SEED_NODES = 33
 #: Cells per side of the raster whose class changes every piece must explain.
 CHECK_CELLS = 128
+#: A seed starts a piece only within this many cells of a class change of that raster.
+NEAR = 2
 
 
 @dataclass
@@ -111,7 +113,11 @@ def make_slice(model, axes: Mapping, fixed: Mapping | None, conditions=None) -> 
     return Slice(m, names[0], names[1], np.array(lo), np.array(hi), fixed, conds, fns, base)
 
 
-def _active(sl: Slice, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+#: The points of the unit square where :func:`_active` compares the conditions.
+_SURVEY = np.random.default_rng(20261123).uniform(0.02, 0.98, size=(12, 2))
+
+
+def _active(sl: Slice) -> tuple[np.ndarray, np.ndarray]:
     """Which conditions can bound a class in the slice, and one representative per
     group of conditions with the same zero set.
 
@@ -150,31 +156,10 @@ def _active(sl: Slice, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray
         if C.kinds[k] == "velocity" and not velocity_axis:
             active[k] = False
     # values at random points: constant conditions, and proportional ones
-    pts = rng.uniform(0.02, 0.98, size=(12, 2))
+    pts = _SURVEY
     vals = np.empty((len(pts), nc))
-    scales = np.empty(nc)
-    for p, (u, w) in enumerate(pts):
-        v[ix] = sl.lo[0] + u * (sl.hi[0] - sl.lo[0])
-        v[iy] = sl.lo[1] + w * (sl.hi[1] - sl.lo[1])
-        C.module.values(v, vals[p], scales)
-    vals = np.where(np.isfinite(vals), vals, np.nan)
-    size = np.nanmax(np.abs(vals), axis=0, initial=0.0)
-    active &= ~(np.ptp(vals, axis=0) <= 1e-13 * size)  # constant (NaN: not constant)
-    # c_k proportional to c_j: c_k(p) c_j(0) = c_k(0) c_j(p) at every point p
-    ref = vals[0]
-    cross = np.abs(vals[:, :, None] * ref[None, None, :] - ref[None, :, None] * vals[:, None, :])
-    terms = np.abs(vals[:, :, None] * ref[None, None, :]) + np.abs(ref[None, :, None]
-                                                                     * vals[:, None, :])
-    with np.errstate(invalid="ignore"):
-        same = np.all(cross <= 1e-9 * terms, axis=0) & (np.abs(ref)[:, None] > 0) \
-            & (np.abs(ref)[None, :] > 0)
-    group = np.arange(nc)
-    for k in range(nc):
-        if active[k]:
-            earlier = np.flatnonzero(same[k, :k] & active[:k])
-            if len(earlier):
-                group[k] = earlier[0]
-                active[k] = False
+    T.entries()["survey"](sl.fns, v, ix, iy, sl.geo, pts, vals)
+    group = T.groups(vals, active)
     return active, group
 
 
@@ -205,7 +190,7 @@ class _Buffers:
 
     def __init__(self, nc: int, vertices: int = 1 << 14, curves: int = 1 << 10):
         self.vf = np.empty((vertices, 4))
-        self.vi = np.ones((vertices, 7), dtype=np.int64)
+        self.vi = np.empty((vertices, 7), dtype=np.int64)
         self.curves = np.empty((curves, 4), dtype=np.int64)
         self.counts = np.zeros(3, dtype=np.int64)
 
@@ -224,8 +209,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     fns, m = sl.fns, sl.model
     run = T.entries()
     code = _LAYER_CODE[layer]
-    rng = np.random.default_rng(20261123)
-    active, group = _active(sl, rng)
+    active, group = _active(sl)
     if only is not None:
         active = active & only
         check_cells = 0
@@ -233,23 +217,27 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     geo = sl.geo
     tol_u, tol_w = tol / geo[1], tol / geo[3]
     v = sl.base.copy()
-    seeds = run["seeds"](fns, active, v, ix, iy, geo, seed_nodes)
     out = np.empty((len(m.candidates), m.n_fields))
     nc = len(sl.conds)
     grp = _ranked(sl.conds, group)
     buf = _Buffers(nc)
     mark = np.zeros((nc, seed_nodes - 1, seed_nodes - 1), dtype=np.int8)
+    near = np.ones((1, 1), dtype=bool)
+    if check_cells:
+        axes = _cell_centres(sl, check_cells)
+        classes = np.ascontiguousarray(evaluate(m, axes, sl.fixed,
+                                                [layers_for(m)[layer]])[layer])
+        near = T.near_changes(classes, NEAR)
+    seeds = run["seeds"](fns, active, v, ix, iy, geo, seed_nodes, near)
     while True:
         run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
-                     buf.counts, buf.curves, mark, tol_u, tol_w, only is None)
+                     buf.counts, buf.curves, mark, near, tol_u, tol_w, only is None)
         if not buf.counts[2]:
             break
         buf = buf.grown()
         mark[:] = 0
     traced = _assembled(buf, group, active)
     if check_cells:
-        axes = _cell_centres(sl, check_cells)
-        classes = evaluate(m, axes, sl.fixed, [layers_for(m)[layer]])[layer]
         traced.classes = classes
         bad = T.uncovered(classes, traced.pv, traced.pp)
         if len(bad):
@@ -262,7 +250,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
                         T._mark(fine, int(traced.pieces[p, 1]), sel[q, 0], sel[q, 1],
                                 sel[q + 1, 0], sel[q + 1, 1])
                 run["trace"](fns, rescue, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
-                             buf.counts, buf.curves, fine, tol_u, tol_w, True)
+                             buf.counts, buf.curves, fine, near, tol_u, tol_w, True)
                 if buf.counts[2]:
                     raise RuntimeError(f"{m.name}: more than {buf.vf.shape[0]} vertices")
                 traced = _assembled(buf, group, active)
@@ -430,7 +418,10 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
                    phasemap_axes=json.dumps({sl.x: [sl.lo[0], sl.hi[0]],
                                              sl.y: [sl.lo[1], sl.hi[1]]}),
                    phasemap_tol=tol)
-    return xr.Dataset(data, coords={"piece": piece}, attrs=attrs)
+    # built directly: the variables share their dimensions and none has an index, so
+    # xarray's merge and alignment (half the cost of a simple slice) have nothing to do
+    return xr.Dataset._construct_direct({**data, "piece": piece}, {"piece"}, attrs=attrs,
+                                        indexes={})
 
 
 def boundaries(model, axes: Mapping, fixed: Mapping | None = None, layer: str = "n_solutions",

@@ -1,0 +1,58 @@
+"""threshold over two further names: the first paradox of a rod whose inertia depends
+on a parameter s, least over (theta, s).
+
+Derived here, independently of the tracer (see tests/test_threshold_along.py for
+the rod with radius of gyration k): at omega = 0 the slide coefficient of the
+end pushed back is kappa + cos^2 theta - f sin theta cos theta, kappa = I/(m l^2);
+it first changes sign at f = 2 sqrt(kappa (kappa + 1)), tan theta =
+sqrt((kappa + 1)/kappa), increasing in kappa.  With I = m l^2 ((s - 1)^2 + 1/4)
+the least over s is at s = 1 (kappa = 1/4): f = sqrt(5)/2 at theta = arctan sqrt(5),
+an interior extremum (c = c_theta = c_s = 0); with I = m k^2 over k in (0.3, 1.5)
+it lies on k's lower edge: f = 2 k sqrt(1 + k^2) at k = 0.3.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+import sympy as sp
+
+import phasemap
+from phasemap.declare import Parameter
+
+from test_threshold_along import declared_rod, gyration_rod
+
+OVER = {"theta": (0.05, 1.55), "f": (0.0, 6.0)}
+FIXED = {"xdot": -1.0, "omega": 0.0, "l": 1.0}
+
+
+def inertia_rod():
+    """A rod whose inertia about its centre of mass is m l^2 ((s - 1)^2 + 1/4)."""
+    s = Parameter("s", "1", "shape parameter of the inertia", default=1.0)
+    return declared_rod("inertia_rod", "a rod whose inertia varies with s, on a rough floor", s,
+                        lambda m, l: m * l**2 * ((s - 1) ** 2 + sp.Rational(1, 4)))
+
+
+def test_interior_minimum_over_two_names():
+    t = phasemap.threshold(inertia_rod(), "f", value=0, over={**OVER, "s": (0.2, 1.9)},
+                           fixed=FIXED)
+    assert abs(t.value - math.sqrt(5) / 2) <= 1e-10
+    assert abs(t.at["theta"] - math.atan(math.sqrt(5))) <= 1e-10
+    assert abs(t.at["s"] - 1.0) <= 1e-10
+    assert t.kind == "fold_f" and t.condition == "coef_A_slip_neg" and t.residual <= 1e-12
+    assert set(t.at) == {"theta", "s", "f"}
+
+
+def test_minimum_on_the_edge_of_the_second_name():
+    t = phasemap.threshold(gyration_rod(), "f", value=0, over={**OVER, "k": (0.3, 1.5)},
+                           fixed=FIXED)
+    assert abs(t.value - 2 * 0.3 * math.sqrt(1 + 0.09)) <= 1e-10
+    assert t.at["k"] == 0.3 and abs(t.at["theta"] - math.atan(math.sqrt(1 + 1 / 0.09))) <= 1e-10
+
+
+def test_three_free_names_are_refused_naming_the_way_out():
+    with pytest.raises(ValueError, match="at most two names besides 'f'.*along="):
+        phasemap.threshold(gyration_rod(), "f", value=0,
+                           over={**OVER, "k": (0.3, 1.5), "l": (0.5, 2.0)},
+                           fixed={"xdot": -1.0, "omega": 0.0})
