@@ -591,7 +591,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         t, kind, new_mode = EVENT(v, y, t1, t, h, theta_end, r, mode, coef_sign, out, yb)
         if kind < 0:  # a rounding flicker: the stage goes on from here
             flickers += 1
-            if flickers > 8:
+            if flickers > ev.MAX_FLICKERS:
                 fate = ev.STEP_FAILURE
                 break
             RHS(v, y, mode, K, 0)
