@@ -32,6 +32,7 @@ from grid import hand_model, load, machine, write_section  # noqa: E402
 import phasemap  # noqa: E402
 
 FIELDS = {"step_ns": "ns per step", "fit_step_ns": "ns per step, fitted",
+          "lean_ns": "lean DOPRI5, ns per step",
           "rhs_ns": "one right-hand side (ns)", "point_ns": "one classification (ns)"}
 
 
@@ -64,7 +65,8 @@ def main():
         f"{a.rounds} rounds: medians of each round's fastest of 5.  *fitted*: least squares "
         f"on steps and events over {a.fit_cells} cells, each timed alone.  The right-hand "
         "side and the classification are timed alone, each call waiting for the last "
-        "(`fate_map.step_profile`).",
+        "(`fate_map.step_profile`); the lean DOPRI5 is the same step and right-hand side "
+        "with the step-size controller alone (`fate_map.lean_dopri5`).  CPU time.",
         "",
         "| | " + " | ".join(FIELDS.values()) + " |",
         "|---|" + "---:|" * len(FIELDS),
