@@ -99,8 +99,14 @@ def _describe(value) -> str:
     return text if kind in ("int", "float") else f"{text} ({kind})"
 
 
+#: Python and NumPy real scalar types, accepted without further checks (not bool).
+PLAIN = frozenset({float, int, np.float64, np.float32, np.int64, np.int32})
+
+
 def _is_real_type(value) -> bool:
     """Whether ``value`` is a real scalar of an accepted type (its size not yet checked)."""
+    if type(value) in PLAIN:  # the common case, without the slow ABC check below
+        return True
     if isinstance(value, np.ndarray):
         return value.ndim == 0 and value.dtype.kind in "iuf"
     return isinstance(value, numbers.Real) and not isinstance(value, _NOT_NUMBERS)
@@ -332,6 +338,8 @@ def scalars(given: Mapping[str, object], known: Iterable[str], where: str = "",
 
 
 def _has_dimensions(value) -> bool:
+    if type(value) in PLAIN:
+        return False
     try:
         return np.ndim(value) > 0
     except (TypeError, ValueError):  # ragged nesting: a sequence all the same

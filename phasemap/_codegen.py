@@ -278,7 +278,8 @@ def _header(src: _Source, what: str) -> list[str]:
 # -- the contract: point, branch, derive --------------------------------------
 
 def contract(model):
-    """The module holding ``point(v, out)``, ``branch(v, b, row)`` and ``derive(v)``."""
+    """The module holding ``point(v, out)``, ``branch(v, b, row)``, ``derive(v)``,
+    ``domain(v)`` and ``rest_speed(v)`` (the velocity tolerance of ``point``'s rest test)."""
     src = _Source(model)
     nb, nf = len(model.candidates), src.nfields
     bodies = {}
@@ -325,12 +326,16 @@ def contract(model):
     else:
         body += ["    return True"]
     bodies["domain(v)"] = body
+    body = ['    """The speed at or below which the relative velocity counts as zero (rest)."""']
+    body += src.load("    ", skip=set(model.inputs) - set(src.scale_names))
+    body += [f"    return {src.velocity_tolerance()}"]
+    bodies["rest_speed(v)"] = body
     lines = _header(src, "The per-point contract")
     for signature, body in bodies.items():
         lines += ['@njit(cache=True, error_model="numpy")', f"def {signature}:", *body, "", ""]
     # Inlined into the integrator's right-hand side: a step evaluates it six
     # times, and an out-of-line call that passes arrays costs more than the physics.
-    for signature in ("branch_row(v, b)", "derive(v)", "domain(v)"):
+    for signature in ("branch_row(v, b)", "derive(v)", "domain(v)", "rest_speed(v)"):
         name, args = signature.split("(", 1)
         lines += ['@njit(cache=True, forceinline=True, error_model="numpy")',
                   f"def {name}_inline({args}:",

@@ -85,8 +85,8 @@ def source_hash(model: Model, *modules) -> str:
 def contract_constants(model: Model) -> dict:
     """The compile-time globals every engine's templates start from.
 
-    The generated contract (``POINT``, the inlined ``BRANCH_ROW``, ``DERIVE``
-    and ``DOMAIN``), the branch layout (``STICK``, ``N_BRANCHES``,
+    The generated contract (``POINT``, the inlined ``BRANCH_ROW``, ``DERIVE``,
+    ``DOMAIN`` and ``REST_SPEED``), the branch layout (``STICK``, ``N_BRANCHES``,
     ``N_FIELDS``, ``DIRECTIONS``, the row columns of the ``REACTIONS``) and,
     for a model that moves, the integrated state: ``N_DOF`` coordinates,
     ``Y_SLOT`` (the input slot of each integrated variable, positions then
@@ -99,6 +99,7 @@ def contract_constants(model: Model) -> dict:
     consts = dict(
         POINT=contract.point, BRANCH_ROW=contract.branch_row_inline,
         DERIVE=contract.derive_inline, DOMAIN=contract.domain_inline,
+        REST_SPEED=contract.rest_speed_inline,
         STICK=model.stick_branch, N_BRANCHES=len(model.branches), N_FIELDS=model.n_fields,
         DIRECTIONS=np.array(model.directions, dtype=np.float64),
         REACTIONS=np.arange(model.first_reaction, model.n_fields, dtype=np.int64),

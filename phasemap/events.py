@@ -72,6 +72,11 @@ MAX_STEPS = 16
 #: The first terminal event: codes >= FIRST_FATE end a motion.
 FIRST_FATE = REST
 
+#: The most rounding flickers in a row (an event whose state the classification keeps
+#: on the running stage, so the stage goes on) before a motion ends with
+#: ``step_failure``: the integrator and :func:`phasemap.workprecision.solve_ivp_staged`.
+MAX_FLICKERS = 8
+
 
 @njit(cache=True)
 def fate_without_unique(n, lost, singular):

@@ -421,12 +421,12 @@ class Model:
         return self.contract.derive
 
     # -- names -------------------------------------------------------------
-    @property
+    @functools.cached_property
     def names(self) -> tuple[str, ...]:
         """State then parameter names: what a user may set or sweep."""
         return tuple(v.name for v in self.state + self.params)
 
-    @property
+    @functools.cached_property
     def inputs(self) -> tuple[str, ...]:
         """The layout of the point function's input vector ``v``."""
         return self.names + tuple(d.name for d in self.derived)

@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Mapping, Sequence
+from typing import Mapping, NamedTuple, Sequence
 
 import numpy as np
 import xarray as xr
 
 from . import _args
 from . import events as ev
+from ._compile import remember
 from ._dataset import assemble, cf_header, variable_attrs
 from .integrate import DEFAULT_METHOD, METHODS, check_method, kernels, run_batch, unpack
 from .model import Model, Variable
@@ -66,9 +67,34 @@ class Options:
 
 def integrated_variables(model: Model) -> list[Variable]:
     """The integrated state: positions, then velocities (with their descriptions)."""
+    return list(_layout(model).integrated)
+
+
+class _Layout(NamedTuple):
+    """What a call of :func:`simulate` reads from its model, derived once per model (a
+    call re-deriving it from the model's properties cost tens of microseconds)."""
+
+    integrated: tuple  # the integrated Variables: positions, then velocities
+    names: tuple  # ... and their names
+    known: dict  # every name a call may set: the model's variables and extra positions
+    state: frozenset  # the names of initial values (the batch form sweeps these)
+    extra: dict  # positions the model integrates but does not take as inputs
+    settable: tuple  # model.names, then the extra positions
+
+
+def _layout(model: Model) -> _Layout:
     dyn = _dynamics(model)
-    known = {**model.variables, **{p.name: p for p in dyn.positions}}
-    return ([known[c[0]] for c in dyn.coordinates] + [known[c[1]] for c in dyn.coordinates])
+    return remember(("simulate", model.name), model, lambda: _make_layout(model, dyn))
+
+
+def _make_layout(model: Model, dyn) -> _Layout:
+    extra = {p.name: p for p in dyn.positions}
+    known = {**model.variables, **extra}
+    integrated = tuple([known[c[0]] for c in dyn.coordinates]
+                       + [known[c[1]] for c in dyn.coordinates])
+    return _Layout(integrated, tuple(v.name for v in integrated), known,
+                   frozenset({v.name for v in model.state} | set(extra)), extra,
+                   (*model.names, *extra))
 
 
 def _dynamics(model: Model):
@@ -80,9 +106,9 @@ def _dynamics(model: Model):
 
 def split_values(model: Model, values: Mapping[str, float]):
     """Validate ``values``: model variables (complete) and extra positions (default 0)."""
-    dyn = _dynamics(model)
-    extra = {p.name: p for p in dyn.positions}
-    values = _args.scalars(values, [*model.names, *extra], model.name,
+    lay = _layout(model)
+    extra = lay.extra
+    values = _args.scalars(values, lay.settable, model.name,
                            " for simulate(); for grids of initial conditions use a Scene "
                            "with fate layers")
     positions = {}
@@ -181,7 +207,7 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
                 te.size and (te[0] < 0 or te[-1] > opts.t_end)):
             raise ValueError(f"{m.name}: t_eval must be a sorted 1-D sequence of times in "
                              f"[0, t_end = {opts.t_end:g}]")
-    names = [v.name for v in integrated_variables(m)]
+    names = list(_layout(m).names)
     y0 = np.array([positions[n] if n in positions else float(full[n]) for n in names])
     v = m.input_vector(full)
     run = (opts.t_end, opts.rtol, opts.atol, opts.max_step, opts.max_steps, opts.max_events,
@@ -220,10 +246,12 @@ def _columns(points, events, y_eval, te):
 def _starts(m: Model, values: Mapping) -> dict[str, np.ndarray]:
     """The initial-state values given as 1-D arrays (the batch form), checked: one
     length for all, every start in the domain, the parameters scalars."""
-    known = {**m.variables, **{p.name: p for p in _dynamics(m).positions}}
-    state = {v.name for v in m.state} | {p.name for p in _dynamics(m).positions}
+    lay = _layout(m)
+    known, state = lay.known, lay.state
     starts = {}
     for k, val in values.items():
+        if type(val) in _args.PLAIN:
+            continue
         nd = np.ndim(val)
         if nd == 0:
             continue
@@ -262,7 +290,7 @@ def _motion_variables(m: Model, t_dims, event_dims, ys, ms, ev_t, ev_kind, ev_y,
                                     {**branch_attrs,
                                      "long_name": "active branch after the event"}),
     }
-    for j, var in enumerate(integrated_variables(m)):
+    for j, var in enumerate(_layout(m).integrated):
         data[var.name] = xr.Variable(t_dims, ys[..., j], variable_attrs(var))
         data[f"event_{var.name}"] = xr.Variable(
             event_dims, ev_y[..., j], {"long_name": f"{var.long_name} at the event",
@@ -345,7 +373,7 @@ def _batch(m: Model, full, positions, opts: Options, names, y0s, te, result) -> 
                                                           "units": "1"})
            for k, (what, v) in counts.items()},
     }
-    known = {**m.variables, **{p.name: p for p in m.dynamics.positions}}
+    known = _layout(m).known
     for j, name in enumerate(names):
         data[f"initial_{name}"] = xr.Variable("start", y0s[:, j].copy(), {
             "long_name": f"initial {known[name].long_name}", "units": known[name].units})

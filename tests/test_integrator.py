@@ -206,6 +206,35 @@ def test_first_velocity_zero_located_to_the_tolerance(rtol, method):
     assert int(ds.event_branch[1]) == phasemap.MODELS["hinge_pendulum"].branches.index("turn_pos")
 
 
+@pytest.mark.parametrize("name", sorted(phasemap.MODELS))
+def test_rest_speed_is_the_tolerance_of_the_classification(name):
+    """The integrator roots a velocity where it reaches the contract's ``rest_speed``
+    (the end of a stage that stops or reverses): it must be the very speed at which
+    ``point`` starts to count the velocity as zero: there its rows are those at rest,
+    one ulp faster the rows of the other direction and of stick do not apply."""
+    m = phasemap.MODELS[name]
+    full = {k: float(x) for k, x in m.complete({}).items()}
+    vel = m.inputs.index(m.velocity)
+    v = m.input_vector(full)
+    m.derive(v)
+    speed = m.contract.rest_speed(v)
+    assert speed > 0.0
+
+    def rows(velocity):
+        v[vel] = velocity
+        out = np.empty((len(m.branches), m.n_fields))
+        m.point(v, out)
+        return out
+
+    at_rest = rows(0.0)
+    for sign in (1.0, -1.0):
+        np.testing.assert_array_equal(rows(sign * speed), at_rest)
+        moving = rows(sign * np.nextafter(speed, np.inf))
+        away = [b for b, d in enumerate(m.directions) if d * sign <= 0.0]
+        assert away and all(moving[away, 0] == 0), (name, sign, moving[:, 0])
+        assert not np.array_equal(moving, at_rest, equal_nan=True)
+
+
 # ------------------------------------------------------------ stick and slip
 @pytest.mark.parametrize("method", METHODS)
 def test_elliptic_pendulum_sticks_exactly_and_slips_at_the_friction_limit(method):

@@ -55,6 +55,7 @@ LOWER = np.zeros(2)
 UPPER = np.zeros(2)
 INSIDE = None
 DOMAIN = None
+REST_SPEED = None
 FILL = None
 RHS = None
 CLASSIFY = None
@@ -301,17 +302,17 @@ def _indicator_template(v, r, theta, mode, col, yb):
     return BRANCH_ROW(v, mode)[col]
 
 
-def _zero_template(v, r, mode, col, sg, fa, fb, h, t, yb):
-    """Illinois on the step for the zero of ``sg`` times an indicator (see INDICATOR),
-    from ``fa`` > 0 at theta = 0 and ``fb`` <= 0 at theta = 1: ``(a, b)``, a bracket
-    of width 4 eps in time."""
+def _zero_template(v, r, mode, col, sg, level, fa, fb, h, t, yb):
+    """Illinois on the step for the zero of ``sg`` times an indicator (see INDICATOR)
+    minus ``level``, from ``fa`` > 0 at theta = 0 and ``fb`` <= 0 at theta = 1:
+    ``(a, b)``, a bracket of width 4 eps in time."""
     a, b = 0.0, 1.0
     side = 0
     for _ in range(100):
         c = (a * fb - b * fa) / (fb - fa)
         if not (a < c < b):
             c = 0.5 * (a + b)
-        fc = sg * INDICATOR(v, r, c, mode, col, yb)
+        fc = sg * INDICATOR(v, r, c, mode, col, yb) - level
         if fc > 0.0:
             a, fa = c, fc
             if side == -1:
@@ -338,16 +339,22 @@ def _locate_template(v, y, y1, h, t, mode, coef_sign, r, out, yb, zs):
     contact released), the coefficient of the senior derivative (a singular
     state).  Those crossing zero in the step are rooted on the dense output
     (Illinois: a few row evaluations each), and the earliest zero that
-    classification confirms (the stage 1e-11 or 1e-9 of the step before it, not
-    at it or 1e-13 or 1e-11 after it) leaves a bracket of 1e-11 to 1e-9 for a
-    dozen bisection steps.  Anything else (a friction cone left at stick,
+    classification confirms (the stage at it or 1e-11 or 1e-9 of the step
+    before it, not at it or 1e-13 or 1e-11 after it) leaves a bracket of 4 eps
+    in time, or 1e-11 to 1e-9 of the step, for bisection.  The velocity is
+    rooted where it reaches the speed that classification counts as rest
+    (``REST_SPEED``), not at its zero: the stage ends there, so its bracket
+    needs a step or two of bisection, not the dozen (each a classification)
+    that the 1e-11 before an exact zero took.  Anything else (a friction cone left at stick,
     another branch turning admissible, the domain's edge) is bisected from the
     whole step.
     """
     nz = 0
     d = DIRECTIONS[mode]
-    if d != 0.0 and d * y[VEL_Y] > 0.0 and d * y1[VEL_Y] <= 0.0:
-        zs[nz, 0], zs[nz, 1] = ZERO(v, r, mode, -1, d, d * y[VEL_Y], d * y1[VEL_Y], h, t, yb)
+    rest = REST_SPEED(v)
+    if d != 0.0 and d * y[VEL_Y] > rest and d * y1[VEL_Y] <= rest:
+        zs[nz, 0], zs[nz, 1] = ZERO(v, r, mode, -1, d, rest, d * y[VEL_Y] - rest,
+                                     d * y1[VEL_Y] - rest, h, t, yb)
         nz += 1
     if WATCH.shape[0] > 0:
         FILL(v, y)
@@ -358,8 +365,8 @@ def _locate_template(v, y, y1, h, t, mode, coef_sign, r, out, yb, zs):
             a0, a1 = g0[WATCH[q]], g1[WATCH[q]]
             if a0 * a1 < 0.0:
                 sg = 1.0 if a0 > 0.0 else -1.0
-                zs[nz, 0], zs[nz, 1] = ZERO(v, r, mode, WATCH[q], sg, sg * a0, sg * a1, h, t,
-                                             yb)
+                zs[nz, 0], zs[nz, 1] = ZERO(v, r, mode, WATCH[q], sg, 0.0, sg * a0, sg * a1,
+                                             h, t, yb)
                 nz += 1
     lo, hi = 0.0, 1.0
     for _ in range(nz):  # the candidates in order of their zeros
@@ -381,7 +388,7 @@ def _locate_template(v, y, y1, h, t, mode, coef_sign, r, out, yb, zs):
                 break
         else:
             continue
-        for before in (1e-11, 1e-9):
+        for before in (0.0, 1e-11, 1e-9):
             c_lo = max(0.0, a - before)
             dense(r, c_lo, yb)
             if STILL(v, yb, out, mode, coef_sign):
@@ -591,7 +598,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         t, kind, new_mode = EVENT(v, y, t1, t, h, theta_end, r, mode, coef_sign, out, yb)
         if kind < 0:  # a rounding flicker: the stage goes on from here
             flickers += 1
-            if flickers > 8:
+            if flickers > ev.MAX_FLICKERS:
                 fate = ev.STEP_FAILURE
                 break
             RHS(v, y, mode, K, 0)

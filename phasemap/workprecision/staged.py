@@ -52,9 +52,6 @@ from ..models import get_model
 from ..simulate import Options, integrated_variables, split_values
 
 _EPS = np.finfo(float).eps
-#: The most rounding flickers (an event whose state the classification keeps on the
-#: stage) in a row before the motion ends with step_failure, as in the integrator.
-_FLICKERS = 8
 
 
 @dataclass
@@ -218,7 +215,7 @@ class StageDriver:
                                               coef_sign)
             if kind < 0:  # a rounding flicker: the stage goes on from here
                 flickers += 1
-                if flickers > _FLICKERS:
+                if flickers > ev.MAX_FLICKERS:
                     fate = ev.STEP_FAILURE
                 continue
             flickers = 0
