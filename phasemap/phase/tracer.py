@@ -57,6 +57,9 @@ STICK = -1
 N_BRANCHES = 0
 DIRECTIONS = np.zeros(1)
 REACTIONS = np.zeros(1, dtype=np.int64)
+LOWER = np.zeros(2)
+UPPER = np.zeros(2)
+BOUND_ROW = np.zeros(0, dtype=np.int64)
 #: Indices into REACTIONS of the reactions whose sign change bends the law (Model.kinks).
 KINKS = np.zeros(0, dtype=np.int64)
 ROW = None
@@ -493,7 +496,16 @@ def _end_reason_template(v, out, x, hh, z, u, a, c, sigma, mode, u_ref, th_e, x_
         if n2 != 1:  # undecided: the event's own classification
             n2, adm2, lost2, sing2 = CLASSIFY(v, x_e, sigma * math.sqrt(max(u_e, 0.0)),
                                               out)
-    if not DOMAIN(v):
+    side = -1  # on a bound of phi moving out (integrate.templates._leave_template)
+    if u_e > 0.0 and not (STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT):
+        for b in range(BOUND_ROW.shape[0]):
+            k = BOUND_ROW[b]
+            if 0 <= k < 2 and out[b, nx.STATUS] != nx.ABSENT and (k == 1) == (sigma > 0.0):
+                side = k
+    if side >= 0:
+        reason = ev.LEFT_DOMAIN
+        x_e = UPPER[0] if side == 1 else LOWER[0]
+    elif not DOMAIN(v):
         reason = ev.LEFT_DOMAIN  # the model's own domain (the rod leaves the step)
     elif not (u_e > 0.0) or (STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT):
         reason = _ZERO
