@@ -79,6 +79,7 @@ KINK = None
 STORE_PANEL = None
 END = None
 END_REASON = None
+LEAVE = None
 CONTACT_END = None
 N_FIELDS = 0
 
@@ -463,6 +464,20 @@ def _end_template(v, out, x, hh, z, u, u1, a, c, sigma, mode, u_ref, coef_sign, 
     return False, hi, guided, c_fld, c_th, c_u, slope, dd
 
 
+def _leave_template(out, sigma):
+    """The bound of phi that a state classified into ``out``, moving in the direction
+    ``sigma``, lies on and leaves through, else NaN: a row that exists only on that
+    bound applies, and the state is not at rest (the integrator's rule,
+    :func:`phasemap.integrate.templates._leave_template`)."""
+    if STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT:
+        return math.nan
+    for b in range(BOUND_ROW.shape[0]):
+        k = BOUND_ROW[b]
+        if 0 <= k < 2 and out[b, nx.STATUS] != nx.ABSENT and (k == 1) == (sigma > 0.0):
+            return UPPER[0] if k == 1 else LOWER[0]
+    return math.nan
+
+
 def _end_reason_template(v, out, x, hh, z, u, a, c, sigma, mode, u_ref, th_e, x_e, u_e,
                          guided, c_th, c_u, slope, dd, buf, tb, nv, a2, c2):
     """What ends the stage at (x_e, u_e), theta ``th_e`` of the panel, where u is not
@@ -496,15 +511,10 @@ def _end_reason_template(v, out, x, hh, z, u, a, c, sigma, mode, u_ref, th_e, x_
         if n2 != 1:  # undecided: the event's own classification
             n2, adm2, lost2, sing2 = CLASSIFY(v, x_e, sigma * math.sqrt(max(u_e, 0.0)),
                                               out)
-    side = -1  # on a bound of phi moving out (integrate.templates._leave_template)
-    if u_e > 0.0 and not (STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT):
-        for b in range(BOUND_ROW.shape[0]):
-            k = BOUND_ROW[b]
-            if 0 <= k < 2 and out[b, nx.STATUS] != nx.ABSENT and (k == 1) == (sigma > 0.0):
-                side = k
-    if side >= 0:
+    bound = LEAVE(out, sigma) if u_e > 0.0 else math.nan
+    if bound == bound:  # on a bound of phi, moving out
         reason = ev.LEFT_DOMAIN
-        x_e = UPPER[0] if side == 1 else LOWER[0]
+        x_e = bound
     elif not DOMAIN(v):
         reason = ev.LEFT_DOMAIN  # the model's own domain (the rod leaves the step)
     elif not (u_e > 0.0) or (STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT):
@@ -717,8 +727,11 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
     mode = -1
     if omega0 != 0.0:
         n, adm, lost, sing = CLASSIFY(v, phi0, omega0, out)
+        bound = LEAVE(out, omega0)
         if STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT:
             omega0 = 0.0  # an omega the model counts as zero: a rest state
+        elif bound == bound:  # on a bound of phi, moving out
+            code, phi0 = ev.LEFT_DOMAIN, bound
         elif sing and (n == nx.N_NONE or n == nx.N_CONTINUUM):
             code = ev.SINGULAR
         elif n == nx.N_UNIQUE:
@@ -788,6 +801,7 @@ PIECES = (("ROW", _row_template, True),
           ("STAGE_POINTS", _stage_points_template, False),
           ("AT_REST", _at_rest_template, False),
           ("STAGE_START", _stage_start_template, True),
+          ("LEAVE", _leave_template, True),
           ("COLLOCATE", _collocate_template, True),
           ("PANEL_ERROR", _panel_error_template, True),
           ("KINK", _kink_template, True),
