@@ -268,9 +268,7 @@ def _at_rest_template(v, x, out):
         return -1, adm
     if sing and (n == nx.N_NONE or n == nx.N_CONTINUUM):
         return ev.SINGULAR, -1
-    if n == nx.N_NONE:
-        return (ev.CONTACT_LOST if lost else ev.NO_SOLUTION), -1
-    return ev.INDETERMINATE, -1
+    return ev.fate_without_unique(n, lost, sing), -1  # (a continuum is not two solutions)
 
 
 def _stage_start_template(v, mode, sigma, x0, u0, react):
