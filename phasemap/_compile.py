@@ -92,8 +92,9 @@ def contract_constants(model: Model) -> dict:
     ``Y_SLOT`` (the input slot of each integrated variable, positions then
     velocities; -1 for a position that is not an input), ``ACC_COL`` (the row
     column of each coordinate's acceleration), ``VEL_Y`` (the index of the
-    relative velocity in the integrated state), ``STICK_IS_REST`` and the bounds
-    ``LOWER``, ``UPPER`` of the integrated variables.
+    relative velocity in the integrated state), ``STICK_IS_REST``, the bounds
+    ``LOWER``, ``UPPER`` of the integrated variables, and per branch the finite bound
+    it exists only on, ``BOUND_ROW`` (``2 i + side`` for variable ``i``; -1: none).
     """
     contract = model.contract
     consts = dict(
@@ -122,7 +123,23 @@ def contract_constants(model: Model) -> dict:
         LOWER=np.array([variables[n].lower for n in positions + velocities]),
         UPPER=np.array([variables[n].upper for n in positions + velocities]),
     )
+    consts["BOUND_ROW"] = bound_rows(model, positions + velocities, consts["LOWER"],
+                                      consts["UPPER"])
     return consts
+
+
+def bound_rows(model: Model, names: list, lower, upper) -> np.ndarray:
+    """Per branch, ``2 i + side`` where it exists only on the finite bound ``side`` (0
+    lower, 1 upper) of the integrated variable ``names[i]``, else -1 (see
+    :attr:`phasemap.model.Branch.bound`; a bound that depends on parameters is infinite
+    in ``lower``, ``upper`` and not marked)."""
+    rows = np.full(len(model.candidates), -1, dtype=np.int64)
+    for k, b in enumerate(model.candidates):
+        if b.bound is not None and b.bound[0] in names:
+            i = names.index(b.bound[0])
+            if np.isfinite((lower, upper)[b.bound[1]][i]):
+                rows[k] = 2 * i + b.bound[1]
+    return rows
 
 
 @njit(cache=True)

@@ -315,8 +315,8 @@ def manifest(S, model: Model) -> dict | None:
         "state": [_variable(v) for v in model.state],
         "params": [_variable(v) for v in model.params],
         "derived": [[d.name, d.source, d.func.__name__] for d in model.derived],
-        "candidates": [[b.name, b.direction, b.func.py_func.__name__, list(b.args)]
-                       for b in model.candidates],
+        "candidates": [[b.name, b.direction, b.func.py_func.__name__, list(b.args),
+                        None if b.bound is None else list(b.bound)] for b in model.candidates],
         "accelerations": [_variable(v) for v in model.accelerations],
         "reactions": [_variable(v) for v in model.reactions],
         "coefficient": _variable(model.coefficient),
@@ -344,8 +344,9 @@ def build(data: dict, module, check, declaration) -> Model:
         name=data["name"], title=data["title"], citation=data["citation"],
         state=tuple(map(var, data["state"])), params=tuple(map(var, data["params"])),
         derived=tuple(Derived(n, s, getattr(np, f)) for n, s, f in data["derived"]),
-        candidates=tuple(Branch(n, float(d), getattr(module, f), tuple(a))
-                         for n, d, f, a in data["candidates"]),
+        candidates=tuple(Branch(n, float(d), getattr(module, f), tuple(a),
+                                None if b is None else (b[0], int(b[1])))
+                         for n, d, f, a, b in data["candidates"]),
         accelerations=tuple(map(var, data["accelerations"])),
         reactions=tuple(map(var, data["reactions"])),
         coefficient=var(data["coefficient"]),

@@ -263,13 +263,18 @@ class Branch:
     ``func``
         the branch function (see the module docstring);
     ``args``
-        constants passed first to ``func`` (such as the direction itself).
+        constants passed first to ``func`` (such as the direction itself);
+    ``bound``
+        ``(state variable, side)`` where the branch exists only on a closed bound of
+        that variable (side 0 the lower, 1 the upper: a declared system's edge row,
+        :mod:`phasemap.declare.edges`); a motion there moving out leaves the domain.
     """
 
     name: str
     direction: float
     func: Callable = field(repr=False)
     args: tuple[float, ...] = ()
+    bound: tuple[str, int] | None = None
 
 
 @dataclass(frozen=True)

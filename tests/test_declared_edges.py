@@ -175,3 +175,66 @@ def test_a_non_finite_acceleration_or_reaction_is_never_a_solution(name, values)
     counted = np.isin(out[:, nx.STATUS], (nx.ADMISSIBLE, nx.SEPARATION, nx.CONTINUUM))
     assert np.isfinite(out[counted, nx.FIRST_ACC:]).all()
     assert nx.summarize(out, m.stick_branch)[0] == 0
+
+
+# ------------------------------------------------ motions that reach a closed bound -----
+def test_edge_rows_say_which_closed_bound_they_exist_on():
+    """The rows of an edge that is a declared bound carry it (Branch.bound), and the
+    integrator's constant maps them to the integrated state's index and side: what its
+    'on the bound, moving out' rule reads.  The Painleve rod's bounds are no edges."""
+    from phasemap._compile import contract_constants
+
+    bounds = {name: {b.bound for b in phasemap.get_model(name).candidates}
+              for name in ("ladder", "rod_on_step", "painleve_rod")}
+    assert bounds == {"ladder": {None, ("phi", 0), ("phi", 1)},
+                      "rod_on_step": {None, ("theta", 1)}, "painleve_rod": {None}}
+    m = phasemap.get_model("ladder")
+    rows = contract_constants(m)["BOUND_ROW"]
+    assert [int(k) for k in rows] == [-1 if b.bound is None else b.bound[1]
+                                      for b in m.candidates]
+
+
+#: The rod on a step above its centre of mass (h > l), tipping over the vertical.
+TIPPING = dict(theta=1.5, omega=1.5, f=0.6, h=1.6)
+
+
+def test_the_rod_on_a_step_tipping_over_the_vertical_leaves_the_domain():
+    """A second system whose edge is a closed bound: the rod's slip over the step's
+    edge, h omega cos(theta) / sin^2(theta), vanishes at theta = pi/2, where the edge
+    rows apply (within the tie tolerance) and find the edge sliding back.  Reaching
+    the vertical with omega > 0 the rod leaves the domain there, with no event in the
+    tie band before it; simulate, phase_curve (another integrator) and the fate map
+    agree on the ending, and on omega there."""
+    ds = phasemap.simulate("rod_on_step", t_end=3.0, **TIPPING)
+    kinds = [phasemap.Event(int(k)) for k in ds.event_kind.values]
+    assert kinds == [phasemap.Event.START, phasemap.Event.LEFT_DOMAIN]
+    assert float(ds.event_theta[-1]) == PI / 2 and float(ds.event_omega[-1]) > 0.0
+    assert ds.attrs["end_message"].endswith("theta reached 1.5708 rad")
+    curve = phasemap.phase_curve("rod_on_step", **TIPPING)
+    assert curve.attrs["end_reason"] == "left_domain"
+    assert curve.attrs["end_message"] == ds.attrs["end_message"]
+    assert float(curve.stage_end_phi[-1]) == PI / 2
+    assert float(curve.stage_end_omega[-1]) == pytest.approx(float(ds.event_omega[-1]),
+                                                             rel=1e-6)
+    fates = phasemap.Scene("rod_on_step", axes={"theta": [TIPPING["theta"]]},
+                           fixed={k: v for k, v in TIPPING.items() if k != "theta"},
+                           layers=["fate"]).compute()
+    assert int(fates.fate[0]) == phasemap.Event.LEFT_DOMAIN
+
+
+@pytest.mark.parametrize("model, start, end", [
+    ("ladder", dict(phi=PI / 2, omega=1.0, f=1.0), "left_domain"),   # lying flat, falling on
+    ("ladder", dict(phi=PI / 2, omega=-1.0, f=1.0), "contact_lost"),  # ... rising: classified
+    ("ladder", dict(phi=PI / 2, omega=0.0, f=0.3), "continuum"),      # ... at rest: class 3
+    ("rod_on_step", dict(theta=PI / 2, omega=1.0, f=0.6, h=1.6), "left_domain"),
+])
+def test_a_motion_started_on_a_bound_leaves_only_moving_out(model, start, end):
+    """Started on a closed bound, a motion moving out leaves the domain at once, and
+    says which edge; moving in, or at rest, the state's classification decides.
+    simulate and phase_curve agree."""
+    ds = phasemap.simulate(model, t_end=1.0, **start)
+    curve = phasemap.phase_curve(model, **start)
+    assert ds.attrs["end_reason"] == curve.attrs["end_reason"] == end
+    assert ds.attrs["end_message"] == curve.attrs["end_message"]
+    if end == "left_domain":
+        assert float(ds.event_t[-1]) == 0.0 and "reached 1.5708 rad" in ds.attrs["end_message"]

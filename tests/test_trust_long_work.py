@@ -88,10 +88,6 @@ def test_no_overflow_is_ever_counted_as_a_solution(model):
 
 
 # ------------------------------------------------------- 3. end labels -----
-@pytest.mark.xfail(strict=True, reason="known regression from the exact edge rows (issue 23 "
-                   "item 1): at phi = pi/2 the edge's separation row ends the motion as "
-                   "contact_lost before the domain edge is reported; to be fixed in the "
-                   "integrator's event piece")
 def test_ladder_lying_flat_leaves_the_domain_and_says_which_edge():
     ds = phasemap.simulate("ladder", t_end=10.0, phi=1.4, omega=1.0, f=1.0)
     assert ds.attrs["end_reason"] == "left_domain"

@@ -90,8 +90,9 @@ def build_model(S) -> Model:
     reactions = _reactions(S, spec)
     renamed = [str(S.names.get(row[0], row[0])) for row in spec["rows"]]
     _check_distinct(S, renamed, reactions)
-    candidates = tuple(Branch(renamed[i], float(direction), getattr(module, fname), tuple(args))
-                       for i, (_, direction, _, fname, args) in enumerate(spec["rows"]))
+    candidates = tuple(Branch(renamed[i], float(direction), getattr(module, fname), tuple(args),
+                              None if bound is None else (bound[0], int(bound[1])))
+                       for i, (_, direction, _, fname, args, bound) in enumerate(spec["rows"]))
     positions = tuple(_variable(c, default=float(c.default)) for c in moving
                       if c.name not in spec["state_positions"])
     dynamics = Dynamics(coordinates=tuple((c.name, c.rate.name, f"{c.name}_ddot")

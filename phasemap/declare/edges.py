@@ -62,6 +62,7 @@ class Edge:
     contacts: tuple[str, ...]
     factors: tuple
     label: str
+    bound: int | None = None
 
     @property
     def symbol(self):
@@ -118,8 +119,10 @@ def find_edges(eqs, factors: dict) -> list[Edge]:
     edges = []
     for i, (coord, (value, sin, cos), names) in enumerate(found):
         c = next(x for x in S.coordinates if x.name == coord)
+        side = _bound(eqs, c, value)
+        label = f"{coord}_edge{i}" if side is None else f"{coord}_{('min', 'max')[side]}"
         edges.append(Edge(i, coord, value, sin, cos, tuple(names),
-                          tuple(factors[n] for n in names), _label(eqs, c, value, i)))
+                          tuple(factors[n] for n in names), label, side))
     return edges
 
 
@@ -185,19 +188,19 @@ def _in_domain(eqs, c, value) -> bool:
     return False
 
 
-def _label(eqs, c, value, i) -> str:
-    """``phi_max`` / ``phi_min`` where the edge is a declared bound (at every parameter
-    point), else ``phi_edge<i>``."""
-    for side in ("upper", "lower"):
+def _bound(eqs, c, value) -> int | None:
+    """1 where ``coordinate = value`` is the coordinate's declared upper bound (at every
+    parameter point), 0 where it is the lower one, else None."""
+    for side, name in ((1, "upper"), (0, "lower")):
         hits = []
         for pt in eqs.parameter_points():
-            b, x = eqs._bound_value(c, side, pt), _numbers(value, pt)
+            b, x = eqs._bound_value(c, name, pt), _numbers(value, pt)
             if x is not None and math.isfinite(b):
                 hits.append(min(abs(x + k * 2 * math.pi - b) for k in (-1, 0, 1))
                             <= 1e-9 * (1 + abs(b)))
         if hits and all(hits):
-            return f"{c.name}_{'max' if side == 'upper' else 'min'}"
-    return f"{c.name}_edge{i}"
+            return side
+    return None
 
 
 def edge_candidates(S, kappa: dict, edge: Edge, ordinary: list[Candidate]) -> list[Candidate]:

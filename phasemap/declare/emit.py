@@ -439,13 +439,21 @@ def module_source(S) -> str:
         "derived": derived,
         "scale_args": scale_args,
         "rows": [(r.name, r.direction, int(r.presence), d.solutions[r.key].problem.fname,
-                  _row_args(d.solutions[r.key].problem, r)) for r in d.candidates],
+                  _row_args(d.solutions[r.key].problem, r), _row_bound(d, r))
+                 for r in d.candidates],
         "kappa": d.kappa,
         "domain": sorted({nm for _, nm in d.eqs.domain}),
         "n_acc": len(d.positions),
     }
     out += [f"SPEC = {json.dumps(spec)!r}", ""]
     return "\n".join(out)
+
+
+def _row_bound(d, row):
+    """``[coordinate, side]`` where ``row`` exists only on a closed bound of a coordinate
+    (its edge is that bound), else None (:attr:`phasemap.model.Branch.bound`)."""
+    edge = None if row.edge is None else d.edges[row.edge]
+    return None if edge is None or edge.bound is None else [edge.coordinate, edge.bound]
 
 
 def _inputs(S, d, used):

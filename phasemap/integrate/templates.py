@@ -53,6 +53,7 @@ DIRECTIONS = np.zeros(1)
 STICK_IS_REST = True
 LOWER = np.zeros(2)
 UPPER = np.zeros(2)
+BOUND_ROW = np.zeros(0, dtype=np.int64)
 INSIDE = None
 DOMAIN = None
 REST_SPEED = None
@@ -66,6 +67,7 @@ ZERO = None
 LOCATE = None
 START = None
 STAGE_COEFFICIENT = None
+LEAVE = None
 FIRST_STEP = None
 STALLED = None
 STIFFNESS = None
@@ -195,6 +197,34 @@ def _stage_coefficient_template(out, mode):
     return coef, 1.0 if coef > 0.0 else (-1.0 if coef < 0.0 else 0.0)
 
 
+def _leave_template(y, out):
+    """The state ``y`` (classified into ``out``) lies on a closed bound of its domain and
+    moves out through it: put it exactly on that bound and return True.
+
+    On the bound is the classification's own rule, as a velocity is zero where the
+    stick branch applies: a branch that exists only on that bound applies at ``y``
+    (``BOUND_ROW``: a declared system's edge row, within the tie tolerance of the
+    edge; :mod:`phasemap.declare.edges`).  Moving out is the bound's coordinate rate
+    pointing out of the domain while the motion's velocity is not zero.  The motion
+    then leaves the domain, whatever the state classifies as (the ladder lying flat
+    with omega > 0: its edge rows find the foot sticking and the top leaving the
+    wall, a motion through the floor).  A model without such rows reaches the bound
+    by crossing it (see INSIDE).
+    """
+    if STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT:
+        return False  # at rest: the classification decides
+    for b in range(BOUND_ROW.shape[0]):
+        k = BOUND_ROW[b]
+        if k < 0 or out[b, nx.STATUS] == nx.ABSENT:
+            continue
+        i = k // 2
+        rate = y[N_DOF + i] if i < N_DOF else 0.0
+        if (rate > 0.0) if k % 2 == 1 else (rate < 0.0):
+            y[i] = UPPER[i] if k % 2 == 1 else LOWER[i]
+            return True
+    return False
+
+
 # ------------------------------------------------------------- the start
 
 def _start_template(v, y, out):
@@ -202,7 +232,10 @@ def _start_template(v, y, out):
     admissible branch, or the fate (branch -1, or the stick branch at rest)."""
     n, mode, lost, sing = CLASSIFY(v, y, out)
     kind = ev.START
-    if n != 1:
+    if LEAVE(y, out):  # on a bound of the domain, moving out
+        mode = -1
+        kind = ev.LEFT_DOMAIN
+    elif n != 1:
         mode = -1
         kind = ev.fate_without_unique(n, lost, sing)
     elif out[mode, nx.STATUS] == nx.SEPARATION:  # the only motion leaves a contact
@@ -447,6 +480,8 @@ def _event_template(v, y, t, t_prev, h, theta_end, r, mode, coef_sign, out, yb):
     d = DIRECTIONS[mode]
     n, adm, lost, sing = CLASSIFY(v, y, out)
     vel_zero = d != 0.0 and (d * y[VEL_Y] <= 0.0 or out[STICK, nx.STATUS] != nx.ABSENT)
+    if not vel_zero and LEAVE(y, out):  # on a bound (its tie band), moving out
+        return t, ev.LEFT_DOMAIN, -1
     if vel_zero:
         y[VEL_Y] = 0.0
         n, adm, lost, sing = CLASSIFY(v, y, out)
@@ -648,6 +683,7 @@ PIECES = (("FILL", _fill_template, True),
           ("ON_STAGE", _on_stage_template, True),
           ("STILL", _still_template, True),
           ("STAGE_COEFFICIENT", _stage_coefficient_template, True),
+          ("LEAVE", _leave_template, True),
           ("INDICATOR", _indicator_template, True),
           ("ZERO", _zero_template, False),
           ("LOCATE", _locate_template, False),

@@ -57,6 +57,9 @@ STICK = -1
 N_BRANCHES = 0
 DIRECTIONS = np.zeros(1)
 REACTIONS = np.zeros(1, dtype=np.int64)
+LOWER = np.zeros(2)
+UPPER = np.zeros(2)
+BOUND_ROW = np.zeros(0, dtype=np.int64)
 #: Indices into REACTIONS of the reactions whose sign change bends the law (Model.kinks).
 KINKS = np.zeros(0, dtype=np.int64)
 ROW = None
@@ -76,6 +79,7 @@ KINK = None
 STORE_PANEL = None
 END = None
 END_REASON = None
+LEAVE = None
 CONTACT_END = None
 N_FIELDS = 0
 
@@ -264,9 +268,7 @@ def _at_rest_template(v, x, out):
         return -1, adm
     if sing and (n == nx.N_NONE or n == nx.N_CONTINUUM):
         return ev.SINGULAR, -1
-    if n == nx.N_NONE:
-        return (ev.CONTACT_LOST if lost else ev.NO_SOLUTION), -1
-    return ev.INDETERMINATE, -1
+    return ev.fate_without_unique(n, lost, sing), -1  # (a continuum is not two solutions)
 
 
 def _stage_start_template(v, mode, sigma, x0, u0, react):
@@ -460,6 +462,20 @@ def _end_template(v, out, x, hh, z, u, u1, a, c, sigma, mode, u_ref, coef_sign, 
     return False, hi, guided, c_fld, c_th, c_u, slope, dd
 
 
+def _leave_template(out, sigma):
+    """The bound of phi that a state classified into ``out``, moving in the direction
+    ``sigma``, lies on and leaves through, else NaN: a row that exists only on that
+    bound applies, and the state is not at rest (the integrator's rule,
+    :func:`phasemap.integrate.templates._leave_template`)."""
+    if STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT:
+        return math.nan
+    for b in range(BOUND_ROW.shape[0]):
+        k = BOUND_ROW[b]
+        if 0 <= k < 2 and out[b, nx.STATUS] != nx.ABSENT and (k == 1) == (sigma > 0.0):
+            return UPPER[0] if k == 1 else LOWER[0]
+    return math.nan
+
+
 def _end_reason_template(v, out, x, hh, z, u, a, c, sigma, mode, u_ref, th_e, x_e, u_e,
                          guided, c_th, c_u, slope, dd, buf, tb, nv, a2, c2):
     """What ends the stage at (x_e, u_e), theta ``th_e`` of the panel, where u is not
@@ -493,7 +509,11 @@ def _end_reason_template(v, out, x, hh, z, u, a, c, sigma, mode, u_ref, th_e, x_
         if n2 != 1:  # undecided: the event's own classification
             n2, adm2, lost2, sing2 = CLASSIFY(v, x_e, sigma * math.sqrt(max(u_e, 0.0)),
                                               out)
-    if not DOMAIN(v):
+    bound = LEAVE(out, sigma) if u_e > 0.0 else math.nan
+    if bound == bound:  # on a bound of phi, moving out
+        reason = ev.LEFT_DOMAIN
+        x_e = bound
+    elif not DOMAIN(v):
         reason = ev.LEFT_DOMAIN  # the model's own domain (the rod leaves the step)
     elif not (u_e > 0.0) or (STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT):
         reason = _ZERO
@@ -705,8 +725,11 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
     mode = -1
     if omega0 != 0.0:
         n, adm, lost, sing = CLASSIFY(v, phi0, omega0, out)
+        bound = LEAVE(out, omega0)
         if STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT:
             omega0 = 0.0  # an omega the model counts as zero: a rest state
+        elif bound == bound:  # on a bound of phi, moving out
+            code, phi0 = ev.LEFT_DOMAIN, bound
         elif sing and (n == nx.N_NONE or n == nx.N_CONTINUUM):
             code = ev.SINGULAR
         elif n == nx.N_UNIQUE:
@@ -776,6 +799,7 @@ PIECES = (("ROW", _row_template, True),
           ("STAGE_POINTS", _stage_points_template, False),
           ("AT_REST", _at_rest_template, False),
           ("STAGE_START", _stage_start_template, True),
+          ("LEAVE", _leave_template, True),
           ("COLLOCATE", _collocate_template, True),
           ("PANEL_ERROR", _panel_error_template, True),
           ("KINK", _kink_template, True),
