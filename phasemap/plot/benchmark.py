@@ -40,7 +40,7 @@ METHOD_LOOKS = {
     "phasemap_DOP853": (_OI["orange"], "s", True),
     "DOP853": (_OI["orange"], "s", False),
     "simulate": (_OI["sky_blue"], "D", True),
-    "phase_curve": (_OI["bluish_green"], "^", True),
+    "phase_curve": (_OI["black"], "^", True),  # green is the fate "rest"
     "Radau": (_OI["reddish_purple"], "v", False),
     "LSODA": (_OI["black"], "X", False),
 }
