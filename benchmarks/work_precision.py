@@ -332,7 +332,7 @@ def main():
         "Dataset; RK45 ... LSODA are `scipy.integrate.solve_ivp` restarted on every stage by "
         "`phasemap.workprecision.solve_ivp_staged` with terminal events (velocity zero, "
         "assumed reaction signs, the coefficient, the stick limit) and the model's own jitted "
-        "branch as right-hand side; `phase_curve` is the first-integral tracer (no "
+        "branch as right-hand side; `phase_curve` is the first-integral tracer (rtol = the "
         "tolerance; error in the phase plane).",
         "",
         "Seconds per trajectory needed for an error at the end of the motion of at most the "

@@ -58,9 +58,10 @@ U_TOP = {0.8: 6.0, 2.0: 22.0}
 def main(argv=None) -> list[Claim]:
     args = arguments(__doc__, argv)
     out = args.out
-    # the maps at print resolution even when quick (a cell under 1.5 px at 300 dpi, so
-    # that no boundary is stair-stepped); n_f odd: f = sqrt 2 mid-axis
-    n_phi, n_f = (721, 561) if args.quick else (721, 1001)
+    # the class boundaries are drawn exactly (phasemap.boundaries), so the quick maps need
+    # no print resolution for them: a cell of about 3 px at 300 dpi keeps the overlays'
+    # edges smooth; n_f odd: f = sqrt 2 mid-axis
+    n_phi, n_f = (361, 281) if args.quick else (721, 1001)
     files, claims = [], []
 
     # -- solvability over (phi, f) at several omega ---------------------------------
@@ -201,7 +202,8 @@ REST_BOUNDARY = {"color": "black", "lw": 1.0, "ls": pplot.DASHES[1], "path_effec
 
 
 def solvability_figure(atlas: xr.Dataset, size="two_column"):
-    """n_solutions over (phi, f) at each omega, overlays, f = sqrt 2 and 2 arctan f."""
+    """n_solutions over (phi, f) at each omega, overlays, f = sqrt 2 and 2 arctan f, and the
+    exact class boundaries traced by phasemap.boundaries."""
     from matplotlib.lines import Line2D
 
     with pplot.style():
@@ -209,7 +211,9 @@ def solvability_figure(atlas: xr.Dataset, size="two_column"):
                                  extra=1.3, sharex=True, sharey=True)
         handles: dict[str, object] = {}
         for k, (ax, w) in enumerate(zip(axes, OMEGAS)):
-            pplot.map_figure(atlas.sel(omega=w), "n_solutions", x="phi", ax=ax)
+            # the exact class boundaries (phasemap.boundaries) over the cells
+            pplot.map_figure(atlas.sel(omega=w), "n_solutions", x="phi", ax=ax,
+                             boundaries=True)
             collect_legend(ax, handles)
             if w == 0.0:
                 ff = np.linspace(0.0, 1.0, 200)
@@ -221,6 +225,8 @@ def solvability_figure(atlas: xr.Dataset, size="two_column"):
         off_line = np.abs(atlas.f.values - SQRT2) > 1e-12
         if "none" in handles and not ((n == 0) & ~lost)[off_line].any():
             handles[r"none (on $f = \sqrt{2}$ only)"] = handles.pop("none")
+        if "class boundary" in handles:  # beside the other curves, after the classes
+            handles["class boundary"] = handles.pop("class boundary")
         if "singular" in handles:  # the coefficient 2 - f^2 of (8) vanishes
             handles[r"singular: $f = \sqrt{2}$"] = handles.pop("singular")
         handles[r"$\varphi = 2\,\arctan f$ (rest boundary)"] = Line2D([], [], **REST_BOUNDARY)

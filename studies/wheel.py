@@ -456,7 +456,7 @@ def fates_figure(fates, size="two_column"):
                               rf"at $\delta/l$ = {HIGH:g} the fate differs from (a) in "
                               f"{differ} of {low.fate.size} cells"],
             0.95 * fig.get_figwidth()).replace(" kg,", " kg;"))
-        pplot.define_symbols(fig, KEY)
+        pplot.define_symbols(fig, KEY + [pplot.fate_grid_note(low, "phi")])
     return fig
 
 

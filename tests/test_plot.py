@@ -1042,3 +1042,40 @@ def test_a_three_dimensional_atlas_is_one_map_per_value_of_its_shortest_axis():
                                           "omega": np.linspace(0, 3, 7)}).compute()
     with pytest.raises(ValueError, match="'omega' has 7 values \\(at most 6\\)"):
         figure_of(long)
+
+
+@pytest.mark.parametrize("size", ["one_column", "two_column"])
+def test_work_precision_scaled_error_states_its_definition_and_scales(size, tmp_path):
+    """A dimensionless error is labelled with its definition, and the key states each
+    panel's scales from the rows; two systems at one column are stacked, one label for
+    the column; the tracer's markers are not joined."""
+    scales = {"hinge_weightless": (("phi", 8.957, "rad", r"\varphi"),
+                                   ("omega", 5.0, "rad s-1", r"\omega")),
+              "hinge_pendulum": (("phi", 2.5, "rad", r"\varphi"),
+                                 ("omega", 5.49, "rad s-1", r"\omega"))}
+    rows = [dict(r, system=system, scales=scales[system], error_scaled_l2=r["error_l2"] / 5,
+                 error_scaled_final=r["error_final"] / 5)
+            for system in scales for r in work_precision_table() if r["system"] == "ladder"]
+    rows += [dict(rows[0], method="phase_curve", tol=tol, error_scaled_l2=1e-12, seconds=2e-3)
+             for tol in (1e-4, 1e-8)]
+    fig = quiet(pplot.work_precision_figure, rows, size=size, error="error_scaled_l2")
+    panels = [a for a in fig.axes if a.axison]
+    label = r"$L_2$ error of $\Delta y_i/\hat y_i$ (dimensionless)"
+    if size == "one_column":
+        assert [a.get_ylabel() for a in panels] == ["", ""]
+        assert fig._supylabel.get_text() == label
+        assert panels[0].get_position().y0 > panels[1].get_position().y1  # stacked
+    else:
+        assert panels[0].get_ylabel() == label
+    key = fig._supxlabel.get_text()
+    assert r"$\hat y_i$: the largest $|y_i|$ along the reference motion" in key
+    assert (r"(a) $\hat{\varphi}$ = 8.957 rad, $\hat{\omega}$ = 5 rad s$^{-1}$" in key
+            and r"(b) $\hat{\varphi}$ = 2.5 rad" in key)
+    tracer = [ln for ln in panels[0].lines if ln.get_label() == "phasemap first integrals"]
+    assert len(tracer) == 1 and tracer[0].get_linestyle() == "None"
+    assert len(tracer[0].get_xdata()) == 2
+    assert figure_review.layout_problems(fig) == []
+    assert figure_review.unit_problems(fig) == []
+    render(fig, tmp_path)
+    with pytest.raises(ValueError, match="lacks error_scaled_final"):
+        pplot.work_precision_figure(work_precision_table(), error="error_scaled_final")

@@ -98,8 +98,8 @@ from .labels import (axis_label, fixed_values, fixed_values_text, format_number,
 from .layout import (WIDE, angle_ticks, define_symbols, figure_legend, figure_texts, label_panels,
                      legend_above, legend_columns, outer_labels, panels, save_figure, width_of)
 from .layout import _panel_width  # noqa: F401  (the tests measure a panel with it)
-from .maps import (draw_boundaries, fate_figure, map_figure, mark_inverted_rests,
-                   profile_figure)
+from .maps import (draw_boundaries, fate_figure, fate_grid_note, map_figure,
+                   mark_inverted_rests, profile_figure)
 from .motion import event_handle, mark_event, phase_curve_figure, trajectory_figure
 from .style import (CATEGORY_COLOURS, CATEGORY_HATCHES, CYCLE, DASHES, EVENT_MARKERS, GREY,
                     HALO, MARKERS, OKABE_ITO, OVERLAYS, PALE_GREY, SIZES, STYLE, SUNSET,
@@ -134,6 +134,7 @@ __all__ = [
     "draw_boundaries",
     "event_handle",
     "fate_figure",
+    "fate_grid_note",
     "figure_legend",
     "figure_texts",
     "fixed_values",

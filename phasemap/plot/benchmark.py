@@ -9,7 +9,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from .labels import _visible_length, wrap
+from .labels import _visible_length, format_number, format_units, wrap
 from .layout import (WIDE, _axes, legend_above, _legend_fits, _legend_height, define_symbols,
                      label_panels, legend_columns, width_of)
 from .style import CYCLE, MARKERS, _FONT, _OI, style
@@ -40,18 +40,23 @@ METHOD_LOOKS = {
     "phasemap_DOP853": (_OI["orange"], "s", True),
     "DOP853": (_OI["orange"], "s", False),
     "simulate": (_OI["sky_blue"], "D", True),
-    "phase_curve": (_OI["bluish_green"], "^", True),
+    "phase_curve": (_OI["black"], "^", True),  # green is the fate "rest"
     "Radau": (_OI["reddish_purple"], "v", False),
     "LSODA": (_OI["black"], "X", False),
 }
 
 
+#: Methods whose points are not joined: the first-integral tracer's rtol is not a knob of
+#: its work (its run time hardly changes with it) nor, measured, monotone in its error.
+UNJOINED = frozenset({"phase_curve"})
+
+
 def _method_look(method: str, j: int) -> dict:
     colour, marker, own = METHOD_LOOKS.get(method, (CYCLE[j % len(CYCLE)],
                                                     MARKERS[j % len(MARKERS)], True))
-    return {"color": colour, "marker": marker, "ms": 3.5, "lw": 1.0,
-            "ls": "solid" if own else (0, (3.0, 1.5)), "mfc": colour if own else "white",
-            "mec": colour, "mew": 0.9}
+    ls = "none" if method in UNJOINED else "solid" if own else (0, (3.0, 1.5))
+    return {"color": colour, "marker": marker, "ms": 4.0 if method in UNJOINED else 3.5,
+            "lw": 1.0, "ls": ls, "mfc": colour if own else "white", "mec": colour, "mew": 0.9}
 #: The built-in work-precision problems as panel headings.
 SYSTEM_NAMES = {
     "hinge_weightless": r"hinge pendulum, $g$ = 0 m s$^{-2}$",
@@ -60,6 +65,40 @@ SYSTEM_NAMES = {
     "wheel": "wheel",
     "elliptic_pendulum": "elliptic pendulum",
 }
+
+
+#: The errors a work-precision table carries, and the label of each (its definition).
+ERROR_LABELS = {
+    "error_final": r"Final-state error $\|\Delta y\|_\infty$ (SI)",
+    "error_l2": r"$L_2$ error along the motion (SI)",
+    "error_scaled_final": r"Final-state error $\max_i|\Delta y_i|/\hat y_i$ (dimensionless)",
+    "error_scaled_l2": r"$L_2$ error of $\Delta y_i/\hat y_i$ (dimensionless)",
+}
+
+
+def _symbol(name: str, symbol: str) -> str:
+    sym = symbol or name
+    return sym if len(sym) == 1 or sym.startswith("\\") else rf"\mathrm{{{sym}}}"
+
+
+def scales_key(rows: Sequence[Mapping]) -> list[str]:
+    r"""What the scaled errors divide by, one item per system of ``rows`` (in order),
+    read from the rows' ``scales`` (``(name, y_hat, units, symbol)`` per component):
+    ``"(a) $\hat\varphi$ = 8.957 rad, $\hat\omega$ = 5 rad s$^{-1}$"``.  Empty when
+    the rows carry no scales."""
+    out = []
+    systems = list(dict.fromkeys(str(r["system"]) for r in rows))
+    for i, system in enumerate(systems):
+        scales = next((r.get("scales") for r in rows if str(r["system"]) == system
+                       and r.get("scales")), None)
+        if not scales:
+            continue
+        items = [rf"$\hat{{{_symbol(name, symbol)}}}$ = "
+                 + format_number(float(f"{value:.4g}"))
+                 + (f" {format_units(units)}" if format_units(units) else "")
+                 for name, value, units, symbol in scales]
+        out.append((f"({chr(97 + i)}) " if len(systems) > 1 else "") + ", ".join(items))
+    return out
 
 
 def _two_decades_shown(ax: Axes) -> None:
@@ -95,19 +134,25 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
     carry ``seconds_min`` and ``seconds_max`` (the fastest and slowest of the
     timing rounds), each point sits at the fastest, which timing noise can
     only delay, and a bar reaches to the slowest.  ``error`` picks
-    ``error_final`` (max norm of the state error at the final time) or
-    ``error_l2``.  ``ylabel`` names the error with its unit (default: the
-    state's max norm, each component in its SI unit) and ``key`` defines the
-    symbols it uses (default: :math:`y`).  Points whose error or time is not
+    ``error_final`` (max norm of the state error at the final time),
+    ``error_l2``, or their dimensionless forms ``error_scaled_final`` and
+    ``error_scaled_l2`` (each component divided by its scale, the largest
+    magnitude it reaches along the reference motion; see
+    :mod:`phasemap.workprecision`).  ``ylabel`` names the error with its
+    definition and unit (default: ``ERROR_LABELS``) and ``key`` defines
+    the symbols it uses (default: :math:`y`); for a scaled error the key
+    always ends with the definition of the scales and each panel's values
+    (``scales_key``).  Points whose error or time is not
     positive and finite cannot be drawn on log axes and are left out.
     """
-    if error not in ("error_final", "error_l2"):
-        raise ValueError(f"error must be 'error_final' or 'error_l2', got {error!r}")
+    if error not in ERROR_LABELS:
+        raise ValueError(f"error must be one of {', '.join(map(repr, ERROR_LABELS))}, "
+                         f"got {error!r}")
     rows = list(table)
     if not rows:
         raise ValueError("work_precision_figure: the table is empty")
     for i, row in enumerate(rows):
-        missing = [k for k in _WP_KEYS if k not in row]
+        missing = [k for k in (*_WP_KEYS, error) if k not in row]
         if missing:
             raise ValueError(f"work_precision_figure: row {i} lacks {', '.join(missing)}")
     systems = list(dict.fromkeys(str(r["system"]) for r in rows))
@@ -116,10 +161,13 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
     rounds = max((int(r.get("n_samples", 0)) for r in rows), default=0)
     width = width_of(size)
     # three panels a row at two-column width, two at one column: narrower, the axis
-    # labels and headings of neighbouring panels collide
-    ncols = min(len(systems), 3 if width >= WIDE else 2)
+    # labels and headings of neighbouring panels collide; one or two systems at one
+    # column are stacked, each panel the full width (side by side they are too small
+    # for their key)
+    ncols = min(len(systems), 3 if width >= WIDE else 1 if len(systems) <= 2 else 2)
     nrows = -(-len(systems) // ncols)
-    panel_h = (width / ncols) * (0.8 if width >= 5 else 0.85)
+    stacked = ax is None and ncols == 1 and nrows > 1
+    panel_h = (width / ncols) * (0.8 if width >= 5 else 0.55 if ncols == 1 else 0.85)
     names = [METHOD_NAMES.get(m, m) for m in methods]
     long_x = ax is not None or width / ncols >= 2.2  # room for "Run time per trajectory (s)"
     # the key goes in a free panel slot when it fits there, else above the panels
@@ -127,8 +175,7 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
              and _legend_fits(names, width / ncols, panel_h))
     top = 0.0 if spare or ax is not None else _legend_height(names, 0.95 * width)
     if ylabel is None:
-        ylabel = (r"Final-state error $\|\Delta y\|_\infty$ (SI)" if error == "error_final"
-                  else r"$L_2$ error along the motion (SI)")
+        ylabel = ERROR_LABELS[error]
     with style():
         axes = _axes(ax, nrows * ncols if spare else len(systems),
                      (width, top + 0.4 + panel_h * nrows), "work_precision_figure",
@@ -166,7 +213,7 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
             # commas to the axes' width (the slot less the tick labels), "(a) " included
             room = width / ncols - 0.55 - _visible_length("(a) ") * 0.5 * _FONT / 72.0
             a.set_title(wrap(title.split(", "), room), loc="left")
-            if ax is not None or i % ncols == 0:
+            if ax is not None or (i % ncols == 0 and not stacked):
                 a.set_ylabel(ylabel)
             if ax is not None or i + ncols >= len(systems):
                 # a narrow panel has no room for the long label: the key says "per trajectory"
@@ -174,6 +221,8 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
         if len(axes) > 1:
             label_panels(axes)
         fig = axes[0].get_figure(root=False)
+        if stacked:  # one label for the column: per panel it is longer than a panel
+            fig.supylabel(ylabel, fontsize=_FONT)
         lines = [handles[m] for m in methods if m in handles]
         labels = [ln.get_label() for ln in lines]
         if ax is None and not spare:
@@ -192,6 +241,9 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
         if ax is None:
             key = list(key) if key is not None else [
                 r"$y$: the state (rad, rad s$^{-1}$, m, m s$^{-1}$)"]
+            if error.startswith("error_scaled"):  # what the label divides by, stated
+                key += [r"$\hat y_i$: the largest $|y_i|$ along the reference motion",
+                        *scales_key(rows)]
             if not long_x:
                 key.append("run time: per trajectory")
             if spread:

@@ -24,7 +24,8 @@ from .. import events as _events
 from .._dataset import dataset_kind as atlas_kind, first_layer, is_categorical, vocabulary
 from .labels import _coord, _flags, _layer, _meaning_text, _units, axis_label, fixed_values_text
 from .layout import (_angle_ticks, _annotate, _axes, _label_axis, _panel_width, _pi_text,
-                     figure_legend, label_panels, legend_above, outer_labels, width_of)
+                     define_symbols, figure_legend, label_panels, legend_above, outer_labels,
+                     width_of)
 from .style import (GREY, HALO, OVERLAYS, SEQUENTIAL, SUNSET, _OI, category_colour, category_hatch,
                     _patch, overlay_patch, style)
 
@@ -525,7 +526,8 @@ def fate_figure(ds: xr.Dataset, *, extra: str | Sequence[str] | None = None,
     "0"; the legend says what blank means.  Panels stand side by side at
     two-column width (a 2 x 2 grid for four), colour bars on the right;
     stacked at one-column width, colour bars underneath.  The heading states
-    what was held fixed and the horizon ``t_end``.
+    what was held fixed and the horizon ``t_end``; the key below says that the
+    class edges are the grid's cells (:func:`fate_grid_note`).
     """
     atlas_kind(ds)
     fate = _layer(ds, "fate")
@@ -589,7 +591,30 @@ def fate_figure(ds: xr.Dataset, *, extra: str | Sequence[str] | None = None,
         else:
             legend_above(axes[0], handles)
             _annotate(axes, fixed_values_text(ds, _panel_width(axes[0])), ax is None)
+        if ax is None:
+            define_symbols(axes[0].get_figure(root=False), [fate_grid_note(ds, xdim)])
     return axes[0].figure
+
+
+def fate_grid_note(ds: xr.Dataset, x: str | None = None) -> str:
+    """What a fate map's class edges are: the cells of its grid, not exact curves.
+
+    A fate follows from the whole motion (its rests, reversals and events), so
+    no one condition on the initial state decides it and the bifurcation-set
+    tracer (:func:`phasemap.boundaries`) has nothing to trace; the map's
+    resolution is what draws its edges.  ``x`` names the horizontal axis
+    (default: as :func:`fate_figure` chooses it).
+
+    >>> import numpy as np, xarray as xr
+    >>> ds = xr.Dataset({"fate": (("omega", "phi"), np.zeros((3, 4), np.int8))},
+    ...                 coords={"phi": [0.0, 1.0, 2.0, 3.0], "omega": [0.0, 1.0, 2.0]})
+    >>> fate_grid_note(ds, "phi")
+    'fate edges: cells of the 4 × 3 grid, not exact curves (a fate follows the whole motion)'
+    """
+    fate = _layer(ds, "fate")
+    xdim, ydim = _grid(ds, fate, x)
+    return (f"fate edges: cells of the {ds.sizes[xdim]} × {ds.sizes[ydim]} grid, "
+            "not exact curves (a fate follows the whole motion)")
 
 
 def mark_inverted_rests(axes: Sequence[Axes], ds: xr.Dataset, x: str, y: str, xc, yc

@@ -28,8 +28,9 @@ Methods
     stage switching included.
 ``phase_curve``
     the first-integral tracer :func:`phasemap.phase.phase_curve` (one-degree-of-
-    freedom models only).  It has no tolerance (its row has ``tol = nan``) and
-    no time: its error is measured in the phase plane (below).
+    freedom models only), with ``rtol = tol`` (its error of omega^2 per panel;
+    clipped to its range [1e-14, 1e-3]).  It has no time: its error is
+    measured in the phase plane (below).
 
 The scipy stage driver
 ----------------------
@@ -57,6 +58,24 @@ plane: ``error_l2`` is the RMS over its points of omega - omega_ref(phi) on
 the same stage, ``error_final`` the max difference of its end state (phi,
 omega).
 
+These mix units (rad and rad s-1) wherever they take a maximum or a mean over
+components.  The **scaled errors**, ``error_scaled_final`` and
+``error_scaled_l2``, are dimensionless: each component's error is first divided
+by its scale y_hat_i, the largest magnitude that component reaches along the
+reference motion (:attr:`Reference.scales`, stated in each row as
+``scales``):
+
+* ``error_scaled_final`` = max_i |y_end,i - y_end,i_ref| / y_hat_i;
+* ``error_scaled_l2`` = the RMS over the saved points and the compared
+  components of (y_i - y_i_ref) / y_hat_i; for the tracer, of
+  (omega^2 - omega_ref(phi)^2) / omega_hat^2 over its points: omega^2 is the
+  variable it integrates, and stays smooth where a stage turns, where omega
+  ~ sqrt(phi - phi_turn) makes a tiny shift of the turn a large error of
+  omega at the tracer's last points.
+
+They are what the figures draw (:func:`phasemap.plot.work_precision_figure`
+labels them with this definition).
+
 References (:class:`Reference`, :mod:`phasemap.workprecision.problems`): a closed form in time (the weightless hinge
 pendulum, eq. (36)); a first integral omega(phi) (the ladder's omega^2(phi),
 compared at each method's own phi, with the exact contact-loss state where
@@ -69,8 +88,10 @@ Timing
 ------
 The run time of a method is the median over ``repeats`` rounds; in each
 round the methods alternate, tolerance by tolerance.  Every (method,
-tolerance) runs once before timing (this warms numba's JIT and gives the
-errors).  A sample repeats a fast run until it lasts ``min_time`` seconds and
+tolerance) runs once before timing (this gives the errors); each method's
+first tolerance runs once more before that, to warm numba's JIT, so that the
+``budget`` below judges a run and never a compilation: a cold cache cannot
+skip the tight tolerances, and the same inputs give the same errors.  A sample repeats a fast run until it lasts ``min_time`` seconds and
 divides.  Preparation that is not per trajectory (model lookup, input
 validation, the input vector) is outside the timing for ``phasemap`` and the
 scipy driver alike; ``simulate`` and ``phase_curve`` are timed as a user calls
@@ -108,16 +129,33 @@ DEFAULT_METHODS = ("phase_curve", *PHASEMAP_METHODS, "simulate") + SCIPY_METHODS
 DEFAULT_TOLERANCES = tuple(10.0 ** -k for k in range(3, 14))
 
 
-def _time_errors(ref: Reference, t, y, y_end):
-    """(error_final, error_l2) of a run saved at times ``t``."""
+def _scales(ref: Reference, ny: int) -> np.ndarray:
+    return np.ones(ny) if ref.scales is None else np.asarray(ref.scales, dtype=float)
+
+
+def _time_errors(ref: Reference, t, y, y_end) -> dict:
+    """The errors (module docstring) of a run saved at times ``t``."""
     y = np.asarray(y, dtype=float)
-    final = float(np.max(np.abs(np.asarray(y_end, dtype=float) - ref.end)))
+    end = np.abs(np.asarray(y_end, dtype=float) - ref.end)
+    scale = _scales(ref, end.size)
+    out = dict(error_final=float(np.max(end)), error_scaled_final=float(np.max(end / scale)),
+               error_l2=math.nan, error_scaled_l2=math.nan)
     if len(t) == 0:
-        return final, math.nan
+        return out
     y_ref = ref.states(np.asarray(t, dtype=float), y)
-    comps = list(ref.components) if ref.components is not None else slice(None)
+    comps = list(ref.components) if ref.components is not None else list(range(end.size))
     diff = (y - y_ref)[:, comps]
-    return final, float(np.sqrt(np.mean(diff ** 2)))
+    out["error_l2"] = float(np.sqrt(np.mean(diff ** 2)))
+    out["error_scaled_l2"] = float(np.sqrt(np.mean((diff / scale[comps]) ** 2)))
+    return out
+
+
+def scales_of(problem: Problem, ref: Reference) -> tuple[tuple[str, float, str, str], ...]:
+    """``(name, y_hat, units, symbol)`` of each state component: the scales of the
+    scaled errors."""
+    names = integrated_variables(get_model(problem.model))
+    return tuple((v.name, float(s), v.units, v.symbol)
+                 for v, s in zip(names, _scales(ref, len(names))))
 
 
 def _methods_for(p: Problem, methods):
@@ -140,8 +178,8 @@ def _job(p: Problem, ref: Reference, method: str, tol: float):
         go = kernel_run(p, tol, PHASEMAP_METHODS[method])
 
         def measure(r):
-            fe, l2 = _time_errors(ref, p.t_save[:len(r[7])], r[7], r[2])
-            return dict(error_final=fe, error_l2=l2, fate=ev.Event(int(r[0])).name.lower(),
+            return dict(_time_errors(ref, p.t_save[:len(r[7])], r[7], r[2]),
+                        fate=ev.Event(int(r[0])).name.lower(),
                         n_reversals=int(r[3]), n_steps=int(r[4]), nfev=math.nan)
     elif method == "simulate":
         values = dict(p.values)
@@ -153,8 +191,7 @@ def _job(p: Problem, ref: Reference, method: str, tol: float):
             names = [v.name for v in integrated_variables(get_model(p.model))]
             y = np.column_stack([ds[n].values for n in names])
             y_end = np.array([float(ds[f"event_{n}"][-1]) for n in names])
-            fe, l2 = _time_errors(ref, ds.t.values, y, y_end)
-            return dict(error_final=fe, error_l2=l2, fate=ds.attrs["end_reason"],
+            return dict(_time_errors(ref, ds.t.values, y, y_end), fate=ds.attrs["end_reason"],
                         n_reversals=int(ds.attrs["n_reversals"]),
                         n_steps=int(ds.attrs["n_steps"]), nfev=math.nan)
     elif method in SCIPY_METHODS:
@@ -165,8 +202,8 @@ def _job(p: Problem, ref: Reference, method: str, tol: float):
             return driver.run(method, tol, tol, float(p.t_end), te)
 
         def measure(r):
-            fe, l2 = _time_errors(ref, r.t, r.y, r.y_final)
-            return dict(error_final=fe, error_l2=l2, fate=r.fate, n_reversals=r.n_reversals,
+            return dict(_time_errors(ref, r.t, r.y, r.y_final), fate=r.fate,
+                        n_reversals=r.n_reversals,
                         n_steps=math.nan, nfev=int(r.nfev))
     elif method == "phase_curve":
         from ..phase import phase_curve
@@ -176,16 +213,26 @@ def _job(p: Problem, ref: Reference, method: str, tol: float):
         params = {v.name: float(full[v.name]) for v in m.params}
         kw = {} if p.phi_range is None else {"phi_range": p.phi_range}
 
+        rtol = min(max(tol, 1e-14), 1e-3)  # the tracer's range
+
         def go():
             return phase_curve(m, phi=float(full["phi"]), omega=float(full["omega"]),
-                               **kw, **params)
+                               rtol=rtol, **kw, **params)
 
         def measure(ds):
             phi, omega = ds.phi.values, ds.omega.values
             w_ref = ref.omega(phi, ds.point_stage.values) if ref.omega else np.nan * phi
-            end = np.array([float(ds.stage_end_phi[-1]), float(ds.stage_end_omega[-1])])
-            return dict(error_final=float(np.max(np.abs(end - ref.end))),
+            end = np.abs(np.array([float(ds.stage_end_phi[-1]),
+                                   float(ds.stage_end_omega[-1])]) - ref.end)
+            scale = _scales(ref, 2)
+            # omega^2, the tracer's own variable, is smooth where a stage turns (omega
+            # ~ sqrt(phi - phi_turn) there, so a tiny shift of the turn is a large
+            # error of omega at the tracer's last points)
+            du = (omega ** 2 - w_ref ** 2) / scale[1] ** 2
+            return dict(error_final=float(np.max(end)),
+                        error_scaled_final=float(np.max(end / scale)),
                         error_l2=float(np.sqrt(np.mean((omega - w_ref) ** 2))),
+                        error_scaled_l2=float(np.sqrt(np.mean(du ** 2))),
                         fate=ds.attrs["end_reason"], n_reversals=int(ds.attrs["n_reversals"]),
                         n_steps=math.nan, nfev=math.nan)
     else:
@@ -217,7 +264,7 @@ def work_precision(problem: Problem | str, tolerances: Sequence[float] = DEFAULT
     problem:
         a :class:`Problem` or the name of a built-in one (:data:`PROBLEMS`).
     tolerances:
-        rtol = atol of each run (the phase-curve tracer runs once).
+        rtol = atol of each run (the phase-curve tracer's rtol).
     methods:
         any of :data:`DEFAULT_METHODS` (see the module docstring).
     repeats:
@@ -238,7 +285,9 @@ def work_precision(problem: Problem | str, tolerances: Sequence[float] = DEFAULT
     list of dict
         one per (method, tolerance): ``system`` (the problem's name),
         ``model``, ``method``, ``tol``, ``error_final``, ``error_l2``,
-        ``seconds`` (median per trajectory), ``seconds_min`` and
+        ``error_scaled_final``, ``error_scaled_l2`` (dimensionless; see the
+        module docstring), ``scales`` (``(name, y_hat, units, symbol)`` per
+        state component), ``seconds`` (median per trajectory), ``seconds_min`` and
         ``seconds_max`` (the spread of the ``n_samples`` rounds), ``fate``, ``n_reversals``,
         ``same_fate`` (fate and reversal count equal the reference's),
         ``n_steps`` (phasemap), ``nfev`` (scipy), ``skipped`` and the
@@ -255,13 +304,17 @@ def work_precision(problem: Problem | str, tolerances: Sequence[float] = DEFAULT
     say = progress or (lambda text: None)
     methods = _methods_for(p, methods)
     jobs: dict[tuple[str, float], dict] = {}
+    scales = scales_of(p, ref)
     for method in methods:
         over = False
-        for tol in ([math.nan] if method == "phase_curve" else sorted(tols, reverse=True)):
+        for k, tol in enumerate(sorted(tols, reverse=True)):
             row = dict(system=p.name, model=p.model, method=method, tol=tol,
-                       reference=ref.kind, floor=ref.floor, cross_check=ref.cross_check)
+                       reference=ref.kind, floor=ref.floor, cross_check=ref.cross_check,
+                       scales=scales)
             if over:
                 jobs[(method, tol)] = dict(row, error_final=math.nan, error_l2=math.nan,
+                                           error_scaled_final=math.nan,
+                                           error_scaled_l2=math.nan,
                                            seconds=math.nan, seconds_min=math.nan,
                                            seconds_max=math.nan, n_samples=0,
                                            fate="", n_reversals=-1,
@@ -269,8 +322,10 @@ def work_precision(problem: Problem | str, tolerances: Sequence[float] = DEFAULT
                                            nfev=math.nan, skipped=True)
                 continue
             go, measure = _job(p, ref, method, tol)
+            if k == 0:
+                go()  # numba's JIT and caches: not a run the budget may judge
             start = time.perf_counter()
-            result = go()  # warm-up (JIT, caches) and the errors
+            result = go()  # the errors
             took = time.perf_counter() - start
             row.update(measure(result))
             # a slow scipy run (no JIT to warm) counts its first run as its one sample
@@ -284,7 +339,7 @@ def work_precision(problem: Problem | str, tolerances: Sequence[float] = DEFAULT
                 f"{took:.4f} s  {row['fate']}")
     for r in range(repeats):
         gc.collect()
-        for tol in [math.nan] + sorted(tols, reverse=True):
+        for tol in sorted(tols, reverse=True):
             for method in methods:
                 row = jobs.get((method, tol))
                 if row is None or row["skipped"]:

@@ -51,6 +51,12 @@ class Reference:
         the reference's own uncertainty (0 for a closed form).
     ``cross_check``
         the largest difference from an independent solution (tight references).
+    ``scales``
+        the scale of each state component (in its unit) that makes the error
+        dimensionless: the largest magnitude the component reaches along the
+        reference motion (:func:`peak_scales`).  The scaled errors of
+        :func:`phasemap.workprecision.work_precision` divide each component's
+        error by it.
     """
 
     kind: str
@@ -63,6 +69,7 @@ class Reference:
     floor: float = 0.0
     cross_check: float = 0.0
     note: str = ""
+    scales: tuple[float, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -102,6 +109,19 @@ class Problem:
         return ref(self)
 
 
+def peak_scales(states: np.ndarray) -> tuple[float, ...]:
+    """The largest magnitude of each component over ``states`` (n, ny), NaN ignored.
+
+    A component that stays zero (to within 1e-300) gets the scale 1 in its own unit,
+    so that its error is still counted rather than divided by zero.
+
+    >>> peak_scales(np.array([[0.0, 5.0], [8.5, -0.5], [np.nan, 1.0]]))
+    (8.5, 5.0)
+    """
+    peak = np.nanmax(np.abs(np.asarray(states, dtype=float)), axis=0)
+    return tuple(float(x) if x > 1e-300 else 1.0 for x in peak)
+
+
 def _weightless_reference(p: Problem) -> Reference:
     """Eq. (36) of the hinge pendulum, exact in time and in the phase plane."""
     phi0, omega0 = p.values["phi"], p.values["omega"]
@@ -116,7 +136,7 @@ def _weightless_reference(p: Problem) -> Reference:
         return omega0 * np.exp(-k * np.abs(np.asarray(phi) - phi0))
 
     return Reference("closed form (36)", states, states(np.array([p.t_end]), None)[0],
-                     "horizon", 0, omega)
+                     "horizon", 0, omega, scales=peak_scales(states(p.t_save, None)))
 
 
 def _ladder_reference(p: Problem) -> Reference:
@@ -157,8 +177,12 @@ def _ladder_reference(p: Problem) -> Reference:
         out[:, 1] = omega(out[:, 0])
         return out
 
+    # the motion runs from phi0 to the contact loss
+    path = np.linspace(phi0, phi_c, 1001)
+    scales = peak_scales(np.column_stack([path, omega(path)]))
     return Reference("first integral omega^2(phi)", states, end, "contact_lost", 0, omega,
-                     components=(1,), note="omega compared at each method's own phi")
+                     components=(1,), note="omega compared at each method's own phi",
+                     scales=scales)
 
 
 _K_WEIGHTLESS = 0.3 / math.sqrt(1.0 - 0.3 ** 2)
@@ -262,6 +286,7 @@ def tight_reference(problem: Problem, rtol: float = TIGHT) -> Reference:
 
     return Reference(f"DOP853 at rtol {rtol:g}", states, y_stop, fate, dop.n_reversals,
                      omega, floor=floor, cross_check=cross,
+                     scales=peak_scales(np.vstack([dop.y, y_stop[None, :]])),
                      note=f"DOP853 at {rtol:g} differs from DOP853 at {10 * rtol:g} by "
                           f"{floor:.1e} and from phasemap at {rtol:g} by {cross:.1e}")
 
