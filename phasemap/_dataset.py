@@ -126,7 +126,7 @@ def declaration_hash(model) -> str | None:
         return None
     if id(model) not in _DECLARATION_HASHES:
         # a model loaded from the kernel cache carries its hash (no sympy needed)
-        digest = getattr(declaration, "__dict__", {}).get("sha256")
+        digest = getattr(declaration, "sha256", None)
         if digest is None:
             from .declare.build import declaration_sha256
 

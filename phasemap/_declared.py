@@ -293,7 +293,9 @@ def _variable(v: Variable) -> list:
 def manifest(S, model: Model) -> dict | None:
     """What :func:`build` needs to rebuild ``model`` from its generated module, as JSON
     data; None when the model cannot be rebuilt without its declaration."""
-    if any(not isinstance(b, (int, float)) for c in S.coordinates for b in (c.lower, c.upper)):
+    from .declare.api import numeric_bound
+
+    if not all(numeric_bound(b) for c in S.coordinates for b in (c.lower, c.upper)):
         return None  # a bound that is an expression is checked through sympy
     module = sys.modules[model.velocity_scale.py_func.__module__]
     prefix = "phasemap_kernel_"

@@ -43,6 +43,13 @@ def sym(x):
     return x._sympy_() if isinstance(x, _Symbolic) else sp.sympify(x)
 
 
+def numeric_bound(bound) -> bool:
+    """Whether a coordinate's bound is a number (else an expression of the parameters,
+    checked through sympy by the model's ``check``): one rule for the build, the
+    equations and the sympy-free cache manifest."""
+    return isinstance(bound, (int, float))
+
+
 @dataclass(frozen=True, eq=False)
 class _Quantity(_Symbolic):
     """A named value with units, a default and a domain (bounds, open or closed)."""

@@ -17,7 +17,7 @@ from .. import _numerics as nx
 from .._declared import checks, declare_sources
 from .._version import __version__
 from ..model import Branch, Derived, Dynamics, Model, Variable
-from .api import Coordinate, sym
+from .api import Coordinate, numeric_bound, sym
 from .emit import module_source
 from .validation import IDENT, fail, validate
 
@@ -129,7 +129,7 @@ def _variable(x, **kw):
 def _bounded(x):
     """The Variable of a quantity; a bound that is an expression of the parameters is
     left infinite here and checked by the model's ``check`` (:func:`_bounds_check`)."""
-    lo, hi = (b if isinstance(b, (int, float)) else sign * math.inf
+    lo, hi = (b if numeric_bound(b) else sign * math.inf
               for b, sign in ((x.lower, -1), (x.upper, 1)))
     return _variable(x, default=float(x.default), lower=float(lo), upper=float(hi),
                      lower_open=x.lower_open, upper_open=x.upper_open)
@@ -144,7 +144,7 @@ def _bounds_check(S):
     for c in S.coordinates:
         for side, b, is_open in (("lower", c.lower, c.lower_open), ("upper", c.upper,
                                                                     c.upper_open)):
-            if isinstance(b, (int, float)):
+            if numeric_bound(b):
                 continue
             e = sym(b)
             names = sorted(s.name for s in e.free_symbols)

@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from .algebra import scale_of
-from .api import Coordinate, sym
+from .api import Coordinate, numeric_bound, sym
 from .validation import fail
 
 
@@ -237,7 +237,7 @@ class Equations:
         import sympy as sp
 
         b = getattr(c, side)
-        if isinstance(b, (int, float)):
+        if numeric_bound(b):
             return sp.Float(b) if math.isfinite(b) else None
         return sym(b)
 
