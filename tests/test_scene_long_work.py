@@ -221,3 +221,14 @@ def test_ctrl_c_stops_the_command_line_while_it_times_its_sample(tmp_path):
     assert proc.returncode == 130, err
     assert err.strip().splitlines()[-1] == "phasemap: interrupted; no partial file was left"
     assert list(tmp_path.iterdir()) == []
+
+
+def test_an_activity_line_ticks_while_nothing_else_prints(capsys):
+    from phasemap import progress
+
+    with progress.enable(), progress.activity("waiting"):
+        time.sleep(2.2)   # a wait with no count, like numba compiling
+        progress.status("still waiting")
+        time.sleep(1.2)
+    err = capsys.readouterr().err
+    assert "waiting [00:01]" in err and "waiting: still waiting [00:03]" in err
