@@ -1,12 +1,15 @@
-"""What the suite compiles, from the logs that ``PHASEMAP_COMPILE_LOG=folder`` writes.
+"""What the suite compiles and what each test costs, from the logs that
+``PHASEMAP_TEST_LOG=folder`` writes (tests/conftest.py).
 
-    PHASEMAP_COMPILE_LOG=/tmp/compiles python -m pytest ...   # cold caches
-    python tests/compile_report.py /tmp/compiles
+    PHASEMAP_TEST_LOG=/tmp/testlog python -m pytest ...   # cold caches, or warm
+    python tests/compile_report.py /tmp/testlog
 
 Prints the CPU seconds of numba compilation per test (most first: the test that first
 needs a kernel pays for it), per kind of kernel (the engine and the model, digests
 left out), and the kernels compiled more than once (by both xdist workers at once, or
-again in a child process with a cache of its own).
+again in a child process with a cache of its own); then the tests by CPU time (this
+process and its children: what a test costs on a quiet machine) with their wall time,
+and the CPU time of the tests marked ``slow`` and of the rest.
 """
 
 from __future__ import annotations
@@ -21,6 +24,31 @@ import sys
 def read(folder) -> list[dict]:
     return [json.loads(line) for path in sorted(pathlib.Path(folder).glob("compiles-*.jsonl"))
             for line in path.read_text().splitlines()]
+
+
+def read_tests(folder) -> list[dict]:
+    return [json.loads(line) for path in sorted(pathlib.Path(folder).glob("tests-*.jsonl"))
+            for line in path.read_text().splitlines()]
+
+
+def tests_report(rows: list[dict], slow: set[str], most: int = 30) -> str:
+    rows = sorted(rows, key=lambda r: -r["cpu"])
+    marked = sum(r["cpu"] for r in rows if r["test"].split("@")[0] in slow)
+    out = [f"{len(rows)} tests, {sum(r['cpu'] for r in rows):.0f} s CPU "
+           f"({marked:.0f} s in tests marked slow), {sum(r['wall'] for r in rows):.0f} s wall",
+           "", "    CPU s   wall s  test"]
+    out += [f"{r['cpu']:9.1f} {r['wall']:8.1f}  {r['test'].split('@')[0]}" for r in rows[:most]]
+    return "\n".join(out)
+
+
+def slow_tests() -> set[str]:
+    """The node ids of the tests marked slow (collected without running them)."""
+    import subprocess
+
+    listed = subprocess.run([sys.executable, "-m", "pytest", "-q", "-n0", "--collect-only",
+                             "-m", "slow", "-p", "no:cacheprovider"], capture_output=True,
+                            text=True, cwd=pathlib.Path(__file__).resolve().parents[1])
+    return {line for line in listed.stdout.splitlines() if "::" in line}
 
 
 def report(rows: list[dict], most: int = 30) -> str:
@@ -47,3 +75,6 @@ def report(rows: list[dict], most: int = 30) -> str:
 
 if __name__ == "__main__":
     print(report(read(sys.argv[1])))
+    tests = read_tests(sys.argv[1])
+    if tests:
+        print("\n" + tests_report(tests, slow_tests()))

@@ -20,11 +20,15 @@ import pytest
 def pytest_collection_modifyitems(config, items):
     """Under pytest-xdist (``-n``, ``--dist loadgroup``), run each test module on one
     worker, so that a module's fixtures (its compiled kernels) are built once, and every
-    study on the same worker, so that each study runs once (:func:`studies`)."""
+    study on the same worker, so that each study runs once (:func:`studies`).  A module
+    whose tests only run phasemap in child processes shares nothing in-process: with
+    ``XDIST_SPREAD = True`` its tests go to whichever worker is free."""
     studies = set()
     for item in items:
         module = item.nodeid.split("::")[0]
         group = "studies" if pathlib.Path(module).name.startswith("test_study_") else module
+        if getattr(getattr(item, "module", None), "XDIST_SPREAD", False):
+            continue
         item.add_marker(pytest.mark.xdist_group(group))
         if group == "studies":
             studies.add(item.nodeid)
@@ -36,8 +40,8 @@ def pytest_collection_modifyitems(config, items):
 def _compile_log(folder: str):
     """numba compilations (cache misses, outermost only) per test, with their CPU time
     (steadier than wall time on a shared machine): which tests compile kernels that no
-    other test needs.  On when PHASEMAP_COMPILE_LOG names a folder; each process writes
-    one JSON-lines file there."""
+    other test needs.  On when PHASEMAP_TEST_LOG names a folder; each process writes
+    its JSON-lines files there (tests/compile_report.py sums them)."""
     import numba.core.event as ev
 
     class CompileLog(ev.Listener):
@@ -64,14 +68,31 @@ def _compile_log(folder: str):
     return log
 
 
-_COMPILE_LOG = (_compile_log(os.environ["PHASEMAP_COMPILE_LOG"])
-                if os.environ.get("PHASEMAP_COMPILE_LOG") else None)
+_LOG = os.environ.get("PHASEMAP_TEST_LOG")
+_COMPILE_LOG = _compile_log(_LOG) if _LOG else None
 
 
-@pytest.hookimpl(tryfirst=True)
+@pytest.hookimpl(hookwrapper=True, tryfirst=True)
 def pytest_runtest_protocol(item, nextitem):
-    if _COMPILE_LOG is not None:
-        _COMPILE_LOG.test = item.nodeid
+    """With PHASEMAP_TEST_LOG: each test's wall time and CPU time (this process and the
+    children it waited for), setup and teardown included; CPU time is what a test costs
+    on a quiet machine when the shared one is loaded."""
+    if _COMPILE_LOG is None:
+        yield
+        return
+    _COMPILE_LOG.test = item.nodeid
+    cpu, wall = _cpu(), time.perf_counter()
+    yield
+    with open(pathlib.Path(_LOG) / f"tests-{os.getpid()}.jsonl", "a") as log:
+        log.write(json.dumps({"test": item.nodeid, "cpu": round(_cpu() - cpu, 2),
+                              "wall": round(time.perf_counter() - wall, 2)}) + "\n")
+
+
+def _cpu() -> float:
+    import resource
+
+    return sum(resource.getrusage(who).ru_utime + resource.getrusage(who).ru_stime
+               for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN))
 
 
 #: The study scripts, each run once per session in quick mode (:func:`studies`).

@@ -27,6 +27,9 @@ from phasemap import cli
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 PHASEMAP = [sys.executable, "-m", "phasemap.cli"]
+#: phasemap runs in child processes here (kernels come from the disk cache): nothing
+#: in-process to share, so the tests spread over the xdist workers (conftest.py)
+XDIST_SPREAD = True
 
 
 def env(progress: str | None = "always") -> dict:
