@@ -90,6 +90,7 @@ def test_atlas_on_built_in_defaults(tmp_path):
         assert set(ds.data_vars) == {"n_solutions", "stagnation"}
 
 
+@pytest.mark.slow
 def test_block_by_block_writing_equals_the_eager_atlas(tmp_path):
     args = ["atlas", "wheel", "--axis", "phi=-3:3:50", "--axis", "delta=0:1:20",
             "--layers", "n_solutions,stagnation,phi_ddot_roll_pos"]
@@ -353,6 +354,7 @@ def interrupt(args, cwd, ready: str, sig=signal.SIGINT):
     return proc.returncode, seen + rest
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("args, ready", [
     (["atlas", "hinge_pendulum", "--axis", "phi=-3:3:3000", "--axis", "omega=-6:6:3000",
       "--layers", "fate", "--option", "t_end=30", "--yes", "-o", "fates.nc"], "fates.nc:"),
@@ -376,6 +378,7 @@ FATE_ATLAS = ["atlas", "hinge_pendulum", "--axis", "phi=-3:3:3000", "--axis", "o
               "--layers", "fate", "--option", "t_end=30", "--yes", "-o", "fates.nc"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("attempt", range(2))
 @pytest.mark.parametrize("signame", ["SIGTERM", "SIGHUP"])
 def test_sigterm_and_sighup_end_the_atlas_with_one_line_and_no_partial_file(tmp_path, signame,
@@ -389,6 +392,7 @@ def test_sigterm_and_sighup_end_the_atlas_with_one_line_and_no_partial_file(tmp_
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("attempt", range(2))
 def test_two_atlases_racing_for_one_name_never_both_write_it(tmp_path, attempt):
     """Both pass the check for an existing file before either has written it; the
@@ -438,6 +442,7 @@ def test_a_disk_without_room_is_refused_before_work(tmp_path):
         assert "time about" not in r.stderr and list(small.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_a_disk_that_fills_up_mid_write_leaves_no_file(tmp_path):
     """Another writer fills the disk while the atlas is being written."""
     with small_filesystem(tmp_path / "fills", "40m") as fills:

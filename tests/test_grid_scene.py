@@ -38,6 +38,7 @@ def _axis(rng, name, lo, hi, uniform):
     return a
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", list(AXES))
 @pytest.mark.parametrize("uniform", [True, False])
 def test_grid_equals_classify_cell_by_cell(model, uniform):
