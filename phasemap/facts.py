@@ -4,7 +4,7 @@ README or the user guide (``docs/guide/``).
 Each entry of :func:`readme_facts` is a piece of README text built from the
 code that decides it (a closed form, a constant the library uses), so a
 README number can only change together with the code, and a wrong one fails
-``tests/test_trust_long_work.py::test_readme_numbers_come_from_code``.
+``tests/test_readme_claims.py::test_readme_numbers_come_from_code``.
 """
 
 from __future__ import annotations

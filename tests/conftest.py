@@ -3,27 +3,32 @@
 from __future__ import annotations
 
 import contextlib
+import dataclasses
+import importlib.util
+import io
+import json
 import os
 import pathlib
 import shutil
 import subprocess
+import time
+import warnings
 
 import pytest
-
-#: What each quick study run in this session produced: {study: (verdicts, figures)}.
-#: The README's tour counts are checked against it once every study has run.
-STUDY_RUNS: dict[str, tuple[list[str], int]] = {}
-
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     """Under pytest-xdist (``-n``, ``--dist loadgroup``), run each test module on one
     worker, so that a module's fixtures (its compiled kernels) are built once, and every
-    study on the same worker, so that the tour counts see all of them (:data:`STUDY_RUNS`)."""
+    study on the same worker, so that each study runs once (:func:`studies`).  A module
+    whose tests only run phasemap in child processes shares nothing in-process: with
+    ``XDIST_SPREAD = True`` its tests go to whichever worker is free."""
     studies = set()
     for item in items:
         module = item.nodeid.split("::")[0]
         group = "studies" if pathlib.Path(module).name.startswith("test_study_") else module
+        if getattr(getattr(item, "module", None), "XDIST_SPREAD", False):
+            continue
         item.add_marker(pytest.mark.xdist_group(group))
         if group == "studies":
             studies.add(item.nodeid)
@@ -32,10 +37,111 @@ def pytest_collection_modifyitems(config, items):
     items.sort(key=lambda item: item.nodeid not in studies)
 
 
-def record_study(name: str, claims, out) -> None:
-    # the tour's figures are the two-column ones; "_one_column" files are their narrow layouts
-    figures = [p for p in pathlib.Path(out).glob("*.png") if not p.stem.endswith("_one_column")]
-    STUDY_RUNS[name] = ([c.verdict for c in claims], len(figures))
+def _compile_log(folder: str):
+    """numba compilations (cache misses, outermost only) per test, with their CPU time
+    (steadier than wall time on a shared machine): which tests compile kernels that no
+    other test needs.  On when PHASEMAP_TEST_LOG names a folder; each process writes
+    its JSON-lines files there (tests/compile_report.py sums them)."""
+    import numba.core.event as ev
+
+    class CompileLog(ev.Listener):
+        path = pathlib.Path(folder) / f"compiles-{os.getpid()}.jsonl"
+        test, depth, started = "collection", 0, 0.0
+
+        def on_start(self, event):
+            self.depth += 1
+            if self.depth == 1:
+                self.started = time.process_time()
+
+        def on_end(self, event):
+            self.depth -= 1
+            if self.depth == 0:
+                kernel = event.data["dispatcher"].py_func
+                with open(self.path, "a") as log:
+                    log.write(json.dumps({
+                        "test": self.test, "seconds": round(time.process_time() - self.started, 2),
+                        "kernel": f"{kernel.__module__}.{kernel.__qualname__}",
+                        "args": str(event.data["args"])[:300]}) + "\n")
+
+    log = CompileLog()
+    ev.register("numba:compile", log)
+    return log
+
+
+_LOG = os.environ.get("PHASEMAP_TEST_LOG")
+_COMPILE_LOG = _compile_log(_LOG) if _LOG else None
+
+
+@pytest.hookimpl(hookwrapper=True, tryfirst=True)
+def pytest_runtest_protocol(item, nextitem):
+    """With PHASEMAP_TEST_LOG: each test's wall time and CPU time (this process and the
+    children it waited for), setup and teardown included; CPU time is what a test costs
+    on a quiet machine when the shared one is loaded."""
+    if _COMPILE_LOG is None:
+        yield
+        return
+    _COMPILE_LOG.test = item.nodeid
+    cpu, wall = _cpu(), time.perf_counter()
+    yield
+    with open(pathlib.Path(_LOG) / f"tests-{os.getpid()}.jsonl", "a") as log:
+        log.write(json.dumps({"test": item.nodeid, "cpu": round(_cpu() - cpu, 2),
+                              "wall": round(time.perf_counter() - wall, 2)}) + "\n")
+
+
+def _cpu() -> float:
+    import resource
+
+    return sum(resource.getrusage(who).ru_utime + resource.getrusage(who).ru_stime
+               for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN))
+
+
+#: The study scripts, each run once per session in quick mode (:func:`studies`).
+STUDIES = pathlib.Path(__file__).resolve().parents[1] / "studies"
+
+
+@dataclasses.dataclass(frozen=True)
+class StudyRun:
+    """One quick run of a study: its claims, what it printed, its folder, the figures seen
+    (:func:`figure_review.recording`) and how many figures the tour counts."""
+
+    name: str
+    claims: list
+    printed: str
+    out: pathlib.Path
+    seen: dict
+
+    @property
+    def figures(self) -> int:
+        # the tour's figures are the two-column ones; "_one_column" files are their narrow
+        # layouts
+        return sum(1 for p in self.out.glob("*.png") if not p.stem.endswith("_one_column"))
+
+
+@pytest.fixture(scope="session")
+def studies(tmp_path_factory):
+    """``studies(name)``: the :class:`StudyRun` of ``studies/name.py --quick --size both``,
+    in a temporary folder with every warning an error, run once per session whichever test
+    asks first (the study modules and the README's tour counts share the runs)."""
+    import figure_review
+
+    runs: dict[str, StudyRun] = {}
+
+    def run(name: str) -> StudyRun:
+        if name not in runs:
+            out = tmp_path_factory.mktemp(name)
+            spec = importlib.util.spec_from_file_location(f"study_{name}",
+                                                          STUDIES / f"{name}.py")
+            module = importlib.util.module_from_spec(spec)
+            printed = io.StringIO()
+            with warnings.catch_warnings(), contextlib.redirect_stdout(printed), \
+                    figure_review.recording() as seen:
+                spec.loader.exec_module(module)  # inside: a study may bind save_figure
+                warnings.simplefilter("error")
+                claims = module.main(["--quick", "--out", str(out), "--size", "both"])
+            runs[name] = StudyRun(name, claims, printed.getvalue(), out, seen)
+        return runs[name]
+
+    return run
 
 
 def require_tool(name: str, install: str):

@@ -18,6 +18,7 @@ import pytest
 import phasemap
 from phasemap import _args
 from phasemap.phase import phase_curve
+import re
 
 HUGE = 10**400
 
@@ -235,3 +236,20 @@ def test_fuzz_phase_curve():
             _check_call(name, lambda x: phase_curve(
                 "hinge_pendulum", **{"phi": 0.5, "omega": 0.0, "max_stages": 2, name: x}),
                 value)
+
+
+# ---------------------------------------------------- values that would overflow -----
+@pytest.mark.parametrize("model, values, words", [
+    ("ladder", {"omega": 1e300}, "omega = 1e+300 is too large"),
+    ("wheel", {"r": 1e155, "l": 0.5}, "r = 1e+155 is too large"),
+    ("hinge_pendulum", {"l": 1e300}, "l = 1e+300 is too large"),
+    ("hinge_pendulum", {"l": 1e-200}, "l = 1e-200 is too small"),
+    ("elliptic_pendulum", {"m": 1e-160}, "m = 1e-160 is too small"),
+])
+def test_values_that_would_overflow_are_refused(model, values, words):
+    with pytest.raises(ValueError, match=re.escape(words)):
+        phasemap.classify(model, **values)
+    name, value = next(iter(values.items()))
+    with pytest.raises(ValueError, match=re.escape(words.split(" is ")[0])):
+        phasemap.Scene(model, axes={name: [1.0, value]}, fixed={k: v for k, v in values.items()
+                                                               if k != name})

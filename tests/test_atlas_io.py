@@ -422,6 +422,7 @@ phasemap.write_atlas(ds, sys.argv[1])
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("attempt", range(2))
 @pytest.mark.parametrize("signame", ["SIGTERM", "SIGHUP", "SIGINT"])
 def test_a_signal_that_ends_the_process_leaves_no_temporary_file(tmp_path, signame, attempt):

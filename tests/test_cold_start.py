@@ -12,6 +12,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 import phasemap
 from phasemap import _declared
 
@@ -41,6 +43,7 @@ def _run(code: str, *args, env=None) -> str:
     return run.stdout.strip().splitlines()[-1]
 
 
+@pytest.mark.slow
 def test_a_warm_process_maps_every_built_in_model_without_sympy():
     """The first process fills the kernel cache; the second finds every declared model's
     manifest there and never builds a declaration: no sympy, no dask, no matplotlib."""
@@ -59,6 +62,7 @@ print(json.dumps([c.n_solutions, [b.accelerations.get("phi_ddot") for b in c.bra
 """
 
 
+@pytest.mark.slow
 def test_a_changed_declaration_is_derived_again_never_loaded_stale(tmp_path):
     """A declaration file's manifest is keyed on its bytes: after an edit that changes the
     physics (the bar's inertia) a warm process uses the new derivation."""

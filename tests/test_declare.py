@@ -56,6 +56,7 @@ ACC = {"ladder": ["phi_ddot"], "wheel": ["phi_ddot"],
        "elliptic_pendulum": ["phi_ddot", "x_ddot"], "hinge_pendulum": ["phi_ddot"]}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", sorted(ACC))
 def test_declared_seed_agrees_with_the_hand_derivation(seed):
     """10,000 random states (a third at zero velocity): wherever the hand module keeps
@@ -101,6 +102,7 @@ def _step_values(rng, zero):
                 g=rng.uniform(0.5, 12), m=rng.uniform(0.3, 3))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, sample", [("painleve_rod", _rod_values),
                                           ("rod_on_step", _step_values)])
 def test_declared_rods_agree_with_an_independent_full_coordinate_solve(name, sample):

@@ -115,6 +115,7 @@ def run_page(page: pathlib.Path, where: pathlib.Path) -> tuple[int, list[str]]:
     return ran, failures
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("page", GUIDE_PAGES, ids=lambda p: str(p.relative_to(DOCS)))
 def test_guide_page_code_runs(page, tmp_path, monkeypatch):
     monkeypatch.setenv("MPLBACKEND", "Agg")

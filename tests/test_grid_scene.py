@@ -38,6 +38,7 @@ def _axis(rng, name, lo, hi, uniform):
     return a
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", list(AXES))
 @pytest.mark.parametrize("uniform", [True, False])
 def test_grid_equals_classify_cell_by_cell(model, uniform):
@@ -221,6 +222,7 @@ def test_local_cluster_with_two_workers_equals_eager():
 
 
 # ----------------------------------------------------------------- atlas -----
+@pytest.mark.slow
 @pytest.mark.parametrize("model", list(AXES))
 def test_atlas_of_each_model_round_trips_and_passes_cfchecks(model, tmp_path):
     m = phasemap.MODELS[model]

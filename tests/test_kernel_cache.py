@@ -105,6 +105,7 @@ DAMAGE = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("damage", list(DAMAGE))
 def test_a_damaged_module_is_generated_again_once_with_one_line(warm, tmp_path, damage):
     root = copy_of(warm, tmp_path)

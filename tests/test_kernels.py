@@ -105,6 +105,7 @@ def _same(a, b):
     return (a == b) or (math.isnan(a) and math.isnan(b))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", list(RANGES))
 @pytest.mark.parametrize("mask,inner_kind", MASKS)
 def test_point_branch_and_grid_agree(model, mask, inner_kind):

@@ -520,6 +520,7 @@ def test_fate_map_lists_only_the_fates_present(tmp_path):
     render(fig, tmp_path)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("extra, size", [("phi_rest", "one_column"), ("phi_rest", "two_column"),
                                          ("n_reversals", "one_column"), ("t_rest", "two_column")])
 def test_fate_map_with_a_second_panel(extra, size, tmp_path):
@@ -657,6 +658,7 @@ def test_work_precision_one_panel_per_system_one_line_per_method(size, tmp_path)
     assert fig.axes[0].get_ylabel() == "$L_2$ error along the motion (SI)"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("size", ["one_column", "two_column"])
 def test_work_precision_of_every_builtin_problem_and_method_lays_out(size, tmp_path):
     """The benchmark's figure: five systems, eight methods, at both widths."""
@@ -990,6 +992,7 @@ def test_a_declared_system_is_labelled_as_a_built_in_one(tmp_path):
     assert r"$\theta_0$ = 1 rad" in fig.axes[0].get_legend().get_title().get_text()
 
 
+@pytest.mark.slow
 def test_phasemap_plot_on_the_command_line(ladder_map, tmp_path):
     import subprocess
     import sys

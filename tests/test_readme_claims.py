@@ -8,6 +8,9 @@ import re
 import tomllib
 
 from phasemap import MODELS, cli
+import math
+import numpy as np
+import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text()
@@ -35,3 +38,23 @@ def test_cfchecker_is_a_pip_extra():
         "optional-dependencies"]
     assert any(req.startswith("cfchecker") for req in extras["cf"])
     assert 'pip install ".[cf]"' in README
+
+
+def test_readme_numbers_come_from_code():
+    from phasemap.facts import elliptic_threshold, readme_facts, wheel_singular_delta
+
+    readme = " ".join(" ".join(page.read_text() for page in [ROOT / "README.md", *sorted(
+        (ROOT / "docs" / "guide").glob("*.md"))]).split())   # the README and the user guide
+    for what, text in readme_facts().items():
+        assert " ".join(text.split()) in readme, (what, text)
+    # the closed forms behind them, checked independently
+    r, l, rho = 1.0, 0.5, 0.5
+    phi = np.linspace(-math.pi, math.pi, 200001)
+    for delta in (wheel_singular_delta(r, l, rho) * (1 - 1e-6),
+                  wheel_singular_delta(r, l, rho) * (1 + 1e-6)):
+        bracket = rho ** 2 + r ** 2 + l ** 2 - 2 * r * l * np.cos(phi) + delta * l * np.sin(phi)
+        assert (bracket.min() <= 0) == (delta > wheel_singular_delta(r, l, rho))
+    assert wheel_singular_delta(r, l, rho) == pytest.approx(math.sqrt(1.25) / 0.5)
+    f = np.linspace(0, 5, 5001)
+    lam_min = (3 - np.sqrt(1 + f ** 2)) / 2
+    assert f[np.argmax(lam_min <= 0)] == pytest.approx(elliptic_threshold(), abs=1e-3)

@@ -97,3 +97,22 @@ def test_a_local_cluster_gives_the_eager_results(rods):
         held.result()
     for lazy, eager in ((la, ea), (lb, eb), (lf, ef)):
         xr.testing.assert_identical(lazy.drop_attrs(), eager.drop_attrs())
+
+
+def test_chunked_fate_map_uses_the_integrator_options():
+    scene = phasemap.Scene("hinge_pendulum", axes={"phi": [2.5, 3.0]}, fixed={"omega": 0.0},
+                           layers=["fate", "t_final", "n_reversals", "t_rest", "phi_rest"],
+                           options={"t_end": 0.5, "rtol": 1e-9})
+    eager = scene.compute()
+    assert np.all(eager.t_final.values == 0.5)  # still swinging at t_end
+    lazy = scene.compute(chunks=1).compute()
+    xr.testing.assert_identical(lazy.drop_attrs(), eager.drop_attrs())
+
+
+def test_a_large_lazy_atlas_builds_no_task_per_block():
+    scene = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 1_000_000),
+                                           "f": np.linspace(0, 3, 1_000_000)})
+    lazy = scene.compute(chunks={"phi": 16, "f": 1_000_000})   # 62500 blocks
+    graph = lazy.n_solutions.data.dask
+    assert lazy.n_solutions.data.npartitions == 62_500
+    assert not any(layer.is_materialized() for layer in graph.layers.values())

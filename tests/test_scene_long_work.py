@@ -109,6 +109,7 @@ print(r.stderr, r.returncode, resource.getrusage(resource.RUSAGE_CHILDREN).ru_ma
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("side", [1, 2000])
 def test_the_memory_estimate_is_near_the_measured_peak(side, tmp_path):
     """The estimate against the measured peak, kernels compiled: in Python with the whole
@@ -200,6 +201,7 @@ print("finished")
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("attempt", range(3))
 def test_ctrl_c_interrupts_a_fate_map_from_python(attempt):
     """One kernel call over these 1681 cells takes minutes; in blocks, KeyboardInterrupt
@@ -210,6 +212,7 @@ def test_ctrl_c_interrupts_a_fate_map_from_python(attempt):
     assert "KeyboardInterrupt" in err and "finished" not in out, err[-2000:]
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_the_command_line_while_it_times_its_sample(tmp_path):
     args = ["atlas", "hinge_pendulum", "--axis", "phi=-3:3:41", "--axis", "omega=-6:6:41",
             "--set", "delta=0", "--layers", "fate", "--option", "t_end=4e4", "-o", "f.nc"]
@@ -221,3 +224,14 @@ def test_ctrl_c_stops_the_command_line_while_it_times_its_sample(tmp_path):
     assert proc.returncode == 130, err
     assert err.strip().splitlines()[-1] == "phasemap: interrupted; no partial file was left"
     assert list(tmp_path.iterdir()) == []
+
+
+def test_an_activity_line_ticks_while_nothing_else_prints(capsys):
+    from phasemap import progress
+
+    with progress.enable(), progress.activity("waiting"):
+        time.sleep(2.2)   # a wait with no count, like numba compiling
+        progress.status("still waiting")
+        time.sleep(1.2)
+    err = capsys.readouterr().err
+    assert "waiting [00:01]" in err and "waiting: still waiting [00:03]" in err

@@ -2,21 +2,14 @@
 
 from __future__ import annotations
 
-import contextlib
-import importlib.util
-import io
-import pathlib
-import warnings
-
 import pytest
 import xarray as xr
-from conftest import record_study
 
 import figure_review
 
 import phasemap
 
-STUDIES = pathlib.Path(__file__).resolve().parents[1] / "studies"
+pytestmark = pytest.mark.slow
 NAME = "rod_on_step"
 
 #: The verdict each claim must get, in the order the study checks them.
@@ -40,18 +33,10 @@ FIGURES = ["rest", "motion", "slide"]
 
 
 @pytest.fixture(scope="module")
-def run(tmp_path_factory):
-    out = tmp_path_factory.mktemp(NAME)
-    spec = importlib.util.spec_from_file_location(f"study_{NAME}", STUDIES / f"{NAME}.py")
-    module = importlib.util.module_from_spec(spec)
-    printed = io.StringIO()
-    with warnings.catch_warnings(), contextlib.redirect_stdout(printed), \
-            figure_review.recording() as seen:
-        spec.loader.exec_module(module)
-        warnings.simplefilter("error")
-        claims = module.main(["--quick", "--out", str(out), "--size", "both"])
-    record_study(NAME, claims, out)
-    return claims, printed.getvalue(), out, seen
+def run(studies):
+    """The study's quick run (conftest): (claims, printed, folder, figures seen)."""
+    r = studies(NAME)
+    return r.claims, r.printed, r.out, r.seen
 
 
 def test_claims_and_verdicts(run):

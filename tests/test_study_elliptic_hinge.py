@@ -2,19 +2,14 @@
 
 from __future__ import annotations
 
-import importlib.util
-import pathlib
-import warnings
-
 import pytest
-from conftest import record_study
 import xarray as xr
 
 import figure_review
 
 import phasemap
 
-STUDIES = pathlib.Path(__file__).resolve().parents[1] / "studies"
+pytestmark = pytest.mark.slow
 
 #: The verdict each claim must get, in the order the study checks them.
 EXPECTED = {
@@ -58,29 +53,11 @@ FIGURES = {
 }
 
 
-def load(name):
-    spec = importlib.util.spec_from_file_location(f"study_{name}", STUDIES / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.fixture(scope="module", params=sorted(EXPECTED))
-def run(request, tmp_path_factory):
-    """Run one study in quick mode, warnings as errors; (name, claims, printed, folder)."""
-    name = request.param
-    out = tmp_path_factory.mktemp(name)
-    module = load(name)
-    import contextlib
-    import io
-
-    printed = io.StringIO()
-    with warnings.catch_warnings(), contextlib.redirect_stdout(printed), \
-            figure_review.recording() as seen:
-        warnings.simplefilter("error")
-        claims = module.main(["--quick", "--out", str(out), "--size", "both"])
-    record_study(name, claims, out)
-    return name, claims, printed.getvalue(), out, seen
+def run(request, studies):
+    """One study's quick run (conftest): (name, claims, printed, folder, figures seen)."""
+    r = studies(request.param)
+    return r.name, r.claims, r.printed, r.out, r.seen
 
 
 def test_claims_and_verdicts(run):

@@ -7,21 +7,14 @@ every warning an error, so the figures render without warnings, at both widths
 
 from __future__ import annotations
 
-import contextlib
-import importlib.util
-import io
-import pathlib
-import warnings
-
 import pytest
-from conftest import record_study
 import xarray as xr
 
 import figure_review
 
 from phasemap.study import VERDICTS
 
-STUDIES = pathlib.Path(__file__).resolve().parents[1] / "studies"
+pytestmark = pytest.mark.slow
 
 #: Files each study writes, by stem: which suffixes.
 FILES = {
@@ -77,25 +70,11 @@ for _files in FILES.values():
             _files[f"{_stem}_one_column"] = ("pdf", "png")
 
 
-def load(name):
-    spec = importlib.util.spec_from_file_location(f"study_{name}", STUDIES / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.fixture(scope="module", params=["ladder", "wheel"])
-def run(request, tmp_path_factory):
-    """(name, folder, claims, printed output) of one quick run, warnings as errors."""
-    name = request.param
-    out = tmp_path_factory.mktemp(name)
-    printed = io.StringIO()
-    with warnings.catch_warnings(), contextlib.redirect_stdout(printed), \
-            figure_review.recording() as seen:
-        warnings.simplefilter("error")
-        claims = load(name).main(["--quick", "--out", str(out), "--size", "both"])
-    record_study(name, claims, out)
-    return name, out, claims, printed.getvalue(), seen
+def run(request, studies):
+    """(name, folder, claims, printed output, figures seen) of one quick run (conftest)."""
+    r = studies(request.param)
+    return r.name, r.out, r.claims, r.printed, r.seen
 
 
 def test_files(run):

@@ -10,6 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import phasemap
+from phasemap.model import MAX_MAGNITUDE, MIN_POSITIVE
+from phasemap.models import MODELS
 
 G = 9.81
 
@@ -176,3 +178,40 @@ def test_defaults_fill_missing_names():
     c = phasemap.classify("elliptic_pendulum")
     assert c.values == phasemap.MODELS["elliptic_pendulum"].defaults
     assert c.values["f"] == 0.3 and c.values["l"] == 1.0
+
+
+@pytest.mark.parametrize("model", sorted(MODELS))
+def test_no_overflow_is_ever_counted_as_a_solution(model):
+    """At random states with every value anywhere in its allowed range (1e-30 to 1e30),
+    each admissible branch has finite accelerations and reactions."""
+    m = MODELS[model]
+    rng = np.random.default_rng(10)
+    checked = 0
+    for _ in range(1500):
+        values = {}
+        for var in m.state + m.params:
+            kind = rng.integers(4)
+            mag = 10.0 ** rng.uniform(-30, 30)
+            x = 0.0 if kind == 0 else (MAX_MAGNITUDE if kind == 1 else mag)
+            if var.lower >= 0:
+                x = max(x, MIN_POSITIVE) if var.lower_open else x
+                if var.upper < math.inf:
+                    x = min(x, var.upper)
+            elif rng.integers(2):
+                x = -x
+            values[var.name] = x
+        if model == "wheel":
+            values["l"] = min(values["l"], values["r"])
+        if m.check is not None:  # a cross-variable domain (the rod on a step must touch it)
+            try:
+                m.check(values)
+            except ValueError:
+                continue
+        c = phasemap.classify(m, **values)
+        for b in c.branches:
+            if b.status != phasemap.BranchStatus.ADMISSIBLE:
+                continue  # a continuum has no values
+            numbers = [*b.accelerations.values(), *b.reactions.values()]
+            assert all(math.isfinite(x) for x in numbers), (repr(values), b)
+            checked += 1
+    assert checked > (100 if m.check is not None else 500)  # a check refuses most draws
