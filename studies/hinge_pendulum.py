@@ -205,6 +205,12 @@ def figure_moving(by_delta, by_omega, size="two_column"):
     omega) at delta/l = 1.5 is one class (none) but for that curve, where the
     hinge reaction vanishes; the key says so rather than drawing a panel of
     one colour (the study checks every cell of it).
+
+    No ``boundaries=True``: the only piece phasemap.boundaries traces on this
+    slice is delta = l (a grid row, drawn already as the singular line); the
+    curve where R = 0 is a line of cells, not a region's edge, and is drawn
+    from its closed form.  Tracing would redraw delta = l at the cost of
+    compiling the tracer (about 40 s with empty caches, as CI runs).
     """
     cont = pplot.CATEGORY_COLOURS["continuum"]
     with pplot.style():

@@ -116,7 +116,9 @@ def least_f(ds, mask):
 
 
 def axes(quick, h):
-    # print resolution even when quick: a cell under 1.5 px at 300 dpi in every figure
+    # print resolution even when quick: a cell under 1.5 px at 300 dpi in every figure.
+    # The maps do not trace exact boundaries (boundaries=True): compiling the rod's
+    # condition functions takes about 2.5 min with empty caches, as CI runs
     n_th, n_f = (641, 401) if quick else (641, 801)
     theta = np.unique(np.r_[np.linspace(theta_min(h), math.pi / 2, n_th),
                             [THETA_STAR] if h == H_STAR else []])
