@@ -71,3 +71,18 @@ def test_same_inputs_give_the_same_numbers(weightless_rows):
             "error_scaled_l2", "fate", "n_reversals", "skipped", "scales")
     assert [[r[k] for k in keys] for r in again] == [[r[k] for k in keys]
                                                      for r in weightless_rows]
+
+
+def test_the_floor_a_report_compares_with_is_in_the_unit_of_its_error():
+    """A tight reference's floor in SI units (a max over rad and rad s-1) must not cut
+    scaled errors: the report reads floor_scaled for them."""
+    rows = [dict(system="s", model="m", method=m, tol=tol, skipped=False, same_fate=True,
+                 seconds=1e-3 / tol ** 0.1, error_final=tol * 40.0, error_scaled_final=tol,
+                 floor=1e-8, floor_scaled=1e-10)
+            for m in ("phasemap", "RK45") for tol in (1e-4, 1e-6, 1e-8)]
+    levels = (1e-5, 1e-8)
+    scaled = wp.report(rows, levels=levels, error="error_scaled_final", method="phasemap")
+    si = wp.report(rows, levels=levels, error="error_final", method="phasemap")
+    # 1e-8 is above ten times the scaled floor (1e-9) and below ten times the SI one (1e-7)
+    assert scaled.splitlines()[-1].count("(floor)") == 0 and "floor 1e-10" in scaled
+    assert si.splitlines()[-1].count("(floor)") == 1 and "floor 1e-08" in si

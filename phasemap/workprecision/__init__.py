@@ -309,8 +309,8 @@ def work_precision(problem: Problem | str, tolerances: Sequence[float] = DEFAULT
         over = False
         for k, tol in enumerate(sorted(tols, reverse=True)):
             row = dict(system=p.name, model=p.model, method=method, tol=tol,
-                       reference=ref.kind, floor=ref.floor, cross_check=ref.cross_check,
-                       scales=scales)
+                       reference=ref.kind, floor=ref.floor, floor_scaled=ref.floor_scaled,
+                       cross_check=ref.cross_check, scales=scales)
             if over:
                 jobs[(method, tol)] = dict(row, error_final=math.nan, error_l2=math.nan,
                                            error_scaled_final=math.nan,
@@ -434,9 +434,10 @@ def report(rows: Sequence[Mapping], levels: Sequence[float] = (1e-3, 1e-5, 1e-7,
     every run ended like the reference), then for each of ``method`` that ran
     the ratio of the fastest solve_ivp method's time to its time at equal
     error, and, when several ran, the same for the fastest of them at each
-    level.  Levels below ten times the reference's floor are shown as
-    ``(floor)``.
+    level.  Levels below ten times the reference's floor (``floor_scaled`` for a
+    scaled ``error``, so that both are in one unit) are shown as ``(floor)``.
     """
+    floor_key = "floor_scaled" if error.startswith("error_scaled") else "floor"
     ours = [method] if isinstance(method, str) else list(method)
     systems = list(dict.fromkeys(r["system"] for r in rows))
     methods = list(dict.fromkeys(r["method"] for r in rows))
@@ -445,7 +446,7 @@ def report(rows: Sequence[Mapping], levels: Sequence[float] = (1e-3, 1e-5, 1e-7,
              "|---|---|" + "---:|" * len(levels) + "---:|---|"]
     for system in systems:
         mine = [r for r in rows if r["system"] == system]
-        floor = max((r.get("floor", 0.0) for r in mine), default=0.0)
+        floor = max((r.get(floor_key, 0.0) for r in mine), default=0.0)
         for m in methods:
             runs = [r for r in mine if r["method"] == m and not r["skipped"]]
             if not runs:

@@ -48,7 +48,9 @@ class Reference:
     ``fate``, ``n_reversals``
         how the reference motion ends.
     ``floor``
-        the reference's own uncertainty (0 for a closed form).
+        the reference's own uncertainty (0 for a closed form), in the states' units
+        (the largest over components); ``floor_scaled`` the same with each
+        component divided by its scale (what the scaled errors compare with).
     ``cross_check``
         the largest difference from an independent solution (tight references).
     ``scales``
@@ -67,6 +69,7 @@ class Reference:
     omega: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None
     components: tuple[int, ...] | None = None
     floor: float = 0.0
+    floor_scaled: float = 0.0
     cross_check: float = 0.0
     note: str = ""
     scales: tuple[float, ...] | None = None
@@ -235,12 +238,15 @@ def tight_reference(problem: Problem, rtol: float = TIGHT) -> Reference:
                                f"{dop.fate} after {dop.n_reversals} reversals, {who} with "
                                f"{other['fate']} after {other['n_reversals']}")
 
-    def gap(t_other, y_other, end_other):
+    scales = peak_scales(np.vstack([dop.y, dop.y_final[None, :]]))
+
+    def gap(t_other, y_other, end_other, unit=1.0):
         k = min(len(dop.t), len(t_other))
-        return max(float(np.max(np.abs(dop.y[:k] - y_other[:k]), initial=0.0)),
-                   float(np.max(np.abs(dop.y_final - end_other))))
+        return max(float(np.max(np.abs(dop.y[:k] - y_other[:k]) / unit, initial=0.0)),
+                   float(np.max(np.abs(dop.y_final - end_other) / unit)))
 
     floor = gap(loose.t, loose.y, loose.y_final)
+    floor_scaled = gap(loose.t, loose.y, loose.y_final, np.asarray(scales))
     cross = gap(p.t_save[:len(pm[7])], pm[7], pm[2])
     stages = dop.stages
     starts = np.array([s[0] for s in stages])
@@ -285,8 +291,8 @@ def tight_reference(problem: Problem, rtol: float = TIGHT) -> Reference:
             return res
 
     return Reference(f"DOP853 at rtol {rtol:g}", states, y_stop, fate, dop.n_reversals,
-                     omega, floor=floor, cross_check=cross,
-                     scales=peak_scales(np.vstack([dop.y, y_stop[None, :]])),
+                     omega, floor=floor, floor_scaled=floor_scaled, cross_check=cross,
+                     scales=scales,
                      note=f"DOP853 at {rtol:g} differs from DOP853 at {10 * rtol:g} by "
                           f"{floor:.1e} and from phasemap at {rtol:g} by {cross:.1e}")
 
