@@ -190,13 +190,18 @@ def near_changes(classes, radius):
                     changed[i + 1, j] = True
                 if j + 1 < n1:
                     changed[i, j + 1] = True
-    near = np.zeros((n0, n1), dtype=np.bool_)
+    # the square of cells around each change, as two passes (along j, then along i)
+    rows = np.zeros((n0, n1), dtype=np.bool_)
     for i in range(n0):
         for j in range(n1):
             if changed[i, j]:
-                for a in range(max(i - radius, 0), min(i + radius + 1, n0)):
-                    for b in range(max(j - radius, 0), min(j + radius + 1, n1)):
-                        near[a, b] = True
+                for b in range(max(j - radius, 0), min(j + radius + 1, n1)):
+                    rows[i, b] = True
+    near = np.zeros((n0, n1), dtype=np.bool_)
+    for i in range(n0):
+        for a in range(max(i - radius, 0), min(i + radius + 1, n0)):
+            for j in range(n1):
+                near[i, j] |= rows[a, j]
     return near
 
 

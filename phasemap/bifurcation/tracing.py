@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Mapping
 
 import numpy as np
@@ -48,8 +49,10 @@ class Slice:
     fns: tuple  # the functions a trace takes (phasemap.bifurcation._trace.FUNCTIONS)
     base: np.ndarray  # the input vector with the fixed values
 
-    @property
+    @cached_property
     def geo(self) -> np.ndarray:
+        """(x_lo, x_span, y_lo, y_span): the map from the unit square to the axes (made
+        once: every kernel call and conversion reads it; do not write it)."""
         return np.array([self.lo[0], self.hi[0] - self.lo[0], self.lo[1], self.hi[1] - self.lo[1]])
 
     @property
@@ -357,13 +360,19 @@ def condition_name(sl: Slice, traced: Traced, k: int) -> str:
     return ",".join(dict.fromkeys([sl.conds.names[k], *names]))
 
 
+def _variable(dim: str, data: np.ndarray, attrs: dict) -> xr.Variable:
+    """A 1-D Variable of an array of ours: xarray's fastpath skips asking whether it is
+    dask, pandas or a nested xarray object (a third of the Dataset's cost)."""
+    return xr.Variable((dim,), data, attrs, fastpath=True)
+
+
 def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
     """The traced pieces and points as the Dataset :func:`boundaries` returns."""
     m = sl.model
     reg = layers_for(m)[layer]
     xv, yv = m.variables[sl.x], m.variables[sl.y]
     px, py = sl.physical(traced.pv)
-    V = xr.Variable
+    V = _variable
     data = {
         sl.x: V("vertex", px, {"units": xv.units, "long_name": xv.long_name}),
         sl.y: V("vertex", py, {"units": yv.units, "long_name": yv.long_name}),
@@ -371,9 +380,17 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
     piece = V("vertex", traced.pp.astype(np.int32),
               {"long_name": "piece the vertex belongs to (index along dimension piece)"})
     pieces = traced.pieces
+    named: dict[int, str] = {}
+
+    def name(k) -> str:
+        """condition_name, once per condition (points repeat their pieces' conditions)."""
+        k = int(k)
+        if k not in named:
+            named[k] = condition_name(sl, traced, k)
+        return named[k]
+
     flags = {k: v for k, v in reg.attrs.items() if k in ("flag_values", "flag_meanings")}
-    data["condition"] = V("piece", np.array([condition_name(sl, traced, int(k))
-                                             for k in pieces[:, 1]], dtype=str),
+    data["condition"] = V("piece", np.array([name(k) for k in pieces[:, 1]], dtype=str),
                           {"long_name": "the condition that vanishes on the piece"})
     data["class_left"] = V("piece", pieces[:, 2].astype(np.int8),
                            {"long_name": f"{layer} left of the piece (along its vertices)",
@@ -396,9 +413,9 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
             kinds.append(f"fold_{sl.y}")
         else:
             kinds.append(_KIND_NAMES[int(kind)])
-        names = [condition_name(sl, traced, int(k))]
+        names = [name(k)]
         if kind in (T.CROSSING, T.TANGENCY) and j >= 0:
-            names.append(condition_name(sl, traced, int(j)))
+            names.append(name(j))
         other.append(" ".join(names))
     data[f"point_{sl.x}"] = V("point", qx, {"units": xv.units, "long_name": xv.long_name})
     data[f"point_{sl.y}"] = V("point", qy, {"units": yv.units, "long_name": yv.long_name})
