@@ -261,7 +261,7 @@ def test_ladder_near_sqrt2_is_finite_and_matches_equation_8(df, phi0, omega0, me
 def test_the_running_ladder_traces_through_its_near_singular_determinant(phi0, omega0):
     """f = sqrt 2 - 1e-10: the declared ladder stops within about 1e-12 rad where the hand
     module stops.  Its sliding determinant is generated as 2 (2 - f^2) / 9, the two slip
-    signs written as one (``declare._Row._one_direction``); expanded, its rounding changed
+    signs written as one (``declare.solvers.one_direction``); expanded, its rounding changed
     with phi, and the tracer stopped at once with step_failure from each of these starts."""
     f = math.sqrt(2.0) - 1e-10
     ds = phase_curve("ladder", phi=phi0, omega=omega0, f=f, points_per_stage=20)
