@@ -131,7 +131,7 @@ def estimate(scene, block_cells: int | None = None, timed: bool = False,
     resident = _resident()
     base = resident + (0 if timed else KERNEL_BYTES)
     if eager:
-        memory = base + cells * per_cell + scratch + axes
+        memory = base + eager_bytes(scene, block_cells) + axes
     else:
         memory = base + WRITER_BYTES + WRITER_COPIES * block * per_cell + scratch + axes
     return Estimate(cells, cells * per_cell, typical, int(memory), block, seconds, resident,
@@ -144,12 +144,13 @@ def estimate(scene, block_cells: int | None = None, timed: bool = False,
 UNCHECKED_BYTES = 1 << 20
 
 
-def eager_bytes(scene) -> int:
+def eager_bytes(scene, block_cells: int | None = None) -> int:
     """What ``scene.compute()`` allocates: every layer of the grid and the integrator's
-    arrays of one block."""
+    arrays of one block (of at most ``block_cells`` cells; default the largest)."""
     reg = layers_for(scene.model)
     per_cell = sum(np.dtype(reg[n].dtype).itemsize for n in scene.layers)
-    return scene.size * per_cell + min(scene.size, largest_block(scene)) * _fate_scratch(scene)
+    block = min(scene.size, block_cells or largest_block(scene))
+    return scene.size * per_cell + block * _fate_scratch(scene)
 
 
 def largest_block(scene) -> int:
