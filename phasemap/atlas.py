@@ -459,7 +459,8 @@ def _defer(signum, frame):
 
 def _raise_pending(*_) -> None:
     pending = _DEFERRED["pending"]
-    if pending:
+    # dask's callbacks are global: a compute in another thread must not take the signal
+    if pending and threading.current_thread() is threading.main_thread():
         signum = pending[0]
         pending.clear()
         _raise_terminated(signum, None)
