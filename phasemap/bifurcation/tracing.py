@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from typing import Mapping
 
 import numpy as np
@@ -225,20 +225,23 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     grp = _ranked(sl.conds, group)
     buf = _Buffers(nc)
     mark = np.zeros((nc, seed_nodes - 1, seed_nodes - 1), dtype=np.int8)
-    near = np.ones((1, 1), dtype=bool)
     if check_cells:
         axes = _cell_centres(sl, check_cells)
         classes = np.ascontiguousarray(evaluate(m, axes, sl.fixed,
-                                                [layers_for(m)[layer]])[layer])
-        near = T.near_changes(classes, NEAR)
-    seeds = run["seeds"](fns, active, v, ix, iy, geo, seed_nodes, near)
-    while True:
+                                                [layers_for(m)[layer]])[layer], dtype=np.int8)
+        near, seeds = run["seed_trace"](fns, classes, NEAR, active, grp, v, out, ix, iy, geo,
+                                        code, seed_nodes, buf.vf, buf.vi, buf.counts,
+                                        buf.curves, mark, tol_u, tol_w)
+    else:
+        near = np.ones((1, 1), dtype=bool)
+        seeds = run["seeds"](fns, active, v, ix, iy, geo, seed_nodes, near)
         run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
                      buf.counts, buf.curves, mark, near, tol_u, tol_w, only is None)
-        if not buf.counts[2]:
-            break
+    while buf.counts[2]:  # the buffers were full: again with larger ones
         buf = buf.grown()
         mark[:] = 0
+        run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
+                     buf.counts, buf.curves, mark, near, tol_u, tol_w, only is None)
     traced = _assembled(buf, group, active)
     if check_cells:
         traced.classes = classes
@@ -270,14 +273,23 @@ KIND_RANK = ("coefficient", "normal", "gap", "friction_limit", "family", "discri
              "domain", "velocity", "start")
 
 
-def _ranked(conds: Conditions, group: np.ndarray) -> np.ndarray:
-    """Per condition: its group (conditions proportional in the slice) and its rank."""
+@lru_cache(maxsize=None)
+def _rank(conds: Conditions) -> np.ndarray:
+    """Each condition's rank (:data:`KIND_RANK`, then its index), once per condition set."""
     order = sorted(range(len(conds)), key=lambda k: (KIND_RANK.index(conds.kinds[k])
                                                       if conds.kinds[k] in KIND_RANK
                                                       else len(KIND_RANK), k))
     rank = np.empty(len(conds), dtype=np.int64)
     rank[order] = np.arange(len(conds))
-    return np.stack([group.astype(np.int64), rank], axis=1)
+    return rank
+
+
+def _ranked(conds: Conditions, group: np.ndarray) -> np.ndarray:
+    """Per condition: its group (conditions proportional in the slice) and its rank."""
+    grp = np.empty((len(conds), 2), dtype=np.int64)
+    grp[:, 0] = group
+    grp[:, 1] = _rank(conds)
+    return grp
 
 
 def _assembled(buf: _Buffers, group, active) -> Traced:
