@@ -1146,17 +1146,28 @@ def _minimum(F, k, v, ix, iy, geo, u, w, radius):
 
 
 @njit(cache=True, error_model="numpy")
-def _seed_trace_all(F, classes, radius, active, grp, v, out, ix, iy, geo, layer, n, vf, vi,
-                    counts, curves, mark, tol_u, tol_w):
-    """The cells near a class change of the check raster ``classes`` (:func:`near_changes`
-    with ``radius``), the seeds of an n x n raster there (:func:`_seeds_all`) and the
-    curves from them (:func:`_trace_all`, ``require_sides``) in one call: each call
-    of an entry point unboxes the model's functions again.  Returns (near, seeds)."""
+def _seed_trace_all(F, pts, vs, classes, radius, active, rank, v, out, ix, iy, geo, layer, n,
+                    vf, vi, counts, curves, mark, tol_u, tol_w):
+    """One call for a whole trace: each call of an entry point unboxes the model's
+    functions again.  The conditions' values at the points ``pts`` (input vector
+    ``vs``) drop from ``active`` those constant or proportional to another there
+    (:func:`groups`); then the cells near a class change of the check raster
+    ``classes`` (:func:`near_changes` with ``radius``), the seeds of an n x n raster
+    there (:func:`_seeds_all`) and the curves from them (:func:`_trace_all`,
+    ``require_sides``).  Returns (near, seeds, group, grp): ``grp`` is each
+    condition's group and ``rank``."""
+    vals = np.empty((pts.shape[0], active.shape[0]))
+    _survey_all(F, vs, ix, iy, geo, pts, vals)
+    group = groups(vals, active)
+    grp = np.empty((active.shape[0], 2), dtype=np.int64)
+    for k in range(active.shape[0]):
+        grp[k, 0] = group[k]
+        grp[k, 1] = rank[k]
     near = near_changes(classes, radius)
     seeds = _seeds_all(F, active, v, ix, iy, geo, n, near)
     _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
                near, tol_u, tol_w, True)
-    return near, seeds
+    return near, seeds, group, grp
 
 
 # -- pieces and the completeness check (no model globals) ---------------------------------
@@ -1402,10 +1413,10 @@ def entries() -> dict:
                                 types.float64, types.boolean)
         sig_seeds = _F2(FUNCTIONS, _B1, _F1, types.int64, types.int64, _F1, types.int64, _B2)
         sig_survey = types.void(FUNCTIONS, _F1, types.int64, types.int64, _F1, _F2, _F2)
-        sig_seed_trace = types.Tuple((_B2, _F2))(
-            FUNCTIONS, types.Array(types.int8, 2, "C"), types.int64, _B1, _I2, _F1, _F2,
-            types.int64, types.int64, _F1, types.int64, types.int64, _F2, _I2, _I1, _I2, _B3,
-            types.float64, types.float64)
+        sig_seed_trace = types.Tuple((_B2, _F2, _I1, _I2))(
+            FUNCTIONS, _F2, _F1, types.Array(types.int8, 2, "C"), types.int64, _B1, _I1, _F1,
+            _F2, types.int64, types.int64, _F1, types.int64, types.int64, _F2, _I2, _I1, _I2,
+            _B3, types.float64, types.float64)
         with warnings.catch_warnings():  # numba calls first-class functions experimental
             warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
             for name, fn, sig in (("trace", _trace_all, sig_trace),
