@@ -2,7 +2,7 @@
 
 The wheel's fate-map integrator (DOPRI5, rtol 1e-6, as ``Scene(..., layers=fate)``
 runs it) on the same random cells, with the declared model (what ``wheel`` runs)
-and the hand module (``phasemap.models.wheel.MODEL``): nanoseconds per step on
+and the hand module (``references.wheel.MODEL``, tests/references/): nanoseconds per step on
 one thread, and the physics of a step timed alone (one right-hand side: sin,
 cos and the roll row; one classification of every row), from
 ``benchmarks/fate_map.py``'s ``step_profile``.  The two models alternate over
@@ -73,7 +73,7 @@ def main():
         f"The wheel's fate-map integrator on {a.cells} random cells (phi in [-pi, pi], omega "
         f"in [-6, 6], DOPRI5, rtol 1e-6; {p['steps_per_cell']:.0f} steps per cell), one "
         "thread, declared (`phasemap/systems/seeds/wheel.py`, what `wheel` runs) against "
-        "hand (`phasemap.models.wheel`), alternating over "
+        "hand (`tests/references/wheel.py`), alternating over "
         f"{a.rounds} rounds: medians of each round's fastest of 5.  *fitted*: least squares "
         f"on steps and events over {a.fit_cells} cells, each timed alone.  The right-hand "
         "side and the classification are timed alone, each call waiting for the last "

@@ -378,7 +378,7 @@ def main():
         fate_limits(fm),
         "",
         f"The wheel runs as its declaration (`phasemap/systems/seeds/wheel.py`, which counts "
-        f"a hop as a solution); the hand module (`phasemap.models.wheel`, no hops) on the "
+        f"a hop as a solution); the hand module (`tests/references/wheel.py`, no hops) on the "
         f"same {fm['small']}^2 map, alternating, medians of 3: declared "
         f"{fm['versus_hand']['declared']:.2f} s, hand {fm['versus_hand']['hand']:.2f} s "
         f"({fm['versus_hand']['declared'] / fm['versus_hand']['hand']:.2f}x), in line with its "

@@ -81,7 +81,7 @@ OVERHEAD_TARGET = 1e-3
 
 # ------------------------------------------------------ NumPy references -----
 def numpy_ladder(phi, f, omega, l, g, m):
-    """The hand ladder (phasemap.models.ladder: no separation modes)."""
+    """The hand ladder (tests/references/ladder.py: no separation modes)."""
     sp, cp = np.sin(phi)[:, None], np.cos(phi)[:, None]
     s, w2 = np.sign(omega), omega * omega
     d = 2.0 - f * f
@@ -214,14 +214,21 @@ def numpy_store(a, b):
 
 
 # ------------------------------------------------------------- the cases -----
+#: The hand-written module of each seed system: the pendulums run by hand; the ladder's
+#: and the wheel's (the paper's equations) are test references, tests/references/.
+HAND_MODULES = {"ladder": "references.ladder", "wheel": "references.wheel",
+                **{name: f"phasemap.systems.{name}" for name in HAND_RUNS}}
+sys.path.insert(0, str(ROOT / "tests"))
+
+
 def hand_model(name):
-    """The hand-written module of a seed system (the ladder and the wheel run as their
-    declarations; the hand modules are references), or the registered model of any
+    """The hand-written model of a seed system (the ladder and the wheel run as their
+    declarations; their hand modules are references), or the registered model of any
     other name."""
     import importlib
 
-    if name in ("ladder", "wheel", "elliptic_pendulum", "hinge_pendulum"):
-        return importlib.import_module(f"phasemap.models.{name}").MODEL
+    if name in HAND_MODULES:
+        return importlib.import_module(HAND_MODULES[name]).MODEL
     return phasemap.MODELS[name]
 
 

@@ -4,7 +4,7 @@ Everything (``classify``, the grid evaluator, the atlas writer, the CLI, the
 integrator) reads only a :class:`Model`.  **Declare first**: a new system is a
 :class:`phasemap.declare.System` (its coordinates, bodies, potential and
 contacts, a few lines; see :mod:`phasemap.declare`), in a module of
-:mod:`phasemap.systems` with one line in ``phasemap.models.DECLARED``, or in
+:mod:`phasemap.systems` with one line in ``phasemap.systems.DECLARED``, or in
 any file passed where a model name is accepted.  phasemap derives its
 branches and generates this contract.  Write a model by hand only for what a
 declaration cannot say, or for speed where a map is pinned bit for bit (the

@@ -19,10 +19,10 @@ import math
 import numpy as np
 import pytest
 import reference as ref
+from references import ladder as hand_ladder
+from references import wheel as hand_wheel
 
 import phasemap
-from phasemap.models import ladder as hand_ladder
-from phasemap.models import wheel as hand_wheel
 
 N_STATES = 1000
 RTOL = 1e-7

@@ -293,7 +293,7 @@ def test_ladder_just_above_sqrt2_stops_clearly_when_the_stage_is_stiff(method):
     # max_steps (10^6 steps, t = 3.6e-4 s).  Hairer's stiffness test now stops the run
     # within a few dozen steps with end_reason 'stiff', which says why.  The hand module
     # keeps both contacts; the running ladder calls this start indeterminate (above).
-    from phasemap.models import ladder as hand_ladder
+    from references import ladder as hand_ladder
 
     tight = phasemap.simulate(hand_ladder.MODEL, 1.0, method=method,
                               rtol=1e-10, phi=0.5, omega=-4.0, f=R2 + 1e-9)

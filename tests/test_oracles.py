@@ -1,6 +1,6 @@
 """The full-coordinate oracles of ``oracles.py`` validated on their own.
 
-Against the hand models (``phasemap.models.ladder.MODEL`` and ``.wheel.MODEL``,
+Against the hand models (``references.ladder.MODEL`` and ``references.wheel.MODEL``,
 the paper's equations) wherever the hand model keeps its contacts, against the
 running (declared) ladder and wheel everywhere, and against closed forms derived by hand (Painleve rod:
 B N = m (g - l sin(theta) omega^2), the pivot (stick) solution, the threshold
@@ -15,10 +15,10 @@ import math
 
 import numpy as np
 import oracles as O
+from references import ladder as hand_ladder
+from references import wheel as hand_wheel
 
 import phasemap
-from phasemap.models import ladder as hand_ladder
-from phasemap.models import wheel as hand_wheel
 
 N_STATES = 1000
 MARGIN = 1e-7

@@ -1,7 +1,7 @@
 r"""Wheel: a disc with a displaced centre of mass and rolling friction (Lapshin 2021, Fig. 2).
 
-Not registered: ``wheel`` runs the declaration phasemap.systems.seeds.wheel, which
-also counts leaving a contact.  This module keeps the paper's equations, errata and
+A test reference, not a system: ``wheel`` runs the declaration
+phasemap.systems.seeds.wheel, which also counts leaving a contact.  This module keeps the paper's equations, errata and
 closed forms, and checks the declaration in the tests (``MODEL`` is a full Model).
 
 Setup
@@ -54,7 +54,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .._numerics import (
+from phasemap._numerics import (
     ADMISSIBLE,
     CONTACT_LOST,
     CONTINUUM,
@@ -66,7 +66,7 @@ from .._numerics import (
     restrict_affine,
     start_interval,
 )
-from ..model import Branch, Derived, Dynamics, Model, Variable
+from phasemap.model import Branch, Derived, Dynamics, Model, Variable
 
 
 @njit(cache=True, error_model="numpy", forceinline=True)

@@ -1,8 +1,10 @@
 r"""Ladder: a homogeneous bar against a rough wall and a rough floor (Lapshin 2021, Fig. 1).
 
-Not registered: ``ladder`` runs the declaration phasemap.systems.seeds.ladder, which
-also counts leaving a contact.  This module keeps the paper's equations, errata and
-closed forms, and checks the declaration in the tests (``MODEL`` is a full Model).
+A test reference, not a system: ``ladder`` runs the declaration
+phasemap.systems.seeds.ladder, which also counts leaving a contact.  This module keeps
+the paper's equations, errata and closed forms, and checks the declaration in the tests
+(``MODEL`` is a full Model).  The first integral below runs as
+phasemap.systems.seeds.closed_forms.ladder_omega_squared.
 
 Setup
 -----
@@ -66,7 +68,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .._numerics import (
+from phasemap._numerics import (
     ADMISSIBLE,
     CONTACT_LOST,
     CONTINUUM,
@@ -78,7 +80,7 @@ from .._numerics import (
     restrict_affine,
     start_interval,
 )
-from ..model import Branch, Derived, Dynamics, Model, Variable
+from phasemap.model import Branch, Derived, Dynamics, Model, Variable
 
 
 @njit(cache=True, error_model="numpy", forceinline=True)
@@ -170,30 +172,3 @@ MODEL = Model(
                                      "the bar lies flat on the floor")}),
     default_axes={"phi": (0.0, math.pi / 2, 512), "f": (0.0, 3.0, 512)},
 )
-
-
-@njit(cache=True, error_model="numpy")
-def first_integral_coefficients(s, f, l, g):
-    """(lam, a, b) of omega^2 = c e^{lam phi} + a sin phi + b cos phi on a stage of sign s.
-
-    Valid for f != sqrt 2; ``s`` is the sign of omega on the stage.
-    """
-    d = 2.0 - f * f
-    q = 4.0 + 32.0 * f * f + f ** 4
-    lam = 6.0 * s * f / d
-    a = -6.0 * s * f * g * (5.0 - 4.0 * f * f) / (l * q)
-    b = -3.0 * g * (2.0 - 15.0 * f * f + f ** 4) / (l * q)
-    return lam, a, b
-
-
-@njit(cache=True, error_model="numpy")
-def omega_squared(phi, phi0, omega0, f, l, g):
-    """omega^2(phi) on the sliding stage through (phi0, omega0), omega0 != 0.
-
-    The constant is carried as (omega0^2 - a sin phi0 - b cos phi0) e^{lam (phi - phi0)},
-    which never forms e^{lam phi} or e^{-lam phi0} on their own.
-    """
-    s = 1.0 if omega0 > 0.0 else -1.0
-    lam, a, b = first_integral_coefficients(s, f, l, g)
-    c0 = omega0 * omega0 - a * math.sin(phi0) - b * math.cos(phi0)
-    return c0 * math.exp(lam * (phi - phi0)) + a * math.sin(phi) + b * math.cos(phi)
