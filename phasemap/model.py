@@ -315,6 +315,42 @@ class Dynamics:
     edges: Mapping[str, tuple[str, str]] = field(default_factory=dict)
 
 
+# ------------------------------------------------ what hand models share -----
+#: sin and cos of the angle ``phi``, computed once per value (per axis on a grid).
+SIN_COS_PHI = (Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos))
+
+
+def angle_state(body: str, angle: str, default: float = 0.0, lower: float = -math.inf,
+                upper: float = math.inf) -> tuple[Variable, Variable]:
+    """The state ``(phi, omega)`` of a ``body`` turning on one ``angle`` (its long name).
+
+    >>> [v.long_name for v in angle_state("rod", "angle of the rod from the vertical")]
+    ['angle of the rod from the vertical', 'angular velocity of the rod']
+    """
+    return (Variable("phi", "rad", angle, "\\varphi", default, lower, upper),
+            Variable("omega", "rad s-1", f"angular velocity of the {body}", "\\omega", 0.0))
+
+
+def angular_acceleration(body: str) -> Variable:
+    """The acceleration ``phi_ddot`` of a ``body`` turning on the angle ``phi``.
+
+    >>> angular_acceleration("disc").units
+    'rad s-2'
+    """
+    return Variable("phi_ddot", "rad s-2", f"angular acceleration of the {body}",
+                    "\\ddot\\varphi")
+
+
+def gravity_and_mass(mass: str) -> tuple[Variable, Variable]:
+    """The parameters ``g`` (9.81 m s-2) and ``m`` (1 kg, described as ``mass``).
+
+    >>> [(v.name, v.default) for v in gravity_and_mass("mass of the bob")]
+    [('g', 9.81), ('m', 1.0)]
+    """
+    return (Variable("g", "m s-2", "gravitational acceleration", "g", 9.81, 0.0),
+            Variable("m", "kg", mass, "m", 1.0, 0.0, lower_open=True))
+
+
 @dataclass(frozen=True)
 class Model:
     """One mechanical system: its variables, branches and jitted point function.

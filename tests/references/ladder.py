@@ -65,22 +65,13 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
-from phasemap._numerics import (
-    ADMISSIBLE,
-    CONTACT_LOST,
-    CONTINUUM,
-    INADMISSIBLE,
-    NAN,
-    NO_SOLUTION,
-    TOL,
-    is_zero,
-    restrict_affine,
-    start_interval,
-)
-from phasemap.model import Branch, Derived, Dynamics, Model, Variable
+from phasemap._numerics import (ADMISSIBLE, CONTACT_LOST, CONTINUUM, INADMISSIBLE, NAN,
+                                NO_SOLUTION, TOL, is_zero, restrict_affine, start_interval)
+from phasemap.model import (SIN_COS_PHI, Branch, Dynamics, Model, Variable, angle_state,
+                            angular_acceleration, gravity_and_mass)
+from phasemap.systems.seeds import citation
 
 
 @njit(cache=True, error_model="numpy", forceinline=True)
@@ -135,30 +126,22 @@ def velocity_scale(g, l):
 MODEL = Model(
     name="ladder",
     title="Homogeneous bar (ladder) against a rough wall and a rough floor",
-    citation="Lapshin V.V. (2021), Herald of the Bauman Moscow State Technical University, "
-    "Series Natural Sciences, no. 6 (99), pp. 4-16, Fig. 1, eq. (6)-(8). "
-    "doi:10.18698/1812-3368-2021-6-4-16",
-    state=(
-        Variable("phi", "rad", "angle of the bar from the vertical", "\\varphi", math.pi / 4,
-                 0.0, math.pi / 2),
-        Variable("omega", "rad s-1", "angular velocity of the bar", "\\omega", 0.0),
-    ),
+    citation=citation("Fig. 1, eq. (6)-(8)"),
+    state=angle_state("bar", "angle of the bar from the vertical", math.pi / 4, 0.0,
+                      math.pi / 2),
     params=(
         Variable("f", "1", "sliding friction coefficient at the floor and the wall", "f", 0.3,
                  0.0),
         Variable("l", "m", "half length of the bar", "l", 1.0, 0.0, lower_open=True),
-        Variable("g", "m s-2", "gravitational acceleration", "g", 9.81, 0.0),
-        Variable("m", "kg", "mass of the bar", "m", 1.0, 0.0, lower_open=True),
+        *gravity_and_mass("mass of the bar"),
     ),
-    derived=(Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos)),
+    derived=SIN_COS_PHI,
     candidates=(
         Branch("slide_pos", 1.0, slide, (1.0,)),
         Branch("slide_neg", -1.0, slide, (-1.0,)),
         Branch("stick", 0.0, stick),
     ),
-    accelerations=(
-        Variable("phi_ddot", "rad s-2", "angular acceleration of the bar", "\\ddot\\varphi"),
-    ),
+    accelerations=(angular_acceleration("bar"),),
     reactions=(
         Variable("N_floor", "N", "normal reaction of the floor", "N_1"),
         Variable("N_wall", "N", "normal reaction of the wall", "N_2"),

@@ -54,19 +54,11 @@ import math
 import numpy as np
 from numba import njit
 
-from phasemap._numerics import (
-    ADMISSIBLE,
-    CONTACT_LOST,
-    CONTINUUM,
-    INADMISSIBLE,
-    NAN,
-    NO_SOLUTION,
-    TOL,
-    is_zero,
-    restrict_affine,
-    start_interval,
-)
-from phasemap.model import Branch, Derived, Dynamics, Model, Variable
+from phasemap._numerics import (ADMISSIBLE, CONTACT_LOST, CONTINUUM, INADMISSIBLE, NAN,
+                                NO_SOLUTION, TOL, is_zero, restrict_affine, start_interval)
+from phasemap.model import (SIN_COS_PHI, Branch, Dynamics, Model, Variable, angle_state,
+                            angular_acceleration, gravity_and_mass)
+from phasemap.systems.seeds import citation
 
 
 @njit(cache=True, error_model="numpy", forceinline=True)
@@ -124,14 +116,8 @@ def _check(values) -> None:
 MODEL = Model(
     name="wheel",
     title="Disc with a displaced centre of mass, rolling with rolling friction",
-    citation="Lapshin V.V. (2021), Herald of the Bauman Moscow State Technical University, "
-    "Series Natural Sciences, no. 6 (99), pp. 4-16, Fig. 2, eq. (10)-(15). "
-    "doi:10.18698/1812-3368-2021-6-4-16",
-    state=(
-        Variable("phi", "rad", "rotation angle of the disc (phi = 0: centre of mass lowest)",
-                 "\\varphi", 0.0),
-        Variable("omega", "rad s-1", "angular velocity of the disc", "\\omega", 0.0),
-    ),
+    citation=citation("Fig. 2, eq. (10)-(15)"),
+    state=angle_state("disc", "rotation angle of the disc (phi = 0: centre of mass lowest)"),
     params=(
         Variable("delta", "m", "rolling friction coefficient", "\\delta", 0.05, 0.0),
         Variable("r", "m", "radius of the disc", "r", 1.0, 0.0, lower_open=True),
@@ -139,18 +125,15 @@ MODEL = Model(
                  0.0),
         Variable("rho", "m", "radius of gyration about the centre of mass", "\\rho", 0.5, 0.0,
                  lower_open=True),
-        Variable("g", "m s-2", "gravitational acceleration", "g", 9.81, 0.0),
-        Variable("m", "kg", "mass of the disc", "m", 1.0, 0.0, lower_open=True),
+        *gravity_and_mass("mass of the disc"),
     ),
-    derived=(Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos)),
+    derived=SIN_COS_PHI,
     candidates=(
         Branch("roll_pos", 1.0, roll, (1.0,)),
         Branch("roll_neg", -1.0, roll, (-1.0,)),
         Branch("stick", 0.0, stick),
     ),
-    accelerations=(
-        Variable("phi_ddot", "rad s-2", "angular acceleration of the disc", "\\ddot\\varphi"),
-    ),
+    accelerations=(angular_acceleration("disc"),),
     reactions=(
         Variable("N", "N", "normal reaction of the floor", "N"),
         Variable("F", "N", "horizontal contact force on the disc", "F"),

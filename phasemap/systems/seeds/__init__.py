@@ -11,6 +11,18 @@ checks both, state by state).  ``checks.py`` and ``closed_forms.py`` hold what r
 without sympy: the wheel's domain check and the ladder's first integral.
 """
 
+
+def citation(where: str) -> str:
+    """The seed paper, cited at ``where`` (its figure and equations).
+
+    >>> citation("Fig. 4")
+    'Lapshin V.V. (2021), Herald of ... pp. 4-16, Fig. 4. doi:10.18698/1812-3368-2021-6-4-16'
+    """
+    return ("Lapshin V.V. (2021), Herald of the Bauman Moscow State Technical University, "
+            f"Series Natural Sciences, no. 6 (99), pp. 4-16, {where}. "
+            "doi:10.18698/1812-3368-2021-6-4-16")
+
+
 #: hand-written model name -> the module of its declared twin
 TWINS = {"elliptic_pendulum": "phasemap.systems.seeds.elliptic_pendulum",
          "hinge_pendulum": "phasemap.systems.seeds.hinge_pendulum"}
