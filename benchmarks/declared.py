@@ -29,7 +29,6 @@ medians.  Writes the section "Declared systems" of ../BENCHMARKS.md.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import pathlib
@@ -43,8 +42,9 @@ import numba
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import phasemap  # noqa: E402
-from grid import (CASES, HAND_MODULES, ROOT, SEEDS, Kernel, hand_model, load,  # noqa: E402
-                  machine, median_times, numpy_rod, scene_args, write_section)
+from _report import ROOT, load, machine, parser, publish  # noqa: E402
+from grid import (CASES, HAND_MODULES, SEEDS, Kernel, hand_model, median_times,  # noqa: E402
+                  numpy_rod, scene_args)
 from phasemap.layers import SUMMARY  # noqa: E402
 
 #: model -> (declared model: a path or a registered name, map case, short motion)
@@ -357,21 +357,17 @@ def report(args, tp, pc, cs, loads):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = parser(__doc__)
     ap.add_argument("--side", type=int, default=2048)
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--cold-repeat", type=int, default=2)
-    ap.add_argument("--no-write", action="store_true", help="print only")
     args = ap.parse_args()
     loads = [load()]
     tp = throughput(args.side, args.repeat)
     pc = calls(args.repeat)
     cs = cold(args.cold_repeat)
     loads.append(load())
-    text = report(args, tp, pc, cs, loads)
-    print(text)
-    if not args.no_write:
-        write_section(text, "## Declared systems")
+    publish(report(args, tp, pc, cs, loads), "## Declared systems", write=not args.no_write)
 
 
 if __name__ == "__main__":

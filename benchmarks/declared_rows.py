@@ -27,7 +27,8 @@ import numba
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from fate_map import step_profile  # noqa: E402
-from grid import hand_model, load, machine, write_section  # noqa: E402
+from _report import load, machine, publish  # noqa: E402
+from grid import hand_model  # noqa: E402
 
 import phasemap  # noqa: E402
 
@@ -91,10 +92,7 @@ def main():
     lines += ["", f"Target 4 (declared rows no slower per step than the hand ones): "
               f"{'met' if ratio <= 1.0 else f'**missed** ({ratio:.2f}x per step)'}.", "",
               WHY, ""]
-    text = "\n".join(lines)
-    print(text)
-    if not a.no_write:
-        write_section(text, "## Declared rows per step")
+    publish(lines, "## Declared rows per step", write=not a.no_write)
 
 
 if __name__ == "__main__":

@@ -27,7 +27,8 @@ from phasemap.simulate import Options
 
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from grid import cold_start, hand_model, load, machine, write_section  # noqa: E402
+from _report import load, machine, publish  # noqa: E402
+from grid import cold_start, hand_model  # noqa: E402
 
 FATE_LAYERS = ["fate", "n_reversals", "t_rest", "phi_rest"]
 FATE_OPTIONS = {"t_end": 30.0, "rtol": 1e-6}
@@ -393,10 +394,7 @@ def main():
           for what, value, ok in targets(fm)],
         "",
     ]
-    text = "\n".join(lines)
-    print(text)
-    if not args.no_write:
-        write_section(text, "## Fate map of the wheel")
+    publish(lines, "## Fate map of the wheel", write=not args.no_write)
 
 
 if __name__ == "__main__":

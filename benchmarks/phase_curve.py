@@ -45,7 +45,8 @@ from phasemap.systems.seeds.closed_forms import ladder_omega_squared
 HERE = pathlib.Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
-from grid import hand_model, machine, write_section  # noqa: E402
+from _report import machine, publish  # noqa: E402
+from grid import hand_model  # noqa: E402
 
 G = 9.81
 #: (label, model, start and parameters, t_end for simulate)
@@ -376,10 +377,7 @@ def main():
               f"{p:.1f} (errors {', '.join(f'{e:.1e}' for e in errs)}); "
               f"the test suite asserts 10..14.  Run time of this script "
               f"{time.perf_counter() - t0:.0f} s."]
-    text = "\n".join(lines)
-    print(text)
-    if not args.no_write:
-        write_section(text, "## Phase curves")
+    publish(lines, "## Phase curves", write=not args.no_write)
 
 
 if __name__ == "__main__":

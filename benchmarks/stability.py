@@ -39,7 +39,8 @@ from phasemap.systems.hinge_pendulum import weightless_motion
 from phasemap.phase import phase_curve
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from grid import hand_model, machine, write_section  # noqa: E402
+from _report import machine, publish  # noqa: E402
+from grid import hand_model  # noqa: E402
 
 R2 = math.sqrt(2.0)
 F_ELLIPTIC = 3.0
@@ -342,10 +343,7 @@ def main():
         for r in failed:
             lines.append(f"- {r['group']}, {r['name']} (rtol {r['rtol']:.0e}): {r['verdict']}")
         lines.append("")
-    text = "\n".join(lines)
-    print(text)
-    if not args.no_write:
-        write_section(text, "## Stability")
+    publish(lines, "## Stability", write=not args.no_write)
 
 
 if __name__ == "__main__":
