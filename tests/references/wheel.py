@@ -160,3 +160,14 @@ def omega_squared_slope(phi, u, sigma, delta, r, l, rho, g):
     bracket = rho * rho + r * r + l * l - 2.0 * r * l * cp + delta * sigma * l * sp
     return (-2.0 * l * (r * sp + delta * sigma * cp) * u - 2.0 * g * l * sp
             - 2.0 * delta * sigma * g) / bracket
+
+
+def random_state(rng):
+    """A random state and parameters, as the tests draw them (a third at rest): a dict
+    in the order ``phi, omega, delta, r, l, rho, g, m``."""
+    r = rng.uniform(0.3, 2)
+    l, rho, delta = rng.uniform(0, r), rng.uniform(0.1, 1.5), rng.uniform(0, 1.5) * r
+    g, m = rng.uniform(0.5, 20), rng.uniform(0.1, 5)
+    phi = rng.uniform(-2 * math.pi, 2 * math.pi)
+    omega = 0.0 if rng.random() < 1 / 3 else rng.normal() * 3 * math.sqrt(g / r)
+    return dict(phi=phi, omega=omega, delta=delta, r=r, l=l, rho=rho, g=g, m=m)
