@@ -71,7 +71,6 @@ Everything else just works.
 
 from __future__ import annotations
 
-import enum
 import functools
 import math
 from dataclasses import dataclass, field
@@ -83,7 +82,7 @@ from . import _args
 from . import _numerics as nx
 
 
-class BranchStatus(enum.IntEnum):
+class BranchStatus(nx.Coded):
     """What one candidate branch is at one state.
 
     Examples
@@ -94,29 +93,14 @@ class BranchStatus(enum.IntEnum):
     ['INADMISSIBLE']
     """
 
-    ABSENT = nx.ABSENT
-    ADMISSIBLE = nx.ADMISSIBLE
-    INADMISSIBLE = nx.INADMISSIBLE
-    CONTACT_LOST = nx.CONTACT_LOST
-    NO_SOLUTION = nx.NO_SOLUTION
-    CONTINUUM = nx.CONTINUUM
-    SEPARATION = nx.SEPARATION
-
-    @property
-    def message(self) -> str:
-        return _STATUS_MESSAGES[self]
-
-
-_STATUS_MESSAGES = {
-    BranchStatus.ABSENT: "does not apply at this state",
-    BranchStatus.ADMISSIBLE: "solves the equations and satisfies its own assumptions",
-    BranchStatus.INADMISSIBLE: "violates its own sign or friction-limit assumption",
-    BranchStatus.CONTACT_LOST: "solves the equations but needs a one-sided contact to pull",
-    BranchStatus.NO_SOLUTION: "has no acceleration that solves the equations",
-    BranchStatus.CONTINUUM: "is solved by a whole family of accelerations",
-    BranchStatus.SEPARATION: "solves the equations with a one-sided contact opening: "
-                             "the body leaves it",
-}
+    ABSENT = nx.ABSENT, "does not apply at this state"
+    ADMISSIBLE = nx.ADMISSIBLE, "solves the equations and satisfies its own assumptions"
+    INADMISSIBLE = nx.INADMISSIBLE, "violates its own sign or friction-limit assumption"
+    CONTACT_LOST = nx.CONTACT_LOST, "solves the equations but needs a one-sided contact to pull"
+    NO_SOLUTION = nx.NO_SOLUTION, "has no acceleration that solves the equations"
+    CONTINUUM = nx.CONTINUUM, "is solved by a whole family of accelerations"
+    SEPARATION = (nx.SEPARATION,
+                  "solves the equations with a one-sided contact opening: the body leaves it")
 
 
 #: Largest magnitude of any value: squares and products of a few values must stay
@@ -127,7 +111,7 @@ MAX_MAGNITUDE = 1e30
 MIN_POSITIVE = 1e-30
 
 
-class Solvability(enum.IntEnum):
+class Solvability(nx.Coded):
     """How many solutions the motion equations have for the senior derivatives.
 
     The values are the ``n_solutions`` of :func:`phasemap.classify` and the
@@ -143,24 +127,11 @@ class Solvability(enum.IntEnum):
     <Solvability.TWO: 2>
     """
 
-    NONE = nx.N_NONE
-    UNIQUE = nx.N_UNIQUE
-    TWO = nx.N_TWO
-    CONTINUUM = nx.N_CONTINUUM
-    THREE_OR_MORE = nx.N_THREE_OR_MORE
-
-    @property
-    def message(self) -> str:
-        return _SOLVABILITY_MESSAGES[self]
-
-
-_SOLVABILITY_MESSAGES = {
-    Solvability.NONE: "no solution: the motion equations are inconsistent (Painleve paradox)",
-    Solvability.UNIQUE: "a unique solution",
-    Solvability.TWO: "two solutions: indeterminacy, determinism fails",
-    Solvability.CONTINUUM: "a continuum of solutions",
-    Solvability.THREE_OR_MORE: "three or more isolated solutions",
-}
+    NONE = nx.N_NONE, "no solution: the motion equations are inconsistent (Painleve paradox)"
+    UNIQUE = nx.N_UNIQUE, "a unique solution"
+    TWO = nx.N_TWO, "two solutions: indeterminacy, determinism fails"
+    CONTINUUM = nx.N_CONTINUUM, "a continuum of solutions"
+    THREE_OR_MORE = nx.N_THREE_OR_MORE, "three or more isolated solutions"
 
 
 @dataclass(frozen=True)
