@@ -247,6 +247,16 @@ class Branch:
     args: tuple[float, ...] = ()
     bound: tuple[str, int] | None = None
 
+    @classmethod
+    def both_ways(cls, name: str, func: Callable) -> tuple[Branch, Branch]:
+        """The two slip (or roll, or turn) branches ``name_pos`` and ``name_neg`` of one
+        branch function whose first argument is the direction.
+
+        >>> [(b.name, b.direction, b.args) for b in Branch.both_ways("turn", print)]
+        [('turn_pos', 1.0, (1.0,)), ('turn_neg', -1.0, (-1.0,))]
+        """
+        return (cls(f"{name}_pos", 1.0, func, (1.0,)), cls(f"{name}_neg", -1.0, func, (-1.0,)))
+
 
 @dataclass(frozen=True)
 class Dynamics:

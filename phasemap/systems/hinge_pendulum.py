@@ -115,8 +115,7 @@ MODEL = Model(
     ),
     derived=SIN_COS_PHI,
     candidates=(
-        Branch("turn_pos", 1.0, turn, (1.0,)),
-        Branch("turn_neg", -1.0, turn, (-1.0,)),
+        *Branch.both_ways("turn", turn),
         Branch("stick", 0.0, stick),
     ),
     accelerations=(angular_acceleration("rod"),),

@@ -137,8 +137,7 @@ MODEL = Model(
     ),
     derived=SIN_COS_PHI,
     candidates=(
-        Branch("slide_pos", 1.0, slide, (1.0,)),
-        Branch("slide_neg", -1.0, slide, (-1.0,)),
+        *Branch.both_ways("slide", slide),
         Branch("stick", 0.0, stick),
     ),
     accelerations=(angular_acceleration("bar"),),

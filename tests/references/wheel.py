@@ -129,8 +129,7 @@ MODEL = Model(
     ),
     derived=SIN_COS_PHI,
     candidates=(
-        Branch("roll_pos", 1.0, roll, (1.0,)),
-        Branch("roll_neg", -1.0, roll, (-1.0,)),
+        *Branch.both_ways("roll", roll),
         Branch("stick", 0.0, stick),
     ),
     accelerations=(angular_acceleration("disc"),),
