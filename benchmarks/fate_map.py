@@ -352,7 +352,8 @@ def main():
         "## Fate map of the wheel (`benchmarks/fate_map.py`)",
         "",
         f"Machine: {machine()}; load average {before} before, {load()} after.  ",
-        "Command: `python benchmarks/fate_map.py" + "".join(f" {x}" for x in sys.argv[1:])
+        "Command: `python benchmarks/fate_map.py"
+        + "".join(f" {x}" for x in sys.argv[1:] if x != "--no-write")
         + "`",
         "",
         f"`phasemap.Scene(\"wheel\", axes={{\"phi\": linspace(-pi, pi, {fm['side']}), "

@@ -224,3 +224,60 @@ def test_a_model_with_its_contract_built_still_pickles():
     again = np.empty_like(out)
     copy.point(copy.input_vector(copy.defaults), again)
     np.testing.assert_array_equal(out, again)
+
+
+
+def _assignments(body: str) -> dict:
+    """``{local: right-hand side}`` of a generated function's ``body``."""
+    import re
+
+    return {m.group(1): m.group(2) for m in
+            (re.match(r"\s+(_k_\w+) = (.*)", ln) for ln in body.splitlines()) if m}
+
+
+def _reads(rhs: dict, name: str) -> set[str]:
+    """The locals that ``name`` is computed from, directly or through others."""
+    import re
+
+    seen, todo = set(), [name]
+    while todo:
+        for dep in re.findall(r"\b_k_\w+", rhs.get(todo.pop(), "")):
+            if dep not in seen:
+                seen.add(dep)
+                todo.append(dep)
+    return seen
+
+
+def test_a_declared_row_forms_its_acceleration_without_its_reactions():
+    """The wheel's rolling row prints phi'' as one quotient over the row's determinant
+    (the paper's right-hand side over its bracket), so that the integrator's
+    right-hand side, which reads phi'' alone, computes no reaction; the row's
+    status still reads every reaction and tie."""
+    from phasemap.declare.emit import module_source
+    from phasemap.systems.seeds.wheel import SYSTEM
+
+    rhs = _assignments(module_source(SYSTEM).split("def mode_1(")[1].split("\n@njit")[0])
+    q = _reads(rhs, "_k_Q0")
+    assert "_k_D" in q and not {x for x in q if x.startswith(("_k_n", "_k_L", "_k_r"))}
+    assert {"_k_n0", "_k_n1", "_k_ns0", "_k_L0", "_k_Ls0"} <= _reads(rhs, "_k_st")
+    # the determinant is the bracket rho^2 + r^2 + l^2 - 2 r l cos(phi) + ...: its
+    # l^2 sin^2 + l^2 cos^2 reduced
+    d = [rhs[x] for x in _reads(rhs, "_k_D") | {"_k_D"} if x in rhs]
+    assert not any("(sin_phi)*(sin_phi)" in e or "(cos_phi)*(cos_phi)" in e for e in d)
+
+
+def test_a_declared_row_with_no_mass_has_no_solution_and_no_acceleration():
+    """The quotient divides the mass matrix's determinant out of phi''; a zero mass
+    (past the input checks) is still no solution, and the integrator's right-hand
+    side gets no acceleration (NaN), as through the reactions before."""
+    m = phasemap.get_model("wheel")
+    values = {**m.defaults, "phi": 0.7, "omega": 1.0, "m": 0.0}
+    v = m.input_vector(values)
+    out = np.full((len(m.branches), m.n_fields), np.nan)
+    m.point(v, out)
+    assert nx.summarize(out, m.stick_branch)[0] == 0
+    assert (out[:, nx.STATUS] != nx.ADMISSIBLE).all()
+    roll = m.branches.index("roll_pos")
+    assert np.isnan(m.contract.branch_row(v, roll)[nx.FIRST_ACC])
+    values["m"] = 1.0
+    assert np.isfinite(m.contract.branch_row(m.input_vector(values), roll)[nx.FIRST_ACC])

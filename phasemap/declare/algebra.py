@@ -44,6 +44,13 @@ def scale_in(form, L, Ls):
     return scale_of(form).xreplace({sp.Abs(L[i]): Ls[i] for i in range(len(L))}).xreplace(sub)
 
 
+def count_ops(exprs) -> int:
+    """The arithmetic operations of ``exprs`` as sympy counts them (a cost estimate)."""
+    import sympy as sp
+
+    return sum(int(sp.count_ops(e)) for e in exprs)
+
+
 def cramer(K, rhs, i):
     """The numerator of unknown ``i`` of ``K x = rhs`` by Cramer's rule."""
     Ki = K.copy()

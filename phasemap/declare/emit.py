@@ -11,7 +11,7 @@ from .algebra import scale_in, scale_of
 from .api import sym
 from .derivation import derive
 from .law import Accelerates
-from .solvers import joint_parts
+from .solvers import joint_parts, quotients, short_determinant
 from .validation import fail
 
 TOL = f"{nx.TOL!r}"
@@ -118,10 +118,10 @@ def row_code(sol, eqs, inputs_of, ctx: RowContext = RowContext()) -> tuple[list[
     if sol.family is not None:
         _family(w, sol, eqs, L, Ls, ctx)
     elif p.squared is not None:
-        _joint(w, sol, L, Ls)
+        _joint(w, sol, eqs, L, Ls)
     else:
-        _regular(w, sol, L, Ls)
-    Q = _accelerations(w, sol, L, Ls)
+        _regular(w, sol, eqs, L, Ls)
+    Q = _accelerations(w, sol, eqs, L, Ls)
     _admissible(w, sol, eqs, Q, L, Ls, ctx)
     w.emit([(f"_k_r{i}", e) for i, e in enumerate(p.reactions)])
     return w.lines, w.used
@@ -152,10 +152,10 @@ def _where(w, sol, ctx: RowContext):
         w.lines.append(f"_k_rest_{c} = rest | (abs(_k_kf_{c}) <= {TOL} * _k_kfs_{c})")
 
 
-def _regular(w, sol, L, Ls):
+def _regular(w, sol, eqs, L, Ls):
     """The unknowns by Cramer's rule: ``L_i = n_i / D``."""
     k = len(L)
-    w.emit([("_k_D", sol.D), ("_k_Ds", scale_of(sol.D))]
+    w.emit([("_k_D", short_determinant(sol, eqs.q)), ("_k_Ds", scale_of(sol.D))]
            + [(f"_k_n{i}", e) for i, e in enumerate(sol.nums)]
            + [(f"_k_ns{i}", scale_of(e)) for i, e in enumerate(sol.nums)])
     w.lines.append(f"_k_sing = abs(_k_D) <= {TOL} * _k_Ds")
@@ -168,12 +168,12 @@ def _regular(w, sol, L, Ls):
     w.lines.append("_k_coef = _k_D / _k_Ds")
 
 
-def _joint(w, sol, L, Ls):
+def _joint(w, sol, eqs, L, Ls):
     """The unknowns affine in the friction moment, and the moment from the squared law
     (:class:`phasemap.declare.solvers.JointRoots` states the same quantities over D)."""
     n0, n1, X, Y = joint_parts(sol)
     sq = sol.problem.squared
-    w.emit([("_k_D", sol.D), ("_k_Ds", scale_of(sol.D))]
+    w.emit([("_k_D", short_determinant(sol, eqs.q)), ("_k_Ds", scale_of(sol.D))]
            + [(f"_k_a{i}", e) for i, e in enumerate(n0)]
            + [(f"_k_as{i}", scale_of(e)) for i, e in enumerate(n0)]
            + [(f"_k_b{i}", e) for i, e in enumerate(n1)]
@@ -361,10 +361,37 @@ def accelerations(sol, L, Ls, over=True):
             [(scale_of(a) + scale_of(b) * sp.Abs(mu)) / sp.Abs(D) for a, b in zip(q0, q1)])
 
 
-def _accelerations(w, sol, L, Ls):
+def rated(eqs) -> list[int]:
+    """The indices of the coordinates with a rate: the accelerations a row returns."""
+    return [i for i, c in enumerate(eqs.S.coordinates) if c.rate]
+
+
+def _accelerations(w, sol, eqs, L, Ls):
+    """``_k_Q<j>`` and their scales ``_k_Qs<j>``.  The accelerations a row returns (all of
+    them in a row without reactions) are one quotient each over the row's determinant
+    where that is the shorter way
+    (:func:`phasemap.declare.solvers.quotients`): they then read no reaction, and a
+    caller that reads only them (the integrator's right-hand side) computes none.
+    ``_k_dM`` is the part of the mass matrix's determinant left in their denominator
+    (1.0: none), kept to refuse a degenerate mass as the path through the reactions
+    does (a division by zero there)."""
+    import sympy as sp
+
     n = sol.problem.n
     Q, Qs = _symbols("_k_Q", n), _symbols("_k_Qs", n)
     acc, accs = accelerations(sol, L, Ls)
+    # without reactions (a free flight) every acceleration is a short quotient; with
+    # them the others are formed from the reactions that classification needs anyway
+    rows = rated(eqs) if sol.problem.unknowns else list(range(n))
+    quot = quotients(sol, rows, eqs.q)
+    if quot is None:
+        w.lines.append("_k_dM = 1.0")
+    else:
+        nums, dM = quot
+        w.emit([("_k_dM", sol.dM)])
+        D = sol.D if sp.sympify(sol.D).is_Number else sp.Symbol("_k_D", real=True)
+        for j, e in zip(rows, nums):
+            acc[j] = e / (dM * D)
     w.emit([(str(Q[j]), acc[j]) for j in range(n)] + [(str(Qs[j]), accs[j]) for j in range(n)])
     return Q
 
@@ -518,9 +545,12 @@ def _branch_function(S, sol, body, used, inputs) -> list[str]:
             " | (not _k_edge)",
             # a non-finite acceleration or reaction is never a solution, whatever the
             # declaration (a zero mass, an overflow)
-            "    _k_fin = " + " & ".join(
-                [f"np.isfinite(_k_Q{j})" for j in acc_idx]
-                + [f"np.isfinite(_k_r{i})" for i in range(len(p.reactions))] + ["True"]),
+            "    _k_finq = " + " & ".join(
+                [f"np.isfinite(_k_Q{j})" for j in acc_idx] + ["(abs(_k_dM) > 0.0)"]),
+            "    _k_fin = _k_finq & " + " & ".join(
+                [f"np.isfinite(_k_r{i})" for i in range(len(p.reactions))] + ["True"]),
+            # the accelerations' own test, so that reading them computes no reaction
+            "    _k_badq = _k_sing | _k_absent | (not (_k_real & _k_finq))",
             "    _k_real = _k_real & _k_fin",
             "    _k_bad = _k_sing | _k_absent | (not _k_real)",
             f"    _k_st = {nx.ABSENT} if _k_absent else (({nx.CONTINUUM} if _k_cont else "
@@ -529,7 +559,7 @@ def _branch_function(S, sol, body, used, inputs) -> list[str]:
             f"{nx.INADMISSIBLE})))",
             "    return (_k_st, 1.0 if (_k_sing & (not _k_absent)) else 0.0,",
             "            NAN if _k_absent else _k_coef,",
-            *[f"            NAN if _k_bad else _k_Q{j}," for j in acc_idx],
+            *[f"            NAN if _k_badq else _k_Q{j}," for j in acc_idx],
             *[f"            NAN if _k_bad else _k_r{i}," for i in range(len(p.reactions))],
             "            )", ""]
 

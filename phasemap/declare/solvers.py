@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .algebra import cramer, pythagorean, reduced, scale_of
+from .algebra import cramer, count_ops, pythagorean, reduced, scale_of
 from .law import STICK, LinearProblem, Mode
 from .validation import fail
 
@@ -291,6 +291,55 @@ def _parametrisation(eqs, p, K, rhs, aMW, I, J, sub, Dp):
         P[j], Dd[j] = pd[a], pd[k - 1 + a]
     Dd[j0] = Dp
     return Family(Dp, P, Dd), moves, _vanishes(eqs, row_p)
+
+
+def short_determinant(sol: Solution, angles):
+    """The row's determinant ``D`` as the generated code computes it: reduced modulo
+    sin^2 + cos^2 = 1 for the ``angles`` where that is shorter (the wheel's
+    ``l^2 sin^2 + l^2 cos^2`` is ``l^2``).  Its tie scale stays that of ``D`` as
+    derived (:func:`phasemap.declare.algebra.scale_of`), so that every tie is kept."""
+    import sympy as sp
+
+    D = sp.sympify(sol.D)
+    if not D.free_symbols & set(angles):
+        return D
+    short = pythagorean(D, angles)
+    return short if count_ops([short]) < count_ops([D]) else D
+
+
+def quotients(sol: Solution, rows, angles):
+    """The accelerations ``rows`` (indices of coordinates) as one quotient each over the
+    row's determinant: ``(numerators, c)`` with ``q''_j = numerators[j] / (c D)``,
+    where ``D`` is the row's determinant and ``c`` what is left of the mass matrix's
+    determinant ``dM`` (reduced modulo sin^2 + cos^2 = 1 for the ``angles``; 1 where it
+    divides out), or None for a row solved otherwise (saddle point, indeterminate).
+
+    ``q'' = aM (hx + W L) / dM`` with ``L = nums / D`` is ``aM (D hx + W nums) / (dM D)``:
+    expanded and divided by the monomial it shares with ``dM``, a rolling wheel's phi''
+    is the paper's right-hand side over its bracket (19 operations where the path
+    through the reactions takes about 150, and no reaction is needed).  None also where
+    the expanded numerators would cost more than the reactions they spare.
+    """
+    import sympy as sp
+
+    if sol.qnums is not None or sol.family is not None or sol.nums is None:
+        return None
+    p = sol.problem
+    n, k = p.n, len(p.unknowns)
+    gen = [sol.D * sol.hx[a] + sum((sol.W[a, i] * sol.nums[i] for i in range(k)),
+                                   sp.Integer(0)) for a in range(n)]
+    nums = [sp.expand(sum((sol.aM[j, a] * gen[a] for a in range(n)), sp.Integer(0)))
+            for j in rows]
+    via = count_ops(sol.nums) + sum(count_ops([sol.aM[j, a] * (sol.hx[a] + sum(
+        (sol.W[a, i] for i in range(k)), sp.Integer(0))) for a in range(n)]) for j in rows)
+    if count_ops(nums) > via:
+        return None
+    dM, *nums = reduced([sp.expand(sol.dM)] + nums)
+    if dM.free_symbols & set(angles):
+        dM = pythagorean(dM, angles)
+    if dM.is_Number:
+        return [sp.expand(e / dM) for e in nums], sp.Integer(1)
+    return nums, dM
 
 
 @dataclass
