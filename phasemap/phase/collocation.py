@@ -210,9 +210,10 @@ def solve_legendre(z, u0, h, nv, u, w, r):
 
     Picard's iteration u <- u0 + int_0^tau (z u + h p), each integral exact in the
     Legendre basis, int_0^tau P_k = (P_{k+1} - P_{k-1}) / (2 (2k + 1)) (P_0: (P_1 +
-    P_0) / 2), until a pass changes no coefficient by more than 1e-17 of their sum: no
-    monomials, whose coefficients for 12 nodes carry the node values' rounding times
-    6e7 (the dense output's :func:`dense` uses them for NODES = 6 terms, times 2e3).
+    P_0) / 2), until a pass changes no coefficient by more than 1e-17 of their sum (the
+    trailing coefficients below that are dropped): no monomials, whose coefficients for
+    12 nodes carry the node values' rounding times 6e7 (the dense output's
+    :func:`dense` uses them for NODES = 6 terms, times 2e3).
     """
     n = nv.shape[0]
     for k in range(n):  # h p in Legendre coefficients
@@ -246,6 +247,8 @@ def solve_legendre(z, u0, h, nv, u, w, r):
         nt = m + 1
         if change <= 1e-17 * size:
             break
+    while nt > 1 and abs(u[nt - 1]) <= 1e-17 * size:  # terms below rounding: each point
+        nt -= 1                                        # sums only the rest
     return nt
 
 
