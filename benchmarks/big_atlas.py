@@ -18,7 +18,7 @@ import sys
 import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from grid import machine, write_section  # noqa: E402
+from _report import machine, publish  # noqa: E402
 
 
 def main():
@@ -53,10 +53,8 @@ def main():
         f"{size_mib:.1f} MiB |",
         "",
     ])
-    print(text)
     out.unlink()
-    if not args.no_write:
-        write_section(text, "## A 10^9-cell atlas")
+    publish(text, "## A 10^9-cell atlas", write=not args.no_write)
 
 
 if __name__ == "__main__":

@@ -2,7 +2,7 @@
 
 The wheel's fate-map integrator (DOPRI5, rtol 1e-6, as ``Scene(..., layers=fate)``
 runs it) on the same random cells, with the declared model (what ``wheel`` runs)
-and the hand module (``phasemap.models.wheel.MODEL``): nanoseconds per step on
+and the hand module (``references.wheel.MODEL``, tests/references/): nanoseconds per step on
 one thread, and the physics of a step timed alone (one right-hand side: sin,
 cos and the roll row; one classification of every row), from
 ``benchmarks/fate_map.py``'s ``step_profile``.  The two models alternate over
@@ -27,7 +27,8 @@ import numba
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from fate_map import step_profile  # noqa: E402
-from grid import hand_model, load, machine, write_section  # noqa: E402
+from _report import load, machine, publish  # noqa: E402
+from grid import hand_model  # noqa: E402
 
 import phasemap  # noqa: E402
 
@@ -73,7 +74,7 @@ def main():
         f"The wheel's fate-map integrator on {a.cells} random cells (phi in [-pi, pi], omega "
         f"in [-6, 6], DOPRI5, rtol 1e-6; {p['steps_per_cell']:.0f} steps per cell), one "
         "thread, declared (`phasemap/systems/seeds/wheel.py`, what `wheel` runs) against "
-        "hand (`phasemap.models.wheel`), alternating over "
+        "hand (`tests/references/wheel.py`), alternating over "
         f"{a.rounds} rounds: medians of each round's fastest of 5.  *fitted*: least squares "
         f"on steps and events over {a.fit_cells} cells, each timed alone.  The right-hand "
         "side and the classification are timed alone, each call waiting for the last "
@@ -91,10 +92,7 @@ def main():
     lines += ["", f"Target 4 (declared rows no slower per step than the hand ones): "
               f"{'met' if ratio <= 1.0 else f'**missed** ({ratio:.2f}x per step)'}.", "",
               WHY, ""]
-    text = "\n".join(lines)
-    print(text)
-    if not a.no_write:
-        write_section(text, "## Declared rows per step")
+    publish(lines, "## Declared rows per step", write=not a.no_write)
 
 
 if __name__ == "__main__":

@@ -27,7 +27,8 @@ from phasemap.simulate import Options
 
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from grid import cold_start, hand_model, load, machine, write_section  # noqa: E402
+from _report import load, machine, publish  # noqa: E402
+from grid import cold_start, hand_model  # noqa: E402
 
 FATE_LAYERS = ["fate", "n_reversals", "t_rest", "phi_rest"]
 FATE_OPTIONS = {"t_end": 30.0, "rtol": 1e-6}
@@ -378,7 +379,7 @@ def main():
         fate_limits(fm),
         "",
         f"The wheel runs as its declaration (`phasemap/systems/seeds/wheel.py`, which counts "
-        f"a hop as a solution); the hand module (`phasemap.models.wheel`, no hops) on the "
+        f"a hop as a solution); the hand module (`tests/references/wheel.py`, no hops) on the "
         f"same {fm['small']}^2 map, alternating, medians of 3: declared "
         f"{fm['versus_hand']['declared']:.2f} s, hand {fm['versus_hand']['hand']:.2f} s "
         f"({fm['versus_hand']['declared'] / fm['versus_hand']['hand']:.2f}x), in line with its "
@@ -393,10 +394,7 @@ def main():
           for what, value, ok in targets(fm)],
         "",
     ]
-    text = "\n".join(lines)
-    print(text)
-    if not args.no_write:
-        write_section(text, "## Fate map of the wheel")
+    publish(lines, "## Fate map of the wheel", write=not args.no_write)
 
 
 if __name__ == "__main__":

@@ -37,8 +37,6 @@ import argparse
 import json
 import os
 import pathlib
-import platform
-import re
 import shlex
 import statistics
 import subprocess
@@ -55,7 +53,9 @@ from phasemap._codegen import grid_kernel, run_grid
 from phasemap.grid import pack_axes
 from phasemap.layers import layers_for
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from _report import ROOT, load, machine, publish, write_section  # noqa: E402,F401  (re-exported)
+
 SEEDS = ROOT / "phasemap" / "systems" / "seeds"
 TOL = 1e-12
 CASES = {  # model: (second axis, its range, fixed values[, (first axis, its range)])
@@ -81,7 +81,7 @@ OVERHEAD_TARGET = 1e-3
 
 # ------------------------------------------------------ NumPy references -----
 def numpy_ladder(phi, f, omega, l, g, m):
-    """The hand ladder (phasemap.models.ladder: no separation modes)."""
+    """The hand ladder (tests/references/ladder.py: no separation modes)."""
     sp, cp = np.sin(phi)[:, None], np.cos(phi)[:, None]
     s, w2 = np.sign(omega), omega * omega
     d = 2.0 - f * f
@@ -214,14 +214,21 @@ def numpy_store(a, b):
 
 
 # ------------------------------------------------------------- the cases -----
+#: The hand-written module of each seed system: the pendulums run by hand; the ladder's
+#: and the wheel's (the paper's equations) are test references, tests/references/.
+HAND_MODULES = {"ladder": "references.ladder", "wheel": "references.wheel",
+                **{name: f"phasemap.systems.{name}" for name in HAND_RUNS}}
+sys.path.insert(0, str(ROOT / "tests"))
+
+
 def hand_model(name):
-    """The hand-written module of a seed system (the ladder and the wheel run as their
-    declarations; the hand modules are references), or the registered model of any
+    """The hand-written model of a seed system (the ladder and the wheel run as their
+    declarations; their hand modules are references), or the registered model of any
     other name."""
     import importlib
 
-    if name in ("ladder", "wheel", "elliptic_pendulum", "hinge_pendulum"):
-        return importlib.import_module(f"phasemap.models.{name}").MODEL
+    if name in HAND_MODULES:
+        return importlib.import_module(HAND_MODULES[name]).MODEL
     return phasemap.MODELS[name]
 
 
@@ -407,24 +414,6 @@ def assembly(name, inner):
 
 
 # ---------------------------------------------------------------- reports -----
-def machine() -> str:
-    cpu = platform.processor() or "unknown CPU"
-    try:
-        for line in pathlib.Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return (f"{os.cpu_count()} cores, {cpu}; Python {platform.python_version()}, "
-            f"numba {numba.__version__}, numpy {np.__version__}")
-
-
-def load() -> str:
-    """The load average over the last minute, and the cores it is shared among."""
-    return f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores"
-
-
 GRID_START = ("import time; t=time.perf_counter(); import numpy as np, phasemap; "
               "phasemap.Scene('ladder', axes={'phi': np.linspace(0, 1, 8)}).compute(); "
               "print(time.perf_counter()-t)")
@@ -592,24 +581,8 @@ def main():
         for name in CASES:
             asm[name] = assembly(name, CASES[name][0])
     loads.append(load())
-    text = report(args, big, small, checked, asm, loads)
-    print(text)
-    if not args.no_write:
-        write_section(text, "## Grid throughput")
-
-
-def write_section(text: str, heading: str) -> None:
-    """Replace (or append) the section that starts with ``heading`` in BENCHMARKS.md."""
-    path = ROOT / "BENCHMARKS.md"
-    old = path.read_text() if path.exists() else "# Benchmarks\n\n"
-    # the heading at the start of a line: "## Grid throughput" must not match the
-    # declared systems' "### Grid throughput, 2048^2 maps" (it did, and deleted it)
-    found = re.search(rf"(?m)^{re.escape(heading)}", old)
-    if found:
-        start = found.start()
-        nxt = old.find("\n## ", start + len(heading))
-        old = old[:start] + old[nxt + 1:] if nxt >= 0 else old[:start]
-    path.write_text(old.rstrip() + "\n\n" + text.rstrip() + "\n")
+    publish(report(args, big, small, checked, asm, loads), "## Grid throughput",
+            write=not args.no_write)
 
 
 if __name__ == "__main__":

@@ -13,7 +13,7 @@ For the ladder, the wheel and the hinge pendulum, times one phase curve
 alternating the three in one process, medians over ``--repeat`` runs, JIT
 compilation excluded (reported separately as the first call).  Accuracy:
 omega^2 along the curve against the ladder's closed form
-(``phasemap.models.ladder.omega_squared``), the weightless hinge pendulum's
+(``phasemap.systems.seeds.closed_forms.ladder_omega_squared``), the weightless hinge pendulum's
 u = omega0^2 exp(-2 k (phi - phi0)) (from ``weightless_motion``), and the
 wheel's first-integral equation integrated by scipy's DOP853 at rtol 1e-13.
 Writes the section "Phase curves" of ../BENCHMARKS.md.
@@ -39,14 +39,15 @@ from scipy.integrate import solve_ivp
 
 import phasemap
 from phasemap import phase
-from phasemap.models import get_model
-from phasemap.models import hinge_pendulum as hinge
-from phasemap.models import ladder as lad
+from phasemap.systems import get_model
+from phasemap.systems import hinge_pendulum as hinge
+from phasemap.systems.seeds.closed_forms import ladder_omega_squared
 
 HERE = pathlib.Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
-from grid import machine, write_section  # noqa: E402
+from _report import machine, publish  # noqa: E402
+from grid import hand_model  # noqa: E402
 
 G = 9.81
 #: (label, model, start and parameters, t_end for simulate)
@@ -274,10 +275,10 @@ def accuracy():
     # running ladder is indeterminate at once at f = sqrt 2 + 1e-6, phi0 0.6, omega0 -3)
     for f, phi0, omega0 in ((0.3, 0.6, 2.0), (0.5, 1.2, -1.5), (math.sqrt(2) + 1e-6, 0.6, -3.0),
                             (math.sqrt(2) - 1e-3, 0.9, 0.5)):
-        ds = phasemap.phase_curve(lad.MODEL, phi=phi0, omega=omega0, f=f)
+        ds = phasemap.phase_curve(hand_model("ladder"), phi=phi0, omega=omega0, f=f)
         sel = ds.point_stage.values == 0
         phis, u = ds.phi.values[sel], ds.omega_squared.values[sel]
-        exact = np.array([lad.omega_squared(p, phi0, omega0, f, 1.0, G) for p in phis])
+        exact = np.array([ladder_omega_squared(p, phi0, omega0, f, 1.0, G) for p in phis])
         out.append((f"ladder f = {f:.6g}, phi0 {phi0}, omega0 {omega0} "
                     f"({ds.stage_end_reason.attrs['flag_meanings'].split()[ds.stage_end_reason.values[0]]})",
                     float(np.max(np.abs(u - exact))) / G))
@@ -464,10 +465,7 @@ def main():
               f"{p:.1f} (errors {', '.join(f'{e:.1e}' for e in errs)}); "
               f"the test suite asserts 10..14.  Run time of this script "
               f"{time.perf_counter() - t0:.0f} s."]
-    text = "\n".join(lines)
-    print(text)
-    if not args.no_write:
-        write_section(text, "## Phase curves")
+    publish(lines, "## Phase curves", write=not args.no_write)
 
 
 if __name__ == "__main__":

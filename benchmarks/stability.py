@@ -35,11 +35,12 @@ import numpy as np
 from scipy.optimize import brentq
 
 import phasemap
-from phasemap.models.hinge_pendulum import weightless_motion
+from phasemap.systems.hinge_pendulum import weightless_motion
 from phasemap.phase import phase_curve
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from grid import machine, write_section  # noqa: E402
+from _report import machine, publish  # noqa: E402
+from grid import hand_model  # noqa: E402
 
 R2 = math.sqrt(2.0)
 F_ELLIPTIC = 3.0
@@ -122,9 +123,7 @@ def cases() -> list[Case]:
     # The kept-contact ladder (the hand module, eq. (8)): its slide is stiff near sqrt 2.
     # The running ladder also counts leaving a contact: thrown at omega = -4 just above
     # sqrt 2 it is indeterminate at t = 0 (the slide and flying off), nothing to integrate.
-    from phasemap.models import ladder as hand_ladder
-
-    ladder = hand_ladder.MODEL
+    ladder = hand_model("ladder")
     for eps in (1e-3, 1e-6, 1e-9):
         f = R2 - eps
         err, reason = against_curve(ladder, phi=0.3, omega=-0.5, f=f)
@@ -344,10 +343,7 @@ def main():
         for r in failed:
             lines.append(f"- {r['group']}, {r['name']} (rtol {r['rtol']:.0e}): {r['verdict']}")
         lines.append("")
-    text = "\n".join(lines)
-    print(text)
-    if not args.no_write:
-        write_section(text, "## Stability")
+    publish(lines, "## Stability", write=not args.no_write)
 
 
 if __name__ == "__main__":

@@ -32,7 +32,7 @@ import time
 import phasemap.workprecision as wp
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from grid import machine, write_section  # noqa: E402
+from _report import machine, publish, write_section  # noqa: E402
 
 HERE = pathlib.Path(__file__).resolve().parent
 LEVELS = (1e-3, 1e-5, 1e-7, 1e-9, 1e-11)
@@ -366,11 +366,8 @@ def main():
                      f"{len(all_ratios)} (system, level) pairs.")
     lines += ["", *limits(rows, args.problems), "",
               "The fate map of the wheel has its own section (`benchmarks/fate_map.py`).", ""]
-    text = "\n".join(lines)
-    print(text)
+    publish(lines, "## Work-precision", write=not args.no_write)
     print("figure:", *paths)
-    if not args.no_write:
-        write_section(text, "## Work-precision")
 
 
 if __name__ == "__main__":

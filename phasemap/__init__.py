@@ -1,5 +1,20 @@
 """phasemap: solvability, stagnation and phase-space maps of systems with dry friction.
 
+The house, one line per room (docs/guide/layout.md says more):
+
+- ``model.py``: the contract every system gives the rest (``Model``, ``Branch``, ``Dynamics``);
+- ``declare/``: a declared ``System`` made a ``Model`` (contact laws, equations, solvers,
+  the code emitter, the kernel cache, admissibility conditions);
+- ``systems/``: every system that runs, and the registry (``MODELS``, ``get_model``);
+  ``models.py`` is its first name, a re-export;
+- ``classify.py``, ``_numerics.py``, ``_codegen.py``, ``layers.py``, ``grid.py``,
+  ``_compile.py``, ``scene.py``: points and grids of points;
+- ``events.py``, ``integrate/``, ``simulate.py``, ``phase/``, ``workprecision/``: motion;
+- ``bifurcation/``: the bifurcation set (``boundaries``, ``threshold``);
+- ``_dataset.py``, ``atlas.py``, ``plot/``, ``accessor.py``: datasets, atlases and figures;
+- ``study.py``, ``tour.py``, ``cli.py``: what the study scripts, the tour and the command
+  line share.
+
 The public API is re-exported here explicitly.
 """
 
@@ -9,7 +24,7 @@ from .classify import Branch, BranchResult, Classification, classify
 from .events import Event
 from .layers import Layer, layers_for
 from .model import BranchStatus, Derived, Dynamics, Model, Solvability, Variable
-from .models import MODELS, get_model
+from .systems import MODELS, get_model
 from .phase import phase_curve
 from .scene import Scene
 from .simulate import simulate

@@ -32,6 +32,8 @@ axes built with ``numpy.linspace`` through zero hit the stick branch.
 
 from __future__ import annotations
 
+import enum
+
 import numpy as np
 from numba import njit
 
@@ -44,6 +46,27 @@ STATUS = 0
 SINGULAR = 1
 COEF = 2
 FIRST_ACC = 3
+
+
+class Coded(enum.IntEnum):
+    """An integer code that says what it means: members are ``NAME = code, message``.
+
+    The base of :class:`phasemap.BranchStatus`, :class:`phasemap.Solvability` and
+    :class:`phasemap.Event`: each member is its code (an ``int``, what the kernels
+    store) and carries its ``message``.
+
+    >>> class Light(Coded):
+    ...     RED = 0, "stop"
+    >>> Light.RED == 0, Light(0).message
+    (True, 'stop')
+    """
+
+    def __new__(cls, code: int, message: str):
+        member = int.__new__(cls, code)
+        member._value_ = code
+        member.message = message
+        return member
+
 
 # Branch statuses (mirrored by :class:`phasemap.model.BranchStatus`).
 ABSENT = 0

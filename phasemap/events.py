@@ -44,7 +44,6 @@ Events that end it (the *fate*):
 
 from __future__ import annotations
 
-import enum
 import math
 
 from numba import njit
@@ -115,7 +114,7 @@ def summary(out, stick):
     return n, first_admissible(out), lost, sing
 
 
-class Event(enum.IntEnum):
+class Event(nx.Coded):
     """A named event of a motion; members from ``REST`` on end it.
 
     The ``fate`` layer of a fate map holds the terminal member that ended each
@@ -130,54 +129,31 @@ class Event(enum.IntEnum):
     'NO_SOLUTION'
     """
 
-    START = START
-    REVERSAL = REVERSAL
-    STICK = STICK
-    SLIP = SLIP
-    SWITCH = SWITCH
-    REST = REST
-    CONTACT_LOST = CONTACT_LOST
-    NO_SOLUTION = NO_SOLUTION
-    INDETERMINATE = INDETERMINATE
-    CONTINUUM = CONTINUUM
-    SINGULAR = SINGULAR
-    HORIZON = HORIZON
-    MAX_EVENTS = MAX_EVENTS
-    STEP_FAILURE = STEP_FAILURE
-    STIFF = STIFF
-    LEFT_DOMAIN = LEFT_DOMAIN
-    MAX_STEPS = MAX_STEPS
+    START = START, "the motion starts on the unique admissible branch"
+    REVERSAL = REVERSAL, "the relative velocity reached zero and the motion reversed"
+    STICK = STICK, "the relative velocity reached zero and the contact sticks"
+    SLIP = SLIP, "the stick branch became inadmissible and slip began"
+    SWITCH = SWITCH, "another branch took over (sign of a two-sided reaction changed)"
+    REST = REST, "stopped in a stagnation zone"
+    CONTACT_LOST = CONTACT_LOST, "a one-sided contact would have to pull: the body leaves it"
+    NO_SOLUTION = NO_SOLUTION, "no solution for the accelerations (Painleve inconsistency)"
+    INDETERMINATE = (INDETERMINATE,
+                     "two or more solutions for the accelerations: the motion is not determined")
+    CONTINUUM = CONTINUUM, "a continuum of solutions for the accelerations"
+    SINGULAR = SINGULAR, "the coefficient of the senior derivative reached zero"
+    HORIZON = HORIZON, "still moving at the end of the requested range"
+    MAX_EVENTS = MAX_EVENTS, "the requested number of events or stages ran out"
+    STEP_FAILURE = STEP_FAILURE, "the step size fell below double-precision resolution"
+    STIFF = (STIFF,
+             "the motion is stiff here (a coefficient of the senior derivative near zero): the "
+             "explicit integrator stops; phase_curve handles such cases")
+    LEFT_DOMAIN = LEFT_DOMAIN, "the motion leaves the model's domain"
+    MAX_STEPS = MAX_STEPS, "the requested number of integration steps (max_steps) ran out"
 
     @property
     def terminal(self) -> bool:
         return self >= FIRST_FATE
 
-    @property
-    def message(self) -> str:
-        return _MESSAGES[self]
-
-
-_MESSAGES = {
-    Event.START: "the motion starts on the unique admissible branch",
-    Event.REVERSAL: "the relative velocity reached zero and the motion reversed",
-    Event.STICK: "the relative velocity reached zero and the contact sticks",
-    Event.SLIP: "the stick branch became inadmissible and slip began",
-    Event.SWITCH: "another branch took over (sign of a two-sided reaction changed)",
-    Event.REST: "stopped in a stagnation zone",
-    Event.CONTACT_LOST: "a one-sided contact would have to pull: the body leaves it",
-    Event.NO_SOLUTION: "no solution for the accelerations (Painleve inconsistency)",
-    Event.INDETERMINATE: "two or more solutions for the accelerations: the motion is not "
-                         "determined",
-    Event.CONTINUUM: "a continuum of solutions for the accelerations",
-    Event.SINGULAR: "the coefficient of the senior derivative reached zero",
-    Event.HORIZON: "still moving at the end of the requested range",
-    Event.MAX_EVENTS: "the requested number of events or stages ran out",
-    Event.MAX_STEPS: "the requested number of integration steps (max_steps) ran out",
-    Event.LEFT_DOMAIN: "the motion leaves the model's domain",
-    Event.STEP_FAILURE: "the step size fell below double-precision resolution",
-    Event.STIFF: "the motion is stiff here (a coefficient of the senior derivative near "
-                 "zero): the explicit integrator stops; phase_curve handles such cases",
-}
 
 #: The fates as CF flags: values and space-separated meanings.
 FATE_VALUES = tuple(int(e) for e in Event if e.terminal)

@@ -4,7 +4,7 @@ Everything (``classify``, the grid evaluator, the atlas writer, the CLI, the
 integrator) reads only a :class:`Model`.  **Declare first**: a new system is a
 :class:`phasemap.declare.System` (its coordinates, bodies, potential and
 contacts, a few lines; see :mod:`phasemap.declare`), in a module of
-:mod:`phasemap.systems` with one line in ``phasemap.models.DECLARED``, or in
+:mod:`phasemap.systems` with one line in ``phasemap.systems.DECLARED``, or in
 any file passed where a model name is accepted.  phasemap derives its
 branches and generates this contract.  Write a model by hand only for what a
 declaration cannot say, or for speed where a map is pinned bit for bit (the
@@ -71,7 +71,6 @@ Everything else just works.
 
 from __future__ import annotations
 
-import enum
 import functools
 import math
 from dataclasses import dataclass, field
@@ -83,7 +82,7 @@ from . import _args
 from . import _numerics as nx
 
 
-class BranchStatus(enum.IntEnum):
+class BranchStatus(nx.Coded):
     """What one candidate branch is at one state.
 
     Examples
@@ -94,29 +93,14 @@ class BranchStatus(enum.IntEnum):
     ['INADMISSIBLE']
     """
 
-    ABSENT = nx.ABSENT
-    ADMISSIBLE = nx.ADMISSIBLE
-    INADMISSIBLE = nx.INADMISSIBLE
-    CONTACT_LOST = nx.CONTACT_LOST
-    NO_SOLUTION = nx.NO_SOLUTION
-    CONTINUUM = nx.CONTINUUM
-    SEPARATION = nx.SEPARATION
-
-    @property
-    def message(self) -> str:
-        return _STATUS_MESSAGES[self]
-
-
-_STATUS_MESSAGES = {
-    BranchStatus.ABSENT: "does not apply at this state",
-    BranchStatus.ADMISSIBLE: "solves the equations and satisfies its own assumptions",
-    BranchStatus.INADMISSIBLE: "violates its own sign or friction-limit assumption",
-    BranchStatus.CONTACT_LOST: "solves the equations but needs a one-sided contact to pull",
-    BranchStatus.NO_SOLUTION: "has no acceleration that solves the equations",
-    BranchStatus.CONTINUUM: "is solved by a whole family of accelerations",
-    BranchStatus.SEPARATION: "solves the equations with a one-sided contact opening: "
-                             "the body leaves it",
-}
+    ABSENT = nx.ABSENT, "does not apply at this state"
+    ADMISSIBLE = nx.ADMISSIBLE, "solves the equations and satisfies its own assumptions"
+    INADMISSIBLE = nx.INADMISSIBLE, "violates its own sign or friction-limit assumption"
+    CONTACT_LOST = nx.CONTACT_LOST, "solves the equations but needs a one-sided contact to pull"
+    NO_SOLUTION = nx.NO_SOLUTION, "has no acceleration that solves the equations"
+    CONTINUUM = nx.CONTINUUM, "is solved by a whole family of accelerations"
+    SEPARATION = (nx.SEPARATION,
+                  "solves the equations with a one-sided contact opening: the body leaves it")
 
 
 #: Largest magnitude of any value: squares and products of a few values must stay
@@ -127,7 +111,7 @@ MAX_MAGNITUDE = 1e30
 MIN_POSITIVE = 1e-30
 
 
-class Solvability(enum.IntEnum):
+class Solvability(nx.Coded):
     """How many solutions the motion equations have for the senior derivatives.
 
     The values are the ``n_solutions`` of :func:`phasemap.classify` and the
@@ -143,24 +127,11 @@ class Solvability(enum.IntEnum):
     <Solvability.TWO: 2>
     """
 
-    NONE = nx.N_NONE
-    UNIQUE = nx.N_UNIQUE
-    TWO = nx.N_TWO
-    CONTINUUM = nx.N_CONTINUUM
-    THREE_OR_MORE = nx.N_THREE_OR_MORE
-
-    @property
-    def message(self) -> str:
-        return _SOLVABILITY_MESSAGES[self]
-
-
-_SOLVABILITY_MESSAGES = {
-    Solvability.NONE: "no solution: the motion equations are inconsistent (Painleve paradox)",
-    Solvability.UNIQUE: "a unique solution",
-    Solvability.TWO: "two solutions: indeterminacy, determinism fails",
-    Solvability.CONTINUUM: "a continuum of solutions",
-    Solvability.THREE_OR_MORE: "three or more isolated solutions",
-}
+    NONE = nx.N_NONE, "no solution: the motion equations are inconsistent (Painleve paradox)"
+    UNIQUE = nx.N_UNIQUE, "a unique solution"
+    TWO = nx.N_TWO, "two solutions: indeterminacy, determinism fails"
+    CONTINUUM = nx.N_CONTINUUM, "a continuum of solutions"
+    THREE_OR_MORE = nx.N_THREE_OR_MORE, "three or more isolated solutions"
 
 
 @dataclass(frozen=True)
@@ -276,6 +247,16 @@ class Branch:
     args: tuple[float, ...] = ()
     bound: tuple[str, int] | None = None
 
+    @classmethod
+    def both_ways(cls, name: str, func: Callable) -> tuple[Branch, Branch]:
+        """The two slip (or roll, or turn) branches ``name_pos`` and ``name_neg`` of one
+        branch function whose first argument is the direction.
+
+        >>> [(b.name, b.direction, b.args) for b in Branch.both_ways("turn", print)]
+        [('turn_pos', 1.0, (1.0,)), ('turn_neg', -1.0, (-1.0,))]
+        """
+        return (cls(f"{name}_pos", 1.0, func, (1.0,)), cls(f"{name}_neg", -1.0, func, (-1.0,)))
+
 
 @dataclass(frozen=True)
 class Dynamics:
@@ -313,6 +294,42 @@ class Dynamics:
     positions: tuple[Variable, ...] = ()
     stick_is_rest: bool = True
     edges: Mapping[str, tuple[str, str]] = field(default_factory=dict)
+
+
+# ------------------------------------------------ what hand models share -----
+#: sin and cos of the angle ``phi``, computed once per value (per axis on a grid).
+SIN_COS_PHI = (Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos))
+
+
+def angle_state(body: str, angle: str, default: float = 0.0, lower: float = -math.inf,
+                upper: float = math.inf) -> tuple[Variable, Variable]:
+    """The state ``(phi, omega)`` of a ``body`` turning on one ``angle`` (its long name).
+
+    >>> [v.long_name for v in angle_state("rod", "angle of the rod from the vertical")]
+    ['angle of the rod from the vertical', 'angular velocity of the rod']
+    """
+    return (Variable("phi", "rad", angle, "\\varphi", default, lower, upper),
+            Variable("omega", "rad s-1", f"angular velocity of the {body}", "\\omega", 0.0))
+
+
+def angular_acceleration(body: str) -> Variable:
+    """The acceleration ``phi_ddot`` of a ``body`` turning on the angle ``phi``.
+
+    >>> angular_acceleration("disc").units
+    'rad s-2'
+    """
+    return Variable("phi_ddot", "rad s-2", f"angular acceleration of the {body}",
+                    "\\ddot\\varphi")
+
+
+def gravity_and_mass(mass: str) -> tuple[Variable, Variable]:
+    """The parameters ``g`` (9.81 m s-2) and ``m`` (1 kg, described as ``mass``).
+
+    >>> [(v.name, v.default) for v in gravity_and_mass("mass of the bob")]
+    [('g', 9.81), ('m', 1.0)]
+    """
+    return (Variable("g", "m s-2", "gravitational acceleration", "g", 9.81, 0.0),
+            Variable("m", "kg", mass, "m", 1.0, 0.0, lower_open=True))
 
 
 @dataclass(frozen=True)

@@ -37,7 +37,7 @@ import phasemap
 from phasemap.bifurcation.claims import threshold_claims
 from phasemap import plot as pplot
 from phasemap import study
-from phasemap.models.hinge_pendulum import weightless_motion
+from phasemap.systems.hinge_pendulum import weightless_motion
 from phasemap.study import Claim, verdict
 
 NAME = "hinge_pendulum"

@@ -137,7 +137,8 @@ def test_guide_code_block_runner_catches_a_wrong_example(tmp_path):
 
 @pytest.mark.parametrize("module", ["phasemap._args", "phasemap.classify", "phasemap.scene", "phasemap.simulate",
                                     "phasemap.phase", "phasemap.plot", "phasemap.study",
-                                    "phasemap.atlas", "phasemap.layers", "phasemap.models",
+                                    "phasemap.atlas", "phasemap.layers", "phasemap.models", "phasemap.systems",
+                                    "phasemap.systems.seeds.closed_forms",
                                     "phasemap.model", "phasemap.events", "phasemap.cache",
                                     "phasemap.blocks", "phasemap.declare.system",
                                     "phasemap.declare.api", "phasemap.declare.contacts",

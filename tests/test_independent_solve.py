@@ -19,10 +19,10 @@ import math
 import numpy as np
 import pytest
 import reference as ref
+from references import ladder as hand_ladder
+from references import wheel as hand_wheel
 
 import phasemap
-from phasemap.models import ladder as hand_ladder
-from phasemap.models import wheel as hand_wheel
 
 N_STATES = 1000
 RTOL = 1e-7
@@ -49,6 +49,36 @@ def _check_branches(c, expected, scale, kept_only=False):
             assert _close(mine, value, scale), (c, name, key, value)
 
 
+def _check_state(c, run, expected, stagnation, lost, scale):
+    """At one state, the hand module (``c``) against the reference's ``expected`` branches
+    and its stagnation and lost contact; the running model (``run``) against its kept
+    branches and stagnation."""
+    assert c.n_solutions == _code(len(expected)), c
+    assert c.stagnation == stagnation, c
+    assert c.contact_lost == lost, c
+    _check_branches(c, expected, scale)
+    _check_branches(run, expected, scale, kept_only=True)
+    assert run.stagnation == stagnation
+
+
+def _moving_branches(omega, names, solve, keeps_contact):
+    """The reference's branches in the directions +1 and -1 (``names``) that apply at
+    ``omega`` and start in their direction from rest: ``{name: solve(s)}`` for those
+    that keep the contact, and whether one of them would need it to pull."""
+    expected, lost = {}, False
+    for s, name in zip((1.0, -1.0), names):
+        if omega != 0.0 and s * omega < 0:
+            continue
+        sol = solve(s)
+        if omega == 0.0 and not s * sol["phi_ddot"] > 0:
+            continue
+        if keeps_contact(sol):
+            expected[name] = sol
+        else:
+            lost = True
+    return expected, lost
+
+
 def _far_from_singular(c, tol=1e-6):
     return all(abs(b.coefficient) > tol or math.isnan(b.coefficient) for b in c.candidates)
 
@@ -64,29 +94,17 @@ def test_ladder_against_unreduced_newton_euler():
         c = phasemap.classify(hand_ladder.MODEL, phi=phi, omega=omega, f=f, l=l, g=g, m=m)
         run = phasemap.classify("ladder", phi=phi, omega=omega, f=f, l=l, g=g, m=m)
         scale = m * g
-        expected, lost = {}, False
-        for s, name in ((1.0, "slide_pos"), (-1.0, "slide_neg")):
-            if omega != 0.0 and s * omega < 0:
-                continue
-            r = ref.ladder_slip(phi, omega, f, l, g, m, s)
-            if omega == 0.0 and not s * r["phi_ddot"] > 0:
-                continue
-            if r["N_floor"] >= 0 and r["N_wall"] >= 0:
-                expected[name] = r
-            else:
-                lost = True
+        expected, lost = _moving_branches(
+            omega, ("slide_pos", "slide_neg"),
+            lambda s: ref.ladder_slip(phi, omega, f, l, g, m, s),
+            lambda r: r["N_floor"] >= 0 and r["N_wall"] >= 0)
         stagnation = omega == 0.0 and ref.ladder_can_rest(phi, f, l, g, m)
         if stagnation:
             expected["stick"] = {"phi_ddot": 0.0}
-        assert c.n_solutions == _code(len(expected)), c
-        assert c.stagnation == stagnation, c
-        assert c.contact_lost == lost, c
         numbers = {k: {"phi_ddot": v["phi_ddot"]} if k == "stick" else
                    {q: v[q] for q in ("phi_ddot", "N_floor", "N_wall")}
                    for k, v in expected.items()}
-        _check_branches(c, numbers, scale)
-        _check_branches(run, numbers, scale, kept_only=True)
-        assert run.stagnation == stagnation
+        _check_state(c, run, numbers, stagnation, lost, scale)
         checked += 1
         at_rest += omega == 0.0
     assert at_rest > 250
@@ -96,28 +114,18 @@ def test_wheel_against_unreduced_newton_euler():
     rng = np.random.default_rng(2)
     checked = at_rest = 0
     while checked < N_STATES:
-        r = rng.uniform(0.3, 2)
-        l, rho, delta = rng.uniform(0, r), rng.uniform(0.1, 1.5), rng.uniform(0, 1.5) * r
-        g, m = rng.uniform(0.5, 20), rng.uniform(0.1, 5)
-        phi = rng.uniform(-2 * math.pi, 2 * math.pi)
-        omega = 0.0 if rng.random() < 1 / 3 else rng.normal() * 3 * math.sqrt(g / r)
-        c = phasemap.classify(hand_wheel.MODEL, phi=phi, omega=omega, delta=delta, r=r, l=l,
-                              rho=rho, g=g, m=m)
-        run = phasemap.classify("wheel", phi=phi, omega=omega, delta=delta, r=r, l=l, rho=rho,
-                                g=g, m=m)
+        state = hand_wheel.random_state(rng)
+        phi, omega, delta, r, l, rho, g, m = state.values()
+        c = phasemap.classify(hand_wheel.MODEL, **state)
+        run = phasemap.classify("wheel", **state)
         if not _far_from_singular(c):
             continue
-        expected, lost = {}, False
-        for s, name in ((1.0, "roll_pos"), (-1.0, "roll_neg")):
-            if omega != 0.0 and s * omega < 0:
-                continue
-            sol = ref.wheel_roll(phi, omega, delta, r, l, rho, g, m, s)
-            if omega == 0.0 and not s * sol["phi_ddot"] > 0:
-                continue
-            if sol["N"] >= 0:
-                expected[name] = {q: sol[q] for q in ("phi_ddot", "N", "F")}
-            else:
-                lost = True
+        expected, lost = _moving_branches(
+            omega, ("roll_pos", "roll_neg"),
+            lambda s: ref.wheel_roll(phi, omega, delta, r, l, rho, g, m, s),
+            lambda sol: sol["N"] >= 0)
+        expected = {name: {q: sol[q] for q in ("phi_ddot", "N", "F")}
+                    for name, sol in expected.items()}
         if omega == 0.0:
             rest = ref.wheel_rest_moment(phi, delta, r, l, rho, g, m)
             stagnation = abs(rest["M"]) <= delta * rest["N"]
@@ -125,12 +133,7 @@ def test_wheel_against_unreduced_newton_euler():
                 expected["stick"] = {"phi_ddot": 0.0, "N": rest["N"], "F": rest["F"]}
         else:
             stagnation = False
-        assert c.n_solutions == _code(len(expected)), c
-        assert c.stagnation == stagnation, c
-        assert c.contact_lost == lost, c
-        _check_branches(c, expected, m * g)
-        _check_branches(run, expected, m * g, kept_only=True)
-        assert run.stagnation == stagnation
+        _check_state(c, run, expected, stagnation, lost, m * g)
         checked += 1
         at_rest += omega == 0.0
     assert at_rest > 250

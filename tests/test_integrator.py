@@ -40,6 +40,17 @@ def weightless(t, phi0, omega0, delta, l):
     return phi0 + math.copysign(1.0, omega0) * np.log(grow) / k, omega0 / grow
 
 
+def weightless_run(t_end, omega0, n=None, **options):
+    """The weightless hinge pendulum (delta = 0.3, l = 1) simulated from phi = 0 with
+    ``options`` (saved at ``n`` times over [0, t_end] when given), and its exact
+    (phi, omega) from (36) at the saved times: ``(ds, phi, omega)``."""
+    if n is not None:
+        options["t_eval"] = np.linspace(0, t_end, n)
+    ds = phasemap.simulate("hinge_pendulum", t_end, phi=0.0, omega=omega0, delta=0.3, g=0.0,
+                           **options)
+    return (ds, *weightless(ds.t.values, 0.0, omega0, 0.3, 1.0))
+
+
 def hinge_rhs(delta, l, g):
     """l phi'' = u - g sin phi with l u = -sigma delta sqrt(Q_n^2 + u^2), Q_n = l w^2 + g cos phi,
     solved for u: u = -sigma delta |Q_n| / sqrt(l^2 - delta^2)."""
@@ -293,7 +304,7 @@ def test_ladder_just_above_sqrt2_stops_clearly_when_the_stage_is_stiff(method):
     # max_steps (10^6 steps, t = 3.6e-4 s).  Hairer's stiffness test now stops the run
     # within a few dozen steps with end_reason 'stiff', which says why.  The hand module
     # keeps both contacts; the running ladder calls this start indeterminate (above).
-    from phasemap.models import ladder as hand_ladder
+    from references import ladder as hand_ladder
 
     tight = phasemap.simulate(hand_ladder.MODEL, 1.0, method=method,
                               rtol=1e-10, phi=0.5, omega=-4.0, f=R2 + 1e-9)
@@ -335,10 +346,7 @@ def test_elliptic_pendulum_near_lambda_zero_never_continues_silently(method):
 
 @pytest.mark.parametrize("method", METHODS)
 def test_extreme_initial_velocities(method):
-    ds = phasemap.simulate("hinge_pendulum", 1.0, method=method,
-                           rtol=1e-10, t_eval=np.linspace(0, 1, 11), phi=0.0, omega=1e6, delta=0.3,
-                           g=0.0)
-    phi, omega = weightless(ds.t.values, 0.0, 1e6, 0.3, 1.0)
+    ds, phi, omega = weightless_run(1.0, 1e6, 11, method=method, rtol=1e-10)
     assert all_finite(ds) and ds.attrs["end_reason"] == "horizon"
     assert np.max(np.abs(ds.phi.values - phi)) < 1e-8            # phi reaches 40 rad
     assert np.max(np.abs(ds.omega.values - omega)) < 1e-8 * 1e6  # relative to omega0
@@ -358,10 +366,7 @@ def test_extreme_initial_velocities(method):
 
 @pytest.mark.parametrize("method", METHODS)
 def test_tolerance_at_the_edge_of_double_precision(method):
-    ds = phasemap.simulate("hinge_pendulum", 10.0, method=method,
-                           rtol=1e-14, t_eval=np.linspace(0, 10, 51), phi=0.0, omega=5.0, delta=0.3,
-                           g=0.0)
-    phi, _ = weightless(ds.t.values, 0.0, 5.0, 0.3, 1.0)
+    ds, phi, _ = weightless_run(10.0, 5.0, 51, method=method, rtol=1e-14)
     assert ds.attrs["end_reason"] == "horizon"
     assert np.max(np.abs(ds.phi.values - phi)) < 1e-12
     with pytest.raises(ValueError, match=r"rtol must be in \[1e-14, 0.1\]"):
@@ -467,9 +472,7 @@ def test_dop853_has_order_8_and_its_error_follows_rtol():
     rtols = 10.0 ** -np.arange(5.0, 13.0)
     steps, errors = [], []
     for rtol in rtols:
-        ds = phasemap.simulate("hinge_pendulum", 10.0, rtol=rtol, method="DOP853", phi=0.0,
-                               omega=5.0, delta=0.3, g=0.0)
-        phi, _ = weightless(ds.t.values, 0.0, 5.0, 0.3, 1.0)
+        ds, phi, _ = weightless_run(10.0, 5.0, rtol=rtol, method="DOP853")
         steps.append(int(ds.attrs["n_steps"]))
         errors.append(np.max(np.abs(ds.phi.values - phi)))
     errors = np.array(errors)

@@ -143,7 +143,7 @@ def test_point_branch_and_grid_agree(model, mask, inner_kind):
 
 
 def test_a_hand_module_and_its_declaration_each_have_their_own_layers():
-    from phasemap.models import ladder
+    from references import ladder
 
     declared, hand = phasemap.get_model("ladder"), ladder.MODEL  # both named "ladder"
     assert hand.name == declared.name and hand.branches != declared.branches

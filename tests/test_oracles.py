@@ -1,6 +1,6 @@
 """The full-coordinate oracles of ``oracles.py`` validated on their own.
 
-Against the hand models (``phasemap.models.ladder.MODEL`` and ``.wheel.MODEL``,
+Against the hand models (``references.ladder.MODEL`` and ``references.wheel.MODEL``,
 the paper's equations) wherever the hand model keeps its contacts, against the
 running (declared) ladder and wheel everywhere, and against closed forms derived by hand (Painleve rod:
 B N = m (g - l sin(theta) omega^2), the pivot (stick) solution, the threshold
@@ -15,10 +15,10 @@ import math
 
 import numpy as np
 import oracles as O
+from references import ladder as hand_ladder
+from references import wheel as hand_wheel
 
 import phasemap
-from phasemap.models import ladder as hand_ladder
-from phasemap.models import wheel as hand_wheel
 
 N_STATES = 1000
 MARGIN = 1e-7
@@ -172,15 +172,10 @@ def test_wheel_against_hand_model():
     rng = np.random.default_rng(14)
     checked = at_rest = skipped = hops = 0
     while checked < N_STATES:
-        r = rng.uniform(0.3, 2)
-        l, rho, delta = rng.uniform(0, r), rng.uniform(0.1, 1.5), rng.uniform(0, 1.5) * r
-        g, m = rng.uniform(0.5, 20), rng.uniform(0.1, 5)
-        phi = rng.uniform(-2 * math.pi, 2 * math.pi)
-        omega = 0.0 if rng.random() < 1 / 3 else rng.normal() * 3 * math.sqrt(g / r)
-        c = phasemap.classify(hand_wheel.MODEL, phi=phi, omega=omega, delta=delta, r=r, l=l,
-                              rho=rho, g=g, m=m)
-        run = phasemap.classify("wheel", phi=phi, omega=omega, delta=delta, r=r, l=l, rho=rho,
-                                g=g, m=m)
+        state = hand_wheel.random_state(rng)
+        phi, omega, delta, r, l, rho, g, m = state.values()
+        c = phasemap.classify(hand_wheel.MODEL, **state)
+        run = phasemap.classify("wheel", **state)
         a = O.wheel(phi, omega, delta, r, l, rho, g, m)
         if c.singular or a.margin < MARGIN or any(abs(b.coefficient) < 1e-6 for b in c.candidates
                                                   if not math.isnan(b.coefficient)):

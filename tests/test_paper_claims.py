@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 import oracles
 import reference as ref
+from references import ladder as hand_ladder
+from references import wheel as hand_wheel
 
 import phasemap
-from phasemap.models import ladder as hand_ladder
-from phasemap.models import wheel as hand_wheel
 
 G = 9.81
 SQRT2 = math.sqrt(2.0)

@@ -16,11 +16,11 @@ import numpy as np
 import pytest
 import reference as ref
 import xarray as xr
+from references import ladder as hand_ladder
 from scipy.integrate import solve_ivp
 
 from phasemap import phase
 from phasemap.events import Event
-from phasemap.models import ladder as hand_ladder
 from phasemap.phase import phase_curve
 
 #: The tracer against references that keep the contacts (the paper's equations) runs on
@@ -473,13 +473,13 @@ def test_collocation_converges_at_order_twelve():
 def test_stiff_ladder_stage_matches_the_closed_form():
     """f = sqrt 2 + 1e-6 (slope |lam| = 8.5e6): the exponential weights carry the boundary
     layer and the slow curve; omega^2 at every output point against the ladder's closed form
-    (phasemap.models.ladder.omega_squared, independent of the tracer)."""
-    from phasemap.models import ladder as lad
+    (phasemap.systems.seeds.closed_forms, independent of the tracer)."""
+    from phasemap.systems.seeds.closed_forms import ladder_omega_squared
     f, phi0, omega0 = math.sqrt(2.0) + 1e-6, 0.6, -3.0
     ds = phase_curve("ladder", phi=phi0, omega=omega0, f=f)
     sel = ds.point_stage.values == 0
     phis, u = ds.phi.values[sel], ds.omega_squared.values[sel]
-    exact = np.array([lad.omega_squared(p, phi0, omega0, f, 1.0, G) for p in phis])
+    exact = np.array([ladder_omega_squared(p, phi0, omega0, f, 1.0, G) for p in phis])
     np.testing.assert_allclose(u, exact, rtol=0, atol=1e-10 * G)
 
 

@@ -350,7 +350,7 @@ def test_contact_lost_is_a_class_of_its_own_not_none(wheel_map, tmp_path):
     instead: those cells are 'unique' and flagged contact_lost."""
     n_run = wheel_map.n_solutions.values
     assert (n_run[wheel_map.contact_lost.values == 1] == 1).all()
-    from phasemap.models import wheel as hand_wheel
+    from references import wheel as hand_wheel
 
     hand_map = phasemap.Scene(hand_wheel.MODEL, axes={"phi": wheel_map.phi.values,
                                                       "omega": wheel_map.omega.values},

@@ -10,7 +10,7 @@ import pytest
 
 import phasemap
 import phasemap.workprecision as wp
-from phasemap.models.hinge_pendulum import weightless_motion
+from phasemap.systems.hinge_pendulum import weightless_motion
 
 TOLS = (1e-5, 1e-8)
 

@@ -69,6 +69,9 @@ H_MIN = 1e-9
 ANGLE = 0.15
 #: A vertex lies on its condition to this fraction of the condition's tie scale.
 RESIDUAL = 1e-12
+#: A marching curve samples the classes on its sides at least at every this many vertices
+#: (and wherever a condition changes sign; see _march).
+SIDE_EVERY = 8
 #: Newton iterations per solve.
 MAX_IT = 40
 #: A condition whose value at a curve's vertex is below this fraction of its tie scale
@@ -322,9 +325,9 @@ def _hess(F, k, v, ix, iy, geo, u, w, g, H):
 
 
 @njit(cache=True, error_model="numpy")
-def _side(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, su, sw, scr):
+def _side(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, su, sw, cvp, scr):
     """The class at (su, sw), a side sample of the curve point (u, w) whose condition
-    values are in ``scr[0]``: -1 outside the slice, or where another condition's zero
+    values are ``cvp``: -1 outside the slice, or where another condition's zero
     set passes between the two (the sample would see that condition's class change,
     not this curve's: near a crossing, or where the curves nearly touch).  A zero set
     through (u, w) itself (far closer than the sample) runs with this curve there."""
@@ -335,7 +338,7 @@ def _side(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, su, sw, scr):
     F[0](v, scr[1], scr[2])
     eps = math.hypot(su - u, sw - w)
     for j in range(active.shape[0]):
-        if active[j] and grp[j, 0] != grp[k, 0] and (scr[0, j] > 0.0) != (scr[1, j] > 0.0):
+        if active[j] and grp[j, 0] != grp[k, 0] and (cvp[j] > 0.0) != (scr[1, j] > 0.0):
             c, s, cu, cw = _grad(F, j, v, ix, iy, geo, u, w, g)
             if abs(c) > 1e-3 * eps * math.hypot(cu, cw):
                 return -1
@@ -351,27 +354,36 @@ def _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw, eps, 
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
     F[0](v, scr[0], scr[2])
+    return _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw, eps,
+                       scr[0], scr)
+
+
+@njit(cache=True, error_model="numpy")
+def _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw, eps, cvp,
+                scr):
+    """:func:`_sides` at a curve point whose condition values ``cvp`` are known."""
     left = _side(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, u - eps * tw,
-                w + eps * tu, scr)
+                 w + eps * tu, cvp, scr)
     right = _side(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, u + eps * tw,
-                 w - eps * tu, scr)
+                  w - eps * tu, cvp, scr)
     return left, right
 
 
 @njit(cache=True, error_model="numpy")
 def _correct(F, k, v, ix, iy, geo, g, pu, pw, du, dw):
     """Newton on c = 0 and (du, dw) . (x - p) = 0 from p: the curve's point whose
-    projection on the direction (du, dw) is p's.  Returns (ok, u, w, residual, step)."""
+    projection on the direction (du, dw) is p's.  Returns (ok, u, w, residual, step) and
+    c's (scale, c_u, c_w) at that point."""
     u, w = pu, pw
     last = np.inf
     for it in range(MAX_IT):
         c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
         if not (math.isfinite(c) and math.isfinite(cu) and math.isfinite(cw)):
-            return False, u, w, np.inf, np.inf
+            return False, u, w, np.inf, np.inf, s, cu, cw
         r = du * (u - pu) + dw * (w - pw)
         a, b = _solve2(cu, cw, du, dw, -c, -r)
         if not math.isfinite(a):
-            return False, u, w, np.inf, np.inf
+            return False, u, w, np.inf, np.inf, s, cu, cw
         u += a
         w += b
         last = abs(a) + abs(b)
@@ -379,7 +391,7 @@ def _correct(F, k, v, ix, iy, geo, g, pu, pw, du, dw):
             break
     c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
     res = abs(c) / s if s > 0.0 else abs(c)
-    return res <= RESIDUAL, u, w, res, last
+    return res <= RESIDUAL, u, w, res, last, s, cu, cw
 
 
 @njit(cache=True, error_model="numpy")
@@ -465,6 +477,12 @@ def _edge(F, k, v, ix, iy, geo, g, u, w, fixed_u, tol_u, tol_w):
 def _tangent(F, k, v, ix, iy, geo, g, u, w, su, sw):
     """The unit tangent at (u, w), oriented along (su, sw); (0, 0) where c has no gradient."""
     c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
+    return _orient(s, cu, cw, su, sw)
+
+
+@njit(cache=True, error_model="numpy")
+def _orient(s, cu, cw, su, sw):
+    """:func:`_tangent` from c's scale and gradient: (t_u, t_w, |grad c|, scale)."""
     n = math.hypot(cu, cw)
     if not (n > 0.0):
         return 0.0, 0.0, n, s
@@ -495,11 +513,11 @@ def _bisect(F, k, grp, active, v, ix, iy, geo, g, out, layer, ua, wa, ub, wb, la
     u, w = ub, wb
     for it in range(60):
         mid = 0.5 * (lo + hi)
-        ok, pu, pw, res, st = _correct(F, k, v, ix, iy, geo, g, ua + mid * (ub - ua),
-                                      wa + mid * (wb - wa), du, dw)
+        ok, pu, pw, res, st, s, cu, cw = _correct(F, k, v, ix, iy, geo, g, ua + mid * (ub - ua),
+                                                  wa + mid * (wb - wa), du, dw)
         if not ok:
             break
-        tu, tw, n, s = _tangent(F, k, v, ix, iy, geo, g, pu, pw, du, dw)
+        tu, tw, n, s = _orient(s, cu, cw, du, dw)
         left, right = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, pu, pw, tu, tw,
                              _side_eps(s, n, h), scr)
         if left == la and right == ra:
@@ -582,7 +600,8 @@ def _jump(F, k, v, ix, iy, geo, g, H, u, w, tu, tw):
         return False, pu, pw, res, u, w
     d = 1e-7
     while d <= 1e-3:
-        ok, qu, qw, r, st = _correct(F, k, v, ix, iy, geo, g, pu + d * tu, pw + d * tw, tu, tw)
+        ok, qu, qw, r, st, qs, qcu, qcw = _correct(F, k, v, ix, iy, geo, g, pu + d * tu,
+                                                   pw + d * tw, tu, tw)
         if ok and math.hypot(qu - pu - d * tu, qw - pw - d * tw) <= 0.25 * d \
                 and _inside(qu, qw, 0.0):
             return True, pu, pw, res, qu, qw
@@ -592,12 +611,24 @@ def _jump(F, k, v, ix, iy, geo, g, H, u, w, tu, tw):
 
 @njit(cache=True, error_model="numpy")
 def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, scr,
-                    su, sw, tu0, tw0, h0, closing, curve, vf, vi, counts, mark, tol_u, tol_w):
+           su, sw, tu0, tw0, h0, closing, curve, vf, vi, counts, mark, tol_u, tol_w):
     """Follow condition ``k`` from the curve point (su, sw) along (tu0, tw0).
 
     Appends the vertices after the start (the start itself is not appended)
     and returns 1 if the curve came back to its start (a loop, only looked for
     when ``closing``), 0 at an edge of the slice, -1 where it stalled.
+
+    The classes on either side (two classifications) are sampled at every
+    :data:`SIDE_EVERY`-th vertex, and at every vertex of a step where anything
+    happens: another condition changes sign or starts or stops vanishing with
+    this one, the curve turns back in an axis, the loop closes, the curve ends.
+    The vertex before such a step is sampled too.  Where a sample disagrees
+    with the classes of the last sampled vertex and vertices in between were
+    not sampled, the march goes back to that vertex and steps again sampling
+    every vertex: what it finds is what sampling every vertex finds, except a
+    change of class that reverts within :data:`SIDE_EVERY` steps while no
+    condition changes sign at the vertices (a side sample that grazes another
+    zero set; assemble forgets such a sample, see _forget_isolated).
     """
     u, w = su, sw
     tu, tw = tu0, tw0
@@ -607,38 +638,86 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
     F[0](v, cv0, cs)
     c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
     n0 = math.hypot(cu, cw)
-    la, ra = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw, _side_eps(s, n0, h),
-                   scr)
+    la, ra = _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw,
+                         _side_eps(s, n0, h), cv0, scr)
     travelled = 0.0
     steps = 0
     # special points found on one step: (s along the step, u, w, residual, error), (kind, other)
-    spf = np.empty((active.shape[0] + 4, 5))
-    spi = np.empty((active.shape[0] + 4, 2), dtype=np.int64)
+    nc = active.shape[0]
+    spf = np.empty((nc + 4, 5))
+    spi = np.empty((nc + 4, 2), dtype=np.int64)
+    # the current vertex: its step length, tie scale and gradient norm (for its side samples)
+    hq, us, un = h, s, n0
+    owned_prev = -1
+    pending = 0  # vertices since the last whose sides were sampled
+    done = 0  # steps taken
+    dense_until = -1  # sample every vertex while done <= dense_until (after going back)
+    # the state at the last sampled vertex, to go back to
+    back_cv = np.empty(nc)
+    back_n = counts[0]
+    back_f = np.empty(9)
+    back_i = np.empty(6, dtype=np.int64)
+    go_back = False
     while True:
+        if go_back:
+            counts[0] = back_n
+            u, w, tu, tw, h = back_f[0], back_f[1], back_f[2], back_f[3], back_f[4]
+            hq, us, un, travelled = back_f[5], back_f[6], back_f[7], back_f[8]
+            steps, la, ra, owned_prev, done = back_i[0], back_i[1], back_i[2], back_i[3], back_i[4]
+            closing = back_i[5] == 1
+            cv0[:] = back_cv
+            pending = 0
+            go_back = False
         if counts[2]:
             return -1
-        if travelled > MAX_LENGTH:
-            _push(vf, vi, counts, u, w, 0.0, 0.0, curve, STALL, k, -1, la, ra)
-            return -1
+        if pending == 0:
+            back_n = counts[0]
+            back_f[0], back_f[1], back_f[2], back_f[3], back_f[4] = u, w, tu, tw, h
+            back_f[5], back_f[6], back_f[7], back_f[8] = hq, us, un, travelled
+            back_i[0], back_i[1], back_i[2], back_i[3], back_i[4] = steps, la, ra, owned_prev, done
+            back_i[5] = 1 if closing else 0
+            back_cv[:] = cv0
+        finish = travelled > MAX_LENGTH
         pu = u + h * tu
         pw = w + h * tw
-        ok, qu, qw, res, st = _correct(F, k, v, ix, iy, geo, g, pu, pw, tu, tw)
-        if (ok and not _inside(qu, qw, 0.0)) or (not ok and not _inside(pu, pw, 0.0)):
+        ok, qu, qw, res, st, qs, qcu, qcw = False, pu, pw, np.inf, np.inf, 0.0, 0.0, 0.0
+        if not finish:
+            ok, qu, qw, res, st, qs, qcu, qcw = _correct(F, k, v, ix, iy, geo, g, pu, pw, tu, tw)
+        leaves = (ok and not _inside(qu, qw, 0.0)) or (not ok and not _inside(pu, pw, 0.0))
+        ex_ok, ex_u, ex_w, ex_res, ex_err = False, u, w, np.inf, np.inf
+        if leaves and not finish:
             # the curve leaves the slice within this step: end on the edge it crosses
-            ok, qu, qw, res, err = _exit(F, k, v, ix, iy, geo, g, u, w, qu if ok else pu,
-                                        qw if ok else pw, tol_u, tol_w)
-            if ok and math.hypot(qu - u, qw - w) <= 2.0 * h:
-                _mark(mark, k, u, w, qu, qw)
-                _push(vf, vi, counts, qu, qw, res, err, curve, END, k, -1, -1, -1)
-                return 0
-            if h > H_MIN:
-                h *= 0.5
-                continue
-            _push(vf, vi, counts, u, w, 0.0, 0.0, curve, STALL, k, -1, la, ra)
-            return -1
-        qtu, qtw, qn, qs = _tangent(F, k, v, ix, iy, geo, g, qu, qw, tu, tw)
+            ex_ok, ex_u, ex_w, ex_res, ex_err = _exit(F, k, v, ix, iy, geo, g, u, w,
+                                                      qu if ok else pu, qw if ok else pw,
+                                                      tol_u, tol_w)
+            ex_ok = ex_ok and math.hypot(ex_u - u, ex_w - w) <= 2.0 * h
+            finish = ex_ok or h <= H_MIN
+        qtu, qtw, qn, qs = _orient(qs, qcu, qcw, tu, tw)
         turn = qtu * tu + qtw * tw
         jump = math.hypot(qu - pu, qw - pw)
+        stuck = not leaves and not finish and h <= H_MIN and (
+            not ok or qn == 0.0 or turn < math.cos(2.0 * ANGLE) or jump > 0.25 * h)
+        if (finish or stuck) and pending > 0:
+            # the curve ends, stalls or jumps here: the vertex before is sampled first
+            lc, rc = _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu,
+                                 tw, _side_eps(us, un, hq), cv0, scr)
+            if lc == la and rc == ra and lc >= 0 and rc >= 0:
+                vi[counts[0] - 1, 4], vi[counts[0] - 1, 5] = lc, rc
+                pending = 0
+            else:
+                go_back = True
+                dense_until = 1 << 62
+                continue
+        if finish:
+            if ex_ok:
+                _mark(mark, k, u, w, ex_u, ex_w)
+                _push(vf, vi, counts, ex_u, ex_w, ex_res, ex_err, curve, END, k, -1, -1, -1)
+                return 0
+            _push(vf, vi, counts, u, w, 0.0, 0.0, curve, STALL, k, -1, la, ra)
+            return -1
+        if leaves:
+            h *= 0.5
+            continue
         if not ok or qn == 0.0 or turn < math.cos(2.0 * ANGLE) or jump > 0.25 * h:
             if h > H_MIN:
                 h *= 0.5
@@ -652,15 +731,18 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
             _push(vf, vi, counts, pu, pw, rj, 0.0, curve, CROSSING, k, k, -1, -1)
             qtu, qtw, qn, qs = _tangent(F, k, v, ix, iy, geo, g, qu, qw, tu, tw)
             lb, rb = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, qu, qw, qtu, qtw,
-                           _side_eps(qs, qn, 1e-4), scr)
+                            _side_eps(qs, qn, 1e-4), scr)
             c, s, cu, cw = _grad(F, k, v, ix, iy, geo, qu, qw, g)
             F[0](v, cv0, cs)
+            owned_prev = _owned(k, grp, active, cv0, cs, mark, u, w, qu, qw)
             _push(vf, vi, counts, qu, qw, abs(c) / s, 0.0, curve, REGULAR, k, -1, lb, rb,
-                  _owned(k, grp, active, cv0, cs, mark, u, w, qu, qw))
+                  owned_prev)
             u, w, tu, tw = qu, qw, qtu, qtw
+            hq, us, un = 1e-4, qs, qn
             if lb >= 0 and rb >= 0:
                 la, ra = lb, rb
             h = 1e-4
+            done += 1
             v[ix] = geo[0] + u * geo[1]
             v[iy] = geo[2] + w * geo[3]
             F[0](v, cv0, cs)
@@ -677,23 +759,40 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
                     qtu, qtw = tu0, tw0
                     closing = False
                     steps = -1  # marks the loop's end
-        # special points between (u, w) and (q): crossings, folds
         v[ix] = geo[0] + qu * geo[1]
         v[iy] = geo[2] + qw * geo[3]
         F[0](v, cv1, cs)
-        nsp = 0
         du, dw = qu - u, qw - w
         length2 = du * du + dw * dw
         owned = _owned(k, grp, active, cv1, cs, mark, u, w, qu, qw)
-        for j in range(active.shape[0]):
+        # does anything happen on this step?
+        event = owned != owned_prev or steps < 0 or tu * qtu < 0.0 or tw * qtw < 0.0
+        for j in range(nc):
+            if active[j] and grp[j, 0] != grp[k, 0]:
+                z0 = abs(cv0[j]) <= COVANISH * cs[j]
+                z1 = abs(cv1[j]) <= COVANISH * cs[j]
+                event = event or z0 != z1 or (not z0 and cv0[j] * cv1[j] < 0.0)
+        if event and pending > 0:
+            lc, rc = _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w,
+                                 tu, tw, _side_eps(us, un, hq), cv0, scr)
+            if lc == la and rc == ra and lc >= 0 and rc >= 0:
+                vi[counts[0] - 1, 4], vi[counts[0] - 1, 5] = lc, rc
+                pending = 0
+            else:
+                go_back = True
+                dense_until = done
+                continue
+        # special points between (u, w) and (q): crossings, folds
+        nsp = 0
+        for j in range(nc):
             if (not active[j]) or grp[j, 0] == grp[k, 0]:
                 continue
             if abs(cv0[j]) <= COVANISH * cs[j] or abs(cv1[j]) <= COVANISH * cs[j]:
                 continue  # j vanishes with this curve here: no crossing
             if cv0[j] * cv1[j] < 0.0:
                 a = cv0[j] / (cv0[j] - cv1[j])
-                ok2, xu, xw, res2, err2 = _solve(F, 0, k, j, v, ix, iy, geo, g, H, u + a * du, w + a * dw,
-                                                tol_u, tol_w)
+                ok2, xu, xw, res2, err2 = _solve(F, 0, k, j, v, ix, iy, geo, g, H, u + a * du,
+                                                 w + a * dw, tol_u, tol_w)
                 t = ((xu - u) * du + (xw - w) * dw) / length2
                 if not (ok2 and -0.25 <= t <= 1.25):
                     # Newton went elsewhere: bisect c_j on the curve between the vertices
@@ -701,8 +800,9 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
                     ln = math.sqrt(length2)
                     for it in range(60):
                         mid = 0.5 * (lo + hi)
-                        okc, mu, mw, r3, s3 = _correct(F, k, v, ix, iy, geo, g, u + mid * du,
-                                                      w + mid * dw, du / ln, dw / ln)
+                        okc, mu, mw, r3, s3, sc, ac, bc = _correct(
+                            F, k, v, ix, iy, geo, g, u + mid * du, w + mid * dw, du / ln,
+                            dw / ln)
                         cj, sj, aj, bj = _grad(F, j, v, ix, iy, geo, mu, mw, g)
                         if (cj < 0.0) == (cv0[j] < 0.0):
                             lo = mid
@@ -711,7 +811,7 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
                         if (hi - lo) * ln < 1e-3 * min(tol_u, tol_w):
                             break
                     ok2, xu, xw, res2, err2 = _solve(F, 0, k, j, v, ix, iy, geo, g, H, mu, mw,
-                                                    tol_u, tol_w)
+                                                     tol_u, tol_w)
                     t = ((xu - u) * du + (xw - w) * dw) / length2
                     if not (ok2 and -0.25 <= t <= 1.25):
                         xu, xw, t = mu, mw, 0.5 * (lo + hi)
@@ -721,27 +821,35 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
             a1 = qtu if axis == 0 else qtw
             if a0 * a1 < 0.0:
                 a = a0 / (a0 - a1)
-                okf, fu, fw, resf, errf = _solve(F, 1 + axis, k, -1, v, ix, iy, geo, g, H, u + a * du,
-                                                w + a * dw, tol_u, tol_w)
+                okf, fu, fw, resf, errf = _solve(F, 1 + axis, k, -1, v, ix, iy, geo, g, H,
+                                                 u + a * du, w + a * dw, tol_u, tol_w)
                 t = ((fu - u) * du + (fw - w) * dw) / length2
                 if okf and -0.25 <= t <= 1.25 and _inside(fu, fw, 1e-12):
                     fu = min(max(fu, 0.0), 1.0)
                     fw = min(max(fw, 0.0), 1.0)
                     nsp = _note(spf, spi, nsp, t, fu, fw, FOLD_X if axis == 0 else FOLD_Y, axis,
                                 resf, errf)
-        # the new vertex's sides; a change that no crossing explains is located
-        lb, rb = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, qu, qw, qtu, qtw,
-                       _side_eps(qs, qn, h), scr)
+        # the new vertex's sides (when sampled); a change that no crossing explains is located
+        lb, rb = -1, -1
+        sampled = event or done <= dense_until or pending + 1 >= SIDE_EVERY
+        if sampled:
+            lb, rb = _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, qu, qw, qtu,
+                                 qtw, _side_eps(qs, qn, h), cv1, scr)
+            if pending > 0 and not (lb == la and rb == ra and lb >= 0 and rb >= 0):
+                # a change since the last sampled vertex: step there again, sampling all
+                go_back = True
+                dense_until = done
+                continue
         crossings = 0
         for i in range(nsp):
             if spi[i, 0] == CROSSING:
                 crossings += 1
         known = lb >= 0 and rb >= 0
         if known and la >= 0 and ra >= 0 and (lb != la or rb != ra) and crossings == 0:
-            xu, xw = _bisect(F, k, grp, active, v, ix, iy, geo, g, out, layer, u, w, qu, qw, la, ra,
-                            h, scr)
-            j, okx, xu2, xw2, resx, errx = _explain(F, k, grp, active, v, ix, iy, geo, g, H, cv1, cs,
-                                                   xu, xw, tol_u, tol_w)
+            xu, xw = _bisect(F, k, grp, active, v, ix, iy, geo, g, out, layer, u, w, qu, qw, la,
+                             ra, h, scr)
+            j, okx, xu2, xw2, resx, errx = _explain(F, k, grp, active, v, ix, iy, geo, g, H, cv1,
+                                                    cs, xu, xw, tol_u, tol_w)
             t = ((xu - u) * du + (xw - w) * dw) / length2
             if j >= 0 and okx:
                 nsp = _note(spf, spi, nsp, t, xu2, xw2, CROSSING, j, resx, errx)
@@ -765,7 +873,7 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
             if kind == FOLD_X or kind == FOLD_Y:
                 ftu, ftw, fn, fs = _tangent(F, k, v, ix, iy, geo, g, spf[a, 1], spf[a, 2], tu, tw)
                 left, right = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, spf[a, 1],
-                                    spf[a, 2], ftu, ftw, _side_eps(fs, fn, h), scr)
+                                     spf[a, 2], ftu, ftw, _side_eps(fs, fn, h), scr)
             _push(vf, vi, counts, spf[a, 1], spf[a, 2], spf[a, 3], spf[a, 4], curve, kind, k,
                   spi[a, 1], left, right)
         _mark(mark, k, u, w, qu, qw)
@@ -773,6 +881,10 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
             _push(vf, vi, counts, qu, qw, res, 0.0, curve, REGULAR, k, -1, -1, -1)
             return 1
         _push(vf, vi, counts, qu, qw, res, 0.0, curve, REGULAR, k, -1, lb, rb, owned)
+        pending = 0 if sampled else pending + 1
+        owned_prev = owned
+        hq, us, un = h, qs, qn
+        done += 1
         travelled += math.sqrt(length2)
         steps += 1
         # the next step from the curvature here
@@ -785,10 +897,11 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
         u, w, tu, tw = qu, qw, qtu, qtw
         if known:
             la, ra = lb, rb
-        for j in range(active.shape[0]):
+        for j in range(nc):
             cv0[j] = cv1[j]
 
 
+@njit(cache=True, error_model="numpy")
 def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
                near, tol_u, tol_w, require_sides):
     """Trace a curve from each seed ``(k, u, w)`` not on a curve already traced.
@@ -811,7 +924,18 @@ def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
     scr = np.empty((3, nc))
     n = mark.shape[1]
     traced = 0
-    for i in range(seeds.shape[0]):
+    # with require_sides, seeds in rank order: a stretch where several conditions vanish
+    # is traced first by the one that ranks first, whose marks then skip the others' seeds
+    # there (see _owned); the curves keep the order of their seeds
+    order = np.arange(seeds.shape[0])
+    if require_sides:
+        rank = np.empty(seeds.shape[0], dtype=np.int64)
+        for i in range(seeds.shape[0]):
+            rank[i] = grp[int(seeds[i, 0]), 1]
+        order = np.argsort(rank, kind="mergesort")
+    first_curve = counts[1]
+    origin = np.empty(curves.shape[0], dtype=np.int64)
+    for i in order:
         k = int(seeds[i, 0])
         u0 = seeds[i, 1]
         w0 = seeds[i, 2]
@@ -876,10 +1000,18 @@ def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
         curves[curve, 1] = first
         curves[curve, 2] = counts[0]
         curves[curve, 3] = closed
+        origin[curve] = i
         traced += 1
+    if require_sides and traced > 1:
+        by_seed = np.argsort(origin[first_curve:counts[1]], kind="mergesort")
+        rows = curves[first_curve:counts[1]].copy()
+        for c in range(by_seed.shape[0]):
+            curves[first_curve + c] = rows[by_seed[c]]
+            vi[curves[first_curve + c, 1]:curves[first_curve + c, 2], 0] = first_curve + c
     return traced
 
 
+@njit(cache=True, error_model="numpy")
 def _survey_all(F, v, ix, iy, geo, pts, vals):
     """Every condition's value at the points ``pts`` (rows (u, w) of the unit square)
     into the rows of ``vals``, NaN where a value is not finite."""
@@ -893,6 +1025,7 @@ def _survey_all(F, v, ix, iy, geo, pts, vals):
                 vals[p, k] = np.nan
 
 
+@njit(cache=True, error_model="numpy")
 def _seeds_all(F, active, v, ix, iy, geo, n, near):
     """Seeds on an n x n raster of nodes (the slice's edges included): every sign change
     of an active condition between neighbouring nodes, and every node where a
@@ -906,19 +1039,18 @@ def _seeds_all(F, active, v, ix, iy, geo, n, near):
     cs = np.empty(active.shape[0])
     need = np.zeros((n, n), dtype=np.bool_)
     m = near.shape[0]
+    # near cells in each rectangle of cells from a summed-area table (one pass over near)
+    sat = np.zeros((m + 1, m + 1), dtype=np.int64)
+    for a in range(m):
+        for b in range(m):
+            sat[a + 1, b + 1] = sat[a, b + 1] + sat[a + 1, b] - sat[a, b] + near[a, b]
     for i in range(n):
+        a0 = max(int((i - 1) / (n - 1) * m), 0)
+        a1 = min(int((i + 1) / (n - 1) * m), m - 1)
         for j in range(n):
-            a0 = max(int((i - 1) / (n - 1) * m), 0)
-            a1 = min(int((i + 1) / (n - 1) * m), m - 1)
             b0 = max(int((j - 1) / (n - 1) * m), 0)
             b1 = min(int((j + 1) / (n - 1) * m), m - 1)
-            for a in range(a0, a1 + 1):
-                for b in range(b0, b1 + 1):
-                    if near[a, b]:
-                        need[i, j] = True
-                        break
-                if need[i, j]:
-                    break
+            need[i, j] = sat[a1 + 1, b1 + 1] - sat[a0, b1 + 1] - sat[a1 + 1, b0] + sat[a0, b0] > 0
             if need[i, j]:
                 v[ix] = geo[0] + (i / (n - 1)) * geo[1]
                 v[iy] = geo[2] + (j / (n - 1)) * geo[3]
@@ -945,24 +1077,17 @@ def _seeds_all(F, active, v, ix, iy, geo, n, near):
                                          (j + (t if d == 1 else 0.0)) / (n - 1), 0)
                 # a local minimum of |c| with one sign all around (NaN, where c is not
                 # defined, is neither lower nor a sign change)
-                lowest = a == a
-                for di in range(-1, 2):
-                    for dj in range(-1, 2):
-                        if di == 0 and dj == 0:
-                            continue
-                        i2 = i + di
-                        j2 = j + dj
-                        if i2 < 0 or j2 < 0 or i2 >= n or j2 >= n:
-                            continue
-                        if not need[i2, j2]:
-                            lowest = False
-                            continue
-                        b = cv[i2, j2, k]
-                        if b != b:
-                            continue
-                        if b * a <= 0.0 or abs(b) <= abs(a):
-                            lowest = False
-                if lowest and a != 0.0:
+                lowest = a == a and a != 0.0
+                for d in range(9):
+                    if not lowest:
+                        break
+                    i2 = i + d // 3 - 1
+                    j2 = j + d % 3 - 1
+                    if d == 4 or i2 < 0 or j2 < 0 or i2 >= n or j2 >= n:
+                        continue
+                    b = cv[i2, j2, k]
+                    lowest = need[i2, j2] and (b != b or (b * a > 0.0 and abs(b) > abs(a)))
+                if lowest:
                     seeds, m = _seed(seeds, m, k, i / (n - 1), j / (n - 1), 1)
     return seeds[:m]
 
@@ -1018,6 +1143,31 @@ def _minimum(F, k, v, ix, iy, geo, u, w, radius):
             if abs(step) <= 1e-15:
                 return _inside(u + t * eu, w + t * ew, 0.0), u + t * eu, w + t * ew
     return False, u, w
+
+
+@njit(cache=True, error_model="numpy")
+def _seed_trace_all(F, pts, vs, classes, radius, active, rank, v, out, ix, iy, geo, layer, n,
+                    vf, vi, counts, curves, mark, tol_u, tol_w):
+    """One call for a whole trace: each call of an entry point unboxes the model's
+    functions again.  The conditions' values at the points ``pts`` (input vector
+    ``vs``) drop from ``active`` those constant or proportional to another there
+    (:func:`groups`); then the cells near a class change of the check raster
+    ``classes`` (:func:`near_changes` with ``radius``), the seeds of an n x n raster
+    there (:func:`_seeds_all`) and the curves from them (:func:`_trace_all`,
+    ``require_sides``).  Returns (near, seeds, group, grp): ``grp`` is each
+    condition's group and ``rank``."""
+    vals = np.empty((pts.shape[0], active.shape[0]))
+    _survey_all(F, vs, ix, iy, geo, pts, vals)
+    group = groups(vals, active)
+    grp = np.empty((active.shape[0], 2), dtype=np.int64)
+    for k in range(active.shape[0]):
+        grp[k, 0] = group[k]
+        grp[k, 1] = rank[k]
+    near = near_changes(classes, radius)
+    seeds = _seeds_all(F, active, v, ix, iy, geo, n, near)
+    _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
+               near, tol_u, tol_w, True)
+    return near, seeds, group, grp
 
 
 # -- pieces and the completeness check (no model globals) ---------------------------------
@@ -1248,8 +1398,9 @@ _ENTRIES: dict = {}
 
 
 def entries() -> dict:
-    """The tracer's entry points, compiled once (cached on disk): ``trace``, ``seeds``
-    and ``survey``.
+    """The tracer's entry points, compiled once (cached on disk): ``trace``, ``seeds``,
+    ``seed_trace`` (both, after the cells near the check raster's class changes) and
+    ``survey``.
 
     Each is the compiled overload's own entry point, called without the
     dispatcher: typing a tuple of first-class functions at every call cost
@@ -1262,12 +1413,18 @@ def entries() -> dict:
                                 types.float64, types.boolean)
         sig_seeds = _F2(FUNCTIONS, _B1, _F1, types.int64, types.int64, _F1, types.int64, _B2)
         sig_survey = types.void(FUNCTIONS, _F1, types.int64, types.int64, _F1, _F2, _F2)
+        sig_seed_trace = types.Tuple((_B2, _F2, _I1, _I2))(
+            FUNCTIONS, _F2, _F1, types.Array(types.int8, 2, "C"), types.int64, _B1, _I1, _F1,
+            _F2, types.int64, types.int64, _F1, types.int64, types.int64, _F2, _I2, _I1, _I2,
+            _B3, types.float64, types.float64)
         with warnings.catch_warnings():  # numba calls first-class functions experimental
             warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
             for name, fn, sig in (("trace", _trace_all, sig_trace),
                                   ("seeds", _seeds_all, sig_seeds),
+                                  ("seed_trace", _seed_trace_all, sig_seed_trace),
                                   ("survey", _survey_all, sig_survey)):
-                _ENTRIES[name] = _entry_point(njit(sig, cache=True, error_model="numpy")(fn), sig)
+                fn.compile(sig)
+                _ENTRIES[name] = _entry_point(fn, sig)
     return _ENTRIES
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from typing import Mapping
 
 import numpy as np
@@ -120,18 +120,29 @@ def make_slice(model, axes: Mapping, fixed: Mapping | None, conditions=None) -> 
 _SURVEY = np.random.default_rng(20261123).uniform(0.02, 0.98, size=(12, 2))
 
 
-def _active(sl: Slice) -> tuple[np.ndarray, np.ndarray]:
-    """Which conditions can bound a class in the slice, and one representative per
-    group of conditions with the same zero set.
+_KINDS: dict = {}
 
-    A condition is dropped when its branch does not apply anywhere in the slice
-    (the velocity's sign excludes it), when it holds only at rest and the
-    velocity is an axis (a line), or when it does not vary over the slice.
-    Conditions whose values are proportional at random points of the slice
-    share their zero set: one traces it.  Returns ``(active, group)``.
-    """
+
+def _kinds(m: Model, conds: Conditions) -> tuple[np.ndarray, np.ndarray]:
+    """Per condition, once per model and condition set: the index of its branch among
+    the model's candidates (-1 for none or a branch the model does not have), and
+    whether it is the velocity condition."""
+    hit = _KINDS.get((id(m), id(conds)))
+    if hit is not None and hit[0] is m and hit[1] is conds:
+        return hit[2]
+    index = {b.name: i for i, b in enumerate(m.candidates)}
+    branch = np.array([index.get(br, -1) if br else -1 for br in conds.branches],
+                      dtype=np.int64)
+    kinds = branch, np.array([k == "velocity" for k in conds.kinds], dtype=bool)
+    _KINDS[(id(m), id(conds))] = (m, conds, kinds)
+    return kinds
+
+
+def _applicable(sl: Slice) -> tuple[np.ndarray, np.ndarray]:
+    """Which conditions can bound a class in the slice, before comparing their values
+    (:func:`_active`), and the input vector of the last probe (its derived inputs
+    filled) for that comparison."""
     m, C = sl.model, sl.conds
-    nc = len(C)
     velocity_axis = m.velocity in (sl.x, sl.y)
     # the branches that apply somewhere in the slice
     applies = np.zeros(len(m.candidates), dtype=bool)
@@ -148,20 +159,30 @@ def _active(sl: Slice) -> tuple[np.ndarray, np.ndarray]:
         m.point(v, out)
         applies |= out[:, nx.STATUS] != nx.ABSENT
     rest = (not velocity_axis) and abs(sl.fixed[m.velocity]) <= nx.TOL * _velocity_scale(m, v)
-    branch_applies = {b.name: bool(applies[i]) for i, b in enumerate(m.candidates)}
-    active = np.ones(nc, dtype=bool)
-    for k in range(nc):
-        br = C.branches[k]
-        if br and not branch_applies.get(br, True):
-            active[k] = False
-        if C.rest_only[k] and not rest:
-            active[k] = False
-        if C.kinds[k] == "velocity" and not velocity_axis:
-            active[k] = False
+    branch, velocity = _kinds(m, C)
+    active = (branch < 0) | applies[branch]
+    if not rest:
+        active &= ~C.rest_only
+    if not velocity_axis:
+        active &= ~velocity
+    return active, v
+
+
+def _active(sl: Slice) -> tuple[np.ndarray, np.ndarray]:
+    """Which conditions can bound a class in the slice, and one representative per
+    group of conditions with the same zero set.
+
+    A condition is dropped when its branch does not apply anywhere in the slice
+    (the velocity's sign excludes it), when it holds only at rest and the
+    velocity is an axis (a line), or when it does not vary over the slice.
+    Conditions whose values are proportional at random points of the slice
+    share their zero set: one traces it.  Returns ``(active, group)``.
+    """
+    active, v = _applicable(sl)
     # values at random points: constant conditions, and proportional ones
-    pts = _SURVEY
-    vals = np.empty((len(pts), nc))
-    T.entries()["survey"](sl.fns, v, ix, iy, sl.geo, pts, vals)
+    ix, iy = sl.slots
+    vals = np.empty((len(_SURVEY), len(sl.conds)))
+    T.entries()["survey"](sl.fns, v, ix, iy, sl.geo, _SURVEY, vals)
     group = T.groups(vals, active)
     return active, group
 
@@ -212,9 +233,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     fns, m = sl.fns, sl.model
     run = T.entries()
     code = _LAYER_CODE[layer]
-    active, group = _active(sl)
     if only is not None:
-        active = active & only
         check_cells = 0
     ix, iy = sl.slots
     geo = sl.geo
@@ -222,23 +241,31 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     v = sl.base.copy()
     out = np.empty((len(m.candidates), m.n_fields))
     nc = len(sl.conds)
-    grp = _ranked(sl.conds, group)
     buf = _Buffers(nc)
     mark = np.zeros((nc, seed_nodes - 1, seed_nodes - 1), dtype=np.int8)
-    near = np.ones((1, 1), dtype=bool)
     if check_cells:
         axes = _cell_centres(sl, check_cells)
         classes = np.ascontiguousarray(evaluate(m, axes, sl.fixed,
-                                                [layers_for(m)[layer]])[layer])
-        near = T.near_changes(classes, NEAR)
-    seeds = run["seeds"](fns, active, v, ix, iy, geo, seed_nodes, near)
-    while True:
+                                                [layers_for(m)[layer]])[layer], dtype=np.int8)
+        # _active's comparison of the conditions, the seeds and the trace: one call
+        active, vs = _applicable(sl)
+        near, seeds, group, grp = run["seed_trace"](
+            fns, _SURVEY, vs, classes, NEAR, active, _rank(sl.conds), v, out, ix, iy, geo,
+            code, seed_nodes, buf.vf, buf.vi, buf.counts, buf.curves, mark, tol_u, tol_w)
+    else:
+        active, group = _active(sl)
+        if only is not None:
+            active = active & only
+        grp = _ranked(sl.conds, group)
+        near = np.ones((1, 1), dtype=bool)
+        seeds = run["seeds"](fns, active, v, ix, iy, geo, seed_nodes, near)
         run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
                      buf.counts, buf.curves, mark, near, tol_u, tol_w, only is None)
-        if not buf.counts[2]:
-            break
+    while buf.counts[2]:  # the buffers were full: again with larger ones
         buf = buf.grown()
         mark[:] = 0
+        run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
+                     buf.counts, buf.curves, mark, near, tol_u, tol_w, only is None)
     traced = _assembled(buf, group, active)
     if check_cells:
         traced.classes = classes
@@ -270,14 +297,23 @@ KIND_RANK = ("coefficient", "normal", "gap", "friction_limit", "family", "discri
              "domain", "velocity", "start")
 
 
-def _ranked(conds: Conditions, group: np.ndarray) -> np.ndarray:
-    """Per condition: its group (conditions proportional in the slice) and its rank."""
+@lru_cache(maxsize=None)
+def _rank(conds: Conditions) -> np.ndarray:
+    """Each condition's rank (:data:`KIND_RANK`, then its index), once per condition set."""
     order = sorted(range(len(conds)), key=lambda k: (KIND_RANK.index(conds.kinds[k])
                                                       if conds.kinds[k] in KIND_RANK
                                                       else len(KIND_RANK), k))
     rank = np.empty(len(conds), dtype=np.int64)
     rank[order] = np.arange(len(conds))
-    return np.stack([group.astype(np.int64), rank], axis=1)
+    return rank
+
+
+def _ranked(conds: Conditions, group: np.ndarray) -> np.ndarray:
+    """Per condition: its group (conditions proportional in the slice) and its rank."""
+    grp = np.empty((len(conds), 2), dtype=np.int64)
+    grp[:, 0] = group
+    grp[:, 1] = _rank(conds)
+    return grp
 
 
 def _assembled(buf: _Buffers, group, active) -> Traced:

@@ -17,9 +17,9 @@ import numpy as np
 
 from .. import events as ev
 from ..integrate import kernels
-from ..models import get_model
-from ..models import hinge_pendulum as _hinge
-from ..models import ladder as _ladder
+from ..systems import get_model
+from ..systems import hinge_pendulum as _hinge
+from ..systems.seeds.closed_forms import ladder_omega_squared
 from ..simulate import Options, integrated_variables, split_values
 from .staged import StageDriver
 
@@ -153,7 +153,7 @@ def _ladder_reference(p: Problem) -> Reference:
 
     def omega(phi, stage=None):
         phi = np.asarray(phi, dtype=float)
-        u = np.array([_ladder.omega_squared(x, phi0, omega0, f, l, g) for x in phi.ravel()])
+        u = np.array([ladder_omega_squared(x, phi0, omega0, f, l, g) for x in phi.ravel()])
         return s * np.sqrt(np.maximum(u, 0.0)).reshape(phi.shape)
 
     v = m.input_vector(full)

@@ -1,5 +1,5 @@
 """Painleve's elliptic pendulum, declared: a slider on a rough two-sided guide carrying a
-pendulum.  The hand derivation (phasemap.models.elliptic_pendulum) runs; this is its twin,
+pendulum.  The hand derivation (phasemap.systems.elliptic_pendulum) runs; this is its twin,
 with its branch and reaction names (``slide_pos_Npos``..., ``N``, ``F``)."""
 
 import sympy as sp

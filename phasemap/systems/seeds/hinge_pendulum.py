@@ -1,6 +1,6 @@
 """The pendulum with dry friction in its hinge (Lapshin 2021), declared: a point mass on a
 weightless rod whose hinge has a friction moment delta |R|.  The hand derivation
-(phasemap.models.hinge_pendulum) runs; this is its twin.  The pivot (xp, yp) is a
+(phasemap.systems.hinge_pendulum) runs; this is its twin.  The pivot (xp, yp) is a
 coordinate of the weightless rod, fixed by the joint.
 
 Its branches carry the hand module's names: the squared friction law has two roots

@@ -1,7 +1,8 @@
 """The ladder of Lapshin (2021, Fig. 1): a bar against a rough wall and a rough floor.
 
 This declaration is what runs as ``ladder``; the hand derivation with the paper's
-equations, errata and closed forms (phasemap.models.ladder) checks it in the tests.
+equations and errata (tests/references/ladder.py) checks it in the tests; its first
+integral runs from closed_forms.py.
 """
 
 import sympy as sp

@@ -1,5 +1,6 @@
 """The wheel of Lapshin (2021, Fig. 2), as it runs: a disc with a displaced centre of mass
-rolling with rolling friction.  phasemap.models.wheel (the paper's equations) checks it."""
+rolling with rolling friction.  The hand derivation with the paper's
+equations (tests/references/wheel.py) checks it in the tests."""
 
 import sympy as sp
 

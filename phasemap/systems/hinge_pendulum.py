@@ -51,16 +51,10 @@ import math
 import numpy as np
 from numba import njit
 
-from .._numerics import (
-    ADMISSIBLE,
-    CONTINUUM,
-    INADMISSIBLE,
-    NAN,
-    NO_SOLUTION,
-    TOL,
-    is_zero,
-)
-from ..model import Branch, Derived, Dynamics, Model, Variable
+from .._numerics import ADMISSIBLE, CONTINUUM, INADMISSIBLE, NAN, NO_SOLUTION, TOL, is_zero
+from ..model import (SIN_COS_PHI, Branch, Dynamics, Model, Variable, angle_state,
+                     angular_acceleration, gravity_and_mass)
+from .seeds import citation
 
 
 @njit(cache=True, error_model="numpy", forceinline=True)
@@ -112,28 +106,19 @@ def velocity_scale(g, l):
 MODEL = Model(
     name="hinge_pendulum",
     title="Mathematical pendulum with dry friction in its hinge",
-    citation="Lapshin V.V. (2021), Herald of the Bauman Moscow State Technical University, "
-    "Series Natural Sciences, no. 6 (99), pp. 4-16, Fig. 4, eq. (29)-(36). "
-    "doi:10.18698/1812-3368-2021-6-4-16",
-    state=(
-        Variable("phi", "rad", "angle of the rod from the downward vertical", "\\varphi", 0.0),
-        Variable("omega", "rad s-1", "angular velocity of the rod", "\\omega", 0.0),
-    ),
+    citation=citation("Fig. 4, eq. (29)-(36)"),
+    state=angle_state("rod", "angle of the rod from the downward vertical"),
     params=(
         Variable("delta", "m", "hinge friction coefficient (a length)", "\\delta", 0.1, 0.0),
         Variable("l", "m", "length of the rod", "l", 1.0, 0.0, lower_open=True),
-        Variable("g", "m s-2", "gravitational acceleration", "g", 9.81, 0.0),
-        Variable("m", "kg", "mass of the bob", "m", 1.0, 0.0, lower_open=True),
+        *gravity_and_mass("mass of the bob"),
     ),
-    derived=(Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos)),
+    derived=SIN_COS_PHI,
     candidates=(
-        Branch("turn_pos", 1.0, turn, (1.0,)),
-        Branch("turn_neg", -1.0, turn, (-1.0,)),
+        *Branch.both_ways("turn", turn),
         Branch("stick", 0.0, stick),
     ),
-    accelerations=(
-        Variable("phi_ddot", "rad s-2", "angular acceleration of the rod", "\\ddot\\varphi"),
-    ),
+    accelerations=(angular_acceleration("rod"),),
     reactions=(
         Variable("R_n", "N", "hinge reaction along the rod, towards the hinge", "R_n"),
         Variable("R_t", "N", "hinge reaction across the rod", "R_\\tau"),

@@ -58,16 +58,10 @@ import math
 import numpy as np
 from numba import njit
 
-from .._numerics import (
-    ADMISSIBLE,
-    CONTINUUM,
-    INADMISSIBLE,
-    NAN,
-    NO_SOLUTION,
-    TOL,
-    is_zero,
-)
-from ..model import Branch, Derived, Dynamics, Model, Variable
+from .._numerics import ADMISSIBLE, CONTINUUM, INADMISSIBLE, NAN, NO_SOLUTION, TOL, is_zero
+from ..model import (SIN_COS_PHI, Branch, Dynamics, Model, Variable, angle_state,
+                     angular_acceleration, gravity_and_mass)
+from .seeds import citation
 
 
 @njit(cache=True, error_model="numpy", forceinline=True)
@@ -129,22 +123,18 @@ def velocity_scale(omega, l, g):
 MODEL = Model(
     name="elliptic_pendulum",
     title="Painleve's elliptic pendulum: slider on a rough two-sided guide with a pendulum",
-    citation="Painleve P. (1895), Lecons sur le frottement; Lapshin V.V. (2021), Herald of the "
-    "Bauman Moscow State Technical University, Series Natural Sciences, no. 6 (99), "
-    "pp. 4-16, Fig. 3, eq. (16)-(28). doi:10.18698/1812-3368-2021-6-4-16",
+    citation="Painleve P. (1895), Lecons sur le frottement; "
+    + citation("Fig. 3, eq. (16)-(28)"),
     state=(
-        Variable("phi", "rad", "angle of the bar from the downward vertical", "\\varphi", 0.0),
-        Variable("omega", "rad s-1", "angular velocity of the bar", "\\omega", 0.0),
+        *angle_state("bar", "angle of the bar from the downward vertical"),
         Variable("xdot", "m s-1", "velocity of the slider", "\\dot x", 0.0),
     ),
     params=(
         Variable("f", "1", "sliding friction coefficient of the guide", "f", 0.3, 0.0),
         Variable("l", "m", "half length of the bar", "l", 1.0, 0.0, lower_open=True),
-        Variable("g", "m s-2", "gravitational acceleration", "g", 9.81, 0.0),
-        Variable("m", "kg", "mass of the slider and of the end mass (each)", "m", 1.0, 0.0,
-                 lower_open=True),
+        *gravity_and_mass("mass of the slider and of the end mass (each)"),
     ),
-    derived=(Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos)),
+    derived=SIN_COS_PHI,
     candidates=(
         Branch("slide_pos_Npos", 1.0, slide, (1.0, 1.0)),
         Branch("slide_pos_Nneg", 1.0, slide, (1.0, -1.0)),
@@ -154,7 +144,7 @@ MODEL = Model(
     ),
     accelerations=(
         Variable("x_ddot", "m s-2", "acceleration of the slider", "\\ddot x"),
-        Variable("phi_ddot", "rad s-2", "angular acceleration of the bar", "\\ddot\\varphi"),
+        angular_acceleration("bar"),
     ),
     reactions=(
         Variable("N", "N", "normal reaction of the guide", "N"),

@@ -1,8 +1,10 @@
 r"""Ladder: a homogeneous bar against a rough wall and a rough floor (Lapshin 2021, Fig. 1).
 
-Not registered: ``ladder`` runs the declaration phasemap.systems.seeds.ladder, which
-also counts leaving a contact.  This module keeps the paper's equations, errata and
-closed forms, and checks the declaration in the tests (``MODEL`` is a full Model).
+A test reference, not a system: ``ladder`` runs the declaration
+phasemap.systems.seeds.ladder, which also counts leaving a contact.  This module keeps
+the paper's equations, errata and closed forms, and checks the declaration in the tests
+(``MODEL`` is a full Model).  The first integral below runs as
+phasemap.systems.seeds.closed_forms.ladder_omega_squared.
 
 Setup
 -----
@@ -63,22 +65,13 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
-from .._numerics import (
-    ADMISSIBLE,
-    CONTACT_LOST,
-    CONTINUUM,
-    INADMISSIBLE,
-    NAN,
-    NO_SOLUTION,
-    TOL,
-    is_zero,
-    restrict_affine,
-    start_interval,
-)
-from ..model import Branch, Derived, Dynamics, Model, Variable
+from phasemap._numerics import (ADMISSIBLE, CONTACT_LOST, CONTINUUM, INADMISSIBLE, NAN,
+                                NO_SOLUTION, TOL, is_zero, restrict_affine, start_interval)
+from phasemap.model import (SIN_COS_PHI, Branch, Dynamics, Model, Variable, angle_state,
+                            angular_acceleration, gravity_and_mass)
+from phasemap.systems.seeds import citation
 
 
 @njit(cache=True, error_model="numpy", forceinline=True)
@@ -133,30 +126,21 @@ def velocity_scale(g, l):
 MODEL = Model(
     name="ladder",
     title="Homogeneous bar (ladder) against a rough wall and a rough floor",
-    citation="Lapshin V.V. (2021), Herald of the Bauman Moscow State Technical University, "
-    "Series Natural Sciences, no. 6 (99), pp. 4-16, Fig. 1, eq. (6)-(8). "
-    "doi:10.18698/1812-3368-2021-6-4-16",
-    state=(
-        Variable("phi", "rad", "angle of the bar from the vertical", "\\varphi", math.pi / 4,
-                 0.0, math.pi / 2),
-        Variable("omega", "rad s-1", "angular velocity of the bar", "\\omega", 0.0),
-    ),
+    citation=citation("Fig. 1, eq. (6)-(8)"),
+    state=angle_state("bar", "angle of the bar from the vertical", math.pi / 4, 0.0,
+                      math.pi / 2),
     params=(
         Variable("f", "1", "sliding friction coefficient at the floor and the wall", "f", 0.3,
                  0.0),
         Variable("l", "m", "half length of the bar", "l", 1.0, 0.0, lower_open=True),
-        Variable("g", "m s-2", "gravitational acceleration", "g", 9.81, 0.0),
-        Variable("m", "kg", "mass of the bar", "m", 1.0, 0.0, lower_open=True),
+        *gravity_and_mass("mass of the bar"),
     ),
-    derived=(Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos)),
+    derived=SIN_COS_PHI,
     candidates=(
-        Branch("slide_pos", 1.0, slide, (1.0,)),
-        Branch("slide_neg", -1.0, slide, (-1.0,)),
+        *Branch.both_ways("slide", slide),
         Branch("stick", 0.0, stick),
     ),
-    accelerations=(
-        Variable("phi_ddot", "rad s-2", "angular acceleration of the bar", "\\ddot\\varphi"),
-    ),
+    accelerations=(angular_acceleration("bar"),),
     reactions=(
         Variable("N_floor", "N", "normal reaction of the floor", "N_1"),
         Variable("N_wall", "N", "normal reaction of the wall", "N_2"),
@@ -170,30 +154,3 @@ MODEL = Model(
                                      "the bar lies flat on the floor")}),
     default_axes={"phi": (0.0, math.pi / 2, 512), "f": (0.0, 3.0, 512)},
 )
-
-
-@njit(cache=True, error_model="numpy")
-def first_integral_coefficients(s, f, l, g):
-    """(lam, a, b) of omega^2 = c e^{lam phi} + a sin phi + b cos phi on a stage of sign s.
-
-    Valid for f != sqrt 2; ``s`` is the sign of omega on the stage.
-    """
-    d = 2.0 - f * f
-    q = 4.0 + 32.0 * f * f + f ** 4
-    lam = 6.0 * s * f / d
-    a = -6.0 * s * f * g * (5.0 - 4.0 * f * f) / (l * q)
-    b = -3.0 * g * (2.0 - 15.0 * f * f + f ** 4) / (l * q)
-    return lam, a, b
-
-
-@njit(cache=True, error_model="numpy")
-def omega_squared(phi, phi0, omega0, f, l, g):
-    """omega^2(phi) on the sliding stage through (phi0, omega0), omega0 != 0.
-
-    The constant is carried as (omega0^2 - a sin phi0 - b cos phi0) e^{lam (phi - phi0)},
-    which never forms e^{lam phi} or e^{-lam phi0} on their own.
-    """
-    s = 1.0 if omega0 > 0.0 else -1.0
-    lam, a, b = first_integral_coefficients(s, f, l, g)
-    c0 = omega0 * omega0 - a * math.sin(phi0) - b * math.cos(phi0)
-    return c0 * math.exp(lam * (phi - phi0)) + a * math.sin(phi) + b * math.cos(phi)

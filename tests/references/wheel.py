@@ -1,7 +1,7 @@
 r"""Wheel: a disc with a displaced centre of mass and rolling friction (Lapshin 2021, Fig. 2).
 
-Not registered: ``wheel`` runs the declaration phasemap.systems.seeds.wheel, which
-also counts leaving a contact.  This module keeps the paper's equations, errata and
+A test reference, not a system: ``wheel`` runs the declaration
+phasemap.systems.seeds.wheel, which also counts leaving a contact.  This module keeps the paper's equations, errata and
 closed forms, and checks the declaration in the tests (``MODEL`` is a full Model).
 
 Setup
@@ -54,19 +54,11 @@ import math
 import numpy as np
 from numba import njit
 
-from .._numerics import (
-    ADMISSIBLE,
-    CONTACT_LOST,
-    CONTINUUM,
-    INADMISSIBLE,
-    NAN,
-    NO_SOLUTION,
-    TOL,
-    is_zero,
-    restrict_affine,
-    start_interval,
-)
-from ..model import Branch, Derived, Dynamics, Model, Variable
+from phasemap._numerics import (ADMISSIBLE, CONTACT_LOST, CONTINUUM, INADMISSIBLE, NAN,
+                                NO_SOLUTION, TOL, is_zero, restrict_affine, start_interval)
+from phasemap.model import (SIN_COS_PHI, Branch, Dynamics, Model, Variable, angle_state,
+                            angular_acceleration, gravity_and_mass)
+from phasemap.systems.seeds import citation
 
 
 @njit(cache=True, error_model="numpy", forceinline=True)
@@ -124,14 +116,8 @@ def _check(values) -> None:
 MODEL = Model(
     name="wheel",
     title="Disc with a displaced centre of mass, rolling with rolling friction",
-    citation="Lapshin V.V. (2021), Herald of the Bauman Moscow State Technical University, "
-    "Series Natural Sciences, no. 6 (99), pp. 4-16, Fig. 2, eq. (10)-(15). "
-    "doi:10.18698/1812-3368-2021-6-4-16",
-    state=(
-        Variable("phi", "rad", "rotation angle of the disc (phi = 0: centre of mass lowest)",
-                 "\\varphi", 0.0),
-        Variable("omega", "rad s-1", "angular velocity of the disc", "\\omega", 0.0),
-    ),
+    citation=citation("Fig. 2, eq. (10)-(15)"),
+    state=angle_state("disc", "rotation angle of the disc (phi = 0: centre of mass lowest)"),
     params=(
         Variable("delta", "m", "rolling friction coefficient", "\\delta", 0.05, 0.0),
         Variable("r", "m", "radius of the disc", "r", 1.0, 0.0, lower_open=True),
@@ -139,18 +125,14 @@ MODEL = Model(
                  0.0),
         Variable("rho", "m", "radius of gyration about the centre of mass", "\\rho", 0.5, 0.0,
                  lower_open=True),
-        Variable("g", "m s-2", "gravitational acceleration", "g", 9.81, 0.0),
-        Variable("m", "kg", "mass of the disc", "m", 1.0, 0.0, lower_open=True),
+        *gravity_and_mass("mass of the disc"),
     ),
-    derived=(Derived("sin_phi", "phi", np.sin), Derived("cos_phi", "phi", np.cos)),
+    derived=SIN_COS_PHI,
     candidates=(
-        Branch("roll_pos", 1.0, roll, (1.0,)),
-        Branch("roll_neg", -1.0, roll, (-1.0,)),
+        *Branch.both_ways("roll", roll),
         Branch("stick", 0.0, stick),
     ),
-    accelerations=(
-        Variable("phi_ddot", "rad s-2", "angular acceleration of the disc", "\\ddot\\varphi"),
-    ),
+    accelerations=(angular_acceleration("disc"),),
     reactions=(
         Variable("N", "N", "normal reaction of the floor", "N"),
         Variable("F", "N", "horizontal contact force on the disc", "F"),
@@ -177,3 +159,14 @@ def omega_squared_slope(phi, u, sigma, delta, r, l, rho, g):
     bracket = rho * rho + r * r + l * l - 2.0 * r * l * cp + delta * sigma * l * sp
     return (-2.0 * l * (r * sp + delta * sigma * cp) * u - 2.0 * g * l * sp
             - 2.0 * delta * sigma * g) / bracket
+
+
+def random_state(rng):
+    """A random state and parameters, as the tests draw them (a third at rest): a dict
+    in the order ``phi, omega, delta, r, l, rho, g, m``."""
+    r = rng.uniform(0.3, 2)
+    l, rho, delta = rng.uniform(0, r), rng.uniform(0.1, 1.5), rng.uniform(0, 1.5) * r
+    g, m = rng.uniform(0.5, 20), rng.uniform(0.1, 5)
+    phi = rng.uniform(-2 * math.pi, 2 * math.pi)
+    omega = 0.0 if rng.random() < 1 / 3 else rng.normal() * 3 * math.sqrt(g / r)
+    return dict(phi=phi, omega=omega, delta=delta, r=r, l=l, rho=rho, g=g, m=m)
