@@ -26,6 +26,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import math
+import os
 import pathlib
 import statistics
 import subprocess
@@ -79,12 +80,13 @@ def load_before(rev: str):
     return module
 
 
-def median_ms(fn, repeat):
+def median_ms(fn, repeat, clock=time.perf_counter):
+    """Median of ``repeat`` calls of ``fn`` (ms) by ``clock``."""
     times = []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = clock()
         fn()
-        times.append(time.perf_counter() - t0)
+        times.append(clock() - t0)
     return 1e3 * statistics.median(times)
 
 
@@ -207,6 +209,65 @@ def equal_accuracy(repeat):
     return rows
 
 
+#: Issue 22's target 5: the hinge from (2.5, 0), delta = 0.1, with the default output.
+TARGET = ("hinge: phi = 2.5, omega = 0, delta = 0.1", "hinge_pendulum",
+          dict(phi=2.5, omega=0.0, delta=0.1), 60.0)
+
+
+def target_five(repeat):
+    """Issue 22's target 5 at the public call and in the kernels: ``phase_curve`` with its
+    default output (200 points per stage) against ``simulate`` with its own (every step),
+    DOPRI5 and DOP853, at rtol in TOLS, each level's cheapest run whose end state errs at
+    most the level (the error as in :func:`equal_accuracy`).  All runs alternate
+    (``repeat`` rounds, medians of 3 calls each)."""
+    label, name, values, t_end = TARGET
+    m, full, lo, hi, kernel, v, u_ref = setup(name, values)
+    ref = kernel(v, full["phi"], full["omega"], lo, hi, 50, 2, u_ref, phase.RTOL, phase.H_MAX,
+                 phase.first_width(phase.RTOL, phase.H_MAX))[1][-1]
+
+    def err(phi_e, u_e):
+        return max(abs(phi_e - ref[4]), abs(u_e - ref[5]) / u_ref)
+
+    y0 = np.array([full["phi"], full["omega"]])
+    no_eval = np.empty(0)
+    errors, calls = {}, {}
+    for tol in TOLS:
+        ds = phase.phase_curve(name, rtol=tol, **values)
+        errors["curve", tol] = err(float(ds.stage_end_phi[-1]),
+                                   float(ds.stage_end_omega[-1]) ** 2)
+        calls["curve", tol, "public"] = lambda tol=tol: phase.phase_curve(name, rtol=tol,
+                                                                          **values)
+        calls["curve", tol, "kernel"] = lambda tol=tol: kernel(
+            v, full["phi"], full["omega"], lo, hi, 50, 200, u_ref, tol, phase.H_MAX,
+            phase.first_width(tol, phase.H_MAX))
+        for method in ("DOPRI5", "DOP853"):
+            atol = tol * math.sqrt(u_ref)
+            ds = phasemap.simulate(name, t_end, rtol=tol, atol=atol, method=method, **values)
+            errors[method, tol] = err(float(ds.event_phi[-1]), float(ds.event_omega[-1]) ** 2)
+            calls[method, tol, "public"] = (
+                lambda tol=tol, atol=atol, method=method: phasemap.simulate(
+                    name, t_end, rtol=tol, atol=atol, method=method, **values))
+            integrate, _ = phasemap.integrate.kernels(m, method)
+            calls[method, tol, "kernel"] = (
+                lambda integrate=integrate, tol=tol, atol=atol: integrate(
+                    v, y0, t_end, tol, atol, math.inf, 10**6, 10**4, True, no_eval))
+    times = {key: [] for key in calls}
+    for _ in range(repeat):
+        for key, fn in calls.items():
+            # CPU time: every call is serial, and other jobs on the cores do not inflate it
+            times[key].append(1e3 * median_ms(fn, 3, time.process_time))
+    med = {key: statistics.median(x) for key, x in times.items()}
+
+    def cheapest(methods, level, where):
+        ok = [med[mt, tol, where] for mt in methods for tol in TOLS
+              if errors[mt, tol] <= level]
+        return min(ok) if ok else math.nan
+
+    return label, {level: {where: (cheapest(["curve"], level, where),
+                                   cheapest(["DOPRI5", "DOP853"], level, where))
+                           for where in ("public", "kernel")} for level in LEVELS}
+
+
 def accuracy():
     """(label, max |omega^2 error| / (g/l), end-point error) against independent references."""
     out = []
@@ -291,6 +352,8 @@ def main():
     acc = accuracy()
     equal = equal_accuracy(max(args.repeat, 3))
     p, errs = order()
+    load = os.getloadavg()[0]
+    five_label, five = target_five(max(args.repeat, 3))
     lines = ["## Phase curves (`benchmarks/phase_curve.py`)", "",
              f"Machine: {machine()}.  Medians of {args.repeat} runs per method, the methods "
              "alternating in one process; JIT compilation excluded.  *after*: "
@@ -303,18 +366,22 @@ def main():
              "fate (its accuracy is about the tracer's), with its Dataset, and its kernel "
              "(saving every step).  *kernel, 2 points*: the compiled curve with "
              "points_per_stage = 2, i.e. the tracing alone without the 200 output points per "
-             "stage, each of which costs one more Gauss pass (6 branch-row evaluations) to "
-             "keep the output at the method's order.", "",
+             "stage, which cost one pass of 12 branch rows per panel (and one Gauss pass of "
+             "6 rows per point on a panel whose |beta h| exceeds 1) to keep the output at "
+             "the method's order.", "",
              "| curve | fate (stages) | simulate fate | before | after | after kernel | "
              "kernel, 2 points | simulate | simulate kernel | before / after | "
              "simulate / after | simulate kernel / kernel, 2 points |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for label, fate, n, sfate, med in rows:
         lines.append(
-            f"| {label} | {fate} ({n}) | {sfate} | {med['before']:.2f} ms | {med['after']:.2f} ms"
+            f"| {label} | {fate} ({n}) | {sfate} | "
+            + ("-" if math.isnan(med["before"]) else f"{med['before']:.2f} ms")
+            + f" | {med['after']:.2f} ms"
             f" | {med['after kernel']:.3f} ms | {med['after kernel, 2 points']:.3f} ms | "
             f"{med['simulate']:.2f} ms | {med['simulate kernel']:.3f} ms | "
-            f"{med['before'] / med['after']:.1f}x | {med['simulate'] / med['after']:.2f}x | "
+            + ("-" if math.isnan(med["before"]) else f"{med['before'] / med['after']:.1f}x")
+            + f" | {med['simulate'] / med['after']:.2f}x | "
             f"{med['simulate kernel'] / med['after kernel, 2 points']:.2f}x |")
     lines += ["", "### At equal accuracy", "",
               "The compiled curve alone (2 points per stage) at rtol = "
@@ -369,6 +436,27 @@ def main():
             cells += ["-" if math.isnan(x) else f"{x * 1e3:.0f} us" for x in (c, sk)]
             cells.append("-" if math.isnan(sk / c) else f"{sk / c:.2f}x")
         lines.append(f"| {label} | {check:.1e} | " + " | ".join(cells) + " |")
+    lines += ["", "### Target 5 of issue 22: the default output at equal accuracy", "",
+              f"{five_label}, with the default output: `phase_curve(..., rtol=...)` (200 "
+              "points per stage, with its Dataset; *kernel*: the compiled curve with 200 "
+              "points) against `simulate(..., rtol=..., atol=rtol times the velocity scale)`, "
+              "DOPRI5 or DOP853, whichever is cheaper (every step saved, with its Dataset; "
+              f"*kernel*: the integrator alone), at rtol = {', '.join(f'{t:g}' for t in TOLS)}: "
+              "at each level the cheapest run whose end state errs at most the level, as "
+              "above.  CPU time of the process (medians; every call is serial), all runs "
+              f"alternating; load average {load:.1f} on {os.cpu_count()} cores.  The output "
+              "points cost one pass per panel (the remainder sampled at 12 Gauss nodes of the "
+              "panel and solved in Legendre coefficients), not one Gauss pass of 6 branch "
+              "rows per point.  Target: the curve at least as fast as simulate at the "
+              "public call.", "",
+              "| level | curve | simulate | simulate / curve | curve kernel | simulate kernel "
+              "| simulate kernel / curve kernel | target 5 |",
+              "|---|---:|---:|---:|---:|---:|---:|---|"]
+    for lv in LEVELS:
+        (c, sm), (ck, sk) = five[lv]["public"], five[lv]["kernel"]
+        ok = c <= sm
+        lines.append(f"| {lv:g} | {c:.0f} us | {sm:.0f} us | {sm / c:.2f}x | {ck:.0f} us | "
+                     f"{sk:.0f} us | {sk / ck:.2f}x | {'met' if ok else '**missed**'} |")
     lines += ["", "Accuracy against independent references (largest error of omega^2 over the "
               "output points of the stage, relative to g/l; the hinge's relative to omega0^2):",
               "", "| case | error |", "|---|---|"]

@@ -36,6 +36,7 @@ import json
 import os
 import pathlib
 import sys
+import types
 
 import numba
 import numpy as np
@@ -365,10 +366,12 @@ def build(data: dict, module, check, declaration) -> Model:
 
 def checks(name: str, check, inside, text: str):
     """A declared model's Python-level domain check: the declaration's own ``check``, and
-    the generated ``inside`` (a state in the domain beyond its variables' bounds)."""
+    the generated ``inside`` (a state in the domain beyond its variables' bounds), evaluated
+    on whole arrays (:func:`on_arrays`)."""
     if inside is None:
         return check
     names = list(inspect.signature(inside.py_func).parameters)
+    arrays = on_arrays(inside.py_func)
 
     def both(values):
         if check is not None:
@@ -379,8 +382,44 @@ def checks(name: str, check, inside, text: str):
             x = np.asarray(values[src], float)
             vals[n] = np.sin(x) if n.startswith("sin_") else (np.cos(x) if n.startswith("cos_")
                                                               else x)
-        ok = np.vectorize(inside.py_func, otypes=[bool])(*(vals[n] for n in names))
+        args = [vals[n] for n in names]
+        try:
+            with np.errstate(all="ignore"):
+                ok = arrays(*args)
+        except (TypeError, ValueError, AttributeError):  # a builtin that takes one number
+            ok = np.vectorize(inside.py_func, otypes=[bool])(*args)
         if not np.all(ok):
             raise ValueError(f"{name}: outside the domain: {text}")
 
     return both
+
+
+class _ArrayMath:
+    """``math`` as the generated code calls it, with NumPy's functions, which take arrays
+    (``math.asin`` is ``np.arcsin``); a name NumPy lacks raises AttributeError."""
+
+    _RENAMED = {"asin": "arcsin", "acos": "arccos", "atan": "arctan", "atan2": "arctan2",
+                "asinh": "arcsinh", "acosh": "arccosh", "atanh": "arctanh", "pow": "power"}
+
+    def __getattr__(self, name):
+        return getattr(np, self._RENAMED.get(name, name))
+
+
+def on_arrays(func):
+    """``func`` (a generated scalar function: arithmetic, ``abs``, ``&`` and ``math``) as one
+    that takes NumPy arrays elementwise: the same code with ``math`` read as NumPy.
+
+    Elementwise it computes what ``func`` computes on each number, IEEE arithmetic being
+    the same in both, in one pass over the arrays instead of one Python call per value
+    (``np.vectorize``: about 1 us each).  A division by zero gives inf, as in the compiled
+    function (``error_model="numpy"``), where Python would raise.  Code that takes one
+    number only (``max``, ``if``) raises TypeError or ValueError on arrays.
+
+    >>> import math
+    >>> def f(x, y):
+    ...     return (math.sqrt(x) >= 1.0) & (abs(y) < 2.0)
+    >>> on_arrays(f)(np.array([0.5, 4.0, 9.0]), np.array([1.0, 1.0, 3.0]))
+    array([False,  True, False])
+    """
+    return types.FunctionType(func.__code__, {**func.__globals__, "math": _ArrayMath()},
+                              func.__name__, func.__defaults__, func.__closure__)

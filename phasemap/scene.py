@@ -18,6 +18,7 @@ arrays or lazily with dask.  The result is a self-describing
 from __future__ import annotations
 
 import json
+import math
 import numbers
 from typing import Mapping, Sequence
 
@@ -147,7 +148,7 @@ class Scene:
 
     @property
     def size(self) -> int:
-        return int(np.prod(self.shape, dtype=np.int64))
+        return math.prod(a.size for a in self.axes.values())
 
     @property
     def has_fates(self) -> bool:

@@ -26,6 +26,11 @@ from .models import get_model
 RTOL_MIN = 1e-14
 
 
+#: Validated :class:`Options` by ``(model, settings, their types)`` (see :meth:`Options.checked`).
+_CHECKED: dict = {}
+_CHECKED_MAX = 256
+
+
 @dataclass(frozen=True)
 class Options:
     """Integrator settings shared by :func:`simulate` and the fate maps."""
@@ -41,7 +46,24 @@ class Options:
     def checked(self, model: str) -> "Options":
         """Validated copy (``atol`` defaults to ``rtol``); ValueError (or
         :class:`phasemap._args.ArgumentTypeError`) naming the setting on bad values.
-        Python and NumPy numbers alike; counts may be whole floats (``1e6``)."""
+        Python and NumPy numbers alike; counts may be whole floats (``1e6``).
+
+        The settings of a call are often those of the last (a sweep): a validated
+        copy is remembered under the settings and their types (``1`` is not ``True``)."""
+        fields = (self.t_end, self.rtol, self.atol, self.max_step, self.max_steps,
+                  self.max_events, self.method)
+        key = (model, fields, tuple(map(type, fields)))
+        try:
+            hit = _CHECKED.get(key)
+        except TypeError:  # an unhashable setting: validation says what is wrong with it
+            return self._checked(model)
+        if hit is None:
+            if len(_CHECKED) >= _CHECKED_MAX:
+                _CHECKED.clear()
+            hit = _CHECKED[key] = self._checked(model)
+        return hit
+
+    def _checked(self, model: str) -> "Options":
         t_end = _args.finite("t_end", self.t_end, model, lower=0.0, lower_open=True)
         rtol = _args.real("rtol", self.rtol, model)
         if not RTOL_MIN <= rtol <= 0.1:
@@ -246,6 +268,9 @@ def _columns(points, events, y_eval, te):
 def _starts(m: Model, values: Mapping) -> dict[str, np.ndarray]:
     """The initial-state values given as 1-D arrays (the batch form), checked: one
     length for all, every start in the domain, the parameters scalars."""
+    plain = _args.PLAIN
+    if all(type(val) in plain for val in values.values()):
+        return {}  # every value one number: a single motion
     lay = _layout(m)
     known, state = lay.known, lay.state
     starts = {}
@@ -281,20 +306,25 @@ def _motion_variables(m: Model, t_dims, event_dims, ys, ms, ev_t, ev_kind, ev_y,
     kind_attrs = {"long_name": "kind of event",
                   "flag_values": np.array(ev.EVENT_VALUES, dtype=np.int8),
                   "flag_meanings": ev.EVENT_MEANINGS}
+    # fastpath: every array is a NumPy array made here, which xarray takes as it is
+    # (without, it asks each whether it is a pandas, dask or masked array: 10 us apiece)
     data = {
-        "branch": xr.Variable(t_dims, np.asarray(ms, dtype=np.int8), branch_attrs),
-        "event_t": xr.Variable(event_dims, ev_t, {"long_name": "time of the event",
-                                                  "units": "s"}),
-        "event_kind": xr.Variable(event_dims, ev_kind.astype(np.int8), kind_attrs),
+        "branch": xr.Variable(t_dims, np.asarray(ms, dtype=np.int8), branch_attrs,
+                              fastpath=True),
+        "event_t": xr.Variable(event_dims, np.asarray(ev_t, dtype=float),
+                               {"long_name": "time of the event", "units": "s"}, fastpath=True),
+        "event_kind": xr.Variable(event_dims, ev_kind.astype(np.int8), kind_attrs,
+                                  fastpath=True),
         "event_branch": xr.Variable(event_dims, ev_mode.astype(np.int8),
                                     {**branch_attrs,
-                                     "long_name": "active branch after the event"}),
+                                     "long_name": "active branch after the event"},
+                                    fastpath=True),
     }
     for j, var in enumerate(_layout(m).integrated):
-        data[var.name] = xr.Variable(t_dims, ys[..., j], variable_attrs(var))
+        data[var.name] = xr.Variable(t_dims, ys[..., j], variable_attrs(var), fastpath=True)
         data[f"event_{var.name}"] = xr.Variable(
             event_dims, ev_y[..., j], {"long_name": f"{var.long_name} at the event",
-                                       "units": var.units})
+                                       "units": var.units}, fastpath=True)
     return data
 
 
@@ -333,7 +363,7 @@ def _dataset(m: Model, full, positions, opts: Options, names, fate, n_rev, n_ste
         **_motion_attrs(m, full, positions, opts),
     }
     coords = {"t": xr.Variable("t", np.asarray(ts, dtype=float),
-                               {"long_name": "time", "units": "s"})}
+                               {"long_name": "time", "units": "s"}, fastpath=True)}
     return assemble(data, coords, attrs)
 
 

@@ -695,3 +695,21 @@ def test_a_loose_rtol_stops_newton_early_and_keeps_its_tolerance(start, rtol):
                                rtol=0, atol=rtol)
     np.testing.assert_allclose(loose.omega_squared.values, tight.omega_squared.values,
                                rtol=0, atol=rtol * u_ref)
+
+
+@pytest.mark.parametrize("z", [0.0, 0.3, -0.7, 1.0, -1.0])
+def test_the_output_pass_solves_a_panel_to_rounding(z):
+    """solve_legendre (the output points' pass): du/dtau = z u + h p, u(0) = u0, with p
+    interpolating e^(a tau) at the 12 output nodes, against the closed form
+    e^(z tau) u0 + h (e^(a tau) - e^(z tau)) / (a - z), at points across the panel."""
+    from phasemap.phase import collocation as col
+
+    a, u0, h = 0.7, 2.5, 0.4
+    nv = np.exp(a * col.OUT_THETA)
+    u = np.empty(col.OUT_TERMS + 1)
+    nt = col.solve_legendre(z, u0, h, nv, u, np.empty(col.OUT_TERMS + 1),
+                            np.empty(col.OUT_NODES))
+    assert 1 <= nt <= col.OUT_TERMS  # (the terms below rounding dropped)
+    for tau in np.linspace(0.0, 1.0, 17):
+        exact = math.exp(z * tau) * u0 + h * (math.exp(a * tau) - math.exp(z * tau)) / (a - z)
+        assert col.legendre_at(tau, u, nt) == pytest.approx(exact, rel=2e-15, abs=0)

@@ -149,7 +149,7 @@ import xarray as xr
 from .. import _args
 from .. import events as ev
 from .._compile import contract_constants, remember, specialize
-from .._dataset import cf_header, squared_units
+from .._dataset import assemble, cf_header, squared_units
 from ..model import Model
 from ..models import get_model
 from . import tracer
@@ -397,11 +397,15 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
     flags = {"flag_values": np.array(ev.EVENT_VALUES, dtype=np.int8),
              "flag_meanings": ev.EVENT_MEANINGS}
 
+    # fastpath: every array is a NumPy array made here, which xarray takes as it is
+    def variable(dim, values, attrs):
+        return xr.Variable(dim, values, attrs, fastpath=True)
+
     def angle(name, values, dim):
-        return xr.Variable(dim, values, {"long_name": name, "units": var_phi.units})
+        return variable(dim, values, {"long_name": name, "units": var_phi.units})
 
     def rate(name, values, dim):
-        return xr.Variable(dim, values, {"long_name": name, "units": var_omega.units})
+        return variable(dim, values, {"long_name": name, "units": var_omega.units})
 
     data = {
         "phi": angle(var_phi.long_name, pts[:, 0].copy(), "point"),
@@ -411,25 +415,25 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
     data["phi"].attrs["phasemap_symbol"] = var_phi.symbol or var_phi.name
     data["omega"].attrs["phasemap_symbol"] = var_omega.symbol or var_omega.name
     data |= {
-        "omega_squared": xr.Variable("point", u, {
+        "omega_squared": variable("point", u, {
             "long_name": f"square of the {var_omega.long_name}",
             "units": squared_units(var_omega.units)}),
-        "point_stage": xr.Variable("point", index, {
+        "point_stage": variable("point", index, {
             "long_name": "index of the stage the point belongs to", "units": "1"}),
-        "stage_sign": xr.Variable("stage", signs, {
+        "stage_sign": variable("stage", signs, {
             "long_name": f"sign of {vel} on the stage (0: no motion)", "units": "1"}),
         "stage_start_phi": angle(f"{var_phi.long_name} at the start of the stage",
                                  stages[:, 1].copy(), "stage"),
         "stage_start_omega": rate(f"{var_omega.long_name} at the start of the stage",
                                   start_omega, "stage"),
-        "stage_end_reason": xr.Variable("stage", reasons, {
+        "stage_end_reason": variable("stage", reasons, {
             "long_name": "event that ends the stage", **flags}),
         "stage_end_phi": angle(f"{var_phi.long_name} at the end of the stage",
                                stages[:, 4].copy(), "stage"),
         "stage_end_omega": rate(f"{var_omega.long_name} at the end of the stage", end_omega,
                                 "stage"),
     }
-    coords = {"stage": xr.Variable("stage", np.arange(len(stages), dtype=np.int32),
+    coords = {"stage": variable("stage", np.arange(len(stages), dtype=np.int32),
                                    {"long_name": f"stage index ({vel} keeps its sign on a "
                                                  "stage)", "units": "1"})}
     last = ev.Event(int(reasons[-1]))
@@ -448,5 +452,5 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
         attrs[f"phasemap_initial_{v.name}"] = float(full[v.name])
     for v in m.params:
         attrs[f"phasemap_fixed_{v.name}"] = float(full[v.name])
-    return xr.Dataset(data, coords, attrs)
+    return assemble(data, coords, attrs)
 

@@ -77,10 +77,22 @@ FACT = np.array([math.factorial(k) for k in range(NODES + 3)], dtype=float)
 INV_FACT = 1.0 / FACT
 #: 1/k for the Taylor series of the phi-functions (a multiply, not a divide, per term).
 INV_INT = np.array([0.0] + [1.0 / k for k in range(1, 100)])
+#: Gauss-Legendre nodes of a panel's output pass (:func:`solve_legendre`): the remainder
+#: N sampled there once per panel, and its interpolant of degree 2 NODES - 1 integrated
+#: exactly at every output point, errs like the NODES-point Gauss rule of a pass per
+#: point (both O(h^(2 NODES + 1))).
+OUT_NODES = 2 * NODES
+OUT_THETA, _, OUT_LEG, _, _ = _tables(OUT_NODES)
+#: The output pass solves in Legendre coefficients where |z| <= Z_OUT, in at most
+#: OUT_PICARD iterations (|z|^k / k! is below 1e-18 at k = 20), so with at most
+#: OUT_TERMS terms.
+Z_OUT = 1.0
+OUT_PICARD = 20
+OUT_TERMS = OUT_NODES + OUT_PICARD + 1
 #: Legendre recurrence (2k+1)/(k+1), k/(k+1) and the integral weight 1/(2 (2k+1)).
-LEG_A = np.array([(2 * k + 1) / (k + 1) for k in range(NODES)])
-LEG_B = np.array([k / (k + 1) for k in range(NODES)])
-LEG_W = np.array([1.0 / (2.0 * (2 * k + 1)) for k in range(NODES)])
+LEG_A = np.array([(2 * k + 1) / (k + 1) for k in range(OUT_TERMS + 1)])
+LEG_B = np.array([k / (k + 1) for k in range(OUT_TERMS + 1)])
+LEG_W = np.array([1.0 / (2.0 * (2 * k + 1)) for k in range(OUT_TERMS + 1)])
 
 
 @njit(cache=True, error_model="numpy")
@@ -187,6 +199,72 @@ def expand(nv, a, c):
             ck += MON[k, j] * nv[j]
         a[k] = ak
         c[k] = ck
+
+
+@njit(cache=True, error_model="numpy")
+def solve_legendre(z, u0, h, nv, u, w, r):
+    """The Legendre coefficients ``u`` (in tau on [0, 1]) of the solution of
+    du/dtau = z u + h p(tau), u(0) = u0, where p interpolates ``nv``, the values at the
+    :data:`OUT_NODES` nodes :data:`OUT_THETA`; |z| <= :data:`Z_OUT`.  Returns the
+    number of terms (``w``: scratch of :data:`OUT_TERMS` + 1, ``r``: of OUT_NODES).
+
+    Picard's iteration u <- u0 + int_0^tau (z u + h p), each integral exact in the
+    Legendre basis, int_0^tau P_k = (P_{k+1} - P_{k-1}) / (2 (2k + 1)) (P_0: (P_1 +
+    P_0) / 2), until a pass changes no coefficient by more than 1e-17 of their sum (the
+    trailing coefficients below that are dropped): no monomials, whose coefficients for
+    12 nodes carry the node values' rounding times 6e7 (the dense output's
+    :func:`dense` uses them for NODES = 6 terms, times 2e3).
+    """
+    n = nv.shape[0]
+    for k in range(n):  # h p in Legendre coefficients
+        acc = 0.0
+        for j in range(n):
+            acc += OUT_LEG[k, j] * nv[j]
+        r[k] = h * acc
+    nt = 1
+    u[0] = u0
+    for _ in range(OUT_PICARD):
+        m = max(nt, n)
+        for k in range(m + 1):
+            w[k] = 0.0
+        w[0] = u0
+        for k in range(m):
+            rk = (z * u[k] if k < nt else 0.0) + (r[k] if k < n else 0.0)
+            if k == 0:
+                w[0] += 0.5 * rk
+                w[1] += 0.5 * rk
+            else:
+                ck = rk * LEG_W[k]
+                w[k + 1] += ck
+                w[k - 1] -= ck
+        change = 0.0
+        size = 0.0
+        for k in range(m + 1):
+            old = u[k] if k < nt else 0.0
+            change = max(change, abs(w[k] - old))
+            size += abs(w[k])
+            u[k] = w[k]
+        nt = m + 1
+        if change <= 1e-17 * size:
+            break
+    while nt > 1 and abs(u[nt - 1]) <= 1e-17 * size:  # terms below rounding: each point
+        nt -= 1                                        # sums only the rest
+    return nt
+
+
+@njit(cache=True, error_model="numpy")
+def legendre_at(tau, u, nt):
+    """sum_k u_k P_k(2 tau - 1) over the first ``nt`` terms."""
+    x = 2.0 * tau - 1.0
+    acc = u[0]
+    if nt > 1:
+        acc += u[1] * x
+    pm, pk = 1.0, x
+    for k in range(1, nt - 1):
+        pp = LEG_A[k] * x * pk - LEG_B[k] * pm
+        acc += u[k + 1] * pp
+        pm, pk = pk, pp
+    return acc
 
 
 @njit(cache=True, error_model="numpy")

@@ -25,8 +25,9 @@ from .. import _numerics as nx
 from .. import events as ev
 from .._compile import grow
 from . import collocation
-from .collocation import (NODES, SERIES, THETA, dense, dense_at, expand, factor, lu_solve,
-                          series, weights)
+from .collocation import (NODES, OUT_NODES, OUT_TERMS, OUT_THETA, SERIES, THETA, Z_OUT, dense,
+                          dense_at, expand, factor, legendre_at, lu_solve, series,
+                          solve_legendre, weights)
 
 #: Modules compiled into these kernels besides this one (see phasemap._compile).
 SOURCES = (collocation,)
@@ -673,16 +674,31 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
 
 
 def _stage_points_template(v, panels, n_pan, sigma, mode, u_ref, x0, u0, x_e, u_e, points, pts,
-                           npts, stage, vecs, buf, tb):
-    """Append the stage's output points (phi, u, stage): evenly spaced in phi."""
+                           npts, stage, vecs, outs, buf, tb):
+    """Append the stage's output points (phi, u, stage): evenly spaced in phi.
+
+    Where a panel's part up to its end, theta_end, has |z theta_end| <= Z_OUT, one pass
+    gives all of its points: the remainder N sampled on the panel's dense output at the
+    :data:`OUT_NODES` Gauss nodes of that part (one branch row each), the solution with
+    N's interpolant, of degree 2 NODES - 1, in Legendre coefficients
+    (:func:`~phasemap.phase.collocation.solve_legendre`), summed at each point.  That
+    errs like the NODES-point Gauss rule of one pass per point, which a stiffer panel
+    still takes (``_refine_template``): at 200 points per stage a twelfth of the rows.
+    """
     n = NODES
     nv = vecs[8]
     a2 = vecs[9]
     c2 = vecs[10]
+    nvo = outs[0, :OUT_NODES]
+    uo = outs[1]
+    wo = outs[2]
+    ro = outs[3]
     length = sigma * (x_e - x0)
     count = points if (length > 0.0 and n_pan > 0) else 1
     pts = grow(pts, npts + count)
     p = 0
+    ready = -1
+    nt = 0
     for k in range(count):
         sk = length * k / (count - 1) if count > 1 else 0.0
         while p < n_pan - 1 and sk > panels[p, 0] + panels[p, 4] * panels[p, 1]:
@@ -690,9 +706,28 @@ def _stage_points_template(v, panels, n_pan, sigma, mode, u_ref, x0, u0, x_e, u_
         uk = u0
         if k > 0 and k < count - 1:  # (the last point is the end state)
             row = panels[p]
-            theta = min(max((sk - row[0]) / row[1], 0.0), row[4])
-            uk = REFINE(v, theta, x0 + sigma * row[0], row[1], row[2], row[3], row[5:5 + n],
-                        row[5 + n:5 + 2 * n], sigma, mode, u_ref, buf, tb, nv, a2, c2)
+            hh, z, up, te = row[1], row[2], row[3], row[4]
+            theta = min(max((sk - row[0]) / row[1], 0.0), te)
+            if theta <= 0.0:
+                uk = up
+            elif abs(z * te) <= Z_OUT:
+                if ready != p:
+                    a = row[5:5 + n]
+                    c = row[5 + n:5 + 2 * n]
+                    beta = z / hh
+                    hs = te * hh
+                    xp = x0 + sigma * row[0]
+                    on_series = series(z, up, hh, c, tb)
+                    for j in range(OUT_NODES):
+                        uj = dense_at(te * OUT_THETA[j], on_series, tb, z, up, hh, a, c, buf)
+                        fj = VALUE(v, xp + sigma * hs * OUT_THETA[j], uj, sigma, mode, u_ref)
+                        nvo[j] = 2.0 * sigma * fj - beta * uj
+                    nt = solve_legendre(z * te, up, hs, nvo, uo, wo, ro)
+                    ready = p
+                uk = legendre_at(theta / te, uo, nt)
+            else:
+                uk = REFINE(v, theta, x0 + sigma * row[0], hh, z, up, row[5:5 + n],
+                            row[5 + n:5 + 2 * n], sigma, mode, u_ref, buf, tb, nv, a2, c2)
         pts[npts + k, 0] = x0 + sigma * sk
         pts[npts + k, 1] = uk
         pts[npts + k, 2] = stage
@@ -719,6 +754,7 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
     vecs = np.empty((11, NODES))
     buf = np.empty(NODES + 2)
     tb = np.empty(SERIES)
+    outs = np.empty((4, OUT_TERMS + 1))
     react = np.empty(REACTIONS.shape[0])
     piv = np.empty(NODES, dtype=np.int64)
     code = -1
@@ -756,7 +792,7 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
             v, out, mode, sigma, x, u, stop, u_ref, rtol, h_max, h, panels, mats, vecs, buf, tb,
             react, piv)
         pts, npts = STAGE_POINTS(v, panels, n_pan, sigma, mode, u_ref, x, u, x_e, u_e, points,
-                                 pts, npts, float(nst), vecs, buf, tb)
+                                 pts, npts, float(nst), vecs, outs, buf, tb)
         go = False
         new_mode = mode
         if reason == _ZERO:
