@@ -4,6 +4,10 @@ A study composes the library into files (atlases, figures) and ends by
 printing the claims it checked, the measured value beside the paper's.  This
 module only defines; the scripts in ``studies/`` produce (DrWatson's rule).
 
+``python studies/NAME.py [--quick] [--out DIR] [--size WIDTH]`` (:func:`arguments`)
+writes the atlases and figures ``NAME_*`` into ``DIR`` and ends with the
+claims table (:func:`finish`).
+
 >>> from phasemap.study import Claim, claims_table
 >>> print(claims_table([Claim("rest zone of the hinge pendulum", "|tan phi| <= 0.1005",
 ...                           "|tan phi| <= 0.1005", "agrees")]))

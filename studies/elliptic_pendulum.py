@@ -24,10 +24,7 @@ xdot > 0 and two for xdot < 0.  This study measures:
   checked with phasemap.classify at the event and drawn on the (phi, omega) map;
 * a stick-slip motion at small f, the slider's velocity exactly 0 while it sticks.
 
-    python studies/elliptic_pendulum.py [--quick] [--out DIR]
-
-Writes atlases (.nc) and figures (.pdf, .png) prefixed ``elliptic_pendulum_``
-and ends with a table of the claims checked, measured value beside the paper's.
+Run as ``python studies/elliptic_pendulum.py`` (:mod:`phasemap.study`).
 """
 
 from __future__ import annotations
@@ -450,8 +447,7 @@ def _zoom(zoom, ds, name, t_max, stick):
 
 def main(argv=None) -> list[Claim]:
     args = study.arguments(__doc__, argv)
-    out, quick = args.out, args.quick
-    files, claims = [], []
+    out, quick, files, claims = args.out, args.quick, [], []
 
     # 1. the threshold, and every cell of the (phi, f) maps against the closed form
     maps = threshold_maps(quick, out, files)
