@@ -136,6 +136,17 @@ def arguments(doc: str, argv: Sequence[str] | None = None) -> argparse.Namespace
     return args
 
 
+def mesh(ds: xr.Dataset, x: str, y: str) -> tuple:
+    """The coordinates ``x`` and ``y`` of an atlas as a column and a row, to broadcast
+    against its ``(x, y)`` layers.
+
+    >>> ds = xr.Dataset(coords={"phi": [0.0, 1.0], "f": [0.1, 0.2, 0.3]})
+    >>> [a.shape for a in mesh(ds, "phi", "f")]
+    [(2, 1), (1, 3)]
+    """
+    return ds[x].values[:, None], ds[y].values[None, :]
+
+
 def save_atlas(ds: xr.Dataset, out: pathlib.Path, name: str, study: str) -> pathlib.Path:
     """Write ``ds`` as ``out/name.nc``, stamped with the study that made it."""
     from .atlas import write_atlas

@@ -465,7 +465,7 @@ def main(argv=None) -> list[Claim]:
     for side, sigma, code, word in (("right", 1.0, 0, "none"), ("left", -1.0, 2, "two")):
         ds = maps[side]
         bad, _ = mismatches(ds, sigma)
-        phi, f = ds.phi.values[:, None], ds.f.values[None, :]
+        phi, f = study.mesh(ds, "phi", "f")
         region = (lam(phi, f, 1.0) < 0) & (phi > 0) & (phi < math.pi / 2)
         n = ds.n_solutions.transpose("phi", "f").values
         hit = int((region & (n == code)).sum())

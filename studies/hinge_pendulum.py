@@ -422,8 +422,7 @@ def main(argv=None) -> list[Claim]:
 
     # 1. the stagnation zone at rest
     rest = rest_map(quick, out, files)
-    phi = rest.phi.values[:, None]
-    delta = rest.delta.values[None, :]
+    phi, delta = study.mesh(rest, "phi", "delta")
     stag = rest.stagnation.transpose("phi", "delta").values == 1
     below = np.broadcast_to(delta < L, stag.shape)
     paper = zone_35(phi, delta) & below

@@ -321,8 +321,7 @@ def main(argv=None) -> list[Claim]:
 
     # 1. the kept-kept coefficient: (S3) against phasemap's own derivation
     motion = motion_maps(quick, out, files)
-    T = motion.theta.values[:, None]
-    F = motion.f.values[None, :]
+    T, F = study.mesh(motion, "theta", "f")
     agree, total = 0, 0
     for w in OMEGAS:
         s = 1 if w > 0 else -1
