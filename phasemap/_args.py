@@ -187,6 +187,31 @@ def finite(name: str, value, where: str = "", *, lower: float = -math.inf,
     return x
 
 
+def finite_range(name: str, value, where: str = "", ends: tuple[str, str] = ("lo", "hi")
+                 ) -> tuple[float, float]:
+    """A range ``(lo, hi)`` of two finite numbers with lo < hi, or ValueError naming ``name``.
+
+    ``ends`` are the words the messages call the two ends by.
+
+    >>> finite_range("axis f", (0, 3))
+    (0.0, 3.0)
+    >>> finite_range("phi_range", (1, 0), "ladder", ("low", "high"))
+    Traceback (most recent call last):
+    ...
+    ValueError: ladder: phi_range must be finite with low < high, got (1, 0)
+    """
+    lo_word, hi_word = ends
+    try:
+        lo, hi = (float(t) for t in value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{_prefix(where)}{name} must be two numbers ({lo_word}, {hi_word}), "
+                         f"got {value!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise ValueError(f"{_prefix(where)}{name} must be finite with {lo_word} < {hi_word}, "
+                         f"got {value!r}")
+    return lo, hi
+
+
 def bound(x: float) -> str:
     """A bound written exactly: ``1.5707963267948966``, not ``1.5708``; ``0``, not ``0.0``.
 

@@ -332,6 +332,28 @@ def gravity_and_mass(mass: str) -> tuple[Variable, Variable]:
             Variable("m", "kg", mass, "m", 1.0, 0.0, lower_open=True))
 
 
+def one_angle(body: str, motion: str, move: Callable, stick: Callable,
+              velocity_scale: Callable, edges: Mapping[str, tuple[str, str]] | None = None
+              ) -> dict[str, object]:
+    """The :class:`Model` keywords every hand model of one ``body`` turning on ``phi`` shares.
+
+    ``derived`` (:data:`SIN_COS_PHI`), ``candidates`` (the two ``motion`` branches of
+    ``move`` and the ``stick`` branch), ``accelerations``, ``velocity`` (``omega``),
+    ``velocity_scale`` and ``dynamics`` (the coordinate ``phi``, with the ``edges`` of
+    :class:`Dynamics`), to pass as ``Model(name=..., **one_angle(...), ...)``.
+
+    >>> kw = one_angle("rod", "turn", print, print, print)
+    >>> [b.name for b in kw["candidates"]], kw["dynamics"].coordinates
+    (['turn_pos', 'turn_neg', 'stick'], (('phi', 'omega', 'phi_ddot'),))
+    """
+    return dict(derived=SIN_COS_PHI,
+                candidates=(*Branch.both_ways(motion, move), Branch("stick", 0.0, stick)),
+                accelerations=(angular_acceleration(body),), velocity="omega",
+                velocity_scale=velocity_scale,
+                dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),),
+                                  edges=dict(edges or {})))
+
+
 @dataclass(frozen=True)
 class Model:
     """One mechanical system: its variables, branches and jitted point function.

@@ -4,6 +4,10 @@ A study composes the library into files (atlases, figures) and ends by
 printing the claims it checked, the measured value beside the paper's.  This
 module only defines; the scripts in ``studies/`` produce (DrWatson's rule).
 
+``python studies/NAME.py [--quick] [--out DIR] [--size WIDTH]`` (:func:`arguments`)
+writes the atlases and figures ``NAME_*`` into ``DIR`` and ends with the
+claims table (:func:`finish`).
+
 >>> from phasemap.study import Claim, claims_table
 >>> print(claims_table([Claim("rest zone of the hinge pendulum", "|tan phi| <= 0.1005",
 ...                           "|tan phi| <= 0.1005", "agrees")]))
@@ -130,6 +134,17 @@ def arguments(doc: str, argv: Sequence[str] | None = None) -> argparse.Namespace
     args.out.mkdir(parents=True, exist_ok=True)
     args.sizes = SIZE_CHOICES[args.size]
     return args
+
+
+def mesh(ds: xr.Dataset, x: str, y: str) -> tuple:
+    """The coordinates ``x`` and ``y`` of an atlas as a column and a row, to broadcast
+    against its ``(x, y)`` layers.
+
+    >>> ds = xr.Dataset(coords={"phi": [0.0, 1.0], "f": [0.1, 0.2, 0.3]})
+    >>> [a.shape for a in mesh(ds, "phi", "f")]
+    [(2, 1), (1, 3)]
+    """
+    return ds[x].values[:, None], ds[y].values[None, :]
 
 
 def save_atlas(ds: xr.Dataset, out: pathlib.Path, name: str, study: str) -> pathlib.Path:

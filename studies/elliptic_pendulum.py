@@ -24,10 +24,7 @@ xdot > 0 and two for xdot < 0.  This study measures:
   checked with phasemap.classify at the event and drawn on the (phi, omega) map;
 * a stick-slip motion at small f, the slider's velocity exactly 0 while it sticks.
 
-    python studies/elliptic_pendulum.py [--quick] [--out DIR]
-
-Writes atlases (.nc) and figures (.pdf, .png) prefixed ``elliptic_pendulum_``
-and ends with a table of the claims checked, measured value beside the paper's.
+Run as ``python studies/elliptic_pendulum.py`` (:mod:`phasemap.study`).
 """
 
 from __future__ import annotations
@@ -450,8 +447,7 @@ def _zoom(zoom, ds, name, t_max, stick):
 
 def main(argv=None) -> list[Claim]:
     args = study.arguments(__doc__, argv)
-    out, quick = args.out, args.quick
-    files, claims = [], []
+    out, quick, files, claims = args.out, args.quick, [], []
 
     # 1. the threshold, and every cell of the (phi, f) maps against the closed form
     maps = threshold_maps(quick, out, files)
@@ -469,7 +465,7 @@ def main(argv=None) -> list[Claim]:
     for side, sigma, code, word in (("right", 1.0, 0, "none"), ("left", -1.0, 2, "two")):
         ds = maps[side]
         bad, _ = mismatches(ds, sigma)
-        phi, f = ds.phi.values[:, None], ds.f.values[None, :]
+        phi, f = study.mesh(ds, "phi", "f")
         region = (lam(phi, f, 1.0) < 0) & (phi > 0) & (phi < math.pi / 2)
         n = ds.n_solutions.transpose("phi", "f").values
         hit = int((region & (n == code)).sum())

@@ -18,10 +18,7 @@ the delta axes read delta/l):
 * the weightless pendulum g = 0 (phasemap.simulate) against its exact solution (36);
 * a fate map over the initial state (phi0, omega0).
 
-    python studies/hinge_pendulum.py [--quick] [--out DIR]
-
-Writes atlases (.nc) and figures (.pdf, .png) prefixed ``hinge_pendulum_``
-and ends with a table of the claims checked, measured value beside the paper's.
+Run as ``python studies/hinge_pendulum.py`` (:mod:`phasemap.study`).
 """
 
 from __future__ import annotations
@@ -421,13 +418,11 @@ def figure_fates(ds, size="two_column"):
 
 def main(argv=None) -> list[Claim]:
     args = study.arguments(__doc__, argv)
-    out, quick = args.out, args.quick
-    files, claims = [], []
+    out, quick, files, claims = args.out, args.quick, [], []
 
     # 1. the stagnation zone at rest
     rest = rest_map(quick, out, files)
-    phi = rest.phi.values[:, None]
-    delta = rest.delta.values[None, :]
+    phi, delta = study.mesh(rest, "phi", "delta")
     stag = rest.stagnation.transpose("phi", "delta").values == 1
     below = np.broadcast_to(delta < L, stag.shape)
     paper = zone_35(phi, delta) & below

@@ -24,9 +24,7 @@ s = -1 (theta decreasing: the rod slides down).  This study, at that h/l:
   motion where its upper end passes the edge (it leaves the step: the edge
   contact's declared extent).
 
-    python studies/rod_on_step.py [--quick] [--out DIR] [--size WIDTH]
-
-Writes ``rod_on_step_*`` atlases and figures and ends with the claims table.
+Run as ``python studies/rod_on_step.py`` (:mod:`phasemap.study`).
 """
 
 from __future__ import annotations
@@ -319,13 +317,11 @@ def figure_slide(ds, t_off, size="two_column"):
 
 def main(argv=None) -> list[Claim]:
     args = study.arguments(__doc__, argv)
-    out, quick = args.out, args.quick
-    files, claims = [], []
+    out, quick, files, claims = args.out, args.quick, [], []
 
     # 1. the kept-kept coefficient: (S3) against phasemap's own derivation
     motion = motion_maps(quick, out, files)
-    T = motion.theta.values[:, None]
-    F = motion.f.values[None, :]
+    T, F = study.mesh(motion, "theta", "f")
     agree, total = 0, 0
     for w in OMEGAS:
         s = 1 if w > 0 else -1

@@ -42,12 +42,14 @@ import re
 
 import matplotlib.colors as mcolors
 import numpy as np
+import xarray as xr
 from matplotlib.collections import Collection
 from matplotlib.image import AxesImage
 from matplotlib.legend import Legend
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
+import phasemap
 from phasemap import plot as pplot
 from phasemap import study
 
@@ -81,6 +83,18 @@ def recording():
         yield seen
     finally:
         study.save_figure = original
+
+
+def check_atlases(name: str, stems, printed: str, out) -> None:
+    """Each atlas ``out/name_stem.nc`` is listed in the study's ``printed`` output and
+    records the model, the version and the study that wrote it."""
+    for stem in stems:
+        path = out / f"{name}_{stem}.nc"
+        assert str(path) in printed
+        with xr.open_dataset(path) as ds:
+            assert ds.attrs["phasemap_model"] == name
+            assert ds.attrs["phasemap_version"] == phasemap.__version__
+            assert ds.attrs["phasemap_study"] == name
 
 
 def check(seen: dict[str, dict], exempt_fixed=()) -> None:

@@ -3,11 +3,8 @@
 from __future__ import annotations
 
 import pytest
-import xarray as xr
 
 import figure_review
-
-import phasemap
 
 pytestmark = pytest.mark.slow
 NAME = "rod_on_step"
@@ -47,13 +44,7 @@ def test_claims_and_verdicts(run):
 
 def test_atlases_carry_provenance(run):
     _, printed, out, _ = run
-    for stem in ATLASES:
-        path = out / f"{NAME}_{stem}.nc"
-        assert str(path) in printed
-        with xr.open_dataset(path) as ds:
-            assert ds.attrs["phasemap_model"] == NAME
-            assert ds.attrs["phasemap_version"] == phasemap.__version__
-            assert ds.attrs["phasemap_study"] == NAME
+    figure_review.check_atlases(NAME, ATLASES, printed, out)
 
 
 def test_figures_written_and_reviewed_at_both_widths(run):

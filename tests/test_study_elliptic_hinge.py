@@ -7,7 +7,6 @@ import xarray as xr
 
 import figure_review
 
-import phasemap
 
 pytestmark = pytest.mark.slow
 
@@ -76,13 +75,7 @@ def test_claims_and_verdicts(run):
 
 def test_atlases_carry_provenance(run):
     name, _, printed, out, _ = run
-    for stem in ATLASES[name]:
-        path = out / f"{name}_{stem}.nc"
-        assert str(path) in printed
-        with xr.open_dataset(path) as ds:
-            assert ds.attrs["phasemap_model"] == name
-            assert ds.attrs["phasemap_version"] == phasemap.__version__
-            assert ds.attrs["phasemap_study"] == name
+    figure_review.check_atlases(name, ATLASES[name], printed, out)
     if name == "elliptic_pendulum":  # the threshold atlases span the paper's 2 and 2 sqrt 2
         with xr.open_dataset(out / f"{name}_threshold_right.nc") as ds:
             assert float(ds.f.min()) <= 2.0 and float(ds.f.max()) >= 2.9

@@ -27,23 +27,22 @@ def add_parsers(sub, make, models: str) -> dict:
     """Register ``boundaries`` and ``threshold`` on the subparsers ``sub``; ``make(sub,
     name, help, description)`` makes one (the CLI's own helper).  Returns them by name."""
     subs = {}
-    p = subs["boundaries"] = make(
-        sub, "boundaries", "trace a slice's class boundaries as exact curves into netCDF",
+    p = subs["boundaries"] = _parser(
+        sub, make, models, "boundaries",
+        "trace a slice's class boundaries as exact curves into netCDF",
         "Traces every boundary piece of a layer over a 2-D slice by continuation of the "
         "condition that vanishes on it, with its crossings, folds and ends on the edges to "
         "--tol, and writes them as a CF netCDF file (phasemap.boundaries).")
-    p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
     p.add_argument("--axis", action="append", default=[], metavar="NAME=LO:HI",
                    help="one of the slice's two axes with its range (give two)")
-    _common(p)
     p.add_argument("--overwrite", action="store_true", help="replace OUT.nc if it exists")
     p.add_argument("-o", "--output", required=True, metavar="OUT.nc")
-    p = subs["threshold"] = make(
-        sub, "threshold", "the least (greatest) parameter at which a class exists, to 1e-10",
+    p = subs["threshold"] = _parser(
+        sub, make, models, "threshold",
+        "the least (greatest) parameter at which a class exists, to 1e-10",
         "Finds the infimum (or supremum) of PARAM over the region where the layer takes "
         "--value, with the ranges of --over (at most two names besides PARAM), and prints "
         "the value, the point and the condition that vanishes there (phasemap.threshold).")
-    p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
     p.add_argument("param", metavar="PARAM", help="the parameter whose threshold is sought")
     p.add_argument("--over", action="append", default=[], metavar="NAME=LO:HI",
                    help="a range searched (repeatable; PARAM's own range may be given too)")
@@ -51,17 +50,21 @@ def add_parsers(sub, make, models: str) -> dict:
                    "region (default %(default)s: no solution)")
     p.add_argument("--side", choices=["min", "max"], default="min",
                    help="infimum (the default) or supremum")
-    _common(p)
     return subs
 
 
-def _common(p) -> None:
+def _parser(sub, make, models: str, *texts: str):
+    """One subcommand (``texts``: name, help, description) with the ``MODEL`` argument
+    and the options both share."""
+    p = make(sub, *texts)
+    p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="fix a state variable or parameter (repeatable)")
     p.add_argument("--layer", choices=_LAYERS, default="n_solutions",
                    help="the layer whose classes are bounded (default %(default)s)")
     p.add_argument("--tol", type=float, default=1e-10, help="accuracy of the special points "
                    "in each coordinate (default %(default)g)")
+    return p
 
 
 def _ranges(items: list[str], option: str) -> dict[str, tuple[float, float]]:

@@ -11,6 +11,7 @@ from typing import Mapping
 import numpy as np
 import xarray as xr
 
+from .. import _args
 from .. import _numerics as nx
 from .._dataset import cf_header
 from ..grid import evaluate
@@ -67,14 +68,7 @@ class Slice:
 
 def parse_range(m: Model, what: str, value) -> tuple[float, float]:
     """A range ``(lo, hi)`` of finite numbers with lo < hi, or ValueError naming ``what``."""
-    try:
-        lo, hi = (float(t) for t in value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{m.name}: {what} must be a pair (lo, hi) of numbers, "
-                         f"got {value!r}") from None
-    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-        raise ValueError(f"{m.name}: {what} must be a finite range lo < hi, got ({lo:g}, {hi:g})")
-    return lo, hi
+    return _args.finite_range(what, value, m.name)
 
 
 def header(m: Model, kind: str, fixed: Mapping, **extra) -> dict:

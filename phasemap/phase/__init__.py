@@ -358,14 +358,7 @@ def _checked_range(m: Model, pos: str, phi: float, phi_range) -> tuple[float, fl
         lo = var.lower if math.isfinite(var.lower) else phi - _DEFAULT_SPAN
         hi = var.upper if math.isfinite(var.upper) else phi + _DEFAULT_SPAN
         return float(lo), float(hi)
-    try:
-        lo, hi = (float(x) for x in phi_range)
-    except (TypeError, ValueError):
-        raise ValueError(f"{m.name}: phi_range must be two numbers (low, high), "
-                         f"got {phi_range!r}") from None
-    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-        raise ValueError(f"{m.name}: phi_range must be finite with low < high, "
-                         f"got {phi_range!r}")
+    lo, hi = _args.finite_range("phi_range", phi_range, m.name, ("low", "high"))
     if not lo <= phi <= hi:
         raise ValueError(f"{m.name}: phi_range {phi_range!r} must contain {pos} = {phi:g}")
     var.check(m.name, lo)

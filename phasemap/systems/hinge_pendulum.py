@@ -52,9 +52,14 @@ import numpy as np
 from numba import njit
 
 from .._numerics import ADMISSIBLE, CONTINUUM, INADMISSIBLE, NAN, NO_SOLUTION, TOL, is_zero
-from ..model import (SIN_COS_PHI, Branch, Dynamics, Model, Variable, angle_state,
-                     angular_acceleration, gravity_and_mass)
+from ..model import Model, Variable, angle_state, gravity_and_mass, one_angle
 from .seeds import citation
+
+
+@njit(cache=True, error_model="numpy", forceinline=True)
+def velocity_scale(g, l):
+    """The pendulum's natural rate sqrt(g / l): omega is zero below 1e-12 of it."""
+    return math.sqrt(g / l)
 
 
 @njit(cache=True, error_model="numpy", forceinline=True)
@@ -97,12 +102,6 @@ def stick(delta, l, g, m, sin_phi, cos_phi):
             m * g * cos_phi if ok else NAN, m * g * sin_phi if ok else NAN)
 
 
-@njit(cache=True, error_model="numpy", forceinline=True)
-def velocity_scale(g, l):
-    """The pendulum's natural rate sqrt(g / l): omega is zero below 1e-12 of it."""
-    return math.sqrt(g / l)
-
-
 MODEL = Model(
     name="hinge_pendulum",
     title="Mathematical pendulum with dry friction in its hinge",
@@ -113,12 +112,7 @@ MODEL = Model(
         Variable("l", "m", "length of the rod", "l", 1.0, 0.0, lower_open=True),
         *gravity_and_mass("mass of the bob"),
     ),
-    derived=SIN_COS_PHI,
-    candidates=(
-        *Branch.both_ways("turn", turn),
-        Branch("stick", 0.0, stick),
-    ),
-    accelerations=(angular_acceleration("rod"),),
+    **one_angle("rod", "turn", turn, stick, velocity_scale),
     reactions=(
         Variable("R_n", "N", "hinge reaction along the rod, towards the hinge", "R_n"),
         Variable("R_t", "N", "hinge reaction across the rod", "R_\\tau"),
@@ -126,9 +120,6 @@ MODEL = Model(
     coefficient=Variable("coef", "m2", "coefficient l^2 - delta^2 of the squared equation (33)",
                          "l^2-\\delta^2"),
     kinks=("R_n",),  # R_n = m Q_n, and (34) holds |Q_n|
-    velocity="omega",
-    velocity_scale=velocity_scale,
-    dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),)),
     default_axes={"phi": (-math.pi, math.pi, 512), "delta": (0.0, 1.5, 512)},
 )
 

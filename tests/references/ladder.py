@@ -69,8 +69,7 @@ from numba import njit
 
 from phasemap._numerics import (ADMISSIBLE, CONTACT_LOST, CONTINUUM, INADMISSIBLE, NAN,
                                 NO_SOLUTION, TOL, is_zero, restrict_affine, start_interval)
-from phasemap.model import (SIN_COS_PHI, Branch, Dynamics, Model, Variable, angle_state,
-                            angular_acceleration, gravity_and_mass)
+from phasemap.model import Model, Variable, angle_state, gravity_and_mass, one_angle
 from phasemap.systems.seeds import citation
 
 
@@ -135,22 +134,14 @@ MODEL = Model(
         Variable("l", "m", "half length of the bar", "l", 1.0, 0.0, lower_open=True),
         *gravity_and_mass("mass of the bar"),
     ),
-    derived=SIN_COS_PHI,
-    candidates=(
-        *Branch.both_ways("slide", slide),
-        Branch("stick", 0.0, stick),
-    ),
-    accelerations=(angular_acceleration("bar"),),
+    **one_angle("bar", "slide", slide, stick, velocity_scale,
+                edges={"phi": ("the bar stands upright against the wall",
+                               "the bar lies flat on the floor")}),
     reactions=(
         Variable("N_floor", "N", "normal reaction of the floor", "N_1"),
         Variable("N_wall", "N", "normal reaction of the wall", "N_2"),
     ),
     coefficient=Variable("coef", "1", "coefficient 2 - f^2 of the angular acceleration",
                          "2-f^2"),
-    velocity="omega",
-    velocity_scale=velocity_scale,
-    dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),),
-                      edges={"phi": ("the bar stands upright against the wall",
-                                     "the bar lies flat on the floor")}),
     default_axes={"phi": (0.0, math.pi / 2, 512), "f": (0.0, 3.0, 512)},
 )

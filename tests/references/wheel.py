@@ -56,8 +56,7 @@ from numba import njit
 
 from phasemap._numerics import (ADMISSIBLE, CONTACT_LOST, CONTINUUM, INADMISSIBLE, NAN,
                                 NO_SOLUTION, TOL, is_zero, restrict_affine, start_interval)
-from phasemap.model import (SIN_COS_PHI, Branch, Dynamics, Model, Variable, angle_state,
-                            angular_acceleration, gravity_and_mass)
+from phasemap.model import Model, Variable, angle_state, gravity_and_mass, one_angle
 from phasemap.systems.seeds import citation
 
 
@@ -127,12 +126,7 @@ MODEL = Model(
                  lower_open=True),
         *gravity_and_mass("mass of the disc"),
     ),
-    derived=SIN_COS_PHI,
-    candidates=(
-        *Branch.both_ways("roll", roll),
-        Branch("stick", 0.0, stick),
-    ),
-    accelerations=(angular_acceleration("disc"),),
+    **one_angle("disc", "roll", roll, stick, velocity_scale),
     reactions=(
         Variable("N", "N", "normal reaction of the floor", "N"),
         Variable("F", "N", "horizontal contact force on the disc", "F"),
@@ -140,9 +134,6 @@ MODEL = Model(
     coefficient=Variable("coef", "m2",
                          "coefficient rho^2 + r^2 + l^2 - 2 r l cos(phi) + delta l sin(phi) sgn(omega)"
                          " of the angular acceleration", "J"),
-    velocity="omega",
-    velocity_scale=velocity_scale,
-    dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),)),
     default_axes={"phi": (-math.pi, math.pi, 512), "delta": (0.0, 1.0, 512)},
     check=_check,
 )
