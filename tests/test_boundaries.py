@@ -214,6 +214,56 @@ def test_a_missing_condition_is_reported_with_its_cells():
                    conditions=rod_conditions(coefficient=False))
 
 
+
+def test_uncovered_is_every_change_with_no_hit_around_either_cell():
+    """The completeness check against numpy: dilate the cells the pieces pass through
+    by one cell, and keep the class changes with neither cell in the dilation."""
+    rng = np.random.default_rng(7)
+    n = 24
+    for trial in range(20):
+        classes = (rng.uniform(size=(n, n)) < rng.uniform(0.05, 0.5)).astype(np.int8)
+        pv = rng.uniform(size=(rng.integers(1, 8), 2))
+        pp = np.sort(rng.integers(0, 3, size=len(pv)))
+        hit = np.zeros((1, n, n), dtype=np.int8)
+        for q in range(len(pv)):
+            end = pv[q + 1] if q + 1 < len(pv) and pp[q + 1] == pp[q] else pv[q]
+            _trace._mark(hit, 0, pv[q, 0], pv[q, 1], end[0], end[1])
+        padded = np.pad(hit[0], 1)
+        near = np.zeros((n, n), dtype=bool)
+        for di in range(3):
+            for dj in range(3):
+                near |= padded[di:di + n, dj:dj + n] != 0
+        want = [(i, j, di, dj) for i in range(n) for j in range(n) for di, dj in ((1, 0), (0, 1))
+                if i + di < n and j + dj < n and classes[i, j] != classes[i + di, j + dj]
+                and not (near[i, j] or near[i + di, j + dj])]
+        got = _trace.uncovered(classes, pv, pp)
+        assert [tuple(r) for r in got] == want, trial
+        assert got.dtype == np.int64 and got.shape == (len(want), 4)
+
+
+def test_the_check_raster_is_the_grid_evaluators():
+    """The 128^2 check raster, from the scene's grid kernel called directly, is what
+    phasemap.grid.evaluate makes of the same cells (axes in either order, derived
+    inputs on the outer or the inner axis)."""
+    from phasemap.bifurcation import tracing
+    from phasemap.grid import evaluate
+    from phasemap.layers import layers_for
+
+    changing = 0
+    for model, axes, fixed, layer in (
+            ("hinge_pendulum", {"phi": (-3, 3), "delta": (0.05, 1.4)}, {"omega": 0.0},
+             "stagnation"),
+            ("hinge_pendulum", {"delta": (0.05, 1.4), "phi": (-3, 3)}, {"omega": 0.0},
+             "stagnation"),
+            ("painleve_rod", {"theta": (0.2, 1.5), "f": (0.0, 3.0)}, SLIDE_BACK, "n_solutions")):
+        sl = tracing.make_slice(model, axes, fixed)
+        cells = tracing._cell_centres(sl, 40)
+        want = evaluate(sl.model, cells, sl.fixed, [layers_for(sl.model)[layer]])[layer]
+        got = tracing._check_raster(sl, layer, cells)
+        assert got.dtype == np.int8 and np.array_equal(got, want), (model, layer)
+        changing += np.unique(want).size > 1
+    assert changing == 3  # the comparison sees class changes, not only uniform rasters
+
 @pytest.mark.parametrize("kw, match", [
     (dict(axes={"theta": (0.2, 1.5)}), "two variables"),
     (dict(axes={"theta": (0.2, 1.5), "f": (3.0, 0.0)}), "lo < hi"),

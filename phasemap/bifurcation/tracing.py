@@ -13,8 +13,8 @@ import xarray as xr
 
 from .. import _args
 from .. import _numerics as nx
-from .._dataset import cf_header
-from ..grid import evaluate
+from .._dataset import _now, cf_header
+from .._codegen import grid_kernel, run_grid
 from ..layers import layers_for
 from ..model import Model
 from ..models import get_model
@@ -74,10 +74,23 @@ def parse_range(m: Model, what: str, value) -> tuple[float, float]:
 def header(m: Model, kind: str, fixed: Mapping, **extra) -> dict:
     """The global attributes of a result: the CF header every phasemap Dataset carries
     (:func:`phasemap._dataset.cf_header`), then ``extra`` and the fixed values."""
-    attrs = cf_header(m, kind) | extra
+    attrs = _cf_header(m, kind) | extra
     for name, value in fixed.items():
         attrs[f"phasemap_fixed_{name}"] = value
     return attrs
+
+
+_HEADERS: dict = {}
+
+
+def _cf_header(m: Model, kind: str) -> dict:
+    """:func:`phasemap._dataset.cf_header`, made once per model, kind and second (its
+    time stamps' resolution): the model's description in JSON is a tenth of a small
+    result's cost."""
+    hit = _HEADERS.get((id(m), kind))
+    if hit is None or hit[0] is not m or hit[1]["date_created"] != _now():
+        hit = _HEADERS[(id(m), kind)] = (m, cf_header(m, kind))
+    return dict(hit[1])
 
 
 def make_slice(model, axes: Mapping, fixed: Mapping | None, conditions=None) -> Slice:
@@ -239,8 +252,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     mark = np.zeros((nc, seed_nodes - 1, seed_nodes - 1), dtype=np.int8)
     if check_cells:
         axes = _cell_centres(sl, check_cells)
-        classes = np.ascontiguousarray(evaluate(m, axes, sl.fixed,
-                                                [layers_for(m)[layer]])[layer], dtype=np.int8)
+        classes = _check_raster(sl, layer, axes)
         # _active's comparison of the conditions, the seeds and the trace: one call
         active, vs = _applicable(sl)
         near, seeds, group, grp = run["seed_trace"](
@@ -318,6 +330,29 @@ def _assembled(buf: _Buffers, group, active) -> Traced:
 def _cell_centres(sl: Slice, n: int) -> dict:
     t = (np.arange(n) + 0.5) / n
     return {sl.x: sl.lo[0] + t * (sl.hi[0] - sl.lo[0]), sl.y: sl.lo[1] + t * (sl.hi[1] - sl.lo[1])}
+
+
+def _check_raster(sl: Slice, layer: str, axes: dict) -> np.ndarray:
+    """The layer's classes at the cell centres ``axes`` (x outer, y inner): the scene's
+    own grid kernel (:func:`phasemap._codegen.grid_kernel`), what :func:`phasemap.grid.evaluate`
+    runs, called directly: two axes and one summary layer need none of its general
+    packing (half the cost of a 128^2 raster)."""
+    m = sl.model
+    x, y = axes[sl.x], axes[sl.y]
+    from_x = [d for d in m.derived if d.source == sl.x]
+    slot = {n: i for i, n in enumerate(m.inputs)}
+    deriv_slot = np.array([[slot[d.name] for d in from_x] or [-1]], dtype=np.int64)
+    deriv_values = np.zeros((1, deriv_slot.shape[1], len(x)))
+    for k, d in enumerate(from_x):
+        deriv_values[0, k] = d.func(x)
+    inner_deriv = np.array([d.func(y) for d in m.derived if d.source == sl.y],
+                           dtype=float).reshape(-1, len(y))
+    flags = np.empty((1, len(x) * len(y)), dtype=np.int8)
+    cells = grid_kernel(m, (layers_for(m)[layer],), sl.y)
+    run_grid(cells, sl.base.copy(), np.array([len(x)], dtype=np.int64),
+             np.array([slot[sl.x]], dtype=np.int64), x.reshape(1, -1), deriv_slot, deriv_values,
+             y, inner_deriv, flags, np.empty((0, flags.shape[1])))
+    return flags.reshape(len(x), len(y))
 
 
 def _rescue_seeds(sl: Slice, active, bad, n: int) -> np.ndarray:
@@ -467,8 +502,10 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
                    phasemap_tol=tol)
     # built directly: the variables share their dimensions and none has an index, so
     # xarray's merge and alignment (half the cost of a simple slice) have nothing to do
-    return xr.Dataset._construct_direct({**data, "piece": piece}, {"piece"}, attrs=attrs,
-                                        indexes={})
+    return xr.Dataset._construct_direct(
+        {**data, "piece": piece}, {"piece"},
+        dims={"vertex": len(px), "piece": len(pieces), "point": len(qx)}, attrs=attrs,
+        indexes={})
 
 
 def boundaries(model, axes: Mapping, fixed: Mapping | None = None, layer: str = "n_solutions",
