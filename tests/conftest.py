@@ -50,11 +50,15 @@ def pytest_collection_modifyitems(config, items):
     worker, so that a module's fixtures (its compiled kernels) are built once, and every
     study on the same worker, so that each study runs once (:func:`studies`).  A module
     whose tests only run phasemap in child processes shares nothing in-process: with
-    ``XDIST_SPREAD = True`` its tests go to whichever worker is free."""
+    ``XDIST_SPREAD = True`` its tests go to whichever worker is free.  A module that
+    compiles the same kernels as another names that module's group in ``XDIST_GROUP``
+    (e.g. ``"tests/test_phase_curve.py"``, or ``"studies"``): on two workers at once the
+    same kernel would be compiled twice, each worker missing the other's numba cache."""
     studies = set()
     for item in items:
         module = item.nodeid.split("::")[0]
         group = "studies" if pathlib.Path(module).name.startswith("test_study_") else module
+        group = getattr(getattr(item, "module", None), "XDIST_GROUP", group)
         if getattr(getattr(item, "module", None), "XDIST_SPREAD", False):
             continue
         item.add_marker(pytest.mark.xdist_group(group))

@@ -22,6 +22,10 @@ import re
 
 HUGE = 10**400
 
+#: compiles the hinge pendulum's phase-curve tracer, as tests/test_phase_curve.py does:
+#: one xdist group, so that it is compiled once (tests/conftest.py)
+XDIST_GROUP = "tests/test_phase_curve.py"
+
 
 # ------------------------------------------------------------ the checker -----
 @pytest.mark.parametrize("value", [0.5, 1, np.float32(0.5), np.float16(0.5), np.int8(1),

@@ -23,6 +23,10 @@ from phasemap.bifurcation import claims
 P = math.pi
 CASES = {f"{c.study}: {c.what}": c for c in claims.CASES}
 
+#: compiles the ladder's admissibility conditions, as the ladder study does: one xdist
+#: group, so that they are compiled once (tests/conftest.py)
+XDIST_GROUP = "studies"
+
 
 @pytest.mark.parametrize("name", list(CASES))
 def test_threshold_closed_form(name):
