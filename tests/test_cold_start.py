@@ -56,8 +56,8 @@ def test_a_warm_process_maps_every_built_in_model_without_sympy():
 CLASSIFY = """
 import json, sys
 import phasemap
-c = phasemap.classify(sys.argv[1], phi=0.6, omega=-1.0, f=0.2)
-print(json.dumps([c.n_solutions, [b.accelerations.get("phi_ddot") for b in c.branches],
+c = phasemap.classify(sys.argv[1], theta=0.6, omega=-1.0, xdot=-1.0, f=0.2)
+print(json.dumps([c.n_solutions, [b.accelerations.get("theta_ddot") for b in c.branches],
                   "sympy" in sys.modules]))
 """
 
@@ -65,15 +65,16 @@ print(json.dumps([c.n_solutions, [b.accelerations.get("phi_ddot") for b in c.bra
 @pytest.mark.slow
 def test_a_changed_declaration_is_derived_again_never_loaded_stale(tmp_path):
     """A declaration file's manifest is keyed on its bytes: after an edit that changes the
-    physics (the bar's inertia) a warm process uses the new derivation."""
-    src = (ROOT / "phasemap" / "systems" / "seeds" / "ladder.py").read_text()
-    src = src.replace('"ladder", "Homogeneous', '"my_ladder", "Homogeneous')
-    assert "inertia=m * l**2 / 3" in src
+    physics (the rod's inertia) a warm process uses the new derivation.  The Painleve rod:
+    the smallest built-in declaration (one contact), the quickest to derive and compile."""
+    src = (ROOT / "phasemap" / "systems" / "painleve_rod.py").read_text()
+    src = src.replace('"painleve_rod", "Painleve', '"edited_rod", "Painleve')
+    assert "inertia=m * l**2 / 3" in src and "edited_rod" in src
     edited = src.replace("inertia=m * l**2 / 3", "inertia=m * l**2 / 12")
-    path, twin = tmp_path / "my_ladder.py", tmp_path / "my_ladder_edited.py"
+    path, twin = tmp_path / "edited_rod.py", tmp_path / "edited_rod_edited.py"
     path.write_text(src)
     twin.write_text(edited)
-    expected = phasemap.classify(twin, phi=0.6, omega=-1.0, f=0.2)  # derived here, with sympy
+    expected = phasemap.classify(twin, theta=0.6, omega=-1.0, xdot=-1.0, f=0.2)  # with sympy
     # a cache of this test's own: a kept cache would hold the edited file's manifest from
     # an earlier run, and the edit would rightly load without sympy
     env = dict(os.environ, PHASEMAP_CACHE_DIR=str(tmp_path / "cache"))
@@ -83,7 +84,7 @@ def test_a_changed_declaration_is_derived_again_never_loaded_stale(tmp_path):
     path.write_text(edited)
     n, after, sympy = json.loads(_run(CLASSIFY, str(path), env=env))
     assert sympy                                                       # derived again
-    new = [b.accelerations.get("phi_ddot") for b in expected.branches]
+    new = [b.accelerations.get("theta_ddot") for b in expected.branches]
     assert after == new and after != before and n == expected.n_solutions
     n, again, sympy = json.loads(_run(CLASSIFY, str(path), env=env))
     assert again == new and not sympy
