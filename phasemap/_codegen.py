@@ -286,34 +286,15 @@ def contract(model):
     # One state at a time (classify, the integrator's events): plain control
     # flow, so that only the branches that apply are computed.  The grid
     # kernels compute the same rows with selects instead (see grid_kernel).
-    # At rest every branch applies; moving, those of its direction.  Each regime
-    # passes ``rest`` as a constant, so that a moving state computes nothing of
-    # what only a start from rest reads (the integrator classifies after every
-    # step, nearly always moving).
-    vel = f"i_{model.velocity}"
-
-    def rows(ind: str, rest: str) -> list[str]:
-        out = []
-        for b in range(nb):
-            row = [f"r{b} = {src.call(b, rest, 'vb')}", *(f"out[{b}, {j}] = r{b}[{j}]"
-                                                           for j in range(nf))]
-            absent = [f"out[{b}, 0] = 0.0", f"out[{b}, 1] = 0.0",
-                      *(f"out[{b}, {j}] = NAN" for j in range(2, nf))]
-            d = model.candidates[b].direction
-            if rest == "True":
-                out += [ind + x for x in row]
-            elif d == 0:
-                out += [ind + x for x in absent]
-            else:
-                out += [f"{ind}if {vel} {'>' if d > 0 else '<'} 0.0:",
-                        *(f"{ind}    {x}" for x in row), f"{ind}else:",
-                        *(f"{ind}    {x}" for x in absent)]
-        return out
-
     body = ['    """Every candidate row at the state v; NaN where a branch does not apply."""']
     body += src.load("    ")
     body += src.head("    ")
-    body += ["    if rest:", *rows("        ", "True"), "    else:", *rows("        ", "False")]
+    for b in range(nb):
+        body += [f"    if {src.applies(b)}:",
+                 f"        r{b} = {src.call(b, 'rest', 'vb')}"]
+        body += [f"        out[{b}, {j}] = r{b}[{j}]" for j in range(nf)]
+        body += ["    else:", f"        out[{b}, 0] = 0.0", f"        out[{b}, 1] = 0.0"]
+        body += [f"        out[{b}, {j}] = NAN" for j in range(2, nf)]
     bodies["point(v, out)"] = body
     # The integrator indexes the row with runtime columns: a tuple of floats,
     # the status (an integer in a branch function's row) included.
