@@ -253,9 +253,10 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     if check_cells:
         axes = _cell_centres(sl, check_cells)
         classes = _check_raster(sl, layer, axes)
-        # _active's comparison of the conditions, the seeds and the trace: one call
+        # _active's comparison of the conditions, the seeds, the trace, its pieces and
+        # the completeness check: one call
         active, vs = _applicable(sl)
-        near, seeds, group, grp = run["seed_trace"](
+        near, seeds, group, grp, changes, *assembled, bad = run["seed_trace"](
             fns, _SURVEY, vs, classes, NEAR, active, _rank(sl.conds), v, out, ix, iy, geo,
             code, seed_nodes, buf.vf, buf.vi, buf.counts, buf.curves, mark, tol_u, tol_w)
     else:
@@ -267,15 +268,20 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
         seeds = run["seeds"](fns, active, v, ix, iy, geo, seed_nodes, near)
         run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
                      buf.counts, buf.curves, mark, near, tol_u, tol_w, only is None)
+    full = bool(buf.counts[2])
     while buf.counts[2]:  # the buffers were full: again with larger ones
         buf = buf.grown()
         mark[:] = 0
         run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
                      buf.counts, buf.curves, mark, near, tol_u, tol_w, only is None)
-    traced = _assembled(buf, group, active)
+    if check_cells and not full:
+        traced = Traced(*assembled, group, active, buf)
+    else:
+        traced = _assembled(buf, group, active)
     if check_cells:
         traced.classes = classes
-        bad = T.uncovered(classes, traced.pv, traced.pp)
+        if full:
+            bad = T._uncovered(check_cells, changes, traced.pv, traced.pp)
         if len(bad):
             rescue = _rescue_seeds(sl, active, bad, check_cells)
             if len(rescue):
@@ -291,7 +297,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
                     raise RuntimeError(f"{m.name}: more than {buf.vf.shape[0]} vertices")
                 traced = _assembled(buf, group, active)
                 traced.classes = classes
-                bad = T.uncovered(classes, traced.pv, traced.pp)
+                bad = T._uncovered(check_cells, changes, traced.pv, traced.pp)
             if len(bad):
                 raise ValueError(_uncovered_message(sl, layer, classes, bad, axes))
     return traced
@@ -405,16 +411,13 @@ def _uncovered_message(sl, layer, classes, bad, axes) -> str:
 
 def _unique_points(traced: Traced, tol_uw: float):
     """The points of the trace, each once (a crossing is found from both its curves)."""
-    pf, pi = traced.points_f, traced.points_i
+    uw = traced.points_f[:, :2].tolist()
+    kinds = traced.points_i[:, 0].tolist()
     keep = []
-    for q in range(len(pf)):
-        dup = False
-        for r in keep:
-            if pi[r, 0] == pi[q, 0] and abs(pf[r, 0] - pf[q, 0]) <= tol_uw \
-                    and abs(pf[r, 1] - pf[q, 1]) <= tol_uw:
-                dup = True
-                break
-        if not dup:
+    for q, (u, w) in enumerate(uw):
+        kind = kinds[q]
+        if not any(kinds[r] == kind and abs(uw[r][0] - u) <= tol_uw
+                   and abs(uw[r][1] - w) <= tol_uw for r in keep):
             keep.append(q)
     return np.array(keep, dtype=np.int64)
 
@@ -426,9 +429,13 @@ def condition_name(sl: Slice, traced: Traced, k: int) -> str:
 
 
 def _variable(dim: str, data: np.ndarray, attrs: dict) -> xr.Variable:
-    """A 1-D Variable of an array of ours: xarray's fastpath skips asking whether it is
-    dask, pandas or a nested xarray object (a third of the Dataset's cost)."""
-    return xr.Variable((dim,), data, attrs, fastpath=True)
+    """A 1-D Variable of an array of ours, made as ``xr.Variable((dim,), data, attrs,
+    fastpath=True)`` makes it (its four slots; no encoding) without asking whether the
+    data is dask, pandas or a nested xarray object, nor parsing the dimensions: a
+    fifth of the cost, and a Dataset of a slice holds 14."""
+    var = object.__new__(xr.Variable)
+    var._dims, var._data, var._attrs, var._encoding = (dim,), data, attrs, None
+    return var
 
 
 def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
@@ -447,15 +454,14 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
     pieces = traced.pieces
     named: dict[int, str] = {}
 
-    def name(k) -> str:
+    def name(k: int) -> str:
         """condition_name, once per condition (points repeat their pieces' conditions)."""
-        k = int(k)
         if k not in named:
             named[k] = condition_name(sl, traced, k)
         return named[k]
 
     flags = {k: v for k, v in reg.attrs.items() if k in ("flag_values", "flag_meanings")}
-    data["condition"] = V("piece", np.array([name(k) for k in pieces[:, 1]], dtype=str),
+    data["condition"] = V("piece", np.array([name(k) for k in pieces[:, 1].tolist()], dtype=str),
                           {"long_name": "the condition that vanishes on the piece"})
     data["class_left"] = V("piece", pieces[:, 2].astype(np.int8),
                            {"long_name": f"{layer} left of the piece (along its vertices)",
@@ -471,13 +477,13 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
     qx, qy = sl.physical(pf[:, :2])
     kinds = []
     other = []
-    for kind, k, j in pi:
+    for kind, k, j in pi.tolist():
         if kind == T.FOLD_X:
             kinds.append(f"fold_{sl.x}")
         elif kind == T.FOLD_Y:
             kinds.append(f"fold_{sl.y}")
         else:
-            kinds.append(_KIND_NAMES[int(kind)])
+            kinds.append(_KIND_NAMES[kind])
         names = [name(k)]
         if kind in (T.CROSSING, T.TANGENCY) and j >= 0:
             names.append(name(j))
