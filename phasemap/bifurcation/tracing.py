@@ -113,14 +113,34 @@ def make_slice(model, axes: Mapping, fixed: Mapping | None, conditions=None) -> 
     for name, value in fixed.items():
         if np.ndim(value) != 0:
             raise ValueError(f"{m.name}: fixed value {name} must be a scalar")
-    corners = {names[0]: np.array([lo[0], hi[0]]).reshape(-1, 1),
-               names[1]: np.array([lo[1], hi[1]]).reshape(1, -1)}
-    full = m.complete({**fixed, **corners})
+    full = _complete(m, fixed, names, lo, hi)
     fixed = {n: float(v) for n, v in full.items() if n not in axes}
     conds = compiled(m, tuple(names), conditions)
     fns = T.functions(m, conds)
     base = m.input_vector({**fixed, names[0]: lo[0], names[1]: lo[1]})
     return Slice(m, names[0], names[1], np.array(lo), np.array(hi), fixed, conds, fns, base)
+
+
+def _complete(m: Model, fixed: dict, names: list, lo: list, hi: list) -> dict:
+    """The slice's values completed with the model's defaults (:meth:`Model.complete`),
+    the axes validated at the slice's four corners.
+
+    Where each axis's range lies in its variable's domain, the axes enter as numbers
+    (Model.complete's fast path; a third of the cost) and the model's own check
+    (:attr:`Model.check`, if any) sees the corners; otherwise, and wherever a check
+    fails, the corners go through Model.complete, whose error is the one raised."""
+    corners = {names[0]: np.array([lo[0], hi[0]]).reshape(-1, 1),
+               names[1]: np.array([lo[1], hi[1]]).reshape(1, -1)}
+    variables = m.variables
+    if all(variables[n]._fine(a) and variables[n]._fine(b) for n, a, b in zip(names, lo, hi)):
+        try:
+            full = m.complete({**fixed, names[0]: lo[0], names[1]: lo[1]})
+            if m.check is not None:
+                m.check({**full, **corners})
+            return full
+        except ValueError:
+            pass
+    return m.complete({**fixed, **corners})
 
 
 #: The points of the unit square where :func:`_active` compares the conditions.
