@@ -365,20 +365,35 @@ def _check_raster(sl: Slice, layer: str, axes: dict) -> np.ndarray:
     packing (half the cost of a 128^2 raster)."""
     m = sl.model
     x, y = axes[sl.x], axes[sl.y]
-    from_x = [d for d in m.derived if d.source == sl.x]
-    slot = {n: i for i, n in enumerate(m.inputs)}
-    deriv_slot = np.array([[slot[d.name] for d in from_x] or [-1]], dtype=np.int64)
+    cells, from_x, from_y, outer_slot, deriv_slot = _raster_kernel(m, sl.x, sl.y, layer)
     deriv_values = np.zeros((1, deriv_slot.shape[1], len(x)))
     for k, d in enumerate(from_x):
         deriv_values[0, k] = d.func(x)
-    inner_deriv = np.array([d.func(y) for d in m.derived if d.source == sl.y],
-                           dtype=float).reshape(-1, len(y))
+    inner_deriv = np.array([d.func(y) for d in from_y], dtype=float).reshape(-1, len(y))
     flags = np.empty((1, len(x) * len(y)), dtype=np.int8)
-    cells = grid_kernel(m, (layers_for(m)[layer],), sl.y)
-    run_grid(cells, sl.base.copy(), np.array([len(x)], dtype=np.int64),
-             np.array([slot[sl.x]], dtype=np.int64), x.reshape(1, -1), deriv_slot, deriv_values,
-             y, inner_deriv, flags, np.empty((0, flags.shape[1])))
+    run_grid(cells, sl.base.copy(), np.array([len(x)], dtype=np.int64), outer_slot,
+             x.reshape(1, -1), deriv_slot, deriv_values, y, inner_deriv, flags,
+             np.empty((0, flags.shape[1])))
     return flags.reshape(len(x), len(y))
+
+
+_RASTER_KERNELS: dict = {}
+
+
+def _raster_kernel(m: Model, x: str, y: str, layer: str) -> tuple:
+    """What :func:`_check_raster` passes the grid kernel that does not depend on the
+    ranges, once per model, axes and layer: the kernel, the derived inputs of the outer
+    (x) and inner (y) axis, the x slot and the slots of x's derived inputs."""
+    key = (id(m), x, y, layer)
+    hit = _RASTER_KERNELS.get(key)
+    if hit is None or hit[0] is not m:
+        from_x = [d for d in m.derived if d.source == x]
+        slot = {n: i for i, n in enumerate(m.inputs)}
+        hit = _RASTER_KERNELS[key] = (
+            m, grid_kernel(m, (layers_for(m)[layer],), y), from_x,
+            [d for d in m.derived if d.source == y], np.array([slot[x]], dtype=np.int64),
+            np.array([[slot[d.name] for d in from_x] or [-1]], dtype=np.int64))
+    return hit[1:]
 
 
 def _rescue_seeds(sl: Slice, active, bad, n: int) -> np.ndarray:
@@ -435,9 +450,11 @@ def _unique_points(traced: Traced, tol_uw: float):
     kinds = traced.points_i[:, 0].tolist()
     keep = []
     for q, (u, w) in enumerate(uw):
-        kind = kinds[q]
-        if not any(kinds[r] == kind and abs(uw[r][0] - u) <= tol_uw
-                   and abs(uw[r][1] - w) <= tol_uw for r in keep):
+        for r in keep:
+            if kinds[r] == kinds[q] and abs(uw[r][0] - u) <= tol_uw \
+                    and abs(uw[r][1] - w) <= tol_uw:
+                break
+        else:
             keep.append(q)
     return np.array(keep, dtype=np.int64)
 
