@@ -241,6 +241,22 @@ def test_uncovered_is_every_change_with_no_hit_around_either_cell():
         assert got.dtype == np.int64 and got.shape == (len(want), 4)
 
 
+def test_full_buffers_are_grown_and_the_trace_is_the_same(monkeypatch):
+    """Where the vertex buffers fill, the trace runs again with larger ones: its pieces,
+    points and completeness check are those of a trace that never filled them."""
+    from phasemap.bifurcation import tracing
+
+    sl = tracing.make_slice("painleve_rod", {"theta": (0.2, 1.5), "f": (0.0, 3.0)},
+                            SLIDE_BACK, ROD)
+    want = tracing.trace(sl, "n_solutions", 1e-10)
+    sizes = tracing._Buffers.__init__.__defaults__
+    monkeypatch.setattr(tracing._Buffers.__init__, "__defaults__", (16, 1))
+    got = tracing.trace(sl, "n_solutions", 1e-10)
+    assert got.buf.vf.shape[0] > 16 and want.buf.vf.shape[0] == sizes[0]
+    for field in ("pv", "pp", "pieces", "points_f", "points_i", "classes"):
+        assert np.array_equal(getattr(got, field), getattr(want, field)), field
+
+
 def test_the_check_raster_is_the_grid_evaluators():
     """The 128^2 check raster, from the scene's grid kernel called directly, is what
     phasemap.grid.evaluate makes of the same cells (axes in either order, derived

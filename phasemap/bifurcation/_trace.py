@@ -179,27 +179,56 @@ def _near(near, u, w):
 
 
 @njit(cache=True, error_model="numpy")
-def near_changes(classes, radius):
-    """Cells of a raster within ``radius`` cells (in each axis) of a class change
-    between neighbouring cells: where a boundary of the raster's classes can pass."""
+def class_changes(classes):
+    """The class changes of a raster: rows ``(i, j, di, dj)``, the cells (i, j) and
+    (i + di, j + dj) (a neighbour along one axis) differ, in the order of i, j and the
+    axis.  Two passes: each cell's changes as bits (branch-free, so that it vectorises),
+    then the rows of the few cells that have one."""
     n0, n1 = classes.shape
-    changed = np.zeros((n0, n1), dtype=np.bool_)
+    bits = np.zeros((n0, n1), dtype=np.int8)
+    count = 0
+    for i in range(n0):
+        for j in range(n1 - 1):  # the last column and the last row after
+            c = classes[i, j]
+            down = i + 1 < n0 and classes[i + 1, j] != c
+            right = classes[i, j + 1] != c
+            bits[i, j] = down + 2 * right
+            count += down + right
+        if n1 and i + 1 < n0 and classes[i + 1, n1 - 1] != classes[i, n1 - 1]:
+            bits[i, n1 - 1] = 1
+            count += 1
+    out = np.empty((count, 4), dtype=np.int64)
+    n = 0
     for i in range(n0):
         for j in range(n1):
-            if (i + 1 < n0 and classes[i + 1, j] != classes[i, j]) \
-                    or (j + 1 < n1 and classes[i, j + 1] != classes[i, j]):
-                changed[i, j] = True
-                if i + 1 < n0:
-                    changed[i + 1, j] = True
-                if j + 1 < n1:
-                    changed[i, j + 1] = True
-    # the square of cells around each change, as two passes (along j, then along i)
+            f = bits[i, j]
+            if f == 0:
+                continue
+            for d in range(2):
+                if f & (1 << d):
+                    out[n, 0] = i
+                    out[n, 1] = j
+                    out[n, 2] = 1 - d
+                    out[n, 3] = d
+                    n += 1
+    return out[:n]
+
+
+@njit(cache=True, error_model="numpy")
+def near_changes(shape, changes, radius):
+    """Cells of a raster of ``shape`` within ``radius`` cells (in each axis) of a cell
+    with a class change (rows of :func:`class_changes`), of its neighbour below and of
+    its neighbour to the right: where a boundary of the raster's classes can pass."""
+    n0, n1 = shape
+    # the square of cells around each of those cells, as two passes: along j from the
+    # cells, then along i over whole rows (which vectorises)
     rows = np.zeros((n0, n1), dtype=np.bool_)
-    for i in range(n0):
-        for j in range(n1):
-            if changed[i, j]:
-                for b in range(max(j - radius, 0), min(j + radius + 1, n1)):
-                    rows[i, b] = True
+    for r in range(changes.shape[0]):
+        i, j = changes[r, 0], changes[r, 1]
+        for a, b0, b1 in ((i, j, j + 1), (i + 1, j, j)):
+            if a < n0:
+                for b in range(max(b0 - radius, 0), min(b1 + radius + 1, n1)):
+                    rows[a, b] = True
     near = np.zeros((n0, n1), dtype=np.bool_)
     for i in range(n0):
         for a in range(max(i - radius, 0), min(i + radius + 1, n0)):
@@ -1153,9 +1182,14 @@ def _seed_trace_all(F, pts, vs, classes, radius, active, rank, v, out, ix, iy, g
     ``vs``) drop from ``active`` those constant or proportional to another there
     (:func:`groups`); then the cells near a class change of the check raster
     ``classes`` (:func:`near_changes` with ``radius``), the seeds of an n x n raster
-    there (:func:`_seeds_all`) and the curves from them (:func:`_trace_all`,
-    ``require_sides``).  Returns (near, seeds, group, grp): ``grp`` is each
-    condition's group and ``rank``."""
+    there (:func:`_seeds_all`), the curves from them (:func:`_trace_all`,
+    ``require_sides``), their pieces (:func:`assemble`) and the class changes of
+    ``classes`` no piece explains (:func:`uncovered`).  Returns (near, seeds, group,
+    grp, changes, the six arrays of :func:`assemble`, uncovered): ``grp`` is each
+    condition's group and ``rank``, ``changes`` the rows of :func:`class_changes`; the
+    pieces are empty where the buffers were full (``counts[2]``: trace again with
+    larger ones).
+    """
     vals = np.empty((pts.shape[0], active.shape[0]))
     _survey_all(F, vs, ix, iy, geo, pts, vals)
     group = groups(vals, active)
@@ -1163,11 +1197,14 @@ def _seed_trace_all(F, pts, vs, classes, radius, active, rank, v, out, ix, iy, g
     for k in range(active.shape[0]):
         grp[k, 0] = group[k]
         grp[k, 1] = rank[k]
-    near = near_changes(classes, radius)
+    changes = class_changes(classes)
+    near = near_changes(classes.shape, changes, radius)
     seeds = _seeds_all(F, active, v, ix, iy, geo, n, near)
     _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
                near, tol_u, tol_w, True)
-    return near, seeds, group, grp
+    pv, pp, pq, pieces, pf, pi = assemble(vf, vi, curves, 0 if counts[2] else counts[1])
+    bad = _uncovered(classes.shape[0], changes, pv, pp)
+    return near, seeds, group, grp, changes, pv, pp, pq, pieces, pf, pi, bad
 
 
 # -- pieces and the completeness check (no model globals) ---------------------------------
@@ -1335,39 +1372,40 @@ def uncovered(classes, pv, pp):
     Returns rows ``(i, j, di, dj)``: the cells (i, j) and (i + di, j + dj) differ
     and no piece passes through the 3 x 3 cells around either.
     """
-    nx_, ny_ = classes.shape
-    assert nx_ == ny_
-    hit = np.zeros((1, nx_, nx_), dtype=np.int8)
+    assert classes.shape[0] == classes.shape[1]
+    return _uncovered(classes.shape[0], class_changes(classes), pv, pp)
+
+
+@njit(cache=True, error_model="numpy")
+def _uncovered(n, changes, pv, pp):
+    """:func:`uncovered` of an n x n raster from its class changes
+    (:func:`class_changes`): those rows with no cell a piece passes through in the
+    3 x 3 cells around either of their two cells."""
+    hit = np.zeros((1, n, n), dtype=np.int8)
     for q in range(pv.shape[0]):
         if q + 1 < pv.shape[0] and pp[q + 1] == pp[q]:
             _mark(hit, 0, pv[q, 0], pv[q, 1], pv[q + 1, 0], pv[q + 1, 1])
         else:
             _mark(hit, 0, pv[q, 0], pv[q, 1], pv[q, 0], pv[q, 1])
-    near = np.zeros((nx_, ny_), dtype=np.bool_)
-    for i in range(nx_):
-        for j in range(ny_):
-            if hit[0, i, j]:
-                for di in range(-1, 2):
-                    for dj in range(-1, 2):
-                        a, b = i + di, j + dj
-                        if 0 <= a < nx_ and 0 <= b < ny_:
-                            near[a, b] = True
-    out = np.empty((2 * nx_ * ny_, 4), dtype=np.int64)
-    n = 0
-    for i in range(nx_):
-        for j in range(ny_):
-            for d in range(2):
-                a = i + 1 if d == 0 else i
-                b = j if d == 0 else j + 1
-                if a >= nx_ or b >= ny_:
-                    continue
-                if classes[i, j] != classes[a, b] and not (near[i, j] or near[a, b]):
-                    out[n, 0] = i
-                    out[n, 1] = j
-                    out[n, 2] = a - i
-                    out[n, 3] = b - j
-                    n += 1
-    return out[:n]
+    out = np.empty((changes.shape[0], 4), dtype=np.int64)
+    m = 0
+    for r in range(changes.shape[0]):
+        i, j = changes[r, 0], changes[r, 1]
+        if not (_hit_around(hit, i, j) or _hit_around(hit, i + changes[r, 2], j + changes[r, 3])):
+            out[m] = changes[r]
+            m += 1
+    return out[:m]
+
+
+@njit(cache=True, error_model="numpy")
+def _hit_around(hit, i, j):
+    """Whether a cell of ``hit[0]`` in the 3 x 3 cells around (i, j) is marked."""
+    n = hit.shape[1]
+    for a in range(max(i - 1, 0), min(i + 2, n)):
+        for b in range(max(j - 1, 0), min(j + 2, n)):
+            if hit[0, a, b]:
+                return True
+    return False
 
 
 # -- the compiled tracer: entry points with the model's functions as arguments --------------
@@ -1413,7 +1451,8 @@ def entries() -> dict:
                                 types.float64, types.boolean)
         sig_seeds = _F2(FUNCTIONS, _B1, _F1, types.int64, types.int64, _F1, types.int64, _B2)
         sig_survey = types.void(FUNCTIONS, _F1, types.int64, types.int64, _F1, _F2, _F2)
-        sig_seed_trace = types.Tuple((_B2, _F2, _I1, _I2))(
+        sig_seed_trace = types.Tuple((_B2, _F2, _I1, _I2, _I2, _F2, _I1, _I1, _I2, _F2, _I2,
+                                      _I2))(
             FUNCTIONS, _F2, _F1, types.Array(types.int8, 2, "C"), types.int64, _B1, _I1, _F1,
             _F2, types.int64, types.int64, _F1, types.int64, types.int64, _F2, _I2, _I1, _I2,
             _B3, types.float64, types.float64)

@@ -113,14 +113,34 @@ def make_slice(model, axes: Mapping, fixed: Mapping | None, conditions=None) -> 
     for name, value in fixed.items():
         if np.ndim(value) != 0:
             raise ValueError(f"{m.name}: fixed value {name} must be a scalar")
-    corners = {names[0]: np.array([lo[0], hi[0]]).reshape(-1, 1),
-               names[1]: np.array([lo[1], hi[1]]).reshape(1, -1)}
-    full = m.complete({**fixed, **corners})
+    full = _complete(m, fixed, names, lo, hi)
     fixed = {n: float(v) for n, v in full.items() if n not in axes}
     conds = compiled(m, tuple(names), conditions)
     fns = T.functions(m, conds)
     base = m.input_vector({**fixed, names[0]: lo[0], names[1]: lo[1]})
     return Slice(m, names[0], names[1], np.array(lo), np.array(hi), fixed, conds, fns, base)
+
+
+def _complete(m: Model, fixed: dict, names: list, lo: list, hi: list) -> dict:
+    """The slice's values completed with the model's defaults (:meth:`Model.complete`),
+    the axes validated at the slice's four corners.
+
+    Where each axis's range lies in its variable's domain, the axes enter as numbers
+    (Model.complete's fast path; a third of the cost) and the model's own check
+    (:attr:`Model.check`, if any) sees the corners; otherwise, and wherever a check
+    fails, the corners go through Model.complete, whose error is the one raised."""
+    corners = {names[0]: np.array([lo[0], hi[0]]).reshape(-1, 1),
+               names[1]: np.array([lo[1], hi[1]]).reshape(1, -1)}
+    variables = m.variables
+    if all(variables[n]._fine(a) and variables[n]._fine(b) for n, a, b in zip(names, lo, hi)):
+        try:
+            full = m.complete({**fixed, names[0]: lo[0], names[1]: lo[1]})
+            if m.check is not None:
+                m.check({**full, **corners})
+            return full
+        except ValueError:
+            pass
+    return m.complete({**fixed, **corners})
 
 
 #: The points of the unit square where :func:`_active` compares the conditions.
@@ -253,9 +273,10 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     if check_cells:
         axes = _cell_centres(sl, check_cells)
         classes = _check_raster(sl, layer, axes)
-        # _active's comparison of the conditions, the seeds and the trace: one call
+        # _active's comparison of the conditions, the seeds, the trace, its pieces and
+        # the completeness check: one call
         active, vs = _applicable(sl)
-        near, seeds, group, grp = run["seed_trace"](
+        near, seeds, group, grp, changes, *assembled, bad = run["seed_trace"](
             fns, _SURVEY, vs, classes, NEAR, active, _rank(sl.conds), v, out, ix, iy, geo,
             code, seed_nodes, buf.vf, buf.vi, buf.counts, buf.curves, mark, tol_u, tol_w)
     else:
@@ -267,15 +288,20 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
         seeds = run["seeds"](fns, active, v, ix, iy, geo, seed_nodes, near)
         run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
                      buf.counts, buf.curves, mark, near, tol_u, tol_w, only is None)
+    full = bool(buf.counts[2])
     while buf.counts[2]:  # the buffers were full: again with larger ones
         buf = buf.grown()
         mark[:] = 0
         run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
                      buf.counts, buf.curves, mark, near, tol_u, tol_w, only is None)
-    traced = _assembled(buf, group, active)
+    if check_cells and not full:
+        traced = Traced(*assembled, group, active, buf)
+    else:
+        traced = _assembled(buf, group, active)
     if check_cells:
         traced.classes = classes
-        bad = T.uncovered(classes, traced.pv, traced.pp)
+        if full:
+            bad = T._uncovered(check_cells, changes, traced.pv, traced.pp)
         if len(bad):
             rescue = _rescue_seeds(sl, active, bad, check_cells)
             if len(rescue):
@@ -291,7 +317,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
                     raise RuntimeError(f"{m.name}: more than {buf.vf.shape[0]} vertices")
                 traced = _assembled(buf, group, active)
                 traced.classes = classes
-                bad = T.uncovered(classes, traced.pv, traced.pp)
+                bad = T._uncovered(check_cells, changes, traced.pv, traced.pp)
             if len(bad):
                 raise ValueError(_uncovered_message(sl, layer, classes, bad, axes))
     return traced
@@ -339,20 +365,35 @@ def _check_raster(sl: Slice, layer: str, axes: dict) -> np.ndarray:
     packing (half the cost of a 128^2 raster)."""
     m = sl.model
     x, y = axes[sl.x], axes[sl.y]
-    from_x = [d for d in m.derived if d.source == sl.x]
-    slot = {n: i for i, n in enumerate(m.inputs)}
-    deriv_slot = np.array([[slot[d.name] for d in from_x] or [-1]], dtype=np.int64)
+    cells, from_x, from_y, outer_slot, deriv_slot = _raster_kernel(m, sl.x, sl.y, layer)
     deriv_values = np.zeros((1, deriv_slot.shape[1], len(x)))
     for k, d in enumerate(from_x):
         deriv_values[0, k] = d.func(x)
-    inner_deriv = np.array([d.func(y) for d in m.derived if d.source == sl.y],
-                           dtype=float).reshape(-1, len(y))
+    inner_deriv = np.array([d.func(y) for d in from_y], dtype=float).reshape(-1, len(y))
     flags = np.empty((1, len(x) * len(y)), dtype=np.int8)
-    cells = grid_kernel(m, (layers_for(m)[layer],), sl.y)
-    run_grid(cells, sl.base.copy(), np.array([len(x)], dtype=np.int64),
-             np.array([slot[sl.x]], dtype=np.int64), x.reshape(1, -1), deriv_slot, deriv_values,
-             y, inner_deriv, flags, np.empty((0, flags.shape[1])))
+    run_grid(cells, sl.base.copy(), np.array([len(x)], dtype=np.int64), outer_slot,
+             x.reshape(1, -1), deriv_slot, deriv_values, y, inner_deriv, flags,
+             np.empty((0, flags.shape[1])))
     return flags.reshape(len(x), len(y))
+
+
+_RASTER_KERNELS: dict = {}
+
+
+def _raster_kernel(m: Model, x: str, y: str, layer: str) -> tuple:
+    """What :func:`_check_raster` passes the grid kernel that does not depend on the
+    ranges, once per model, axes and layer: the kernel, the derived inputs of the outer
+    (x) and inner (y) axis, the x slot and the slots of x's derived inputs."""
+    key = (id(m), x, y, layer)
+    hit = _RASTER_KERNELS.get(key)
+    if hit is None or hit[0] is not m:
+        from_x = [d for d in m.derived if d.source == x]
+        slot = {n: i for i, n in enumerate(m.inputs)}
+        hit = _RASTER_KERNELS[key] = (
+            m, grid_kernel(m, (layers_for(m)[layer],), y), from_x,
+            [d for d in m.derived if d.source == y], np.array([slot[x]], dtype=np.int64),
+            np.array([[slot[d.name] for d in from_x] or [-1]], dtype=np.int64))
+    return hit[1:]
 
 
 def _rescue_seeds(sl: Slice, active, bad, n: int) -> np.ndarray:
@@ -405,16 +446,15 @@ def _uncovered_message(sl, layer, classes, bad, axes) -> str:
 
 def _unique_points(traced: Traced, tol_uw: float):
     """The points of the trace, each once (a crossing is found from both its curves)."""
-    pf, pi = traced.points_f, traced.points_i
+    uw = traced.points_f[:, :2].tolist()
+    kinds = traced.points_i[:, 0].tolist()
     keep = []
-    for q in range(len(pf)):
-        dup = False
+    for q, (u, w) in enumerate(uw):
         for r in keep:
-            if pi[r, 0] == pi[q, 0] and abs(pf[r, 0] - pf[q, 0]) <= tol_uw \
-                    and abs(pf[r, 1] - pf[q, 1]) <= tol_uw:
-                dup = True
+            if kinds[r] == kinds[q] and abs(uw[r][0] - u) <= tol_uw \
+                    and abs(uw[r][1] - w) <= tol_uw:
                 break
-        if not dup:
+        else:
             keep.append(q)
     return np.array(keep, dtype=np.int64)
 
@@ -426,9 +466,13 @@ def condition_name(sl: Slice, traced: Traced, k: int) -> str:
 
 
 def _variable(dim: str, data: np.ndarray, attrs: dict) -> xr.Variable:
-    """A 1-D Variable of an array of ours: xarray's fastpath skips asking whether it is
-    dask, pandas or a nested xarray object (a third of the Dataset's cost)."""
-    return xr.Variable((dim,), data, attrs, fastpath=True)
+    """A 1-D Variable of an array of ours, made as ``xr.Variable((dim,), data, attrs,
+    fastpath=True)`` makes it (its four slots; no encoding) without asking whether the
+    data is dask, pandas or a nested xarray object, nor parsing the dimensions: a
+    fifth of the cost, and a Dataset of a slice holds 14."""
+    var = object.__new__(xr.Variable)
+    var._dims, var._data, var._attrs, var._encoding = (dim,), data, attrs, None
+    return var
 
 
 def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
@@ -447,15 +491,14 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
     pieces = traced.pieces
     named: dict[int, str] = {}
 
-    def name(k) -> str:
+    def name(k: int) -> str:
         """condition_name, once per condition (points repeat their pieces' conditions)."""
-        k = int(k)
         if k not in named:
             named[k] = condition_name(sl, traced, k)
         return named[k]
 
     flags = {k: v for k, v in reg.attrs.items() if k in ("flag_values", "flag_meanings")}
-    data["condition"] = V("piece", np.array([name(k) for k in pieces[:, 1]], dtype=str),
+    data["condition"] = V("piece", np.array([name(k) for k in pieces[:, 1].tolist()], dtype=str),
                           {"long_name": "the condition that vanishes on the piece"})
     data["class_left"] = V("piece", pieces[:, 2].astype(np.int8),
                            {"long_name": f"{layer} left of the piece (along its vertices)",
@@ -471,13 +514,13 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
     qx, qy = sl.physical(pf[:, :2])
     kinds = []
     other = []
-    for kind, k, j in pi:
+    for kind, k, j in pi.tolist():
         if kind == T.FOLD_X:
             kinds.append(f"fold_{sl.x}")
         elif kind == T.FOLD_Y:
             kinds.append(f"fold_{sl.y}")
         else:
-            kinds.append(_KIND_NAMES[int(kind)])
+            kinds.append(_KIND_NAMES[kind])
         names = [name(k)]
         if kind in (T.CROSSING, T.TANGENCY) and j >= 0:
             names.append(name(j))
