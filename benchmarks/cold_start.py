@@ -147,7 +147,19 @@ def report(args, med, heavy, loads) -> str:
                  f"  Here the floor alone exceeds the {TARGET} s target: on this machine "
                  "at this load no process that imports numba and xarray and loads one "
                  "compiled function can meet it, so the rows say how far phasemap is "
-                 "above that floor."), ""]
+                 "above that floor."),
+              "",
+              f"What is phasemap's own: `import phasemap` costs "
+              f"{med['import phasemap'][1] - med['import numba, xarray'][1]:+.2f} s of CPU "
+              "beyond `import numba, xarray`, and no model's first map imports sympy.  A "
+              "first map loads two compiled functions from numba's cache (the model's grid "
+              "kernel `cells` and the driver `_drive`; counted by wrapping numba's "
+              "`Cache.load_overload` in a fresh process, the calls task, issue 22): the "
+              "first load of any function runs numba's target refresh "
+              "(`load_additional_registries`: about 300 modules of numba's NumPy, linalg "
+              "and SciPy support, most of the floor's third row), the second (`_drive`) "
+              "took 0.014 s of CPU.  Fewer, larger entry points would save at most that "
+              "second load; the floor is numba's and xarray's.", ""]
     return "\n".join(lines)
 
 

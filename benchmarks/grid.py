@@ -27,6 +27,7 @@ every kernel that runs is checked (compiled fresh in a child process) for what
 the hot loop must not hold: gathers, scalar byte stores, calls.
 
     python benchmarks/grid.py [--side 2048] [--small 256] [--repeat 7]
+    python benchmarks/grid.py --public-only    # the small maps' public call alone
 
 Writes the section "Grid throughput" of ../BENCHMARKS.md.
 """
@@ -506,25 +507,9 @@ def report(args, big, small, checked, asm, loads) -> str:
         "computes four candidate rows where it computes one, so the ratio understates "
         "the declared kernel against a NumPy version of the same rows.",
         "",
-        f"### The public call on a small map, side {s} (ms)",
-        "",
-        "*beyond*: the public call's time minus the kernel's, on the same thread count. "
-        "The target's verdict reads the one-thread figures (CPU time); the 2-thread ones "
-        "are wall times, which at a load above the core count include waiting for the "
-        "second thread to be scheduled (tens of ms on a map this small).",
-        "",
-        f"| model | kernel 1 thread | public 1 thread | beyond | kernel {nt} threads | "
-        f"public {nt} threads | beyond |",
-        "|---|---:|---:|---:|---:|---:|---:|",
     ]
-    beyond = {}
-    for name in CASES:
-        label = runs_as(name)
-        k1, p1 = small[(name, label, "kernel", 1)], small[(name, label, "public", 1)]
-        kn, pn = small[(name, label, "kernel", nt)], small[(name, label, "public", nt)]
-        beyond[name] = p1 - k1
-        lines.append(f"| {name} | {k1 * 1e3:.3f} | {p1 * 1e3:.3f} | {(p1 - k1) * 1e3:.3f} | "
-                     f"{kn * 1e3:.3f} | {pn * 1e3:.3f} | {(pn - kn) * 1e3:.3f} |")
+    table, beyond = public_table(small, s, nt)
+    lines += table
     lines += [
         "",
         "### The hot loops' assembly",
@@ -558,10 +543,7 @@ def report(args, big, small, checked, asm, loads) -> str:
             note = "" if same else " (a)"
             lines.append(f"| kernel >= {NUMPY_TARGET:.0f}x NumPy, per thread | {name} | "
                          f"{ratio:.1f}x{note} | {verdict(ratio >= NUMPY_TARGET)} |")
-    for name, t in beyond.items():
-        lines.append(f"| public call <= {OVERHEAD_TARGET * 1e3:.0f} ms beyond its kernel at "
-                     f"{s}^2, one thread | {name} | {t * 1e3:.2f} ms | "
-                     f"{verdict(t <= OVERHEAD_TARGET)} |")
+    lines += public_targets(beyond, s)
     clean = all(a["gathers"] == 0 and a["byte stores"] == 0 and a["calls"] == 0
                 for a in asm.values())
     lines += [
@@ -575,6 +557,64 @@ def report(args, big, small, checked, asm, loads) -> str:
     return "\n".join(lines)
 
 
+def public_table(small, s, nt) -> tuple[list[str], dict]:
+    """The subsection of the public call on a small map, and each model's cost beyond its
+    kernel on one thread (seconds)."""
+    lines = [
+        f"### The public call on a small map, side {s} (ms)",
+        "",
+        "*beyond*: the public call's time minus the kernel's, on the same thread count. "
+        "The target's verdict reads the one-thread figures (CPU time); the 2-thread ones "
+        "are wall times, which at a load above the core count include waiting for the "
+        "second thread to be scheduled (tens of ms on a map this small).",
+        "",
+        f"| model | kernel 1 thread | public 1 thread | beyond | kernel {nt} threads | "
+        f"public {nt} threads | beyond |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
+    beyond = {}
+    for name in CASES:
+        label = runs_as(name)
+        k1, p1 = small[(name, label, "kernel", 1)], small[(name, label, "public", 1)]
+        kn, pn = small[(name, label, "kernel", nt)], small[(name, label, "public", nt)]
+        beyond[name] = p1 - k1
+        lines.append(f"| {name} | {k1 * 1e3:.3f} | {p1 * 1e3:.3f} | {(p1 - k1) * 1e3:.3f} | "
+                     f"{kn * 1e3:.3f} | {pn * 1e3:.3f} | {(pn - kn) * 1e3:.3f} |")
+    return lines, beyond
+
+
+def public_targets(beyond, s) -> list[str]:
+    """The rows of target 2 (the cost of the public call beyond its kernel)."""
+    return [f"| public call <= {OVERHEAD_TARGET * 1e3:.0f} ms beyond its kernel at {s}^2, "
+            f"one thread | {name} | {t * 1e3:.2f} ms | {verdict(t <= OVERHEAD_TARGET)} |"
+            for name, t in beyond.items()]
+
+
+def public_only(args) -> None:
+    """``--public-only``: time the small maps alone and replace, in BENCHMARKS.md, the
+    subsection of the public call and target 2's rows; the rest of the section stays."""
+    before = load()
+    small, _ = measure(args.small, max(args.repeat, 25), with_numpy=False)
+    table, beyond = public_table(small, args.small, numba.config.NUMBA_NUM_THREADS)
+    table[2] += (f"  Timed alone by `python benchmarks/grid.py --public-only` (load average "
+                 f"{before} at the start, {load()} at the end).")
+    print("\n".join(table + [""] + public_targets(beyond, args.small)))
+    if args.no_write:
+        return
+    path = ROOT / "BENCHMARKS.md"
+    text = path.read_text()
+    head = "### The public call on a small map"
+    start = text.index(head)
+    end = text.index("\n### ", start + 1)
+    text = text[:start] + "\n".join(table) + "\n" + text[end:]
+    rows = dict(zip(beyond, public_targets(beyond, args.small)))
+    out = []
+    for line in text.split("\n"):
+        hit = [n for n in rows if line.startswith("| public call <= ") and f"| {n} |" in line]
+        out.append(rows[hit[0]] if hit else line)
+    path.write_text("\n".join(out))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--side", type=int, default=2048)
@@ -582,7 +622,12 @@ def main():
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--no-asm", action="store_true", help="skip the assembly check")
     ap.add_argument("--no-write", action="store_true", help="print only")
+    ap.add_argument("--public-only", action="store_true",
+                    help="time only the public call on the small maps (its subsection)")
     args = ap.parse_args()
+    if args.public_only:
+        public_only(args)
+        return
     loads = [load()]
     big, checked = measure(args.side, args.repeat, with_numpy=True)
     small, _ = measure(args.small, max(args.repeat, 25), with_numpy=False)

@@ -30,6 +30,7 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import re
+import time as _time
 from dataclasses import dataclass, field
 from typing import Mapping
 
@@ -70,8 +71,18 @@ _TITLES = {"atlas": "atlas", "trajectory": "trajectory", "phase_curve": "phase c
            "boundaries": "boundaries", "threshold": "threshold curve"}
 
 
+#: (whole seconds since the epoch, their ISO 8601 time stamp): the last one made
+_STAMP = [None, ""]
+
+
 def _now() -> str:
-    return _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    """The time stamp of now (UTC, whole seconds), formatted once per second."""
+    second = int(_time.time())
+    if _STAMP[0] != second:
+        _STAMP[0] = second
+        _STAMP[1] = _dt.datetime.fromtimestamp(second, _dt.timezone.utc).strftime(
+            "%Y-%m-%dT%H:%M:%SZ")
+    return _STAMP[1]
 
 
 def cf_header(model, kind: str = "atlas", producer: str = "phasemap") -> dict:
@@ -86,9 +97,26 @@ def cf_header(model, kind: str = "atlas", producer: str = "phasemap") -> dict:
     ``phasemap_declaration_sha256`` (:func:`declaration_hash`).  The producer
     adds what is its own (the scene, the fixed values, the end of a motion).
     """
-    if kind not in _TITLES:
-        raise ValueError(f"kind must be one of {', '.join(_TITLES)}, got {kind!r}")
     now = _now()
+    key = (id(model), kind, producer)
+    hit = _HEADERS.get(key)
+    if hit is None or hit[0] is not model:
+        if kind not in _TITLES:
+            raise ValueError(f"kind must be one of {', '.join(_TITLES)}, got {kind!r}")
+        hit = _HEADERS[key] = (model, _header(model, kind, producer, now))
+    attrs = dict(hit[1])
+    if attrs["date_created"] != now:
+        attrs["history"] = f"{now} created by {producer} {__version__}"
+        attrs["date_created"] = now
+    return attrs
+
+
+#: (id(model), kind, producer) -> (model, its header as first made): the model's
+#: description in JSON is made once (a tenth of a short motion's wrapper otherwise)
+_HEADERS: dict[tuple, tuple] = {}
+
+
+def _header(model, kind: str, producer: str, now: str) -> dict:
     attrs = {
         "Conventions": CONVENTIONS,
         "title": f"phasemap {_TITLES[kind]}: {model.title}",
@@ -145,7 +173,10 @@ def assemble(data_vars: dict, coords: dict, attrs: dict) -> xr.Dataset:
     """
     import pandas as pd  # loaded with xarray
 
-    indexes = {name: xr.indexes.PandasIndex(pd.Index(var.values), name, coord_dtype=var.dtype)
+    # a named pandas Index of the coordinate's own array: what PandasIndex would make of
+    # the Variable (its safe cast and the copy it takes of an unnamed index skipped)
+    indexes = {name: xr.indexes.PandasIndex(pd.Index(var.values, name=name, copy=False),
+                                            name, coord_dtype=var.dtype, fastpath=True)
                for name, var in coords.items()}
     variables = {}
     for name, var in coords.items():

@@ -506,12 +506,13 @@ class Model:
         Raises ValueError naming the model and the variable for an unknown
         name, a non-finite value or a value outside the domain.
         """
-        full: dict[str, object] = self.defaults
+        defaults, variables = self._completion
+        full: dict[str, object] = dict(defaults)
         if all(type(x) is float and n in full for n, x in values.items()):
             full.update(values)  # what _args.values makes of known names and Python floats
         else:
             full.update(_args.values(values, self.names, self.name))
-        for name, var in self.variables.items():
+        for name, var in variables:
             value = full[name]
             # An array whose least and greatest values pass passes whole: each variable's
             # domain is an interval (NaN fails); otherwise check names what fails.
@@ -521,6 +522,12 @@ class Model:
         if self.check is not None:
             self.check(full)
         return full
+
+    @functools.cached_property
+    def _completion(self) -> tuple[dict[str, float], tuple[tuple[str, Variable], ...]]:
+        """What :meth:`complete` starts from, made once: the defaults, and each variable
+        by name (a call of a sweep validates its values only)."""
+        return self.defaults, tuple(self.variables.items())
 
     def input_vector(self, values: Mapping[str, float]) -> np.ndarray:
         """The point function's ``v`` for complete scalar values."""

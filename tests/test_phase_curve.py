@@ -713,3 +713,12 @@ def test_the_output_pass_solves_a_panel_to_rounding(z):
     for tau in np.linspace(0.0, 1.0, 17):
         exact = math.exp(z * tau) * u0 + h * (math.exp(a * tau) - math.exp(z * tau)) / (a - z)
         assert col.legendre_at(tau, u, nt) == pytest.approx(exact, rel=2e-15, abs=0)
+    # the output points evaluate the sum many at a time (legendre_many): the same
+    # arithmetic per point, so the same bits, for any number of terms
+    taus = np.linspace(0.0, 1.0, 17)
+    for terms in sorted({1, 2, 3, nt}):
+        lanes = np.empty((4, col.LANES))
+        lanes[0, :taus.size] = taus
+        col.legendre_many(lanes, taus.size, u, terms)
+        assert [float(x) for x in lanes[1, :taus.size]] == [
+            col.legendre_at(float(t), u, terms) for t in taus]

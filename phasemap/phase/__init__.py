@@ -210,8 +210,10 @@ def _build(m: Model):
 
 def velocity_reference(m: Model, full: dict) -> float:
     """u_ref: the square of the model's natural velocity scale at these values."""
-    names = list(inspect.signature(m.velocity_scale.py_func).parameters)
-    scale = float(m.velocity_scale.py_func(*(full[n] for n in names)))
+    scale_of = m.velocity_scale.py_func
+    names = remember(("velocity_scale", m.name), m,
+                     lambda: tuple(inspect.signature(scale_of).parameters))
+    scale = float(scale_of(*[full[n] for n in names]))
     return scale * scale if scale > 0.0 and math.isfinite(scale) else 1.0
 
 
@@ -366,10 +368,6 @@ def _checked_range(m: Model, pos: str, phi: float, phi_range) -> tuple[float, fl
     return lo, hi
 
 
-def _signed_root(sign: float, u: float) -> float:
-    return sign * math.sqrt(u) if u > 0.0 else 0.0
-
-
 #: How the curves are computed (the Dataset's ``method`` attribute).
 METHOD = (f"exponential Gauss collocation in phi ({NODES} nodes, order {2 * NODES}) of "
           "d(omega^2)/dphi = 2 phi'' from the model's branch rows; events by classification, "
@@ -379,56 +377,29 @@ METHOD = (f"exponential Gauss collocation in phi ({NODES} nodes, order {2 * NODE
 def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
              pts: np.ndarray, stages: np.ndarray, rtol: float = RTOL) -> xr.Dataset:
     pos, vel, _ = coordinate(m)
-    var_phi, var_omega = m.variables[pos], m.variables[vel]
+    words = remember(("phase_curve_words", m.name), m, lambda: _words(m, pos, vel))
     index = pts[:, 2].astype(np.int32)
     signs = stages[:, 0].astype(np.int8)
     u = np.maximum(pts[:, 1], 0.0)
     omega = np.where(u > 0.0, signs[index] * np.sqrt(u), 0.0)
     reasons = stages[:, 3].astype(np.int8)
-    start_omega = np.array([_signed_root(s, x) for s, x in zip(stages[:, 0], stages[:, 2])])
-    end_omega = np.array([_signed_root(s, x) for s, x in zip(stages[:, 0], stages[:, 5])])
-    flags = {"flag_values": np.array(ev.EVENT_VALUES, dtype=np.int8),
-             "flag_meanings": ev.EVENT_MEANINGS}
-
+    u_ends = stages[:, (2, 5)]  # at the start and the end of each stage
+    omega_ends = np.where(u_ends > 0.0, stages[:, :1] * np.sqrt(np.maximum(u_ends, 0.0)),
+                          0.0)
+    columns = {
+        "phi": pts[:, 0].copy(), "omega": omega, "omega_squared": u, "point_stage": index,
+        "stage_sign": signs, "stage_start_phi": stages[:, 1].copy(),
+        "stage_start_omega": omega_ends[:, 0].copy(), "stage_end_reason": reasons,
+        "stage_end_phi": stages[:, 4].copy(), "stage_end_omega": omega_ends[:, 1].copy(),
+    }
     # fastpath: every array is a NumPy array made here, which xarray takes as it is
-    def variable(dim, values, attrs):
-        return xr.Variable(dim, values, attrs, fastpath=True)
-
-    def angle(name, values, dim):
-        return variable(dim, values, {"long_name": name, "units": var_phi.units})
-
-    def rate(name, values, dim):
-        return variable(dim, values, {"long_name": name, "units": var_omega.units})
-
-    data = {
-        "phi": angle(var_phi.long_name, pts[:, 0].copy(), "point"),
-        "omega": rate(var_omega.long_name, omega, "point"),
-    }
-    # the model's own symbols, for plots of a model whose coordinate is not phi
-    data["phi"].attrs["phasemap_symbol"] = var_phi.symbol or var_phi.name
-    data["omega"].attrs["phasemap_symbol"] = var_omega.symbol or var_omega.name
-    data |= {
-        "omega_squared": variable("point", u, {
-            "long_name": f"square of the {var_omega.long_name}",
-            "units": squared_units(var_omega.units)}),
-        "point_stage": variable("point", index, {
-            "long_name": "index of the stage the point belongs to", "units": "1"}),
-        "stage_sign": variable("stage", signs, {
-            "long_name": f"sign of {vel} on the stage (0: no motion)", "units": "1"}),
-        "stage_start_phi": angle(f"{var_phi.long_name} at the start of the stage",
-                                 stages[:, 1].copy(), "stage"),
-        "stage_start_omega": rate(f"{var_omega.long_name} at the start of the stage",
-                                  start_omega, "stage"),
-        "stage_end_reason": variable("stage", reasons, {
-            "long_name": "event that ends the stage", **flags}),
-        "stage_end_phi": angle(f"{var_phi.long_name} at the end of the stage",
-                               stages[:, 4].copy(), "stage"),
-        "stage_end_omega": rate(f"{var_omega.long_name} at the end of the stage", end_omega,
-                                "stage"),
-    }
-    coords = {"stage": variable("stage", np.arange(len(stages), dtype=np.int32),
+    data = {name: xr.Variable(dim, columns[name], dict(attrs), fastpath=True)
+            for name, (dim, attrs) in words.items()}
+    data["stage_end_reason"].attrs["flag_values"] = np.array(ev.EVENT_VALUES, dtype=np.int8)
+    stage = words["stage_sign"][0]
+    coords = {"stage": xr.Variable(stage, np.arange(len(stages), dtype=np.int32),
                                    {"long_name": f"stage index ({vel} keeps its sign on a "
-                                                 "stage)", "units": "1"})}
+                                                 "stage)", "units": "1"}, fastpath=True)}
     last = ev.Event(int(reasons[-1]))
     attrs = {
         **cf_header(m, "phase_curve", "phasemap.phase_curve"),
@@ -447,3 +418,34 @@ def _dataset(m: Model, full: dict, phi_range, max_stages: int, points: int,
         attrs[f"phasemap_fixed_{v.name}"] = float(full[v.name])
     return assemble(data, coords, attrs)
 
+
+def _words(m: Model, pos: str, vel: str) -> dict:
+    """The dimension and attributes of each variable of the model's phase curves, made
+    once per model (each Dataset takes copies of the attributes)."""
+    var_phi, var_omega = m.variables[pos], m.variables[vel]
+    flags = {"flag_values": None, "flag_meanings": ev.EVENT_MEANINGS}  # values: per Dataset
+
+    def angle(name, dim):
+        return dim, {"long_name": name, "units": var_phi.units}
+
+    def rate(name, dim):
+        return dim, {"long_name": name, "units": var_omega.units}
+
+    words = {"phi": angle(var_phi.long_name, "point"), "omega": rate(var_omega.long_name, "point")}
+    # the model's own symbols, for plots of a model whose coordinate is not phi
+    words["phi"][1]["phasemap_symbol"] = var_phi.symbol or var_phi.name
+    words["omega"][1]["phasemap_symbol"] = var_omega.symbol or var_omega.name
+    return words | {
+        "omega_squared": ("point", {"long_name": f"square of the {var_omega.long_name}",
+                                    "units": squared_units(var_omega.units)}),
+        "point_stage": ("point", {"long_name": "index of the stage the point belongs to",
+                                  "units": "1"}),
+        "stage_sign": ("stage", {"long_name": f"sign of {vel} on the stage (0: no motion)",
+                                 "units": "1"}),
+        "stage_start_phi": angle(f"{var_phi.long_name} at the start of the stage", "stage"),
+        "stage_start_omega": rate(f"{var_omega.long_name} at the start of the stage",
+                                  "stage"),
+        "stage_end_reason": ("stage", {"long_name": "event that ends the stage", **flags}),
+        "stage_end_phi": angle(f"{var_phi.long_name} at the end of the stage", "stage"),
+        "stage_end_omega": rate(f"{var_omega.long_name} at the end of the stage", "stage"),
+    }

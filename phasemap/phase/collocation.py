@@ -252,6 +252,36 @@ def solve_legendre(z, u0, h, nv, u, w, r):
     return nt
 
 
+#: Output points a panel's Legendre sum is evaluated at together (:func:`legendre_many`).
+LANES = 64
+
+
+@njit(cache=True, error_model="numpy")
+def legendre_many(lanes, nb, u, nt):
+    """:func:`legendre_at` at the ``nb`` values of tau in ``lanes[0]``, into ``lanes[1]``
+    (``lanes[2:4]``: scratch).
+
+    The points' recurrences are independent, so the loop over the points runs inside
+    the loop over the terms: the pipeline and the vector registers take several points
+    at once where one point's recurrence waits on its previous term.  Each point's
+    arithmetic is :func:`legendre_at`'s, in the same order, so the sums are identical.
+    """
+    x, acc, pm, pk = lanes[0, :nb], lanes[1, :nb], lanes[2, :nb], lanes[3, :nb]
+    for i in range(nb):
+        xi = 2.0 * x[i] - 1.0
+        x[i] = xi
+        acc[i] = u[0] + u[1] * xi if nt > 1 else u[0]
+        pm[i] = 1.0
+        pk[i] = xi
+    for k in range(1, nt - 1):
+        a, b, c = LEG_A[k], LEG_B[k], u[k + 1]
+        for i in range(nb):
+            pp = a * x[i] * pk[i] - b * pm[i]
+            acc[i] += c * pp
+            pm[i] = pk[i]
+            pk[i] = pp
+
+
 @njit(cache=True, error_model="numpy")
 def legendre_at(tau, u, nt):
     """sum_k u_k P_k(2 tau - 1) over the first ``nt`` terms."""

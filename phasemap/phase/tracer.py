@@ -25,8 +25,8 @@ from .. import _numerics as nx
 from .. import events as ev
 from .._compile import grow
 from . import collocation
-from .collocation import (NODES, OUT_NODES, OUT_TERMS, OUT_THETA, SERIES, THETA, Z_OUT, dense,
-                          dense_at, expand, factor, legendre_at, lu_solve, series,
+from .collocation import (LANES, NODES, OUT_NODES, OUT_TERMS, OUT_THETA, SERIES, THETA, Z_OUT,
+                          dense, dense_at, expand, factor, legendre_many, lu_solve, series,
                           solve_legendre, weights)
 
 #: Modules compiled into these kernels besides this one (see phasemap._compile).
@@ -69,6 +69,7 @@ STILL = None
 REFINE = None
 ROOT = None
 STAGE_POINTS = None
+FLUSH = None
 VALUE = None
 CLASSIFY = None
 AT_REST = None
@@ -673,8 +674,17 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
     return ev.STEP_FAILURE, x, u, n_pan, panels, mode, h
 
 
+def _flush_template(pts, lanes, rows, nb, uo, nt):
+    """The pending output points of a panel's Legendre sum: their u into ``pts``."""
+    if nb > 0:
+        legendre_many(lanes, nb, uo, nt)
+        for i in range(nb):
+            pts[rows[i], 1] = lanes[1, i]
+    return 0
+
+
 def _stage_points_template(v, panels, n_pan, sigma, mode, u_ref, x0, u0, x_e, u_e, points, pts,
-                           npts, stage, vecs, outs, buf, tb):
+                           npts, stage, vecs, outs, buf, tb, lanes, rows):
     """Append the stage's output points (phi, u, stage): evenly spaced in phi.
 
     Where a panel's part up to its end, theta_end, has |z theta_end| <= Z_OUT, one pass
@@ -684,6 +694,8 @@ def _stage_points_template(v, panels, n_pan, sigma, mode, u_ref, x0, u0, x_e, u_
     (:func:`~phasemap.phase.collocation.solve_legendre`), summed at each point.  That
     errs like the NODES-point Gauss rule of one pass per point, which a stiffer panel
     still takes (``_refine_template``): at 200 points per stage a twelfth of the rows.
+    The sums wait in ``lanes`` (their tau) and ``rows`` (their row of ``pts``) and are
+    evaluated :data:`LANES` at a time (:func:`~phasemap.phase.collocation.legendre_many`).
     """
     n = NODES
     nv = vecs[8]
@@ -699,6 +711,7 @@ def _stage_points_template(v, panels, n_pan, sigma, mode, u_ref, x0, u0, x_e, u_
     p = 0
     ready = -1
     nt = 0
+    nb = 0
     for k in range(count):
         sk = length * k / (count - 1) if count > 1 else 0.0
         while p < n_pan - 1 and sk > panels[p, 0] + panels[p, 4] * panels[p, 1]:
@@ -712,6 +725,7 @@ def _stage_points_template(v, panels, n_pan, sigma, mode, u_ref, x0, u0, x_e, u_
                 uk = up
             elif abs(z * te) <= Z_OUT:
                 if ready != p:
+                    nb = FLUSH(pts, lanes, rows, nb, uo, nt)
                     a = row[5:5 + n]
                     c = row[5 + n:5 + 2 * n]
                     beta = z / hh
@@ -724,13 +738,19 @@ def _stage_points_template(v, panels, n_pan, sigma, mode, u_ref, x0, u0, x_e, u_
                         nvo[j] = 2.0 * sigma * fj - beta * uj
                     nt = solve_legendre(z * te, up, hs, nvo, uo, wo, ro)
                     ready = p
-                uk = legendre_at(theta / te, uo, nt)
+                if nb == LANES:
+                    nb = FLUSH(pts, lanes, rows, nb, uo, nt)
+                lanes[0, nb] = theta / te
+                rows[nb] = npts + k
+                nb += 1
+                uk = math.nan  # the sum's, when the points are flushed
             else:
                 uk = REFINE(v, theta, x0 + sigma * row[0], hh, z, up, row[5:5 + n],
                             row[5 + n:5 + 2 * n], sigma, mode, u_ref, buf, tb, nv, a2, c2)
         pts[npts + k, 0] = x0 + sigma * sk
         pts[npts + k, 1] = uk
         pts[npts + k, 2] = stage
+    FLUSH(pts, lanes, rows, nb, uo, nt)
     if count > 1:
         pts[npts + count - 1, 0] = x_e
         pts[npts + count - 1, 1] = u_e
@@ -755,6 +775,8 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
     buf = np.empty(NODES + 2)
     tb = np.empty(SERIES)
     outs = np.empty((4, OUT_TERMS + 1))
+    lanes = np.empty((4, LANES))
+    rows = np.empty(LANES, dtype=np.int64)
     react = np.empty(REACTIONS.shape[0])
     piv = np.empty(NODES, dtype=np.int64)
     code = -1
@@ -792,7 +814,7 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
             v, out, mode, sigma, x, u, stop, u_ref, rtol, h_max, h, panels, mats, vecs, buf, tb,
             react, piv)
         pts, npts = STAGE_POINTS(v, panels, n_pan, sigma, mode, u_ref, x, u, x_e, u_e, points,
-                                 pts, npts, float(nst), vecs, outs, buf, tb)
+                                 pts, npts, float(nst), vecs, outs, buf, tb, lanes, rows)
         go = False
         new_mode = mode
         if reason == _ZERO:
@@ -832,6 +854,7 @@ PIECES = (("ROW", _row_template, True),
           ("STILL", _still_template, False),
           ("REFINE", _refine_template, False),
           ("ROOT", _root_template, False),
+          ("FLUSH", _flush_template, True),
           ("STAGE_POINTS", _stage_points_template, False),
           ("AT_REST", _at_rest_template, False),
           ("STAGE_START", _stage_start_template, True),
