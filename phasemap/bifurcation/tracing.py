@@ -47,7 +47,7 @@ class Slice:
     hi: np.ndarray
     fixed: dict
     conds: Conditions
-    fns: tuple  # the functions a trace takes (phasemap.bifurcation._trace.FUNCTIONS)
+    fns: tuple  # addresses of the functions a trace takes (phasemap.bifurcation._trace.ADDRESSES)
     base: np.ndarray  # the input vector with the fixed values
 
     @cached_property
