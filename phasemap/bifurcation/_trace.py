@@ -1439,18 +1439,18 @@ with warnings.catch_warnings():  # numba calls first-class functions experimenta
     FUNCTIONS = types.Tuple((types.FunctionType(VALUES_SIG), types.FunctionType(GRADIENT_SIG),
                              types.FunctionType(HESSIAN_SIG), types.FunctionType(CLASS_SIG)))
 
-#: What an entry point takes for :data:`FUNCTIONS`: the addresses of the four functions'
-#: C wrappers (:func:`functions`).  numba unboxes a first-class function argument with
-#: four Python calls and two unpickled signatures (its ``_get_wrapper_address`` and
-#: ``_get_jit_address``); an address is one integer.
-ADDRESSES = types.UniTuple(types.intp, len(FUNCTIONS))
+#: What an entry point takes for :data:`FUNCTIONS`: per function, the addresses of its
+#: compiled code and of its C wrapper (:func:`functions`).  numba unboxes a first-class
+#: function argument with four Python calls and two unpickled signatures (its
+#: ``_get_wrapper_address`` and ``_get_jit_address``); an address is one integer.
+ADDRESSES = types.UniTuple(types.intp, 2 * len(FUNCTIONS))
 
 
 @intrinsic
 def _functions_at(typingctx, addresses):
-    """:data:`FUNCTIONS` from :data:`ADDRESSES`: what numba's unboxing of each first-class
-    function makes of its object (the wrapper's address; no Python object, no direct
-    entry), without calling into Python."""
+    """:data:`FUNCTIONS` from :data:`ADDRESSES`: what numba's unboxing of a jitted
+    function makes of it (its compiled code's address, called directly in numba's
+    calling convention, and its C wrapper's), without calling into Python."""
     if addresses != ADDRESSES:
         return None
 
@@ -1459,9 +1459,9 @@ def _functions_at(typingctx, addresses):
         made = []
         for i, fty in enumerate(FUNCTIONS.types):
             fn = cgutils.create_struct_proxy(fty)(context, builder)
-            fn.c_addr = builder.inttoptr(builder.extract_value(args[0], i), null.type)
+            fn.jit_addr = builder.inttoptr(builder.extract_value(args[0], 2 * i), null.type)
+            fn.c_addr = builder.inttoptr(builder.extract_value(args[0], 2 * i + 1), null.type)
             fn.py_addr = null
-            fn.jit_addr = null
             made.append(fn._getvalue())
         return context.make_tuple(builder, FUNCTIONS, made)
 
@@ -1534,21 +1534,22 @@ _FUNCTIONS: dict = {}
 def functions(model, conds) -> tuple:
     """The addresses of the functions a trace of ``model`` with the two-variable
     condition module ``conds`` takes (:data:`ADDRESSES`, for :data:`FUNCTIONS`), made
-    once per model and module.
+    once per model and module: per function, its compiled overload's code and C wrapper.
 
-    Each is the address of its compiled overload's C wrapper (what
-    :class:`numba.core.types.function_type.CompileResultWAP` gives numba): a jitted
-    function passed as such is looked up in its dispatcher at every call (0.2 ms a
-    call), and a first-class function object is unboxed through Python at every call
-    (15 us for the four, measured on a call of the ``survey`` entry point).  The
-    overloads stay alive with their model and module, which this cache keeps.
+    A jitted function passed as such is looked up in its dispatcher at every call
+    (0.2 ms a call), and a first-class function object is unboxed through Python at
+    every call (15 us for the four, measured on a call of the ``survey`` entry point).
+    The overloads stay alive with their model and module, which this cache keeps.
     """
     mod = conds.module
     hit = _FUNCTIONS.get((id(model), id(mod)))
     if hit is not None and hit[0] is model and hit[1] is mod:
         return hit[2]
-    fns = tuple(CompileResultWAP(fn.overloads[tuple(sig.args)]).__wrapper_address__()
-                for fn, sig in ((mod.values, VALUES_SIG), (mod.gradient, GRADIENT_SIG),
-                                (mod.hessian, HESSIAN_SIG), (classifier(model), CLASS_SIG)))
-    _FUNCTIONS[(id(model), id(mod))] = (model, mod, fns)
-    return fns
+    fns = []
+    for fn, sig in ((mod.values, VALUES_SIG), (mod.gradient, GRADIENT_SIG),
+                    (mod.hessian, HESSIAN_SIG), (classifier(model), CLASS_SIG)):
+        cres = fn.overloads[tuple(sig.args)]
+        fns += [cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name),
+                CompileResultWAP(cres).__wrapper_address__()]
+    _FUNCTIONS[(id(model), id(mod))] = (model, mod, tuple(fns))
+    return _FUNCTIONS[(id(model), id(mod))][2]

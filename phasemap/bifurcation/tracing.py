@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import time
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from typing import Mapping
@@ -13,7 +14,7 @@ import xarray as xr
 
 from .. import _args
 from .. import _numerics as nx
-from .._dataset import _now, cf_header
+from .._dataset import cf_header
 from .._codegen import grid_kernel, run_grid
 from ..layers import layers_for
 from ..model import Model
@@ -86,10 +87,13 @@ _HEADERS: dict = {}
 def _cf_header(m: Model, kind: str) -> dict:
     """:func:`phasemap._dataset.cf_header`, made once per model, kind and second (its
     time stamps' resolution): the model's description in JSON is a tenth of a small
-    result's cost."""
+    result's cost.  The second is the clock's, read before the header is made: the
+    header's own time stamp is that second or later, and a later one is never reused
+    (formatting the time stamp to compare it costs more than a small Dataset's header)."""
+    second = int(time.time())
     hit = _HEADERS.get((id(m), kind))
-    if hit is None or hit[0] is not m or hit[1]["date_created"] != _now():
-        hit = _HEADERS[(id(m), kind)] = (m, cf_header(m, kind))
+    if hit is None or hit[0] is not m or hit[2] != second:
+        hit = _HEADERS[(id(m), kind)] = (m, cf_header(m, kind), second)
     return dict(hit[1])
 
 
@@ -461,8 +465,9 @@ def _unique_points(traced: Traced, tol_uw: float):
 
 def condition_name(sl: Slice, traced: Traced, k: int) -> str:
     """A condition's name, with those of the conditions that share its zero set."""
-    names = [sl.conds.names[j] for j in range(len(sl.conds)) if traced.group[j] == k]
-    return ",".join(dict.fromkeys([sl.conds.names[k], *names]))
+    names = sl.conds.names
+    same = [names[j] for j, g in enumerate(traced.group.tolist()) if g == k]
+    return ",".join(dict.fromkeys([names[k], *same]))
 
 
 def _variable(dim: str, data: np.ndarray, attrs: dict) -> xr.Variable:
