@@ -3,7 +3,9 @@
 What is particular to a model reaches the tracer as first-class functions, in
 the tuple ``F`` (:data:`FUNCTIONS`), as :func:`phasemap._codegen.driver` takes
 a scene's ``cells``: so the tracer compiles once (and is cached on disk), and a
-new model or slice compiles only its small generated condition module.
+new model or slice compiles only its small generated condition module.  The
+entry points take the functions' addresses (:data:`ADDRESSES`, made once per
+model by :func:`functions`) and make ``F`` of them (:func:`_functions_at`).
 
 ``F[0](x, out, scale)``, ``F[1](k, x, g)``, ``F[2](k, x, g, H)``
     the generated condition module (:mod:`phasemap.bifurcation.conditions`)
@@ -41,8 +43,10 @@ import warnings
 
 import numpy as np
 from numba import njit, types
+from numba.core import cgutils
 from numba.core.errors import NumbaExperimentalFeatureWarning
 from numba.core.types.function_type import CompileResultWAP
+from numba.extending import intrinsic
 
 from .. import _numerics as nx
 
@@ -931,7 +935,7 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
 
 
 @njit(cache=True, error_model="numpy")
-def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
+def _trace_all(A, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
                near, tol_u, tol_w, require_sides):
     """Trace a curve from each seed ``(k, u, w)`` not on a curve already traced.
 
@@ -944,6 +948,7 @@ def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
     sampling their sides costs two classifications each).  Returns the number
     of curves traced.
     """
+    F = _functions_at(A)
     g = np.empty(2)
     H = np.empty((2, 2))
     nc = active.shape[0]
@@ -1041,9 +1046,10 @@ def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
 
 
 @njit(cache=True, error_model="numpy")
-def _survey_all(F, v, ix, iy, geo, pts, vals):
+def _survey_all(A, v, ix, iy, geo, pts, vals):
     """Every condition's value at the points ``pts`` (rows (u, w) of the unit square)
     into the rows of ``vals``, NaN where a value is not finite."""
+    F = _functions_at(A)
     cs = np.empty(vals.shape[1])
     for p in range(pts.shape[0]):
         v[ix] = geo[0] + pts[p, 0] * geo[1]
@@ -1055,7 +1061,7 @@ def _survey_all(F, v, ix, iy, geo, pts, vals):
 
 
 @njit(cache=True, error_model="numpy")
-def _seeds_all(F, active, v, ix, iy, geo, n, near):
+def _seeds_all(A, active, v, ix, iy, geo, n, near):
     """Seeds on an n x n raster of nodes (the slice's edges included): every sign change
     of an active condition between neighbouring nodes, and every node where a
     condition's magnitude has a local minimum without a sign change around it (a loop
@@ -1064,6 +1070,7 @@ def _seeds_all(F, active, v, ix, iy, geo, n, near):
     cannot start a curve (:func:`_trace_all`).  Returns rows (condition, u, w, kind: 0 sign
     change, 1 minimum).
     """
+    F = _functions_at(A)
     cv = np.empty((n, n, active.shape[0]))
     cs = np.empty(active.shape[0])
     need = np.zeros((n, n), dtype=np.bool_)
@@ -1175,7 +1182,7 @@ def _minimum(F, k, v, ix, iy, geo, u, w, radius):
 
 
 @njit(cache=True, error_model="numpy")
-def _seed_trace_all(F, pts, vs, classes, radius, active, rank, v, out, ix, iy, geo, layer, n,
+def _seed_trace_all(A, pts, vs, classes, radius, active, rank, v, out, ix, iy, geo, layer, n,
                     vf, vi, counts, curves, mark, tol_u, tol_w):
     """One call for a whole trace: each call of an entry point unboxes the model's
     functions again.  The conditions' values at the points ``pts`` (input vector
@@ -1191,7 +1198,7 @@ def _seed_trace_all(F, pts, vs, classes, radius, active, rank, v, out, ix, iy, g
     larger ones).
     """
     vals = np.empty((pts.shape[0], active.shape[0]))
-    _survey_all(F, vs, ix, iy, geo, pts, vals)
+    _survey_all(A, vs, ix, iy, geo, pts, vals)
     group = groups(vals, active)
     grp = np.empty((active.shape[0], 2), dtype=np.int64)
     for k in range(active.shape[0]):
@@ -1199,8 +1206,8 @@ def _seed_trace_all(F, pts, vs, classes, radius, active, rank, v, out, ix, iy, g
         grp[k, 1] = rank[k]
     changes = class_changes(classes)
     near = near_changes(classes.shape, changes, radius)
-    seeds = _seeds_all(F, active, v, ix, iy, geo, n, near)
-    _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
+    seeds = _seeds_all(A, active, v, ix, iy, geo, n, near)
+    _trace_all(A, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
                near, tol_u, tol_w, True)
     pv, pp, pq, pieces, pf, pi = assemble(vf, vi, curves, 0 if counts[2] else counts[1])
     bad = _uncovered(classes.shape[0], changes, pv, pp)
@@ -1432,6 +1439,35 @@ with warnings.catch_warnings():  # numba calls first-class functions experimenta
     FUNCTIONS = types.Tuple((types.FunctionType(VALUES_SIG), types.FunctionType(GRADIENT_SIG),
                              types.FunctionType(HESSIAN_SIG), types.FunctionType(CLASS_SIG)))
 
+#: What an entry point takes for :data:`FUNCTIONS`: per function, the addresses of its
+#: compiled code and of its C wrapper (:func:`functions`).  numba unboxes a first-class
+#: function argument with four Python calls and two unpickled signatures (its
+#: ``_get_wrapper_address`` and ``_get_jit_address``); an address is one integer.
+ADDRESSES = types.UniTuple(types.intp, 2 * len(FUNCTIONS))
+
+
+@intrinsic
+def _functions_at(typingctx, addresses):
+    """:data:`FUNCTIONS` from :data:`ADDRESSES`: what numba's unboxing of a jitted
+    function makes of it (its compiled code's address, called directly in numba's
+    calling convention, and its C wrapper's), without calling into Python."""
+    if addresses != ADDRESSES:
+        return None
+
+    def codegen(context, builder, sig, args):
+        null = context.get_constant_null(types.voidptr)
+        made = []
+        for i, fty in enumerate(FUNCTIONS.types):
+            fn = cgutils.create_struct_proxy(fty)(context, builder)
+            fn.jit_addr = builder.inttoptr(builder.extract_value(args[0], 2 * i), null.type)
+            fn.c_addr = builder.inttoptr(builder.extract_value(args[0], 2 * i + 1), null.type)
+            fn.py_addr = null
+            made.append(fn._getvalue())
+        return context.make_tuple(builder, FUNCTIONS, made)
+
+    return FUNCTIONS(addresses), codegen
+
+
 _ENTRIES: dict = {}
 
 
@@ -1443,17 +1479,18 @@ def entries() -> dict:
     Each is the compiled overload's own entry point, called without the
     dispatcher: typing a tuple of first-class functions at every call cost
     0.2-0.5 ms, more than a whole trace of a simple slice.  The callers pass
-    exactly the signature's types (C-contiguous arrays, :func:`functions`).
+    exactly the signature's types (C-contiguous arrays, :func:`functions`'
+    addresses, :data:`ADDRESSES`).
     """
     if not _ENTRIES:
-        sig_trace = types.int64(FUNCTIONS, _F2, _I2, _B1, _F1, _F2, types.int64, types.int64,
+        sig_trace = types.int64(ADDRESSES, _F2, _I2, _B1, _F1, _F2, types.int64, types.int64,
                                 _F1, types.int64, _F2, _I2, _I1, _I2, _B3, _B2, types.float64,
                                 types.float64, types.boolean)
-        sig_seeds = _F2(FUNCTIONS, _B1, _F1, types.int64, types.int64, _F1, types.int64, _B2)
-        sig_survey = types.void(FUNCTIONS, _F1, types.int64, types.int64, _F1, _F2, _F2)
+        sig_seeds = _F2(ADDRESSES, _B1, _F1, types.int64, types.int64, _F1, types.int64, _B2)
+        sig_survey = types.void(ADDRESSES, _F1, types.int64, types.int64, _F1, _F2, _F2)
         sig_seed_trace = types.Tuple((_B2, _F2, _I1, _I2, _I2, _F2, _I1, _I1, _I2, _F2, _I2,
                                       _I2))(
-            FUNCTIONS, _F2, _F1, types.Array(types.int8, 2, "C"), types.int64, _B1, _I1, _F1,
+            ADDRESSES, _F2, _F1, types.Array(types.int8, 2, "C"), types.int64, _B1, _I1, _F1,
             _F2, types.int64, types.int64, _F1, types.int64, types.int64, _F2, _I2, _I1, _I2,
             _B3, types.float64, types.float64)
         with warnings.catch_warnings():  # numba calls first-class functions experimental
@@ -1495,19 +1532,24 @@ _FUNCTIONS: dict = {}
 
 
 def functions(model, conds) -> tuple:
-    """The tuple of functions a trace of ``model`` with the two-variable condition module
-    ``conds`` takes (:data:`FUNCTIONS`), made once per model and module.
+    """The addresses of the functions a trace of ``model`` with the two-variable
+    condition module ``conds`` takes (:data:`ADDRESSES`, for :data:`FUNCTIONS`), made
+    once per model and module: per function, its compiled overload's code and C wrapper.
 
-    Each is the address of its compiled overload (a
-    :class:`numba.core.types.function_type.CompileResultWAP`): a jitted function
-    passed as such is looked up in its dispatcher at every call (0.2 ms a call).
+    A jitted function passed as such is looked up in its dispatcher at every call
+    (0.2 ms a call), and a first-class function object is unboxed through Python at
+    every call (15 us for the four, measured on a call of the ``survey`` entry point).
+    The overloads stay alive with their model and module, which this cache keeps.
     """
     mod = conds.module
     hit = _FUNCTIONS.get((id(model), id(mod)))
     if hit is not None and hit[0] is model and hit[1] is mod:
         return hit[2]
-    fns = tuple(CompileResultWAP(fn.overloads[tuple(sig.args)])
-                for fn, sig in ((mod.values, VALUES_SIG), (mod.gradient, GRADIENT_SIG),
-                                (mod.hessian, HESSIAN_SIG), (classifier(model), CLASS_SIG)))
-    _FUNCTIONS[(id(model), id(mod))] = (model, mod, fns)
-    return fns
+    fns = []
+    for fn, sig in ((mod.values, VALUES_SIG), (mod.gradient, GRADIENT_SIG),
+                    (mod.hessian, HESSIAN_SIG), (classifier(model), CLASS_SIG)):
+        cres = fn.overloads[tuple(sig.args)]
+        fns += [cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name),
+                CompileResultWAP(cres).__wrapper_address__()]
+    _FUNCTIONS[(id(model), id(mod))] = (model, mod, tuple(fns))
+    return _FUNCTIONS[(id(model), id(mod))][2]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import time
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from typing import Mapping
@@ -13,7 +14,7 @@ import xarray as xr
 
 from .. import _args
 from .. import _numerics as nx
-from .._dataset import _now, cf_header
+from .._dataset import cf_header
 from .._codegen import grid_kernel, run_grid
 from ..layers import layers_for
 from ..model import Model
@@ -47,7 +48,7 @@ class Slice:
     hi: np.ndarray
     fixed: dict
     conds: Conditions
-    fns: tuple  # the functions a trace takes (phasemap.bifurcation._trace.FUNCTIONS)
+    fns: tuple  # addresses of the functions a trace takes (phasemap.bifurcation._trace.ADDRESSES)
     base: np.ndarray  # the input vector with the fixed values
 
     @cached_property
@@ -86,10 +87,13 @@ _HEADERS: dict = {}
 def _cf_header(m: Model, kind: str) -> dict:
     """:func:`phasemap._dataset.cf_header`, made once per model, kind and second (its
     time stamps' resolution): the model's description in JSON is a tenth of a small
-    result's cost."""
+    result's cost.  The second is the clock's, read before the header is made: the
+    header's own time stamp is that second or later, and a later one is never reused
+    (formatting the time stamp to compare it costs more than a small Dataset's header)."""
+    second = int(time.time())
     hit = _HEADERS.get((id(m), kind))
-    if hit is None or hit[0] is not m or hit[1]["date_created"] != _now():
-        hit = _HEADERS[(id(m), kind)] = (m, cf_header(m, kind))
+    if hit is None or hit[0] is not m or hit[2] != second:
+        hit = _HEADERS[(id(m), kind)] = (m, cf_header(m, kind), second)
     return dict(hit[1])
 
 
@@ -101,9 +105,10 @@ def make_slice(model, axes: Mapping, fixed: Mapping | None, conditions=None) -> 
                          f"{{x: (lo, hi), y: (lo, hi)}}; got {axes!r}")
     fixed = dict(fixed or {})
     names = list(axes)
+    variables = m.variables
     lo, hi = [], []
     for name in names:
-        if name not in m.variables:
+        if name not in variables:
             raise ValueError(f"{m.name}: unknown variable {name!r}; allowed: {', '.join(m.names)}")
         if name in fixed:
             raise ValueError(f"{m.name}: {name!r} is both an axis and fixed")
@@ -113,7 +118,7 @@ def make_slice(model, axes: Mapping, fixed: Mapping | None, conditions=None) -> 
     for name, value in fixed.items():
         if np.ndim(value) != 0:
             raise ValueError(f"{m.name}: fixed value {name} must be a scalar")
-    full = _complete(m, fixed, names, lo, hi)
+    full = _complete(m, variables, fixed, names, lo, hi)
     fixed = {n: float(v) for n, v in full.items() if n not in axes}
     conds = compiled(m, tuple(names), conditions)
     fns = T.functions(m, conds)
@@ -121,17 +126,18 @@ def make_slice(model, axes: Mapping, fixed: Mapping | None, conditions=None) -> 
     return Slice(m, names[0], names[1], np.array(lo), np.array(hi), fixed, conds, fns, base)
 
 
-def _complete(m: Model, fixed: dict, names: list, lo: list, hi: list) -> dict:
+def _complete(m: Model, variables: dict, fixed: dict, names: list, lo: list,
+              hi: list) -> dict:
     """The slice's values completed with the model's defaults (:meth:`Model.complete`),
     the axes validated at the slice's four corners.
 
     Where each axis's range lies in its variable's domain, the axes enter as numbers
     (Model.complete's fast path; a third of the cost) and the model's own check
     (:attr:`Model.check`, if any) sees the corners; otherwise, and wherever a check
-    fails, the corners go through Model.complete, whose error is the one raised."""
+    fails, the corners go through Model.complete, whose error is the one raised.
+    ``variables``: the model's (:attr:`Model.variables`, a new dict at every access)."""
     corners = {names[0]: np.array([lo[0], hi[0]]).reshape(-1, 1),
                names[1]: np.array([lo[1], hi[1]]).reshape(1, -1)}
-    variables = m.variables
     if all(variables[n]._fine(a) and variables[n]._fine(b) for n, a, b in zip(names, lo, hi)):
         try:
             full = m.complete({**fixed, names[0]: lo[0], names[1]: lo[1]})
@@ -353,8 +359,14 @@ def _assembled(buf: _Buffers, group, active) -> Traced:
     return Traced(pv, pp, pq, pieces, pf, pi, group, active, buf)
 
 
+@lru_cache(maxsize=None)
+def _centres(n: int) -> np.ndarray:
+    """The centres of n cells across the unit interval, once per n (do not write them)."""
+    return (np.arange(n) + 0.5) / n
+
+
 def _cell_centres(sl: Slice, n: int) -> dict:
-    t = (np.arange(n) + 0.5) / n
+    t = _centres(n)
     return {sl.x: sl.lo[0] + t * (sl.hi[0] - sl.lo[0]), sl.y: sl.lo[1] + t * (sl.hi[1] - sl.lo[1])}
 
 
@@ -461,8 +473,9 @@ def _unique_points(traced: Traced, tol_uw: float):
 
 def condition_name(sl: Slice, traced: Traced, k: int) -> str:
     """A condition's name, with those of the conditions that share its zero set."""
-    names = [sl.conds.names[j] for j in range(len(sl.conds)) if traced.group[j] == k]
-    return ",".join(dict.fromkeys([sl.conds.names[k], *names]))
+    names = sl.conds.names
+    same = [names[j] for j, g in enumerate(traced.group.tolist()) if g == k]
+    return ",".join(dict.fromkeys([names[k], *same]))
 
 
 def _variable(dim: str, data: np.ndarray, attrs: dict) -> xr.Variable:
