@@ -34,7 +34,8 @@ import phasemap  # noqa: E402
 
 FIELDS = {"step_ns": "ns per step", "fit_step_ns": "ns per step, fitted",
           "lean_ns": "lean DOPRI5, ns per step",
-          "rhs_ns": "one right-hand side (ns)", "point_ns": "one classification (ns)"}
+          "rhs_ns": "one right-hand side (ns)", "point_ns": "one classification (ns)",
+          "after_ns": "the test after a step (ns)"}
 
 
 def why(med: dict) -> str:

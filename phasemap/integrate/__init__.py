@@ -22,10 +22,13 @@ Method
   first-same-as-last, with an RMS error norm over ``atol + rtol |y|`` and the
   standard step-size controller.
 * **Events by classification.**  After every accepted step the end state is
-  classified with the model's own ``point`` function, exactly as
-  :func:`phasemap.classify` does.  The stage goes on while the classification
-  is *unique and equal to the active branch* (and the branch's coefficient of
-  the senior derivative keeps its sign).  Otherwise the first state where it
+  classified with the model's own rows, exactly as :func:`phasemap.classify`
+  does.  The stage goes on while the classification is *unique and equal to
+  the active branch* (and the branch's coefficient of the senior derivative
+  keeps its sign); after a step the integrator reads only that decision,
+  from the statuses of the rows that apply and the stage's coefficient
+  (``GOES_ON`` in :mod:`phasemap.integrate.templates`), and events classify
+  every row.  Otherwise the first state where it
   stops being so is located by bisection on the dense output, to the
   resolution of double precision in t, and classified there: a velocity zero
   (then rest, stick or reversal, with the velocity set to exactly 0), a sign
