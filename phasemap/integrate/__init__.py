@@ -69,7 +69,7 @@ from numba import types as nb_types
 from .. import _dop853, _dopri5
 from .. import _numerics as nx
 from .. import events as ev
-from .._codegen import _F1, _F2, _F3, _I1, _I2, set_cell
+from .._codegen import _F1, _F2, _F3, _I1, _I2, moving_test, set_cell
 from .._compile import contract_constants, grow, remember, specialize
 from ..grid import pack_axes
 from ..model import Model
@@ -252,6 +252,7 @@ def _stage_kernels(model: Model) -> Stage:
                          "it can be classified and mapped but not integrated in time")
     consts = contract_constants(model)
     consts["WATCH"] = np.concatenate([[nx.COEF], consts["REACTIONS"]]).astype(np.int64)
+    consts["MOVING"] = moving_test(model).moving
     for name, template, inline in tp.PIECES:
         consts[name] = specialize(template, model, name.lower(), inline=inline, **consts)
     return Stage(consts["CLASSIFY"], consts["STILL"], consts["EVENT"], consts["START"],

@@ -63,6 +63,7 @@ RHS = None
 CLASSIFY = None
 ON_STAGE = None
 GOES_ON = None
+MOVING = None
 STILL = None
 INDICATOR = None
 ZERO = None
@@ -201,12 +202,12 @@ def _goes_on_template(v, y1, out, mode, coef_sign):
     (admissible, or a separation) with its coefficient's sign kept, no other row is
     a solution or a continuum, and the state is inside the domain.  Moving, the
     classification computes only the rows of the velocity's direction (the others
-    are absent, among them the stick row) and each is ``BRANCH_ROW``'s, the same
-    call with the same arguments; inlined, LLVM keeps of it what a status or the
-    coefficient reads (no accelerations, no stores but the coefficient, which
-    ``STALLED`` reads).  At rest, or within its tolerance, every row applies, and
-    the full classification decides.  The events keep the full classification
-    (``STILL``, ``CLASSIFY``).
+    are absent, among them the stick row); ``MOVING`` (generated,
+    :func:`phasemap._codegen.moving_test`) computes those with the same arguments and
+    no stores, so that LLVM keeps what a status or the coefficient reads, and the
+    coefficient goes into ``out``, which ``STALLED`` reads.  At rest, or within its
+    tolerance, every row applies, and the full classification decides.  The events
+    keep the full classification (``STILL``, ``CLASSIFY``).
     """
     vel = v[Y_SLOT[VEL_Y]]
     if abs(vel) <= REST_SPEED(v):
@@ -214,18 +215,9 @@ def _goes_on_template(v, y1, out, mode, coef_sign):
         n, adm, lost, sing = ev.summary(out, STICK)
         on = ON_STAGE(n, adm, out, mode, coef_sign)
     else:
-        on = False
-        for b in range(N_BRANCHES):
-            d = DIRECTIONS[b]
-            if (d > 0.0 and vel > 0.0) or (d < 0.0 and vel < 0.0):
-                r = BRANCH_ROW(v, b)
-                st = r[nx.STATUS]
-                if b == mode:
-                    out[mode, nx.COEF] = r[nx.COEF]
-                    on = ((st == nx.ADMISSIBLE or st == nx.SEPARATION)
-                          and (coef_sign == 0.0 or r[nx.COEF] * coef_sign > 0.0))
-                elif st == nx.ADMISSIBLE or st == nx.SEPARATION or st == nx.CONTINUUM:
-                    return False
+        sole, coef = MOVING(v, mode)
+        out[mode, nx.COEF] = coef
+        on = sole and (coef_sign == 0.0 or coef * coef_sign > 0.0)
     return on and BOUNDED(y1) and DOMAIN(v)
 
 
