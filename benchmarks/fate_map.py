@@ -78,7 +78,7 @@ def _physics_loops(model):
         return s
 
     @njit
-    def classify(v, n):
+    def classify(v, n, mode):
         out = np.empty(shape)
         x = 0.3
         s = 0.0
@@ -87,8 +87,10 @@ def _physics_loops(model):
             v[1] = 1.0 + 1e-7 * i
             derive(v)
             point(v, out)
-            s += out[0, 0]
-            x = 0.3 + 1e-9 * i + 1e-15 * out[0, 0]
+            # the stage's status, which waits for its row (row 0 of the declared wheel is
+            # the stick row, absent while moving: a store of a constant)
+            s += out[mode, 0]
+            x = 0.3 + 1e-9 * i + 1e-15 * out[mode, 0]
         return s
 
     @njit
@@ -222,10 +224,10 @@ def step_profile(model, cells: int = 1500, repeat: int = 5, fit_cells: int = 400
     mode = model.branches.index("roll_pos")
     n = 1_000_000
     rhs(v, 10, mode)
-    classify(v, 10)
+    classify(v, 10, mode)
     after_step(v, 10, mode)
     t_rhs, _ = _cpu(lambda: rhs(v, n, mode), repeat)
-    t_point, _ = _cpu(lambda: classify(v, n), repeat)
+    t_point, _ = _cpu(lambda: classify(v, n, mode), repeat)
     t_after, _ = _cpu(lambda: after_step(v, n, mode), repeat)
     return dict(steps_per_cell=steps / cells, step_ns=1e9 * t_int / steps,
                 lean_ns=1e9 * t_lean / lean_steps,
