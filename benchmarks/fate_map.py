@@ -49,14 +49,19 @@ FATE_START = ("import time; t = time.perf_counter(); import sys; sys.path.insert
 
 def _physics_loops(model):
     """Jitted loops timing the physics of a step alone: one right-hand side (the
-    derived inputs sin phi, cos phi and the stage's branch row) and one
-    classification (derived inputs and every candidate row).  Each call's phi
-    depends on the previous call's result, as the stages of a Runge-Kutta step do,
-    so the loops measure latency, not the throughput of independent calls."""
+    derived inputs sin phi, cos phi and the stage's branch row), one classification
+    (derived inputs and every candidate row) and the integrator's test after a step
+    (``GOES_ON`` of :mod:`phasemap.integrate.templates`: derived inputs and the
+    statuses it reads).  Each call's phi depends on the previous call's result, as
+    the stages of a Runge-Kutta step do, so the loops measure latency, not the
+    throughput of independent calls."""
     from numba import njit
+
+    from phasemap.integrate import stage_kernels
 
     contract = model.contract
     point, row, derive = contract.point, contract.branch_row_inline, contract.derive_inline
+    goes_on = stage_kernels(model).constants["GOES_ON"]
     shape = (len(model.branches), model.n_fields)
 
     @njit
@@ -73,7 +78,7 @@ def _physics_loops(model):
         return s
 
     @njit
-    def classify(v, n):
+    def classify(v, n, mode):
         out = np.empty(shape)
         x = 0.3
         s = 0.0
@@ -82,11 +87,28 @@ def _physics_loops(model):
             v[1] = 1.0 + 1e-7 * i
             derive(v)
             point(v, out)
-            s += out[0, 0]
-            x = 0.3 + 1e-9 * i + 1e-15 * out[0, 0]
+            # the stage's status, which waits for its row (row 0 of the declared wheel is
+            # the stick row, absent while moving: a store of a constant)
+            s += out[mode, 0]
+            x = 0.3 + 1e-9 * i + 1e-15 * out[mode, 0]
         return s
 
-    return rhs, classify
+    @njit
+    def after_step(v, n, mode):
+        out = np.empty(shape)
+        y1 = np.empty(2)
+        x = 0.3
+        s = 0.0
+        for i in range(n):
+            v[0] = y1[0] = x
+            v[1] = y1[1] = 1.0 + 1e-7 * i
+            derive(v)
+            on = 1.0 if goes_on(v, y1, out, mode, 1.0) else 0.0
+            s += on
+            x = 0.3 + 1e-9 * i + 1e-15 * on
+        return s
+
+    return rhs, classify, after_step
 
 
 def lean_dopri5(model):
@@ -198,16 +220,19 @@ def step_profile(model, cells: int = 1500, repeat: int = 5, fit_cells: int = 400
         rows.append((res[4], len(res[6]), 1.0, best / 10))
     fit = np.linalg.lstsq(np.array([r[:3] for r in rows], float),
                           np.array([r[3] for r in rows]), rcond=None)[0]
-    rhs, classify = _physics_loops(model)
+    rhs, classify, after_step = _physics_loops(model)
     mode = model.branches.index("roll_pos")
     n = 1_000_000
     rhs(v, 10, mode)
-    classify(v, 10)
+    classify(v, 10, mode)
+    after_step(v, 10, mode)
     t_rhs, _ = _cpu(lambda: rhs(v, n, mode), repeat)
-    t_point, _ = _cpu(lambda: classify(v, n), repeat)
+    t_point, _ = _cpu(lambda: classify(v, n, mode), repeat)
+    t_after, _ = _cpu(lambda: after_step(v, n, mode), repeat)
     return dict(steps_per_cell=steps / cells, step_ns=1e9 * t_int / steps,
                 lean_ns=1e9 * t_lean / lean_steps,
                 rhs_ns=1e9 * t_rhs / n, point_ns=1e9 * t_point / n,
+                after_ns=1e9 * t_after / n,
                 rows=len(model.branches), cells=cells, repeat=repeat, fit_cells=fit_cells,
                 fit_step_ns=1e9 * fit[0], fit_event_us=1e6 * fit[1],
                 fit_cell_us=1e6 * fit[2], events_per_cell=float(np.mean([r[1] for r in rows])))
@@ -285,7 +310,8 @@ def step_text(fm) -> str:
                      f"event fitted), lean DOPRI5 {p['lean_ns']:.0f} ns per step; one "
                      f"right-hand side {p['rhs_ns']:.0f} ns (sin and cos of phi and the "
                      f"stage's branch row), one classification of {p['rows']} rows "
-                     f"{p['point_ns']:.0f} ns")
+                     f"{p['point_ns']:.0f} ns (at events), the test after a step "
+                     f"{p['after_ns']:.0f} ns")
     d, h = pr["declared"], pr["hand"]
 
     def floor(p):
@@ -301,7 +327,10 @@ def step_text(fm) -> str:
             f"{d['fit_cells']} of them, each timed alone): " + "; ".join(parts) + ". The lean "
             "DOPRI5 (`lean_dopri5`) runs the integrator's own step and right-hand side on one "
             "branch with the step-size controller alone: no classification after a step, no "
-            "stiffness test, no events.  An event locates the first state off the stage to "
+            "stiffness test, no events.  After a step the integrator reads only whether the "
+            "stage goes on (`GOES_ON`: the statuses of the rows of the velocity's direction "
+            "and the stage's coefficient, the decision of the full classification bit for "
+            "bit); events classify every row.  An event locates the first state off the stage to "
             "2 eps in time: the velocity is rooted on the dense output where it reaches the "
             "speed classification counts as rest (`REST_SPEED` of the contract), which leaves "
             "a bracket of 4 eps and a step or two of bisection; rooting the exact zero left "

@@ -343,6 +343,45 @@ def contract(model):
     return _load(model, "contract", "\n".join(lines) + "\n")
 
 
+def moving_test(model):
+    """The module holding ``moving(v, mode)``, the integrator's test after a step where the
+    velocity is outside its rest tolerance (:func:`phasemap.integrate.templates._goes_on_template`).
+
+    ``moving(v, mode)`` returns ``(sole, coef)``: the row of branch ``mode`` is the one
+    solution (admissible, or a separation; no other row a solution or a continuum) and
+    its coefficient (NaN where the branch does not apply).  Moving, ``point`` computes the
+    rows of the velocity's direction only, with these arguments; here they are straight
+    code with no stores, so that LLVM keeps what the statuses and the coefficient read.
+    """
+    src = _Source(model)
+    nb = len(model.candidates)
+    vel = f"i_{model.velocity}"
+    body = ['    """(the row of branch mode is the one solution, its coefficient) at a moving '
+            'state v."""']
+    body += src.load("    ")
+    body += [f"    s{b} = 0" for b in range(nb)] + [f"    c{b} = NAN" for b in range(nb)]
+    for k, sign in enumerate((1.0, -1.0)):
+        rows = [b for b, c in enumerate(model.candidates) if c.direction == sign]
+        body.append(f"    {'if' if k == 0 else 'elif'} {vel} {'>' if sign > 0 else '<'} 0.0:")
+        for b in rows:
+            body += [f"        r{b} = {src.call(b, 'False', vel)}",
+                     f"        s{b} = r{b}[0]", f"        c{b} = r{b}[{nx.COEF}]"]
+        if not rows:
+            body.append("        pass")
+    sm, cm = f"s{nb - 1}", f"c{nb - 1}"
+    for b in range(nb - 2, -1, -1):
+        sm, cm = f"(s{b} if mode == {b} else {sm})", f"(c{b} if mode == {b} else {cm})"
+    solution = "(({s} == %d) | ({s} == %d))" % (nx.ADMISSIBLE, nx.SEPARATION)
+    other = " | ".join(f"((mode != {b}) & ({solution.format(s=f's{b}')} | (s{b} == "
+                       f"{nx.CONTINUUM})))" for b in range(nb))
+    body += [f"    sm = {sm}", f"    other = {other}",
+             f"    return {solution.format(s='sm')} & (not other), {cm}"]
+    lines = _header(src, "The integrator's test after a step")
+    lines += ['@njit(cache=True, forceinline=True, error_model="numpy")', "def moving(v, mode):",
+              *body, "", ""]
+    return _load(model, "moving", "\n".join(lines) + "\n")
+
+
 # -- the grid kernels -----------------------------------------------------------
 
 #: Inner-axis cells per parallel task (an inner axis longer than this is split).

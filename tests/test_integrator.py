@@ -537,3 +537,37 @@ def test_dop853_fate_map_and_bad_method(tmp_path):
         phasemap.simulate("hinge_pendulum", 1.0, method="RK4")
     with pytest.raises(ValueError, match="method must be one of"):
         phasemap.Scene("hinge_pendulum", **scene, options={"method": "dop853"})
+
+
+@pytest.mark.parametrize("name", ["wheel", "elliptic_pendulum", "hinge_pendulum"])
+def test_the_test_after_a_step_decides_as_the_full_classification(name):
+    """GOES_ON, what the integrator reads after a step, against STILL (every row
+    classified, then ON_STAGE and the domain): the same decision at random states,
+    moving, at rest and within the rest tolerance, for every branch and coefficient
+    sign, and the stage's coefficient where it goes on."""
+    from phasemap import _numerics as nx
+    from phasemap.integrate import stage_kernels
+
+    m = phasemap.get_model(name)
+    stage = stage_kernels(m)
+    c = stage.constants
+    fill, goes_on = c["FILL"], c["GOES_ON"]
+    v = m.input_vector({k: float(x) for k, x in m.defaults.items()})
+    lower, upper, vel = c["LOWER"], c["UPPER"], c["VEL_Y"]
+    nb = c["N_BRANCHES"]
+    full, cut = np.empty((nb, c["N_FIELDS"])), np.empty((nb, c["N_FIELDS"]))
+    rng = np.random.default_rng(22)
+    decided = {True: 0, False: 0}
+    for trial in range(200):
+        y = rng.uniform(np.maximum(lower, -np.pi), np.minimum(upper, np.pi))
+        y[vel] = (0.0, 1e-14 * rng.standard_normal(), y[vel], y[vel], y[vel])[trial % 5]
+        for mode in range(nb):
+            for coef_sign in (-1.0, 0.0, 1.0):
+                expect = stage.still(v, y, full, mode, coef_sign)
+                fill(v, y)
+                got = goes_on(v, y, cut, mode, coef_sign)
+                assert got == expect, (name, y, mode, coef_sign)
+                decided[bool(got)] += 1
+                if got and coef_sign != 0.0:
+                    assert cut[mode, nx.COEF] == full[mode, nx.COEF]
+    assert decided[True] > 0 and decided[False] > 0, decided

@@ -22,10 +22,13 @@ Method
   first-same-as-last, with an RMS error norm over ``atol + rtol |y|`` and the
   standard step-size controller.
 * **Events by classification.**  After every accepted step the end state is
-  classified with the model's own ``point`` function, exactly as
-  :func:`phasemap.classify` does.  The stage goes on while the classification
-  is *unique and equal to the active branch* (and the branch's coefficient of
-  the senior derivative keeps its sign).  Otherwise the first state where it
+  classified with the model's own rows, exactly as :func:`phasemap.classify`
+  does.  The stage goes on while the classification is *unique and equal to
+  the active branch* (and the branch's coefficient of the senior derivative
+  keeps its sign); after a step the integrator reads only that decision,
+  from the statuses of the rows that apply and the stage's coefficient
+  (``GOES_ON`` in :mod:`phasemap.integrate.templates`), and events classify
+  every row.  Otherwise the first state where it
   stops being so is located by bisection on the dense output, to the
   resolution of double precision in t, and classified there: a velocity zero
   (then rest, stick or reversal, with the velocity set to exactly 0), a sign
@@ -66,7 +69,7 @@ from numba import types as nb_types
 from .. import _dop853, _dopri5
 from .. import _numerics as nx
 from .. import events as ev
-from .._codegen import _F1, _F2, _F3, _I1, _I2, set_cell
+from .._codegen import _F1, _F2, _F3, _I1, _I2, moving_test, set_cell
 from .._compile import contract_constants, grow, remember, specialize
 from ..grid import pack_axes
 from ..model import Model
@@ -249,6 +252,7 @@ def _stage_kernels(model: Model) -> Stage:
                          "it can be classified and mapped but not integrated in time")
     consts = contract_constants(model)
     consts["WATCH"] = np.concatenate([[nx.COEF], consts["REACTIONS"]]).astype(np.int64)
+    consts["MOVING"] = moving_test(model).moving
     for name, template, inline in tp.PIECES:
         consts[name] = specialize(template, model, name.lower(), inline=inline, **consts)
     return Stage(consts["CLASSIFY"], consts["STILL"], consts["EVENT"], consts["START"],

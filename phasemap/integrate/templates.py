@@ -58,9 +58,12 @@ INSIDE = None
 DOMAIN = None
 REST_SPEED = None
 FILL = None
+BOUNDED = None
 RHS = None
 CLASSIFY = None
 ON_STAGE = None
+GOES_ON = None
+MOVING = None
 STILL = None
 INDICATOR = None
 ZERO = None
@@ -141,12 +144,19 @@ def _fill_template(v, y):
     DERIVE(v)
 
 
-def _inside_template(v, y):
-    """The integrated state lies in the model's domain: the bounds of its variables
-    and the model's own ``inside`` condition (``v`` is filled with ``y``)."""
+def _bounded_template(y):
+    """The integrated state ``y`` lies within the bounds of its variables."""
     for i in range(y.shape[0]):
         if y[i] < LOWER[i] or y[i] > UPPER[i]:
             return False
+    return True
+
+
+def _inside_template(v, y):
+    """The integrated state lies in the model's domain: the bounds of its variables
+    and the model's own ``inside`` condition (``v`` is filled with ``y``)."""
+    if not BOUNDED(y):
+        return False
     FILL(v, y)
     return DOMAIN(v)
 
@@ -181,6 +191,34 @@ def _on_stage_template(n, adm, out, mode, coef_sign):
     its coefficient kept (0: not watched)."""
     return n == 1 and adm == mode and (coef_sign == 0.0
                                        or out[mode, nx.COEF] * coef_sign > 0.0)
+
+
+def _goes_on_template(v, y1, out, mode, coef_sign):
+    """After an accepted step to ``y1`` (``v`` holds it and its derived inputs, as the
+    step's last right-hand side left it): the stage of branch ``mode`` goes on.
+
+    The decision of ``ON_STAGE`` on the full classification and of ``INSIDE``, bit
+    for bit, from less: the stage goes on where its row is the one solution
+    (admissible, or a separation) with its coefficient's sign kept, no other row is
+    a solution or a continuum, and the state is inside the domain.  Moving, the
+    classification computes only the rows of the velocity's direction (the others
+    are absent, among them the stick row); ``MOVING`` (generated,
+    :func:`phasemap._codegen.moving_test`) computes those with the same arguments and
+    no stores, so that LLVM keeps what a status or the coefficient reads, and the
+    coefficient goes into ``out``, which ``STALLED`` reads.  At rest, or within its
+    tolerance, every row applies, and the full classification decides.  The events
+    keep the full classification (``STILL``, ``CLASSIFY``).
+    """
+    vel = v[Y_SLOT[VEL_Y]]
+    if abs(vel) <= REST_SPEED(v):
+        POINT(v, out)
+        n, adm, lost, sing = ev.summary(out, STICK)
+        on = ON_STAGE(n, adm, out, mode, coef_sign)
+    else:
+        sole, coef = MOVING(v, mode)
+        out[mode, nx.COEF] = coef
+        on = sole and (coef_sign == 0.0 or coef * coef_sign > 0.0)
+    return on and BOUNDED(y1) and DOMAIN(v)
 
 
 def _still_template(v, yb, out, mode, coef_sign):
@@ -596,9 +634,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
             fate = ev.STIFF
             break
         # v holds y1 and its derived inputs from the last stage of the step
-        POINT(v, out)
-        n, adm, lost, sing = ev.summary(out, STICK)
-        still = ON_STAGE(n, adm, out, mode, coef_sign) and INSIDE(v, y1)
+        still = GOES_ON(v, y1, out, mode, coef_sign)
         theta_end = 1.0
         # the dense output, only where it is used: to locate an event, at requested times
         if not still or (n_eval < t_eval.shape[0]
@@ -677,10 +713,12 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
 #: physics inlined, and no array is passed between helpers; the right-hand side, the
 #: root finder and the event location are called.
 PIECES = (("FILL", _fill_template, True),
+          ("BOUNDED", _bounded_template, True),
           ("INSIDE", _inside_template, True),
           ("RHS", _rhs_template, False),
           ("CLASSIFY", _classify_template, True),
           ("ON_STAGE", _on_stage_template, True),
+          ("GOES_ON", _goes_on_template, True),
           ("STILL", _still_template, True),
           ("STAGE_COEFFICIENT", _stage_coefficient_template, True),
           ("LEAVE", _leave_template, True),
