@@ -59,32 +59,40 @@ def _physics_loops(model):
     point, row, derive = contract.point, contract.branch_row_inline, contract.derive_inline
     shape = (len(model.branches), model.n_fields)
 
-    @njit
-    def rhs(v, n, mode):
-        x = 0.3
-        s = 0.0
-        for i in range(n):
-            v[0] = x
-            v[1] = 1.0 + 1e-7 * i
-            derive(v)
-            a = row(v, mode)[3]
-            s += a
-            x = 0.3 + 1e-9 * i + 1e-15 * a
-        return s
+    def chained(value):
+        """A jitted loop of ``n`` calls ``value(v, arg)``, each on the inputs derived
+        from a phi that the previous call's result moves."""
+
+        @njit
+        def loop(v, n, arg):
+            x = 0.3
+            s = 0.0
+            for i in range(n):
+                v[0] = x
+                v[1] = 1.0 + 1e-7 * i
+                derive(v)
+                a = value(v, arg)
+                s += a
+                x = 0.3 + 1e-9 * i + 1e-15 * a
+            return s
+
+        return loop
+
+    @njit(inline="always")
+    def acceleration(v, mode):
+        return row(v, mode)[3]
+
+    @njit(inline="always")
+    def first_field(v, out):
+        point(v, out)
+        return out[0, 0]
+
+    rhs = chained(acceleration)
+    classify_rows = chained(first_field)
 
     @njit
     def classify(v, n):
-        out = np.empty(shape)
-        x = 0.3
-        s = 0.0
-        for i in range(n):
-            v[0] = x
-            v[1] = 1.0 + 1e-7 * i
-            derive(v)
-            point(v, out)
-            s += out[0, 0]
-            x = 0.3 + 1e-9 * i + 1e-15 * out[0, 0]
-        return s
+        return classify_rows(v, n, np.empty(shape))
 
     return rhs, classify
 
