@@ -27,10 +27,9 @@ needed.
 from __future__ import annotations
 
 import numpy as np
-from numba import literal_unroll
 
 from . import _dopri5
-from ._dopri5 import combine
+from ._dopri5 import combine, run_stages
 
 #: The integrator's name for the method (``simulate(method=...)``).
 NAME = "DOP853"
@@ -121,10 +120,7 @@ D7 = (-25.69393346270375, -154.18974869023643, -231.5293791760455, 357.639117910
 def step_template(v, y, h, mode, K, yt, y1, rtol, atol):
     """One DOP853 step; returns the error norm (see :mod:`phasemap._dopri5`)."""
     ny = y.shape[0]
-    for stage in literal_unroll(STAGES):  # (row of K, rows it combines, a_ij)
-        for i in range(ny):
-            yt[i] = y[i] + h * combine(K, i, stage[1], stage[2])
-        RHS(v, yt, mode, K, stage[0])
+    run_stages(RHS, v, y, h, mode, K, yt, STAGES)
     acc5 = 0.0
     acc3 = 0.0
     for i in range(ny):
@@ -146,10 +142,7 @@ def step_template(v, y, h, mode, K, yt, y1, rtol, atol):
 def dense_template(v, y, y1, h, mode, K, yt, r):
     """The order-7 continuous extension of the step y -> y1 into ``r`` (8 rows)."""
     ny = y.shape[0]
-    for stage in literal_unroll(DENSE_STAGES):  # (row of K, rows it combines, a_ij)
-        for i in range(ny):
-            yt[i] = y[i] + h * combine(K, i, stage[1], stage[2])
-        RHS(v, yt, mode, K, stage[0])
+    run_stages(RHS, v, y, h, mode, K, yt, DENSE_STAGES)
     for i in range(ny):
         dy = y1[i] - y[i]
         r[0, i] = y[i]

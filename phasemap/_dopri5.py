@@ -27,7 +27,8 @@ the constants below.
 from __future__ import annotations
 
 import numpy as np
-from numba import literal_unroll, njit
+from numba import njit
+from numba.extending import overload
 
 #: The integrator's name for the method (``simulate(method=...)``).
 NAME = "DOPRI5"
@@ -93,16 +94,39 @@ def combine(K, i, rows, coefs):
     return acc
 
 
+def run_stages(rhs, v, y, h, mode, K, yt, table):
+    """The explicit stages of ``table`` in order: for each (row, rows, coefs),
+    ``yt = y + h combine(K, rows, coefs)``, then ``rhs`` fills row ``row`` of ``K``.
+
+    In Python it loops over ``table``; in numba (:func:`_unrolled_stages`) the
+    loop is written out once per table, so that every coefficient and row index is
+    a compile-time constant of the step, as in a step written by hand.
+    """
+    for row, rows, coefs in table:
+        for i in range(y.shape[0]):
+            yt[i] = y[i] + h * combine(K, i, rows, coefs)
+        rhs(v, yt, mode, K, row)
+
+
+@overload(run_stages, inline="always")
+def _unrolled_stages(rhs, v, y, h, mode, K, yt, table):
+    lines = ["def stages(rhs, v, y, h, mode, K, yt, table):"]
+    for k in range(len(table)):
+        lines += ["    for i in range(y.shape[0]):",
+                  f"        yt[i] = y[i] + h * combine(K, i, table[{k}][1], table[{k}][2])",
+                  f"    rhs(v, yt, mode, K, table[{k}][0])"]
+    scope = {"combine": combine}
+    exec("\n".join(lines), scope)
+    return scope["stages"]
+
+
 def step_template(v, y, h, mode, K, yt, y1, rtol, atol):
     """One Dormand-Prince 5(4) step; returns the error norm (see the module docstring)."""
     ny = y.shape[0]
     for i in range(ny):
         yt[i] = y[i] + h * A21 * K[0, i]
     RHS(v, yt, mode, K, 1)
-    for stage in literal_unroll(STAGES):  # (row of K, rows it combines, a_ij)
-        for i in range(ny):
-            yt[i] = y[i] + h * combine(K, i, stage[1], stage[2])
-        RHS(v, yt, mode, K, stage[0])
+    run_stages(RHS, v, y, h, mode, K, yt, STAGES)
     for i in range(ny):
         y1[i] = y[i] + h * combine(K, i, B_ROWS, B)
     RHS(v, y1, mode, K, FSAL)
