@@ -64,18 +64,30 @@ def _physics_loops(model):
     goes_on = stage_kernels(model).constants["GOES_ON"]
     shape = (len(model.branches), model.n_fields)
 
-    @njit
-    def rhs(v, n, mode):
-        x = 0.3
-        s = 0.0
-        for i in range(n):
-            v[0] = x
-            v[1] = 1.0 + 1e-7 * i
-            derive(v)
-            a = row(v, mode)[3]
-            s += a
-            x = 0.3 + 1e-9 * i + 1e-15 * a
-        return s
+    def chained(value):
+        """A jitted loop of ``n`` calls ``value(v, arg)``, each on the inputs derived
+        from a phi that the previous call's result moves."""
+
+        @njit
+        def loop(v, n, arg):
+            x = 0.3
+            s = 0.0
+            for i in range(n):
+                v[0] = x
+                v[1] = 1.0 + 1e-7 * i
+                derive(v)
+                a = value(v, arg)
+                s += a
+                x = 0.3 + 1e-9 * i + 1e-15 * a
+            return s
+
+        return loop
+
+    @njit(inline="always")
+    def acceleration(v, mode):
+        return row(v, mode)[3]
+
+    rhs = chained(acceleration)
 
     @njit
     def classify(v, n, mode):

@@ -416,12 +416,9 @@ def figure_fates(ds, size="two_column"):
 # --------------------------------------------------------------------------- the study
 
 
-def main(argv=None) -> list[Claim]:
-    args = study.arguments(__doc__, argv)
-    out, quick, files, claims = args.out, args.quick, [], []
-
-    # 1. the stagnation zone at rest
-    rest = rest_map(quick, out, files)
+def rest_claims(rest) -> list[Claim]:
+    """The stagnation zone at rest against (35), and rest for delta >= l."""
+    claims = []
     phi, delta = study.mesh(rest, "phi", "delta")
     stag = rest.stagnation.transpose("phi", "delta").values == 1
     below = np.broadcast_to(delta < L, stag.shape)
@@ -448,9 +445,12 @@ def main(argv=None) -> list[Claim]:
         "delta > l, rest at phi = +-pi/2", "(no solution for delta >= l)",
         f"two solutions (rest, free fall with R = 0) on {two}/{2 * int(strictly.sum())} cells",
         verdict(two == 2 * strictly.sum() > 0, "finding")))
+    return claims
 
-    # 2. in motion: delta > l
-    by_delta, by_omega = moving_maps(quick, out, files)
+
+def moving_claims(by_delta, by_omega) -> list[Claim]:
+    """In motion with delta >= l: no solution off the free-fall curve, after (33)."""
+    claims = []
     n = by_delta.n_solutions.transpose("phi", "delta").values
     phis, deltas = by_delta.phi.values, by_delta.delta.values
     on = np.isin(phis, free_angle(OMEGA_MOVING))
@@ -485,9 +485,12 @@ def main(argv=None) -> list[Claim]:
         f"delta/l = {DELTA_ABOVE:g} over (phi, omega)", "no solution for delta >= l",
         f"none on {int((n_om[off] == 0).sum())}/{int(off.sum())} moving cells off the curve",
         verdict(bool((n_om[off] == 0).all()) and off.any())))
+    return claims
 
-    # 3. phase curves: swings decay to rest inside the zone
-    curves = phase_curves(out, files)
+
+def phase_claims(curves) -> list[Claim]:
+    """Phase curves: swings from rest decay to rest inside the zone."""
+    claims = []
     ends = [(ds.attrs["end_reason"], float(ds.stage_end_phi[-1])) for ds in curves]
     at_rest = [p for r, p in ends if r == "rest"]
     worst = max(L * abs(math.sin(p)) for p in at_rest) if at_rest else math.inf
@@ -497,9 +500,12 @@ def main(argv=None) -> list[Claim]:
         f"{len(at_rest)}/{len(curves)} phase curves end at rest after {swings} stages; "
         f"max l|sin phi_rest| = {worst:.4f} <= delta = {DELTA:g}",
         verdict(len(at_rest) == len(curves) and worst <= DELTA)))
+    return claims
 
-    # 4. weightless pendulum against (36)
-    runs = weightless(out, files)
+
+def weightless_claims(runs) -> list[Claim]:
+    """The weightless pendulum against its exact solution (36)."""
+    claims = []
     d_phi = d_omega = 0.0  # each in its own unit: rad and rad s-1 are not compared
     for ds, (phi0, omega0) in zip(runs, WEIGHTLESS):
         p, w = weightless_motion(ds.t.values, phi0, omega0, DELTA_WEIGHTLESS, L)
@@ -512,9 +518,12 @@ def main(argv=None) -> list[Claim]:
         f"simulate (rtol 1e-10, 10 s): max |d phi| {d_phi:.1e} rad, max |d omega| "
         f"{d_omega:.1e} rad s-1; direction kept",
         verdict(max(d_phi, d_omega) < 1e-7 and keep)))
+    return claims
 
-    # 5. fate map: rest in the lower or the upper part of the zone
-    fates = fate_map(quick, out, files)
+
+def fate_claims(fates) -> list[Claim]:
+    """The fate map: every motion ends at rest, in the lower or the upper part of the zone."""
+    claims = []
     rest_cells = fates.fate.values == phasemap.Event.REST
     phi_rest = fates.phi_rest.values[rest_cells]
     worst = float(np.max(L * np.abs(np.sin(phi_rest)))) if phi_rest.size else math.inf
@@ -524,6 +533,19 @@ def main(argv=None) -> list[Claim]:
         f"rest from {int(rest_cells.sum())}/{rest_cells.size} states within {T_FATE:g} s, "
         f"{upper} at the top; max l|sin phi_rest| = {worst:.4f}",
         verdict(bool(rest_cells.all()) and worst <= DELTA and 0 < upper < rest_cells.sum())))
+    return claims
+
+
+def main(argv=None) -> list[Claim]:
+    args = study.arguments(__doc__, argv)
+    out, quick, files = args.out, args.quick, []
+    rest = rest_map(quick, out, files)
+    by_delta, by_omega = moving_maps(quick, out, files)
+    curves = phase_curves(out, files)
+    runs = weightless(out, files)
+    fates = fate_map(quick, out, files)
+    claims = (rest_claims(rest) + moving_claims(by_delta, by_omega) + phase_claims(curves)
+              + weightless_claims(runs) + fate_claims(fates))
 
     for name, draw in (("rest", lambda size: figure_rest(rest, size)),
                        ("moving", lambda size: figure_moving(by_delta, by_omega, size)),

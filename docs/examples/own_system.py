@@ -1,5 +1,12 @@
 """Your own system in 30 lines: the classic Painleve rod, declared, mapped and moved.
 
+The parameters and coordinates are those of the built-in rod, declared one a
+line in ``phasemap/systems/painleve_rod.py`` (``Parameter("f", "1", "friction
+coefficient at the floor", default=0.5, lower=0.0)``, ``Coordinate("theta", ...,
+rate=Rate("omega", ...))``; the user guide's "Declaring a system" writes them
+all out); this file declares a system of its own with them: the body, its
+potential and the floor contact.
+
 Run:  python docs/examples/own_system.py   (writes own_system_map.png, own_system_motion.png)
 """
 
@@ -7,19 +14,8 @@ import numpy as np
 import sympy as sp
 
 import phasemap
-from phasemap.declare import Body, Coordinate, Parameter, PointContact, Rate, System
-
-f = Parameter("f", "1", "friction coefficient at the floor", default=0.5, lower=0.0)
-l = Parameter("l", "m", "half length of the rod", default=1.0, lower=0.0, lower_open=True)
-g = Parameter("g", "m s-2", "gravitational acceleration", default=9.81, lower=0.0)
-m = Parameter("m", "kg", "mass of the rod", default=1.0, lower=0.0, lower_open=True)
-theta = Coordinate("theta", "rad", "angle of the rod to the floor", default=1.0, lower=0.0,
-                   upper=float(sp.pi), symbol="\\theta",
-                   rate=Rate("omega", "rad s-1", "angular velocity", symbol="\\omega",
-                             scale=sp.sqrt(g / l)))
-x = Coordinate("x", "m", "position of end A", rate=Rate("xdot", "m s-1", "velocity of end A",
-                                                        symbol="\\dot x", scale=sp.sqrt(g * l)))
-y = Coordinate("y", "m", "height of end A")          # no rate: the floor contact fixes it
+from phasemap.declare import Body, PointContact, System
+from phasemap.systems.painleve_rod import f, g, l, m, theta, x, y
 
 SYSTEM = System(
     "my_rod", "A uniform rod with one end on a rough floor", "Painleve (1895)",
