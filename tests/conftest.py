@@ -44,6 +44,20 @@ def _test_kernels() -> None:
 _test_kernels()
 
 
+def _deterministic_hypothesis() -> None:
+    """Property tests draw the same examples on every run (``derandomize``): a fresh clone
+    keeps no example database, so a random draw would make CI pass or fail by luck.  Set
+    ``HYPOTHESIS_PROFILE=explore`` to draw new examples (as a search for bugs, not in CI)."""
+    from hypothesis import settings
+
+    settings.register_profile("ci", derandomize=True)
+    settings.register_profile("explore", derandomize=False)
+    settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+
+_deterministic_hypothesis()
+
+
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     """Under pytest-xdist (``-n``, ``--dist loadgroup``), run each test module on one
