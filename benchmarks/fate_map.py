@@ -89,36 +89,27 @@ def _physics_loops(model):
 
     rhs = chained(acceleration)
 
-    @njit
-    def classify(v, n, mode):
-        out = np.empty(shape)
-        x = 0.3
-        s = 0.0
-        for i in range(n):
-            v[0] = x
-            v[1] = 1.0 + 1e-7 * i
-            derive(v)
-            point(v, out)
-            # the stage's status, which waits for its row (row 0 of the declared wheel is
-            # the stick row, absent while moving: a store of a constant)
-            s += out[mode, 0]
-            x = 0.3 + 1e-9 * i + 1e-15 * out[mode, 0]
-        return s
+    @njit(inline="always")
+    def stage_status(v, arg):
+        # the stage's status, which waits for its row (row 0 of the declared wheel is
+        # the stick row, absent while moving: a store of a constant)
+        out, mode = arg
+        point(v, out)
+        return out[mode, 0]
 
-    @njit
+    @njit(inline="always")
+    def goes_on_now(v, arg):
+        out, y1, mode = arg
+        y1[0], y1[1] = v[0], v[1]
+        return 1.0 if goes_on(v, y1, out, mode, 1.0) else 0.0
+
+    status_loop, goes_on_loop = chained(stage_status), chained(goes_on_now)
+
+    def classify(v, n, mode):
+        return status_loop(v, n, (np.empty(shape), mode))
+
     def after_step(v, n, mode):
-        out = np.empty(shape)
-        y1 = np.empty(2)
-        x = 0.3
-        s = 0.0
-        for i in range(n):
-            v[0] = y1[0] = x
-            v[1] = y1[1] = 1.0 + 1e-7 * i
-            derive(v)
-            on = 1.0 if goes_on(v, y1, out, mode, 1.0) else 0.0
-            s += on
-            x = 0.3 + 1e-9 * i + 1e-15 * on
-        return s
+        return goes_on_loop(v, n, (np.empty(shape), np.empty(2), mode))
 
     return rhs, classify, after_step
 
