@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-import time
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from typing import Mapping
@@ -75,26 +74,10 @@ def parse_range(m: Model, what: str, value) -> tuple[float, float]:
 def header(m: Model, kind: str, fixed: Mapping, **extra) -> dict:
     """The global attributes of a result: the CF header every phasemap Dataset carries
     (:func:`phasemap._dataset.cf_header`), then ``extra`` and the fixed values."""
-    attrs = _cf_header(m, kind) | extra
+    attrs = cf_header(m, kind) | extra
     for name, value in fixed.items():
         attrs[f"phasemap_fixed_{name}"] = value
     return attrs
-
-
-_HEADERS: dict = {}
-
-
-def _cf_header(m: Model, kind: str) -> dict:
-    """:func:`phasemap._dataset.cf_header`, made once per model, kind and second (its
-    time stamps' resolution): the model's description in JSON is a tenth of a small
-    result's cost.  The second is the clock's, read before the header is made: the
-    header's own time stamp is that second or later, and a later one is never reused
-    (formatting the time stamp to compare it costs more than a small Dataset's header)."""
-    second = int(time.time())
-    hit = _HEADERS.get((id(m), kind))
-    if hit is None or hit[0] is not m or hit[2] != second:
-        hit = _HEADERS[(id(m), kind)] = (m, cf_header(m, kind), second)
-    return dict(hit[1])
 
 
 def make_slice(model, axes: Mapping, fixed: Mapping | None, conditions=None) -> Slice:
