@@ -354,27 +354,30 @@ def _generate(model: Model, variables: tuple[str, ...], conds) -> str:
             '    """Every condition\'s value into out, its tie scale into scale."""',
             f"    _vscale = {vsc}"]
     out += body(pairs) + ["", ""]
+    # one function per derivative order, every condition's body in its own branch:
+    # a function per condition costs numba a compilation each (measured on the
+    # ladder's 54 conditions: 26.5 s of CPU against 17.7 s for these two)
     n = len(variables)
+    gradient = [f'@njit("{_GRADIENT}", cache=True, error_model="numpy")',
+                "def gradient(_k, _x, _g):",
+                '    """Condition k: (value, tie scale), its gradient into the arrays."""']
+    hessian = [f'@njit("{_HESSIAN}", cache=True, error_model="numpy")',
+               "def hessian(_k, _x, _g, _H):",
+               '    """Condition k: (value, tie scale), its hessian into the arrays."""']
     for k, (e, s) in enumerate(zip(exprs, scales)):
         grad = [sp.diff(e, v) for v in var_syms]
         hess = {(i, j): sp.diff(grad[i], var_syms[j]) for i in range(n) for j in range(i, n)}
-        out += ['@njit(cache=True, error_model="numpy")', f"def _gradient_{k}(_x, _g):",
-                f"    _vscale = {vsc}"]
-        out += body([("_c", e), ("_s", scale_of(s))] + [(f"_g[{i}]", d) for i, d in enumerate(grad)])
-        out += ["    return _c, _s", "", ""]
-        out += ['@njit(cache=True, error_model="numpy")', f"def _hessian_{k}(_x, _g, _H):",
-                f"    _vscale = {vsc}"]
-        out += body([("_c", e), ("_s", scale_of(s))] + [(f"_g[{i}]", d) for i, d in enumerate(grad)]
-                    + [(f"_H[{i}, {j}]", d) for (i, j), d in hess.items()])
-        out += [f"    _H[{j}, {i}] = _H[{i}, {j}]" for (i, j) in hess if i != j]
-        out += ["    return _c, _s", "", ""]
-    for what, args, sig in (("gradient", "_x, _g", _GRADIENT), ("hessian", "_x, _g, _H", _HESSIAN)):
-        out += [f'@njit("{sig}", cache=True, error_model="numpy")', f"def {what}(_k, {args}):",
-                f'    """Condition k: (value, tie scale), its {what} into the arrays."""']
-        for k in range(len(conds)):
-            out += [f"    {'if' if k == 0 else 'elif'} _k == {k}:",
-                    f"        return _{what}_{k}({args})"]
-        out += ["    return np.nan, np.nan", "", ""]
+        first = [("_c", e), ("_s", scale_of(s))] + [(f"_g[{i}]", d) for i, d in enumerate(grad)]
+        test = f"    {'if' if k == 0 else 'elif'} _k == {k}:"
+        gradient += [test, f"        _vscale = {vsc}"]
+        gradient += ["    " + line for line in body(first)] + ["        return _c, _s"]
+        hessian += [test, f"        _vscale = {vsc}"]
+        hessian += ["    " + line for line in body(first + [(f"_H[{i}, {j}]", d)
+                                                          for (i, j), d in hess.items()])]
+        hessian += [f"        _H[{j}, {i}] = _H[{i}, {j}]" for (i, j) in hess if i != j]
+        hessian += ["        return _c, _s"]
+    for what in (gradient, hessian):
+        out += what + ["    return np.nan, np.nan", "", ""]
     spec = [{"name": c.name, "branch": c.branch, "kind": c.kind, "rest_only": c.rest_only}
             for c in conds]
     out += [f"VARIABLES = {tuple(variables)!r}", f"SPEC = {json.dumps(spec)!r}", ""]
