@@ -21,8 +21,8 @@ _STATUS = {"ADMISSIBLE": nx.ADMISSIBLE, "SEPARATION": nx.SEPARATION}
 
 
 def printer():
-    """A sympy printer for numba: float literals everywhere (no mixed int/float tuples),
-    integer powers as products."""
+    """A sympy printer for numba: float literals everywhere (no mixed int/float tuples, a
+    rational as the double its division gives), integer powers as products."""
     import sympy as sp
     from sympy.printing.pycode import PythonCodePrinter
 
@@ -31,7 +31,13 @@ def printer():
             return f"{int(e)}.0"
 
         def _print_Rational(self, e):
-            return f"({int(e.p)}.0/{int(e.q)}.0)"
+            # the double that p.0/q.0 evaluates to, written out: numba types and lowers
+            # each division of two constants it is given (no folding before LLVM's)
+            try:
+                value = float(int(e.p)) / float(int(e.q))
+            except OverflowError:
+                return f"({int(e.p)}.0/{int(e.q)}.0)"
+            return f"({value!r})"
 
         def _print_Half(self, e):
             return "0.5"
