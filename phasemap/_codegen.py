@@ -101,8 +101,15 @@ class _Source:
             self.inside_names = _params(model.inside, 0, self.inputs, f"{model.name}: inside")
 
     def call(self, b: int, rest: str, velocity: str) -> str:
-        """The call of branch ``b`` with ``rest`` and the velocity local ``velocity``."""
+        """The call of branch ``b`` with ``rest`` and the velocity local ``velocity``.
+
+        A constant ``rest`` is passed as ``bool(True)``/``bool(False)``: numba types
+        a bare constant as a literal and compiles the branch function once more for it
+        (the integrator's rows and ``point``'s runtime flag would each compile every
+        branch); the branch functions are inlined by LLVM, which folds the constant."""
         consts, names = self.calls[b]
+        if rest in ("True", "False"):
+            rest = f"bool({rest})"
         args = consts + [rest if n == "rest" else (velocity if n == self.model.velocity
                                                    else f"i_{n}") for n in names]
         return f"BR{b}({', '.join(args)})"
