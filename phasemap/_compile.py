@@ -37,7 +37,10 @@ def specialize(template, model: Model, kind: str, parallel: bool = False, inline
     With ``inline`` the function is marked for LLVM to inline into its callers
     (``forceinline``): for small per-step helpers, whose calls would pass arrays
     as structs by value.  Unlike numba's IR inlining, the helper is compiled
-    once, not once per call site.
+    once, not once per call site.  ``inline="ir"`` inlines it into numba's IR of
+    its (one) caller instead: it is never compiled on its own, where a called
+    function's code is optimised and generated once in its own library and again
+    in each caller's.
     """
     module = sys.modules[template.__module__]
     digest = source_hash(model, module, *getattr(module, "SOURCES", ()))
@@ -50,7 +53,9 @@ def specialize(template, model: Model, kind: str, parallel: bool = False, inline
         fn = types.FunctionType(template.__code__, scope, name)
         fn.__qualname__ = name  # one on-disk cache index per model and source
         fn.__doc__ = template.__doc__
-        if inline:
+        if inline == "ir":
+            kernel = _CACHE[key] = njit(cache=True, inline="always", error_model="numpy")(fn)
+        elif inline:
             kernel = _CACHE[key] = njit(cache=True, forceinline=True, error_model="numpy")(fn)
         else:
             kernel = _CACHE[key] = njit(parallel=parallel, cache=True, error_model="numpy")(fn)
