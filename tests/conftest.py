@@ -44,6 +44,34 @@ def _test_kernels() -> None:
 _test_kernels()
 
 
+def _fast_machine_code() -> None:
+    """LLVM's code generator (instruction selection, register allocation) runs at -O0 for
+    the suite's kernels, while its IR optimisation stays at ``NUMBA_OPT``.
+
+    numba gives both the same level.  Code generation was the larger part of the suite's
+    compile time: the declared ladder's phase-curve tracer took 123 s of CPU from cold
+    (its point kernels included) against 80 s with this, its curves 10 % slower to run.
+    The code generator keeps IEEE semantics at every level (nothing is fused or
+    reassociated without fast-math, which phasemap never asks for), so the tests check
+    the same numbers.  Only kernels compiled in this process are affected (a child
+    process compiles at numba's setting); they go to the tests' own cache (see
+    :func:`_test_kernels`).  ``PHASEMAP_TEST_CODEGEN=default`` turns this off."""
+    if os.environ.get("PHASEMAP_TEST_CODEGEN") == "default":
+        return
+    from numba.core import codegen
+
+    customize = codegen.JITCPUCodegen._customize_tm_options
+
+    def at_o0(self, options):
+        customize(self, options)
+        options["opt"] = 0
+
+    codegen.JITCPUCodegen._customize_tm_options = at_o0
+
+
+_fast_machine_code()
+
+
 def _deterministic_hypothesis() -> None:
     """Property tests draw the same examples on every run (``derandomize``): a fresh clone
     keeps no example database, so a random draw would make CI pass or fail by luck.  Set
