@@ -95,12 +95,15 @@ def pytest_collection_modifyitems(config, items):
     ``XDIST_SPREAD = True`` its tests go to whichever worker is free.  A module that
     compiles the same kernels as another names that module's group in ``XDIST_GROUP``
     (e.g. ``"tests/test_phase_curve.py"``, or ``"studies"``): on two workers at once the
-    same kernel would be compiled twice, each worker missing the other's numba cache."""
+    same kernel would be compiled twice, each worker missing the other's numba cache.
+    One test (a parametrized case) names its group with ``@pytest.mark.kernels_with(group)``."""
     studies = set()
     for item in items:
         module = item.nodeid.split("::")[0]
         group = "studies" if pathlib.Path(module).name.startswith("test_study_") else module
         group = getattr(getattr(item, "module", None), "XDIST_GROUP", group)
+        marked = item.get_closest_marker("kernels_with")
+        group = marked.args[0] if marked else group
         if getattr(getattr(item, "module", None), "XDIST_SPREAD", False):
             continue
         item.add_marker(pytest.mark.xdist_group(group))

@@ -217,7 +217,11 @@ def test_first_velocity_zero_located_to_the_tolerance(rtol, method):
     assert int(ds.event_branch[1]) == phasemap.MODELS["hinge_pendulum"].branches.index("turn_pos")
 
 
-@pytest.mark.parametrize("name", sorted(phasemap.MODELS))
+@pytest.mark.parametrize("name", [
+    # rod_on_step's point and integrator are test_declare's too: compiled once, not on
+    # both workers at once (17.6 s of CPU twice)
+    pytest.param(n, marks=pytest.mark.kernels_with("tests/test_declare.py"))
+    if n == "rod_on_step" else n for n in sorted(phasemap.MODELS)])
 def test_rest_speed_is_the_tolerance_of_the_classification(name):
     """The integrator roots a velocity where it reaches the contract's ``rest_speed``
     (the end of a stage that stops or reverses): it must be the very speed at which

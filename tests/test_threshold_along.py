@@ -25,6 +25,9 @@ from phasemap.declare import Body, Coordinate, Parameter, PointContact, Rate, Sy
 
 from conftest import assert_atlas_round_trip
 
+#: test_threshold_over declares and maps the same gyration rod: one worker compiles it
+XDIST_GROUP = "tests/test_threshold_over.py"
+
 
 def gyration_rod():
     """A rod whose inertia about its centre of mass is m k^2, declared with the public API."""
