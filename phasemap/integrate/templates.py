@@ -424,7 +424,7 @@ def _locate_template(v, y, y1, h, t, mode, coef_sign, r, out, yb, zs):
     d = DIRECTIONS[mode]
     rest = REST_SPEED(v)
     if d != 0.0 and d * y[VEL_Y] > rest and d * y1[VEL_Y] <= rest:
-        zs[nz, 0], zs[nz, 1] = ZERO(v, r, mode, -1, d, rest, d * y[VEL_Y] - rest,
+        zs[nz, 0], zs[nz, 1] = ZERO(v, r, mode, int(-1), d, rest, d * y[VEL_Y] - rest,
                                      d * y1[VEL_Y] - rest, h, t, yb)
         nz += 1
     if WATCH.shape[0] > 0:
@@ -578,9 +578,9 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
     yb = np.empty(ny)
     zs = np.empty((WATCH.shape[0] + 1, 2))  # zeros ending the stage in a step (LOCATE)
     pts = np.empty((64 if save else 1, 2 + ny))  # saved points: t, branch, y
-    n_saved = 0
+    n_saved = int(0)  # int(): see phase.tracer.PIECES
     evs = np.empty((16, 3 + ny))  # events: t, kind, branch after, y
-    n_ev = 0
+    n_ev = int(0)
     y_eval = np.empty((t_eval.shape[0], ny))
     n_eval = 0
 
@@ -602,8 +602,8 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
     h = 0.0
     h_prev_ok = True
     flickers = 0
-    stiff_hits = 0  # Hairer's stiffness detection: consecutive steps with h |lambda| > bound
-    calm = 0
+    stiff_hits = int(0)  # Hairer's stiffness detection: consecutive steps with h |lambda| > bound
+    calm = int(0)
     if fate < 0:
         h = FIRST_STEP(v, y, mode, K, yt, err, t_end, rtol, atol, h_max)
 

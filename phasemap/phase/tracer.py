@@ -578,7 +578,7 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
     coef0, coef_sign = STAGE_START(v, mode, sigma, x0, u0, react)
     coef_prev = coef0
     x, u, s = x0, u0, 0.0
-    n_pan = 0
+    n_pan = int(0)  # not a literal: see the note above PIECES
     # (rtol >= 1, the measurements' accept-every-panel, still converges to 1e-14)
     tol_newton = NEWTON * rtol if rtol < 1.0 else 0.0
     truncated = False
@@ -766,7 +766,7 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
     """
     out = np.empty((N_BRANCHES, N_FIELDS))
     pts = np.empty((max(points, 16), 3))
-    npts = 0
+    npts = int(0)  # not a literal: see the note above PIECES
     stg = np.empty((8, 6))
     nst = 0
     panels = np.empty((64, _PANEL_COLS))
@@ -843,7 +843,9 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
 
 #: A constant argument of a called piece is written ``bool(True)``, ``int(-1)``: numba
 #: compiles a function once more for each literal it is called with (ROOT was compiled
-#: three times, 3.9 s of CPU).  STAGE is inlined into CURVE's numba IR ("ir", see
+#: three times, 3.9 s of CPU).  A counter that starts at 0 and is passed in a loop is
+#: started at ``int(0)``: numba's type inference sees the literal 0 first and compiled
+#: the callee for it before the counter's type became int64 (STAGE_POINTS, 1.8 s).  STAGE is inlined into CURVE's numba IR ("ir", see
 #: :func:`phasemap._compile.specialize`): compiled on its own, its code was optimised
 #: and generated twice.  With the contract's rows called with ``bool(False)`` too
 #: (:meth:`phasemap._codegen._Source.call`), the ladder's simulate, phase_curve and a
