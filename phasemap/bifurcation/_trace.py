@@ -1548,6 +1548,8 @@ def functions(model, conds) -> tuple:
     fns = []
     for fn, sig in ((mod.values, VALUES_SIG), (mod.gradient, GRADIENT_SIG),
                     (mod.hessian, HESSIAN_SIG), (classifier(model), CLASS_SIG)):
+        if tuple(sig.args) not in fn.overloads:
+            fn.compile(sig)  # the hessian, compiled (or loaded) when first needed
         cres = fn.overloads[tuple(sig.args)]
         fns += [cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name),
                 CompileResultWAP(cres).__wrapper_address__()]

@@ -257,10 +257,10 @@ def _explicit_key(conds) -> str:
 
 
 #: The signatures of the generated entry points, as the tracer calls them
-#: (:data:`phasemap.bifurcation._trace.FUNCTIONS`).
+#: (:data:`phasemap.bifurcation._trace.FUNCTIONS`); ``hessian`` is compiled for its
+#: signature when first needed (:func:`phasemap.bifurcation._trace.functions`).
 _VALUES = "void(float64[::1], float64[::1], float64[::1])"
 _GRADIENT = "UniTuple(float64, 2)(int64, float64[::1], float64[::1])"
-_HESSIAN = "UniTuple(float64, 2)(int64, float64[::1], float64[::1], float64[:, ::1])"
 
 
 def _printer():
@@ -361,7 +361,10 @@ def _generate(model: Model, variables: tuple[str, ...], conds) -> str:
     gradient = [f'@njit("{_GRADIENT}", cache=True, error_model="numpy")',
                 "def gradient(_k, _x, _g):",
                 '    """Condition k: (value, tie scale), its gradient into the arrays."""']
-    hessian = [f'@njit("{_HESSIAN}", cache=True, error_model="numpy")',
+    # compiled at its first use (a boundary's trace takes its address; a threshold never
+    # calls it): a third of a module's compile time, saved where only values and
+    # gradients are read
+    hessian = ['@njit(cache=True, error_model="numpy")',
                "def hessian(_k, _x, _g, _H):",
                '    """Condition k: (value, tie scale), its hessian into the arrays."""']
     for k, (e, s) in enumerate(zip(exprs, scales)):
