@@ -60,7 +60,11 @@ def _fast_machine_code() -> None:
         return
     from numba.core import codegen
 
-    customize = codegen.JITCPUCodegen._customize_tm_options
+    customize = getattr(codegen.JITCPUCodegen, "_customize_tm_options", None)
+    if customize is None:  # a numba without this hook: its own code generation, slower
+        warnings.warn("tests/conftest.py: numba.core.codegen.JITCPUCodegen has no "
+                      "_customize_tm_options; machine code is generated at NUMBA_OPT")
+        return
 
     def at_o0(self, options):
         customize(self, options)
