@@ -845,11 +845,13 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
 #: compiles a function once more for each literal it is called with (ROOT was compiled
 #: three times, 3.9 s of CPU).  A counter that starts at 0 and is passed in a loop is
 #: started at ``int(0)``: numba's type inference sees the literal 0 first and compiled
-#: the callee for it before the counter's type became int64 (STAGE_POINTS, 1.8 s).  STAGE is inlined into CURVE's numba IR ("ir", see
+#: the callee for it before the counter's type became int64 (STAGE_POINTS, 1.8 s).
+#: STAGE is inlined into CURVE's numba IR ("ir", see
 #: :func:`phasemap._compile.specialize`): compiled on its own, its code was optimised
 #: and generated twice.  With the contract's rows called with ``bool(False)`` too
 #: (:meth:`phasemap._codegen._Source.call`), the ladder's simulate, phase_curve and a
 #: 16 x 16 scene compiled from cold in 98 s of CPU, against 127 s before.
+#:
 #: The tracer's pieces, compiled in this order: (name, template, inline); CURVE is the
 #: whole curve.  RATE and VALUE (the branch row, per
 #: collocation node) and the stage's named pieces are LLVM-inlined; CLASSIFY, STILL,
