@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
@@ -60,10 +59,6 @@ class Slice:
     def slots(self) -> tuple[int, int]:
         inputs = self.model.inputs
         return inputs.index(self.x), inputs.index(self.y)
-
-    def physical(self, uw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        g = self.geo
-        return g[0] + uw[..., 0] * g[1], g[2] + uw[..., 1] * g[3]
 
 
 def parse_range(m: Model, what: str, value) -> tuple[float, float]:
@@ -471,16 +466,37 @@ def _variable(dim: str, data: np.ndarray, attrs: dict) -> xr.Variable:
     return var
 
 
+_LABELS: dict = {}
+
+
+def _labels(sl: Slice, layer: str) -> tuple:
+    """What the Dataset of a slice takes from its model, axes and layer alone, once per
+    model, axes and layer: each axis's (units, long_name), and the layer's flag values
+    and meanings (the attribute dicts are made anew for every Dataset)."""
+    m = sl.model
+    key = (id(m), sl.x, sl.y, layer)
+    hit = _LABELS.get(key)
+    if hit is None or hit[0] is not m:
+        variables = m.variables
+        reg = layers_for(m)[layer]
+        hit = _LABELS[key] = (m, tuple((variables[n].units, variables[n].long_name)
+                                       for n in (sl.x, sl.y)),
+                              (tuple(reg.flag_values), reg.dtype, reg.flag_meanings)
+                              if reg.flag_values is not None else None)
+    return hit[1:]
+
+
 def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
     """The traced pieces and points as the Dataset :func:`boundaries` returns."""
     m = sl.model
-    reg = layers_for(m)[layer]
-    xv, yv = m.variables[sl.x], m.variables[sl.y]
-    px, py = sl.physical(traced.pv)
+    ((xu, xl), (yu, yl)), flag = _labels(sl, layer)
+    g0, g1, g2, g3 = sl.geo.tolist()
+    pv = traced.pv
+    px, py = g0 + pv[:, 0] * g1, g2 + pv[:, 1] * g3
     V = _variable
     data = {
-        sl.x: V("vertex", px, {"units": xv.units, "long_name": xv.long_name}),
-        sl.y: V("vertex", py, {"units": yv.units, "long_name": yv.long_name}),
+        sl.x: V("vertex", px, {"units": xu, "long_name": xl}),
+        sl.y: V("vertex", py, {"units": yu, "long_name": yl}),
     }
     piece = V("vertex", traced.pp.astype(np.int32),
               {"long_name": "piece the vertex belongs to (index along dimension piece)"})
@@ -493,21 +509,25 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
             named[k] = condition_name(sl, traced, k)
         return named[k]
 
-    flags = {k: v for k, v in reg.attrs.items() if k in ("flag_values", "flag_meanings")}
+    def flags() -> dict:
+        if flag is None:
+            return {}
+        return {"flag_values": np.array(flag[0], dtype=flag[1]), "flag_meanings": flag[2]}
+
     data["condition"] = V("piece", np.array([name(k) for k in pieces[:, 1].tolist()], dtype=str),
                           {"long_name": "the condition that vanishes on the piece"})
     data["class_left"] = V("piece", pieces[:, 2].astype(np.int8),
                            {"long_name": f"{layer} left of the piece (along its vertices)",
-                            **flags})
+                            **flags()})
     data["class_right"] = V("piece", pieces[:, 3].astype(np.int8),
                             {"long_name": f"{layer} right of the piece (along its vertices)",
-                             **flags})
+                             **flags()})
     data["closed"] = V("piece", pieces[:, 4].astype(np.int8),
                        {"long_name": "the piece is a closed loop (its last vertex is its first)",
                         "flag_values": np.array([0, 1], np.int8), "flag_meanings": "no yes"})
-    keep = _unique_points(traced, 0.5 * tol / max(sl.geo[1], sl.geo[3]))
+    keep = _unique_points(traced, 0.5 * tol / max(g1, g3))
     pf, pi = traced.points_f[keep], traced.points_i[keep]
-    qx, qy = sl.physical(pf[:, :2])
+    qx, qy = g0 + pf[:, 0] * g1, g2 + pf[:, 1] * g3
     kinds = []
     other = []
     for kind, k, j in pi.tolist():
@@ -521,8 +541,8 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
         if kind in (T.CROSSING, T.TANGENCY) and j >= 0:
             names.append(name(j))
         other.append(" ".join(names))
-    data[f"point_{sl.x}"] = V("point", qx, {"units": xv.units, "long_name": xv.long_name})
-    data[f"point_{sl.y}"] = V("point", qy, {"units": yv.units, "long_name": yv.long_name})
+    data[f"point_{sl.x}"] = V("point", qx, {"units": xu, "long_name": xl})
+    data[f"point_{sl.y}"] = V("point", qy, {"units": yu, "long_name": yl})
     data["point_kind"] = V("point", np.array(kinds, dtype=str),
                            {"long_name": "kind of point: crossing, fold_<axis> (the piece turns "
                                          "back in that axis), end (on the slice's edge), "
@@ -535,9 +555,10 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
     data["point_error"] = V("point", pf[:, 3] * tol,
                             {"units": "1", "long_name": "size of the last Newton step in the "
                              "point's coordinates (an error estimate, in axis units)"})
+    # the axes as JSON (the names are identifiers; repr is what json writes of a float)
     attrs = header(m, "boundaries", sl.fixed, phasemap_layer=layer,
-                   phasemap_axes=json.dumps({sl.x: [sl.lo[0], sl.hi[0]],
-                                             sl.y: [sl.lo[1], sl.hi[1]]}),
+                   phasemap_axes=f'{{"{sl.x}": [{float(sl.lo[0])!r}, {float(sl.hi[0])!r}], '
+                                 f'"{sl.y}": [{float(sl.lo[1])!r}, {float(sl.hi[1])!r}]}}',
                    phasemap_tol=tol)
     # built directly: the variables share their dimensions and none has an index, so
     # xarray's merge and alignment (half the cost of a simple slice) have nothing to do
