@@ -1,17 +1,16 @@
 """The compiled tracer: one set of numba functions for every model.
 
-What is particular to a model reaches the tracer as first-class functions, in
-the tuple ``F`` (:data:`FUNCTIONS`), as :func:`phasemap._codegen.driver` takes
-a scene's ``cells``: so the tracer compiles once (and is cached on disk), and a
-new model or slice compiles only its small generated condition module.  The
-entry points take the functions' addresses (:data:`ADDRESSES`, made once per
-model by :func:`functions`) and make ``F`` of them (:func:`_functions_at`).
+What is particular to a model reaches the tracer as the addresses of its
+compiled functions, in the tuple ``F`` (:data:`ADDRESSES`, made once per model
+by :func:`functions`): so the tracer compiles once (and is cached on disk), and
+a new model or slice compiles only its small generated condition module.  Each
+is called at its address in numba's calling convention:
 
-``F[0](x, out, scale)``, ``F[1](k, x, g)``, ``F[2](k, x, g, H)``
+``_values(F, x, out, scale)``, ``_gradient(F, k, x, g)``, ``_hessian(F, k, x, g, H)``
     the generated condition module (:mod:`phasemap.bifurcation.conditions`)
     of the slice's two axes: every condition's value and tie scale; one
     condition's value, tie scale and gradient (and Hessian) in (x, y);
-``F[3](v, out, layer)``
+``_classify(F, v, out, layer)``
     the model's class at a state, from its own ``point`` and ``summarize``
     (:func:`classifier`).
 
@@ -39,13 +38,10 @@ curves, overflow)``.
 from __future__ import annotations
 
 import math
-import warnings
 
 import numpy as np
 from numba import njit, types
 from numba.core import cgutils
-from numba.core.errors import NumbaExperimentalFeatureWarning
-from numba.core.types.function_type import CompileResultWAP
 from numba.extending import intrinsic
 
 from .. import _numerics as nx
@@ -166,13 +162,10 @@ def _note(spf, spi, n, s, u, w, kind, other, res, err):
 
 @njit(cache=True, error_model="numpy")
 def _seed(seeds, m, k, u, w, kind):
-    """Append the seed (k, u, w, kind) as row m, growing the array when it is full."""
-    if m >= seeds.shape[0]:
-        bigger = np.empty((2 * seeds.shape[0], 4))
-        bigger[:m] = seeds[:m]
-        seeds = bigger
-    seeds[m, 0], seeds[m, 1], seeds[m, 2], seeds[m, 3] = k, u, w, kind
-    return seeds, m + 1
+    """Write the seed (k, u, w, kind) as row m where ``seeds`` has room; the next row."""
+    if m < seeds.shape[0]:
+        seeds[m, 0], seeds[m, 1], seeds[m, 2], seeds[m, 3] = k, u, w, kind
+    return m + 1
 
 
 @njit(cache=True, error_model="numpy")
@@ -286,7 +279,7 @@ def _yields(k, grp, active, F, v, ix, iy, geo, u, w, cv, cs):
     that condition's to trace (:func:`_owned`), and a seed of k there starts no piece."""
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
-    F[0](v, cv, cs)
+    _values(F, v, cv, cs)
     for j in range(cv.shape[0]):
         if active[j] and grp[j, 0] != grp[k, 0] and grp[j, 1] < grp[k, 1] \
                 and abs(cv[j]) <= COVANISH * cs[j]:
@@ -335,7 +328,7 @@ def _class_template(v, out, layer):
 def _class_at(F, v, out, layer, ix, iy, geo, u, w):
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
-    return F[3](v, out, layer)
+    return _classify(F, v, out, layer)
 
 
 @njit(cache=True, error_model="numpy")
@@ -343,7 +336,7 @@ def _grad(F, k, v, ix, iy, geo, u, w, g):
     """Condition ``k`` at (u, w): (value, scale, d/du, d/dw)."""
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
-    c, s = F[1](k, v, g)
+    c, s = _gradient(F, k, v, g)
     return c, s, g[0] * geo[1], g[1] * geo[3]
 
 
@@ -352,7 +345,7 @@ def _hess(F, k, v, ix, iy, geo, u, w, g, H):
     """Condition ``k`` at (u, w): (value, scale, c_u, c_w, c_uu, c_uw, c_ww)."""
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
-    c, s = F[2](k, v, g, H)
+    c, s = _hessian(F, k, v, g, H)
     return (c, s, g[0] * geo[1], g[1] * geo[3], H[0, 0] * geo[1] * geo[1],
             H[0, 1] * geo[1] * geo[3], H[1, 1] * geo[3] * geo[3])
 
@@ -368,7 +361,7 @@ def _side(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, su, sw, cvp, s
         return -1
     v[ix] = geo[0] + su * geo[1]
     v[iy] = geo[2] + sw * geo[3]
-    F[0](v, scr[1], scr[2])
+    _values(F, v, scr[1], scr[2])
     eps = math.hypot(su - u, sw - w)
     for j in range(active.shape[0]):
         if active[j] and grp[j, 0] != grp[k, 0] and (cvp[j] > 0.0) != (scr[1, j] > 0.0):
@@ -377,7 +370,7 @@ def _side(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, su, sw, cvp, s
                 return -1
     v[ix] = geo[0] + su * geo[1]
     v[iy] = geo[2] + sw * geo[3]
-    return F[3](v, out, layer)
+    return _classify(F, v, out, layer)
 
 
 @njit(cache=True, error_model="numpy")
@@ -386,7 +379,7 @@ def _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw, eps, 
     ``eps`` away (-1 for a side that cannot be sampled, see SIDE)."""
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
-    F[0](v, scr[0], scr[2])
+    _values(F, v, scr[0], scr[2])
     return _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw, eps,
                        scr[0], scr)
 
@@ -569,7 +562,7 @@ def _explain(F, k, grp, active, v, ix, iy, geo, g, H, cv, cs, u, w, tol_u, tol_w
     crossing with k there: (j, ok, u, w, residual, error); j = -1 if none is near."""
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
-    F[0](v, cv, cs)
+    _values(F, v, cv, cs)
     best = -1
     dist = 1e-6
     for j in range(active.shape[0]):
@@ -668,7 +661,7 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
     h = h0
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
-    F[0](v, cv0, cs)
+    _values(F, v, cv0, cs)
     c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
     n0 = math.hypot(cu, cw)
     la, ra = _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw,
@@ -766,7 +759,7 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
             lb, rb = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, qu, qw, qtu, qtw,
                             _side_eps(qs, qn, 1e-4), scr)
             c, s, cu, cw = _grad(F, k, v, ix, iy, geo, qu, qw, g)
-            F[0](v, cv0, cs)
+            _values(F, v, cv0, cs)
             owned_prev = _owned(k, grp, active, cv0, cs, mark, u, w, qu, qw)
             _push(vf, vi, counts, qu, qw, abs(c) / s, 0.0, curve, REGULAR, k, -1, lb, rb,
                   owned_prev)
@@ -778,7 +771,7 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
             done += 1
             v[ix] = geo[0] + u * geo[1]
             v[iy] = geo[2] + w * geo[3]
-            F[0](v, cv0, cs)
+            _values(F, v, cv0, cs)
             continue
         # a loop: the step passes its start again
         if closing and steps >= 3 and travelled > 2.0 * h:
@@ -794,7 +787,7 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
                     steps = -1  # marks the loop's end
         v[ix] = geo[0] + qu * geo[1]
         v[iy] = geo[2] + qw * geo[3]
-        F[0](v, cv1, cs)
+        _values(F, v, cv1, cs)
         du, dw = qu - u, qw - w
         length2 = du * du + dw * dw
         owned = _owned(k, grp, active, cv1, cs, mark, u, w, qu, qw)
@@ -890,7 +883,7 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
                 nsp = _note(spf, spi, nsp, t, xu, xw, CHANGE, -1, np.nan, np.nan)
             v[ix] = geo[0] + qu * geo[1]
             v[iy] = geo[2] + qw * geo[3]
-            F[0](v, cv1, cs)
+            _values(F, v, cv1, cs)
         # append the special points in order along the step, then the new vertex
         for a in range(nsp):
             best = a
@@ -948,7 +941,7 @@ def _trace_all(A, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
     sampling their sides costs two classifications each).  Returns the number
     of curves traced.
     """
-    F = _functions_at(A)
+    F = A
     g = np.empty(2)
     H = np.empty((2, 2))
     nc = active.shape[0]
@@ -1020,7 +1013,7 @@ def _trace_all(A, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
         for q in range(first, counts[0]):
             vi[q, 4], vi[q, 5] = vi[q, 5], vi[q, 4]
         c0, s0, cu0, cw0 = _grad(F, k, v, ix, iy, geo, u, w, g)
-        F[0](v, cv0, cs)
+        _values(F, v, cv0, cs)
         _push(vf, vi, counts, u, w, abs(c0) / s0, 0.0, curve, REGULAR, k, -1, left, right,
               _owned(k, grp, active, cv0, cs, mark, u, w, u, w))
         closed = 0
@@ -1049,12 +1042,12 @@ def _trace_all(A, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
 def _survey_all(A, v, ix, iy, geo, pts, vals):
     """Every condition's value at the points ``pts`` (rows (u, w) of the unit square)
     into the rows of ``vals``, NaN where a value is not finite."""
-    F = _functions_at(A)
+    F = A
     cs = np.empty(vals.shape[1])
     for p in range(pts.shape[0]):
         v[ix] = geo[0] + pts[p, 0] * geo[1]
         v[iy] = geo[2] + pts[p, 1] * geo[3]
-        F[0](v, vals[p], cs)
+        _values(F, v, vals[p], cs)
         for k in range(vals.shape[1]):
             if not math.isfinite(vals[p, k]):
                 vals[p, k] = np.nan
@@ -1068,64 +1061,93 @@ def _seeds_all(A, active, v, ix, iy, geo, n, near):
     smaller than a cell).  Only nodes within one raster cell of a cell of ``near``
     (:func:`near_changes`) are evaluated and only they seed: a seed elsewhere
     cannot start a curve (:func:`_trace_all`).  Returns rows (condition, u, w, kind: 0 sign
-    change, 1 minimum).
+    change, 1 minimum), by condition, then node.
     """
-    F = _functions_at(A)
-    cv = np.empty((n, n, active.shape[0]))
-    cs = np.empty(active.shape[0])
-    need = np.zeros((n, n), dtype=np.bool_)
+    F = A
+    nc = active.shape[0]
     m = near.shape[0]
     # near cells in each rectangle of cells from a summed-area table (one pass over near)
     sat = np.zeros((m + 1, m + 1), dtype=np.int64)
     for a in range(m):
+        run = 0
         for b in range(m):
-            sat[a + 1, b + 1] = sat[a, b + 1] + sat[a + 1, b] - sat[a, b] + near[a, b]
+            run += near[a, b]
+            sat[a + 1, b + 1] = sat[a, b + 1] + run
+    lo = np.empty(n, dtype=np.int64)
+    hi = np.empty(n, dtype=np.int64)
     for i in range(n):
-        a0 = max(int((i - 1) / (n - 1) * m), 0)
-        a1 = min(int((i + 1) / (n - 1) * m), m - 1)
+        lo[i] = max(int((i - 1) / (n - 1) * m), 0)
+        hi[i] = min(int((i + 1) / (n - 1) * m), m - 1) + 1
+    ks = np.flatnonzero(active)
+    # the active conditions' values at the needed nodes, a condition's contiguous, with a
+    # frame of nodes not needed around them (no edge test for the sign changes below)
+    need = np.zeros((n + 2, n + 2), dtype=np.bool_)
+    cv = np.empty((ks.shape[0], n + 2, n + 2))
+    row = np.empty(nc)
+    cs = np.empty(nc)
+    for i in range(n):
+        v[ix] = geo[0] + (i / (n - 1)) * geo[1]
         for j in range(n):
-            b0 = max(int((j - 1) / (n - 1) * m), 0)
-            b1 = min(int((j + 1) / (n - 1) * m), m - 1)
-            need[i, j] = sat[a1 + 1, b1 + 1] - sat[a0, b1 + 1] - sat[a1 + 1, b0] + sat[a0, b0] > 0
-            if need[i, j]:
-                v[ix] = geo[0] + (i / (n - 1)) * geo[1]
+            if sat[hi[i], hi[j]] - sat[lo[i], hi[j]] - sat[hi[i], lo[j]] + sat[lo[i], lo[j]] > 0:
+                need[i + 1, j + 1] = True
                 v[iy] = geo[2] + (j / (n - 1)) * geo[3]
-                F[0](v, cv[i, j], cs)
-    seeds = np.empty((64, 4))
+                _values(F, v, row, cs)
+                for q in range(ks.shape[0]):
+                    cv[q, i + 1, j + 1] = row[ks[q]]
+    # rows into a buffer that is not reassigned in the loops (numba keeps an array
+    # variable reassigned in a loop alive with reference counts at every pass: 40 % of the
+    # call); a second pass where it was too small
+    seeds = np.empty((1024, 4))
+    count = _seed_rows(cv, need, ks, n, seeds)
+    if count > seeds.shape[0]:
+        seeds = np.empty((count, 4))
+        _seed_rows(cv, need, ks, n, seeds)
+    return seeds[:count]
+
+
+@njit(cache=True, error_model="numpy")
+def _seed_rows(cv, need, ks, n, seeds):
+    """The seeds of :func:`_seeds_all` from the values ``cv`` at the nodes ``need`` (each
+    framed by one node not needed) into the rows of ``seeds`` that exist; their count."""
     m = 0
-    for k in range(active.shape[0]):
-        if not active[k]:
-            continue
-        for i in range(n):
-            for j in range(n):
+    for q in range(ks.shape[0]):
+        k = ks[q]
+        c = cv[q]
+        for i in range(1, n + 1):
+            for j in range(1, n + 1):
                 if not need[i, j]:
                     continue
-                a = cv[i, j, k]
+                a = c[i, j]
                 for d in range(2):
                     i2 = i + 1 if d == 0 else i
                     j2 = j if d == 0 else j + 1
-                    if i2 >= n or j2 >= n or not need[i2, j2]:
+                    if not need[i2, j2]:
                         continue
-                    b = cv[i2, j2, k]
+                    b = c[i2, j2]
                     if a * b < 0.0 or (a == 0.0 and b != 0.0):
                         t = a / (a - b)
-                        seeds, m = _seed(seeds, m, k, (i + (t if d == 0 else 0.0)) / (n - 1),
-                                         (j + (t if d == 1 else 0.0)) / (n - 1), 0)
+                        m = _seed(seeds, m, k, (i - 1 + (t if d == 0 else 0.0)) / (n - 1),
+                                  (j - 1 + (t if d == 1 else 0.0)) / (n - 1), 0)
                 # a local minimum of |c| with one sign all around (NaN, where c is not
                 # defined, is neither lower nor a sign change)
                 lowest = a == a and a != 0.0
                 for d in range(9):
                     if not lowest:
                         break
+                    if d == 4:
+                        continue
                     i2 = i + d // 3 - 1
                     j2 = j + d % 3 - 1
-                    if d == 4 or i2 < 0 or j2 < 0 or i2 >= n or j2 >= n:
-                        continue
-                    b = cv[i2, j2, k]
-                    lowest = need[i2, j2] and (b != b or (b * a > 0.0 and abs(b) > abs(a)))
+                    if i2 < 1 or j2 < 1 or i2 > n or j2 > n:
+                        continue  # beyond the raster's edge
+                    if not need[i2, j2]:
+                        lowest = False
+                        break
+                    b = c[i2, j2]
+                    lowest = b != b or (b * a > 0.0 and abs(b) > abs(a))
                 if lowest:
-                    seeds, m = _seed(seeds, m, k, i / (n - 1), j / (n - 1), 1)
-    return seeds[:m]
+                    m = _seed(seeds, m, k, (i - 1) / (n - 1), (j - 1) / (n - 1), 1)
+    return m
 
 
 @njit(cache=True, error_model="numpy")
@@ -1432,40 +1454,67 @@ GRADIENT_SIG = types.UniTuple(types.float64, 2)(types.int64, _F1, _F1)
 HESSIAN_SIG = types.UniTuple(types.float64, 2)(types.int64, _F1, _F1, _F2)
 #: ``classify(v, out, layer)``: the layer's class at the input vector v (a model's).
 CLASS_SIG = types.int64(_F1, _F2, types.int64)
-#: The functions a trace calls, passed as first-class functions: one compiled tracer
-#: serves every model and condition set.
-with warnings.catch_warnings():  # numba calls first-class functions experimental
-    warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
-    FUNCTIONS = types.Tuple((types.FunctionType(VALUES_SIG), types.FunctionType(GRADIENT_SIG),
-                             types.FunctionType(HESSIAN_SIG), types.FunctionType(CLASS_SIG)))
+#: What an entry point takes for the model's functions: the addresses of their compiled
+#: code (:func:`functions`), in the order ``values``, ``gradient``, ``hessian``,
+#: ``classify``.
+ADDRESSES = types.UniTuple(types.intp, 4)
 
-#: What an entry point takes for :data:`FUNCTIONS`: per function, the addresses of its
-#: compiled code and of its C wrapper (:func:`functions`).  numba unboxes a first-class
-#: function argument with four Python calls and two unpickled signatures (its
-#: ``_get_wrapper_address`` and ``_get_jit_address``); an address is one integer.
-ADDRESSES = types.UniTuple(types.intp, 2 * len(FUNCTIONS))
+
+def _call_at(context, builder, i, fsig, addresses, args):
+    """Call function ``i`` of :data:`ADDRESSES` (signature ``fsig``) at its address, as
+    numba calls a compiled function, propagating its exception status."""
+    fnty = context.call_conv.get_function_type(fsig.return_type, fsig.args).as_pointer()
+    fn = builder.inttoptr(builder.extract_value(addresses, i), fnty)
+    status, res = context.call_conv.call_function(builder, fn, fsig.return_type, fsig.args,
+                                                  args)
+    with cgutils.if_unlikely(builder, status.is_error):
+        context.call_conv.return_status_propagate(builder, status)
+    return res
+
+
+def _typer(i, fsig, addresses, args):
+    """The signature and code of a call of function ``i`` of :data:`ADDRESSES` with the
+    argument types ``args``, or None where they are not ``fsig``'s.
+
+    numba's first-class functions, the tracer's way of taking the model's before,
+    lower every call with a second path that asks Python for the address where it
+    is missing.  That path (a few hundred instructions at every call) kept LLVM from
+    inlining the small helpers that call the model (``_grad``, ``_side``...), and each
+    of them then counted references to its array arguments on entry and exit with
+    atomic instructions.
+    """
+    if addresses != ADDRESSES or tuple(args) != tuple(fsig.args):
+        return None
+
+    def codegen(context, builder, sig, llargs):
+        res = _call_at(context, builder, i, fsig, llargs[0], llargs[1:])
+        return context.get_dummy_value() if fsig.return_type == types.none else res
+
+    return fsig.return_type(addresses, *args), codegen
 
 
 @intrinsic
-def _functions_at(typingctx, addresses):
-    """:data:`FUNCTIONS` from :data:`ADDRESSES`: what numba's unboxing of a jitted
-    function makes of it (its compiled code's address, called directly in numba's
-    calling convention, and its C wrapper's), without calling into Python."""
-    if addresses != ADDRESSES:
-        return None
+def _values(typingctx, addresses, x, out, scale):
+    """``values(x, out, scale)`` of the condition module (:data:`VALUES_SIG`)."""
+    return _typer(0, VALUES_SIG, addresses, (x, out, scale))
 
-    def codegen(context, builder, sig, args):
-        null = context.get_constant_null(types.voidptr)
-        made = []
-        for i, fty in enumerate(FUNCTIONS.types):
-            fn = cgutils.create_struct_proxy(fty)(context, builder)
-            fn.jit_addr = builder.inttoptr(builder.extract_value(args[0], 2 * i), null.type)
-            fn.c_addr = builder.inttoptr(builder.extract_value(args[0], 2 * i + 1), null.type)
-            fn.py_addr = null
-            made.append(fn._getvalue())
-        return context.make_tuple(builder, FUNCTIONS, made)
 
-    return FUNCTIONS(addresses), codegen
+@intrinsic
+def _gradient(typingctx, addresses, k, x, g):
+    """``gradient(k, x, g)`` of the condition module (:data:`GRADIENT_SIG`)."""
+    return _typer(1, GRADIENT_SIG, addresses, (k, x, g))
+
+
+@intrinsic
+def _hessian(typingctx, addresses, k, x, g, H):
+    """``hessian(k, x, g, H)`` of the condition module (:data:`HESSIAN_SIG`)."""
+    return _typer(2, HESSIAN_SIG, addresses, (k, x, g, H))
+
+
+@intrinsic
+def _classify(typingctx, addresses, v, out, layer):
+    """The model's ``classify(v, out, layer)`` (:data:`CLASS_SIG`, :func:`classifier`)."""
+    return _typer(3, CLASS_SIG, addresses, (v, out, layer))
 
 
 _ENTRIES: dict = {}
@@ -1477,8 +1526,9 @@ def entries() -> dict:
     ``survey``.
 
     Each is the compiled overload's own entry point, called without the
-    dispatcher: typing a tuple of first-class functions at every call cost
-    0.2-0.5 ms, more than a whole trace of a simple slice.  The callers pass
+    dispatcher (typing the arguments at every call cost 0.2-0.5 ms with the
+    first-class functions the tracer took before, more than a whole trace of a
+    simple slice).  The callers pass
     exactly the signature's types (C-contiguous arrays, :func:`functions`'
     addresses, :data:`ADDRESSES`).
     """
@@ -1493,14 +1543,12 @@ def entries() -> dict:
             ADDRESSES, _F2, _F1, types.Array(types.int8, 2, "C"), types.int64, _B1, _I1, _F1,
             _F2, types.int64, types.int64, _F1, types.int64, types.int64, _F2, _I2, _I1, _I2,
             _B3, types.float64, types.float64)
-        with warnings.catch_warnings():  # numba calls first-class functions experimental
-            warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
-            for name, fn, sig in (("trace", _trace_all, sig_trace),
-                                  ("seeds", _seeds_all, sig_seeds),
-                                  ("seed_trace", _seed_trace_all, sig_seed_trace),
-                                  ("survey", _survey_all, sig_survey)):
-                fn.compile(sig)
-                _ENTRIES[name] = _entry_point(fn, sig)
+        for name, fn, sig in (("trace", _trace_all, sig_trace),
+                              ("seeds", _seeds_all, sig_seeds),
+                              ("seed_trace", _seed_trace_all, sig_seed_trace),
+                              ("survey", _survey_all, sig_survey)):
+            fn.compile(sig)
+            _ENTRIES[name] = _entry_point(fn, sig)
     return _ENTRIES
 
 
@@ -1533,8 +1581,8 @@ _FUNCTIONS: dict = {}
 
 def functions(model, conds) -> tuple:
     """The addresses of the functions a trace of ``model`` with the two-variable
-    condition module ``conds`` takes (:data:`ADDRESSES`, for :data:`FUNCTIONS`), made
-    once per model and module: per function, its compiled overload's code and C wrapper.
+    condition module ``conds`` takes (:data:`ADDRESSES`), made once per model and
+    module: per function, its compiled overload's code.
 
     A jitted function passed as such is looked up in its dispatcher at every call
     (0.2 ms a call), and a first-class function object is unboxed through Python at
@@ -1551,7 +1599,6 @@ def functions(model, conds) -> tuple:
         if tuple(sig.args) not in fn.overloads:
             fn.compile(sig)  # the hessian, compiled (or loaded) when first needed
         cres = fn.overloads[tuple(sig.args)]
-        fns += [cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name),
-                CompileResultWAP(cres).__wrapper_address__()]
+        fns.append(cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name))
     _FUNCTIONS[(id(model), id(mod))] = (model, mod, tuple(fns))
     return _FUNCTIONS[(id(model), id(mod))][2]

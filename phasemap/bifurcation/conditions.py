@@ -257,8 +257,8 @@ def _explicit_key(conds) -> str:
 
 
 #: The signatures of the generated entry points, as the tracer calls them
-#: (:data:`phasemap.bifurcation._trace.FUNCTIONS`); ``hessian`` is compiled for its
-#: signature when first needed (:func:`phasemap.bifurcation._trace.functions`).
+#: (:data:`phasemap.bifurcation._trace.VALUES_SIG` and the next two); ``hessian`` is
+#: compiled for its signature when first needed (:func:`phasemap.bifurcation._trace.functions`).
 _VALUES = "void(float64[::1], float64[::1], float64[::1])"
 _GRADIENT = "UniTuple(float64, 2)(int64, float64[::1], float64[::1])"
 
