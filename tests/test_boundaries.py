@@ -241,6 +241,64 @@ def test_uncovered_is_every_change_with_no_hit_around_either_cell():
         assert got.dtype == np.int64 and got.shape == (len(want), 4)
 
 
+def _seed_rows_reference(cv, need, ks, n):
+    """The seeding rule of _seeds_all in plain Python: per condition and node in C order,
+    a sign change to the needed node below or to the right (interpolated), then a
+    local minimum of |c| with one sign among every needed neighbour in the raster."""
+    rows = []
+    for q, k in enumerate(ks):
+        c = cv[q]
+        for i in range(1, n + 1):
+            for j in range(1, n + 1):
+                if not need[i, j]:
+                    continue
+                a = c[i, j]
+                for d, (i2, j2) in enumerate(((i + 1, j), (i, j + 1))):
+                    b = c[i2, j2]
+                    if need[i2, j2] and (a * b < 0 or (a == 0 and b != 0)):
+                        t = a / (a - b)
+                        rows.append((k, (i - 1 + (t if d == 0 else 0)) / (n - 1),
+                                     (j - 1 + (t if d == 1 else 0)) / (n - 1), 0))
+                around = [(i + di, j + dj) for di in (-1, 0, 1) for dj in (-1, 0, 1)
+                          if (di or dj) and 1 <= i + di <= n and 1 <= j + dj <= n]
+                if a == a and a != 0 and all(
+                        need[p] and (c[p] != c[p] or (c[p] * a > 0 and abs(c[p]) > abs(a)))
+                        for p in around):
+                    rows.append((k, (i - 1) / (n - 1), (j - 1) / (n - 1), 1))
+    return np.array(rows, dtype=float).reshape(-1, 4)
+
+
+def test_seed_rows_follow_the_rule_and_count_beyond_the_buffer():
+    """The seeds of a raster (sign changes and isolated minima, NaN where a condition is
+    undefined, nodes not needed) are the rule's, in its order; a buffer too small
+    for them holds the first rows and the count is of them all (_seeds_all then
+    calls again with room for every row)."""
+    rng = np.random.default_rng(11)
+    n = 9
+    kinds = set()
+    for trial in range(12):
+        ks = np.array([0, 2, 3], dtype=np.int64)
+        x = np.linspace(-1, 1, n)
+        cv = np.empty((len(ks), n + 2, n + 2))
+        cv[:, 1:-1, 1:-1] = (rng.uniform(-1, 1, (len(ks), 1, 1)) + x[:, None] ** 2
+                             + rng.uniform(-0.5, 0.5, (len(ks), 1, 1)) * x[None, :]
+                             + rng.normal(0, 0.05, (len(ks), n, n)))
+        cv[rng.uniform(size=cv.shape) < 0.03] = np.nan
+        cv[0, 1 + rng.integers(n), 1 + rng.integers(n)] = 0.0
+        need = np.zeros((n + 2, n + 2), dtype=bool)
+        need[1:-1, 1:-1] = rng.uniform(size=(n, n)) < 0.85
+        want = _seed_rows_reference(cv, need, ks, n)
+        seeds = np.full((len(want) + 4, 4), -7.0)
+        count = _trace._seed_rows(cv, need, ks, n, seeds)
+        assert count == len(want) and np.array_equal(seeds[:count], want), trial
+        assert np.all(seeds[count:] == -7.0)
+        small = np.full((max(len(want) // 2, 1), 4), -7.0)
+        assert _trace._seed_rows(cv, need, ks, n, small) == len(want)
+        assert np.array_equal(small, want[:len(small)]) or len(want) == 0
+        kinds |= set(want[:, 3].tolist())
+    assert kinds == {0.0, 1.0}  # sign changes and minima both occur in these rasters
+
+
 def test_full_buffers_are_grown_and_the_trace_is_the_same(monkeypatch):
     """Where the vertex buffers fill, the trace runs again with larger ones: its pieces,
     points and completeness check are those of a trace that never filled them."""
