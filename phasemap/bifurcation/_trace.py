@@ -45,6 +45,7 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 from .. import _numerics as nx
+from .._codegen import CELLS_SIGNATURE
 
 # vertex kinds
 REGULAR = 0
@@ -1204,21 +1205,43 @@ def _minimum(F, k, v, ix, iy, geo, u, w, radius):
 
 
 @njit(cache=True, error_model="numpy")
-def _seed_trace_all(A, pts, vs, classes, radius, active, rank, v, out, ix, iy, geo, layer, n,
+def _raster_all(cells_at, v, ix, xs, xslot, xderiv, ys, yderiv, flags, fields):
+    """The check raster: the scene's grid kernel ``cells`` (its address ``cells_at``) over
+    the values ``xs`` of the input slot ``ix`` (outer; its derived inputs ``xderiv`` in
+    the slots ``xslot``) and ``ys`` (inner, derived inputs ``yderiv``), row i into
+    ``flags[:, i * len(ys):]`` (what :func:`phasemap._codegen.driver` does, serially and
+    without a call from Python)."""
+    ny = ys.shape[0]
+    for i in range(xs.shape[0]):
+        v[ix] = xs[i]
+        for k in range(xslot.shape[0]):
+            v[xslot[k]] = xderiv[k, i]
+        _cells(cells_at, v, i * ny, 0, ny, ys, yderiv, flags, fields)
+
+
+@njit(cache=True, error_model="numpy")
+def _seed_trace_all(A, pts, vs, raster, radius, active, rank, v, out, ix, iy, geo, layer, n,
                     vf, vi, counts, curves, mark, tol_u, tol_w):
-    """One call for a whole trace: each call of an entry point unboxes the model's
-    functions again.  The conditions' values at the points ``pts`` (input vector
-    ``vs``) drop from ``active`` those constant or proportional to another there
-    (:func:`groups`); then the cells near a class change of the check raster
-    ``classes`` (:func:`near_changes` with ``radius``), the seeds of an n x n raster
-    there (:func:`_seeds_all`), the curves from them (:func:`_trace_all`,
-    ``require_sides``), their pieces (:func:`assemble`) and the class changes of
-    ``classes`` no piece explains (:func:`uncovered`).  Returns (near, seeds, group,
-    grp, changes, the six arrays of :func:`assemble`, uncovered): ``grp`` is each
-    condition's group and ``rank``, ``changes`` the rows of :func:`class_changes`; the
-    pieces are empty where the buffers were full (``counts[2]``: trace again with
-    larger ones).
+    """One call for a whole trace (a call from Python and the parallel driver of a
+    raster cost about 30 us).  The check raster ``classes`` (:func:`_raster_all` with
+    the arguments ``raster``: the grid kernel's address, then x's values, derived
+    slots and derived values, y's values and derived values); the conditions' values
+    at the points ``pts`` (input vector ``vs``) drop from ``active`` those constant or
+    proportional to another there (:func:`groups`); then the cells near a class
+    change of ``classes`` (:func:`near_changes` with ``radius``), the seeds of an
+    n x n raster there (:func:`_seeds_all`), the curves from them
+    (:func:`_trace_all`, ``require_sides``), their pieces (:func:`assemble`) and the
+    class changes of ``classes`` no piece explains (:func:`uncovered`).  Returns
+    (classes, near, seeds, group, grp, changes, the six arrays of :func:`assemble`,
+    uncovered): ``grp`` is each condition's group and ``rank``, ``changes`` the rows
+    of :func:`class_changes`; the pieces are empty where the buffers were full
+    (``counts[2]``: trace again with larger ones).
     """
+    cells_at, xs, xslot, xderiv, ys, yderiv = raster
+    flags = np.empty((1, xs.shape[0] * ys.shape[0]), dtype=np.int8)
+    _raster_all(cells_at, v.copy(), ix, xs, xslot, xderiv, ys, yderiv, flags,
+                np.empty((0, flags.shape[1])))
+    classes = flags[0].reshape((xs.shape[0], ys.shape[0]))
     vals = np.empty((pts.shape[0], active.shape[0]))
     _survey_all(A, vs, ix, iy, geo, pts, vals)
     group = groups(vals, active)
@@ -1233,7 +1256,7 @@ def _seed_trace_all(A, pts, vs, classes, radius, active, rank, v, out, ix, iy, g
                near, tol_u, tol_w, True)
     pv, pp, pq, pieces, pf, pi = assemble(vf, vi, curves, 0 if counts[2] else counts[1])
     bad = _uncovered(classes.shape[0], changes, pv, pp)
-    return near, seeds, group, grp, changes, pv, pp, pq, pieces, pf, pi, bad
+    return classes, near, seeds, group, grp, changes, pv, pp, pq, pieces, pf, pi, bad
 
 
 # -- pieces and the completeness check (no model globals) ---------------------------------
@@ -1446,6 +1469,10 @@ _I2 = types.Array(types.int64, 2, "C")
 _B1 = types.Array(types.boolean, 1, "C")
 _B2 = types.Array(types.boolean, 2, "C")
 _B3 = types.Array(types.int8, 3, "C")
+_C2 = types.Array(types.int8, 2, "C")
+#: A check raster's arguments (:func:`_raster_all`): the grid kernel's address; x's
+#: values, derived slots and derived values; y's values and derived values.
+RASTER = types.Tuple((types.intp, _F1, _I1, _F2, _F1, _F2))
 #: ``values(x, out, scale)`` of a generated condition module.
 VALUES_SIG = types.void(_F1, _F1, _F1)
 #: ``gradient(k, x, g)``: (value, tie scale); the gradient in the module's variables into g.
@@ -1461,10 +1488,15 @@ ADDRESSES = types.UniTuple(types.intp, 4)
 
 
 def _call_at(context, builder, i, fsig, addresses, args):
-    """Call function ``i`` of :data:`ADDRESSES` (signature ``fsig``) at its address, as
-    numba calls a compiled function, propagating its exception status."""
+    """Call function ``i`` of :data:`ADDRESSES` (signature ``fsig``) at its address."""
+    return _call_address(context, builder, builder.extract_value(addresses, i), fsig, args)
+
+
+def _call_address(context, builder, address, fsig, args):
+    """Call the compiled function at ``address`` (signature ``fsig``) as numba calls a
+    compiled function, propagating its exception status."""
     fnty = context.call_conv.get_function_type(fsig.return_type, fsig.args).as_pointer()
-    fn = builder.inttoptr(builder.extract_value(addresses, i), fnty)
+    fn = builder.inttoptr(address, fnty)
     status, res = context.call_conv.call_function(builder, fn, fsig.return_type, fsig.args,
                                                   args)
     with cgutils.if_unlikely(builder, status.is_error):
@@ -1517,13 +1549,29 @@ def _classify(typingctx, addresses, v, out, layer):
     return _typer(3, CLASS_SIG, addresses, (v, out, layer))
 
 
+@intrinsic
+def _cells(typingctx, address, v, first, lo, hi, inner_values, inner_deriv, flags, fields):
+    """A scene's generated grid kernel ``cells`` (:data:`phasemap._codegen.CELLS_SIGNATURE`)
+    at its compiled ``address``: cells lo..hi of the inner axis at the outer state v."""
+    args = (v, first, lo, hi, inner_values, inner_deriv, flags, fields)
+    if types.unliteral(address) != types.intp or \
+            tuple(types.unliteral(a) for a in args) != tuple(CELLS_SIGNATURE.args):
+        return None
+
+    def codegen(context, builder, sig, llargs):
+        _call_address(context, builder, llargs[0], CELLS_SIGNATURE, llargs[1:])
+        return context.get_dummy_value()
+
+    return types.void(types.intp, *CELLS_SIGNATURE.args), codegen
+
+
 _ENTRIES: dict = {}
 
 
 def entries() -> dict:
     """The tracer's entry points, compiled once (cached on disk): ``trace``, ``seeds``,
-    ``seed_trace`` (both, after the cells near the check raster's class changes) and
-    ``survey``.
+    ``seed_trace`` (the check raster, then both, after the cells near its class
+    changes), ``survey`` and ``raster`` (the check raster alone).
 
     Each is the compiled overload's own entry point, called without the
     dispatcher (typing the arguments at every call cost 0.2-0.5 ms with the
@@ -1538,15 +1586,18 @@ def entries() -> dict:
                                 types.float64, types.boolean)
         sig_seeds = _F2(ADDRESSES, _B1, _F1, types.int64, types.int64, _F1, types.int64, _B2)
         sig_survey = types.void(ADDRESSES, _F1, types.int64, types.int64, _F1, _F2, _F2)
-        sig_seed_trace = types.Tuple((_B2, _F2, _I1, _I2, _I2, _F2, _I1, _I1, _I2, _F2, _I2,
-                                      _I2))(
-            ADDRESSES, _F2, _F1, types.Array(types.int8, 2, "C"), types.int64, _B1, _I1, _F1,
+        sig_seed_trace = types.Tuple((_C2, _B2, _F2, _I1, _I2, _I2, _F2, _I1, _I1, _I2, _F2,
+                                      _I2, _I2))(
+            ADDRESSES, _F2, _F1, RASTER, types.int64, _B1, _I1, _F1,
             _F2, types.int64, types.int64, _F1, types.int64, types.int64, _F2, _I2, _I1, _I2,
             _B3, types.float64, types.float64)
+        sig_raster = types.void(types.intp, _F1, types.int64, _F1, _I1, _F2, _F1, _F2, _C2,
+                                _F2)
         for name, fn, sig in (("trace", _trace_all, sig_trace),
                               ("seeds", _seeds_all, sig_seeds),
                               ("seed_trace", _seed_trace_all, sig_seed_trace),
-                              ("survey", _survey_all, sig_survey)):
+                              ("survey", _survey_all, sig_survey),
+                              ("raster", _raster_all, sig_raster)):
             fn.compile(sig)
             _ENTRIES[name] = _entry_point(fn, sig)
     return _ENTRIES

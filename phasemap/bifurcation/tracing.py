@@ -13,7 +13,7 @@ import xarray as xr
 from .. import _args
 from .. import _numerics as nx
 from .._dataset import cf_header
-from .._codegen import grid_kernel, run_grid
+from .._codegen import CELLS_SIGNATURE, grid_kernel
 from ..layers import layers_for
 from ..model import Model
 from ..models import get_model
@@ -256,13 +256,13 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     mark = np.zeros((nc, seed_nodes - 1, seed_nodes - 1), dtype=np.int8)
     if check_cells:
         axes = _cell_centres(sl, check_cells)
-        classes = _check_raster(sl, layer, axes)
-        # _active's comparison of the conditions, the seeds, the trace, its pieces and
-        # the completeness check: one call
+        # the check raster, _active's comparison of the conditions, the seeds, the trace,
+        # its pieces and the completeness check: one call
         active, vs = _applicable(sl)
-        near, seeds, group, grp, changes, *assembled, bad = run["seed_trace"](
-            fns, _SURVEY, vs, classes, NEAR, active, _rank(sl.conds), v, out, ix, iy, geo,
-            code, seed_nodes, buf.vf, buf.vi, buf.counts, buf.curves, mark, tol_u, tol_w)
+        classes, near, seeds, group, grp, changes, *assembled, bad = run["seed_trace"](
+            fns, _SURVEY, vs, _raster_args(sl, layer, axes), NEAR, active, _rank(sl.conds), v,
+            out, ix, iy, geo, code, seed_nodes, buf.vf, buf.vi, buf.counts, buf.curves, mark,
+            tol_u, tol_w)
     else:
         active, group = _active(sl)
         if only is not None:
@@ -351,39 +351,51 @@ def _cell_centres(sl: Slice, n: int) -> dict:
 def _check_raster(sl: Slice, layer: str, axes: dict) -> np.ndarray:
     """The layer's classes at the cell centres ``axes`` (x outer, y inner): the scene's
     own grid kernel (:func:`phasemap._codegen.grid_kernel`), what :func:`phasemap.grid.evaluate`
-    runs, called directly: two axes and one summary layer need none of its general
-    packing (half the cost of a 128^2 raster)."""
-    m = sl.model
+    runs, called row by row from compiled code (:func:`phasemap.bifurcation._trace._raster_all`;
+    a trace computes it inside its one call)."""
+    at, x, *rest = _raster_args(sl, layer, axes)
+    flags = np.empty((1, len(x) * len(rest[2])), dtype=np.int8)
+    T.entries()["raster"](at, sl.base.copy(), sl.slots[0], x, *rest, flags,
+                          np.empty((0, flags.shape[1])))
+    return flags.reshape(len(x), len(rest[2]))
+
+
+def _raster_args(sl: Slice, layer: str, axes: dict) -> tuple:
+    """The check raster's arguments (:data:`phasemap.bifurcation._trace.RASTER`) at the
+    cell centres ``axes``: the grid kernel's address, x's values, the slots and values
+    of x's derived inputs, y's values and its derived inputs' values."""
+    at, from_x, from_y, xslot = _raster_kernel(sl.model, sl.x, sl.y, layer)
     x, y = axes[sl.x], axes[sl.y]
-    cells, from_x, from_y, outer_slot, deriv_slot = _raster_kernel(m, sl.x, sl.y, layer)
-    deriv_values = np.zeros((1, deriv_slot.shape[1], len(x)))
+    xderiv = np.empty((len(from_x), len(x)))
     for k, d in enumerate(from_x):
-        deriv_values[0, k] = d.func(x)
-    inner_deriv = np.array([d.func(y) for d in from_y], dtype=float).reshape(-1, len(y))
-    flags = np.empty((1, len(x) * len(y)), dtype=np.int8)
-    run_grid(cells, sl.base.copy(), np.array([len(x)], dtype=np.int64), outer_slot,
-             x.reshape(1, -1), deriv_slot, deriv_values, y, inner_deriv, flags,
-             np.empty((0, flags.shape[1])))
-    return flags.reshape(len(x), len(y))
+        xderiv[k] = d.func(x)
+    yderiv = np.empty((len(from_y), len(y)))
+    for k, d in enumerate(from_y):
+        yderiv[k] = d.func(y)
+    return at, x, xslot, xderiv, y, yderiv
 
 
 _RASTER_KERNELS: dict = {}
 
 
 def _raster_kernel(m: Model, x: str, y: str, layer: str) -> tuple:
-    """What :func:`_check_raster` passes the grid kernel that does not depend on the
-    ranges, once per model, axes and layer: the kernel, the derived inputs of the outer
-    (x) and inner (y) axis, the x slot and the slots of x's derived inputs."""
+    """What the check raster takes that does not depend on the ranges, once per model,
+    axes and layer: the address of the layer's grid kernel with y inner, the derived
+    inputs of x and of y, and the slots of x's."""
     key = (id(m), x, y, layer)
     hit = _RASTER_KERNELS.get(key)
     if hit is None or hit[0] is not m:
         from_x = [d for d in m.derived if d.source == x]
         slot = {n: i for i, n in enumerate(m.inputs)}
+        cells = grid_kernel(m, (layers_for(m)[layer],), y)
+        cres = cells.overloads[CELLS_SIGNATURE.args]
+        # the kernel is kept with its address (and the model with both), so that the
+        # code stays loaded and the id is not reused
         hit = _RASTER_KERNELS[key] = (
-            m, grid_kernel(m, (layers_for(m)[layer],), y), from_x,
-            [d for d in m.derived if d.source == y], np.array([slot[x]], dtype=np.int64),
-            np.array([[slot[d.name] for d in from_x] or [-1]], dtype=np.int64))
-    return hit[1:]
+            m, cells, cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name),
+            from_x, [d for d in m.derived if d.source == y],
+            np.array([slot[d.name] for d in from_x], dtype=np.int64))
+    return hit[2:]
 
 
 def _rescue_seeds(sl: Slice, active, bad, n: int) -> np.ndarray:
