@@ -299,6 +299,48 @@ def test_seed_rows_follow_the_rule_and_count_beyond_the_buffer():
     assert kinds == {0.0, 1.0}  # sign changes and minima both occur in these rasters
 
 
+def test_applicable_conditions_are_those_of_the_statuses_at_the_probes():
+    """The compiled choice of the conditions that can bound a class (_applicable_all, run
+    inside a trace) is this plain reading of the model's own point function: the
+    branches that apply at the slice's centre (and corners, where the velocity is an
+    axis), rest-only conditions only at rest, the velocity's condition only on a
+    velocity axis."""
+    from phasemap import _numerics as nx
+    from phasemap.bifurcation import tracing
+
+    for model, axes, fixed in (
+            ("hinge_pendulum", {"phi": (-3, 3), "delta": (0.05, 1.4)}, {"omega": 0.0}),
+            ("hinge_pendulum", {"phi": (-3, 3), "delta": (0.05, 1.4)}, {"omega": 0.7}),
+            ("hinge_pendulum", {"phi": (-3, 3), "omega": (-2, 2)}, {}),
+            ("hinge_pendulum", {"phi": (-3, 3), "omega": (0.1, 2)}, {}),
+            ("painleve_rod", {"theta": (0.2, 1.5), "f": (0, 3)}, SLIDE_BACK),
+            ("painleve_rod", {"theta": (0.2, 1.5), "xdot": (-1, 1)}, {"omega": 0.0})):
+        sl = tracing.make_slice(model, axes, fixed)
+        m, conds = sl.model, sl.conds
+        on_velocity = m.velocity in axes
+        applies = np.zeros(len(m.candidates), dtype=bool)
+        out = np.empty((len(m.candidates), m.n_fields))
+        v = sl.base.copy()
+        probes = [(0.5, 0.5)] + ([(0, 0), (1, 1), (0, 1), (1, 0)] if on_velocity else [])
+        for u, w in probes:
+            v[sl.slots[0]] = sl.lo[0] + u * (sl.hi[0] - sl.lo[0])
+            v[sl.slots[1]] = sl.lo[1] + w * (sl.hi[1] - sl.lo[1])
+            m.derive(v)
+            m.point(v, out)
+            applies |= out[:, nx.STATUS] != nx.ABSENT
+        names = m.velocity_scale.py_func.__code__.co_varnames
+        scale = m.velocity_scale(*(v[m.inputs.index(n)] for n in
+                                   names[:m.velocity_scale.py_func.__code__.co_argcount]))
+        rest = not on_velocity and abs(sl.fixed[m.velocity]) <= nx.TOL * scale
+        index = {b.name: i for i, b in enumerate(m.candidates)}
+        want = np.array([(not br or index.get(br, -1) < 0 or applies[index[br]])
+                         and (rest or not ro) and (on_velocity or kind != "velocity")
+                         for br, ro, kind in zip(conds.branches, conds.rest_only, conds.kinds)])
+        active, last = tracing._applicable(sl)
+        assert np.array_equal(active, want) and np.array_equal(last, v), (model, axes, fixed)
+        assert 0 < active.sum() < len(active)
+
+
 def test_full_buffers_are_grown_and_the_trace_is_the_same(monkeypatch):
     """Where the vertex buffers fill, the trace runs again with larger ones: its pieces,
     points and completeness check are those of a trace that never filled them."""

@@ -1220,10 +1220,45 @@ def _raster_all(cells_at, v, ix, xs, xslot, xderiv, ys, yderiv, flags, fields):
 
 
 @njit(cache=True, error_model="numpy")
-def _seed_trace_all(A, pts, vs, raster, radius, active, rank, v, out, ix, iy, geo, layer, n,
-                    vf, vi, counts, curves, mark, tol_u, tol_w):
+def _applicable_all(A, v, out, ix, iy, geo, applicable, active):
+    """Which conditions can bound a class in the slice (into ``active``), before their
+    values are compared (:func:`groups`): those of no branch or of a branch that
+    applies at one of the probes (the model's own statuses, :data:`CLASS_SIG`),
+    without those that hold only at rest where the velocity is fixed and not zero,
+    and without the velocity's own where it is not an axis.  ``applicable``
+    (:data:`APPLICABLE`): the probes, each condition's branch index, the velocity and
+    rest-only masks, whether the velocity is an axis, and its input slot.  ``v`` is
+    left at the last probe, its derived inputs filled."""
+    probes, branch, velocity, rest_only, velocity_axis, vslot = applicable
+    applies = np.zeros(out.shape[0], dtype=np.bool_)
+    for p in range(probes.shape[0]):
+        v[ix] = geo[0] + probes[p, 0] * geo[1]
+        v[iy] = geo[2] + probes[p, 1] * geo[3]
+        _classify(A, v, out, 0)
+        for b in range(out.shape[0]):
+            applies[b] = applies[b] or out[b, nx.STATUS] != nx.ABSENT
+    rest = False
+    if not velocity_axis:
+        cv = np.empty(active.shape[0])
+        cs = np.empty(active.shape[0])
+        _values(A, v, cv, cs)
+        for k in range(active.shape[0]):
+            if velocity[k]:  # the velocity condition's tie scale is the velocity scale
+                rest = abs(v[vslot]) <= nx.TOL * cs[k]
+    for k in range(active.shape[0]):
+        active[k] = (branch[k] < 0 or applies[branch[k]]) and (rest or not rest_only[k]) \
+            and (velocity_axis or not velocity[k])
+
+
+@njit(cache=True, error_model="numpy")
+def _seed_trace_all(A, pts, vs, applicable, raster, radius, active, rank, v, out, ix, iy, geo,
+                    layer, n, vf, vi, counts, curves, mark, tol_u, tol_w):
     """One call for a whole trace (a call from Python and the parallel driver of a
-    raster cost about 30 us).  The check raster ``classes`` (:func:`_raster_all` with
+    raster cost about 30 us).  The conditions that can bound a class, into ``active``
+    (:func:`_applicable_all` with the arguments ``applicable``: the probes, each
+    condition's branch index, velocity and rest-only masks, whether the velocity is
+    an axis and its input slot; ``vs`` left at the last probe); the check raster
+    ``classes`` (:func:`_raster_all` with
     the arguments ``raster``: the grid kernel's address, then x's values, derived
     slots and derived values, y's values and derived values); the conditions' values
     at the points ``pts`` (input vector ``vs``) drop from ``active`` those constant or
@@ -1237,6 +1272,7 @@ def _seed_trace_all(A, pts, vs, raster, radius, active, rank, v, out, ix, iy, ge
     of :func:`class_changes`; the pieces are empty where the buffers were full
     (``counts[2]``: trace again with larger ones).
     """
+    _applicable_all(A, vs, out, ix, iy, geo, applicable, active)
     cells_at, xs, xslot, xderiv, ys, yderiv = raster
     flags = np.empty((1, xs.shape[0] * ys.shape[0]), dtype=np.int8)
     _raster_all(cells_at, v.copy(), ix, xs, xslot, xderiv, ys, yderiv, flags,
@@ -1473,6 +1509,10 @@ _C2 = types.Array(types.int8, 2, "C")
 #: A check raster's arguments (:func:`_raster_all`): the grid kernel's address; x's
 #: values, derived slots and derived values; y's values and derived values.
 RASTER = types.Tuple((types.intp, _F1, _I1, _F2, _F1, _F2))
+#: What decides the conditions that can bound a class (:func:`_applicable_all`): the
+#: probes (unit square), per condition its branch's index and the velocity and rest-only
+#: masks, whether the velocity is an axis, and its input slot.
+APPLICABLE = types.Tuple((_F2, _I1, _B1, _B1, types.boolean, types.int64))
 #: ``values(x, out, scale)`` of a generated condition module.
 VALUES_SIG = types.void(_F1, _F1, _F1)
 #: ``gradient(k, x, g)``: (value, tie scale); the gradient in the module's variables into g.
@@ -1571,7 +1611,7 @@ _ENTRIES: dict = {}
 def entries() -> dict:
     """The tracer's entry points, compiled once (cached on disk): ``trace``, ``seeds``,
     ``seed_trace`` (the check raster, then both, after the cells near its class
-    changes), ``survey`` and ``raster`` (the check raster alone).
+    changes), ``survey``, ``raster`` (the check raster alone) and ``applicable``.
 
     Each is the compiled overload's own entry point, called without the
     dispatcher (typing the arguments at every call cost 0.2-0.5 ms with the
@@ -1588,16 +1628,19 @@ def entries() -> dict:
         sig_survey = types.void(ADDRESSES, _F1, types.int64, types.int64, _F1, _F2, _F2)
         sig_seed_trace = types.Tuple((_C2, _B2, _F2, _I1, _I2, _I2, _F2, _I1, _I1, _I2, _F2,
                                       _I2, _I2))(
-            ADDRESSES, _F2, _F1, RASTER, types.int64, _B1, _I1, _F1,
+            ADDRESSES, _F2, _F1, APPLICABLE, RASTER, types.int64, _B1, _I1, _F1,
             _F2, types.int64, types.int64, _F1, types.int64, types.int64, _F2, _I2, _I1, _I2,
             _B3, types.float64, types.float64)
+        sig_applicable = types.void(ADDRESSES, _F1, _F2, types.int64, types.int64, _F1,
+                                    APPLICABLE, _B1)
         sig_raster = types.void(types.intp, _F1, types.int64, _F1, _I1, _F2, _F1, _F2, _C2,
                                 _F2)
         for name, fn, sig in (("trace", _trace_all, sig_trace),
                               ("seeds", _seeds_all, sig_seeds),
                               ("seed_trace", _seed_trace_all, sig_seed_trace),
                               ("survey", _survey_all, sig_survey),
-                              ("raster", _raster_all, sig_raster)):
+                              ("raster", _raster_all, sig_raster),
+                              ("applicable", _applicable_all, sig_applicable)):
             fn.compile(sig)
             _ENTRIES[name] = _entry_point(fn, sig)
     return _ENTRIES

@@ -11,7 +11,6 @@ import numpy as np
 import xarray as xr
 
 from .. import _args
-from .. import _numerics as nx
 from .._dataset import cf_header
 from .._codegen import CELLS_SIGNATURE, grid_kernel
 from ..layers import layers_for
@@ -149,33 +148,32 @@ def _kinds(m: Model, conds: Conditions) -> tuple[np.ndarray, np.ndarray]:
     return kinds
 
 
+#: Where :func:`_applicable` classifies the slice (unit square): its centre, and its
+#: corners too where the velocity is an axis (its sign picks the branches).
+_PROBES = np.array([(0.5, 0.5)])
+_PROBES_VELOCITY = np.array([(0.5, 0.5), (0.0, 0.0), (1.0, 1.0), (0.0, 1.0), (1.0, 0.0)])
+
+
+def _applicable_args(sl: Slice) -> tuple:
+    """What the trace's compiled :func:`phasemap.bifurcation._trace._applicable_all` takes
+    to do what :func:`_applicable` does (:data:`phasemap.bifurcation._trace.APPLICABLE`)."""
+    m = sl.model
+    velocity_axis = m.velocity in (sl.x, sl.y)
+    branch, velocity = _kinds(m, sl.conds)
+    return (_PROBES_VELOCITY if velocity_axis else _PROBES, branch, velocity,
+            sl.conds.rest_only, velocity_axis, m.inputs.index(m.velocity))
+
+
 def _applicable(sl: Slice) -> tuple[np.ndarray, np.ndarray]:
     """Which conditions can bound a class in the slice, before comparing their values
     (:func:`_active`), and the input vector of the last probe (its derived inputs
-    filled) for that comparison."""
-    m, C = sl.model, sl.conds
-    velocity_axis = m.velocity in (sl.x, sl.y)
-    # the branches that apply somewhere in the slice
-    applies = np.zeros(len(m.candidates), dtype=bool)
-    out = np.empty((len(m.candidates), m.n_fields))
+    filled) for that comparison: :func:`phasemap.bifurcation._trace._applicable_all`,
+    which a trace runs inside its one call."""
+    active = np.empty(len(sl.conds), dtype=bool)
     v = sl.base.copy()
-    ix, iy = sl.slots
-    probes = [(0.5, 0.5)]
-    if velocity_axis:
-        probes += [(0.0, 0.0), (1.0, 1.0), (0.0, 1.0), (1.0, 0.0)]
-    for u, w in probes:
-        v[ix] = sl.lo[0] + u * (sl.hi[0] - sl.lo[0])
-        v[iy] = sl.lo[1] + w * (sl.hi[1] - sl.lo[1])
-        m.derive(v)
-        m.point(v, out)
-        applies |= out[:, nx.STATUS] != nx.ABSENT
-    rest = (not velocity_axis) and abs(sl.fixed[m.velocity]) <= nx.TOL * _velocity_scale(m, v)
-    branch, velocity = _kinds(m, C)
-    active = (branch < 0) | applies[branch]
-    if not rest:
-        active &= ~C.rest_only
-    if not velocity_axis:
-        active &= ~velocity
+    m = sl.model
+    T.entries()["applicable"](sl.fns, v, np.empty((len(m.candidates), m.n_fields)),
+                              *sl.slots, sl.geo, _applicable_args(sl), active)
     return active, v
 
 
@@ -196,12 +194,6 @@ def _active(sl: Slice) -> tuple[np.ndarray, np.ndarray]:
     T.entries()["survey"](sl.fns, v, ix, iy, sl.geo, _SURVEY, vals)
     group = T.groups(vals, active)
     return active, group
-
-
-def _velocity_scale(m: Model, v: np.ndarray) -> float:
-    code = m.velocity_scale.py_func.__code__
-    names = code.co_varnames[:code.co_argcount]
-    return float(m.velocity_scale(*(v[m.inputs.index(n)] for n in names)))
 
 
 @dataclass
@@ -258,11 +250,11 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
         axes = _cell_centres(sl, check_cells)
         # the check raster, _active's comparison of the conditions, the seeds, the trace,
         # its pieces and the completeness check: one call
-        active, vs = _applicable(sl)
+        active = np.empty(nc, dtype=bool)
         classes, near, seeds, group, grp, changes, *assembled, bad = run["seed_trace"](
-            fns, _SURVEY, vs, _raster_args(sl, layer, axes), NEAR, active, _rank(sl.conds), v,
-            out, ix, iy, geo, code, seed_nodes, buf.vf, buf.vi, buf.counts, buf.curves, mark,
-            tol_u, tol_w)
+            fns, _SURVEY, sl.base.copy(), _applicable_args(sl), _raster_args(sl, layer, axes),
+            NEAR, active, _rank(sl.conds), v, out, ix, iy, geo, code, seed_nodes, buf.vf,
+            buf.vi, buf.counts, buf.curves, mark, tol_u, tol_w)
     else:
         active, group = _active(sl)
         if only is not None:
