@@ -400,7 +400,13 @@ def _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw, 
 def _correct(F, k, v, ix, iy, geo, g, pu, pw, du, dw):
     """Newton on c = 0 and (du, dw) . (x - p) = 0 from p: the curve's point whose
     projection on the direction (du, dw) is p's.  Returns (ok, u, w, residual, step) and
-    c's (scale, c_u, c_w) at that point."""
+    c's (scale, c_u, c_w) at that point.
+
+    Where the next step would be at most 1e-15 (in the unit square), the point before it
+    is the answer, with the value and gradient already evaluated there: it is that
+    close to the root (Newton's step is its error there), and stepping would cost one
+    more gradient per vertex, a quarter of the corrector.
+    """
     u, w = pu, pw
     last = np.inf
     for it in range(MAX_IT):
@@ -411,10 +417,13 @@ def _correct(F, k, v, ix, iy, geo, g, pu, pw, du, dw):
         a, b = _solve2(cu, cw, du, dw, -c, -r)
         if not math.isfinite(a):
             return False, u, w, np.inf, np.inf, s, cu, cw
+        last = abs(a) + abs(b)
+        if last <= 1e-15:
+            res = abs(c) / s if s > 0.0 else abs(c)
+            return res <= RESIDUAL, u, w, res, last, s, cu, cw
         u += a
         w += b
-        last = abs(a) + abs(b)
-        if last <= 1e-15 or (last <= 1e-13 and abs(c) <= 0.01 * RESIDUAL * s):
+        if last <= 1e-13 and abs(c) <= 0.01 * RESIDUAL * s:
             break
     c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
     res = abs(c) / s if s > 0.0 else abs(c)
