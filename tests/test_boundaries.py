@@ -341,6 +341,23 @@ def test_applicable_conditions_are_those_of_the_statuses_at_the_probes():
         assert 0 < active.sum() < len(active)
 
 
+def test_class_changes_are_a_plain_scans():
+    """Every pair of neighbouring cells with different classes, in scan order, for
+    rasters whose rows are not whole words of eight cells, a single row or column,
+    and none."""
+    rng = np.random.default_rng(5)
+    for shape in ((128, 128), (33, 127), (1, 9), (9, 1), (2, 2), (0, 0), (17, 130)):
+        for trial in range(4):
+            a = (rng.integers(0, 3, size=shape) * (rng.uniform(size=shape) < rng.uniform())
+                 ).astype(np.int8)
+            n0, n1 = shape
+            want = [(i, j, di, dj) for i in range(n0) for j in range(n1)
+                    for di, dj in ((1, 0), (0, 1))
+                    if i + di < n0 and j + dj < n1 and a[i, j] != a[i + di, j + dj]]
+            got = _trace.class_changes(a)
+            assert got.dtype == np.int64 and [tuple(r) for r in got] == want, (shape, trial)
+
+
 def test_full_buffers_are_grown_and_the_trace_is_the_same(monkeypatch):
     """Where the vertex buffers fill, the trace runs again with larger ones: its pieces,
     points and completeness check are those of a trace that never filled them."""

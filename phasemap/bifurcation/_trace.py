@@ -180,35 +180,43 @@ def _near(near, u, w):
 def class_changes(classes):
     """The class changes of a raster: rows ``(i, j, di, dj)``, the cells (i, j) and
     (i + di, j + dj) (a neighbour along one axis) differ, in the order of i, j and the
-    axis.  Two passes: each cell's changes as bits (branch-free, so that it vectorises),
-    then the rows of the few cells that have one."""
+    axis.  Two passes: each cell's changes as bits (the last row apart, so that the
+    loop over the others has no test and vectorises), then the rows of the cells that
+    have one, read eight cells at a time (a word of bits that is zero is skipped)."""
     n0, n1 = classes.shape
-    bits = np.zeros((n0, n1), dtype=np.int8)
+    bits = np.zeros((n0, n1 + (-n1) % 8), dtype=np.int8)  # rows of whole words
     count = 0
-    for i in range(n0):
-        for j in range(n1 - 1):  # the last column and the last row after
+    for i in range(n0 - 1):
+        for j in range(n1 - 1):
             c = classes[i, j]
-            down = i + 1 < n0 and classes[i + 1, j] != c
+            down = classes[i + 1, j] != c
             right = classes[i, j + 1] != c
             bits[i, j] = down + 2 * right
             count += down + right
-        if n1 and i + 1 < n0 and classes[i + 1, n1 - 1] != classes[i, n1 - 1]:
-            bits[i, n1 - 1] = 1
-            count += 1
+        down = classes[i + 1, n1 - 1] != classes[i, n1 - 1]
+        bits[i, n1 - 1] = down
+        count += down
+    if n0 > 0:
+        for j in range(n1 - 1):
+            right = classes[n0 - 1, j + 1] != classes[n0 - 1, j]
+            bits[n0 - 1, j] = 2 * right
+            count += right
+    words = bits.view(np.int64)
     out = np.empty((count, 4), dtype=np.int64)
     n = 0
     for i in range(n0):
-        for j in range(n1):
-            f = bits[i, j]
-            if f == 0:
+        for q in range(words.shape[1]):
+            if words[i, q] == 0:
                 continue
-            for d in range(2):
-                if f & (1 << d):
-                    out[n, 0] = i
-                    out[n, 1] = j
-                    out[n, 2] = 1 - d
-                    out[n, 3] = d
-                    n += 1
+            for j in range(8 * q, min(8 * q + 8, n1)):
+                f = bits[i, j]
+                for d in range(2):
+                    if f & (1 << d):
+                        out[n, 0] = i
+                        out[n, 1] = j
+                        out[n, 2] = 1 - d
+                        out[n, 3] = d
+                        n += 1
     return out[:n]
 
 
