@@ -301,10 +301,11 @@ def test_seed_rows_follow_the_rule_and_count_beyond_the_buffer():
 
 def test_applicable_conditions_are_those_of_the_statuses_at_the_probes():
     """The compiled choice of the conditions that can bound a class (_applicable_all, run
-    inside a trace) is this plain reading of the model's own point function: the
-    branches that apply at the slice's centre (and corners, where the velocity is an
-    axis), rest-only conditions only at rest, the velocity's condition only on a
-    velocity axis."""
+    inside a trace) is this plain reading of the model's statuses (its point function,
+    through the tracer's classify, compiled already): the branches that apply at the
+    slice's centre (and corners, where the velocity is an axis), rest-only conditions
+    only at rest, the velocity's condition only on a velocity axis (rest read from the
+    model's velocity scale)."""
     from phasemap import _numerics as nx
     from phasemap.bifurcation import tracing
 
@@ -325,8 +326,7 @@ def test_applicable_conditions_are_those_of_the_statuses_at_the_probes():
         for u, w in probes:
             v[sl.slots[0]] = sl.lo[0] + u * (sl.hi[0] - sl.lo[0])
             v[sl.slots[1]] = sl.lo[1] + w * (sl.hi[1] - sl.lo[1])
-            m.derive(v)
-            m.point(v, out)
+            _trace.classifier(m)(v, out, 0)  # derive, then point, into out
             applies |= out[:, nx.STATUS] != nx.ABSENT
         names = m.velocity_scale.py_func.__code__.co_varnames
         scale = m.velocity_scale(*(v[m.inputs.index(n)] for n in
