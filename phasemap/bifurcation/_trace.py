@@ -946,7 +946,7 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
 
 
 @njit(cache=True, error_model="numpy")
-def _trace_all(A, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
+def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
                near, tol_u, tol_w, require_sides):
     """Trace a curve from each seed ``(k, u, w)`` not on a curve already traced.
 
@@ -959,7 +959,6 @@ def _trace_all(A, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
     sampling their sides costs two classifications each).  Returns the number
     of curves traced.
     """
-    F = A
     g = np.empty(2)
     H = np.empty((2, 2))
     nc = active.shape[0]
@@ -1057,10 +1056,9 @@ def _trace_all(A, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
 
 
 @njit(cache=True, error_model="numpy")
-def _survey_all(A, v, ix, iy, geo, pts, vals):
+def _survey_all(F, v, ix, iy, geo, pts, vals):
     """Every condition's value at the points ``pts`` (rows (u, w) of the unit square)
     into the rows of ``vals``, NaN where a value is not finite."""
-    F = A
     cs = np.empty(vals.shape[1])
     for p in range(pts.shape[0]):
         v[ix] = geo[0] + pts[p, 0] * geo[1]
@@ -1072,7 +1070,7 @@ def _survey_all(A, v, ix, iy, geo, pts, vals):
 
 
 @njit(cache=True, error_model="numpy")
-def _seeds_all(A, active, v, ix, iy, geo, n, near):
+def _seeds_all(F, active, v, ix, iy, geo, n, near):
     """Seeds on an n x n raster of nodes (the slice's edges included): every sign change
     of an active condition between neighbouring nodes, and every node where a
     condition's magnitude has a local minimum without a sign change around it (a loop
@@ -1081,7 +1079,6 @@ def _seeds_all(A, active, v, ix, iy, geo, n, near):
     cannot start a curve (:func:`_trace_all`).  Returns rows (condition, u, w, kind: 0 sign
     change, 1 minimum), by condition, then node.
     """
-    F = A
     nc = active.shape[0]
     m = near.shape[0]
     # near cells in each rectangle of cells from a summed-area table (one pass over near)
@@ -1237,7 +1234,7 @@ def _raster_all(cells_at, v, ix, xs, xslot, xderiv, ys, yderiv, flags, fields):
 
 
 @njit(cache=True, error_model="numpy")
-def _applicable_all(A, v, out, ix, iy, geo, applicable, active):
+def _applicable_all(F, v, out, ix, iy, geo, applicable, active):
     """Which conditions can bound a class in the slice (into ``active``), before their
     values are compared (:func:`groups`): those of no branch or of a branch that
     applies at one of the probes (the model's own statuses, :data:`CLASS_SIG`),
@@ -1251,14 +1248,14 @@ def _applicable_all(A, v, out, ix, iy, geo, applicable, active):
     for p in range(probes.shape[0]):
         v[ix] = geo[0] + probes[p, 0] * geo[1]
         v[iy] = geo[2] + probes[p, 1] * geo[3]
-        _classify(A, v, out, 0)
+        _classify(F, v, out, 0)
         for b in range(out.shape[0]):
             applies[b] = applies[b] or out[b, nx.STATUS] != nx.ABSENT
     rest = False
     if not velocity_axis:
         cv = np.empty(active.shape[0])
         cs = np.empty(active.shape[0])
-        _values(A, v, cv, cs)
+        _values(F, v, cv, cs)
         for k in range(active.shape[0]):
             if velocity[k]:  # the velocity condition's tie scale is the velocity scale
                 rest = abs(v[vslot]) <= nx.TOL * cs[k]
@@ -1268,16 +1265,16 @@ def _applicable_all(A, v, out, ix, iy, geo, applicable, active):
 
 
 @njit(cache=True, error_model="numpy")
-def _seed_trace_all(A, pts, vs, applicable, raster, radius, active, rank, v, out, ix, iy, geo,
+def _seed_trace_all(F, pts, vs, applicable, raster, radius, active, rank, v, out, ix, iy, geo,
                     layer, n, vf, vi, counts, curves, mark, tol_u, tol_w):
     """One call for a whole trace (a call from Python and the parallel driver of a
     raster cost about 30 us).  The conditions that can bound a class, into ``active``
     (:func:`_applicable_all` with the arguments ``applicable``: the probes, each
     condition's branch index, velocity and rest-only masks, whether the velocity is
     an axis and its input slot; ``vs`` left at the last probe); the check raster
-    ``classes`` (:func:`_raster_all` with
-    the arguments ``raster``: the grid kernel's address, then x's values, derived
-    slots and derived values, y's values and derived values); the conditions' values
+    ``classes`` (:func:`_raster_all` with the arguments ``raster``: the grid kernel's
+    address, then x's values, derived slots and derived values, y's values and
+    derived values); the conditions' values
     at the points ``pts`` (input vector ``vs``) drop from ``active`` those constant or
     proportional to another there (:func:`groups`); then the cells near a class
     change of ``classes`` (:func:`near_changes` with ``radius``), the seeds of an
@@ -1289,14 +1286,14 @@ def _seed_trace_all(A, pts, vs, applicable, raster, radius, active, rank, v, out
     of :func:`class_changes`; the pieces are empty where the buffers were full
     (``counts[2]``: trace again with larger ones).
     """
-    _applicable_all(A, vs, out, ix, iy, geo, applicable, active)
+    _applicable_all(F, vs, out, ix, iy, geo, applicable, active)
     cells_at, xs, xslot, xderiv, ys, yderiv = raster
     flags = np.empty((1, xs.shape[0] * ys.shape[0]), dtype=np.int8)
     _raster_all(cells_at, v.copy(), ix, xs, xslot, xderiv, ys, yderiv, flags,
                 np.empty((0, flags.shape[1])))
     classes = flags[0].reshape((xs.shape[0], ys.shape[0]))
     vals = np.empty((pts.shape[0], active.shape[0]))
-    _survey_all(A, vs, ix, iy, geo, pts, vals)
+    _survey_all(F, vs, ix, iy, geo, pts, vals)
     group = groups(vals, active)
     grp = np.empty((active.shape[0], 2), dtype=np.int64)
     for k in range(active.shape[0]):
@@ -1304,8 +1301,8 @@ def _seed_trace_all(A, pts, vs, applicable, raster, radius, active, rank, v, out
         grp[k, 1] = rank[k]
     changes = class_changes(classes)
     near = near_changes(classes.shape, changes, radius)
-    seeds = _seeds_all(A, active, v, ix, iy, geo, n, near)
-    _trace_all(A, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
+    seeds = _seeds_all(F, active, v, ix, iy, geo, n, near)
+    _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
                near, tol_u, tol_w, True)
     pv, pp, pq, pieces, pf, pi = assemble(vf, vi, curves, 0 if counts[2] else counts[1])
     bad = _uncovered(classes.shape[0], changes, pv, pp)
@@ -1687,6 +1684,14 @@ def classifier(model):
     return fn
 
 
+def compiled_address(dispatcher, args) -> int:
+    """The address of the code of ``dispatcher``'s overload for the argument types
+    ``args``, as :func:`_call_address` calls it (numba's calling convention).  The
+    overload stays loaded while its dispatcher lives: keep the dispatcher."""
+    cres = dispatcher.overloads[tuple(args)]
+    return cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name)
+
+
 _FUNCTIONS: dict = {}
 
 
@@ -1709,7 +1714,6 @@ def functions(model, conds) -> tuple:
                     (mod.hessian, HESSIAN_SIG), (classifier(model), CLASS_SIG)):
         if tuple(sig.args) not in fn.overloads:
             fn.compile(sig)  # the hessian, compiled (or loaded) when first needed
-        cres = fn.overloads[tuple(sig.args)]
-        fns.append(cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name))
+        fns.append(compiled_address(fn, sig.args))
     _FUNCTIONS[(id(model), id(mod))] = (model, mod, tuple(fns))
     return _FUNCTIONS[(id(model), id(mod))][2]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
@@ -58,6 +59,11 @@ class Slice:
     def slots(self) -> tuple[int, int]:
         inputs = self.model.inputs
         return inputs.index(self.x), inputs.index(self.y)
+
+    def physical(self, uw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Rows (u, w) of the unit square in the axes' units."""
+        g0, g1, g2, g3 = self.geo.tolist()
+        return g0 + uw[:, 0] * g1, g2 + uw[:, 1] * g3
 
 
 def parse_range(m: Model, what: str, value) -> tuple[float, float]:
@@ -345,11 +351,11 @@ def _check_raster(sl: Slice, layer: str, axes: dict) -> np.ndarray:
     own grid kernel (:func:`phasemap._codegen.grid_kernel`), what :func:`phasemap.grid.evaluate`
     runs, called row by row from compiled code (:func:`phasemap.bifurcation._trace._raster_all`;
     a trace computes it inside its one call)."""
-    at, x, *rest = _raster_args(sl, layer, axes)
-    flags = np.empty((1, len(x) * len(rest[2])), dtype=np.int8)
-    T.entries()["raster"](at, sl.base.copy(), sl.slots[0], x, *rest, flags,
+    at, x, xslot, xderiv, y, yderiv = _raster_args(sl, layer, axes)
+    flags = np.empty((1, len(x) * len(y)), dtype=np.int8)
+    T.entries()["raster"](at, sl.base.copy(), sl.slots[0], x, xslot, xderiv, y, yderiv, flags,
                           np.empty((0, flags.shape[1])))
-    return flags.reshape(len(x), len(rest[2]))
+    return flags.reshape(len(x), len(y))
 
 
 def _raster_args(sl: Slice, layer: str, axes: dict) -> tuple:
@@ -380,11 +386,10 @@ def _raster_kernel(m: Model, x: str, y: str, layer: str) -> tuple:
         from_x = [d for d in m.derived if d.source == x]
         slot = {n: i for i, n in enumerate(m.inputs)}
         cells = grid_kernel(m, (layers_for(m)[layer],), y)
-        cres = cells.overloads[CELLS_SIGNATURE.args]
         # the kernel is kept with its address (and the model with both), so that the
         # code stays loaded and the id is not reused
         hit = _RASTER_KERNELS[key] = (
-            m, cells, cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name),
+            m, cells, T.compiled_address(cells, CELLS_SIGNATURE.args),
             from_x, [d for d in m.derived if d.source == y],
             np.array([slot[d.name] for d in from_x], dtype=np.int64))
     return hit[2:]
@@ -494,9 +499,7 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
     """The traced pieces and points as the Dataset :func:`boundaries` returns."""
     m = sl.model
     ((xu, xl), (yu, yl)), flag = _labels(sl, layer)
-    g0, g1, g2, g3 = sl.geo.tolist()
-    pv = traced.pv
-    px, py = g0 + pv[:, 0] * g1, g2 + pv[:, 1] * g3
+    px, py = sl.physical(traced.pv)
     V = _variable
     data = {
         sl.x: V("vertex", px, {"units": xu, "long_name": xl}),
@@ -529,9 +532,9 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
     data["closed"] = V("piece", pieces[:, 4].astype(np.int8),
                        {"long_name": "the piece is a closed loop (its last vertex is its first)",
                         "flag_values": np.array([0, 1], np.int8), "flag_meanings": "no yes"})
-    keep = _unique_points(traced, 0.5 * tol / max(g1, g3))
+    keep = _unique_points(traced, 0.5 * tol / max(sl.geo[1], sl.geo[3]))
     pf, pi = traced.points_f[keep], traced.points_i[keep]
-    qx, qy = g0 + pf[:, 0] * g1, g2 + pf[:, 1] * g3
+    qx, qy = sl.physical(pf)
     kinds = []
     other = []
     for kind, k, j in pi.tolist():
@@ -559,10 +562,9 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
     data["point_error"] = V("point", pf[:, 3] * tol,
                             {"units": "1", "long_name": "size of the last Newton step in the "
                              "point's coordinates (an error estimate, in axis units)"})
-    # the axes as JSON (the names are identifiers; repr is what json writes of a float)
     attrs = header(m, "boundaries", sl.fixed, phasemap_layer=layer,
-                   phasemap_axes=f'{{"{sl.x}": [{float(sl.lo[0])!r}, {float(sl.hi[0])!r}], '
-                                 f'"{sl.y}": [{float(sl.lo[1])!r}, {float(sl.hi[1])!r}]}}',
+                   phasemap_axes=json.dumps({sl.x: [sl.lo[0], sl.hi[0]],
+                                             sl.y: [sl.lo[1], sl.hi[1]]}),
                    phasemap_tol=tol)
     # built directly: the variables share their dimensions and none has an index, so
     # xarray's merge and alignment (half the cost of a simple slice) have nothing to do
