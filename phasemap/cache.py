@@ -323,9 +323,32 @@ def glob_escape(text: str) -> str:
     return re.sub(r"([*?\[])", r"[\1]", text)
 
 
+def _load_without_refresh(cache, sig, target_context, load):
+    """numba's ``Cache.load_overload`` without its refresh of the target's registries.
+
+    numba refreshes the target context before every load: the first refresh in a
+    process imports and installs its typing and lowering registries (about 300
+    modules of its NumPy, linalg and random support), 0.4-0.6 s, most of a warm
+    process's first map.  Loading machine code from the disk needs none of it,
+    only numba's runtime (NRT) linked in; any compilation refreshes for itself
+    (numba's ``CompilerBase`` does), so a miss that compiles after this is unchanged.
+    Where numba's private hooks are not there (another numba), its own load runs.
+    """
+    inner = getattr(cache, "_load_overload", None)
+    guard = getattr(cache, "_guard_against_spurious_io_errors", None)
+    if inner is None or guard is None:
+        return load(cache, sig, target_context)
+    from numba.core.runtime import rtsys
+
+    rtsys.initialize(target_context)
+    with guard():
+        return inner(sig, target_context)
+
+
 def _guard_numba() -> None:
     """Make numba treat a damaged cache file of phasemap's as a miss, tolerate a full
-    disk when it saves one, and mark what it loads as used (the LRU bound)."""
+    disk when it saves one, mark what it loads as used (the LRU bound), and load it
+    without refreshing its registries (:func:`_load_without_refresh`)."""
     from numba.core import caching
 
     cls = caching.Cache
@@ -338,7 +361,7 @@ def _guard_numba() -> None:
         if not _ours(self):
             return load(self, sig, target_context)
         try:
-            data = load(self, sig, target_context)
+            data = _load_without_refresh(self, sig, target_context, load)
         except Exception as err:
             _say(f"numba's cache of {self._name} was damaged ({type(err).__name__}); "
                  "compiling it again")
