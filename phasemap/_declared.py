@@ -47,7 +47,7 @@ from ._version import __version__
 from .model import Branch, Derived, Dynamics, Model, Variable
 
 #: Bumped when the manifest's layout changes.
-FORMAT = 1
+FORMAT = 2
 #: Imports a declaration may make and stay eligible (their versions are in the key).
 _PURE = {"__future__", "math", "numpy", "sympy"}
 #: Calls that may read what the key does not hold.
@@ -306,6 +306,7 @@ def manifest(S, model: Model) -> dict | None:
         if check is None:
             return None
     funcs = [b.func for b in model.candidates] + [model.velocity_scale] + \
+        [b.edge for b in model.candidates if b.edge is not None] + \
         ([model.inside] if model.inside is not None else [])
     if not module.__name__.startswith(prefix) or any(
             getattr(module, f.py_func.__name__, None) is not f for f in funcs) or any(
@@ -319,7 +320,9 @@ def manifest(S, model: Model) -> dict | None:
         "params": [_variable(v) for v in model.params],
         "derived": [[d.name, d.source, d.func.__name__] for d in model.derived],
         "candidates": [[b.name, b.direction, b.func.py_func.__name__, list(b.args),
-                        None if b.bound is None else list(b.bound)] for b in model.candidates],
+                        None if b.bound is None else list(b.bound),
+                        None if b.edge is None else b.edge.py_func.__name__]
+                       for b in model.candidates],
         "accelerations": [_variable(v) for v in model.accelerations],
         "reactions": [_variable(v) for v in model.reactions],
         "coefficient": _variable(model.coefficient),
@@ -348,8 +351,9 @@ def build(data: dict, module, check, declaration) -> Model:
         state=tuple(map(var, data["state"])), params=tuple(map(var, data["params"])),
         derived=tuple(Derived(n, s, getattr(np, f)) for n, s, f in data["derived"]),
         candidates=tuple(Branch(n, float(d), getattr(module, f), tuple(a),
-                                None if b is None else (b[0], int(b[1])))
-                         for n, d, f, a, b in data["candidates"]),
+                                None if b is None else (b[0], int(b[1])),
+                                None if e is None else getattr(module, e))
+                         for n, d, f, a, b, e in data["candidates"]),
         accelerations=tuple(map(var, data["accelerations"])),
         reactions=tuple(map(var, data["reactions"])),
         coefficient=var(data["coefficient"]),

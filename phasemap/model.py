@@ -238,7 +238,13 @@ class Branch:
     ``bound``
         ``(state variable, side)`` where the branch exists only on a closed bound of
         that variable (side 0 the lower, 1 the upper: a declared system's edge row,
-        :mod:`phasemap.declare.edges`); a motion there moving out leaves the domain.
+        :mod:`phasemap.declare.edges`); a motion there moving out leaves the domain;
+    ``edge``
+        for a row that exists only on an edge, the compiled function of model inputs
+        (by its parameter names) that says whether the state is on it: the row calls it
+        and is absent where it is false, and a grid kernel calls it once per outer state
+        where its inner axis does not enter it, and leaves the row out of the inner loop
+        there (a declared system's edge rows).  None: the row is not restricted so.
     """
 
     name: str
@@ -246,6 +252,7 @@ class Branch:
     func: Callable = field(repr=False)
     args: tuple[float, ...] = ()
     bound: tuple[str, int] | None = None
+    edge: Callable | None = field(default=None, repr=False)
 
     @classmethod
     def both_ways(cls, name: str, func: Callable) -> tuple[Branch, Branch]:

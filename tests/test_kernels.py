@@ -281,3 +281,38 @@ def test_a_declared_row_with_no_mass_has_no_solution_and_no_acceleration():
     assert np.isnan(m.contract.branch_row(v, roll)[nx.FIRST_ACC])
     values["m"] = 1.0
     assert np.isfinite(m.contract.branch_row(m.input_vector(values), roll)[nx.FIRST_ACC])
+
+
+def test_edge_rows_left_out_of_a_loop_give_what_their_own_test_gives():
+    """A declared row that exists only on an edge (the ladder's at phi = 0 and pi/2, 16 of
+    its 27 rows) is left out of a grid loop where its edge test (``Branch.edge``, which the
+    row itself calls) reads no inner-axis value and is false at the outer state.  On grids
+    through both edges, exactly and within the tie tolerance, with the edge rows outside
+    (inner f) and inside (inner omega, the velocity) the loops' regimes, every cell is what
+    the per-point classification gives; at some of them an edge row is a solution, so a
+    loop that left it out there would differ.  (The layer sets are those of the figures'
+    tests: no kernel of its own.)"""
+    m = phasemap.MODELS["ladder"]
+    edge = {b.name for b in m.candidates if b.edge is not None}
+    assert len(edge) == 16 and all(b.bound is not None for b in m.candidates
+                                   if b.name in edge)
+    phi = np.array([0.0, 1e-13, 1e-9, 0.7, math.pi / 2 - 1e-9, math.pi / 2 - 1e-13,
+                    math.pi / 2])
+    scenes = [({"phi": phi, "f": np.array([0.0, 0.3, 1.0, math.sqrt(2.0), 2.5])},
+               {"omega": w}, ["n_solutions", "stagnation"]) for w in (0.0, 0.7, -0.4)]
+    scenes.append(({"phi": phi, "omega": np.array([-1.0, 0.0, 0.5])}, {"f": 0.4},
+                   ["n_solutions", "stagnation"]))
+    on_edge_solutions = 0
+    for axes, fixed, layers in scenes:
+        ds = phasemap.Scene("ladder", axes=axes, fixed=fixed, layers=layers).compute()
+        names = list(axes)
+        for index in np.ndindex(*ds.n_solutions.shape):
+            point = {n: float(axes[n][i]) for n, i in zip(names, index)} | fixed
+            c = phasemap.classify("ladder", **point)
+            cell = ds.isel(dict(zip(names, index)))
+            assert int(cell.n_solutions) == c.n_solutions, point
+            assert bool(cell.stagnation) == c.stagnation, point
+            on_edge_solutions += sum(b.name in edge and b.status in (
+                phasemap.BranchStatus.ADMISSIBLE, phasemap.BranchStatus.SEPARATION)
+                for b in c.candidates)
+    assert on_edge_solutions > 0

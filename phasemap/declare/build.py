@@ -91,8 +91,10 @@ def build_model(S) -> Model:
     renamed = [str(S.names.get(row[0], row[0])) for row in spec["rows"]]
     _check_distinct(S, renamed, reactions)
     candidates = tuple(Branch(renamed[i], float(direction), getattr(module, fname), tuple(args),
-                              None if bound is None else (bound[0], int(bound[1])))
-                       for i, (_, direction, _, fname, args, bound) in enumerate(spec["rows"]))
+                              None if bound is None else (bound[0], int(bound[1])),
+                              None if edge is None else getattr(module, edge))
+                       for i, (_, direction, _, fname, args, bound, edge)
+                       in enumerate(spec["rows"]))
     positions = tuple(_variable(c, default=float(c.default)) for c in moving
                       if c.name not in spec["state_positions"])
     dynamics = Dynamics(coordinates=tuple((c.name, c.rate.name, f"{c.name}_ddot")

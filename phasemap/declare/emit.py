@@ -106,6 +106,10 @@ class RowContext:
 
     edge: object = None
     still: dict = field(default_factory=dict)
+    #: ``(name, arguments)`` of the generated function that decides ``edge``
+    #: (:func:`edge_code`), which the row calls: the grid kernels call it too, once per
+    #: outer state where the inner axis does not enter it.
+    edge_call: tuple | None = None
 
     def rest_of(self, contact: str) -> str:
         """The code of "contact is at rest" in the row."""
@@ -133,21 +137,40 @@ def row_code(sol, eqs, inputs_of, ctx: RowContext = RowContext()) -> tuple[list[
     return w.lines, w.used
 
 
-def _where(w, sol, ctx: RowContext):
-    """``_k_edge`` (the row's edge holds: its contacts' slip factors vanish, and the state
-    is near it) and ``_k_rest_<c>`` (contact c is at rest: at rest, or where its factor
-    vanishes), for the contacts the row's requirements start."""
+def edge_code(edge, inputs_of) -> tuple[list[str], list[str]]:
+    """The body lines of the function that decides ``edge`` at a state (its contacts'
+    slip factors vanish to the tie tolerance, and the state is near it:
+    :func:`phasemap.declare.edges.edge_flag`), and the inputs it reads, sorted: its
+    parameters."""
     from .edges import NEAR, edge_flag
 
+    w = _Writer(inputs_of)
+    factors, scales, near = edge_flag(edge)
+    w.emit([(f"_k_ef{i}", k) for i, k in enumerate(factors)]
+           + [(f"_k_efs{i}", s) for i, s in enumerate(scales)] + [("_k_near", near)])
+    w.lines.append("return " + " & ".join(
+        [f"(abs(_k_ef{i}) <= {TOL} * _k_efs{i})" for i in range(len(factors))]
+        + [f"(_k_near <= {NEAR!r})"]))
+    return w.lines, sorted(w.used)
+
+
+def _edge_function(name: str, edge, body: list[str], args: list[str]) -> list[str]:
+    return ['@njit(cache=True, error_model="numpy", forceinline=True)',
+            f"def {name}({', '.join(args)}):",
+            f'    """Whether the state is on the edge {edge.label}."""',
+            *("    " + ln for ln in body), ""]
+
+
+def _where(w, sol, ctx: RowContext):
+    """``_k_edge`` (the row's edge holds: a call of its :func:`edge_code` function) and
+    ``_k_rest_<c>`` (contact c is at rest: at rest, or where its factor vanishes), for the
+    contacts the row's requirements start."""
     if ctx.edge is None:
         w.lines.append("_k_edge = True")
     else:
-        factors, scales, near = edge_flag(ctx.edge)
-        w.emit([(f"_k_ef{i}", k) for i, k in enumerate(factors)]
-               + [(f"_k_efs{i}", s) for i, s in enumerate(scales)] + [("_k_near", near)])
-        w.lines.append("_k_edge = " + " & ".join(
-            [f"(abs(_k_ef{i}) <= {TOL} * _k_efs{i})" for i in range(len(factors))]
-            + [f"(_k_near <= {NEAR!r})"]))
+        name, args = ctx.edge_call
+        w.used.update(args)
+        w.lines.append(f"_k_edge = {name}({', '.join(args)})")
     started = {r.contact for r in sol.problem.requirements
                if isinstance(r, Accelerates) and r.rest_only}
     for c in sorted(started & set(ctx.still)):
@@ -453,8 +476,11 @@ def module_source(S) -> str:
     """The generated module's source text (from the derivation of ``S``)."""
     d = derive(S)
     still = {c: d.factors[c] for c in sorted(d.still)}
-    code = {key: row_code(sol, d.eqs, d.inputs_of,
-                          RowContext(None if key[1] is None else d.edges[key[1]], still))
+    used_edges = sorted({key[1] for key in d.solutions if key[1] is not None})
+    edges = {i: edge_code(d.edges[i], d.inputs_of) for i in used_edges}
+    code = {key: row_code(sol, d.eqs, d.inputs_of, RowContext(
+                None if key[1] is None else d.edges[key[1]], still,
+                None if key[1] is None else (f"edge_{key[1]}", edges[key[1]][1])))
             for key, sol in d.solutions.items()}
     inputs, state_pos, derived = _inputs(S, d, set().union(*(u for _, u in code.values())))
     scale_expr = velocity_scale_expr(S, d.velocity)
@@ -463,6 +489,8 @@ def module_source(S) -> str:
            "import math", "import numpy as np", "from numba import njit",
            "from phasemap._numerics import restrict_affine", "", "NAN = np.nan", ""]
     out += _velocity_scale(scale_expr, scale_args) + _inside(d, inputs)
+    for i, (body, args) in edges.items():
+        out += _edge_function(f"edge_{i}", d.edges[i], body, args)
     for key, sol in d.solutions.items():
         out += _branch_function(S, sol, *code[key], inputs)
     spec = {
@@ -472,7 +500,8 @@ def module_source(S) -> str:
         "derived": derived,
         "scale_args": scale_args,
         "rows": [(r.name, r.direction, int(r.presence), d.solutions[r.key].problem.fname,
-                  _row_args(d.solutions[r.key].problem, r), _row_bound(d, r))
+                  _row_args(d.solutions[r.key].problem, r), _row_bound(d, r),
+                  None if r.edge is None else f"edge_{r.edge}")
                  for r in d.candidates],
         "kappa": d.kappa,
         "domain": sorted({nm for _, nm in d.eqs.domain}),
