@@ -397,12 +397,20 @@ def moving_test(model):
             'state v."""']
     body += src.load("    ")
     body += [f"    s{b} = 0" for b in range(nb)] + [f"    c{b} = NAN" for b in range(nb)]
+    # an edge row is computed only on its edge: elsewhere it is absent (status 0, no
+    # coefficient), as its own call of the same test decides (the ladder: 8 of 12 rows)
+    flags, edge_of = src.edge_flags("    ", ())
+    body += flags
     for k, sign in enumerate((1.0, -1.0)):
         rows = [b for b, c in enumerate(model.candidates) if c.direction == sign]
         body.append(f"    {'if' if k == 0 else 'elif'} {vel} {'>' if sign > 0 else '<'} 0.0:")
         for b in rows:
-            body += [f"        r{b} = {src.call(b, 'False', vel)}",
-                     f"        s{b} = r{b}[0]", f"        c{b} = r{b}[{nx.COEF}]"]
+            ind = "        "
+            if b in edge_of:
+                body.append(f"{ind}if {edge_of[b]}:")
+                ind += "    "
+            body += [f"{ind}r{b} = {src.call(b, 'False', vel)}",
+                     f"{ind}s{b} = r{b}[0]", f"{ind}c{b} = r{b}[{nx.COEF}]"]
         if not rows:
             body.append("        pass")
     sm, cm = f"s{nb - 1}", f"c{nb - 1}"

@@ -316,3 +316,33 @@ def test_edge_rows_left_out_of_a_loop_give_what_their_own_test_gives():
                 phasemap.BranchStatus.ADMISSIBLE, phasemap.BranchStatus.SEPARATION)
                 for b in c.candidates)
     assert on_edge_solutions > 0
+
+
+def test_the_integrators_moving_test_computes_edge_rows_on_their_edges_only():
+    """The integrator's test after a step (``_codegen.moving_test``) computes an edge row
+    only where its edge test holds: at moving states on and off the ladder's edges it
+    says what ``point`` (every row of the velocity's direction, each with its own test)
+    says, for every mode, coefficient bit for bit; on the edges some edge row is a
+    solution there, so a test that skipped them would differ."""
+    m = phasemap.MODELS["ladder"]
+    moving = _codegen.moving_test(m).moving
+    point = _codegen.contract(m).point
+    nb = len(m.candidates)
+    solution = (nx.ADMISSIBLE, nx.SEPARATION)
+    out = np.empty((nb, m.n_fields))
+    edge_solutions = 0
+    for phi in (0.0, 1e-13, 0.7, math.pi / 2 - 1e-13, math.pi / 2):
+        for omega in (0.7, -0.4):
+            for f in (0.0, 0.4, 1.0, 2.5):
+                v = m.input_vector(m.complete({"phi": phi, "omega": omega, "f": f}))
+                point(v, out)
+                st = out[:, nx.STATUS]
+                edge_solutions += sum(st[b] in solution for b in range(nb)
+                                      if m.candidates[b].edge is not None)
+                for mode in range(nb):
+                    sole, coef = moving(v, mode)
+                    others = [st[b] in solution or st[b] == nx.CONTINUUM
+                              for b in range(nb) if b != mode]
+                    assert sole == (st[mode] in solution and not any(others)), (phi, omega, f)
+                    assert _same(coef, out[mode, nx.COEF]), (phi, omega, f, mode)
+    assert edge_solutions > 0
