@@ -196,11 +196,11 @@ class _Source:
         their own call of the same test would decide."""
         lines, local = [], {}
         for b, (alias, names) in self.edges.items():
-            if set(names) & set(varying):
-                continue
-            local[b] = alias.lower()
-            if local[b] not in [v for c, v in local.items() if c != b]:
-                lines.append(f"{ind}{local[b]} = {alias}({', '.join(f'i_{n}' for n in names)})")
+            if set(names).isdisjoint(varying):
+                if alias.lower() not in local.values():  # one call per edge function
+                    lines.append(f"{ind}{alias.lower()} = {alias}("
+                                 f"{', '.join(f'i_{n}' for n in names)})")
+                local[b] = alias.lower()
         return lines, local
 
     def load(self, ind: str, skip=()) -> list[str]:
@@ -617,7 +617,7 @@ def _generate_grid_kernel(model, layers, inner: str):
     lines += flag_lines
 
     def versions(ind: str, regime: str | None) -> list[str]:
-        off = sorted(b for b in edge_of if b in src.active(regime))
+        off = sorted(set(edge_of) & set(src.active(regime)))
         if not off:
             return loop(ind, regime)
         on = " | ".join(sorted({edge_of[b] for b in off}))

@@ -154,9 +154,14 @@ def edge_code(edge, inputs_of) -> tuple[list[str], list[str]]:
     return w.lines, sorted(w.used)
 
 
-def _edge_function(name: str, edge, body: list[str], args: list[str]) -> list[str]:
+def edge_name(i: int) -> str:
+    """The name of the generated function that decides edge ``i`` (:func:`edge_code`)."""
+    return f"edge_{i}"
+
+
+def _edge_function(i: int, edge, body: list[str], args: list[str]) -> list[str]:
     return ['@njit(cache=True, error_model="numpy", forceinline=True)',
-            f"def {name}({', '.join(args)}):",
+            f"def {edge_name(i)}({', '.join(args)}):",
             f'    """Whether the state is on the edge {edge.label}."""',
             *("    " + ln for ln in body), ""]
 
@@ -476,11 +481,11 @@ def module_source(S) -> str:
     """The generated module's source text (from the derivation of ``S``)."""
     d = derive(S)
     still = {c: d.factors[c] for c in sorted(d.still)}
-    used_edges = sorted({key[1] for key in d.solutions if key[1] is not None})
-    edges = {i: edge_code(d.edges[i], d.inputs_of) for i in used_edges}
+    edges = {i: edge_code(d.edges[i], d.inputs_of)
+             for i in sorted({key[1] for key in d.solutions if key[1] is not None})}
     code = {key: row_code(sol, d.eqs, d.inputs_of, RowContext(
                 None if key[1] is None else d.edges[key[1]], still,
-                None if key[1] is None else (f"edge_{key[1]}", edges[key[1]][1])))
+                None if key[1] is None else (edge_name(key[1]), edges[key[1]][1])))
             for key, sol in d.solutions.items()}
     inputs, state_pos, derived = _inputs(S, d, set().union(*(u for _, u in code.values())))
     scale_expr = velocity_scale_expr(S, d.velocity)
@@ -490,7 +495,7 @@ def module_source(S) -> str:
            "from phasemap._numerics import restrict_affine", "", "NAN = np.nan", ""]
     out += _velocity_scale(scale_expr, scale_args) + _inside(d, inputs)
     for i, (body, args) in edges.items():
-        out += _edge_function(f"edge_{i}", d.edges[i], body, args)
+        out += _edge_function(i, d.edges[i], body, args)
     for key, sol in d.solutions.items():
         out += _branch_function(S, sol, *code[key], inputs)
     spec = {
@@ -501,7 +506,7 @@ def module_source(S) -> str:
         "scale_args": scale_args,
         "rows": [(r.name, r.direction, int(r.presence), d.solutions[r.key].problem.fname,
                   _row_args(d.solutions[r.key].problem, r), _row_bound(d, r),
-                  None if r.edge is None else f"edge_{r.edge}")
+                  None if r.edge is None else edge_name(r.edge))
                  for r in d.candidates],
         "kappa": d.kappa,
         "domain": sorted({nm for _, nm in d.eqs.domain}),
