@@ -263,27 +263,12 @@ _VALUES = "void(float64[::1], float64[::1], float64[::1])"
 _GRADIENT = "UniTuple(float64, 2)(int64, float64[::1], float64[::1])"
 
 
-def _printer():
-    """The declared systems' printer (:func:`phasemap.declare.emit.printer`), with a
-    negative integer power as a float division: inf where the base vanishes (numba's
-    ``x ** -k`` raises ZeroDivisionError there, as Python's does)."""
+def _generate(model: Model, variables: tuple[str, ...], conds) -> str:
+    """The generated module's text (sympy runs here, and only here), printed by the declared
+    systems' own printer (:func:`phasemap.declare.emit.printer`)."""
     import sympy as sp
 
     from ..declare.emit import printer
-
-    class Printer(type(printer())):
-        def _print_Pow(self, e, rational=False):
-            b, x = e.args
-            if x.is_Integer and x < 0:
-                return f"(1.0/{self._print(sp.Pow(b, -x, evaluate=False))})"
-            return super()._print_Pow(e, rational)
-
-    return Printer({"fully_qualified_modules": True})
-
-
-def _generate(model: Model, variables: tuple[str, ...], conds) -> str:
-    """The generated module's text (sympy runs here, and only here)."""
-    import sympy as sp
 
     conds = [c for cond in conds for c in _smooth(cond)]
     names = set(model.names)
@@ -305,7 +290,7 @@ def _generate(model: Model, variables: tuple[str, ...], conds) -> str:
     scales = [canonical(c.scale) for c in conds]
     var_syms = [canon[v] for v in variables]
     slot = {n: i for i, n in enumerate(model.inputs)}
-    P = _printer()
+    P = printer()
     fresh = sp.numbered_symbols("_t")
     # sin and cos of an input become locals computed once
     trig = {}

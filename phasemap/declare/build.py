@@ -18,7 +18,7 @@ from .._declared import checks, declare_sources
 from .._version import __version__
 from ..model import Branch, Derived, Dynamics, Model, Variable
 from .api import Coordinate, numeric_bound, sym
-from .emit import module_source
+from .emit import GENERATION, module_source
 from .validation import IDENT, fail, validate
 
 
@@ -71,7 +71,8 @@ def cache_stem(S) -> str:
     h = hashlib.sha256(canonical(S).encode())
     for f in declare_sources():
         h.update(f.read_bytes())
-    h.update(f"{sp.__version__} {numba.__version__} {np.__version__} {__version__}".encode())
+    h.update(f"{sp.__version__} {numba.__version__} {np.__version__} {__version__} "
+             f"generation {GENERATION}".encode())
     return f"{S.name}_declared_{h.hexdigest()[:16]}"
 
 

@@ -16,6 +16,12 @@ from .validation import fail
 
 TOL = f"{nx.TOL!r}"
 
+#: The generation of the printed code, part of every generated module's cache key
+#: (:func:`phasemap.declare.build.cache_stem`): raised whenever the printer's output changes
+#: meaning, so that no kernel printed before survives an upgrade.  2: a negative integer power
+#: of a sum, 1/(A + B), had been printed without its parentheses (issue 37).
+GENERATION = 2
+
 #: Statuses of a generated row, as the module prints them.
 _STATUS = {"ADMISSIBLE": nx.ADMISSIBLE, "SEPARATION": nx.SEPARATION}
 
@@ -24,6 +30,7 @@ def printer():
     """A sympy printer for numba: float literals everywhere (no mixed int/float tuples, a
     rational as the double its division gives), integer powers as products."""
     import sympy as sp
+    from sympy.printing.precedence import PRECEDENCE
     from sympy.printing.pycode import PythonCodePrinter
 
     class Printer(PythonCodePrinter):
@@ -48,7 +55,10 @@ def printer():
             if x.is_Integer:
                 k = int(x)
                 if k < 0:  # numba raises ZeroDivisionError for 0.0 ** -k, whatever its error model
-                    return f"(1.0/{self._print(b ** -k)})"
+                    # a divisor that binds no tighter than a product gets its parentheses:
+                    # 1/(A + B) was once printed as 1.0/A + B (issue 37)
+                    div = self.parenthesize(b ** -k, PRECEDENCE["Mul"], strict=True)
+                    return f"(1.0/{div})"
                 if k == 2:
                     return f"(({pb})*({pb}))"
                 return f"(({pb})**{k})"
