@@ -148,17 +148,6 @@ def test_docstring_examples(module):
     assert result.attempted >= 2 and result.failed == 0
 
 
-def test_readme_quick_start_has_exactly_two_commands():
-    for page in (ROOT / "README.md", DOCS / "index.md"):
-        text = page.read_text()
-        block = text.split("## Quick start", 1)[1].split("```bash", 1)[1].split("```", 1)[0]
-        commands = [line for line in block.splitlines() if line.strip()]
-        assert len(commands) == 2, page
-        assert commands[0] == ("python3 -m venv .venv && . .venv/bin/activate && "
-                               "pip install . && phasemap tour")
-        assert "pytest" in commands[1] and "pytest" in (ROOT / ".ci" / "run").read_text()
-
-
 def test_cli_table_and_errors():
     run = [sys.executable, "-m", "phasemap.cli"]
     out = subprocess.run(run + ["table"], capture_output=True, text=True, check=True).stdout
