@@ -299,10 +299,40 @@ def test_ladder_with_f_near_sqrt2(f, phi, omega, ends, method):
     assert ds.attrs["end_reason"] in ends
 
 
+def _wall_release(f, phi0, omega0, l=1.0, g=9.81):
+    """Where the ladder's wall reaction vanishes on the sliding stage through (phi0, omega0):
+    the first integral of (8), u = c e^{lam phi} + a sin phi + b cos phi, its derivative
+    phi'' = u'/2 and the wall reaction from the momentum equations (tests/references/
+    ladder.py), in 40-digit arithmetic, the root bracketed and bisected.  Independent of
+    phasemap's integrators and of the double-precision cancellation in 2 - f^2 near sqrt 2."""
+    import mpmath as mp
+
+    with mp.workdps(40):
+        f, g, l, phi0, omega0 = map(mp.mpf, (f, g, l, phi0, omega0))
+        s = 1 if omega0 > 0 else -1
+        q = 4 + 32 * f ** 2 + f ** 4
+        lam = 6 * s * f / (2 - f * f)
+        a = -6 * s * f * g * (5 - 4 * f ** 2) / (l * q)
+        b = -3 * g * (2 - 15 * f ** 2 + f ** 4) / (l * q)
+        c0 = omega0 ** 2 - a * mp.sin(phi0) - b * mp.cos(phi0)
+
+        def wall(phi):  # N_wall (1 + f^2)/m
+            e = c0 * mp.exp(lam * (phi - phi0))
+            u = e + a * mp.sin(phi) + b * mp.cos(phi)
+            acc = (lam * e + a * mp.cos(phi) - b * mp.sin(phi)) / 2
+            xdd = l * mp.cos(phi) * acc - l * mp.sin(phi) * u
+            ydd = -l * mp.sin(phi) * acc - l * mp.cos(phi) * u
+            return xdd + s * f * (g + ydd)
+
+        lo, hi = phi0 - mp.mpf("1e-7"), phi0 - mp.mpf("1e-9")
+        assert wall(lo) < 0 < wall(hi)
+        return float(mp.findroot(wall, (lo, hi), solver="bisect"))
+
+
 @pytest.mark.parametrize("method", ["DOPRI5"])  # the hand model: one compile, not two
 def test_ladder_just_above_sqrt2_stops_clearly_when_the_stage_is_stiff(method):
     # f = sqrt2 + 1e-9 makes the stage stiff: a boundary layer of width ~1e-10 rad, then
-    # N_wall < 0 on the slow manifold at phi = 0.49999999297 (found by phase_curve).  At
+    # N_wall < 0 on the slow manifold at phi = 0.4999999929693 (_wall_release below).  At
     # rtol 1e-10 simulate finds it too.  At rtol 1e-8 explicit steps sit at the stability
     # limit off the manifold and never see the contact loss; they used to crawl to
     # max_steps (10^6 steps, t = 3.6e-4 s).  Hairer's stiffness test now stops the run
@@ -313,7 +343,7 @@ def test_ladder_just_above_sqrt2_stops_clearly_when_the_stage_is_stiff(method):
     tight = phasemap.simulate(hand_ladder.MODEL, 1.0, method=method,
                               rtol=1e-10, phi=0.5, omega=-4.0, f=R2 + 1e-9)
     assert tight.attrs["end_reason"] == "contact_lost"
-    assert abs(float(tight.event_phi[-1]) - 0.49999999297) < 1e-8
+    assert abs(float(tight.event_phi[-1]) - _wall_release(R2 + 1e-9, 0.5, -4.0)) < 1e-8
     loose = phasemap.simulate(hand_ladder.MODEL, 1.0, method=method,
                               rtol=1e-8, phi=0.5, omega=-4.0, f=R2 + 1e-9)
     assert loose.attrs["end_reason"] in {"contact_lost", "stiff"}
