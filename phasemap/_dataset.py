@@ -282,6 +282,18 @@ def _from_description(d) -> Vocabulary:
                       table("edges", 2))
 
 
+def read_json(text: str, what: str):
+    """JSON text from a file's attribute, as data: ValueError in one line naming ``what``
+    when it is not JSON, including a nesting too deep for Python's decoder (which raises
+    RecursionError) and text too large to decode."""
+    try:
+        return json.loads(text)
+    except ValueError as e:
+        raise ValueError(f"{what}: not JSON ({e})") from None
+    except (RecursionError, MemoryError):
+        raise ValueError(f"{what}: JSON nested too deeply or too large to read") from None
+
+
 def vocabulary(ds: xr.Dataset | Mapping) -> Vocabulary:
     """What the Dataset ``ds`` (or its global attributes) says about its model's words.
 
@@ -296,10 +308,7 @@ def vocabulary(ds: xr.Dataset | Mapping) -> Vocabulary:
     if text is not None:
         if not isinstance(text, str):
             raise ValueError("phasemap_variables: must be JSON text")
-        try:
-            description = json.loads(text)
-        except ValueError as e:
-            raise ValueError(f"phasemap_variables: not JSON ({e})") from None
+        description = read_json(text, "phasemap_variables")
         return _from_description(description)
     try:
         model = recorded_model(attrs)

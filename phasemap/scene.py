@@ -28,7 +28,7 @@ import xarray as xr
 from . import _args
 from . import _numerics as nx
 from ._codegen import content_hash
-from ._dataset import assemble, cf_header, declaration_hash, variable_attrs
+from ._dataset import assemble, cf_header, declaration_hash, read_json, variable_attrs
 from .grid import evaluate
 from .integrate import run_fate_map
 from .layers import Outcome, layers_for
@@ -403,10 +403,10 @@ def _read_spec(spec):
         raise ValueError(f"Scene.from_spec: {what}")
 
     if isinstance(spec, str):
-        try:
-            spec = json.loads(spec)
-        except ValueError as e:
-            bad(f"the spec is not JSON ({e})")
+        spec = read_json(spec, "Scene.from_spec: the spec")
+    if spec is None:
+        bad("no spec (an atlas written by phasemap records it in its phasemap_scene "
+            "attribute, which this one lacks)")
     if not isinstance(spec, Mapping):
         bad(f"a spec is a mapping, got {type(spec).__name__}")
     unknown = set(spec) - _SPEC_KEYS

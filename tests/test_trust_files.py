@@ -222,6 +222,7 @@ def test_a_spec_is_checked_before_anything_it_names_is_made(monkeypatch):
 
 #: Values a file's attribute can hold, the malformed ones first.
 JUNK = [None, "", "{", "[]", "{}", "null", "3", "evil.py", "../../evil.py", "/tmp/evil.py",
+        "[" * 100_000 + "]" * 100_000, np.array([1.0, 2.0, 3.0]),  # too deep for json; vlen
         "ladder", "hinge_pendulum", "trajectory", "fate", "map", "atlas", 3, -1, 0.5, np.nan,
         np.inf, True, np.array([1, 2]), np.array(["a", "b"]), "x" * 10_000, "\x00", "é",
         json.dumps({"variables": {"phi": 3}}), json.dumps({"variables": {"phi": ["a"]}}),
@@ -336,3 +337,79 @@ def test_the_figure_and_description_of_a_file_fuzzed_in_its_variables(ladder_map
                 assert _raised_by_phasemap(e) and "\n" not in str(e), (var, attr, value, e)
             plt.close("all")
     assert drawn > 12
+
+
+def _crafted(base: pathlib.Path, folder: pathlib.Path) -> dict[str, pathlib.Path]:
+    """Atlases whose shapes a reader might not expect (issue 42 item 3), each made from
+    ``base`` with netCDF4 directly, as a hostile or careless writer would."""
+    import shutil
+
+    import netCDF4
+
+    made = {}
+    for name in ("zero_dimensional", "nested_json", "array_attribute", "no_scene"):
+        made[name] = shutil.copy(base, folder / f"{name}.nc")
+    with netCDF4.Dataset(made["zero_dimensional"], "a") as nc:
+        old = nc.variables["n_solutions"]
+        attrs = {k: old.getncattr(k) for k in old.ncattrs() if k != "_FillValue"}
+        nc.renameVariable("n_solutions", "n_old")
+        z = nc.createVariable("n_solutions", "i1", ())
+        z.setncatts(attrs)
+        z.assignValue(1)
+    with netCDF4.Dataset(made["nested_json"], "a") as nc:
+        for attr in ("phasemap_scene", "phasemap_variables"):
+            nc.setncattr(attr, "[" * 100_000 + "]" * 100_000)
+    with netCDF4.Dataset(made["array_attribute"], "a") as nc:
+        nc.variables["n_solutions"].setncattr("long_name", np.array([1.0, 2.0, 3.0]))
+        nc.variables["n_solutions"].setncattr("flag_meanings", np.array([1, 2], dtype="i4"))
+    with netCDF4.Dataset(made["no_scene"], "a") as nc:
+        nc.delncattr("phasemap_scene")
+    return made
+
+
+CRAFTED_READERS = """
+import sys, xarray as xr, phasemap
+for path in sys.argv[1:]:
+    for what in ("open_atlas", "accessor plot", "from_spec"):
+        try:
+            if what == "open_atlas":
+                phasemap.open_atlas(path).close()
+            elif what == "accessor plot":
+                with xr.open_dataset(path) as ds:
+                    ds.phasemap.plot()
+            else:
+                with xr.open_dataset(path) as ds:
+                    phasemap.Scene.from_spec(ds.attrs.get("phasemap_scene"))
+            print(path, what, "| ok")
+        except (ValueError, TypeError) as e:
+            print(path, what, "| refused", str(e).replace(chr(10), "<newline>"))
+"""
+
+
+def test_crafted_atlases_get_one_line_naming_the_file_from_every_reader(ladder_map, tmp_path):
+    """A zero-dimensional layer, JSON nested too deeply for Python's decoder, an attribute
+    stored as an array, and no ``phasemap_scene``: ``info``, ``plot`` and ``cfcheck``
+    answer or refuse in one line that names the file, the library's readers with one
+    ValueError/TypeError of one line (they gave IndexError, RecursionError, matplotlib's
+    ValueError and KeyError)."""
+    base = phasemap.write_atlas(ladder_map, tmp_path / "base.nc")
+    made = _crafted(base, tmp_path)
+    for name, path in made.items():
+        for command in (["info", path.name], ["plot", path.name, "-o", f"{name}_fig"],
+                        ["cfcheck", path.name]):
+            done = run(["-m", "phasemap.cli", *command], tmp_path)
+            assert "Traceback" not in done.stderr, (command, done.stderr)
+            if done.returncode != 0:
+                lines = done.stderr.strip().splitlines()
+                assert done.returncode == 2 and len(lines) == 1, (command, done.stderr)
+                assert path.name in lines[0], (command, lines[0])
+    done = run(["-c", CRAFTED_READERS, *map(str, made.values())], tmp_path)
+    assert done.returncode == 0, done.stderr
+    said = {" ".join(line.split(" | ")[0].split()[1:]) + " " + pathlib.Path(
+        line.split()[0]).stem: line.split(" | ", 1)[1] for line in done.stdout.splitlines()}
+    assert len(said) == 12, done.stdout
+    assert said["from_spec no_scene"].startswith("refused") and "phasemap_scene" in \
+        said["from_spec no_scene"]
+    assert "nested too deeply" in said["from_spec nested_json"]
+    assert "nested too deeply" in said["accessor plot nested_json"]
+    assert "0 dimension" in said["accessor plot zero_dimensional"]

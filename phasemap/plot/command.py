@@ -64,7 +64,10 @@ def plot_file(path: str | os.PathLike, stem: str | os.PathLike | None = None,
     stem = path.with_suffix("") if stem is None else stem
     with open_atlas(path) as ds:
         ds = ds.load()
-    fig = figure_of(ds, SIZES[size])
+    try:
+        fig = figure_of(ds, SIZES[size])
+    except (ValueError, TypeError) as e:  # what is wrong with the file, and which file
+        raise type(e)(f"{path}: {e}") from None
     try:
         return save_figure(fig, stem)
     finally:

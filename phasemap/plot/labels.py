@@ -16,7 +16,7 @@ from typing import Sequence
 import numpy as np
 import xarray as xr
 
-from .._dataset import squared_units, vocabulary
+from .._dataset import read_json, squared_units, vocabulary
 from .style import _FONT
 
 # --------------------------------------------------------------------------- labels
@@ -205,7 +205,8 @@ def _horizon(ds: xr.Dataset) -> float | None:
     if "fate" not in ds.data_vars:
         return None
     try:
-        return float(json.loads(str(ds.attrs["phasemap_scene"]))["options"]["t_end"])
+        return float(read_json(str(ds.attrs["phasemap_scene"]), "phasemap_scene")
+                     ["options"]["t_end"])
     except (KeyError, TypeError, ValueError):
         return None
 
