@@ -54,6 +54,7 @@ import pathlib
 import re
 import shutil
 import signal
+import stat
 import tempfile
 import threading
 import time
@@ -214,7 +215,7 @@ def write_atlas(ds: xr.Dataset, path: str | os.PathLike, *, complevel: int = 4,
         raise TypeError(f"write_atlas needs an xarray.Dataset, got {type(ds).__name__}")
     path = destination(path)
     if not overwrite and path.exists():
-        raise ValueError(_exists(path))
+        raise ValueError(exists_message(path))
     out = prepare(ds)
     encoding = cf_encoding(out, chunks, complevel=complevel)
     with no_partial_file(path, overwrite=overwrite) as tmp:
@@ -248,8 +249,10 @@ def _joined_writer_threads(ds: xr.Dataset) -> Iterator[None]:
         pool.shutdown(wait=True, cancel_futures=True)
 
 
-def _exists(path: pathlib.Path) -> str:
-    return f"{path} exists; pass --overwrite to replace it"
+def exists_message(path: pathlib.Path) -> str:
+    """What a writer says when ``path`` exists and may not be replaced: the Python keyword
+    and the command line's flag."""
+    return f"{path} exists; pass overwrite=True (--overwrite on the command line) to replace it"
 
 
 class WriteError(ValueError):
@@ -308,6 +311,7 @@ def atomic_path(path: str | os.PathLike, *, overwrite: bool = True) -> Iterator[
                 os.fsync(fh.fileno())
             os.chmod(tmp, 0o666 & ~_umask())
             if overwrite:
+                _check_replaceable(path)  # again: the name may have changed meanwhile
                 os.replace(tmp, path)
             else:
                 _rename_exclusive(tmp, path)
@@ -345,17 +349,17 @@ def _rename_exclusive(src: pathlib.Path, dst: pathlib.Path) -> None:
         _renameat2_noreplace(src, dst)
         return
     except FileExistsError:
-        raise ValueError(_exists(dst)) from None
+        raise ValueError(exists_message(dst)) from None
     except OSError as err:
         if err.errno not in (errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP, errno.ENOTSUP):
             raise
     try:
         os.link(src, dst)
     except FileExistsError:
-        raise ValueError(_exists(dst)) from None
+        raise ValueError(exists_message(dst)) from None
     except OSError:
         if dst.exists():
-            raise ValueError(_exists(dst)) from None
+            raise ValueError(exists_message(dst)) from None
         os.replace(src, dst)
         return
     os.unlink(src)
@@ -505,14 +509,34 @@ def signals_deferred() -> Iterator[None]:
 
 
 def destination(path: str | os.PathLike) -> pathlib.Path:
-    """``path`` as a Path, checked writable in principle: its folder exists, it is no folder."""
+    """``path`` as a Path, checked writable in principle: its folder exists, and it is
+    nothing but a regular file (or a symbolic link, which a write replaces, never its
+    target) if it exists.  A device node, a FIFO or a socket is never replaced, not even
+    with ``overwrite`` (as root, ``-o /dev/null --overwrite`` would replace the real one)."""
     path = pathlib.Path(os.path.expanduser(os.fspath(path)))
     folder = path.parent
     if not folder.is_dir():
         raise ValueError(f"cannot write {path}: folder {folder} does not exist")
     if path.is_dir():
         raise ValueError(f"cannot write {path}: it is a folder")
+    _check_replaceable(path)
     return path
+
+
+def _check_replaceable(path: pathlib.Path) -> None:
+    """ValueError unless ``path`` is missing, a regular file or a symbolic link."""
+    try:
+        mode = os.lstat(path).st_mode
+    except FileNotFoundError:
+        return
+    except OSError as err:
+        raise ValueError(f"cannot write {path}: {err.strerror or err}") from None
+    if not (stat.S_ISREG(mode) or stat.S_ISLNK(mode)):
+        kind = ("a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else
+                "a FIFO" if stat.S_ISFIFO(mode) else "a socket" if stat.S_ISSOCK(mode)
+                else "not a regular file")
+        raise ValueError(f"cannot write {path}: it is {kind}, which phasemap never replaces; "
+                         "choose a file name")
 
 
 def prepare(ds: xr.Dataset) -> xr.Dataset:

@@ -35,8 +35,8 @@ from typing import Callable, Iterator, Mapping
 import numpy as np
 
 from . import progress
-from .atlas import (PART_PREFIX, cf_encoding, default_chunks, destination, no_partial_file,
-                    prepare)
+from .atlas import (PART_PREFIX, cf_encoding, default_chunks, destination, exists_message,
+                    no_partial_file, prepare)
 from .layers import layers_for
 from .progress import human_bytes, human_duration
 
@@ -284,7 +284,7 @@ def check_output(path, need_bytes: int = 0, typical_bytes: int = 0, *,
 
     path = destination(path)
     if path.exists() and not overwrite:
-        raise ValueError(f"{path} exists; pass --overwrite to replace it")
+        raise ValueError(exists_message(path))
     folder = path.parent
     try:
         fd, probe = tempfile.mkstemp(dir=folder, prefix=PART_PREFIX, suffix=".probe")

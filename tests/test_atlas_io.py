@@ -12,6 +12,7 @@ import os
 import pathlib
 import re
 import subprocess
+import sys
 import threading
 import time
 
@@ -387,7 +388,7 @@ def test_without_overwrite_a_file_that_appeared_meanwhile_is_kept(tmp_path, monk
     if how == "check and rename":
         monkeypatch.setattr(os, "link", lambda *args: unsupported())
     path = tmp_path / "atlas.nc"
-    with pytest.raises(ValueError, match="exists; pass --overwrite"):
+    with pytest.raises(ValueError, match=r"exists; pass overwrite=True \(--overwrite"):
         with atomic_path(path, overwrite=False) as tmp:
             tmp.write_bytes(b"ours")
             path.write_bytes(b"theirs")   # another writer finished first
@@ -396,7 +397,7 @@ def test_without_overwrite_a_file_that_appeared_meanwhile_is_kept(tmp_path, monk
     with atomic_path(path, overwrite=False) as tmp:
         tmp.write_bytes(b"ours")
     assert path.read_bytes() == b"ours" and folder_listing(tmp_path) == ["atlas.nc"]
-    with pytest.raises(ValueError, match="exists; pass --overwrite"):
+    with pytest.raises(ValueError, match=r"exists; pass overwrite=True \(--overwrite"):
         write_atlas(_failing_atlas(), path, overwrite=False)   # refused before any work
     assert path.read_bytes() == b"ours"
 
@@ -555,3 +556,64 @@ def test_ncdump_prints_the_header(tmp_path):
     assert "n_solutions:flag_values = 0b, 1b, 2b, 3b, 4b" in header
     assert f':Conventions = "{atlas.CONVENTIONS}"' in header
     assert ':phasemap_model = "ladder"' in header
+
+
+def _special_files(folder: pathlib.Path) -> dict[str, pathlib.Path]:
+    """A FIFO, and where this process may make one (root), a character device that is a
+    copy of /dev/null: names a writer must never replace (issue 44 item 3)."""
+    import stat as st_
+
+    made = {"fifo": folder / "pipe.nc"}
+    os.mkfifo(made["fifo"])
+    try:
+        os.mknod(folder / "null.nc", 0o666 | st_.S_IFCHR, os.stat("/dev/null").st_rdev)
+        made["device"] = folder / "null.nc"
+    except (PermissionError, OSError):
+        pass
+    return made
+
+
+def test_a_device_or_fifo_is_never_replaced_even_with_overwrite(tmp_path):
+    import stat as st_
+
+    special = _special_files(tmp_path)
+    ds = xr.Dataset({"n": (("x",), np.arange(3, dtype=np.int8), {"long_name": "n"})})
+    for kind, path in special.items():
+        before = os.lstat(path).st_mode
+        with pytest.raises(ValueError, match=f"it is a {'FIFO' if kind == 'fifo' else 'device'}"
+                           ", which phasemap never replaces"):
+            write_atlas(ds, path, overwrite=True)
+        with pytest.raises(ValueError, match="never replaces"):
+            with atomic_path(path, overwrite=True) as tmp:
+                tmp.write_bytes(b"x")
+        assert os.lstat(path).st_mode == before
+        assert st_.S_ISFIFO(before) or st_.S_ISCHR(before)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(p.name for p in special.values())
+    # a name that becomes a FIFO while the file is written is not replaced either
+    late = tmp_path / "late.nc"
+    with pytest.raises(ValueError, match="never replaces"):
+        with atomic_path(late, overwrite=True) as tmp:
+            tmp.write_bytes(b"x")
+            os.mkfifo(late)
+    assert st_.S_ISFIFO(os.lstat(late).st_mode)
+    # a symbolic link is replaced as a name; its target is left alone
+    target = tmp_path / "target.nc"
+    target.write_bytes(b"precious")
+    link = tmp_path / "link.nc"
+    link.symlink_to(target)
+    write_atlas(ds, link, overwrite=True)
+    assert target.read_bytes() == b"precious" and not link.is_symlink()
+
+
+def test_the_command_line_refuses_to_replace_a_fifo(tmp_path):
+    special = _special_files(tmp_path)
+    for path in special.values():
+        for args in (["atlas", "ladder", "--axis", "phi=0:1:5", "--overwrite", "-o", path.name],
+                     ["simulate", "ladder", "phi=1", "--overwrite", "-o", path.name]):
+            done = subprocess.run([sys.executable, "-m", "phasemap.cli", *args], cwd=tmp_path,
+                                  capture_output=True, text=True, timeout=600)
+            assert done.returncode == 2, (args, done.stderr)
+            assert done.stderr.strip().splitlines() == [
+                f"phasemap: error: cannot write {path.name}: it is a "
+                f"{'FIFO' if path == special['fifo'] else 'device'}, which phasemap never "
+                "replaces; choose a file name"], done.stderr

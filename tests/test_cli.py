@@ -407,7 +407,8 @@ def test_two_atlases_racing_for_one_name_never_both_write_it(tmp_path, attempt):
     assert codes == [0, 2], results
     loser = [r for r in results if r[2] == 2][0]
     assert loser[1].strip().splitlines()[-1] == ("phasemap: error: c.nc exists; pass "
-                                                 "--overwrite to replace it"), loser[1]
+                                                 "overwrite=True (--overwrite on the command "
+                                                 "line) to replace it"), loser[1]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.nc"]
     with xr.open_dataset(tmp_path / "c.nc") as ds:
         assert ds.sizes == {"phi": 15, "omega": 15}
@@ -419,7 +420,8 @@ def test_an_existing_file_needs_overwrite(tmp_path):
     target.write_bytes(b"precious")
     for args in (["atlas", "ladder", "--axis", "phi=0:1:5", "-o", target],
                  ["simulate", "ladder", "phi=1", "-o", target]):
-        one_line_error(quiet(*args), f"{target} exists; pass --overwrite to replace it")
+        one_line_error(quiet(*args), f"{target} exists; pass overwrite=True (--overwrite "
+                                     "on the command line) to replace it")
         assert target.read_bytes() == b"precious"
     assert quiet("atlas", "ladder", "--axis", "phi=0:1:5", "--overwrite", "-o", target
                ).returncode == 0
