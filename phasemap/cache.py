@@ -51,6 +51,7 @@ import contextlib
 import functools
 import hashlib
 import importlib.util
+import math
 import os
 import pathlib
 import re
@@ -398,15 +399,22 @@ _guard_numba()
 # --------------------------------------------------------------------------- the bound
 
 
+#: What ``PHASEMAP_CACHE_MAX_MB=inf`` gives: no bound.
+UNBOUNDED = 2 ** 63 - 1
+
+
 def limit() -> int:
-    """The bound on the whole cache, in bytes (``$PHASEMAP_CACHE_MAX_MB``)."""
+    """The bound on the whole cache, in bytes (``$PHASEMAP_CACHE_MAX_MB``: a number of
+    megabytes, 0 or more; ``inf`` for no bound)."""
     text = os.environ.get("PHASEMAP_CACHE_MAX_MB", "")
     try:
         mb = float(text) if text else DEFAULT_MAX_MB
     except ValueError:
-        raise ValueError(f"PHASEMAP_CACHE_MAX_MB must be a number of megabytes, got "
-                         f"{text!r}") from None
-    return int(mb * 1e6)
+        mb = math.nan
+    if not mb >= 0:  # negative, or not a number
+        raise ValueError(f"PHASEMAP_CACHE_MAX_MB must be a number of megabytes, 0 or more "
+                         f"(inf for no bound), got {text!r}")
+    return UNBOUNDED if mb * 1e6 >= UNBOUNDED else int(mb * 1e6)
 
 
 @dataclass
@@ -520,8 +528,13 @@ class CacheInfo:
         for kind, label in kinds.items():
             if self.counts.get(kind):
                 lines.append(f"  {self.counts[kind]:>5}  {label}")
-        lines.append(f"  size      {human_bytes(self.size)} of at most {human_bytes(self.limit)} "
-                     "(PHASEMAP_CACHE_MAX_MB); the least recently used go first")
+        if self.limit >= UNBOUNDED:
+            lines.append(f"  size      {human_bytes(self.size)}, with no bound "
+                         "(PHASEMAP_CACHE_MAX_MB=inf)")
+        else:
+            lines.append(f"  size      {human_bytes(self.size)} of at most "
+                         f"{human_bytes(self.limit)} (PHASEMAP_CACHE_MAX_MB); the least "
+                         "recently used go first")
         return "\n".join(lines)
 
 

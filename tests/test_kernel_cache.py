@@ -362,3 +362,24 @@ def test_cache_info_and_clear_from_the_command_line(tmp_path, monkeypatch, capsy
     assert main(["cache", "clear"]) == 0
     assert capsys.readouterr().out.startswith("removed ")
     assert list(root.glob("*.py")) == [] and list(numba_dir.rglob("*.nb*")) == []
+
+
+@pytest.mark.parametrize("text, bound", [("", 500 * 10 ** 6), ("0", 0), ("1.5", 1_500_000),
+                                         ("inf", None), ("1e300", None)])
+def test_the_cache_bound_reads_megabytes_and_inf_for_none(monkeypatch, text, bound):
+    from phasemap import cache
+
+    monkeypatch.setenv("PHASEMAP_CACHE_MAX_MB", text)
+    assert cache.limit() == (cache.UNBOUNDED if bound is None else bound)
+    if bound is None:
+        assert "with no bound" in cache.info().text()
+
+
+@pytest.mark.parametrize("text", ["-5", "-inf", "nan", "lots", "-0.001"])
+def test_a_cache_bound_that_is_no_size_is_refused_in_one_line(monkeypatch, text):
+    from phasemap import cache
+
+    monkeypatch.setenv("PHASEMAP_CACHE_MAX_MB", text)
+    with pytest.raises(ValueError, match=r"^PHASEMAP_CACHE_MAX_MB must be a number of "
+                                         r"megabytes, 0 or more \(inf for no bound\), got "):
+        cache.limit()
