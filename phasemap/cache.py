@@ -8,15 +8,24 @@ owns that folder:
 
 * **Where.** ``$PHASEMAP_CACHE_DIR``, else ``~/.cache/phasemap/kernels``.
   A folder that cannot be created or written, that another user owns or that
-  others can write is refused, with one line on stderr; phasemap then uses
+  others (its group included) can write is refused, with one line on stderr; phasemap then uses
   ``$TMPDIR/phasemap-kernels-<uid>`` (created ``0700``, and refused in turn
   if it is not private), else a private temporary folder for this process
   only, removed at exit.
 * **Verified.** Every generated file starts with the SHA-256 of the rest of
   its text.  A file that is empty, truncated, edited or fails to import is
-  generated again, once, atomically, with one line on stderr.  A damaged
-  numba index or data file of phasemap's code (an ``UnpicklingError``...) is
-  removed and the function compiled again, also with one line.
+  generated again, once, atomically, with one line on stderr.  numba's index
+  and data files of phasemap's code are pickles holding machine code: each
+  function's are hashed when phasemap saves them (``<name>.nbh`` beside the
+  index), and a file that does not match, or that phasemap did not write, is
+  never unpickled: it is removed and the function compiled again, with one
+  line.
+* **Trusted.** Nothing is loaded from a file, or a folder, that another user
+  owns or that anyone else (group included) can write: the cache folder is
+  refused as a whole (see *Where*), and numba's folders and files for
+  phasemap's code are refused one by one (compiled instead, with one line
+  naming the folder); folders that numba creates under a permissive umask
+  are made writable by their owner only.
 * **Atomic.** Files are written under a temporary name and renamed; a write
   that fails (a full disk) leaves no temporary file, and the module is
   generated in a private temporary folder instead (or, if that fails too,
@@ -71,8 +80,9 @@ DEFAULT_MAX_MB = 500
 #: The first line of every generated file: this prefix, then the SHA-256 of the rest.
 HASH_PREFIX = "# phasemap-sha256 "
 
-#: numba's files: ``<stem>.<function>-<line>.pyXY.nbi`` and ``....pyXY.<n>.nbc``.
-_NUMBA_FILE = re.compile(r"^(?P<stem>[^.]+(?:\.[^.]+?)?)-\d+\.py\d+(?:\.\d+)?\.nb[ic]$")
+#: numba's files: ``<stem>.<function>-<line>.pyXY.nbi`` and ``....pyXY.<n>.nbc``, and
+#: phasemap's hashes of them, ``....pyXY.nbh``.
+_NUMBA_FILE = re.compile(r"^(?P<stem>[^.]+(?:\.[^.]+?)?)-\d+\.py\d+(?:\.\d+)?\.nb[ich]$")
 #: Python's bytecode of a generated module (earlier versions imported them from files).
 _BYTECODE = re.compile(r"^(?P<stem>[^.]+)\.cpython-\d+\.pyc$")
 
@@ -88,8 +98,11 @@ class CacheError(ValueError):
     """The kernel cache cannot be written anywhere (a full disk); the message is one line."""
 
 
-def _say(message: str) -> None:
-    """One line on stderr, once per process."""
+def _say(message: str, unless: str = "") -> None:
+    """One line on stderr, once per process (not at all if a line that starts with
+    ``unless`` was said)."""
+    if unless and any(said.startswith(unless) for said in _SAID):
+        return
     if message not in _SAID:
         _SAID.add(message)
         print(f"phasemap: kernel cache: {message}", file=sys.stderr, flush=True)
@@ -140,7 +153,7 @@ def _usable(root: pathlib.Path, private: bool) -> str | None:
         return "not a folder"
     if st.st_uid != os.getuid():
         return f"owned by another user (uid {st.st_uid})"
-    if st.st_mode & (0o022 if private else 0o002):
+    if st.st_mode & 0o022:
         return f"writable by others (mode {stat.S_IMODE(st.st_mode):o})"
     if private and st.st_mode & 0o077:
         with contextlib.suppress(OSError):
@@ -251,6 +264,9 @@ def _verified(path: pathlib.Path) -> str:
 
 
 def _import(stem: str, path: pathlib.Path):
+    problem = distrust(path)
+    if problem is not None:
+        raise _Damaged(problem)
     body = _verified(path)
     # numba's disk cache re-imports a function's module by name when it loads
     # the function in a new process: register it under that name.  The code is
@@ -320,9 +336,68 @@ def _ours(cache) -> bool:
 
 
 def _numba_files(cache) -> list[pathlib.Path]:
+    """numba's index and data files of one function, then phasemap's hash file of them."""
     index = pathlib.Path(cache._cache_file._index_path)
     base = index.name[:-len(".nbi")]
-    return [index, *index.parent.glob(f"{glob_escape(base)}.*.nbc")]
+    return [index, *sorted(index.parent.glob(f"{glob_escape(base)}.*.nbc")),
+            index.with_suffix(".nbh")]
+
+
+def distrust(path: pathlib.Path, *, owner_only: bool = False) -> str | None:
+    """Why the file or folder ``path`` may hold what another user wrote, or None: it and
+    its folder must belong to this user (or to root) and, unless ``owner_only``, be
+    writable by no one else, its group included, but for a folder with the sticky bit
+    (like /tmp: there only an entry's owner may replace it).  A missing ``path`` is
+    checked by its folder alone."""
+    uid = os.getuid()
+    for p in (path, path.parent):
+        try:
+            st = os.stat(p)
+        except FileNotFoundError:
+            continue
+        except OSError as err:
+            return f"{p}: {err.strerror or err}"
+        if st.st_uid not in (uid, 0):
+            return f"{p} is owned by another user (uid {st.st_uid})"
+        sticky = stat.S_ISDIR(st.st_mode) and st.st_mode & stat.S_ISVTX
+        if not owner_only and st.st_mode & 0o022 and not sticky:
+            return f"{p} is writable by others (mode {stat.S_IMODE(st.st_mode):o})"
+    return None
+
+
+def _digests(files: list[pathlib.Path]) -> str:
+    """The hash file's text: one ``<sha256>  <name>`` line per numba file."""
+    lines = []
+    for f in files:
+        with contextlib.suppress(FileNotFoundError):
+            lines.append(f"{hashlib.sha256(f.read_bytes()).hexdigest()}  {f.name}\n")
+    return "".join(lines)
+
+
+def _unverified(files: list[pathlib.Path]) -> str | None:
+    """Why numba's files of one function are not the ones phasemap saved, or None."""
+    *data, hashes = files
+    if not hashes.exists():
+        return "saved without phasemap's hash: by an older phasemap, or not by phasemap"
+    try:
+        recorded = hashes.read_text()
+    except (OSError, UnicodeDecodeError) as err:
+        return f"its hash file cannot be read ({type(err).__name__})"
+    if _digests(data) != recorded:
+        return "they do not match the hashes phasemap saved"
+    return None
+
+
+def _owner_only(paths) -> None:
+    """Make each of ``paths`` that is ours writable by its owner only (numba creates its
+    folders and files with the umask's mode: group-writable under ``umask 002``,
+    world-writable under ``umask 000``)."""
+    uid = os.getuid()
+    for where in paths:
+        with contextlib.suppress(OSError):
+            st = os.stat(where)
+            if st.st_uid == uid and st.st_mode & 0o022:
+                os.chmod(where, stat.S_IMODE(st.st_mode) & ~0o022)
 
 
 def glob_escape(text: str) -> str:
@@ -351,6 +426,19 @@ def _load_without_refresh(cache, sig, target_context, load):
         return inner(sig, target_context)
 
 
+def _write_hashes(path: pathlib.Path, text: str) -> None:
+    """Write the hash file ``path`` atomically, readable and writable by its owner only."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem[:40]}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
 def _guard_numba() -> None:
     """Make numba treat a damaged cache file of phasemap's as a miss, tolerate a full
     disk when it saves one, mark what it loads as used (the LRU bound), and load it
@@ -362,18 +450,35 @@ def _guard_numba() -> None:
         return
     load, save = cls.load_overload, cls.save_overload
 
+    def damaged(self, files, why: str) -> None:
+        verb = "is not loaded" if why.startswith("saved without") else "was damaged"
+        _say(f"numba's cache of {self._name} {verb} ({why}); compiling it again")
+        for f in files:
+            with contextlib.suppress(OSError):
+                f.unlink()
+
     @functools.wraps(load)
     def load_overload(self, sig, target_context):
         if not _ours(self):
             return load(self, sig, target_context)
+        files = _numba_files(self)
+        if not files[0].exists():
+            return None  # nothing saved yet: numba compiles
+        problem = next(filter(None, (distrust(f, owner_only=True) for f in files)), None)
+        if problem is not None:  # another user's: never unpickled, never removed
+            _say(f"not loading numba's cache of {self._name}: {problem}; compiling it "
+                 "instead, and not saving it (make the folder yours and private, or set "
+                 "NUMBA_CACHE_DIR)")
+            return None
+        problem = next(filter(None, map(distrust, files)), None) or _unverified(files)
+        if problem is not None:  # ours, but others could have written it, or damaged
+            _owner_only([files[0].parent])
+            damaged(self, files, problem)
+            return None
         try:
             data = _load_without_refresh(self, sig, target_context, load)
         except Exception as err:
-            _say(f"numba's cache of {self._name} was damaged ({type(err).__name__}); "
-                 "compiling it again")
-            for f in _numba_files(self):
-                with contextlib.suppress(OSError):
-                    f.unlink()
+            damaged(self, files, type(err).__name__)
             return None
         if data is not None:
             _touch(self._cache_file._index_path)
@@ -383,8 +488,24 @@ def _guard_numba() -> None:
     def save_overload(self, sig, data):
         if not _ours(self):
             return save(self, sig, data)
+        files = _numba_files(self)
+        _owner_only([files[0].parent])
+        # numba reads the index it adds to: it must be ours and what phasemap saved
+        problem = distrust(files[0].parent) or next(
+            filter(None, (distrust(f, owner_only=True) for f in files)), None)
+        if problem is not None:  # said when it was not loaded, if it was another user's
+            _say(f"not saving the compiled {self._name}: {problem}; it will be compiled "
+                 "again next time (make the folder yours and private, or set "
+                 "NUMBA_CACHE_DIR)", unless=f"not loading numba's cache of {self._name}")
+            return None
+        if files[0].exists() and (next(filter(None, map(distrust, files)), None)
+                                  or _unverified(files)):
+            _remove(files)
         try:
-            return save(self, sig, data)
+            save(self, sig, data)
+            files = _numba_files(self)
+            _owner_only(files[:-1])
+            _write_hashes(files[-1], _digests(files[:-1]))
         except OSError as err:
             _say(f"cannot save the compiled {self._name} in {self._cache_path} "
                  f"({err.strerror or err}); it will be compiled again next time")
@@ -440,11 +561,20 @@ def _folders() -> list[tuple[pathlib.Path, bool]]:
     numba's files for phasemap's own functions."""
     root = folder()
     out = [(root, True)]
-    for source, generated in ((root, True), (_PACKAGE, False)):
+    # numba keeps a folder per source folder: the package's subpackages have their own
+    sources = [(root, True), *((d, False) for d in _source_folders(_PACKAGE))]
+    for source, generated in sources:
         numba_dir = _numba_folder(source)
-        if numba_dir is not None and numba_dir != root:
+        if numba_dir is not None and numba_dir != root and (numba_dir, generated) not in out:
             out.append((numba_dir, generated))
     return out
+
+
+@functools.lru_cache(maxsize=None)
+def _source_folders(package: pathlib.Path) -> tuple[pathlib.Path, ...]:
+    """The package's folders that hold Python files (numba caches per folder)."""
+    return tuple(sorted({package} | {p.parent for p in package.rglob("*.py")
+                                     if "__pycache__" not in p.parts}))
 
 
 def _entries() -> list[_Entry]:

@@ -383,3 +383,112 @@ def test_a_cache_bound_that_is_no_size_is_refused_in_one_line(monkeypatch, text)
     with pytest.raises(ValueError, match=r"^PHASEMAP_CACHE_MAX_MB must be a number of "
                                          r"megabytes, 0 or more \(inf for no bound\), got "):
         cache.limit()
+
+
+# ------------------------------------------------ trust: what another user may write (issue 44)
+def _needs_root():
+    if os.getuid() != 0:
+        pytest.skip("making a file another user's needs root")
+
+
+EVIL_PICKLE = b"cos\nsystem\n(S'touch {marker}'\ntR."  # pickle protocol 0: os.system(...)
+
+
+def test_a_flipped_bit_in_compiled_code_is_found_and_compiled_again_with_one_line(warm,
+                                                                                 tmp_path):
+    """One flipped bit in a cached ``.nbc`` once gave 569 of 30 000 cells the wrong class
+    with no message (or SIGSEGV, and the damaged entry was reused forever)."""
+    root = copy_of(warm, tmp_path)
+    (data,) = (root / "__pycache__").glob(f"{STEM}.cells-*.nbc")
+    raw = bytearray(data.read_bytes())
+    raw[len(raw) // 2] ^= 0x10
+    data.write_bytes(bytes(raw))
+    r = child(load(), root)
+    loaded(r)
+    assert len(lines(r)) == 1 and "was damaged (they do not match the hashes phasemap " \
+        "saved)" in r.stderr, r.stderr
+    assert child(load(), root).stderr == ""   # compiled, saved and hashed again
+
+
+@pytest.mark.parametrize("which", ["index", "hash file", "folder"])
+def test_numba_files_another_user_owns_are_never_unpickled(warm, tmp_path, which):
+    """A pickle planted as numba's index (where anyone can compute the name, in a shared
+    NUMBA_CACHE_DIR) would run its code on the next load: a file or folder of another
+    user's is never read, and never removed; the function is compiled instead."""
+    _needs_root()
+    root = copy_of(warm, tmp_path)
+    numba = root / "__pycache__"
+    marker = tmp_path / "planted-code-ran"
+    (index,) = numba.glob(f"{STEM}.cells-*.nbi")
+    index.write_bytes(EVIL_PICKLE.replace(b"{marker}", str(marker).encode()))
+    target = {"index": index, "hash file": index.with_suffix(".nbh"), "folder": numba}[which]
+    os.chown(target, 65534, 65534)
+    r = child(load(), root)
+    loaded(r)
+    assert not marker.exists()
+    assert len(lines(r)) == 1 and "not loading numba's cache" in r.stderr and \
+        "owned by another user (uid 65534)" in r.stderr, r.stderr
+    assert target.exists() and os.stat(target).st_uid == 65534
+
+
+def test_a_shared_world_writable_numba_cache_dir_keeps_each_users_files_apart(tmp_path):
+    """NUMBA_CACHE_DIR shared like /tmp (mode 1777): another user pre-creates the folder
+    numba will use for the cache's functions and plants an index there."""
+    _needs_root()
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    os.chmod(shared, 0o1777)
+    root = tmp_path / "cache"
+    marker = tmp_path / "planted-code-ran"
+    first = child(load(), root, numba_dir=shared)   # ours: the folder numba uses is made
+    loaded(first)
+    (index,) = shared.rglob(f"{STEM}.cells-*.nbi")
+    folder = index.parent
+    shutil.rmtree(folder)
+    folder.mkdir()
+    index.write_bytes(EVIL_PICKLE.replace(b"{marker}", str(marker).encode()))
+    for p in (folder, index):
+        os.chown(p, 65534, 65534)
+    os.chmod(folder, 0o777)
+    r = child(load(), root, numba_dir=shared)
+    loaded(r)
+    assert not marker.exists()
+    said = lines(r)
+    assert said and all("owned by another user" in line for line in said), r.stderr
+
+
+@pytest.mark.parametrize("mode", [0o775, 0o777])
+def test_a_cache_folder_its_group_can_write_is_refused(tmp_path, mode):
+    root = tmp_path / "cache"
+    root.mkdir()
+    os.chmod(root, mode)
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    r = child(load(), root, TMPDIR=str(tmp))
+    path = loaded(r)
+    assert root not in path.parents
+    assert len(lines(r)) == 1 and f"writable by others (mode {mode:o})" in r.stderr, r.stderr
+
+
+def test_numba_files_of_ours_that_others_could_write_are_compiled_again(warm, tmp_path):
+    root = copy_of(warm, tmp_path)
+    (data,) = (root / "__pycache__").glob(f"{STEM}.cells-*.nbc")
+    os.chmod(data, 0o666)
+    r = child(load(), root)
+    loaded(r)
+    assert len(lines(r)) == 1 and "writable by others (mode 666)" in r.stderr, r.stderr
+    assert child(load(), root).stderr == ""
+    for f in (root / "__pycache__").iterdir():
+        assert not f.stat().st_mode & 0o022, f
+
+
+def test_under_umask_000_nothing_the_cache_saves_is_writable_by_others(tmp_path):
+    root = tmp_path / "cache"
+    code = "import os; os.umask(0)\n" + load()
+    loaded(child(code, root))
+    saved = [root, *root.rglob("*")]
+    assert any(p.suffix == ".nbc" for p in saved) and any(p.suffix == ".nbh" for p in saved)
+    for p in saved:
+        assert not p.stat().st_mode & 0o022, (p, oct(p.stat().st_mode))
+    r = child(code, root)
+    assert loaded(r) and r.stderr == ""   # and it loads, hashes and all
