@@ -492,3 +492,25 @@ def test_under_umask_000_nothing_the_cache_saves_is_writable_by_others(tmp_path)
         assert not p.stat().st_mode & 0o022, (p, oct(p.stat().st_mode))
     r = child(code, root)
     assert loaded(r) and r.stderr == ""   # and it loads, hashes and all
+
+
+def test_info_clear_and_the_bound_see_the_numba_files_of_every_subpackage(fake_cache):
+    """numba keeps a folder per source folder: the integrators' (integrate/), the phase
+    tracers' and the hand systems' (systems/) files were missed by ``cache info``, ``cache
+    clear`` and the bound (2.8 MB left after a clear, reported as 0 B)."""
+    from phasemap import cache
+
+    root, generated, compiled, keep = fake_cache
+    sub = cache._PACKAGE / "systems"
+    sub.mkdir()
+    (sub / "hinge_pendulum.py").write_text("")
+    numba_sub = cache._numba_folder(sub)
+    assert numba_sub not in (generated, compiled)
+    _entry(numba_sub, "hinge_pendulum.turn-66.py311.nbi", 1000, 10)
+    _entry(numba_sub, "hinge_pendulum.turn-66.py311.1.nbc", 1000, 10)
+    _entry(numba_sub, "hinge_pendulum.turn-66.py311.nbh", 100, 10)
+    assert numba_sub in cache.info().numba_folders
+    assert cache.info().size == 22_000 + 2_100
+    files, freed = cache.clear()
+    assert (files, freed) == (6 * 3 + 1 + 3 + 3, 24_100)
+    assert list(numba_sub.iterdir()) == [] and keep.exists()
