@@ -255,6 +255,10 @@ def exists_message(path: pathlib.Path) -> str:
     return f"{path} exists; pass overwrite=True (--overwrite on the command line) to replace it"
 
 
+#: Free space below which a failed write is put down to a full disk, whatever the writer said.
+FULL_BYTES = 64 * 1024
+
+
 class WriteError(ValueError):
     """Writing failed (a full disk, an I/O error); no partial file was left."""
 
@@ -265,16 +269,34 @@ def no_partial_file(path: pathlib.Path, *, overwrite: bool = True) -> Iterator[p
     try:
         with atomic_path(path, overwrite=overwrite) as tmp:
             yield tmp
-    except (OSError, RuntimeError) as err:
-        if not isinstance(err, OSError) and not str(err).startswith("NetCDF"):
+    except Exception as err:
+        io = isinstance(err, OSError) or (isinstance(err, RuntimeError)
+                                          and str(err).startswith("NetCDF"))
+        try:
+            space = shutil.disk_usage(path.parent).free
+        except OSError:
+            space = None
+        # a writer on a full disk may say something else (HDF5: "Permission denied";
+        # matplotlib's PDF writer: an AttributeError while it cleans up)
+        full = space is not None and space < FULL_BYTES
+        if not (io or full):
             raise  # not an I/O error: a failure of the computation
         reason = " ".join(str(err).split()) or type(err).__name__
-        try:
-            free = human_bytes(shutil.disk_usage(path.parent).free)
-        except OSError:
-            free = "?"
+        if full and getattr(err, "errno", None) != errno.ENOSPC:
+            reason = (f"no space left on the device (the writer said {type(err).__name__}: "
+                      f"{reason[:120]})")
+        free = "?" if space is None else human_bytes(space)
         raise WriteError(f"cannot write {path}: {reason} ({free} free on {path.parent}); "
-                         "no file was left") from None
+                         + left_behind(err)) from None
+
+
+def left_behind(err: BaseException) -> str:
+    """What a failed write left: "no file was left", or the temporary file that could
+    not be removed (:func:`atomic_path` records it on the error)."""
+    left = getattr(err, "phasemap_left", None)
+    if left is None:
+        return "no file was left"
+    return f"its temporary file {left[0]} could not be removed ({left[1]}): remove it by hand"
 
 
 @contextlib.contextmanager
@@ -315,9 +337,14 @@ def atomic_path(path: str | os.PathLike, *, overwrite: bool = True) -> Iterator[
                 os.replace(tmp, path)
             else:
                 _rename_exclusive(tmp, path)
-        except BaseException:
-            with contextlib.suppress(FileNotFoundError):
+        except BaseException as err:
+            try:
                 tmp.unlink()
+            except FileNotFoundError:
+                pass
+            except OSError as stuck:  # a folder made read-only meanwhile: say so
+                with contextlib.suppress(AttributeError, TypeError):
+                    err.phasemap_left = (tmp, stuck.strerror or str(stuck))
             raise
     _fsync_folder(path.parent)
 

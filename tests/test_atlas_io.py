@@ -617,3 +617,29 @@ def test_the_command_line_refuses_to_replace_a_fifo(tmp_path):
                 f"phasemap: error: cannot write {path.name}: it is a "
                 f"{'FIFO' if path == special['fifo'] else 'device'}, which phasemap never "
                 "replaces; choose a file name"], done.stderr
+
+
+def test_a_temporary_file_that_cannot_be_removed_is_named_not_denied(tmp_path, monkeypatch):
+    """A folder made read-only while an atlas is written: the rename fails, and so does
+    removing the temporary file; the message said 'no file was left' beside it.  (Root
+    ignores a folder's permissions, so both failures are simulated.)"""
+    ds = xr.Dataset({"n": (("x",), np.arange(3, dtype=np.int8), {"long_name": "n"})})
+    path = tmp_path / "a.nc"
+
+    def denied(*args, **kwargs):
+        raise PermissionError(errno.EACCES, "Permission denied")
+
+    monkeypatch.setattr(os, "replace", denied)
+    monkeypatch.setattr(pathlib.Path, "unlink", denied)
+    with pytest.raises(atlas.WriteError) as caught:
+        write_atlas(ds, path)
+    (part,) = [p for p in tmp_path.iterdir() if p.name.endswith(".part")]
+    message = str(caught.value)
+    assert "\n" not in message and "no file was left" not in message
+    assert message.endswith(f"its temporary file {part} could not be removed (Permission "
+                            "denied): remove it by hand")
+    monkeypatch.undo()
+    with pytest.raises(atlas.WriteError, match="; no file was left$"):
+        with atlas.no_partial_file(path) as tmp:
+            raise OSError(errno.ENOSPC, "No space left on device")
+    assert not path.exists() and not tmp.exists()

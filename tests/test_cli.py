@@ -444,6 +444,25 @@ def test_a_disk_without_room_is_refused_before_work(tmp_path):
         assert "time about" not in r.stderr and list(small.iterdir()) == []
 
 
+def test_a_full_disk_is_called_full_by_simulate_and_plot(tmp_path):
+    """HDF5 reports a full disk as "Permission denied", and matplotlib's PDF writer as an
+    AttributeError from its cleanup (a 40-line traceback): each is one line that says the
+    disk is full, with no file left."""
+    atlas = tmp_path / "a.nc"
+    assert quiet("atlas", "ladder", "--axis", "phi=0:1:5", "-o", atlas).returncode == 0
+    with small_filesystem(tmp_path / "full", "1m") as full:
+        with contextlib.suppress(OSError), open(full / "ballast", "wb") as fh:
+            while True:
+                fh.write(b"\0" * 4096)
+                fh.flush()
+        for args in (["simulate", "ladder", "phi=1", "--t-end", "0.1", "-o", full / "m.nc"],
+                     ["plot", atlas, "-o", full / "fig"]):
+            r = quiet(*args)
+            one_line_error(r, "no space left on the device")
+            assert "no file was left" in r.stderr and "Traceback" not in r.stderr
+            assert [p.name for p in full.iterdir()] == ["ballast"]
+
+
 @pytest.mark.slow
 def test_a_disk_that_fills_up_mid_write_leaves_no_file(tmp_path):
     """Another writer fills the disk while the atlas is being written."""

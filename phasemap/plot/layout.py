@@ -21,7 +21,7 @@ from matplotlib.ticker import FuncFormatter, MultipleLocator
 from matplotlib.transforms import offset_copy
 
 from .._version import __version__
-from ..atlas import atomic_path, destination
+from ..atlas import destination, no_partial_file
 from .labels import _units, _visible_length, axis_label, wrap
 from .style import _FONT, SIZES, TITLE_PAD, style
 
@@ -355,7 +355,8 @@ def save_figure(fig: Figure, stem: str | os.PathLike, *, dpi: int = 300
     Raises
     ------
     ValueError
-        if the folder does not exist.
+        if the folder does not exist; as :class:`phasemap.atlas.WriteError` (one
+        line) when writing fails, a full disk say, with no file left.
     """
     stem = pathlib.Path(os.path.expanduser(os.fspath(stem)))
     if stem.suffix.lower() in (".pdf", ".png"):
@@ -366,7 +367,7 @@ def save_figure(fig: Figure, stem: str | os.PathLike, *, dpi: int = 300
             path = destination(stem.with_name(stem.name + "." + fmt))
             meta = ({"Creator": f"phasemap {__version__}"} if fmt == "pdf"
                     else {"Software": f"phasemap {__version__}"})
-            with atomic_path(path) as tmp:
+            with no_partial_file(path) as tmp:  # a full disk: one line, no file left
                 fig.savefig(tmp, format=fmt, dpi=dpi, metadata=meta)
             paths.append(path)
     return paths[0], paths[1]
