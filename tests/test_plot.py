@@ -1087,3 +1087,30 @@ def test_work_precision_scaled_error_states_its_definition_and_scales(size, tmp_
     render(fig, tmp_path)
     with pytest.raises(ValueError, match="lacks error_scaled_final"):
         pplot.work_precision_figure(work_precision_table(), error="error_scaled_final")
+
+
+def test_a_file_with_more_cells_than_a_figure_is_read_at_its_resolution(tmp_path,
+                                                                        monkeypatch):
+    """``phasemap plot`` on a 2e9-cell atlas read it whole (11.9 GB); an axis longer than
+    MAX_DRAWN is now read at every k-th value, lazily, and the figure says so."""
+    from phasemap.plot import command
+
+    ds = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 301),
+                                        "f": np.linspace(0, 1, 7)},
+                        fixed={"omega": 0.0}, layers=["n_solutions"]).compute()
+    path = phasemap.write_atlas(ds, tmp_path / "long.nc")
+    monkeypatch.setattr(command, "MAX_DRAWN", 100)
+    with phasemap.open_atlas(path) as lazy:
+        part, note = command.reduced(lazy)
+        assert part.sizes == {"phi": 76, "f": 7}
+        assert note == "drawn from 1 in 4 values of phi (301 in the file)"
+        # sampled, never averaged: the classes drawn are the file's own
+        assert (part.n_solutions.values == ds.n_solutions.values[::4]).all()
+    drawn = []
+    real = command.figure_of
+    monkeypatch.setattr(command, "figure_of", lambda d, size: drawn.append(d.sizes) or
+                        real(d, size))
+    pdf, png = command.plot_file(path)
+    assert png.exists() and drawn == [{"phi": 76, "f": 7}]
+    small = command.reduced(ds.isel(phi=slice(0, 50)))
+    assert small[1] == "" and small[0].sizes["phi"] == 50

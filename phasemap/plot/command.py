@@ -38,6 +38,9 @@ __all__ = ["MAX_PANELS", "SIZES", "figure_of", "plot_file"]
 SIZES = {"one": "one_column", "two": "two_column"}
 #: The most maps a three-dimensional atlas is drawn as (one per value of its shortest axis).
 MAX_PANELS = 6
+#: The most values of a map's axis that a figure draws (a figure is a few million pixels):
+#: a longer axis of an atlas file is read at every k-th value, and the figure says so.
+MAX_DRAWN = 2048
 
 
 def plot_file(path: str | os.PathLike, stem: str | os.PathLike | None = None,
@@ -63,15 +66,32 @@ def plot_file(path: str | os.PathLike, stem: str | os.PathLike | None = None,
     path = pathlib.Path(os.path.expanduser(os.fspath(path)))
     stem = path.with_suffix("") if stem is None else stem
     with open_atlas(path) as ds:
-        ds = ds.load()
+        ds, note = reduced(ds)
+        ds = ds.load()  # only what is drawn is read: memory stays bounded
     try:
         fig = figure_of(ds, SIZES[size])
     except (ValueError, TypeError) as e:  # what is wrong with the file, and which file
         raise type(e)(f"{path}: {e}") from None
+    if note:
+        fig.text(0.005, 0.003, note, fontsize=5, color="0.35", ha="left", va="bottom")
     try:
         return save_figure(fig, stem)
     finally:
         plt.close(fig)
+
+
+def reduced(ds: xr.Dataset) -> tuple[xr.Dataset, str]:
+    """``ds`` (a map or fate map, read lazily) at every k-th value of each axis longer than
+    :data:`MAX_DRAWN`, and the note that says so ("" when nothing is left out).  Classes
+    are categories: they are sampled, never averaged.  Motions are drawn whole."""
+    if motion_kind(ds) is not None:
+        return ds, ""
+    step = {d: -(-n // MAX_DRAWN) for d, n in ds.sizes.items() if n > MAX_DRAWN}
+    if not step:
+        return ds, ""
+    note = "drawn from " + ", ".join(f"1 in {k} values of {d} ({ds.sizes[d]} in the file)"
+                                     for d, k in step.items())
+    return ds.isel({d: slice(None, None, k) for d, k in step.items()}), note
 
 
 def figure_of(ds: xr.Dataset, size: str | float = "one_column") -> Figure:
