@@ -145,7 +145,8 @@ def singular_line_claims(atlas: xr.Dataset) -> list[Claim]:
     # (8) is resolved for phi'' off the line; what the whole problem (contacts may
     # open) has there is counted, a finding of its own (README, findings)
     claims.append(Claim(
-        "ladder: (8) solvable for phi'' when f != sqrt 2", "yes (resolved for phi'')",
+        "ladder: (8), both contacts kept, solvable for phi'' when f != sqrt 2",
+        "yes (resolved for phi'')",
         f"never singular off the line; with contacts that may open, f < sqrt 2: none "
         f"{100 * none_off[below].mean():.1f} %, two {100 * two_off[below].mean():.1f} %, "
         f"leaves a contact {100 * (lost[off][below] & (n[off][below] == 1)).mean():.0f} %; "

@@ -401,8 +401,8 @@ def fate_claims(fates) -> list[Claim]:
         texts.append(f"{k:g}: " + ", ".join(f"{n} {v}" for n, v in counts.items()))
     bound = p["rho"] ** 2 + (p["r"] - p["l"]) ** 2 - HIGH * L * p["l"]
     claims.append(Claim(
-        "wheel fate maps: no Painleve state on any motion",
-        "no solution only where the bracket of (13) vanishes",
+        "wheel fate maps: no Painleve state of (13), the rolling contact kept, on any motion",
+        "(13) has no solution only where its bracket vanishes",
         "bracket >= rho^2 + (r - l)^2 - delta l >= "
         f"{bound:.2f} m2 > 0; fates at delta/l = " + "; ".join(texts)
         + " (no_solution: rolling would pull and a hop is inconsistent)",

@@ -33,7 +33,8 @@ EXPECTED = {
     "ladder": [
         ("ladder: coefficient 2 - f^2 of (8) vanishes", "agrees"),
         ("ladder: at f = sqrt 2 (8) has no solution", "agrees"),
-        ("ladder: (8) solvable for phi'' when f != sqrt 2", "agrees"),
+        ("ladder: (8), both contacts kept, solvable for phi'' when f != sqrt 2",
+         "agrees"),
         ("ladder: static zone at omega = 0, f < 1", "finding"),
         ("ladder: static zone at omega = 0, f >= 1", "finding"),
         ("ladder: the phase curves stop only in the static zone", "finding"),
@@ -54,7 +55,8 @@ EXPECTED = {
         ("wheel: no-bounce condition (12)", "agrees"),
         ("wheel (13): sign of the omega^2 term", "erratum"),
         ("wheel fate map, delta/l = 0.1: stops after a reversal", "agrees"),
-        ("wheel fate maps: no Painleve state on any motion", "agrees"),
+        ("wheel fate maps: no Painleve state of (13), the rolling contact kept, on "
+         "any motion", "agrees"),
         ("wheel fate map, delta/l = 1.2: no reversal", "agrees"),
         ("wheel: bracket of (13) can vanish", "finding"),
         ("wheel: (13) has no solution where its bracket vanishes", "agrees"),
