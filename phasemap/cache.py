@@ -238,11 +238,16 @@ class _Damaged(Exception):
 def _write(path: pathlib.Path, body: str) -> None:
     """Write ``body`` under a hash line to ``path``, atomically: no temporary file is left."""
     data = body.encode()
-    head = f"{HASH_PREFIX}{hashlib.sha256(data).hexdigest()}\n".encode()
+    _write_atomic(path, f"{HASH_PREFIX}{hashlib.sha256(data).hexdigest()}\n".encode() + data)
+
+
+def _write_atomic(path: pathlib.Path, raw: bytes) -> None:
+    """Write ``raw`` to ``path`` under a temporary name (owner-only, as mkstemp makes it)
+    and rename it; no temporary file is left, whatever fails."""
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem[:40]}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "wb") as fh:
-            fh.write(head + data)
+            fh.write(raw)
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(OSError):
@@ -264,7 +269,7 @@ def _verified(path: pathlib.Path) -> str:
 
 
 def _import(stem: str, path: pathlib.Path):
-    problem = distrust(path)
+    problem = _distrust(path)
     if problem is not None:
         raise _Damaged(problem)
     body = _verified(path)
@@ -343,7 +348,7 @@ def _numba_files(cache) -> list[pathlib.Path]:
             index.with_suffix(".nbh")]
 
 
-def distrust(path: pathlib.Path, *, owner_only: bool = False) -> str | None:
+def _distrust(path: pathlib.Path, *, owner_only: bool = False) -> str | None:
     """Why the file or folder ``path`` may hold what another user wrote, or None: it and
     its folder must belong to this user (or to root) and, unless ``owner_only``, be
     writable by no one else, its group included, but for a folder with the sticky bit
@@ -365,6 +370,11 @@ def distrust(path: pathlib.Path, *, owner_only: bool = False) -> str | None:
     return None
 
 
+def _first_distrust(files, owner_only: bool = False) -> str | None:
+    """What :func:`_distrust` finds wrong with the first of ``files`` it objects to, or None."""
+    return next(filter(None, (_distrust(f, owner_only=owner_only) for f in files)), None)
+
+
 def _digests(files: list[pathlib.Path]) -> str:
     """The hash file's text: one ``<sha256>  <name>`` line per numba file."""
     lines = []
@@ -374,11 +384,15 @@ def _digests(files: list[pathlib.Path]) -> str:
     return "".join(lines)
 
 
+#: Why numba's files without a hash file of phasemap's are not loaded.
+UNHASHED = "saved without phasemap's hash: by an older phasemap, or not by phasemap"
+
+
 def _unverified(files: list[pathlib.Path]) -> str | None:
     """Why numba's files of one function are not the ones phasemap saved, or None."""
     *data, hashes = files
     if not hashes.exists():
-        return "saved without phasemap's hash: by an older phasemap, or not by phasemap"
+        return UNHASHED
     try:
         recorded = hashes.read_text()
     except (OSError, UnicodeDecodeError) as err:
@@ -426,19 +440,6 @@ def _load_without_refresh(cache, sig, target_context, load):
         return inner(sig, target_context)
 
 
-def _write_hashes(path: pathlib.Path, text: str) -> None:
-    """Write the hash file ``path`` atomically, readable and writable by its owner only."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem[:40]}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
-
-
 def _guard_numba() -> None:
     """Make numba treat a damaged cache file of phasemap's as a miss, tolerate a full
     disk when it saves one, mark what it loads as used (the LRU bound), and load it
@@ -450,8 +451,7 @@ def _guard_numba() -> None:
         return
     load, save = cls.load_overload, cls.save_overload
 
-    def damaged(self, files, why: str) -> None:
-        verb = "is not loaded" if why.startswith("saved without") else "was damaged"
+    def damaged(self, files, why: str, verb: str = "was damaged") -> None:
         _say(f"numba's cache of {self._name} {verb} ({why}); compiling it again")
         for f in files:
             with contextlib.suppress(OSError):
@@ -464,16 +464,17 @@ def _guard_numba() -> None:
         files = _numba_files(self)
         if not files[0].exists():
             return None  # nothing saved yet: numba compiles
-        problem = next(filter(None, (distrust(f, owner_only=True) for f in files)), None)
+        problem = _first_distrust(files, owner_only=True)
         if problem is not None:  # another user's: never unpickled, never removed
             _say(f"not loading numba's cache of {self._name}: {problem}; compiling it "
                  "instead, and not saving it (make the folder yours and private, or set "
                  "NUMBA_CACHE_DIR)")
             return None
-        problem = next(filter(None, map(distrust, files)), None) or _unverified(files)
+        problem = _first_distrust(files) or _unverified(files)
         if problem is not None:  # ours, but others could have written it, or damaged
             _owner_only([files[0].parent])
-            damaged(self, files, problem)
+            damaged(self, files, problem, "is not loaded" if problem == UNHASHED
+                    else "was damaged")
             return None
         try:
             data = _load_without_refresh(self, sig, target_context, load)
@@ -491,21 +492,19 @@ def _guard_numba() -> None:
         files = _numba_files(self)
         _owner_only([files[0].parent])
         # numba reads the index it adds to: it must be ours and what phasemap saved
-        problem = distrust(files[0].parent) or next(
-            filter(None, (distrust(f, owner_only=True) for f in files)), None)
+        problem = _distrust(files[0].parent) or _first_distrust(files, owner_only=True)
         if problem is not None:  # said when it was not loaded, if it was another user's
             _say(f"not saving the compiled {self._name}: {problem}; it will be compiled "
                  "again next time (make the folder yours and private, or set "
                  "NUMBA_CACHE_DIR)", unless=f"not loading numba's cache of {self._name}")
             return None
-        if files[0].exists() and (next(filter(None, map(distrust, files)), None)
-                                  or _unverified(files)):
+        if files[0].exists() and (_first_distrust(files) or _unverified(files)):
             _remove(files)
         try:
             save(self, sig, data)
             files = _numba_files(self)
             _owner_only(files[:-1])
-            _write_hashes(files[-1], _digests(files[:-1]))
+            _write_atomic(files[-1], _digests(files[:-1]).encode())
         except OSError as err:
             _say(f"cannot save the compiled {self._name} in {self._cache_path} "
                  f"({err.strerror or err}); it will be compiled again next time")
