@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import numpy as np
 
 import pytest
 
@@ -238,3 +239,29 @@ def test_a_motion_started_on_a_bound_leaves_only_moving_out(model, start, end):
     assert ds.attrs["end_message"] == curve.attrs["end_message"]
     if end == "left_domain":
         assert float(ds.event_t[-1]) == 0.0 and "reached 1.5708 rad" in ds.attrs["end_message"]
+
+
+def test_a_separated_corner_flies_freely():
+    """Issue 37: the printer once dropped the parentheses of 1/(A + B), and the block on
+    its corner (tests/unseen.py) reported the wrong accelerations for its separated mode.
+    Flying free, the body falls with g and turns uniformly, so the corner P = C - d,
+    d = R(alpha + psi) (a, b), accelerates as (0, -g) + omega^2 d: along the incline
+    s'' = -g sin(alpha) + omega^2 d.t, with psi'' = 0 (closed form, checked at random
+    states, whatever the mode's admissibility)."""
+    m = _model(unseen.corner_block)
+    rng = np.random.default_rng(37)
+    a, b, g = 0.5, 1.0, 9.81
+    for _ in range(200):
+        psi, alpha = rng.uniform(0.0, PI / 2), rng.uniform(0.0, 1.2)
+        omega, sdot, f = rng.uniform(-4, 4), rng.uniform(-3, 3), rng.uniform(0, 2)
+        c = phasemap.classify(m, psi=psi, omega=omega, sdot=sdot, f=f, alpha=alpha)
+        flying = [br for br in c.candidates if br.name.startswith("corner_separated")]
+        assert flying, [br.name for br in c.candidates]
+        th = alpha + psi
+        d = (a * math.cos(th) - b * math.sin(th), a * math.sin(th) + b * math.cos(th))
+        s_dd = -g * math.sin(alpha) + omega ** 2 * (d[0] * math.cos(alpha)
+                                                     + d[1] * math.sin(alpha))
+        for br in flying:
+            assert br.accelerations["psi_ddot"] == pytest.approx(0.0, abs=1e-12)
+            assert br.accelerations["s_ddot"] == pytest.approx(s_dd, rel=1e-10, abs=1e-10), \
+                (psi, omega, sdot, f, alpha, br.name)
