@@ -1,11 +1,13 @@
-"""Write the studies' claims tables into docs/guide/studies.md.
+"""The studies' claims tables on docs/guide/studies.md.
 
 Runs every study in ``studies/`` in quick mode (as ``phasemap tour`` does, into a
-temporary folder) and replaces the text between the ``claims:NAME`` markers of
-the page with that study's claims table, the measured value beside the
-paper's.  The page's count of claims and verdicts is checked against the claims
-the studies give in the test session (``tests/test_study_overview.py``); the
-tables themselves are as fresh as the last run of this script.
+temporary folder) and puts each study's claims table, the measured value beside
+the paper's, between the page's ``claims:NAME`` markers.  The documentation build
+does this on the page it renders (``docs/conf.py``: the tables are made by the
+build that shows them, so they cannot go stale; the page in the repository keeps
+its markers empty); run as a script it writes the tables into the page itself.
+The page's count of claims and verdicts is checked against the claims the studies
+give in the test session (``tests/test_study_overview.py``).
 
     python docs/claims.py          # about a minute and a half on warm caches
 """
@@ -47,11 +49,11 @@ def parse(text: str) -> dict[str, list[tuple[str, str, str, str]]]:
     return out
 
 
-def main() -> int:
+def filled(text: str) -> str:
+    """``text`` (the page) with each study's claims table between its markers."""
     sys.path.insert(0, str(ROOT))
     from phasemap.tour import ORDER, load
 
-    text = PAGE.read_text()
     with tempfile.TemporaryDirectory() as out:
         for name in ORDER:
             print(f"running studies/{name}.py --quick", flush=True)
@@ -62,7 +64,11 @@ def main() -> int:
                 raise SystemExit(f"{PAGE}: no marker {marker.strip()} for study {name}")
             text = BLOCK.sub(lambda m: m.group(1) + table(claims) + m.group(4)
                              if m.group(2) == name else m.group(0), text)
-    PAGE.write_text(text)
+    return text
+
+
+def main() -> int:
+    PAGE.write_text(filled(PAGE.read_text()))
     print(f"wrote the claims tables into {PAGE.relative_to(ROOT)}")
     return 0
 

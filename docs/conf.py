@@ -100,3 +100,16 @@ html_context = {"default_mode": "light"}
 # Offline: nothing is fetched at build time.
 intersphinx_mapping: dict = {}
 nitpicky = False
+
+
+# -- the studies' claims tables, made by the build that renders them (docs/claims.py) -----
+def _claims_tables(app, docname, source):
+    if docname == "guide/studies":
+        sys.path.insert(0, str(HERE))
+        import claims
+
+        source[0] = claims.filled(source[0])
+
+
+def setup(app):
+    app.connect("source-read", _claims_tables)

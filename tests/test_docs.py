@@ -258,3 +258,27 @@ def numpydoc_gaps(modules=("phasemap", "phasemap.declare")) -> list[str]:
 
 def test_public_api_docstrings_are_numpydoc():
     assert not numpydoc_gaps()
+
+
+def test_the_docs_build_fills_the_studies_claims_tables(monkeypatch):
+    """The studies page's tables were empty on the built site (issue 41 item 15): the
+    build fills them from the studies themselves (here stand-ins), on the page it renders."""
+    import types
+
+    from phasemap import tour
+
+    sys.path.insert(0, str(DOCS))
+    try:
+        import claims
+    finally:
+        sys.path.remove(str(DOCS))
+    row = types.SimpleNamespace(claim="a | b", paper="p", measured="m", verdict="agrees")
+    monkeypatch.setattr(tour, "load", lambda path: types.SimpleNamespace(
+        main=lambda argv: [row] if "--quick" in argv else []))
+    page = (DOCS / "guide" / "studies.md").read_text()
+    assert all(not rows for rows in claims.parse(page).values())   # empty in the repository
+    tables = claims.parse(claims.filled(page))
+    assert set(tables) == set(tour.ORDER)
+    assert all(rows == [("a | b", "p", "m", "agrees")] for rows in tables.values())
+    conf = (DOCS / "conf.py").read_text()
+    assert 'app.connect("source-read", _claims_tables)' in conf
