@@ -68,8 +68,11 @@ STIFF = 14
 LEFT_DOMAIN = 15
 MAX_STEPS = 16
 
-#: The first terminal event: codes >= FIRST_FATE end a motion.
-FIRST_FATE = REST
+#: The events that end a motion (its fate), named one by one: event codes are
+#: append-only (atlases and fate maps store them), so a later event that continues a
+#: motion takes the next free code, and no order of codes says which events end one.
+FATES = frozenset({REST, CONTACT_LOST, NO_SOLUTION, INDETERMINATE, CONTINUUM, SINGULAR,
+                   HORIZON, MAX_EVENTS, STEP_FAILURE, STIFF, LEFT_DOMAIN, MAX_STEPS})
 
 #: The most rounding flickers in a row (an event whose state the classification keeps
 #: on the running stage, so the stage goes on) before a motion ends with
@@ -115,7 +118,7 @@ def summary(out, stick):
 
 
 class Event(nx.Coded):
-    """A named event of a motion; members from ``REST`` on end it.
+    """A named event of a motion; the members of :data:`FATES` end it.
 
     The ``fate`` layer of a fate map holds the terminal member that ended each
     motion; ``terminal`` and ``message`` say what a member means.
@@ -152,7 +155,8 @@ class Event(nx.Coded):
 
     @property
     def terminal(self) -> bool:
-        return self >= FIRST_FATE
+        """Whether the event ends the motion (:data:`FATES`)."""
+        return int(self) in FATES
 
 
 #: The fates as CF flags: values and space-separated meanings.

@@ -85,3 +85,19 @@ def test_a_batch_of_starts_is_one_call_identical_to_a_call_per_start():
                           f=[0.1, 0.2])
     with pytest.raises(ValueError, match="phi"):
         phasemap.simulate("elliptic_pendulum", 1.0, phi=[0.1, np.nan], xdot=0.0)
+
+
+def test_event_codes_are_append_only_and_each_says_whether_it_ends_a_motion():
+    """The codes atlases and fate maps store keep their meaning (issue 38: events that
+    continue a motion will be added after them), and which events end a motion is named
+    event by event, not read from the order of the codes."""
+    from phasemap import events
+
+    stored = ["start", "reversal", "stick", "slip", "switch", "rest", "contact_lost",
+              "no_solution", "indeterminate", "continuum", "singular", "horizon",
+              "max_events", "step_failure", "stiff", "left_domain", "max_steps"]
+    assert [e.name.lower() for e in phasemap.Event][:len(stored)] == stored
+    assert [int(e) for e in phasemap.Event][:len(stored)] == list(range(len(stored)))
+    continuing = {"start", "reversal", "stick", "slip", "switch"}
+    assert {e.name.lower() for e in phasemap.Event if not e.terminal} == continuing
+    assert events.FATE_VALUES == tuple(sorted(events.FATES))
