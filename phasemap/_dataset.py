@@ -62,9 +62,12 @@ __all__ = [
 CONVENTIONS = "CF-1.8"
 
 #: What a Dataset can be, as ``ds.phasemap.kind`` names it.
-KINDS = ("map", "profile", "fate", "phase_curve", "trajectory")
+KINDS = ("map", "profile", "fate", "phase_curve", "trajectory", "boundaries", "threshold")
 #: The kinds that follow one motion (global attribute ``phasemap_kind``).
 MOTIONS = ("phase_curve", "trajectory")
+#: The kinds of the bifurcation set: pieces of curves on a dimension ``vertex``, special
+#: points on ``point`` (:func:`phasemap.boundaries`, ``threshold(..., along=)``).
+CURVES = ("boundaries", "threshold")
 
 #: The title of each producer's Dataset, by kind (``phasemap_kind``; ``atlas`` for a Scene's).
 _TITLES = {"atlas": "atlas", "trajectory": "trajectory", "phase_curve": "phase curve",
@@ -358,6 +361,35 @@ def first_layer(ds: xr.Dataset) -> xr.DataArray:
         if is_categorical(var):
             return var
     return next(iter(ds.data_vars.values()))
+
+
+def curve_kind(ds: xr.Dataset) -> str | None:
+    """``"boundaries"`` or ``"threshold"`` for a Dataset of the bifurcation set, else None."""
+    kind = ds.attrs.get("phasemap_kind")
+    return kind if isinstance(kind, str) and kind in CURVES else None
+
+
+def curve_axes(ds: xr.Dataset) -> tuple[str, str]:
+    """The (x, y) variables of a bifurcation-set Dataset: the slice's two axes for
+    boundaries, the followed parameter and the threshold's for a threshold curve.
+    ValueError in one line if the file does not say them."""
+    kind = curve_kind(ds)
+    attr = "phasemap_axes" if kind == "boundaries" else "phasemap_along"
+    text = ds.attrs.get(attr)
+    if not isinstance(text, str):
+        raise ValueError(f"{attr}: a {kind} file names its axes there, as JSON text")
+    names = read_json(text, attr)
+    if not isinstance(names, dict) or not all(isinstance(n, str) for n in names):
+        raise ValueError(f"{attr}: must map axis names to ranges")
+    names = list(names)
+    if kind == "threshold":
+        param = ds.attrs.get("phasemap_param")
+        names = names[:1] + ([param] if isinstance(param, str) else [])
+    if len(names) != 2 or any(n not in ds.variables or ds[n].dims != ("vertex",)
+                              for n in names):
+        raise ValueError(f"a {kind} file needs its two axes as variables on 'vertex', "
+                         f"got {names!r}")
+    return names[0], names[1]
 
 
 def motion_kind(ds: xr.Dataset) -> str | None:

@@ -63,7 +63,7 @@ from typing import Iterator, Mapping
 import numpy as np
 import xarray as xr
 
-from ._dataset import CONVENTIONS, motion_kind
+from ._dataset import CONVENTIONS, curve_axes, curve_kind, motion_kind
 from ._version import __version__
 from .progress import human_bytes
 
@@ -787,7 +787,58 @@ def _describe(ds: xr.Dataset, where: str) -> str:
             raise ValueError(f"{where}: phasemap_kind says {kind}, but it has no "
                              f"{', '.join(missing)}")
         return _describe_motion(ds, where, kind)
+    if curve_kind(ds) is not None:
+        return _describe_curves(ds, where, curve_kind(ds))
     return _describe_grid(ds, where)
+
+
+def _describe_curves(ds: xr.Dataset, where: str, kind: str) -> str:
+    """Boundaries or a threshold curve: its axes, pieces by condition, special points."""
+    a = ds.attrs
+    x, y = curve_axes(ds)
+    lines = [f"phasemap {'threshold curve' if kind == 'threshold' else kind} {where}"]
+    if "title" in a:
+        lines.append(f"  title     {a['title']}")
+    lines.append(f"  model     {a['phasemap_model']}")
+    if kind == "threshold":
+        lines.append(f"  threshold the {a.get('phasemap_side', '')} {y} at which "
+                     f"{a.get('phasemap_layer', '?')} = {_number(a.get('phasemap_value'))}, "
+                     f"followed in {x}")
+    else:
+        lines.append(f"  layer     {a.get('phasemap_layer', '?')}, over {x} and {y}")
+    for name in (x, y):
+        values = np.asarray(ds[name].values, dtype=float)
+        span = (f"from {np.nanmin(values):.6g} to {np.nanmax(values):.6g}"
+                if np.isfinite(values).any() else "(no vertex)")
+        units = str(ds[name].attrs.get("units", ""))
+        lines.append(f"  {name:<9} {span} {'' if units == '1' else units}".rstrip())
+    conditions = np.asarray(ds["condition"].values).astype(str) if "condition" in ds else []
+    counts: dict[str, int] = {}
+    for c in conditions:
+        counts[c] = counts.get(c, 0) + 1
+    lines.append(f"  pieces    {ds.sizes.get('piece', 0)} with {ds.sizes.get('vertex', 0)} "
+                 "vertices" + (": " + ", ".join(f"{c} {n}" for c, n in counts.items())
+                               if counts else ""))
+    kinds = np.asarray(ds["point_kind"].values).astype(str) if "point_kind" in ds else []
+    points: dict[str, int] = {}
+    for k in kinds:
+        points[k] = points.get(k, 0) + 1
+    lines.append(f"  points    {len(kinds)}" + (": " + ", ".join(
+        f"{k} {n}" for k, n in points.items()) if points else ""))
+    for name in ("residual", "point_residual"):
+        if name in ds and ds[name].size and np.isfinite(ds[name].values).any():
+            lines.append(f"  {'residual' if name == 'residual' else 'points residual':<9} "
+                         f"at most {np.nanmax(np.abs(ds[name].values)):.3g} (relative to "
+                         "the conditions' tie scales)")
+    if "phasemap_tol" in a:
+        lines.append(f"  tolerance {_number(a['phasemap_tol'])}")
+    lines.append(f"  made by   phasemap {a.get('phasemap_version', '?')}, "
+                 f"{a.get('date_created', 'creation time unknown')}")
+    fixed = [(k[len("phasemap_fixed_"):], "=", _number(v)) for k, v in a.items()
+             if k.startswith("phasemap_fixed_")]
+    lines.append("fixed")
+    lines += _table(fixed) if fixed else ["  (none)"]
+    return "\n".join(lines)
 
 
 def _describe_motion(ds: xr.Dataset, where: str, kind: str) -> str:

@@ -43,3 +43,19 @@ def test_boundaries_writes_the_pieces(tmp_path):
         fold = ds.point_kind.values == "fold_f"
         assert abs(float(ds.point_f.values[fold][0]) - 4 / 3) <= 1e-10
     assert "fold_f" in r.stdout and "theta = 1.10714871779" in r.stdout
+
+
+def test_info_and_plot_take_a_boundaries_file(tmp_path):
+    """``info`` called a boundaries file an atlas ("cells 303 = 101 vertex x ..."), and
+    ``plot`` refused it (issue 41 item 2)."""
+    out = tmp_path / "rod.nc"
+    assert run("boundaries", "painleve_rod", "--axis", "theta=0.2:1.5", "--axis", "f=0:3",
+               *ROD, "-o", str(out)).returncode == 0
+    info = run("info", str(out))
+    assert info.returncode == 0, info.stderr
+    assert info.stdout.startswith(f"phasemap boundaries {out}") and "cells" not in info.stdout
+    assert "over theta and f" in info.stdout and "fold_f 1" in info.stdout
+    assert "coef_A_slip_neg" in info.stdout
+    drawn = run("plot", str(out), "-o", str(tmp_path / "fig"))
+    assert drawn.returncode == 0, drawn.stderr
+    assert (tmp_path / "fig.png").stat().st_size > 10_000

@@ -82,3 +82,26 @@ def test_first_paradox_along_k(curve):
 
 def test_curve_round_trip(curve, tmp_path):
     assert_atlas_round_trip(curve, tmp_path, "along.nc")
+
+
+def test_a_threshold_curve_file_is_summarised_and_drawn(curve, tmp_path):
+    """Every kind of file phasemap writes opens in ``info`` and ``plot`` (issue 41 item 2):
+    here a threshold curve, written from Python (the command line's threshold is a point)."""
+    import subprocess
+    import sys
+
+    path = phasemap.write_atlas(curve, tmp_path / "curve.nc")
+    cli = [sys.executable, "-m", "phasemap.cli"]
+    info = subprocess.run(cli + ["info", str(path)], capture_output=True, text=True,
+                          timeout=600)
+    assert info.returncode == 0, info.stderr
+    assert info.stdout.startswith(f"phasemap threshold curve {path}")
+    assert "followed in k" in info.stdout and "pieces    1 with" in info.stdout
+    drawn = subprocess.run(cli + ["plot", str(path), "-o", str(tmp_path / "fig")],
+                           capture_output=True, text=True, timeout=600)
+    assert drawn.returncode == 0, drawn.stderr
+    fig = curve.phasemap.plot()
+    ax = fig.axes[0]
+    assert ax.get_xlabel().startswith("$k$") and ax.get_ylabel().startswith("$f$")
+    (line,) = [ln for ln in ax.get_lines() if len(ln.get_xdata()) == curve.sizes["vertex"]]
+    assert np.allclose(line.get_xdata(), curve.k.values)

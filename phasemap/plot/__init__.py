@@ -16,6 +16,8 @@ kind             how it is recognised                         figure
 ``fate``         a ``fate`` layer                             :func:`fate_figure`
 ``phase_curve``  global attribute ``phasemap_kind``           :func:`phase_curve_figure`
 ``trajectory``   global attribute ``phasemap_kind``           :func:`trajectory_figure`
+``boundaries``   global attribute ``phasemap_kind``           :func:`curves_figure`
+``threshold``    global attribute ``phasemap_kind``           :func:`curves_figure`
 ===============  ===========================================  ============================
 
 :func:`work_precision_figure` draws a benchmark table, and :func:`save_figure`
@@ -93,6 +95,7 @@ from matplotlib.figure import Figure
 
 from .._dataset import KINDS, dataset_kind as atlas_kind
 from .benchmark import METHOD_NAMES, SYSTEM_NAMES, work_precision_figure
+from .curves import curves_figure
 from .labels import (axis_label, fixed_values, fixed_values_text, format_number, format_units,
                      wrap)
 from .layout import (WIDE, angle_ticks, define_symbols, figure_legend, figure_texts, label_panels,
@@ -130,6 +133,7 @@ __all__ = [
     "axis_label",
     "category_colour",
     "category_hatch",
+    "curves_figure",
     "define_symbols",
     "draw_boundaries",
     "event_handle",
@@ -191,4 +195,8 @@ def plot(ds: xr.Dataset, layer: str | Sequence[str] | None = None, *, ax=None,
         if layer is not None:
             raise ValueError(f"a phase curve has no layers to choose; got layer={layer!r}")
         return phase_curve_figure(ds, ax=ax, size=size, **kw)
+    if kind in ("boundaries", "threshold"):
+        if layer is not None:
+            raise ValueError(f"a {kind} file has no layers to choose; got layer={layer!r}")
+        return curves_figure(ds, ax=ax, size=size, **kw)
     return trajectory_figure(ds, states=layer, ax=ax, size=size, **kw)

@@ -1,7 +1,8 @@
 """``phasemap plot FILE.nc [-o STEM] [--size one|two]``: the figure of any file phasemap wrote.
 
 The command line's ``plot`` subcommand calls :func:`plot_file`, which opens
-an atlas, a fate map, a trajectory or a phase curve, draws the figure the
+an atlas, a fate map, a trajectory, a phase curve, or the boundaries or threshold
+curve of the bifurcation set, draws the figure the
 accessor draws (``ds.phasemap.plot()``) and writes it as PDF and PNG.  An atlas of
 three dimensions is drawn as one map per value of its shortest axis (up to
 :data:`MAX_PANELS`), side by side, as the studies draw the ladder at three
@@ -25,7 +26,7 @@ import pathlib
 import xarray as xr
 from matplotlib.figure import Figure
 
-from .._dataset import dataset_kind, first_layer, motion_kind
+from .._dataset import curve_kind, dataset_kind, first_layer, motion_kind
 from .labels import _value_text, fixed_values_text
 from .layout import WIDE, figure_legend, label_panels, outer_labels, panels, save_figure, \
     width_of
@@ -84,7 +85,7 @@ def reduced(ds: xr.Dataset) -> tuple[xr.Dataset, str]:
     """``ds`` (a map or fate map, read lazily) at every k-th value of each axis longer than
     :data:`MAX_DRAWN`, and the note that says so ("" when nothing is left out).  Classes
     are categories: they are sampled, never averaged.  Motions are drawn whole."""
-    if motion_kind(ds) is not None:
+    if motion_kind(ds) is not None or curve_kind(ds) is not None:
         return ds, ""
     step = {d: -(-n // MAX_DRAWN) for d, n in ds.sizes.items() if n > MAX_DRAWN}
     if not step:
@@ -97,7 +98,7 @@ def reduced(ds: xr.Dataset) -> tuple[xr.Dataset, str]:
 def figure_of(ds: xr.Dataset, size: str | float = "one_column") -> Figure:
     """The figure of ``ds`` at ``size``: the accessor's, or for a three-dimensional atlas
     one map per value of its shortest axis."""
-    if motion_kind(ds) is not None or first_layer(ds).ndim < 3:
+    if motion_kind(ds) is not None or curve_kind(ds) is not None or first_layer(ds).ndim < 3:
         return ds.phasemap.plot(size=size)
     var = first_layer(ds)
     if var.ndim > 3:
