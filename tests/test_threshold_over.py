@@ -56,3 +56,30 @@ def test_three_free_names_are_refused_naming_the_way_out():
         phasemap.threshold(gyration_rod(), "f", value=0,
                            over={**OVER, "k": (0.3, 1.5), "l": (0.5, 2.0)},
                            fixed={"xdot": -1.0, "omega": 0.0})
+
+
+@pytest.mark.parametrize("tol", [1e-16, 2e-16, 1e-20])
+def test_a_tolerance_below_double_precision_is_refused_in_one_line(tol):
+    """tol=1e-16 once returned the rod's first paradox 8.1e-5 off, kind 'flat' (issue 37
+    item 4): a tolerance below twice the spacing of doubles at a range's largest value
+    cannot be met, and is refused before anything is traced, by every entry point."""
+    over = {"theta": (0.1, 1.5), "f": (0.0, 3.0)}
+    rod = {"xdot": -1.0, "omega": 0.0}
+    words = r"^tol = .* cannot be met: double precision resolves f in \[0, 3\] only to about"
+    with pytest.raises(ValueError, match=words):
+        phasemap.threshold("painleve_rod", "f", over=over, fixed=rod, tol=tol)
+    with pytest.raises(ValueError, match=words):
+        phasemap.boundaries("painleve_rod", over, fixed=rod, tol=tol)
+    with pytest.raises(ValueError, match=r"cannot be met: double precision resolves f in "):
+        # f's range not given: its default range is checked
+        phasemap.threshold("painleve_rod", "f", over={"theta": (0.1, 1.5)},
+                           fixed=rod, tol=tol)
+
+
+def test_the_smallest_tolerance_allowed_is_met():
+    import numpy as np
+
+    tol = 2.0 * float(np.spacing(3.0))
+    t = phasemap.threshold("painleve_rod", "f", over={"theta": (0.1, 1.5), "f": (0.0, 3.0)},
+                           fixed={"xdot": -1.0, "omega": 0.0}, tol=tol)
+    assert abs(t.value - 4 / 3) <= tol and abs(t.at["theta"] - math.atan(2)) <= 1e-12

@@ -30,7 +30,7 @@ import numpy as np
 import xarray as xr
 
 from ..model import Model
-from .tracing import header, parse_range
+from .tracing import check_tol, header, parse_range
 from .conditions import compiled
 from .thresholds import Threshold, _Spec, threshold
 
@@ -168,6 +168,7 @@ def threshold_curve(m: Model, param: str, layer: str, value: int, over, fixed, s
         raise ValueError(f"{m.name}: {name!r} in along must be neither the parameter, "
                          "ranged over, nor fixed")
     spec = _Spec.make(m, param, layer, value, over, {**fixed, name: a_lo}, side, tol)
+    check_tol(spec.tol, {name: (a_lo, a_hi)})
     if len(spec.others) > 1:
         raise ValueError(f"{m.name}: along needs at most one name ranged over besides "
                          f"{param!r}")

@@ -14,7 +14,8 @@ from ..layers import layers_for
 from ..model import Model
 from ..models import get_model
 from . import _trace as T
-from .tracing import LAYERS, Slice, Traced, condition_name, make_slice, parse_range, trace
+from .tracing import (LAYERS, Slice, Traced, check_tol, condition_name, make_slice, parse_range,
+                      parse_tol, trace)
 from .conditions import compiled
 
 #: Samples of a one-dimensional threshold's line.
@@ -188,12 +189,7 @@ class _Spec:
             raise ValueError("layer singular holds on curves: only value=1 has a threshold")
         if side not in ("min", "max"):
             raise ValueError(f"side must be 'min' or 'max', got {side!r}")
-        try:
-            tol = float(tol)
-        except (TypeError, ValueError):
-            raise ValueError(f"tol must be a number, got {tol!r}") from None
-        if not 0.0 < tol < 1.0:
-            raise ValueError(f"tol must be in (0, 1), got {tol:g}")
+        tol = parse_tol(tol)
         over = dict(over or {})
         fixed = dict(fixed or {})
         if param in fixed:
@@ -213,6 +209,7 @@ class _Spec:
             raise ValueError(f"{m.name}: over ranges at most two names besides {param!r}, got "
                              f"{', '.join(others)}: fix the others (fixed=), or follow the "
                              "threshold in one of them with along= for each value of the rest")
+        check_tol(tol, ranges)
         return _Spec(m, param, layer, value, ranges, others, fixed, side, tol)
 
 
