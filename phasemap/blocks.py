@@ -404,7 +404,8 @@ def compute_blocks(scene, desc: str, block_cells: int | None = None, show: bool 
     def evaluate(axes):
         return scene.evaluate(axes, layers)
 
-    with progress.enable(progress.wanted(show)), progress.bar(scene.size, desc) as pbar:
+    with progress.enable(progress.wanted(show), force=show is True), \
+            progress.bar(scene.size, desc) as pbar:
         for index, arrays in run_blocks(scene.axes, evaluate, first_block(scene),
                                         largest_block(scene), block_cells):
             yield index, arrays

@@ -1,7 +1,9 @@
 """Progress on stderr, in one style (tqdm), wherever a user waits.
 
 The library is quiet by default; the command line and the tour switch
-progress on with :func:`enable`.  ``PHASEMAP_PROGRESS=always`` in the
+progress on with :func:`enable`, and it shows only where someone watches: when
+stderr is a terminal (a log written by ``phasemap tour > log 2>&1``, or a pipe,
+gets no ticker and no cursor codes).  ``PHASEMAP_PROGRESS=always`` in the
 environment forces it on and shows every bar at once (the tests use it to see
 that work has started); ``PHASEMAP_PROGRESS=never`` forces it off.
 
@@ -27,29 +29,30 @@ from typing import TYPE_CHECKING, Iterator
 if TYPE_CHECKING:
     from tqdm import tqdm
 
-_state = {"on": False, "activities": []}
+_state = {"on": False, "force": False, "activities": []}
 
 
 def enabled() -> bool:
-    """Whether progress is shown: :func:`enable`, or ``PHASEMAP_PROGRESS``."""
+    """Whether progress is shown: inside :func:`enable` with stderr a terminal, or as
+    ``PHASEMAP_PROGRESS`` says."""
     env = os.environ.get("PHASEMAP_PROGRESS", "")
     if env == "always":
         return True
     if env == "never":
         return False
-    return _state["on"]
+    return _state["on"] and (_state["force"] or _isatty(sys.stderr))
 
 
 def wanted(show: bool | None = None) -> bool:
     """Whether a library call asked for ``progress=show`` shows it: as given, or
-    (None) when :func:`enabled` or in an interactive session (stderr is a
-    terminal).  ``PHASEMAP_PROGRESS`` overrides both."""
+    (None) in an interactive session (stderr is a terminal).  ``PHASEMAP_PROGRESS``
+    overrides both."""
     env = os.environ.get("PHASEMAP_PROGRESS", "")
     if env in ("always", "never"):
         return env == "always"
     if show is not None:
         return bool(show)
-    return _state["on"] or _isatty(sys.stderr)
+    return _isatty(sys.stderr)
 
 
 def _isatty(stream) -> bool:
@@ -64,14 +67,15 @@ def _delay() -> float:
 
 
 @contextlib.contextmanager
-def enable(on: bool = True) -> Iterator[None]:
-    """Show progress (on stderr) inside the block."""
-    before = _state["on"]
-    _state["on"] = on
+def enable(on: bool = True, force: bool = False) -> Iterator[None]:
+    """Show progress (on stderr) inside the block, where stderr is a terminal (anywhere
+    with ``force``: a library call given ``progress=True``)."""
+    before = _state["on"], _state["force"]
+    _state["on"], _state["force"] = on, force
     try:
         yield
     finally:
-        _state["on"] = before
+        _state["on"], _state["force"] = before
 
 
 def bar(total: int, desc: str, unit: str = "cell") -> "tqdm":

@@ -603,3 +603,32 @@ def test_claims_tables_fit_the_terminal():
         assert " ".join(table.split()).count("sharper") == 2
         assert "2.8284" in table
     assert len(claims_table(claims, width=0).splitlines()) == 4   # no terminal: one line each
+
+
+def test_progress_is_silent_in_a_pipe_or_a_log(tmp_path):
+    """``phasemap tour > log 2>&1`` wrote a ticker twice a second and tqdm's cursor codes
+    (2 862 updates), and ``simulate ... 2>&1 | cat`` glued the ticker to the table's
+    header: the command line's progress shows only where stderr is a terminal (issue 41
+    item 8).  The command line's switch, a wait of 1.6 s (past the ticker's one-second
+    delay) and a bar, in a child whose stderr is a pipe; a library call that asks for
+    progress=True still gets it."""
+    code = ("import time\n"
+            "from phasemap import progress\n"
+            "with progress.enable():\n"
+            "    with progress.activity('compiling'):\n"
+            "        time.sleep(1.6)\n"
+            "    with progress.bar(10, 'cells') as b:\n"
+            "        time.sleep(1.2); b.update(10)\n"
+            "print('done')\n"
+            "with progress.enable(True, force=True):\n"
+            "    with progress.activity('asked for'):\n"
+            "        time.sleep(1.6)\n")
+    e = {k: v for k, v in env(None).items() if k != "PHASEMAP_PROGRESS"}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=e, timeout=120)
+    assert done.returncode == 0 and done.stdout == "done\n", done.stderr
+    assert "compiling" not in done.stderr and "cells" not in done.stderr, repr(done.stderr)
+    assert "asked for" in done.stderr
+    first = run("simulate", "hinge_pendulum", "phi=2.5", "omega=0", "delta=0.1",
+                "--t-end", "20").stdout.splitlines()[0]
+    assert first.startswith("t (s)"), first   # the table's header, alone on its line
