@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Mapping
@@ -14,7 +15,8 @@ from ..layers import layers_for
 from ..model import Model
 from ..models import get_model
 from . import _trace as T
-from .tracing import LAYERS, Slice, Traced, condition_name, make_slice, parse_range, trace
+from .tracing import (LAYERS, Slice, Traced, condition_name, make_slice, parse_range, trace,
+                      unresolved_points)
 from .conditions import compiled
 
 #: Samples of a one-dimensional threshold's line.
@@ -46,7 +48,11 @@ class Threshold:
         the largest residual of its defining equations, relative to their tie
         scales;
     ``bound``
-        the raster's best cell in the region (a cell's width from the exact value).
+        the raster's best cell in the region (a cell's width from the exact value);
+    ``unresolved``
+        points where an extremum of a condition may reach zero within a cell of the
+        seed raster and could not be resolved (a warning names them): a region
+        thinner than a cell there could lie beyond ``value``.
     """
 
     param: str
@@ -58,6 +64,7 @@ class Threshold:
     error: float = 0.0
     bound: float = math.nan
     side: str = "min"
+    unresolved: tuple = ()
 
     def __post_init__(self):
         # plain floats: the numbers print and compare as they read
@@ -113,15 +120,18 @@ def threshold(model, param: str, layer: str = "n_solutions", value: int = 0,
     Returns
     -------
     Threshold or None
-        None where the region is empty in the given ranges.
+        None where the region is empty in the given ranges (a region thinner than
+        a raster cell included: the extrema of every condition are searched).
 
     Raises
     ------
     ValueError
         naming the argument: an unknown model, parameter, variable or layer, a
         range that is empty or outside the domain, more than two names in ``over``
-        besides the parameter (not supported), or a region whose extremum cannot
-        be located to ``tol``.
+        besides the parameter (not supported), a region whose extremum cannot
+        be located to ``tol``, or no region found where an extremum of a
+        condition could not be resolved (a warning names it; with a region, the
+        Threshold lists such points in ``unresolved``).
 
     Examples
     --------
@@ -241,6 +251,22 @@ def _plane(spec: _Spec, conditions) -> Threshold | None:
         rows = rows[np.isin(tr.buf.vi[:n, 2], np.flatnonzero(only))]
         return _best(sl, spec, tr, rows, edge=None, bound=math.nan)
     tr = trace(sl, spec.layer, spec.tol)
+    result = _plane_best(sl, spec, tr)
+    unresolved = unresolved_points(sl, tr)
+    if unresolved and result is None:
+        raise ValueError(f"{sl.model.name}: no region with {spec.layer} = {spec.value} was "
+                         f"found, but {len(unresolved)} extrema of a condition could not be "
+                         "resolved (see the warning): a region thinner than a seed raster cell "
+                         "may lie there")
+    if unresolved:
+        result = dataclasses.replace(result, unresolved=tuple(unresolved))
+    return result
+
+
+def _plane_best(sl: Slice, spec: _Spec, tr: Traced) -> Threshold | None:
+    """The threshold of the traced slice ``tr`` (:func:`_best` over the pieces that bound
+    the region, and the raster's cells in it)."""
+    p = spec.param
     bounding = np.flatnonzero((tr.pieces[:, 2] == spec.value) | (tr.pieces[:, 3] == spec.value))
     rows = tr.pq[np.isin(tr.pp, bounding)]
     inside = tr.classes == spec.value
