@@ -369,17 +369,31 @@ def _line(spec: _Spec, conditions) -> Threshold | None:
     slot = m.inputs.index(p)
     nc = len(C)
     values = np.empty((len(samples), nc))
-    scales = np.empty(nc)
+    scales = np.empty((len(samples), nc))
     v = base.copy()
     for i, x in enumerate(samples):
         v[slot] = x
-        C.module.values(v, values[i], scales)
+        C.module.values(v, values[i], scales[i])
+    # a sample within a condition's ties (|c| <= TOL scale) may be classed on either side:
+    # the condition changes sign there as far as the classes can tell
+    with np.errstate(invalid="ignore"):
+        tied = np.abs(values) <= nx.TOL * scales
     g = np.empty(1)
 
+    def crosses(k, a, b):
+        """c_k changes sign between samples a and b, or is tied at either."""
+        return values[a, k] * values[b, k] < 0.0 or tied[a, k] or tied[b, k]
+
     def root(k, a, b):
-        """c_k = 0 between samples a and b, by Newton from the secant point."""
+        """c_k = 0 between samples a and b, by Newton from the secant point (from the tied
+        sample where there is no sign change): (x, residual, last step, width of the ties
+        around x)."""
         ca, cb = values[a, k], values[b, k]
-        x = samples[a] + ca / (ca - cb) * (samples[b] - samples[a])
+        if ca * cb < 0.0:
+            x = samples[a] + ca / (ca - cb) * (samples[b] - samples[a])
+        else:
+            x = samples[a] if abs(ca) * scales[b, k] <= abs(cb) * scales[a, k] else samples[b]
+        step = 0.0
         for it in range(T.MAX_IT):
             v[slot] = x
             c, s = C.module.gradient(k, v, g)
@@ -387,13 +401,15 @@ def _line(spec: _Spec, conditions) -> Threshold | None:
                 return None
             step = -c / g[0]
             x += step
-            if abs(step) <= 1e-3 * spec.tol:
+            # a step below the tolerance, or the value within a hundredth of the ties
+            # (large terms leave rounding noise in c and so in the step)
+            if abs(step) <= 1e-3 * spec.tol or abs(c) <= 1e-2 * nx.TOL * s:
                 break
         v[slot] = x
         c, s = C.module.gradient(k, v, g)
-        if not (samples[a] - spec.tol <= x <= samples[b] + spec.tol):
+        if not (samples[a] - spec.tol <= x <= samples[b] + spec.tol) or g[0] == 0.0:
             return None
-        return x, abs(c) / s if s > 0 else abs(c), abs(step)
+        return x, abs(c) / s if s > 0 else abs(c), abs(step), nx.TOL * s / abs(g[0])
 
     order = range(len(samples) - 1) if spec.side == "min" else range(len(samples) - 2, -1, -1)
     if spec.layer == "singular":
@@ -421,7 +437,7 @@ def _line(spec: _Spec, conditions) -> Threshold | None:
             for k in range(nc):
                 if C.rest_only[k] and abs(fixed.get(m.velocity, 1.0)) > 0 and m.velocity != p:
                     continue
-                if values[i, k] * values[i + 1, k] < 0.0:
+                if crosses(k, i, i + 1):
                     r = root(k, i, i + 1)
                     if r is not None:
                         found.append((spec.sign * r[0], k, r))
@@ -431,13 +447,18 @@ def _line(spec: _Spec, conditions) -> Threshold | None:
                                  "condition changes sign: the conditions do not explain it")
             # the root where the class becomes the region's, nearest the outside sample
             found.sort(key=lambda t: abs(t[2][0] - samples[a]))
-            eps = 1e-9 * (hi - lo)
             step = 1.0 if b > a else -1.0
             for _, k, r in found:
-                if _class_at(m, v, slot, r[0] + step * eps, spec.layer) == spec.value \
-                        and _class_at(m, v, slot, r[0] - step * eps, spec.layer) != spec.value:
-                    return Threshold(p, r[0], {p: r[0]}, C.names[k], "root", r[1], r[2],
-                                     float(samples[b]), spec.side)
+                # the classes either side, beyond the condition's ties (wide where its
+                # terms are large), and no further than half a sample
+                eps = max(1e-9 * (hi - lo), 4.0 * r[3])
+                while eps <= 0.5 * (samples[1] - samples[0]):
+                    if _class_at(m, v, slot, r[0] + step * eps, spec.layer) == spec.value \
+                            and _class_at(m, v, slot, r[0] - step * eps,
+                                          spec.layer) != spec.value:
+                        return Threshold(p, r[0], {p: r[0]}, C.names[k], "root", r[1], r[2],
+                                         float(samples[b]), spec.side)
+                    eps *= 10.0
             raise ValueError(f"{m.name}: {spec.layer} changes between {p} = "
                              f"{samples[i]:.12g} and {samples[i + 1]:.12g} at none of the "
                              "conditions' roots there")
