@@ -103,3 +103,29 @@ def test_an_extremum_that_cannot_be_resolved_is_reported():
             pytest.raises(ValueError, match="could not be resolved"):
         phasemap.threshold("painleve_rod", "f", value=0, over=axes, fixed=ROD,
                            conditions=[cusp])
+
+
+@pytest.mark.parametrize("cut", [1e-6, -1e-6])
+def test_a_loop_that_an_edge_cuts_by_less_than_a_step(cut):
+    """The inertia rod's paradox hole at f = sqrt(5)/2 + 1e-3, |s - 1| < h, with s's range
+    starting at 1 - h + cut: cut by the edge (cut > 0) it is a piece with two ends on
+    that edge, not a loop (issue 37, item 8); just inside (cut < 0), a loop."""
+    f = math.sqrt(5.0) / 2.0 + 1e-3
+    half = math.sqrt((math.sqrt(1.0 + f * f) - 1.0) / 2.0 - 0.25)
+    lo = 1.0 - half + cut
+    b = phasemap.boundaries(inertia_rod(), {"theta": (0.05, 1.55), "s": (lo, 1.9)},
+                            fixed={**ROD, "l": 1.0, "f": f})
+    assert b.sizes["piece"] == 1
+    th, s = b.theta.values, b.s.values
+    assert np.max(np.abs((s - 1) ** 2 + 0.25 + np.cos(th) ** 2 - f * np.sin(th) * np.cos(th))) \
+        <= 1e-12
+    ends = b.point_kind.values == "end"
+    theta_star = math.pi / 2 - math.atan(f) / 2
+    if cut > 0:
+        assert int(b.closed[0]) == 0 and ends.sum() == 2
+        assert np.all(b.point_s.values[ends] == lo) and s.min() == lo
+        e = np.sort(b.point_theta.values[ends])
+        assert e[0] < theta_star < e[1]
+    else:
+        assert int(b.closed[0]) == 1 and ends.sum() == 0
+        assert abs(s.min() - (1.0 - half)) <= 1e-10

@@ -728,6 +728,26 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
         if not finish:
             ok, qu, qw, res, st, qs, qcu, qcw = _correct(F, k, v, ix, iy, geo, g, pu, pw, tu, tw)
         leaves = (ok and not _inside(qu, qw, 0.0)) or (not ok and not _inside(pu, pw, 0.0))
+        xu, xw = (qu, qw) if ok else (pu, pw)  # a point beyond the edge, where it leaves
+        qtu, qtw, qn, qs = _orient(qs, qcu, qcw, tu, tw)
+        if ok and not leaves and not finish and (tu * qtu < 0.0 or tw * qtw < 0.0):
+            # the curve turns back in an axis between two vertices inside the slice: where
+            # that fold lies beyond an edge, the curve leaves the slice there and comes back
+            # (a loop that the edge cuts by less than a step)
+            for axis in range(2):
+                a0 = tu if axis == 0 else tw
+                a1 = qtu if axis == 0 else qtw
+                if a0 * a1 < 0.0:
+                    a = a0 / (a0 - a1)
+                    okf, fu, fw, resf, errf = _solve(F, 1 + axis, k, -1, v, ix, iy, geo, g, H,
+                                                     u + a * (qu - u), w + a * (qw - w), tol_u,
+                                                     tol_w)
+                    # beyond the edge by more than the tolerance (a fold on it, to the
+                    # tolerance, is a loop that touches the edge)
+                    if okf and not _inside(fu, fw, max(tol_u, tol_w)) \
+                            and math.hypot(fu - u, fw - w) <= 2.0 * h:
+                        leaves = True
+                        xu, xw = fu, fw
         ex_ok, ex_u, ex_w, ex_res, ex_err = False, u, w, np.inf, np.inf
         # from a point on an edge, along a tangent into the slice (a region thinner than
         # the step, that the edge cuts), the step is shortened, not ended on that edge
@@ -735,12 +755,10 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
             or (w <= 1e-12 and tw > 0.0) or (w >= 1.0 - 1e-12 and tw < 0.0)
         if leaves and not finish and not (inward and h > H_MIN):
             # the curve leaves the slice within this step: end on the edge it crosses
-            ex_ok, ex_u, ex_w, ex_res, ex_err = _exit(F, k, v, ix, iy, geo, g, u, w,
-                                                      qu if ok else pu, qw if ok else pw,
+            ex_ok, ex_u, ex_w, ex_res, ex_err = _exit(F, k, v, ix, iy, geo, g, u, w, xu, xw,
                                                       tol_u, tol_w)
             ex_ok = ex_ok and math.hypot(ex_u - u, ex_w - w) <= 2.0 * h
             finish = ex_ok or h <= H_MIN
-        qtu, qtw, qn, qs = _orient(qs, qcu, qcw, tu, tw)
         turn = qtu * tu + qtw * tw
         jump = math.hypot(qu - pu, qw - pw)
         stuck = not leaves and not finish and h <= H_MIN and (
