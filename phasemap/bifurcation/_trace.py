@@ -496,6 +496,16 @@ def _solve(F, what, k, j, v, ix, iy, geo, g, H, u, w, tol_u, tol_w):
 
 
 @njit(cache=True, error_model="numpy")
+def _fold_on_step(F, axis, k, v, ix, iy, geo, g, H, u, w, qu, qw, a0, a1, tol_u, tol_w):
+    """The fold in ``axis`` between the curve points (u, w) and (qu, qw), whose tangents
+    have the components a0 and a1 (of opposite signs) in that axis: :func:`_solve` from
+    where the component interpolates to zero."""
+    a = a0 / (a0 - a1)
+    return _solve(F, 1 + axis, k, -1, v, ix, iy, geo, g, H, u + a * (qu - u), w + a * (qw - w),
+                  tol_u, tol_w)
+
+
+@njit(cache=True, error_model="numpy")
 def _edge(F, k, v, ix, iy, geo, g, u, w, fixed_u, tol_u, tol_w):
     """Newton on c = 0 along an edge (u fixed when ``fixed_u``, else w) from (u, w)."""
     err = np.inf
@@ -738,10 +748,8 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
                 a0 = tu if axis == 0 else tw
                 a1 = qtu if axis == 0 else qtw
                 if a0 * a1 < 0.0:
-                    a = a0 / (a0 - a1)
-                    okf, fu, fw, resf, errf = _solve(F, 1 + axis, k, -1, v, ix, iy, geo, g, H,
-                                                     u + a * (qu - u), w + a * (qw - w), tol_u,
-                                                     tol_w)
+                    okf, fu, fw, resf, errf = _fold_on_step(F, axis, k, v, ix, iy, geo, g, H, u,
+                                                            w, qu, qw, a0, a1, tol_u, tol_w)
                     # beyond the edge by more than the tolerance (a fold on it, to the
                     # tolerance, is a loop that touches the edge)
                     if okf and not _inside(fu, fw, max(tol_u, tol_w)) \
@@ -886,9 +894,8 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
             a0 = tu if axis == 0 else tw
             a1 = qtu if axis == 0 else qtw
             if a0 * a1 < 0.0:
-                a = a0 / (a0 - a1)
-                okf, fu, fw, resf, errf = _solve(F, 1 + axis, k, -1, v, ix, iy, geo, g, H,
-                                                 u + a * du, w + a * dw, tol_u, tol_w)
+                okf, fu, fw, resf, errf = _fold_on_step(F, axis, k, v, ix, iy, geo, g, H, u, w,
+                                                        qu, qw, a0, a1, tol_u, tol_w)
                 t = ((fu - u) * du + (fw - w) * dw) / length2
                 if okf and -0.25 <= t <= 1.25 and _inside(fu, fw, 1e-12):
                     fu = min(max(fu, 0.0), 1.0)
