@@ -48,3 +48,21 @@ def test_a_large_root(theta):
     t = phasemap.threshold("painleve_rod", "f", value=0, over={"f": (0.0, 2.05 * want)},
                            fixed={**ROD, "theta": theta})
     assert t.kind == "root" and abs(t.value - want) <= 1e-12 * want, (t, want)
+
+
+@pytest.mark.parametrize("excess", [1e-7, 1e-8])
+@pytest.mark.parametrize("side", ["min", "max"])
+def test_a_region_thinner_than_a_sample(excess, side):
+    """At f = 4/3 + excess the slide coefficient 5/2 + 3/2 cos 2 theta - 3/2 f sin 2 theta
+    is negative only where cos(2 theta + arctan f) < -5 / (3 sqrt(1 + f^2)): a window of
+    theta narrower than a sample of the line (issue 37, item 5)."""
+    f = 4.0 / 3.0 + excess
+    a = math.acos(-5.0 / (3.0 * math.sqrt(1.0 + f * f)))
+    lo, hi = sorted([(a - math.atan(f)) / 2, (2 * math.pi - a - math.atan(f)) / 2])
+    rng = (0.1, 1.5)
+    assert hi - lo < (rng[1] - rng[0]) / LINE_SAMPLES
+    t = phasemap.threshold("painleve_rod", "theta", value=0, over={"theta": rng},
+                           fixed={**ROD, "f": f}, side=side)
+    assert t is not None and t.kind == "root" and t.condition == "coef_A_slip_neg"
+    assert abs(t.value - (lo if side == "min" else hi)) <= 1e-10, (t, lo, hi)
+    assert t.residual <= 1e-12

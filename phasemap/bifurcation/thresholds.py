@@ -422,20 +422,91 @@ def _line(spec: _Spec, conditions) -> Threshold | None:
                         return Threshold(p, r[0], {p: r[0]}, C.names[k], "root", r[1], r[2],
                                          math.nan, spec.side)
         return None
+    def excluded(k):
+        """c_k holds only at rest, and the velocity is fixed and not zero."""
+        return bool(C.rest_only[k]) and abs(fixed.get(m.velocity, 1.0)) > 0 and m.velocity != p
+
+    def zero(k, xa, xb):
+        """The zero of c_k between xa and xb (opposite signs), by bisection to the last
+        bit."""
+        v[slot] = xa
+        ca = C.module.gradient(k, v, g)[0]
+        while True:
+            mid = 0.5 * (xa + xb)
+            if mid == xa or mid == xb:
+                return mid
+            v[slot] = mid
+            if (C.module.gradient(k, v, g)[0] < 0.0) == (ca < 0.0):
+                xa = mid
+            else:
+                xb = mid
+
+    def thin():
+        """The region's first point (in the side's order) in a region thinner than a
+        sample: an extremum of a condition between three samples of one sign where it
+        changes sign (Newton on c' = 0), whose class is the region's; or None."""
+        H = np.empty((1, 1))
+        best = None
+        mid, left, right = values[1:-1], values[:-2], values[2:]
+        with np.errstate(invalid="ignore"):
+            least = (mid * left > 0.0) & (mid * right > 0.0) & (np.abs(mid) < np.abs(left)) \
+                & (np.abs(mid) <= np.abs(right)) & ~tied[1:-1]
+        for i, k in zip(*np.nonzero(least)):
+            i, k = int(i) + 1, int(k)
+            if excluded(k):
+                continue
+            ci = values[i, k]
+            x, ok = samples[i], False
+            for it in range(T.MAX_IT):
+                v[slot] = x
+                C.module.hessian(k, v, g, H)
+                dx = -g[0] / H[0, 0] if H[0, 0] != 0.0 else math.nan
+                if not math.isfinite(dx):
+                    break
+                x += dx
+                if not samples[i - 1] <= x <= samples[i + 1]:
+                    break
+                if abs(dx) <= 1e-3 * spec.tol:
+                    ok = True
+                    break
+            v[slot] = x
+            cx, sx = C.module.gradient(k, v, g)
+            if not ok or cx * ci >= 0.0 or abs(cx) <= nx.TOL * sx:
+                continue
+            if spec.side == "min":
+                r = zero(k, samples[i - 1], x)
+            else:
+                r = zero(k, x, samples[i + 1])
+            step = 1.0 if spec.side == "min" else -1.0
+            eps = 1e-3 * abs(x - r)
+            if _class_at(m, v, slot, r + step * eps, spec.layer) != spec.value \
+                    or _class_at(m, v, slot, r - step * eps, spec.layer) == spec.value:
+                continue
+            if best is None or spec.sign * r < spec.sign * best.value:
+                v[slot] = r
+                cr, sr = C.module.gradient(k, v, g)
+                best = Threshold(p, r, {p: r}, C.names[k], "root",
+                                 abs(cr) / sr if sr > 0 else abs(cr), 0.0, math.nan,
+                                 spec.side)
+        return best
+
+    sliver = thin()
     classes = evaluate(m, {p: samples}, fixed, [layers_for(m)[spec.layer]])[spec.layer]
     inside = classes == spec.value
     if not inside.any():
-        return None
+        return sliver
     first = 0 if spec.side == "min" else len(samples) - 1
     if inside[first]:
         return Threshold(p, samples[first], {p: float(samples[first])}, "", "edge", 0.0, 0.0,
                          float(samples[first]), spec.side)
     for i in order:
         a, b = (i, i + 1) if spec.side == "min" else (i + 1, i)
+        if sliver is not None and spec.sign * sliver.value <= spec.sign * samples[b]:
+            return sliver  # met before the samples' first class change
         if inside[b] and not inside[a]:
             found = []
             for k in range(nc):
-                if C.rest_only[k] and abs(fixed.get(m.velocity, 1.0)) > 0 and m.velocity != p:
+                if excluded(k):
                     continue
                 if crosses(k, i, i + 1):
                     r = root(k, i, i + 1)
@@ -462,7 +533,7 @@ def _line(spec: _Spec, conditions) -> Threshold | None:
             raise ValueError(f"{m.name}: {spec.layer} changes between {p} = "
                              f"{samples[i]:.12g} and {samples[i + 1]:.12g} at none of the "
                              "conditions' roots there")
-    return None
+    return sliver
 
 
 __all__ = ["Threshold", "threshold"]
