@@ -496,6 +496,16 @@ def _solve(F, what, k, j, v, ix, iy, geo, g, H, u, w, tol_u, tol_w):
 
 
 @njit(cache=True, error_model="numpy")
+def _fold_on_step(F, axis, k, v, ix, iy, geo, g, H, u, w, qu, qw, a0, a1, tol_u, tol_w):
+    """The fold in ``axis`` between the curve points (u, w) and (qu, qw), whose tangents
+    have the components a0 and a1 (of opposite signs) in that axis: :func:`_solve` from
+    where the component interpolates to zero."""
+    a = a0 / (a0 - a1)
+    return _solve(F, 1 + axis, k, -1, v, ix, iy, geo, g, H, u + a * (qu - u), w + a * (qw - w),
+                  tol_u, tol_w)
+
+
+@njit(cache=True, error_model="numpy")
 def _edge(F, k, v, ix, iy, geo, g, u, w, fixed_u, tol_u, tol_w):
     """Newton on c = 0 along an edge (u fixed when ``fixed_u``, else w) from (u, w)."""
     err = np.inf
@@ -728,15 +738,35 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
         if not finish:
             ok, qu, qw, res, st, qs, qcu, qcw = _correct(F, k, v, ix, iy, geo, g, pu, pw, tu, tw)
         leaves = (ok and not _inside(qu, qw, 0.0)) or (not ok and not _inside(pu, pw, 0.0))
+        xu, xw = (qu, qw) if ok else (pu, pw)  # a point beyond the edge, where it leaves
+        qtu, qtw, qn, qs = _orient(qs, qcu, qcw, tu, tw)
+        if ok and not leaves and not finish and (tu * qtu < 0.0 or tw * qtw < 0.0):
+            # the curve turns back in an axis between two vertices inside the slice: where
+            # that fold lies beyond an edge, the curve leaves the slice there and comes back
+            # (a loop that the edge cuts by less than a step)
+            for axis in range(2):
+                a0 = tu if axis == 0 else tw
+                a1 = qtu if axis == 0 else qtw
+                if a0 * a1 < 0.0:
+                    okf, fu, fw, resf, errf = _fold_on_step(F, axis, k, v, ix, iy, geo, g, H, u,
+                                                            w, qu, qw, a0, a1, tol_u, tol_w)
+                    # beyond the edge by more than the tolerance (a fold on it, to the
+                    # tolerance, is a loop that touches the edge)
+                    if okf and not _inside(fu, fw, max(tol_u, tol_w)) \
+                            and math.hypot(fu - u, fw - w) <= 2.0 * h:
+                        leaves = True
+                        xu, xw = fu, fw
         ex_ok, ex_u, ex_w, ex_res, ex_err = False, u, w, np.inf, np.inf
-        if leaves and not finish:
+        # from a point on an edge, along a tangent into the slice (a region thinner than
+        # the step, that the edge cuts), the step is shortened, not ended on that edge
+        inward = (u <= 1e-12 and tu > 0.0) or (u >= 1.0 - 1e-12 and tu < 0.0) \
+            or (w <= 1e-12 and tw > 0.0) or (w >= 1.0 - 1e-12 and tw < 0.0)
+        if leaves and not finish and not (inward and h > H_MIN):
             # the curve leaves the slice within this step: end on the edge it crosses
-            ex_ok, ex_u, ex_w, ex_res, ex_err = _exit(F, k, v, ix, iy, geo, g, u, w,
-                                                      qu if ok else pu, qw if ok else pw,
+            ex_ok, ex_u, ex_w, ex_res, ex_err = _exit(F, k, v, ix, iy, geo, g, u, w, xu, xw,
                                                       tol_u, tol_w)
             ex_ok = ex_ok and math.hypot(ex_u - u, ex_w - w) <= 2.0 * h
             finish = ex_ok or h <= H_MIN
-        qtu, qtw, qn, qs = _orient(qs, qcu, qcw, tu, tw)
         turn = qtu * tu + qtw * tw
         jump = math.hypot(qu - pu, qw - pw)
         stuck = not leaves and not finish and h <= H_MIN and (
@@ -864,9 +894,8 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
             a0 = tu if axis == 0 else tw
             a1 = qtu if axis == 0 else qtw
             if a0 * a1 < 0.0:
-                a = a0 / (a0 - a1)
-                okf, fu, fw, resf, errf = _solve(F, 1 + axis, k, -1, v, ix, iy, geo, g, H,
-                                                 u + a * du, w + a * dw, tol_u, tol_w)
+                okf, fu, fw, resf, errf = _fold_on_step(F, axis, k, v, ix, iy, geo, g, H, u, w,
+                                                        qu, qw, a0, a1, tol_u, tol_w)
                 t = ((fu - u) * du + (fw - w) * dw) / length2
                 if okf and -0.25 <= t <= 1.25 and _inside(fu, fw, 1e-12):
                     fu = min(max(fu, 0.0), 1.0)
@@ -1216,6 +1245,204 @@ def _minimum(F, k, v, ix, iy, geo, u, w, radius):
             if abs(step) <= 1e-15:
                 return _inside(u + t * eu, w + t * ew, 0.0), u + t * eu, w + t * ew
     return False, u, w
+
+
+@njit(cache=True, error_model="numpy")
+def _thin_all(F, active, v, ix, iy, geo, n):
+    """Seeds that no class change of a raster gives: a region thinner than a cell of the
+    check raster shows none, so :func:`_seeds_all` has no seed near it (GUIDE §7).
+
+    On an n x n raster of nodes (the slice's edges included), per active condition c,
+    its extremal nodes (c least, or greatest, among the neighbours): a sign change to a
+    neighbour (an island of one node), or one found by refining the extremum near the
+    node (:func:`_extremum`: the zero set passes between the nodes).  (A band between
+    the zero sets of two conditions, thinner than a cell and without an extremum, is
+    not looked for.)
+    Returns rows (condition, u, w, status): status 0 a seed near the zero set, 2 an
+    extremum that could not be refined but may reach zero within a cell (unresolved).
+    """
+    nc = active.shape[0]
+    ks = np.flatnonzero(active)
+    cv = np.empty((ks.shape[0], n, n))
+    row = np.empty(nc)
+    cs = np.empty(nc)
+    for i in range(n):
+        v[ix] = geo[0] + (i / (n - 1)) * geo[1]
+        for j in range(n):
+            v[iy] = geo[2] + (j / (n - 1)) * geo[3]
+            _values(F, v, row, cs)
+            for q in range(ks.shape[0]):
+                cv[q, i, j] = row[ks[q]]
+    g = np.empty(2)
+    H = np.empty((2, 2))
+    r = 1.0 / (n - 1)
+    rows = np.empty((16, 4))
+    m = 0
+    for q in range(ks.shape[0]):
+        k = ks[q]
+        c = cv[q]
+        for i in range(n):
+            for j in range(n):
+                a = c[i, j]
+                if not a == a:
+                    continue
+                least, most = True, True
+                flip_i, flip_j = -1, -1
+                for d in range(9):
+                    i2 = i + d // 3 - 1
+                    j2 = j + d % 3 - 1
+                    if d == 4 or i2 < 0 or j2 < 0 or i2 >= n or j2 >= n:
+                        continue
+                    b = c[i2, j2]
+                    if not b == b:
+                        continue
+                    # ties: the first node of a flat stretch is its extremum
+                    least = least and (b > a or (b == a and d > 4))
+                    most = most and (b < a or (b == a and d > 4))
+                    if a * b < 0.0:
+                        flip_i, flip_j = i2, j2
+                    if not (least or most):
+                        break
+                if not (least or most):
+                    continue
+                ui, wj = i / (n - 1), j / (n - 1)
+                if a == 0.0:
+                    rows = _row(rows, m, k, ui, wj, 0)
+                    m += 1
+                elif flip_i >= 0:  # an island: c has the other sign at a neighbour
+                    f = a / (a - c[flip_i, flip_j])
+                    rows = _row(rows, m, k, ui + f * (flip_i - i) * r,
+                                wj + f * (flip_j - j) * r, 0)
+                    m += 1
+                elif (least and a > 0.0) or (most and a < 0.0):
+                    status, u, w = _extremum(F, k, v, ix, iy, geo, ui, wj,
+                                             1.0 if a > 0.0 else -1.0, r, g, H)
+                    if status > 0:
+                        rows = _row(rows, m, k, u, w, 0 if status == 1 else 2)
+                        m += 1
+    return rows[:m]
+
+
+@njit(cache=True, error_model="numpy")
+def _row(rows, m, k, u, w, status):
+    """``rows`` with row m set to (k, u, w, status), twice as long where it was full."""
+    if m >= rows.shape[0]:
+        more = np.empty((2 * rows.shape[0], 4))
+        more[:m] = rows[:m]
+        rows = more
+    rows[m, 0], rows[m, 1], rows[m, 2], rows[m, 3] = k, u, w, status
+    return rows
+
+
+@njit(cache=True, error_model="numpy")
+def _extremum(F, k, v, ix, iy, geo, u0, w0, s, r, g, H):
+    """From a raster node (u0, w0) where s c_k > 0 is least among its neighbours
+    (``r`` apart): does c_k change sign within two cells?
+
+    A corner where s c grows inwards along both edges is its own minimum.  Otherwise
+    the candidates are the stationary point of c (Newton on grad c = 0) and, on each
+    edge of the slice within a cell, the stationary point along it (a region that the
+    edge cuts has its extremum there); where none is a minimum of s c (a kink, where c
+    is a root, or the edge of c's domain), the least of 3 x 3 samples around the node,
+    moved to the least sample, and zoomed in where that is the centre.  A point where
+    s c < 0 proves a sign change.  Returns (1, u, w) with a point of the zero set
+    (:func:`_zero_between` the node and that point); (0, u0, w0) where a minimum of
+    s c is positive (for the samples: above their spread and above what the gradient
+    at the least loses over the window: a cusp never is), touches zero within the
+    ties, or lies at the edge of c's domain (beyond which c has no sign); else
+    (2, u0, w0), unresolved."""
+    c, sc, cu, cw = _grad(F, k, v, ix, iy, geo, u0, w0, g)
+    if (u0 == 0.0 or u0 == 1.0) and (w0 == 0.0 or w0 == 1.0) \
+            and s * cu * (1.0 if u0 == 0.0 else -1.0) >= 0.0 \
+            and s * cw * (1.0 if w0 == 0.0 else -1.0) >= 0.0:
+        return 0, u0, w0
+    radius = 2.0 * r
+    for e in range(-1, 4):  # -1: the interior; then the edges u = 0, u = 1, w = 0, w = 1
+        fixed_u = e < 2
+        edge = float(e % 2)
+        if e >= 0 and abs((u0 if fixed_u else w0) - edge) > r:
+            continue
+        u, w = u0, w0
+        if e >= 0:
+            u, w = (edge, w0) if fixed_u else (u0, edge)
+        done = False
+        for it in range(12):
+            c, sc, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, u, w, g, H)
+            if not math.isfinite(c):
+                break
+            if s * c < 0.0:
+                return _zero_between(F, k, v, ix, iy, geo, g, u0, w0, u, w)
+            if done:
+                break
+            if e < 0:
+                a, b = _solve2(huu, huw, huw, hww, -cu, -cw)
+            elif fixed_u:
+                a, b = 0.0, -cw / hww
+            else:
+                a, b = -cu / huu, 0.0
+            if not (math.isfinite(a) and math.isfinite(b)):
+                break
+            u += a
+            w += b
+            if math.hypot(u - u0, w - w0) > radius or not _inside(u, w, 0.0):
+                break
+            done = abs(a) + abs(b) <= 1e-10  # one more pass: the value there
+        if not (done and math.isfinite(c)):
+            continue
+        if e < 0 and s * huu >= 0.0 and s * hww >= 0.0 and huu * hww >= huw * huw:
+            return 0, u0, w0
+        inward = (cu if fixed_u else cw) * (1.0 if edge == 0.0 else -1.0)
+        if e >= 0 and s * (hww if fixed_u else huu) >= 0.0 and s * inward >= 0.0:
+            return 0, u0, w0
+    # no smooth minimum: zoom in on the least of the samples around the node
+    bu, bw, half = u0, w0, r
+    for it in range(128):
+        au, aw = bu, bw
+        hi, least, tie, slope, edge = -np.inf, np.inf, 0.0, 0.0, False
+        for p in range(9):
+            u = min(max(au + (p // 3 - 1) * half, 0.0), 1.0)
+            w = min(max(aw + (p % 3 - 1) * half, 0.0), 1.0)
+            c, sc, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
+            if not math.isfinite(c):
+                edge = True
+                continue
+            if s * c < 0.0:
+                return _zero_between(F, k, v, ix, iy, geo, g, u0, w0, u, w)
+            hi = max(hi, s * c)
+            if s * c < least:
+                least, tie, slope, bu, bw = s * c, COVANISH * sc, math.hypot(cu, cw), u, w
+        if (least > hi - least and least > 4.0 * slope * half) or least <= tie or edge:
+            # above the samples' spread and the linear model's fall over the window,
+            # within the ties of zero (it touches zero, as |x| does), or at the edge of
+            # c's domain
+            return 0, u0, w0
+        if bu == au and bw == aw:
+            half *= 0.25
+            if half <= 1e-15:
+                break
+        elif math.hypot(bu - u0, bw - w0) > radius:
+            return 0, u0, w0  # the least lies nearer another node, which is looked at
+    return 2, u0, w0
+
+
+@njit(cache=True, error_model="numpy")
+def _zero_between(F, k, v, ix, iy, geo, g, ua, wa, ub, wb):
+    """A zero of c_k on the segment from (ua, wa) to (ub, wb), where it has opposite
+    signs, by bisection: (1, u, w), or (2, ua, wa) where c is not finite on the way."""
+    ca = _grad(F, k, v, ix, iy, geo, ua, wa, g)[0]
+    lo, hi = 0.0, 1.0
+    for it in range(60):
+        mid = 0.5 * (lo + hi)
+        c = _grad(F, k, v, ix, iy, geo, ua + mid * (ub - ua), wa + mid * (wb - wa), g)[0]
+        if not math.isfinite(c):
+            return 2, ua, wa
+        if (c < 0.0) == (ca < 0.0):
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo <= 1e-12:
+            break
+    return 1, ua + hi * (ub - ua), wa + hi * (wb - wa)
 
 
 @njit(cache=True, error_model="numpy")
@@ -1625,7 +1852,8 @@ _ENTRIES: dict = {}
 def entries() -> dict:
     """The tracer's entry points, compiled once (cached on disk): ``trace``, ``seeds``,
     ``seed_trace`` (the check raster, then both, after the cells near its class
-    changes), ``survey``, ``raster`` (the check raster alone) and ``applicable``.
+    changes), ``thin`` (seeds of regions thinner than a raster cell), ``survey``,
+    ``raster`` (the check raster alone) and ``applicable``.
 
     Each is the compiled overload's own entry point, called without the
     dispatcher (typing the arguments at every call cost 0.2-0.5 ms with the
@@ -1645,6 +1873,7 @@ def entries() -> dict:
             ADDRESSES, _F2, _F1, APPLICABLE, RASTER, types.int64, _B1, _I1, _F1,
             _F2, types.int64, types.int64, _F1, types.int64, types.int64, _F2, _I2, _I1, _I2,
             _B3, types.float64, types.float64)
+        sig_thin = _F2(ADDRESSES, _B1, _F1, types.int64, types.int64, _F1, types.int64)
         sig_applicable = types.void(ADDRESSES, _F1, _F2, types.int64, types.int64, _F1,
                                     APPLICABLE, _B1)
         sig_raster = types.void(types.intp, _F1, types.int64, _F1, _I1, _F2, _F1, _F2, _C2,
@@ -1652,6 +1881,7 @@ def entries() -> dict:
         for name, fn, sig in (("trace", _trace_all, sig_trace),
                               ("seeds", _seeds_all, sig_seeds),
                               ("seed_trace", _seed_trace_all, sig_seed_trace),
+                              ("thin", _thin_all, sig_thin),
                               ("survey", _survey_all, sig_survey),
                               ("raster", _raster_all, sig_raster),
                               ("applicable", _applicable_all, sig_applicable)):

@@ -21,6 +21,7 @@ or kind), the switch point is solved as ``p_1(a) = p_2(a)`` by Newton, with
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import dataclass
@@ -179,8 +180,23 @@ def threshold_curve(m: Model, param: str, layer: str, value: int, over, fixed, s
     span_a = a_hi - a_lo
 
     def at(a):
-        return threshold(m, param, layer, value, spec.ranges, {**fixed, name: a}, side, tol,
-                         conditions=conditions)
+        t = threshold(m, param, layer, value, spec.ranges, {**fixed, name: a}, side, tol,
+                      conditions=conditions)
+        if t is not None and t.kind == "flat" and spec.others:
+            # the least vertex of a piece whose fold the tracer did not locate (near an
+            # edge): the fold, where it is solved nearby
+            fold = Threshold(t.param, t.value, t.at, t.condition, "fold_" + param, t.residual,
+                             t.error, t.bound, t.side)
+            t = _moved(spec, name, C, base, fold, a, tol, within=True) or t
+        return t
+
+    def same(t0, a1, t1):
+        """The candidate t0, followed to a1, gives t1's threshold (to tol) there: another
+        name for the same threshold (a key change there is no switch)."""
+        if t0 is None or t1 is None:
+            return None
+        moved = _moved(spec, name, C, base, t0, a1, tol, within=True)
+        return moved if moved is not None and abs(moved.value - t1.value) <= tol else None
 
     def tangent(t: Threshold, a):
         """dp/da (normalised by the ranges) of the candidate t at a."""
@@ -206,6 +222,8 @@ def threshold_curve(m: Model, param: str, layer: str, value: int, over, fixed, s
     while a < a_hi:
         an = min(a + h * span_a, a_hi)
         tn = at(an)
+        if _key(tn) != _key(t):
+            tn = same(t, an, tn) or tn
         if _key(tn) == _key(t):
             if tn is not None:
                 sn = tangent(tn, an)
@@ -225,14 +243,19 @@ def threshold_curve(m: Model, param: str, layer: str, value: int, over, fixed, s
             continue
         # the threshold passes to another candidate (or the region appears or vanishes)
         sa, st = _switch(spec, name, C, base, a, t, an, tn, at, tol, span_a)
+        # both candidates solved at the switch itself (not copied from a vertex)
+        before = _moved(spec, name, C, base, t, sa, tol) if t is not None else None
+        after = _moved(spec, name, C, base, st, sa, tol) if st is not None else None
         if t is not None:
-            current.append(_Vertex(sa, _moved(spec, name, C, base, t, sa, tol) or t))
+            current.append(_Vertex(sa, before or t))
             pieces.append(current)
-        points.append(("switch" if (t is not None and st is not None) else "end", sa,
-                       st if st is not None else t))
+        point = after or before or st or t
+        if before is not None and after is not None:
+            point = dataclasses.replace(after, residual=max(before.residual, after.residual))
+        points.append(("switch" if (t is not None and st is not None) else "end", sa, point))
         current = []
         if st is not None:
-            current.append(_Vertex(sa, _moved(spec, name, C, base, st, sa, tol) or st))
+            current.append(_Vertex(sa, after or st))
         a, t = an, tn
         if t is not None:
             current.append(_Vertex(an, tn))
@@ -243,8 +266,10 @@ def threshold_curve(m: Model, param: str, layer: str, value: int, over, fixed, s
     return _dataset(spec, name, (a_lo, a_hi), pieces, points, tol)
 
 
-def _moved(spec, along, C, base, t: Threshold, a: float, tol) -> Threshold | None:
-    """The candidate ``t`` followed by its defining system to ``a``."""
+def _moved(spec, along, C, base, t: Threshold, a: float, tol,
+           within: bool = False) -> Threshold | None:
+    """The candidate ``t`` followed by its defining system to ``a``; None where it does
+    not converge (or, ``within``, leaves the ranges by more than ``tol``)."""
     if t.kind == "edge":
         at = dict(t.at)
         return Threshold(t.param, t.value, at, t.condition, t.kind, t.residual, t.error,
@@ -258,6 +283,9 @@ def _moved(spec, along, C, base, t: Threshold, a: float, tol) -> Threshold | Non
     if len(z) == 2:
         at[sysm.x] = float(z[0])
     at[t.param] = float(z[-1])
+    if within and not all(spec.ranges[n][0] - tol <= at[n] <= spec.ranges[n][1] + tol
+                          for n in spec.ranges):
+        return None
     return Threshold(t.param, float(z[-1]), at, t.condition, t.kind, res, err, math.nan, t.side)
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Mapping
@@ -15,7 +16,7 @@ from ..model import Model
 from ..models import get_model
 from . import _trace as T
 from .tracing import (LAYERS, Slice, Traced, check_tol, condition_name, make_slice, parse_range,
-                      parse_tol, trace)
+                      parse_tol, trace, unresolved_points)
 from .conditions import compiled
 
 #: Samples of a one-dimensional threshold's line.
@@ -47,7 +48,11 @@ class Threshold:
         the largest residual of its defining equations, relative to their tie
         scales;
     ``bound``
-        the raster's best cell in the region (a cell's width from the exact value).
+        the raster's best cell in the region (a cell's width from the exact value);
+    ``unresolved``
+        points where an extremum of a condition may reach zero within a cell of the
+        seed raster and could not be resolved (a warning names them): a region
+        thinner than a cell there could lie beyond ``value``.
     """
 
     param: str
@@ -59,6 +64,7 @@ class Threshold:
     error: float = 0.0
     bound: float = math.nan
     side: str = "min"
+    unresolved: tuple = ()
 
     def __post_init__(self):
         # plain floats: the numbers print and compare as they read
@@ -114,15 +120,18 @@ def threshold(model, param: str, layer: str = "n_solutions", value: int = 0,
     Returns
     -------
     Threshold or None
-        None where the region is empty in the given ranges.
+        None where the region is empty in the given ranges (a region thinner than
+        a raster cell included: the extrema of every condition are searched).
 
     Raises
     ------
     ValueError
         naming the argument: an unknown model, parameter, variable or layer, a
         range that is empty or outside the domain, more than two names in ``over``
-        besides the parameter (not supported), or a region whose extremum cannot
-        be located to ``tol``.
+        besides the parameter (not supported), a region whose extremum cannot
+        be located to ``tol``, or no region found where an extremum of a
+        condition could not be resolved (a warning names it; with a region, the
+        Threshold lists such points in ``unresolved``).
 
     Examples
     --------
@@ -238,6 +247,22 @@ def _plane(spec: _Spec, conditions) -> Threshold | None:
         rows = rows[np.isin(tr.buf.vi[:n, 2], np.flatnonzero(only))]
         return _best(sl, spec, tr, rows, edge=None, bound=math.nan)
     tr = trace(sl, spec.layer, spec.tol)
+    result = _plane_best(sl, spec, tr)
+    unresolved = unresolved_points(sl, tr)
+    if unresolved and result is None:
+        raise ValueError(f"{sl.model.name}: no region with {spec.layer} = {spec.value} was "
+                         f"found, but {len(unresolved)} extrema of a condition could not be "
+                         "resolved (see the warning): a region thinner than a seed raster cell "
+                         "may lie there")
+    if unresolved:
+        result = dataclasses.replace(result, unresolved=tuple(unresolved))
+    return result
+
+
+def _plane_best(sl: Slice, spec: _Spec, tr: Traced) -> Threshold | None:
+    """The threshold of the traced slice ``tr`` (:func:`_best` over the pieces that bound
+    the region, and the raster's cells in it)."""
+    p = spec.param
     bounding = np.flatnonzero((tr.pieces[:, 2] == spec.value) | (tr.pieces[:, 3] == spec.value))
     rows = tr.pq[np.isin(tr.pp, bounding)]
     inside = tr.classes == spec.value
@@ -340,17 +365,31 @@ def _line(spec: _Spec, conditions) -> Threshold | None:
     slot = m.inputs.index(p)
     nc = len(C)
     values = np.empty((len(samples), nc))
-    scales = np.empty(nc)
+    scales = np.empty((len(samples), nc))
     v = base.copy()
     for i, x in enumerate(samples):
         v[slot] = x
-        C.module.values(v, values[i], scales)
+        C.module.values(v, values[i], scales[i])
+    # a sample within a condition's ties (|c| <= TOL scale) may be classed on either side:
+    # the condition changes sign there as far as the classes can tell
+    with np.errstate(invalid="ignore"):
+        tied = np.abs(values) <= nx.TOL * scales
     g = np.empty(1)
 
+    def crosses(k, a, b):
+        """c_k changes sign between samples a and b, or is tied at either."""
+        return values[a, k] * values[b, k] < 0.0 or tied[a, k] or tied[b, k]
+
     def root(k, a, b):
-        """c_k = 0 between samples a and b, by Newton from the secant point."""
+        """c_k = 0 between samples a and b, by Newton from the secant point (from the tied
+        sample where there is no sign change): (x, residual, last step, width of the ties
+        around x)."""
         ca, cb = values[a, k], values[b, k]
-        x = samples[a] + ca / (ca - cb) * (samples[b] - samples[a])
+        if ca * cb < 0.0:
+            x = samples[a] + ca / (ca - cb) * (samples[b] - samples[a])
+        else:
+            x = samples[a] if abs(ca) * scales[b, k] <= abs(cb) * scales[a, k] else samples[b]
+        step = 0.0
         for it in range(T.MAX_IT):
             v[slot] = x
             c, s = C.module.gradient(k, v, g)
@@ -358,13 +397,15 @@ def _line(spec: _Spec, conditions) -> Threshold | None:
                 return None
             step = -c / g[0]
             x += step
-            if abs(step) <= 1e-3 * spec.tol:
+            # a step below the tolerance, or the value within a hundredth of the ties
+            # (large terms leave rounding noise in c and so in the step)
+            if abs(step) <= 1e-3 * spec.tol or abs(c) <= 1e-2 * nx.TOL * s:
                 break
         v[slot] = x
         c, s = C.module.gradient(k, v, g)
-        if not (samples[a] - spec.tol <= x <= samples[b] + spec.tol):
+        if not (samples[a] - spec.tol <= x <= samples[b] + spec.tol) or g[0] == 0.0:
             return None
-        return x, abs(c) / s if s > 0 else abs(c), abs(step)
+        return x, abs(c) / s if s > 0 else abs(c), abs(step), nx.TOL * s / abs(g[0])
 
     order = range(len(samples) - 1) if spec.side == "min" else range(len(samples) - 2, -1, -1)
     if spec.layer == "singular":
@@ -377,22 +418,93 @@ def _line(spec: _Spec, conditions) -> Threshold | None:
                         return Threshold(p, r[0], {p: r[0]}, C.names[k], "root", r[1], r[2],
                                          math.nan, spec.side)
         return None
+    def excluded(k):
+        """c_k holds only at rest, and the velocity is fixed and not zero."""
+        return bool(C.rest_only[k]) and abs(fixed.get(m.velocity, 1.0)) > 0 and m.velocity != p
+
+    def zero(k, xa, xb):
+        """The zero of c_k between xa and xb (opposite signs), by bisection to the last
+        bit."""
+        v[slot] = xa
+        ca = C.module.gradient(k, v, g)[0]
+        while True:
+            mid = 0.5 * (xa + xb)
+            if mid == xa or mid == xb:
+                return mid
+            v[slot] = mid
+            if (C.module.gradient(k, v, g)[0] < 0.0) == (ca < 0.0):
+                xa = mid
+            else:
+                xb = mid
+
+    def thin():
+        """The region's first point (in the side's order) in a region thinner than a
+        sample: an extremum of a condition between three samples of one sign where it
+        changes sign (Newton on c' = 0), whose class is the region's; or None."""
+        H = np.empty((1, 1))
+        best = None
+        mid, left, right = values[1:-1], values[:-2], values[2:]
+        with np.errstate(invalid="ignore"):
+            least = (mid * left > 0.0) & (mid * right > 0.0) & (np.abs(mid) < np.abs(left)) \
+                & (np.abs(mid) <= np.abs(right)) & ~tied[1:-1]
+        for i, k in zip(*np.nonzero(least)):
+            i, k = int(i) + 1, int(k)
+            if excluded(k):
+                continue
+            ci = values[i, k]
+            x, ok = samples[i], False
+            for it in range(T.MAX_IT):
+                v[slot] = x
+                C.module.hessian(k, v, g, H)
+                dx = -g[0] / H[0, 0] if H[0, 0] != 0.0 else math.nan
+                if not math.isfinite(dx):
+                    break
+                x += dx
+                if not samples[i - 1] <= x <= samples[i + 1]:
+                    break
+                if abs(dx) <= 1e-3 * spec.tol:
+                    ok = True
+                    break
+            v[slot] = x
+            cx, sx = C.module.gradient(k, v, g)
+            if not ok or cx * ci >= 0.0 or abs(cx) <= nx.TOL * sx:
+                continue
+            if spec.side == "min":
+                r = zero(k, samples[i - 1], x)
+            else:
+                r = zero(k, x, samples[i + 1])
+            step = 1.0 if spec.side == "min" else -1.0
+            eps = 1e-3 * abs(x - r)
+            if _class_at(m, v, slot, r + step * eps, spec.layer) != spec.value \
+                    or _class_at(m, v, slot, r - step * eps, spec.layer) == spec.value:
+                continue
+            if best is None or spec.sign * r < spec.sign * best.value:
+                v[slot] = r
+                cr, sr = C.module.gradient(k, v, g)
+                best = Threshold(p, r, {p: r}, C.names[k], "root",
+                                 abs(cr) / sr if sr > 0 else abs(cr), 0.0, math.nan,
+                                 spec.side)
+        return best
+
+    sliver = thin()
     classes = evaluate(m, {p: samples}, fixed, [layers_for(m)[spec.layer]])[spec.layer]
     inside = classes == spec.value
     if not inside.any():
-        return None
+        return sliver
     first = 0 if spec.side == "min" else len(samples) - 1
     if inside[first]:
         return Threshold(p, samples[first], {p: float(samples[first])}, "", "edge", 0.0, 0.0,
                          float(samples[first]), spec.side)
     for i in order:
         a, b = (i, i + 1) if spec.side == "min" else (i + 1, i)
+        if sliver is not None and spec.sign * sliver.value <= spec.sign * samples[b]:
+            return sliver  # met before the samples' first class change
         if inside[b] and not inside[a]:
             found = []
             for k in range(nc):
-                if C.rest_only[k] and abs(fixed.get(m.velocity, 1.0)) > 0 and m.velocity != p:
+                if excluded(k):
                     continue
-                if values[i, k] * values[i + 1, k] < 0.0:
+                if crosses(k, i, i + 1):
                     r = root(k, i, i + 1)
                     if r is not None:
                         found.append((spec.sign * r[0], k, r))
@@ -402,17 +514,22 @@ def _line(spec: _Spec, conditions) -> Threshold | None:
                                  "condition changes sign: the conditions do not explain it")
             # the root where the class becomes the region's, nearest the outside sample
             found.sort(key=lambda t: abs(t[2][0] - samples[a]))
-            eps = 1e-9 * (hi - lo)
             step = 1.0 if b > a else -1.0
             for _, k, r in found:
-                if _class_at(m, v, slot, r[0] + step * eps, spec.layer) == spec.value \
-                        and _class_at(m, v, slot, r[0] - step * eps, spec.layer) != spec.value:
-                    return Threshold(p, r[0], {p: r[0]}, C.names[k], "root", r[1], r[2],
-                                     float(samples[b]), spec.side)
+                # the classes either side, beyond the condition's ties (wide where its
+                # terms are large), and no further than half a sample
+                eps = max(1e-9 * (hi - lo), 4.0 * r[3])
+                while eps <= 0.5 * (samples[1] - samples[0]):
+                    if _class_at(m, v, slot, r[0] + step * eps, spec.layer) == spec.value \
+                            and _class_at(m, v, slot, r[0] - step * eps,
+                                          spec.layer) != spec.value:
+                        return Threshold(p, r[0], {p: r[0]}, C.names[k], "root", r[1], r[2],
+                                         float(samples[b]), spec.side)
+                    eps *= 10.0
             raise ValueError(f"{m.name}: {spec.layer} changes between {p} = "
                              f"{samples[i]:.12g} and {samples[i + 1]:.12g} at none of the "
                              "conditions' roots there")
-    return None
+    return sliver
 
 
 __all__ = ["Threshold", "threshold"]

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+import warnings
+from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
 from typing import Mapping
 
@@ -241,6 +242,9 @@ class Traced:
     active: np.ndarray
     buf: "_Buffers"  # every traced curve, pieces or not
     classes: np.ndarray | None = None  # the check raster (cell centres)
+    #: rows (condition, u, w): extrema of a condition that may reach zero within a seed
+    #: raster cell and that neither a refinement nor a traced curve resolved
+    unresolved: np.ndarray = field(default_factory=lambda: np.empty((0, 3)))
 
 
 class _Buffers:
@@ -295,19 +299,33 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
         seeds = run["seeds"](fns, active, v, ix, iy, geo, seed_nodes, near)
         run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
                      buf.counts, buf.curves, mark, near, tol_u, tol_w, only is None)
+    thin = run["thin"](fns, active, v, ix, iy, geo, seed_nodes)
+    extra = thin[thin[:, 3] == 0.0]
+    more = 0
+    if len(extra):
+        if check_cells:  # a seed of a thin region starts a curve where no class change is near
+            n = near.shape[0]
+            cell = np.clip((extra[:, 1:3] * n).astype(np.int64), 0, n - 1)
+            near[cell[:, 0], cell[:, 1]] = True
+        if not buf.counts[2]:
+            more = run["trace"](fns, extra, grp, active, v, out, ix, iy, geo, code, buf.vf,
+                                buf.vi, buf.counts, buf.curves, mark, near, tol_u, tol_w,
+                                only is None)
+        seeds = np.concatenate((seeds, extra))
     full = bool(buf.counts[2])
     while buf.counts[2]:  # the buffers were full: again with larger ones
         buf = buf.grown()
         mark[:] = 0
         run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
                      buf.counts, buf.curves, mark, near, tol_u, tol_w, only is None)
-    if check_cells and not full:
+    if check_cells and not full and not more:
         traced = Traced(*assembled, group, active, buf)
     else:
         traced = _assembled(buf, group, active)
+    traced.unresolved = _unresolved(thin, mark)
     if check_cells:
         traced.classes = classes
-        if full:
+        if full or more:
             bad = T._uncovered(check_cells, changes, traced.pv, traced.pp)
         if len(bad):
             rescue = _rescue_seeds(sl, active, bad, check_cells)
@@ -323,7 +341,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
                 if buf.counts[2]:
                     raise RuntimeError(f"{m.name}: more than {buf.vf.shape[0]} vertices")
                 traced = _assembled(buf, group, active)
-                traced.classes = classes
+                traced.classes, traced.unresolved = classes, _unresolved(thin, mark)
                 bad = T._uncovered(check_cells, changes, traced.pv, traced.pp)
             if len(bad):
                 raise ValueError(_uncovered_message(sl, layer, classes, bad, axes))
@@ -418,6 +436,36 @@ def _raster_kernel(m: Model, x: str, y: str, layer: str) -> tuple:
             from_x, [d for d in m.derived if d.source == y],
             np.array([slot[d.name] for d in from_x], dtype=np.int64))
     return hit[2:]
+
+
+def _unresolved(thin: np.ndarray, mark: np.ndarray) -> np.ndarray:
+    """The unresolved extrema of :func:`phasemap.bifurcation._trace._thin_all` (status 2)
+    whose seed raster cell no traced curve of their condition crosses: rows
+    (condition, u, w)."""
+    rows = thin[thin[:, 3] == 2.0, :3]
+    n = mark.shape[1]
+    k = rows[:, 0].astype(np.int64)
+    i, j = (np.clip((rows[:, 1:3] * n).astype(np.int64), 0, n - 1).T)
+    return rows[mark[k, i, j] == 0]
+
+
+def unresolved_points(sl: Slice, traced: Traced) -> list[dict]:
+    """The unresolved extrema of a trace (:attr:`Traced.unresolved`), each as
+    ``{x: value, y: value, "condition": name}``; a warning names them."""
+    points = []
+    if len(traced.unresolved):
+        px, py = sl.physical(traced.unresolved[:, 1:3])
+        for k, a, b in zip(traced.unresolved[:, 0].astype(int).tolist(), px.tolist(),
+                           py.tolist()):
+            points.append({sl.x: a, sl.y: b, "condition": condition_name(sl, traced, k)})
+        listed = "; ".join(f"{p['condition']} at {sl.x}={p[sl.x]:.6g}, {sl.y}={p[sl.y]:.6g}"
+                           for p in points[:5])
+        more = f" and {len(points) - 5} more" if len(points) > 5 else ""
+        warnings.warn(f"{sl.model.name}: {len(points)} extrema of a condition may reach zero "
+                      f"within a cell of the {SEED_NODES}^2 seed raster, and neither Newton nor "
+                      f"sampling could tell: {listed}{more}. A region thinner than that may be "
+                      "missed there (see the result's unresolved points)", stacklevel=3)
+    return points
 
 
 def _rescue_seeds(sl: Slice, active, bad, n: int) -> np.ndarray:
@@ -641,6 +689,13 @@ def boundaries(model, axes: Mapping, fixed: Mapping | None = None, layer: str = 
         check raster lies more than one cell from every traced piece (naming
         the cells).
 
+    Warns
+    -----
+    UserWarning
+        where an extremum of a condition may reach zero within a cell of the seed
+        raster and could not be resolved (a region thinner than a cell may hide
+        there); the attribute ``phasemap_unresolved`` then lists those points (JSON).
+
     Examples
     --------
     The Painleve rod pushed towards its end (xdot < 0): no solution beyond the
@@ -661,4 +716,8 @@ def boundaries(model, axes: Mapping, fixed: Mapping | None = None, layer: str = 
     sl = make_slice(model, axes, fixed, conditions)
     check_tol(tol, {sl.x: (sl.lo[0], sl.hi[0]), sl.y: (sl.lo[1], sl.hi[1])})
     traced = trace(sl, layer, tol)
-    return to_dataset(sl, traced, layer, tol)
+    ds = to_dataset(sl, traced, layer, tol)
+    points = unresolved_points(sl, traced)
+    if points:
+        ds.attrs["phasemap_unresolved"] = json.dumps(points)
+    return ds
