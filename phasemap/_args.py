@@ -11,7 +11,7 @@ What counts as a number
 -----------------------
 A *real scalar* is a Python ``int`` or ``float``, a NumPy integer or floating
 scalar, a 0-d array of one of those, or any other :class:`numbers.Real`
-(``fractions.Fraction``).  Refused, with a :class:`ArgumentTypeError`:
+(``fractions.Fraction``).  Refused, with a :class:`WrongType`:
 
 * ``bool`` and ``numpy.bool_``: ``True`` is not a length or an angle, and
   taking it as 1.0 would hide a mistake;
@@ -25,7 +25,7 @@ the argument and the limit, not an ``OverflowError``.
 
 Errors
 ------
-A wrong *type* raises :class:`ArgumentTypeError`, which is a ``TypeError`` and
+A wrong *type* raises :class:`WrongType`, which is a ``TypeError`` and
 also a ``ValueError``: phasemap promises a ``ValueError`` for bad input, and
 code that catches either keeps working.  A wrong *value* raises
 ``ValueError``.  Every message starts with where the argument went (usually the
@@ -74,7 +74,7 @@ MAX_EXPRESSION = 200
 _NOT_NUMBERS = (bool, np.bool_, np.datetime64, np.timedelta64)
 
 
-class ArgumentTypeError(TypeError, ValueError):
+class WrongType(TypeError, ValueError):
     """An argument of the wrong type.  A ``TypeError``, and also a ``ValueError`` so that
     ``except ValueError`` catches every kind of bad input, as phasemap documents."""
 
@@ -132,7 +132,7 @@ def real(name: str, value, where: str = "") -> float:
 
     Raises
     ------
-    ArgumentTypeError
+    WrongType
         for a bool, a date, a string, a complex number, ``None`` or a container.
     ValueError
         for an integer beyond the range of a double.
@@ -145,13 +145,13 @@ def real(name: str, value, where: str = "") -> float:
     >>> real("phi", True, where="ladder")
     Traceback (most recent call last):
     ...
-    phasemap._args.ArgumentTypeError: ladder: phi must be a real number, got True (bool)
+    phasemap._args.WrongType: ladder: phi must be a real number, got True (bool)
     """
     if not _is_real_type(value):
         what = ("one real number, not a sequence"
                 if not isinstance(value, (str, bytes, Mapping)) and _has_dimensions(value)
                 else "a real number")
-        raise ArgumentTypeError(f"{_prefix(where)}{name} must be {what}, "
+        raise WrongType(f"{_prefix(where)}{name} must be {what}, "
                                 f"got {_describe(value)}")
     try:
         return float(value)
@@ -266,15 +266,15 @@ def reals(name: str, values, where: str = "") -> np.ndarray:
     >>> reals("phi", np.array(["2020"], dtype="datetime64[Y]"), where="ladder")
     Traceback (most recent call last):
     ...
-    phasemap._args.ArgumentTypeError: ladder: phi must hold real numbers, got datetime64[Y] values
+    phasemap._args.WrongType: ladder: phi must hold real numbers, got datetime64[Y] values
     """
     if isinstance(values, (str, bytes, Mapping)) or values is None:
-        raise ArgumentTypeError(f"{_prefix(where)}{name} must be a sequence of real numbers, "
+        raise WrongType(f"{_prefix(where)}{name} must be a sequence of real numbers, "
                                 f"got {_describe(values)}")
     try:
         a = np.asarray(values)
     except (TypeError, ValueError):  # ragged nesting
-        raise ArgumentTypeError(f"{_prefix(where)}{name} must be a sequence of real numbers, "
+        raise WrongType(f"{_prefix(where)}{name} must be a sequence of real numbers, "
                                 f"got {_describe(values)}") from None
     if a.dtype.kind in "iuf":
         return a.astype(float)
@@ -283,7 +283,7 @@ def reals(name: str, values, where: str = "") -> np.ndarray:
         for index, x in np.ndenumerate(a):
             out[index] = real(f"{name}[{', '.join(map(str, index))}]", x, where)
         return out
-    raise ArgumentTypeError(f"{_prefix(where)}{name} must hold real numbers, got {a.dtype} "
+    raise WrongType(f"{_prefix(where)}{name} must hold real numbers, got {a.dtype} "
                             "values")
 
 
@@ -320,10 +320,10 @@ def unknown(kind: str, name, known: Iterable[str], where: str = "", listing: str
 def check_name(kind: str, name, known: Iterable[str], where: str = "",
                listing: str = "") -> str:
     """``name`` if it is one of ``known``; else a ValueError from :func:`unknown` (an
-    :class:`ArgumentTypeError` for a name that is not a string)."""
+    :class:`WrongType` for a name that is not a string)."""
     known = list(known)
     if not isinstance(name, str):
-        raise ArgumentTypeError(f"{_prefix(where)}a {kind} name must be a string, "
+        raise WrongType(f"{_prefix(where)}a {kind} name must be a string, "
                                 f"got {_describe(name)}")
     if name not in known:
         raise ValueError(unknown(kind, name, known, where, listing))
@@ -384,12 +384,12 @@ def layers(given, known: Iterable[str], where: str = "", listing: str = "") -> l
         given = [given]
     if isinstance(given, (bytes, Mapping)) or not isinstance(given, Iterable) or (
             isinstance(given, np.ndarray) and given.ndim == 0):
-        raise ArgumentTypeError(f"{_prefix(where)}layers must be a layer name or a list of "
+        raise WrongType(f"{_prefix(where)}layers must be a layer name or a list of "
                                 f"them, got {_describe(given)}")
     names = list(given)
     for name in names:
         if not isinstance(name, str):
-            raise ArgumentTypeError(f"{_prefix(where)}layers must be layer names (strings), "
+            raise WrongType(f"{_prefix(where)}layers must be layer names (strings), "
                                     f"got {_describe(name)}")
     names = list(dict.fromkeys(names))
     known = list(known)
@@ -410,7 +410,7 @@ def chunks(given, axes: Mapping[str, int], where: str = ""):
     >>> chunks("a", {"phi": 100})
     Traceback (most recent call last):
     ...
-    phasemap._args.ArgumentTypeError: chunks must be an int, a mapping {axis: int}, 'auto' or None, got 'a' (str)
+    phasemap._args.WrongType: chunks must be an int, a mapping {axis: int}, 'auto' or None, got 'a' (str)
     """
     if given is None or (isinstance(given, str) and given == "auto"):
         return given
@@ -422,7 +422,7 @@ def chunks(given, axes: Mapping[str, int], where: str = ""):
             sizes[name] = count(f"chunks[{name!r}]", size, where)
     elif isinstance(given, (str, bytes)) or not (
             isinstance(given, (numbers.Real, np.ndarray)) and np.ndim(given) == 0):
-        raise ArgumentTypeError(f"{_prefix(where)}chunks must be an int, a mapping "
+        raise WrongType(f"{_prefix(where)}chunks must be an int, a mapping "
                                 f"{{axis: int}}, 'auto' or None, got {_describe(given)}")
     else:
         size = count("chunks", given, where)

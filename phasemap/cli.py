@@ -94,9 +94,11 @@ def _sub(sub, name: str, help: str, description: str):
 
 
 def _model_names() -> str:
+    """What MODEL may be, for the commands' help."""
     from .models import MODELS
 
-    return ", ".join(MODELS)
+    return (f"a built-in model ({', '.join(MODELS)}) or a declaration file "
+            "(path/to/system.py, defining SYSTEM)")
 
 
 def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.ArgumentParser]]:
@@ -134,7 +136,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                               "and defaults", "Lists every model: its state variables and "
                               "parameters with units, defaults and domains, and its branches; "
                               "given a MODEL, that model with the layers an atlas can hold.")
-    p.add_argument("model", nargs="?", metavar="MODEL", help=f"one of: {models}")
+    p.add_argument("model", nargs="?", metavar="MODEL", help=models)
     p = subs["atlas"] = _sub(
         sub, "atlas", "map solvability and stagnation over a grid into a netCDF atlas",
         "Computes the layers over a grid of states and parameters, block by block, into a "
@@ -142,7 +144,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
         "models).  Before any work it prints the cells, output size, memory and time, and "
         "refuses what cannot be written or would not fit on the disk; above 10^9 cells or "
         "an hour it asks for --yes.")
-    p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
+    p.add_argument("model", metavar="MODEL", help=models)
     p.add_argument("--axis", action="append", default=[], metavar="NAME=START:STOP:COUNT",
                    help="an axis of COUNT values from START to STOP; STOP may be below "
                    "START (a descending axis); START and STOP may be arithmetic with pi "
@@ -167,7 +169,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
         sub, "simulate", "integrate a motion in time: phasemap simulate MODEL name=value ...",
         "Integrates the motion from an initial state with exact stick and slip, and prints "
         "its events.")
-    p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
+    p.add_argument("model", metavar="MODEL", help=models)
     p.add_argument("values", nargs="*", metavar="NAME=VALUE",
                    help="initial state and parameters (defaults: phasemap models)")
     p.add_argument("--t-end", type=float, default=10.0, metavar="T", help="horizon in s "
@@ -198,8 +200,11 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
     p = subs["classify"] = _sub(sub, "classify", "classify one state: phasemap classify "
                                 "MODEL name=value ...", "Counts the solutions of the motion "
                                 "equations for the senior derivatives at one state.")
-    p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
-    p.add_argument("values", nargs="*", metavar="NAME=VALUE")
+    # MODEL optional to argparse, required by _run: argparse would name NAME=VALUE as
+    # required too when nothing is given
+    p.add_argument("model", nargs="?", metavar="MODEL", help=models)
+    p.add_argument("values", nargs="*", metavar="NAME=VALUE",
+                   help="state and parameters (optional: the others take the defaults)")
     p = subs["cache"] = _sub(sub, "cache", "show or clear the kernel cache: phasemap cache "
                              "info|clear", "The kernel cache holds the code phasemap generates "
                              "and what numba compiles from it and from phasemap's own "
@@ -283,6 +288,9 @@ def _run(args) -> int:
 
         from .models import get_model
 
+        if args.model is None:
+            raise ValueError(f"classify needs MODEL, {_model_names()}; NAME=VALUE pairs "
+                             "are optional (phasemap classify ladder phi=0.5)")
         model = get_model(args.model)
         print(classify(model, **_parse_values(args.values, model=model)))
     elif args.command == "cache":
@@ -310,6 +318,9 @@ def _parse_values(items: list[str], words: tuple[str, ...] = (), model=None) -> 
         name, sep, text = item.partition("=")
         if not sep or not name:
             raise ValueError(f"expected NAME=VALUE, got {item!r}")
+        if name in values:  # as atlas refuses a repeated --axis
+            raise ValueError(f"{name} is given twice ({name}={text} after "
+                             f"{name}={values[name]}); give each name once")
         values[name] = text if name in words else _number(name, text, model)
     return values
 

@@ -101,7 +101,7 @@ class Scene:
         m = self.model
         for what, given in (("axes", axes), ("fixed", fixed), ("options", options)):
             if given is not None and not isinstance(given, Mapping):
-                raise _args.ArgumentTypeError(f"{m.name}: {what} must be a mapping "
+                raise _args.WrongType(f"{m.name}: {what} must be a mapping "
                                               f"{{name: value}}, got {type(given).__name__}")
         if not axes:
             raise ValueError(f"{m.name}: a scene needs at least one axis; "

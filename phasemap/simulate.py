@@ -45,7 +45,7 @@ class Options:
 
     def checked(self, model: str) -> "Options":
         """Validated copy (``atol`` defaults to ``rtol``); ValueError (or
-        :class:`phasemap._args.ArgumentTypeError`) naming the setting on bad values.
+        :class:`phasemap._args.WrongType`) naming the setting on bad values.
         Python and NumPy numbers alike; counts may be whole floats (``1e6``).
 
         The settings of a call are often those of the last (a sweep): a validated
@@ -76,7 +76,7 @@ class Options:
         counts = [_args.count(name, getattr(self, name), model)
                   for name in ("max_steps", "max_events")]
         if not isinstance(self.method, str):
-            raise _args.ArgumentTypeError(f"{model}: method must be a string, one of "
+            raise _args.WrongType(f"{model}: method must be a string, one of "
                                           f"{', '.join(METHODS)}, got {type(self.method).__name__}")
         check_method(self.method, model)
         return Options(t_end, rtol, atol, max_step, *counts, self.method)

@@ -257,3 +257,13 @@ def test_values_that_would_overflow_are_refused(model, values, words):
     with pytest.raises(ValueError, match=re.escape(words.split(" is ")[0])):
         phasemap.Scene(model, axes={name: [1.0, value]}, fixed={k: v for k, v in values.items()
                                                                if k != name})
+
+
+@pytest.mark.parametrize("value", ["0.5", None, True, 1 + 2j])
+def test_a_value_of_the_wrong_type_is_a_type_error_and_a_value_error(value):
+    """classify('ladder', phi='0.5') raised a class named ArgumentTypeError, which reads as
+    argparse's (issue 41 item 4): it is phasemap's WrongType, both errors the guide names."""
+    with pytest.raises(TypeError, match=r"^ladder: phi must be a real number, got ") as err:
+        phasemap.classify("ladder", phi=value)
+    assert isinstance(err.value, ValueError)
+    assert type(err.value).__name__ == "WrongType" and "argparse" not in repr(err.value)

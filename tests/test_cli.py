@@ -632,3 +632,19 @@ def test_progress_is_silent_in_a_pipe_or_a_log(tmp_path):
     first = run("simulate", "hinge_pendulum", "phi=2.5", "omega=0", "delta=0.1",
                 "--t-end", "20").stdout.splitlines()[0]
     assert first.startswith("t (s)"), first   # the table's header, alone on its line
+
+
+def test_classify_names_what_it_needs_and_refuses_a_name_given_twice():
+    """Issue 41 items 5, 6 and 12: ``classify`` without arguments said NAME=VALUE was
+    required; ``phi=0.5 phi=0.6`` silently took 0.6; the help listed MODEL as the
+    built-in names only."""
+    r = quiet("classify")
+    one_line_error(r, "classify needs MODEL, a built-in model (ladder, ")
+    assert "NAME=VALUE pairs are optional" in r.stderr
+    for command, tail in ((["classify", "ladder"], []),
+                          (["simulate", "ladder"], ["--t-end", "0.1"])):
+        r = quiet(*command, "phi=0.5", "phi=0.6", *tail)
+        one_line_error(r, "phi is given twice (phi=0.6 after phi=0.5); give each name once")
+    for command in ("classify", "atlas", "simulate", "threshold", "boundaries", "models"):
+        text = " ".join(quiet(command, "--help").stdout.split())
+        assert "or a declaration file (path/to/system.py, defining SYSTEM)" in text, command

@@ -57,7 +57,7 @@ def _parser(sub, make, models: str, *texts: str):
     """One subcommand (``texts``: name, help, description) with the ``MODEL`` argument
     and the options both share."""
     p = make(sub, *texts)
-    p.add_argument("model", metavar="MODEL", help=f"one of: {models}")
+    p.add_argument("model", metavar="MODEL", help=models)
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="fix a state variable or parameter (repeatable)")
     p.add_argument("--layer", choices=_LAYERS, default="n_solutions",
