@@ -214,6 +214,33 @@ def test_a_missing_condition_is_reported_with_its_cells():
                    conditions=rod_conditions(coefficient=False))
 
 
+def test_unexplained_class_changes_come_back_as_data_when_not_strict(tmp_path):
+    """Issue 37 item 9: a user debugging a declaration gets the traced pieces with the
+    class changes no piece explains, as data, and a warning, without private functions.
+    The rod's slide coefficient left out: every change across the paradox's boundary is
+    unexplained; each lies where the coefficient 1 + 3 cos^2 - 3 f sin cos changes sign
+    between its two cells, and its classes are 'none' and 'unique'."""
+    axes = {"theta": (0.2, 1.5), "f": (0.0, 3.0)}
+    with pytest.warns(UserWarning, match=r"class change\(s\) of n_solutions.*unexplained_"):
+        b = boundaries("painleve_rod", axes, fixed=SLIDE_BACK,
+                       conditions=rod_conditions(coefficient=False), strict=False)
+    assert b.sizes["unexplained"] > 10
+    classes = {int(a) for a in b.unexplained_class_from.values} | {
+        int(a) for a in b.unexplained_class_to.values}
+    assert classes == {0, 1}
+
+    def coef(theta, f):
+        return 1 + 3 * np.cos(theta) ** 2 - 3 * f * np.sin(theta) * np.cos(theta)
+
+    a = coef(b.unexplained_theta_from.values, b.unexplained_f_from.values)
+    c = coef(b.unexplained_theta_to.values, b.unexplained_f_to.values)
+    assert (a * c <= 0).all()
+    assert b.unexplained_class_from.attrs["flag_meanings"].split()[:2] == ["none", "unique"]
+    back = phasemap.open_atlas(phasemap.write_atlas(b, tmp_path / "b.nc")).load()
+    xr.testing.assert_identical(back[["unexplained_theta_from", "unexplained_class_to"]],
+                                b[["unexplained_theta_from", "unexplained_class_to"]])
+
+
 
 def test_uncovered_is_every_change_with_no_hit_around_either_cell():
     """The completeness check against numpy: dilate the cells the pieces pass through

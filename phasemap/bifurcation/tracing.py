@@ -245,6 +245,10 @@ class Traced:
     #: rows (condition, u, w): extrema of a condition that may reach zero within a seed
     #: raster cell and that neither a refinement nor a traced curve resolved
     unresolved: np.ndarray = field(default_factory=lambda: np.empty((0, 3)))
+    #: rows (i, j, di, dj): class changes of the check raster, from cell (i, j) to
+    #: (i + di, j + dj), that no piece explains (kept with ``strict=False`` only)
+    unexplained: np.ndarray = field(default_factory=lambda: np.empty((0, 4), np.int64))
+    raster: dict | None = None  # the check raster's cell centres, by axis name
 
 
 class _Buffers:
@@ -262,11 +266,14 @@ class _Buffers:
 
 
 def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
-          check_cells: int = CHECK_CELLS, only: np.ndarray | None = None) -> Traced:
+          check_cells: int = CHECK_CELLS, only: np.ndarray | None = None,
+          strict: bool = True) -> Traced:
     """Trace every boundary piece of the slice and check it against a finer raster.
 
     ``only``: a mask of the conditions to trace, whole (not only where they
-    bound a class; no check against the raster).
+    bound a class; no check against the raster).  Class changes of the raster that
+    no piece explains raise ValueError, or with ``strict=False`` are kept in
+    ``Traced.unexplained`` (rows: the two cells' indices on the raster) with a warning.
     """
     fns, m = sl.fns, sl.model
     run = T.entries()
@@ -344,7 +351,13 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
                 traced.classes, traced.unresolved = classes, _unresolved(thin, mark)
                 bad = T._uncovered(check_cells, changes, traced.pv, traced.pp)
             if len(bad):
-                raise ValueError(_uncovered_message(sl, layer, classes, bad, axes))
+                message = _uncovered_message(sl, layer, classes, bad, axes)
+                if strict:
+                    raise ValueError(message)
+                warnings.warn(message + "; returned with those cells as unexplained_*",
+                              stacklevel=3)
+                traced.unexplained = np.asarray(bad, dtype=np.int64).reshape(-1, 4)
+                traced.raster = axes
     return traced
 
 
@@ -635,20 +648,43 @@ def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:
     data["point_error"] = V("point", pf[:, 3] * tol,
                             {"units": "1", "long_name": "size of the last Newton step in the "
                              "point's coordinates (an error estimate, in axis units)"})
+    if len(traced.unexplained):
+        data.update(_unexplained(sl, traced, layer, (xu, xl), (yu, yl), flags()))
     attrs = header(m, "boundaries", sl.fixed, phasemap_layer=layer,
                    phasemap_axes=json.dumps({sl.x: [sl.lo[0], sl.hi[0]],
                                              sl.y: [sl.lo[1], sl.hi[1]]}),
                    phasemap_tol=tol)
     # built directly: the variables share their dimensions and none has an index, so
     # xarray's merge and alignment (half the cost of a simple slice) have nothing to do
+    dims = {"vertex": len(px), "piece": len(pieces), "point": len(qx)}
+    if len(traced.unexplained):
+        dims["unexplained"] = len(traced.unexplained)
     return xr.Dataset._construct_direct(
-        {**data, "piece": piece}, {"piece"},
-        dims={"vertex": len(px), "piece": len(pieces), "point": len(qx)}, attrs=attrs,
-        indexes={})
+        {**data, "piece": piece}, {"piece"}, dims=dims, attrs=attrs, indexes={})
+
+
+def _unexplained(sl: Slice, traced: Traced, layer: str, xl, yl, flags: dict) -> dict:
+    """The class changes of the check raster no piece explains, as variables on the
+    dimension ``unexplained``: each change's two cells (centres and classes)."""
+    bad, axes, classes = traced.unexplained, traced.raster, traced.classes
+    i, j, di, dj = bad.T
+    V = _variable
+    out = {}
+    for end, (a, b) in (("from", (i, j)), ("to", (i + di, j + dj))):
+        out[f"unexplained_{sl.x}_{end}"] = V("unexplained", axes[sl.x][a],
+                                             {"units": xl[0], "long_name": f"{xl[1]} of the "
+                                              f"cell the unexplained change goes {end}"})
+        out[f"unexplained_{sl.y}_{end}"] = V("unexplained", axes[sl.y][b],
+                                             {"units": yl[0], "long_name": f"{yl[1]} of the "
+                                              f"cell the unexplained change goes {end}"})
+        out[f"unexplained_class_{end}"] = V(
+            "unexplained", classes[a, b].astype(np.int8),
+            {"long_name": f"{layer} of the cell the unexplained change goes {end}", **flags})
+    return out
 
 
 def boundaries(model, axes: Mapping, fixed: Mapping | None = None, layer: str = "n_solutions",
-               tol: float = 1e-10, *, conditions=None) -> xr.Dataset:
+               tol: float = 1e-10, *, conditions=None, strict: bool = True) -> xr.Dataset:
     """The class boundaries of a 2-D slice of a map, as exact curves.
 
     Parameters
@@ -667,6 +703,13 @@ def boundaries(model, axes: Mapping, fixed: Mapping | None = None, layer: str = 
     conditions:
         the conditions to trace (:class:`phasemap.bifurcation.Condition`);
         by default the model's own (see :mod:`phasemap.bifurcation`).
+    strict:
+        True (the default): class changes of the check raster that no traced
+        piece explains raise ValueError.  False, for debugging a declaration:
+        the pieces are returned with those changes as data on a dimension
+        ``unexplained`` (``unexplained_<x>_from``, ``unexplained_<y>_from``,
+        ``unexplained_class_from`` and the same ``_to``: the two cells of each
+        change), with a warning.
 
     Returns
     -------
@@ -715,7 +758,7 @@ def boundaries(model, axes: Mapping, fixed: Mapping | None = None, layer: str = 
     tol = parse_tol(tol)
     sl = make_slice(model, axes, fixed, conditions)
     check_tol(tol, {sl.x: (sl.lo[0], sl.hi[0]), sl.y: (sl.lo[1], sl.hi[1])})
-    traced = trace(sl, layer, tol)
+    traced = trace(sl, layer, tol, strict=bool(strict))
     ds = to_dataset(sl, traced, layer, tol)
     points = unresolved_points(sl, traced)
     if points:
