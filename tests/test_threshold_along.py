@@ -105,3 +105,26 @@ def test_a_threshold_curve_file_is_summarised_and_drawn(curve, tmp_path):
     assert ax.get_xlabel().startswith("$k$") and ax.get_ylabel().startswith("$f$")
     (line,) = [ln for ln in ax.get_lines() if len(ln.get_xdata()) == curve.sizes["vertex"]]
     assert np.allclose(line.get_xdata(), curve.k.values)
+
+
+def test_a_curve_stopped_by_a_default_range_says_so_and_ends_on_its_edge():
+    """Issue 41 item 3 / 37 item 10: along k, with f's range left to its default [0, 2],
+    the first paradox f* = 2 k sqrt(1 + k^2) leaves it at k^2 = (sqrt 5 - 1)/2 (golden):
+    the end is solved on the edge with consistent coordinates, recorded, and warned of."""
+    with pytest.warns(UserWarning, match=r"f reached 2 at k = 0\.786151.*default range "
+                                         r"\[0, 2\]"):
+        c = phasemap.threshold(gyration_rod(), "f", value=0, over={"theta": (0.05, 1.55)},
+                               fixed={"xdot": -1.0, "omega": 0.0, "l": 1.0},
+                               along={"k": (0.2, 1.5)})
+    assert "f reached 2 at k = 0.786151" in c.attrs["phasemap_stopped_by"]
+    end = c.point_kind.values == "end"
+    k, f, th = (float(c[f"point_{n}"].values[end][0]) for n in ("k", "f", "theta"))
+    assert abs(k - math.sqrt((math.sqrt(5) - 1) / 2)) <= 1e-7
+    assert abs(f - 2 * k * math.sqrt(1 + k * k)) <= 1e-9 and abs(f - 2.0) <= 1e-7
+    assert abs(th - math.atan(math.sqrt(1 + 1 / k ** 2))) <= 1e-9
+    # given a wider range, the curve goes on to the end of k's range, and nothing is said
+    wide = phasemap.threshold(gyration_rod(), "f", value=0,
+                              over={"theta": (0.05, 1.55), "f": (0.0, 6.0)},
+                              fixed={"xdot": -1.0, "omega": 0.0, "l": 1.0},
+                              along={"k": (0.2, 1.5)})
+    assert "phasemap_stopped_by" not in wide.attrs and wide.k.values[-1] == 1.5

@@ -83,3 +83,21 @@ def test_the_smallest_tolerance_allowed_is_met():
     t = phasemap.threshold("painleve_rod", "f", over={"theta": (0.1, 1.5), "f": (0.0, 3.0)},
                            fixed={"xdot": -1.0, "omega": 0.0}, tol=tol)
     assert abs(t.value - 4 / 3) <= tol and abs(t.at["theta"] - math.atan(2)) <= 1e-12
+
+
+def test_a_threshold_on_the_edge_of_a_default_range_is_warned_of():
+    """Issue 37 item 10: the supremum of f where the rod has no solution lies on the edge of
+    f's default range: the region goes on beyond it, which the user is told."""
+    rod = {"xdot": -1.0, "omega": 0.0}
+    with pytest.warns(UserWarning, match=r"painleve_rod: the threshold f = 3 lies on the "
+                                         r"edge of its default range \[0, 3\]"):
+        t = phasemap.threshold("painleve_rod", "f", over={"theta": (0.1, 1.5)}, fixed=rod,
+                               side="max")
+    assert t.value == 3.0
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")   # a range given: nothing to say
+        phasemap.threshold("painleve_rod", "f", over={"theta": (0.1, 1.5), "f": (0.0, 3.0)},
+                           fixed=rod, side="max")
+        phasemap.threshold("painleve_rod", "f", over={"theta": (0.1, 1.5)}, fixed=rod)

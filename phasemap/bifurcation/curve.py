@@ -24,6 +24,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import warnings
 from dataclasses import dataclass
 from typing import Mapping
 
@@ -154,7 +155,10 @@ def threshold_curve(m: Model, param: str, layer: str, value: int, over, fixed, s
     ``kind``: the candidate that gives the threshold along the piece) and
     dimension ``point`` (``point_<name>`` for each, ``point_kind``: ``switch``
     where the threshold passes from one candidate to another, ``end`` where
-    the region stops existing; ``point_residual``).
+    the region stops existing; ``point_residual``).  Where an end lies on the edge
+    of a range (the parameter's, or another ranged name's, given or the default
+    one), the attribute ``phasemap_stopped_by`` says which, and a warning too: the
+    curve goes on beyond the range, and a wider one follows it.
     """
     if not isinstance(along, Mapping) or len(along) != 1:
         raise ValueError(f"along must name one variable with its range, {{name: (lo, hi)}}; "
@@ -263,7 +267,35 @@ def threshold_curve(m: Model, param: str, layer: str, value: int, over, fixed, s
         h = H_MAX
     if current:
         pieces.append(current)
-    return _dataset(spec, name, (a_lo, a_hi), pieces, points, tol)
+    ds = _dataset(spec, name, (a_lo, a_hi), pieces, points, tol)
+    stopped = _stopped_by_ranges(spec, over or {}, name, points, tol)
+    if stopped:
+        ds.attrs["phasemap_stopped_by"] = "; ".join(stopped)
+        warnings.warn(f"{m.name}: the threshold curve in {name} ended on a range's edge, not "
+                      f"where the region ends: {'; '.join(stopped)}", stacklevel=3)
+    return ds
+
+
+def _stopped_by_ranges(spec, over: Mapping, along: str, points, tol) -> list[str]:
+    """What a range stopped: for each end point of the curve that lies on an edge of a
+    range (the parameter's or another ranged name's), which edge, and whether the range
+    was a default the user did not give."""
+    out = []
+    for kind, a, t in points:
+        if kind != "end" or t is None:
+            continue
+        for n, (lo, hi) in spec.ranges.items():
+            x = t.value if n == t.param else t.at.get(n, math.nan)
+            slack = max(1e3 * tol, 1e-7 * (hi - lo))
+            edge = lo if abs(x - lo) <= slack else hi if abs(x - hi) <= slack else None
+            if edge is None:
+                continue
+            given = n in over
+            out.append(f"{n} reached {edge:g} at {along} = {a:.6g}, the edge of "
+                       + (f"its range [{lo:g}, {hi:g}]" if given else
+                          f"its default range [{lo:g}, {hi:g}] (pass over={{{n!r}: (lo, hi)}} "
+                          "to follow it further)"))
+    return out
 
 
 def _moved(spec, along, C, base, t: Threshold, a: float, tol,

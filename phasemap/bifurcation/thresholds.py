@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Mapping
 
@@ -152,12 +153,30 @@ def threshold(model, param: str, layer: str = "n_solutions", value: int = 0,
                                conditions)
     spec = _Spec.make(m, param, layer, value, over, fixed, side, tol)
     if len(spec.others) == 0:
-        return _line(spec, conditions)
-    if len(spec.others) == 2:
+        result = _line(spec, conditions)
+    elif len(spec.others) == 2:
         from .curve import threshold_volume
 
-        return threshold_volume(spec, conditions)
-    return _plane(spec, conditions)
+        result = threshold_volume(spec, conditions)
+    else:
+        result = _plane(spec, conditions)
+    _on_a_default_edge(spec, over or {}, result)
+    return result
+
+
+def _on_a_default_edge(spec: "_Spec", over: Mapping, result: "Threshold | None") -> None:
+    """Warn where the threshold lies on an edge of the parameter's default range (one the
+    user did not give): the region goes on beyond it, and so may the threshold."""
+    if result is None or spec.param in over:
+        return
+    lo, hi = spec.ranges[spec.param]
+    slack = max(1e3 * spec.tol, 1e-7 * (hi - lo))
+    for edge in (lo, hi):
+        if abs(result.value - edge) <= slack:
+            warnings.warn(f"{spec.model.name}: the threshold {spec.param} = {result.value:.10g}"
+                          f" lies on the edge of its default range [{lo:g}, {hi:g}]; the "
+                          f"region may go on beyond it: pass over={{{spec.param!r}: (lo, hi)}}",
+                          stacklevel=3)
 
 
 @dataclass
