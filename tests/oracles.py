@@ -44,7 +44,7 @@ Public API (all return an :class:`Answer`):
     painleve_rod(theta, omega, xdot, f, l, g, m, k=None)   (k: radius of gyration)
     ladder(phi, omega, f, l, g, m)
     wheel(phi, omega, delta, r, l, rho, g, m)
-    rod_on_step(theta, omega, f, l, h, g, m, f_edge=None)
+    rod_on_step(theta, omega, f, l, h, g, m, f_edge=None, a=None, k=None, push=0.0)
     corner_block(psi, omega, sdot, f, a, b, alpha, g, m)
     leaning_ladder(phi, omega, f1, f2, beta, l, g, m)
     ledge_rod(xdot, f, l, h, g, m)
@@ -436,7 +436,7 @@ def wheel(phi, omega, delta, r, l, rho, g, m):
     return ans
 
 
-def rod_on_step(theta, omega, f, l, h, g, m, f_edge=None):
+def rod_on_step(theta, omega, f, l, h, g, m, f_edge=None, a=None, k=None, push=0.0):
     """Uniform rod (length 2l, J = m l^2/3): end A on a rough floor, resting on a rough step edge.
 
     The edge is the fixed point K = (0, h); theta in (0, pi/2) is the rod's
@@ -446,13 +446,17 @@ def rod_on_step(theta, omega, f, l, h, g, m, f_edge=None):
     and ``edge`` (at K, normal nu = (-sin theta, cos theta), slip along e,
     friction f_edge, default f).  Both kept: one degree of freedom theta, with
     slip velocities xA' = h omega / sin^2 theta and e.v_K = h cos theta omega /
-    sin^2 theta (both of the sign of omega).
+    sin^2 theta (both of the sign of omega).  ``a``: the centre of mass at C = A + a e
+    instead (default l), ``k`` its radius of gyration (default l / sqrt 3), ``push``
+    a constant force along +x at C.
     """
     fe = f if f_edge is None else f_edge
+    ac = l if a is None else a
+    J = m * l * l / 3.0 if k is None else m * k * k
 
     def vA(q, qd):
         c, s = _rot(q[2])
-        return qd[0] + l * s * qd[2], qd[1] - l * c * qd[2]
+        return qd[0] + ac * s * qd[2], qd[1] - ac * c * qd[2]
 
     def edge_v(q, qd):
         c, s = _rot(q[2])
@@ -469,14 +473,14 @@ def rod_on_step(theta, omega, f, l, h, g, m, f_edge=None):
     c, s = math.cos(theta), math.sin(theta)
     xA = -h * c / s
     xAd = h * omega / (s * s)
-    q = np.array([xA + l * c, l * s, theta])
-    qd = np.array([xAd - l * s * omega, l * c * omega, omega])
-    M = np.diag([m, m, m * l * l / 3.0])
-    Q = np.array([0.0, -m * g, 0.0])
+    q = np.array([xA + ac * c, ac * s, theta])
+    qd = np.array([xAd - ac * s * omega, ac * c * omega, omega])
+    M = np.diag([m, m, J])
+    Q = np.array([push, -m * g, 0.0])
     w2 = omega * omega * (1.0 + (h / (l * s * s)) ** 2)
     fm = max(f, fe)
-    ans = enumerate_modes(q, qd, M, Q, [floor, edge], m * (g + l * w2) * (1.0 + fm), g + l * w2,
-                          l, math.sqrt(g * l) + l * math.sqrt(w2))
+    ans = enumerate_modes(q, qd, M, Q, [floor, edge], (m * (g + l * w2) + abs(push)) * (1.0 + fm),
+                          g + l * w2, l, math.sqrt(g * l) + l * math.sqrt(w2))
     for md in ans.modes:
         md.extra = {"theta_ddot": md.qdd[2], "N_floor": md.N[0], "N_edge": md.N[1]}
     return ans

@@ -173,3 +173,67 @@ def test_the_peg_rods_boundaries(peg_rod):
         for sign, want in ((1, b.class_left.values[p]), (-1, b.class_right.values[p])):
             th, f = 0.1 + 0.8 * (u[q] + sign * nu), 2.0 * (w[q] + sign * nw)
             assert oracles.peg_rod(th, 0.0, f, 1.0, 0.8, 9.81, 1.0).n_solutions == want
+
+
+def random_step_rod(seed: int):
+    """A rod with its end A on a rough floor, lying across a rough step's edge (a
+    PointContact and an EdgeContact), of random structure: where its centre of mass
+    sits, its radius of gyration, a constant push along the floor at the centre; the
+    step's height, the rod's angular velocity for the slice."""
+    import sympy as sp
+
+    from phasemap.declare import (Body, Coordinate, EdgeContact, Parameter, PointContact, Rate,
+                                  System)
+
+    rng = np.random.default_rng(seed)
+    a = sp.Rational(int(rng.integers(30, 170)), 100)        # centre from A (rod length 2)
+    k2 = sp.Rational(int(rng.integers(10, 100)), 100)       # radius of gyration squared
+    push = sp.Rational(int(rng.integers(-50, 50)), 100)     # in m g
+    f = Parameter("f", "1", "friction coefficient", 0.5, 0.0)
+    h = Parameter("h", "m", "height of the step", 0.8, 0.0, lower_open=True)
+    g = Parameter("g", "m s-2", "gravitational acceleration", 9.81, 0.0)
+    m = Parameter("m", "kg", "mass", 1.0, 0.0, lower_open=True)
+    th = Coordinate("theta", "rad", "angle to the floor", 1.0, 0.0, float(sp.pi) / 2,
+                    lower_open=True, rate=Rate("omega", "rad s-1", "angular velocity",
+                                               scale=sp.sqrt(g)))
+    xa, ya = Coordinate("xa", "m", "end A along the floor"), Coordinate("ya", "m", "height of A")
+    system = System(f"random_step_rod_{seed}", "a random rod on a step", "test",
+                    coordinates=(th, xa, ya), parameters=(f, h, g, m),
+                    bodies=(Body(m, (xa + a * sp.cos(th), ya + a * sp.sin(th)),
+                                 inertia=m * k2, angle=th),),
+                    potential=m * g * (ya + a * sp.sin(th)),
+                    forces={xa: push * m * g, th: -push * m * g * a * sp.sin(th)},
+                    contacts=(PointContact("floor", (xa, ya), normal=(0, 1), friction=f),
+                              EdgeContact("edge", (xa, ya), corner=(0, h), angle=th, friction=f,
+                                          extent=(0, 2))))
+    values = {"h": float(rng.uniform(0.3, 1.2)), "omega": float(rng.choice([0.0, -1.0, 1.0])),
+              "a": float(a), "k": float(sp.sqrt(k2)), "push": float(push) * 9.81}
+    return system.model, values
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [2])
+def test_random_step_rods_cell_by_cell_and_traced(seed):
+    """A random two-contact declaration: a 24^2 raster over (theta, f) cell by cell
+    against the full-coordinate enumeration, then its boundaries on that slice with
+    every class change of the check raster explained."""
+    model, v = random_step_rod(seed)
+    lo = float(np.arcsin(v["h"] / 2)) + 0.02       # the edge on the rod: h / sin theta <= 2
+    ths = np.linspace(lo, 1.5, 24)
+    fs = np.linspace(0.0, 2.0, 24)
+    wrong, n = [], 0
+    for th in ths:
+        for f in fs:
+            want = oracles.rod_on_step(th, v["omega"], f, 1.0, v["h"], 9.81, 1.0, a=v["a"],
+                                       k=v["k"], push=v["push"])
+            if want.margin < 1e-6:
+                continue
+            got = phasemap.classify(model, theta=th, omega=v["omega"], f=f, h=v["h"])
+            n += 1
+            if (int(got.n_solutions), bool(got.stagnation)) != (want.n_solutions,
+                                                                 want.stagnation):
+                wrong.append((th, f))
+    assert n > 500 and not wrong, wrong[:3]
+    b = phasemap.boundaries(model, {"theta": (lo, 1.5), "f": (0.0, 2.0)},
+                            fixed={"omega": v["omega"], "h": v["h"]})
+    assert np.all(b.point_residual.values <= 1e-10)
