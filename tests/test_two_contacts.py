@@ -237,3 +237,25 @@ def test_random_step_rods_cell_by_cell_and_traced(seed):
     b = phasemap.boundaries(model, {"theta": (lo, 1.5), "f": (0.0, 2.0)},
                             fixed={"omega": v["omega"], "h": v["h"]})
     assert np.all(b.point_residual.values <= 1e-10)
+
+
+def test_the_peg_rods_boundaries_across_omega_zero(peg_rod):
+    """Over (theta, omega) through omega = 0 with f = 1.5: no solution pushed one way,
+    one the other, the rest classes on the line.  The wall's reaction where the peg lets
+    go is a multiple of omega^2: it vanishes on omega = 0 with every term, and the
+    velocity's curve used to yield it the line (which it cannot trace), so boundaries
+    raised on every such slice."""
+    b = phasemap.boundaries(peg_rod, {"theta": (0.1, 0.9), "omega": (-1.0, 1.0)},
+                            fixed={"f": 1.5})
+    on = [p for p in range(b.sizes["piece"]) if b.condition.values[p] == "omega"]
+    assert on and all(np.all(b.omega.values[b.piece.values == p] == 0.0) for p in on)
+    for p in on:
+        sel = np.flatnonzero(b.piece.values == p)
+        th = b.theta.values[sel[len(sel) // 2]]
+        up = b.theta.values[sel[-1]] > b.theta.values[sel[0]]
+        # the left normal of a piece running up in theta points to omega > 0
+        left, right = (1e-7, -1e-7) if up else (-1e-7, 1e-7)
+        assert oracles.peg_rod(th, left, 1.5, 1.0, 0.8, 9.81, 1.0).n_solutions \
+            == b.class_left.values[p]
+        assert oracles.peg_rod(th, right, 1.5, 1.0, 0.8, 9.81, 1.0).n_solutions \
+            == b.class_right.values[p]
