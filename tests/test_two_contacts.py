@@ -130,16 +130,8 @@ def test_the_drawers_boundaries_hold_its_wedge_line(drawer):
     sel = b.piece.values == wedge[0]
     assert np.max(np.abs(b.f.values[sel] - F_W)) <= 1e-12
     assert b.d.values[sel].max() == 1.0 and b.d.values[sel].min() < 0.2
-    # every piece's side classes, against the enumeration just beside its middle vertex
-    u, w = (b.d.values + 1.0) / 2.0, b.f.values / 2.0
-    for p in range(b.sizes["piece"]):
-        sel = np.flatnonzero(b.piece.values == p)
-        q = sel[len(sel) // 2]
-        du, dw = u[q + 1] - u[q - 1], w[q + 1] - w[q - 1]
-        nu, nw = -dw / np.hypot(du, dw) * 1e-6, du / np.hypot(du, dw) * 1e-6  # left normal
-        for sign, want in ((1, b.class_left.values[p]), (-1, b.class_right.values[p])):
-            d, f = -1.0 + 2.0 * (u[q] + sign * nu), 2.0 * (w[q] + sign * nw)
-            assert oracles.drawer(0.0, f, A, C, PSI, d, 10.0, 9.81, 1.0).stagnation == want
+    _sides_agree(b, "d", (-1.0, 1.0), (0.0, 2.0), lambda d, f: oracles.drawer(
+        0.0, f, A, C, PSI, d, 10.0, 9.81, 1.0).stagnation)
     assert np.all(b.point_residual.values <= 1e-10)
 
 
@@ -163,16 +155,23 @@ def test_the_peg_rods_boundaries(peg_rod):
     b = phasemap.boundaries(peg_rod, {"theta": (0.1, 0.9), "f": (0.0, 2.0)},
                             fixed={"omega": 0.0})
     assert b.sizes["piece"] >= 1 and np.all(b.point_residual.values <= 1e-10)
-    # the classes each piece carries, against the enumeration just beside its middle vertex
-    u, w = (b.theta.values - 0.1) / 0.8, b.f.values / 2.0
+    _sides_agree(b, "theta", (0.1, 0.9), (0.0, 2.0), lambda th, f: oracles.peg_rod(
+        th, 0.0, f, 1.0, 0.8, 9.81, 1.0).n_solutions)
+
+
+def _sides_agree(b, x, xr, fr, oracle):
+    """Every piece's side classes in the slice (x, f), against the enumeration ``oracle(x,
+    f)`` just beside the piece's middle vertex (1e-6 of the slice along its left normal)."""
+    u, w = (b[x].values - xr[0]) / (xr[1] - xr[0]), (b.f.values - fr[0]) / (fr[1] - fr[0])
     for p in range(b.sizes["piece"]):
         sel = np.flatnonzero(b.piece.values == p)
         q = sel[len(sel) // 2]
         du, dw = u[q + 1] - u[q - 1], w[q + 1] - w[q - 1]
         nu, nw = -dw / np.hypot(du, dw) * 1e-6, du / np.hypot(du, dw) * 1e-6  # left normal
         for sign, want in ((1, b.class_left.values[p]), (-1, b.class_right.values[p])):
-            th, f = 0.1 + 0.8 * (u[q] + sign * nu), 2.0 * (w[q] + sign * nw)
-            assert oracles.peg_rod(th, 0.0, f, 1.0, 0.8, 9.81, 1.0).n_solutions == want
+            at = (xr[0] + (xr[1] - xr[0]) * (u[q] + sign * nu),
+                  fr[0] + (fr[1] - fr[0]) * (w[q] + sign * nw))
+            assert oracle(*at) == want, (p, sign, at)
 
 
 def random_step_rod(seed: int):
