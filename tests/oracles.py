@@ -44,12 +44,15 @@ Public API (all return an :class:`Answer`):
     painleve_rod(theta, omega, xdot, f, l, g, m, k=None)   (k: radius of gyration)
     ladder(phi, omega, f, l, g, m)
     wheel(phi, omega, delta, r, l, rho, g, m)
-    rod_on_step(theta, omega, f, l, h, g, m, f_edge=None)
+    rod_on_step(theta, omega, f, l, h, g, m, f_edge=None, a=None, k=None, push=0.0)
     corner_block(psi, omega, sdot, f, a, b, alpha, g, m)
     leaning_ladder(phi, omega, f1, f2, beta, l, g, m)
     ledge_rod(xdot, f, l, h, g, m)
     incline_point(xdot, f, alpha, g, m)
-and the closed forms painleve_rod_threshold(), painleve_rod_B(theta, f, s).
+    drawer(xdot, f, a, c, psi, d, p, g, m)
+    peg_rod(theta, omega, f, l, p, g, m)
+and the closed forms painleve_rod_threshold(), painleve_rod_B(theta, f, s),
+drawer_wedge(a, c, psi).
 """
 
 from __future__ import annotations
@@ -433,7 +436,7 @@ def wheel(phi, omega, delta, r, l, rho, g, m):
     return ans
 
 
-def rod_on_step(theta, omega, f, l, h, g, m, f_edge=None):
+def rod_on_step(theta, omega, f, l, h, g, m, f_edge=None, a=None, k=None, push=0.0):
     """Uniform rod (length 2l, J = m l^2/3): end A on a rough floor, resting on a rough step edge.
 
     The edge is the fixed point K = (0, h); theta in (0, pi/2) is the rod's
@@ -443,13 +446,17 @@ def rod_on_step(theta, omega, f, l, h, g, m, f_edge=None):
     and ``edge`` (at K, normal nu = (-sin theta, cos theta), slip along e,
     friction f_edge, default f).  Both kept: one degree of freedom theta, with
     slip velocities xA' = h omega / sin^2 theta and e.v_K = h cos theta omega /
-    sin^2 theta (both of the sign of omega).
+    sin^2 theta (both of the sign of omega).  ``a``: the centre of mass at C = A + a e
+    instead (default l), ``k`` its radius of gyration (default l / sqrt 3), ``push``
+    a constant force along +x at C.
     """
     fe = f if f_edge is None else f_edge
+    ac = l if a is None else a
+    J = m * l * l / 3.0 if k is None else m * k * k
 
     def vA(q, qd):
         c, s = _rot(q[2])
-        return qd[0] + l * s * qd[2], qd[1] - l * c * qd[2]
+        return qd[0] + ac * s * qd[2], qd[1] - ac * c * qd[2]
 
     def edge_v(q, qd):
         c, s = _rot(q[2])
@@ -466,14 +473,14 @@ def rod_on_step(theta, omega, f, l, h, g, m, f_edge=None):
     c, s = math.cos(theta), math.sin(theta)
     xA = -h * c / s
     xAd = h * omega / (s * s)
-    q = np.array([xA + l * c, l * s, theta])
-    qd = np.array([xAd - l * s * omega, l * c * omega, omega])
-    M = np.diag([m, m, m * l * l / 3.0])
-    Q = np.array([0.0, -m * g, 0.0])
+    q = np.array([xA + ac * c, ac * s, theta])
+    qd = np.array([xAd - ac * s * omega, ac * c * omega, omega])
+    M = np.diag([m, m, J])
+    Q = np.array([push, -m * g, 0.0])
     w2 = omega * omega * (1.0 + (h / (l * s * s)) ** 2)
     fm = max(f, fe)
-    ans = enumerate_modes(q, qd, M, Q, [floor, edge], m * (g + l * w2) * (1.0 + fm), g + l * w2,
-                          l, math.sqrt(g * l) + l * math.sqrt(w2))
+    ans = enumerate_modes(q, qd, M, Q, [floor, edge], (m * (g + l * w2) + abs(push)) * (1.0 + fm),
+                          g + l * w2, l, math.sqrt(g * l) + l * math.sqrt(w2))
     for md in ans.modes:
         md.extra = {"theta_ddot": md.qdd[2], "N_floor": md.N[0], "N_edge": md.N[1]}
     return ans
@@ -576,3 +583,62 @@ def incline_point(xdot, f, alpha, g, m):
     Q = np.array([0.0, -m * g])
     return enumerate_modes(q, qd, M, Q, [point], m * g * (1.0 + f), g, 1.0,
                            math.sqrt(g) + abs(xdot))
+
+
+def drawer(xdot, f, a, c, psi, d, p, g, m):
+    """A drawer (half length a, half width c, J = m (a^2 + c^2)/3) tilted by psi in a slot
+    whose guides are the lines y = -+w, w = a sin psi + c cos psi: its corner R(psi) (a, c)
+    against the upper guide (normal -y), the opposite corner against the lower one
+    (normal +y), both one-sided with friction f; gravity -y, and the push (-p, 0) at the
+    handle R(psi) (a, -d).  It slides along the slot with xdot."""
+    def corner(sign):
+        return _body_point(lambda q: (sign * (a * np.cos(q[2]) - c * np.sin(q[2])),
+                                      sign * (a * np.sin(q[2]) + c * np.cos(q[2]))))
+
+    upper = _on_surface("upper", corner(1.0), (0.0, -1.0), f)
+    lower = _on_surface("lower", corner(-1.0), (0.0, 1.0), f)
+    cs, sn = math.cos(psi), math.sin(psi)
+    q = np.array([0.0, 0.0, psi])
+    qd = np.array([xdot, 0.0, 0.0])
+    M = np.diag([m, m, m * (a * a + c * c) / 3.0])
+    Q = np.array([-p, -m * g, p * (a * sn - d * cs)])
+    L = math.hypot(a, c)
+    load = m * g + p
+    return enumerate_modes(q, qd, M, Q, [upper, lower], (load + m * xdot * xdot / L) * (1.0 + f),
+                           load / m + xdot * xdot / L, L, math.sqrt(g * L) + abs(xdot))
+
+
+def drawer_wedge(a, c, psi):
+    """The drawer's self-locking friction: its two reactions can squeeze it with no load
+    where the line through the two corners lies in both friction cones,
+    f >= (a cos psi - c sin psi) / (a sin psi + c cos psi)."""
+    return ((a * math.cos(psi) - c * math.sin(psi))
+            / (a * math.sin(psi) + c * math.cos(psi)))
+
+
+def peg_rod(theta, omega, f, l, p, g, m):
+    """A uniform rod (2l, J = m l^2/3) with its end A against a rough wall x = 0 (normal
+    +x), lying on a rough peg, the fixed corner K = (p, 0): theta is the rod's angle above
+    the horizontal, A = (0, -p tan theta), C = A + l (cos theta, sin theta); both contacts
+    one-sided with friction f (the peg's slip is the rod's material velocity along it)."""
+    wall = _on_surface("wall", _body_point(lambda q: (-l * np.cos(q[2]), -l * np.sin(q[2]))),
+                       (1.0, 0.0), f)
+
+    def peg_v(q, qd):
+        cs, sn = _rot(q[2])
+        nu, e = (-sn, cs), (cs, sn)
+        dx, dy = q[0] - p, q[1]                            # C - K
+        vn = nu[0] * qd[0] + nu[1] * qd[1] - qd[2] * (e[0] * dx + e[1] * dy)
+        vt = e[0] * qd[0] + e[1] * qd[1] + qd[2] * (nu[0] * dx + nu[1] * dy)
+        return vn, vt
+
+    peg = Contact("peg", vn=lambda q, qd: peg_v(q, qd)[0], vt=lambda q, qd: peg_v(q, qd)[1], f=f)
+    cs, sn = math.cos(theta), math.sin(theta)
+    yad = -p * omega / (cs * cs)
+    q = np.array([l * cs, -p * sn / cs + l * sn, theta])
+    qd = np.array([-l * sn * omega, yad + l * cs * omega, omega])
+    M = np.diag([m, m, m * l * l / 3.0])
+    Q = np.array([0.0, -m * g, 0.0])
+    w2 = omega * omega * (1.0 + (p / (l * cs * cs)) ** 2)
+    return enumerate_modes(q, qd, M, Q, [wall, peg], m * (g + l * w2) * (1.0 + f), g + l * w2,
+                           l, math.sqrt(g * l) + l * math.sqrt(w2))

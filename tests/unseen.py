@@ -1,7 +1,7 @@
 """Systems phasemap has never seen, declared with the public API (issue 23)."""
 import math
 import sympy as sp
-from phasemap.declare import Body, Coordinate, Parameter, PointContact, Rate, System
+from phasemap.declare import Body, Coordinate, EdgeContact, Parameter, PointContact, Rate, System
 
 PI = float(sp.pi)
 
@@ -112,3 +112,56 @@ def incline_point():
                   coordinates=(x, y), parameters=(f, al, g, m),
                   bodies=(Body(m, (x, y)),), potential=m * g * y,
                   contacts=(PointContact("P", (x, y), normal=(-sp.sin(al), sp.cos(al)), friction=f),))
+
+def drawer():
+    """A drawer tilted in a slot (issue 37): a rectangle of half length a and half width c
+    at the tilt psi (a parameter), its corner (a, c) against the upper guide y = w and its
+    corner (-a, -c) against the lower guide y = -w, w = a sin psi + c cos psi, both rough
+    and one-sided; pushed into the slot (along -x) with the force p at the handle, the
+    point (a, -d) of the drawer (d below its centre line).  ``phi`` is the drawer's turn
+    from the tilt, fixed (0) while both corners touch."""
+    f, _, g, m = _common()
+    a = Parameter("a", "m", "half length", 0.5, 0.0, lower_open=True)
+    c = Parameter("c", "m", "half width", 0.25, 0.0, lower_open=True)
+    psi = Parameter("psi", "rad", "tilt", 0.3, 0.0, 1.2, lower_open=True)
+    d = Parameter("d", "m", "handle below the centre line", 0.1, -1.0, 1.0)
+    p = Parameter("p", "N", "push on the handle", 10.0, 0.0)
+    x = Coordinate("x", "m", "centre along the slot",
+                   rate=Rate("xdot", "m s-1", "velocity along the slot", scale=sp.sqrt(g * a)))
+    y = Coordinate("y", "m", "centre across the slot")
+    phi = Coordinate("phi", "rad", "turn from the tilt", 0.0)
+    th = psi + phi
+    # cos and sin of th written out, so that closing the guides solves for phi's
+    cth = sp.cos(psi) * sp.cos(phi) - sp.sin(psi) * sp.sin(phi)
+    sth = sp.sin(psi) * sp.cos(phi) + sp.cos(psi) * sp.sin(phi)
+    w = a * sp.sin(psi) + c * sp.cos(psi)
+    ux, uy = a * cth - c * sth, a * sth + c * cth
+    return System("drawer", "a drawer tilted in a slot, pushed at its handle", "test",
+                  coordinates=(x, y, phi), parameters=(f, a, c, psi, d, p, g, m),
+                  bodies=(Body(m, (x, y), inertia=m * (a**2 + c**2) / 3, angle=th),),
+                  potential=m * g * y,
+                  forces={x: -p, phi: p * (a * sth - d * cth)},
+                  contacts=(PointContact("upper", (x + ux, y + uy), normal=(0, -1), offset=-w,
+                                         friction=f),
+                            PointContact("lower", (x - ux, y - uy), normal=(0, 1), offset=-w,
+                                         friction=f)))
+
+
+def peg_rod():
+    """A rod (half length l) with its end A against a rough wall x = 0, lying on a rough
+    peg, the fixed corner (p, 0) (issue 37): A = (0, -p tan theta), theta the rod's angle
+    above the horizontal; the peg must lie on the rod (p / cos theta <= 2 l)."""
+    f, l, g, m = _common()
+    p = Parameter("p", "m", "distance of the peg from the wall", 0.8, 0.0, lower_open=True)
+    th = Coordinate("theta", "rad", "angle of the rod above the horizontal", 0.5, 0.0, 1.0,
+                    rate=Rate("omega", "rad s-1", "angular velocity", scale=sp.sqrt(g / l)))
+    xa = Coordinate("xa", "m", "end A across the wall")
+    ya = Coordinate("ya", "m", "end A along the wall")
+    return System("peg_rod", "rod against a rough wall lying on a rough peg", "test",
+                  coordinates=(th, xa, ya), parameters=(f, l, p, g, m),
+                  bodies=(Body(m, (xa + l * sp.cos(th), ya + l * sp.sin(th)),
+                               inertia=m * l**2 / 3, angle=th),),
+                  potential=m * g * (ya + l * sp.sin(th)),
+                  contacts=(PointContact("wall", (xa, ya), normal=(1, 0), friction=f),
+                            EdgeContact("peg", (xa, ya), corner=(p, 0), angle=th, friction=f,
+                                        extent=(0, 2 * l))))

@@ -285,13 +285,17 @@ def groups(vals, active):
 @njit(cache=True, error_model="numpy")
 def _yields(k, grp, active, F, v, ix, iy, geo, u, w, cv, cs):
     """A condition that ranks before k vanishes with it at (u, w): the stretch there is
-    that condition's to trace (:func:`_owned`), and a seed of k there starts no piece."""
+    that condition's to trace (:func:`_owned`), and a seed of k there starts no piece.
+    A condition whose every term vanishes there (scale 0) does not take it: it is zero
+    to the order of its terms, as the peg rod's wall reaction, a multiple of omega^2
+    where the peg lets go, is on omega = 0, where it changes no sign and its curve
+    cannot be followed, while the velocity's sign there changes the class."""
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
     _values(F, v, cv, cs)
     for j in range(cv.shape[0]):
         if active[j] and grp[j, 0] != grp[k, 0] and grp[j, 1] < grp[k, 1] \
-                and abs(cv[j]) <= COVANISH * cs[j]:
+                and abs(cv[j]) <= COVANISH * cs[j] and cs[j] > 0.0:
             return True
     return False
 
@@ -300,13 +304,14 @@ def _yields(k, grp, active, F, v, ix, iy, geo, u, w, cv, cs):
 def _owned(k, grp, active, cv, cs, mark, ua, wa, ub, wb):
     """Whether the curve of k traces the stretch from (ua, wa) to (ub, wb), whose end's
     condition values are cv: 0 where a condition that ranks first vanishes there too
-    (its zero set runs with this curve; it traces the stretch), and the cells of the
-    conditions that rank after k and vanish too are marked as traced."""
+    (its zero set runs with this curve; it traces the stretch; not one whose every term
+    vanishes, see :func:`_yields`), and the cells of the conditions that rank after k and
+    vanish too are marked as traced."""
     owned = 1
     for j in range(cv.shape[0]):
         if active[j] and grp[j, 0] != grp[k, 0] and abs(cv[j]) <= COVANISH * cs[j]:
             if grp[j, 1] < grp[k, 1]:
-                owned = 0
+                owned = 0 if cs[j] > 0.0 else owned
             else:
                 _mark(mark, j, ua, wa, ub, wb)
     return owned

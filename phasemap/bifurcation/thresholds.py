@@ -534,6 +534,7 @@ def _line(spec: _Spec, conditions) -> Threshold | None:
             # the root where the class becomes the region's, nearest the outside sample
             found.sort(key=lambda t: abs(t[2][0] - samples[a]))
             step = 1.0 if b > a else -1.0
+            good = []
             for _, k, r in found:
                 # the classes either side, beyond the condition's ties (wide where its
                 # terms are large), and no further than half a sample
@@ -542,9 +543,16 @@ def _line(spec: _Spec, conditions) -> Threshold | None:
                     if _class_at(m, v, slot, r[0] + step * eps, spec.layer) == spec.value \
                             and _class_at(m, v, slot, r[0] - step * eps,
                                           spec.layer) != spec.value:
-                        return Threshold(p, r[0], {p: r[0]}, C.names[k], "root", r[1], r[2],
-                                         float(samples[b]), spec.side)
+                        good.append((k, r))
+                        break
                     eps *= 10.0
+            if good:
+                # conditions that vanish together (a family's pair where both its slopes
+                # do): the root of the one solved best, among those at the first one
+                k, r = min((kr for kr in good if abs(kr[1][0] - good[0][1][0]) <= spec.tol),
+                           key=lambda kr: kr[1][1])
+                return Threshold(p, r[0], {p: r[0]}, C.names[k], "root", r[1], r[2],
+                                 float(samples[b]), spec.side)
             raise ValueError(f"{m.name}: {spec.layer} changes between {p} = "
                              f"{samples[i]:.12g} and {samples[i + 1]:.12g} at none of the "
                              "conditions' roots there")

@@ -65,8 +65,15 @@ Kinds and names (``<b>`` the branch's name, ``<c>`` a contact's)
     that ``v`` is form ``j`` at the member where form ``i`` is tight, and applies
     ``where = -g1_i g1_j > 0`` (one bound below, one above).  Its zero set is
     where the two bounds meet (the ladder's static zone phi = 2 arctan f).  A form
-    whose slope vanishes identically (a ray) adds no pair; the tie is the
-    kernel's where both forms are inclusive.
+    whose slope vanishes identically (a ray) adds no pair but is a condition of its
+    own, named as in a determinate row (``expr = g0_i``, ``divisor = D``); the tie is
+    the kernel's where both forms are inclusive.  ``slope_<form>_<b>`` (``expr =
+    g1_i``, ``where = 0``: it never applies, so it decides nothing) marks where
+    form ``i`` turns from a lower bound of ``t`` into an upper one: there the pairs
+    start or stop applying, and a bound running off to infinity empties or fills
+    the family, a class boundary on which no pair vanishes (a drawer jammed in its
+    slot: its wedge line, where the reactions' internal squeeze leaves the
+    friction cones).
 ``discriminant``, ``root``
     a turning joint's ``disc_<c>_<b>`` (the squared law has real roots:
     ``>= 0``, ``> 0`` for the second root so that a double root counts once) and
@@ -446,14 +453,23 @@ class _Branch:
 
         D, P, Dd = self.sol.family[0].D, self.sol.family[0].P, self.sol.family[0].Dd
         R = self.sL[0]
-        lines = []
+        lines, out = [], []
         for form in self.p.forms:
             c = family_coefficients(form, self.L, self.d.S, self.p.fname)
             g0 = sum((ci * x for ci, x in zip(c, P)), sp.Integer(0))
             g1 = sp.expand(sum((ci * x for ci, x in zip(c, Dd)), sp.Integer(0)))
             if g1 != 0:
                 lines.append((form, g0, g1))
-        out = []
+                # where the slope changes sign the form turns from a lower bound of t into
+                # an upper one: the pairs below start or stop applying there, and a bound
+                # that runs off to infinity can empty (or fill) the family (the drawer's
+                # self-locking wedge).  It decides nothing itself: where = 0.
+                out.append(Condition(f"slope_{self._name(form.label)}", self.branch,
+                                     "family", g1, scale_of(g1), ">= 0", where=sp.Integer(0)))
+            else:
+                # a ray: the form has the same value on every member
+                out.append(Condition(self._name(form.label), self.branch, form.kind, g0, R,
+                                     self._sense(form.strict), divisor=D))
         for (fi, g0i, g1i), (fj, g0j, g1j) in ((a, b) for k, a in enumerate(lines)
                                                for b in lines[k + 1:]):
             det = sp.expand(g0j * g1i - g0i * g1j)
