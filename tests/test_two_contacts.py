@@ -149,6 +149,32 @@ def test_the_drawers_threshold_is_the_wedge(drawer, d):
     assert abs(plane.value - F_W) <= 1e-12 and plane.residual <= 1e-10
 
 
+def _oracle_stagnation_edge(d: float, lo: float, hi: float) -> float:
+    """The least f at which the drawer can stay, by bisection on the enumeration."""
+    def stays(f):
+        return oracles.drawer(0.0, f, A, C, PSI, d, 10.0, 9.81, 1.0).stagnation
+
+    assert not stays(lo) and stays(hi)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if stays(mid) else (mid, hi)
+    return 0.5 * (lo + hi)
+
+
+@pytest.mark.parametrize("d, bracket", [(0.0, (0.8, 0.9)), (0.001, (0.8, 0.9)),
+                                        (0.1, (0.95, 0.98))])
+def test_the_drawers_line_threshold_where_its_edge_is_curved(drawer, d, bracket):
+    """With the handle high the stagnation edge lies below f_w, near other conditions'
+    roots: on a wide line of f (issue 37 item 6's d = 0 and 0.001) the threshold is the
+    enumeration's edge.  At d = 0.1 a family bound's root 2.2e-3 below the edge was once
+    taken for it (the class check either side of a root stepped as far as half a
+    sample)."""
+    t = phasemap.threshold(drawer, "f", layer="stagnation", value=1, over={"f": (0.0, 30.0)},
+                           fixed={"xdot": 0.0, "d": d})
+    assert abs(t.value - _oracle_stagnation_edge(d, *bracket)) <= 1e-7
+    assert t.residual <= 1e-10
+
+
 def test_the_peg_rods_boundaries(peg_rod):
     """The rod on a wall and a peg at rest, over (theta, f): every class change explained,
     and the peg rod's static zone bounded by its family's pairs."""

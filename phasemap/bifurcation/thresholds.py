@@ -537,9 +537,12 @@ def _line(spec: _Spec, conditions) -> Threshold | None:
             good = []
             for _, k, r in found:
                 # the classes either side, beyond the condition's ties (wide where its
-                # terms are large), and no further than half a sample
+                # terms are large): at most a thousand times that, and half a sample, so
+                # that the step never reaches another condition's root nearby (a drawer's
+                # stagnation edge 2.2e-3 beyond a family bound's root was taken for it)
                 eps = max(1e-9 * (hi - lo), 4.0 * r[3])
-                while eps <= 0.5 * (samples[1] - samples[0]):
+                reach = min(0.5 * (samples[1] - samples[0]), 1e3 * eps)
+                while eps <= reach:
                     if _class_at(m, v, slot, r[0] + step * eps, spec.layer) == spec.value \
                             and _class_at(m, v, slot, r[0] - step * eps,
                                           spec.layer) != spec.value:
