@@ -792,6 +792,17 @@ def _describe(ds: xr.Dataset, where: str) -> str:
     return _describe_grid(ds, where)
 
 
+def _made_by(a) -> str:
+    """The summary's line of the version and time that made a file."""
+    return (f"  made by   phasemap {a.get('phasemap_version', '?')}, "
+            f"{a.get('date_created', 'creation time unknown')}")
+
+
+def _prefixed(a, prefix: str) -> list[tuple[str, str, str]]:
+    """The attributes named ``prefix<name>``, as rows (name, "=", value) of a table."""
+    return [(k[len(prefix):], "=", _number(v)) for k, v in a.items() if k.startswith(prefix)]
+
+
 def _describe_curves(ds: xr.Dataset, where: str, kind: str) -> str:
     """Boundaries or a threshold curve: its axes, pieces by condition, special points."""
     a = ds.attrs
@@ -832,10 +843,8 @@ def _describe_curves(ds: xr.Dataset, where: str, kind: str) -> str:
                          "the conditions' tie scales)")
     if "phasemap_tol" in a:
         lines.append(f"  tolerance {_number(a['phasemap_tol'])}")
-    lines.append(f"  made by   phasemap {a.get('phasemap_version', '?')}, "
-                 f"{a.get('date_created', 'creation time unknown')}")
-    fixed = [(k[len("phasemap_fixed_"):], "=", _number(v)) for k, v in a.items()
-             if k.startswith("phasemap_fixed_")]
+    lines.append(_made_by(a))
+    fixed = _prefixed(a, "phasemap_fixed_")
     lines.append("fixed")
     lines += _table(fixed) if fixed else ["  (none)"]
     return "\n".join(lines)
@@ -874,12 +883,9 @@ def _describe_motion(ds: xr.Dataset, where: str, kind: str) -> str:
         lines.append(f"  ended     {a['end_reason']}: {a.get('end_message', '')}")
     if "n_reversals" in a:
         lines.append(f"  reversals {int(np.squeeze(a['n_reversals']))}")
-    lines.append(f"  made by   phasemap {a.get('phasemap_version', '?')}, "
-                 f"{a.get('date_created', 'creation time unknown')}")
-    start = [(k[len("phasemap_initial_"):], "=", _number(v)) for k, v in a.items()
-             if k.startswith("phasemap_initial_")]
-    fixed = [(k[len("phasemap_fixed_"):], "=", _number(v)) for k, v in a.items()
-             if k.startswith("phasemap_fixed_")]
+    lines.append(_made_by(a))
+    start = _prefixed(a, "phasemap_initial_")
+    fixed = _prefixed(a, "phasemap_fixed_")
     lines.append("initial state")
     lines += _table(start) if start else ["  (none)"]
     lines.append("parameters")
@@ -912,8 +918,7 @@ def _describe_grid(ds: xr.Dataset, where: str) -> str:
         lines.append(f"  title     {a['title']}")
     lines.append(f"  model     {a['phasemap_model']}")
     lines.append(f"  cells     {cells} = " + " x ".join(f"{ds.sizes[d]} {d}" for d in dims))
-    lines.append(f"  made by   phasemap {a.get('phasemap_version', '?')}, "
-                 f"{a.get('date_created', 'creation time unknown')}")
+    lines.append(_made_by(a))
     if "Conventions" in a:
         lines.append(f"  follows   {a['Conventions']}")
 
