@@ -282,3 +282,20 @@ def test_the_docs_build_fills_the_studies_claims_tables(monkeypatch):
     assert all(rows == [("a | b", "p", "m", "agrees")] for rows in tables.values())
     conf = (DOCS / "conf.py").read_text()
     assert 'app.connect("source-read", _claims_tables)' in conf
+
+
+def test_ci_docs_without_the_docs_extra_says_so_in_one_line(tmp_path):
+    """``bash .ci/docs`` without the docs extra printed importlib's traceback before its
+    message (issue 41 item 9).  A ``python`` on PATH whose metadata check fails as a
+    missing distribution does stands in for an environment without the extra."""
+    shim = tmp_path / "python"
+    shim.write_text("#!/bin/sh\n"
+                    f"exec {sys.executable} -c \"import importlib.metadata as m; "
+                    "m.version('phasemap-no-such-dist')\"\n")
+    shim.chmod(0o755)
+    done = subprocess.run(["bash", str(ROOT / ".ci" / "docs")], capture_output=True, text=True,
+                          env={**os.environ, "PATH": f"{tmp_path}{os.pathsep}"
+                                                     f"{os.environ['PATH']}"}, timeout=60)
+    assert done.returncode == 1
+    assert done.stderr.strip().splitlines() == [
+        'CI: the docs extra is missing: pip install ".[docs]" first (.ci/run does)']
