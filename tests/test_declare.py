@@ -546,3 +546,32 @@ def test_a_classification_holds_branch_results_not_branch_definitions():
     assert got.candidates and all(type(b) is phasemap.BranchResult for b in got.candidates)
     assert phasemap.Branch is phasemap.BranchResult
     assert model.Branch is not phasemap.BranchResult
+
+
+def test_a_broken_declaration_names_every_problem_at_once():
+    """declare.md's own broken example reported the missing rate but not the missing body
+    (issue 41 item 10): every part a system cannot do without is named in one ValueError,
+    and the checks that can run on what is there run too."""
+    import sympy as sp
+
+    from phasemap.declare import Coordinate, Parameter, System
+
+    q = Coordinate("q", "m", "height")
+    with pytest.raises(ValueError) as err:
+        System("broken", "a height without a rate, and no body", "-", coordinates=(q,),
+               parameters=(), bodies=(), contacts=()).model
+    said = str(err.value)
+    assert said.startswith("broken: ") and "\n" not in said
+    for part in ("coordinates: at least one coordinate needs a Rate",
+                 "bodies: declare at least one Body", "contacts: declare at least one contact"):
+        assert part in said, said
+    # a single problem reads as before
+    m = Parameter("m", "kg", "mass", 1.0, 0.0, lower_open=True)
+    with pytest.raises(ValueError, match=r"^alone: bodies: declare at least one Body "
+                                         r"\(the system has no mass\)$"):
+        from phasemap.declare import PointContact, Rate
+
+        x = Coordinate("x", "m", "position", rate=Rate("v", "m s-1", "velocity"))
+        System("alone", "no body", "-", coordinates=(x,), parameters=(m,), bodies=(),
+               contacts=(PointContact("A", (x, sp.Integer(0)), normal=(0, 1), friction=m),
+                         )).model

@@ -23,21 +23,41 @@ def fail(system, part: str, why: str):
 
 
 def validate(S) -> None:
-    """Raise ValueError naming the system and the part for the first problem found."""
+    """Raise one ValueError naming the system and every problem found, part by part
+    (``name: part: why; part: why``).  The checks that do not depend on each other all
+    run; one that needs an earlier part (the contacts need the bodies) runs only where
+    that part is sound."""
     if not isinstance(S.name, str) or not IDENT.match(S.name):
         raise ValueError(f"a system's name must be an identifier, got {S.name!r}")
-    known = _declared_names(S)
-    _check_present(S)
-    at = _check_values(S)
-    expr = _expression_check(S, known)
-    _check_bodies(S, expr, at)
-    _check_potential(S, expr)
-    for k, e in S.forces.items():
-        nm = k.name if isinstance(k, Coordinate) else k
-        if nm not in {c.name for c in S.coordinates}:
-            fail(S, "forces", f"{nm!r} is not a coordinate")
-        expr(f"force on {nm}", e)
-    _check_contacts(S, expr, at)
+    problems: list[str] = []
+    prefix = f"{S.name}: "
+
+    def attempt(check, *args):
+        try:
+            return check(*args), True
+        except ValueError as err:
+            text = str(err)
+            problems.append(text[len(prefix):] if text.startswith(prefix) else text)
+            return None, False
+
+    known, named = attempt(_declared_names, S)
+    for part, why in _missing(S):
+        problems.append(f"{part}: {why}")
+    if named and not problems:
+        at, valued = attempt(_check_values, S)
+        expr = _expression_check(S, known)
+        bodies = valued and attempt(_check_bodies, S, expr, at)[1]
+        attempt(_check_potential, S, expr)
+        for k, e in S.forces.items():
+            nm = k.name if isinstance(k, Coordinate) else k
+            if nm not in {c.name for c in S.coordinates}:
+                problems.append(f"forces: {nm!r} is not a coordinate")
+            else:
+                attempt(expr, f"force on {nm}", e)
+        if bodies:
+            attempt(_check_contacts, S, expr, at)
+    if problems:
+        raise ValueError(prefix + "; ".join(problems))
 
 
 def _declared_names(S) -> set[str]:
@@ -64,16 +84,19 @@ def _declared_names(S) -> set[str]:
     return set(names)
 
 
-def _check_present(S) -> None:
+def _missing(S) -> list[tuple[str, str]]:
+    """(part, why) for every part a system cannot do without and does not declare."""
+    out = []
     if not S.coordinates:
-        fail(S, "coordinates", "declare at least one coordinate")
-    if not any(c.rate for c in S.coordinates):
-        fail(S, "coordinates", "at least one coordinate needs a Rate (a state velocity)")
+        out.append(("coordinates", "declare at least one coordinate"))
+    elif not any(c.rate for c in S.coordinates):
+        out.append(("coordinates", "at least one coordinate needs a Rate (a state velocity)"))
     if not S.bodies:
-        fail(S, "bodies", "declare at least one Body (the system has no mass)")
+        out.append(("bodies", "declare at least one Body (the system has no mass)"))
     if not S.contacts:
-        fail(S, "contacts", "declare at least one contact (a point contact, a rolling "
-             "contact or a joint): without dry friction phasemap has nothing to map")
+        out.append(("contacts", "declare at least one contact (a point contact, a rolling "
+                    "contact or a joint): without dry friction phasemap has nothing to map"))
+    return out
 
 
 def _number(x) -> float | None:
