@@ -229,7 +229,8 @@ def test_ctrl_c_stops_the_command_line_while_it_times_its_sample(tmp_path):
 def test_an_activity_line_ticks_while_nothing_else_prints(capsys):
     from phasemap import progress
 
-    with progress.enable(), progress.activity("waiting"):
+    # forced: capsys's stderr is no terminal, where the command line's ticker is silent
+    with progress.enable(True, force=True), progress.activity("waiting"):
         time.sleep(2.2)   # a wait with no count, like numba compiling
         progress.status("still waiting")
         time.sleep(1.2)
