@@ -63,6 +63,7 @@ EXPRESSIONS = st.recursive(_leaf, _grow, max_leaves=12)
 POINTS = st.tuples(*[st.floats(-3.0, 3.0, allow_nan=False).filter(lambda v: abs(v) > 1e-3)
                      for _ in SYMBOLS])
 
+
 class _MathInMpmath:
     """:mod:`math` as the printed text names it, in mpmath (complex where sympy's is)."""
 
