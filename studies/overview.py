@@ -110,7 +110,7 @@ def main(argv=None) -> list[Claim]:
                            fixed={"delta": 0.05},
                            layers=["fate", "phi_rest", "n_reversals", "t_rest"],
                            options={"t_end": 60.0})
-    fates = scene.compute(progress=True)
+    fates = scene.compute()   # a bar where a terminal watches, none in a log
     files.append(save_atlas(fates, out, f"{NAME}_wheel_fates", NAME))
     files += save_figures(lambda size: phasemap.plot.fate_figure(fates, extra="n_reversals",
                                                                  size=size),
