@@ -69,6 +69,7 @@ import stat
 import sys
 import tempfile
 import threading
+from typing import Iterator
 from dataclasses import dataclass
 
 __all__ = ["CacheError", "CacheInfo", "DEFAULT_MAX_MB", "clear", "folder", "info", "limit",
@@ -81,8 +82,8 @@ DEFAULT_MAX_MB = 500
 HASH_PREFIX = "# phasemap-sha256 "
 
 #: numba's files: ``<stem>.<function>-<line>.pyXY.nbi`` and ``....pyXY.<n>.nbc``, and
-#: phasemap's hashes of them, ``....pyXY.nbh``.
-_NUMBA_FILE = re.compile(r"^(?P<stem>[^.]+(?:\.[^.]+?)?)-\d+\.py\d+(?:\.\d+)?\.nb[ich]$")
+#: phasemap's hashes of them, ``....pyXY.nbh``, and lock, ``....pyXY.nbl``.
+_NUMBA_FILE = re.compile(r"^(?P<stem>[^.]+(?:\.[^.]+?)?)-\d+\.py\d+(?:\.\d+)?\.nb[ichl]$")
 #: Python's bytecode of a generated module (earlier versions imported them from files).
 _BYTECODE = re.compile(r"^(?P<stem>[^.]+)\.cpython-\d+\.pyc$")
 
@@ -370,6 +371,27 @@ def _distrust(path: pathlib.Path, *, owner_only: bool = False) -> str | None:
     return None
 
 
+@contextlib.contextmanager
+def _locked(index: pathlib.Path, exclusive: bool) -> Iterator[None]:
+    """Hold a lock on one function's numba files (``<name>.nbl`` beside its index): shared
+    while they are checked and loaded, exclusive while they are saved and hashed, so that a
+    process never reads an index whose hash another process has not written yet (two
+    workers compiling one kernel at once).  Without ``fcntl`` (or where the lock file
+    cannot be made) the block runs unlocked."""
+    try:
+        import fcntl
+
+        fd = os.open(index.with_suffix(".nbl"), os.O_RDWR | os.O_CREAT, 0o600)
+    except (ImportError, OSError):
+        yield
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+        yield
+    finally:
+        os.close(fd)
+
+
 def _first_distrust(files, owner_only: bool = False) -> str | None:
     """What :func:`_distrust` finds wrong with the first of ``files`` it objects to, or None."""
     return next(filter(None, (_distrust(f, owner_only=owner_only) for f in files)), None)
@@ -470,17 +492,18 @@ def _guard_numba() -> None:
                  "instead, and not saving it (make the folder yours and private, or set "
                  "NUMBA_CACHE_DIR)")
             return None
-        problem = _first_distrust(files) or _unverified(files)
-        if problem is not None:  # ours, but others could have written it, or damaged
-            _owner_only([files[0].parent])
-            damaged(self, files, problem, "is not loaded" if problem == UNHASHED
-                    else "was damaged")
-            return None
-        try:
-            data = _load_without_refresh(self, sig, target_context, load)
-        except Exception as err:
-            damaged(self, files, type(err).__name__)
-            return None
+        with _locked(files[0], exclusive=False):
+            problem = _first_distrust(files) or _unverified(files)
+            if problem is not None:  # ours, but others could have written it, or damaged
+                _owner_only([files[0].parent])
+                damaged(self, files, problem, "is not loaded" if problem == UNHASHED
+                        else "was damaged")
+                return None
+            try:
+                data = _load_without_refresh(self, sig, target_context, load)
+            except Exception as err:
+                damaged(self, files, type(err).__name__)
+                return None
         if data is not None:
             _touch(self._cache_file._index_path)
         return data
@@ -498,13 +521,14 @@ def _guard_numba() -> None:
                  "again next time (make the folder yours and private, or set "
                  "NUMBA_CACHE_DIR)", unless=f"not loading numba's cache of {self._name}")
             return None
-        if files[0].exists() and (_first_distrust(files) or _unverified(files)):
-            _remove(files)
         try:
-            save(self, sig, data)
-            files = _numba_files(self)
-            _owner_only(files[:-1])
-            _write_atomic(files[-1], _digests(files[:-1]).encode())
+            with _locked(files[0], exclusive=True):
+                if files[0].exists() and (_first_distrust(files) or _unverified(files)):
+                    _remove(files)
+                save(self, sig, data)
+                files = _numba_files(self)
+                _owner_only(files[:-1])
+                _write_atomic(files[-1], _digests(files[:-1]).encode())
         except OSError as err:
             _say(f"cannot save the compiled {self._name} in {self._cache_path} "
                  f"({err.strerror or err}); it will be compiled again next time")

@@ -514,3 +514,26 @@ def test_info_clear_and_the_bound_see_the_numba_files_of_every_subpackage(fake_c
     files, freed = cache.clear()
     assert (files, freed) == (6 * 3 + 1 + 3 + 3, 24_100)
     assert list(numba_sub.iterdir()) == [] and keep.exists()
+
+
+def test_processes_compiling_one_function_at_once_say_nothing(tmp_path):
+    """Two xdist workers compiling one kernel at once: one read an index whose hash the
+    other had not written yet, called it damaged on stderr and removed it.  The numba files
+    of a function are now saved under an exclusive lock and loaded under a shared one.
+    Four processes, three rounds from a cold folder."""
+    code = "import time; time.sleep(0.2)\n" + load()
+    for round_ in range(3):
+        root = tmp_path / f"cache{round_}"
+        procs = [subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                                  stderr=subprocess.PIPE, text=True,
+                                  env={**{k: v for k, v in os.environ.items()
+                                          if k != "NUMBA_CACHE_DIR"},
+                                       "PYTHONPATH": os.pathsep.join(
+                                           [str(ROOT), os.environ.get("PYTHONPATH", "")]),
+                                       "PHASEMAP_CACHE_DIR": str(root)})
+                 for _ in range(4)]
+        for p in procs:
+            out, err = p.communicate(timeout=300)
+            assert p.returncode == 0 and out.split()[:2] == ["42", "probe"], err
+            assert err == "", err
+        assert child(load(), root).stderr == ""
