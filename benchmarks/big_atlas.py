@@ -44,7 +44,7 @@ def main():
         "",
         f"`phasemap atlas ladder --axis phi=0:1.5707963:{args.side} --axis f=0:3:{args.side} "
         f"--set omega=1 --yes`: {cells:.3e} cells, layer `n_solutions` (int8), computed and written "
-        f"block by block straight into the file (`phasemap.blocks.write_scene`, blocks of "
+        f"block by block straight into the file (`phasemap.maps.blocks.write_scene`, blocks of "
         f"about a quarter second, no dask graph).",
         "",
         "| cells | int8 data in memory if eager | peak resident memory | wall time | file size |",

@@ -62,7 +62,7 @@ def one(x):
 """
 
 #: numba's load from the cache without its registry refresh, as phasemap loads its own
-#: functions (``phasemap.cache._load_without_refresh``), written out here so that the floor
+#: functions (``phasemap.core.cache._load_without_refresh``), written out here so that the floor
 #: does not import phasemap.
 LEAN = """
 from numba.core import caching
@@ -179,7 +179,7 @@ def report(args, med, heavy, loads) -> str:
               f"{numba_floor[0] - floor[0]:+.2f} s of wall time here (the floor's third row "
               "against its fourth); loading machine code needs none of it, only numba's "
               "runtime, and every compilation refreshes for itself, so phasemap loads its "
-              "own functions without it (`phasemap.cache._load_without_refresh`; "
+              "own functions without it (`phasemap.core.cache._load_without_refresh`; "
               "tests/test_cold_start.py checks that a warm process's maps equal those of "
               "the process that compiled them, and that it never imports "
               "`numba.np.linalg`).  What is left is numba's and xarray's imports.", ""]

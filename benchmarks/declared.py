@@ -45,7 +45,7 @@ import phasemap  # noqa: E402
 from _report import ROOT, load, machine, parser, publish  # noqa: E402
 from grid import (CASES, HAND_MODULES, SEEDS, Kernel, hand_model, median_times,  # noqa: E402
                   numpy_rod, scene_args)
-from phasemap.layers import SUMMARY  # noqa: E402
+from phasemap.maps.layers import SUMMARY  # noqa: E402
 
 #: model -> (declared model: a path or a registered name, map case, short motion)
 SYSTEMS = {
@@ -172,8 +172,8 @@ T = {}
 t = time.perf_counter()
 import numpy as np, phasemap
 import phasemap.declare.build as d
-from phasemap.grid import evaluate
-from phasemap.layers import layers_for
+from phasemap.maps.grid import evaluate
+from phasemap.maps.layers import layers_for
 T["import phasemap"] = time.perf_counter() - t
 if spec["declared"] and spec["empty"]:  # a warm process loads the model without sympy
     t = time.perf_counter()

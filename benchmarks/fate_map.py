@@ -23,7 +23,7 @@ import numpy as np
 
 import phasemap
 from phasemap.models import get_model
-from phasemap.simulate import Options
+from phasemap.motion.simulate import Options
 
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -51,13 +51,13 @@ def _physics_loops(model):
     """Jitted loops timing the physics of a step alone: one right-hand side (the
     derived inputs sin phi, cos phi and the stage's branch row), one classification
     (derived inputs and every candidate row) and the integrator's test after a step
-    (``GOES_ON`` of :mod:`phasemap.integrate.templates`: derived inputs and the
+    (``GOES_ON`` of :mod:`phasemap.motion.integrate.templates`: derived inputs and the
     statuses it reads).  Each call's phi depends on the previous call's result, as
     the stages of a Runge-Kutta step do, so the loops measure latency, not the
     throughput of independent calls."""
     from numba import njit
 
-    from phasemap.integrate import stage_kernels
+    from phasemap.motion.integrate import stage_kernels
 
     contract = model.contract
     point, row, derive = contract.point, contract.branch_row_inline, contract.derive_inline
@@ -122,12 +122,12 @@ def lean_dopri5(model):
     returns the number of steps."""
     from numba import njit
 
-    from phasemap import _dopri5
-    from phasemap._compile import specialize
-    from phasemap.integrate import stage_kernels
-    from phasemap.integrate import templates as tp
+    from phasemap.motion.integrate import dopri5 as _dopri5
+    from phasemap.core.compile import specialize
+    from phasemap.motion.integrate import stage_kernels
+    from phasemap.motion.integrate import templates as tp
 
-    phasemap.integrate.kernels(model, "DOPRI5")
+    phasemap.motion.integrate.kernels(model, "DOPRI5")
     consts = dict(stage_kernels(model).constants)
     consts.update(N_STAGES=_dopri5.N_STAGES, FSAL=_dopri5.FSAL, N_DENSE=_dopri5.N_DENSE,
                   EXPONENT=_dopri5.EXPONENT, STIFF_BOUND=_dopri5.STIFF_BOUND)
@@ -178,7 +178,7 @@ def step_profile(model, cells: int = 1500, repeat: int = 5, fit_cells: int = 400
     on shared cores), each loop inside numba (no dispatch per cell)."""
     from numba import njit
 
-    integrate, _ = phasemap.integrate.kernels(model, "DOPRI5")
+    integrate, _ = phasemap.motion.integrate.kernels(model, "DOPRI5")
     lean = lean_dopri5(model)
     full = {k: float(x) for k, x in model.complete({"phi": 0.0, "omega": 0.0}).items()}
     v = model.input_vector(full)

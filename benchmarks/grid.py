@@ -3,7 +3,7 @@
 For each built-in system, a 2-D map of side ``--side`` over (phi, f), (phi, delta) or
 (theta, f) at a moving state (the case's fixed values below), layer ``n_solutions``:
 
-* **kernel**: the generated grid kernel (:func:`phasemap._codegen.run_grid`, what
+* **kernel**: the generated grid kernel (:func:`phasemap.core.codegen.run_grid`, what
   ``Scene.compute()`` runs) into arrays allocated once;
 * **public**: ``phasemap.Scene(...).compute()`` as a user calls it: validation, the
   kernel, the Dataset;
@@ -53,9 +53,9 @@ import numpy as np
 from numba import njit
 
 import phasemap
-from phasemap._codegen import grid_kernel, run_grid
-from phasemap.grid import pack_axes
-from phasemap.layers import layers_for
+from phasemap.core.codegen import grid_kernel, run_grid
+from phasemap.core.codegen import pack_axes
+from phasemap.maps.layers import layers_for
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from _report import ROOT, load, machine, publish, write_section  # noqa: E402,F401  (re-exported)
@@ -325,13 +325,13 @@ _INSIDE: list = []
 _CLOCK = [time.thread_time]
 
 
-def _timed_run_grid(*args, _run=phasemap.grid.run_grid):
+def _timed_run_grid(*args, _run=phasemap.maps.grid.run_grid):
     t = _CLOCK[0]()
     _run(*args)
     _INSIDE.append(_CLOCK[0]() - t)
 
 
-phasemap.grid.run_grid = _timed_run_grid
+phasemap.maps.grid.run_grid = _timed_run_grid
 
 
 def median_times(runs: dict, repeat: int) -> dict:
@@ -401,8 +401,8 @@ def measure(side: int, repeat: int, with_numpy: bool):
 ASM_CHILD = r"""
 import collections, json, re, sys
 import phasemap
-from phasemap._codegen import grid_kernel
-from phasemap.layers import layers_for
+from phasemap.core.codegen import grid_kernel
+from phasemap.maps.layers import layers_for
 spec = json.loads(sys.argv[1])
 m = phasemap.get_model(spec["model"])
 cells = grid_kernel(m, (layers_for(m)["n_solutions"],), spec["inner"])

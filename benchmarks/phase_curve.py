@@ -38,7 +38,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 import phasemap
-from phasemap import phase
+from phasemap.motion import phase
 from phasemap.systems import get_model
 from phasemap.systems import hinge_pendulum as hinge
 from phasemap.systems.seeds.closed_forms import ladder_omega_squared
@@ -101,7 +101,7 @@ def setup(name, values):
 
 def runners(name, values, t_end, before):
     m, full, lo, hi, kernel, v, u_ref = setup(name, values)
-    integrate, _ = phasemap.integrate.kernels(m, "DOP853")
+    integrate, _ = phasemap.motion.integrate.kernels(m, "DOP853")
     y0 = np.array([full["phi"], full["omega"]])
     no_eval = np.empty(0)
     return {
@@ -184,7 +184,7 @@ def equal_accuracy(repeat):
                 v, full["phi"], full["omega"], lo, hi, 50, 2, u_ref, tol, phase.H_MAX,
                 phase.first_width(tol, phase.H_MAX))
             for method in ("DOPRI5", "DOP853"):
-                integrate, _ = phasemap.integrate.kernels(m, method)
+                integrate, _ = phasemap.motion.integrate.kernels(m, method)
                 atol = tol * math.sqrt(u_ref)
                 errors[method, tol] = err(sim_end(method, tol))
                 calls[method, tol] = lambda integrate=integrate, tol=tol, atol=atol: integrate(
@@ -247,7 +247,7 @@ def target_five(repeat):
             calls[method, tol, "public"] = (
                 lambda tol=tol, atol=atol, method=method: phasemap.simulate(
                     name, t_end, rtol=tol, atol=atol, method=method, **values))
-            integrate, _ = phasemap.integrate.kernels(m, method)
+            integrate, _ = phasemap.motion.integrate.kernels(m, method)
             calls[method, tol, "kernel"] = (
                 lambda integrate=integrate, tol=tol, atol=atol: integrate(
                     v, y0, t_end, tol, atol, math.inf, 10**6, 10**4, True, no_eval))

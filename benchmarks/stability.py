@@ -3,7 +3,7 @@
 Runs ``phasemap.simulate`` on the cases below and records, per case, the end
 reason, whether every floating-point output is finite, the error against a
 reference where there is one (a closed form, the first-integral tracer
-``phasemap.phase.phase_curve``, or the limit the case tends to), the steps
+``phasemap.motion.phase.phase_curve``, or the limit the case tends to), the steps
 and the wall time, and gives a verdict:
 
 * **meets target**: the expected end, finite outputs, error within target;
@@ -36,7 +36,7 @@ from scipy.optimize import brentq
 
 import phasemap
 from phasemap.systems.hinge_pendulum import weightless_motion
-from phasemap.phase import phase_curve
+from phasemap.motion.phase import phase_curve
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from _report import machine, publish  # noqa: E402

@@ -1,6 +1,6 @@
 """Work-precision: error against run time per trajectory, phasemap against solve_ivp.
 
-For each built-in problem of :mod:`phasemap.workprecision` (one per system)
+For each built-in problem of :mod:`phasemap.motion.workprecision` (one per system)
 this runs the first-integral tracer, the numba integrator (its kernel with
 the DOPRI5 and the DOP853 method, and ``phasemap.simulate`` with its
 Dataset) and scipy's ``solve_ivp`` (RK45,
@@ -29,7 +29,7 @@ import statistics
 import sys
 import time
 
-import phasemap.workprecision as wp
+import phasemap.motion.workprecision as wp
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from _report import machine, publish, write_section  # noqa: E402
@@ -163,7 +163,7 @@ def public_call(rounds: int = 200) -> tuple[str, list]:
     from scipy.integrate import solve_ivp
 
     import phasemap
-    from phasemap.integrate import kernels
+    from phasemap.motion.integrate import kernels
 
     sim = sys.modules["phasemap.simulate"]  # the module (phasemap.simulate is the function)
 
@@ -334,7 +334,7 @@ def main():
         "`phasemap_DOP853` the same kernel with `method=\"DOP853\"` (order 8, dense output "
         "of order 7); `simulate` is `phasemap.simulate` with validation and the "
         "Dataset; RK45 ... LSODA are `scipy.integrate.solve_ivp` restarted on every stage by "
-        "`phasemap.workprecision.solve_ivp_staged` with terminal events (velocity zero, "
+        "`phasemap.motion.workprecision.solve_ivp_staged` with terminal events (velocity zero, "
         "assumed reaction signs, the coefficient, the stick limit) and the model's own jitted "
         "branch as right-hand side; `phase_curve` is the first-integral tracer (rtol = the "
         "tolerance; error in the phase plane).",

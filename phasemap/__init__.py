@@ -1,34 +1,37 @@
 """phasemap: solvability, stagnation and phase-space maps of systems with dry friction.
 
-The house, one line per room (docs/guide/layout.md says more):
+The house, in nine parts, each importing only from the parts below it (ARCHITECTURE.md
+at the top of the repository says more, with a picture):
 
-- ``model.py``: the contract every system gives the rest (``Model``, ``Branch``, ``Dynamics``);
-- ``declare/``: a declared ``System`` made a ``Model`` (contact laws, equations, solvers,
-  the code emitter, the kernel cache, admissibility conditions);
+- ``core/``: the contract every system gives the rest (``Model``, ``Branch``,
+  ``Dynamics``, ``Event``) and the machinery that compiles it (generated kernels, the
+  kernel cache, the numba types, the argument checks);
+- ``declare/``: a declared ``System`` made a ``Model`` (contact laws, equations,
+  solvers, the code emitter, admissibility conditions);
 - ``systems/``: every system that runs, and the registry (``MODELS``, ``get_model``);
-  ``models.py`` is its first name, a re-export;
-- ``classify.py``, ``_numerics.py``, ``_codegen.py``, ``layers.py``, ``grid.py``,
-  ``_compile.py``, ``scene.py``: points and grids of points;
-- ``events.py``, ``integrate/``, ``simulate.py``, ``phase/``, ``workprecision/``: motion;
+- ``atlas/``: Datasets and their netCDF files (writing, atomic files, reading);
+- ``motion/``: the integrator, ``simulate``, phase curves, work against precision;
+- ``maps/``: one state (``classify``), the layers, grids and ``Scene``;
 - ``bifurcation/``: the bifurcation set (``boundaries``, ``threshold``);
-- ``_dataset.py``, ``atlas.py``, ``plot/``, ``accessor.py``: datasets, atlases and figures;
-- ``study.py``, ``tour.py``, ``cli.py``: what the study scripts, the tour and the command
-  line share.
+- ``plot/``: figures;
+- the front door (this file, ``cli.py``, ``study.py``, ``tour.py``, ``accessor.py``):
+  what users, the study scripts and the command line call.
 
 The public API is re-exported here explicitly.
 """
 
-from ._version import __version__
-from .atlas import describe_atlas, open_atlas, write_atlas
-from .classify import Branch, BranchResult, Classification, classify
-from .events import Event
-from .layers import Layer, layers_for
-from .model import BranchStatus, Derived, Dynamics, Model, Solvability, Variable
-from .systems import MODELS, get_model
-from .phase import phase_curve
-from .scene import Scene
-from .simulate import simulate
-from . import accessor as _accessor  # noqa: F401  (registers Dataset.phasemap)
+from phasemap._version import __version__
+from phasemap.atlas.read import describe_atlas, open_atlas
+from phasemap.atlas.write import write_atlas
+from phasemap.maps.classify import Branch, BranchResult, Classification, classify
+from phasemap.core.events import Event
+from phasemap.maps.layers import Layer, layers_for
+from phasemap.core.model import BranchStatus, Derived, Dynamics, Model, Solvability, Variable
+from phasemap.systems import MODELS, get_model
+from phasemap.motion.phase import phase_curve
+from phasemap.maps.scene import Scene
+from phasemap.motion.simulate import simulate
+from phasemap import accessor as _accessor  # noqa: F401  (registers Dataset.phasemap)
 
 
 def __getattr__(name: str):
@@ -40,7 +43,7 @@ def __getattr__(name: str):
 
         return importlib.import_module(".plot", __name__)
     if name in ("boundaries", "threshold"):  # sympy and the tracer load on first use
-        from . import bifurcation
+        from phasemap import bifurcation
 
         return getattr(bifurcation, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -23,8 +23,8 @@ from typing import TYPE_CHECKING, Sequence
 
 import xarray as xr
 
-from ._dataset import dataset_kind, recorded_model
-from .model import Model
+from phasemap.atlas.dataset import dataset_kind, recorded_model
+from phasemap.core.model import Model
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -43,7 +43,7 @@ class PhasemapAccessor:
     def kind(self) -> str:
         """``"map"``, ``"profile"``, ``"fate"``, ``"phase_curve"`` or ``"trajectory"``.
 
-        See :func:`phasemap._dataset.dataset_kind` (no matplotlib needed);
+        See :func:`phasemap.atlas.dataset.dataset_kind` (no matplotlib needed);
         ValueError for a Dataset that is not a phasemap atlas.
         """
         return dataset_kind(self._ds)
@@ -53,7 +53,7 @@ class PhasemapAccessor:
         """The built-in :class:`phasemap.Model` named by the ``phasemap_model`` global attribute.
 
         A Dataset is data: the name is looked up among the built-in models and
-        nothing it names is loaded (see :func:`phasemap._dataset.recorded_model`).
+        nothing it names is loaded (see :func:`phasemap.atlas.dataset.recorded_model`).
         Raises ValueError if there is no such attribute, it names no built-in
         model, or the built-in model was declared otherwise than the Dataset records.
         """
@@ -67,7 +67,7 @@ class PhasemapAccessor:
         (``"one_column"``, ``"two_column"`` or a width in inches) and other
         keywords are those of :func:`phasemap.plot.plot`.
         """
-        from .plot import plot
+        from phasemap.plot import plot
 
         return plot(self._ds, layer, ax=ax, size=size, **kw)
 
@@ -79,7 +79,7 @@ class PhasemapAccessor:
         """
         import matplotlib.pyplot as plt
 
-        from .plot import save_figure
+        from phasemap.plot import save_figure
 
         fig = self.plot(layer, **kw)
         try:

@@ -9,9 +9,9 @@ import shutil
 import sys
 import textwrap
 
-from . import _args
-from ._version import __version__
-from .bifurcation import command as _bif
+from phasemap.core import args as _args
+from phasemap._version import __version__
+from phasemap.bifurcation import command as _bif
 
 #: Examples per subcommand; ``phasemap --help`` shows them all, each
 #: subcommand's help only its own.
@@ -95,7 +95,7 @@ def _sub(sub, name: str, help: str, description: str):
 
 def _model_names() -> str:
     """What MODEL may be, for the commands' help."""
-    from .models import MODELS
+    from phasemap.systems import MODELS
 
     return (f"a built-in model ({', '.join(MODELS)}) or a declaration file "
             "(path/to/system.py, defining SYSTEM)")
@@ -221,8 +221,8 @@ def main(argv: list[str] | None = None) -> int:
     args, extra = parser.parse_known_args(argv)
     if extra:  # the subcommand's own usage, not the top level's
         (subs.get(args.command) or parser).error(f"unrecognized arguments: {' '.join(extra)}")
-    from . import progress
-    from .atlas import Terminated, removed_on_signals
+    from phasemap.core import progress
+    from phasemap.atlas.atomic import Terminated, removed_on_signals
 
     try:
         with progress.enable(), removed_on_signals():
@@ -259,7 +259,7 @@ def _run(args) -> int:
     if args.command in (None, "table"):
         print(_table())
     elif args.command == "tour":
-        from .tour import tour
+        from phasemap.tour import tour
 
         return tour(args.out, full=args.full, studies=args.studies,
                     only=args.only.split(",") if args.only else None, size=args.size)
@@ -270,23 +270,23 @@ def _run(args) -> int:
     elif args.command == "simulate":
         print(_simulate(args))
     elif args.command == "info":
-        from .atlas import describe_atlas
+        from phasemap.atlas.read import describe_atlas
 
         print(describe_atlas(args.path))
     elif args.command == "plot":
-        from .plot.command import plot_file
+        from phasemap.plot.command import plot_file
 
         print("wrote " + ", ".join(map(str, plot_file(args.path, args.output, args.size))))
     elif args.command == "cfcheck":
-        from .cfcheck import cfcheck
+        from phasemap.atlas.cfcheck import cfcheck
 
         report, ok = cfcheck(args.path)
         print(report)
         return 0 if ok else 1
     elif args.command == "classify":
-        from .classify import classify
+        from phasemap.maps.classify import classify
 
-        from .models import get_model
+        from phasemap.systems import get_model
 
         if args.model is None:
             raise ValueError(f"classify needs MODEL, {_model_names()}; NAME=VALUE pairs "
@@ -301,8 +301,8 @@ def _run(args) -> int:
 
 
 def _cache(action: str) -> str:
-    from . import cache
-    from .progress import human_bytes
+    from phasemap.core import cache
+    from phasemap.core.progress import human_bytes
 
     if action == "clear":
         files, freed = cache.clear()
@@ -312,7 +312,7 @@ def _cache(action: str) -> str:
 
 def _parse_values(items: list[str], words: tuple[str, ...] = (), model=None) -> dict[str, float]:
     """NAME=VALUE items as numbers (the names in ``words`` keep their text); a VALUE
-    may be arithmetic with pi (:func:`phasemap._args.parse_real`)."""
+    may be arithmetic with pi (:func:`phasemap.core.args.parse_real`)."""
     values = {}
     for item in items:
         name, sep, text = item.partition("=")
@@ -371,11 +371,11 @@ def _parse_axis(item: str, model=None) -> tuple[str, object]:
 
 
 def _atlas(args) -> str:
-    from . import blocks
-    from .atlas import destination
-    from .models import get_model
-    from .progress import human_duration
-    from .scene import Scene
+    from phasemap.maps import blocks
+    from phasemap.atlas.atomic import destination
+    from phasemap.systems import get_model
+    from phasemap.core.progress import human_duration
+    from phasemap.maps.scene import Scene
 
     model = get_model(args.model)
     destination(args.output)  # the folder exists, the output is no folder
@@ -411,12 +411,13 @@ def _atlas(args) -> str:
 
 
 def _simulate(args) -> str:
-    from . import progress
-    from .atlas import destination, write_atlas
-    from .blocks import check_output
-    from .events import Event
-    from .simulate import integrated_variables, simulate
-    from .models import get_model
+    from phasemap.core import progress
+    from phasemap.atlas.atomic import destination
+    from phasemap.atlas.write import write_atlas
+    from phasemap.maps.blocks import check_output
+    from phasemap.core.events import Event
+    from phasemap.motion.simulate import integrated_variables, simulate
+    from phasemap.systems import get_model
 
     model = get_model(args.model)
     if args.output:
@@ -444,7 +445,7 @@ def _simulate(args) -> str:
 
 
 def _table() -> str:
-    from .classify import classify
+    from phasemap.maps.classify import classify
 
     rows = [("model", "state and parameters", "solutions", "stag.", "lost", "sing.", "the paper")]
     for model, values, claim in PAPER_CASES:
@@ -465,7 +466,7 @@ def _table() -> str:
 
 
 def _models(name: str | None = None) -> str:
-    from .models import MODELS, get_model
+    from phasemap.systems import MODELS, get_model
 
     lines = []
     for m in (MODELS.values() if name is None else [get_model(name)]):
@@ -477,7 +478,7 @@ def _models(name: str | None = None) -> str:
                              f"domain {v.domain_text():<{width}} {v.long_name}")
         lines.append(f"  branches: {', '.join(m.branches)}")
         if name is not None:
-            from .layers import layers_for
+            from phasemap.maps.layers import layers_for
 
             layers = layers_for(m)
             lines.append(f"  layers ({len(layers)}):")

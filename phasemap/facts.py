@@ -33,12 +33,12 @@ def elliptic_threshold() -> float:
 
 def readme_facts() -> dict[str, str]:
     """README text, by what it states, as the code computes it."""
-    from ._numerics import TOL
-    from .atlas import CONVENTIONS
-    from .blocks import YES_CELLS
-    from .cache import DEFAULT_MAX_MB
-    from .model import MAX_MAGNITUDE, MIN_POSITIVE
-    from .scene import MAX_SPEC_CELLS
+    from phasemap.core.numerics import TOL
+    from phasemap.atlas.dataset import CONVENTIONS
+    from phasemap.maps.blocks import YES_CELLS
+    from phasemap.core.cache import DEFAULT_MAX_MB
+    from phasemap.core.model import MAX_MAGNITUDE, MIN_POSITIVE
+    from phasemap.maps.scene import MAX_SPEC_CELLS
 
     return {
         "wheel singular threshold at r = 1, l = rho = 0.5":

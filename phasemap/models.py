@@ -7,6 +7,6 @@
 True
 """
 
-from .systems import DECLARED, MODELS, builtin_model, get_model
+from phasemap.systems import DECLARED, MODELS, builtin_model, get_model
 
 __all__ = ["MODELS", "DECLARED", "builtin_model", "get_model"]

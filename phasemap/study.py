@@ -28,7 +28,7 @@ from typing import Callable, Sequence
 
 import xarray as xr
 
-from ._version import __version__
+from phasemap._version import __version__
 
 #: Verdicts a claim can get.  ``agrees``: the paper's statement holds as
 #: printed.  ``erratum``: the paper's formula is wrong and the measured value
@@ -149,7 +149,7 @@ def mesh(ds: xr.Dataset, x: str, y: str) -> tuple:
 
 def save_atlas(ds: xr.Dataset, out: pathlib.Path, name: str, study: str) -> pathlib.Path:
     """Write ``ds`` as ``out/name.nc``, stamped with the study that made it."""
-    from .atlas import write_atlas
+    from phasemap.atlas.write import write_atlas
 
     ds = ds.assign_attrs(phasemap_study=study, phasemap_version=__version__)
     return write_atlas(ds, out / f"{name}.nc")
@@ -159,7 +159,7 @@ def save_figure(fig, out: pathlib.Path, name: str) -> list[pathlib.Path]:
     """Write ``fig`` as ``out/name.pdf`` (vector) and ``.png``, then close it."""
     import matplotlib.pyplot as plt
 
-    from .plot import save_figure as _save
+    from phasemap.plot import save_figure as _save
 
     paths = list(_save(fig, out / name))
     plt.close(fig)

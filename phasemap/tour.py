@@ -20,7 +20,7 @@ import sys
 import time
 from typing import Iterator, Sequence
 
-from . import progress
+from phasemap.core import progress
 
 #: The order of the tour: the four systems of the paper, the rod on a step (a declared
 #: system with two frictional contacts), then the overview.

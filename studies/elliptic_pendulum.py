@@ -37,7 +37,7 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
 import phasemap
-from phasemap.bifurcation.claims import threshold_claims
+from phasemap.claims import threshold_claims
 from phasemap import plot as pplot
 from phasemap import study
 from phasemap.study import Claim, verdict

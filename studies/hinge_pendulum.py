@@ -31,7 +31,7 @@ from matplotlib.colors import to_hex
 from matplotlib.lines import Line2D
 
 import phasemap
-from phasemap.bifurcation.claims import threshold_claims
+from phasemap.claims import threshold_claims
 from phasemap import plot as pplot
 from phasemap import study
 from phasemap.systems.hinge_pendulum import weightless_motion

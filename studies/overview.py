@@ -25,8 +25,8 @@ import math
 import numpy as np
 
 import phasemap
-from phasemap.bifurcation.claims import threshold_claims
-from phasemap import workprecision as wp
+from phasemap.claims import threshold_claims
+from phasemap.motion import workprecision as wp
 from phasemap.study import Claim, arguments, finish, save_atlas, save_figures, verdict
 
 NAME = "overview"
@@ -37,7 +37,7 @@ NAME = "overview"
 PAIRS = ("phasemap", "RK45", "phasemap_DOP853", "DOP853")
 METHODS = PAIRS + ("phase_curve",)
 #: The figure's error: dimensionless (each component over its peak along the reference
-#: motion), so that rad and rad s-1 are never added (phasemap.workprecision).
+#: motion), so that rad and rad s-1 are never added (phasemap.motion.workprecision).
 ERROR = "error_scaled_l2"
 
 

@@ -32,7 +32,7 @@ import numpy as np
 import xarray as xr
 
 import phasemap
-from phasemap.bifurcation.claims import threshold_claims
+from phasemap.claims import threshold_claims
 from phasemap.facts import wheel_singular_delta
 from phasemap import plot as pplot
 from phasemap.study import (Claim, arguments, collect_legend, finish, save_atlas,

@@ -238,7 +238,7 @@ def require_tool(name: str, install: str):
 
 def cfchecks(path, folder) -> str:
     """Run cfchecks offline on ``path`` (as ``phasemap cfcheck`` does); return its report."""
-    from phasemap.cfcheck import cfcheck
+    from phasemap.atlas.cfcheck import cfcheck
 
     require_tool("cfchecks", "pip install cfchecker; needs libudunits2-0")
     report, _ = cfcheck(path)

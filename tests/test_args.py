@@ -1,6 +1,6 @@
 """Bad input gets one clear error at every public entry point (issue 23 item 9).
 
-Each case below failed on the code before phasemap._args: an OverflowError, a
+Each case below failed on the code before phasemap.core.args: an OverflowError, a
 numba TypeError, a numpy ufunc error, ``unknown layer 'n'``, a date read as
 50.0, ``atol=np.int64(1)`` refused.  The fuzz at the end throws a few hundred
 awkward values at classify, Scene, compute, simulate and phase_curve.
@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 import phasemap
-from phasemap import _args
-from phasemap.phase import phase_curve
+from phasemap.core import args as _args
+from phasemap.motion.phase import phase_curve
 import re
 
 HUGE = 10**400
@@ -227,7 +227,7 @@ def _check_call(name, call, value):
     except (ValueError, TypeError) as err:
         text = str(err)
         assert name in text, (name, value_text, text)
-        assert type(err).__module__ in ("builtins", "phasemap._args"), (name, value_text, text)
+        assert type(err).__module__ in ("builtins", "phasemap.core.args"), (name, value_text, text)
         assert "numba" not in text.lower() and "Traceback" not in text, (name, value_text, text)
     else:
         assert _admissible_rows_finite(result), (name, value_text)

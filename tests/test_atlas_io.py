@@ -25,8 +25,11 @@ from hypothesis import strategies as st
 
 from conftest import cfchecks, require_tool
 
-from phasemap import atlas
-from phasemap.atlas import atomic_path, cf_encoding, describe_atlas, write_atlas
+import phasemap
+from phasemap.atlas import atomic, dataset, read, write
+from phasemap.atlas.atomic import atomic_path
+from phasemap.atlas.read import describe_atlas
+from phasemap.atlas.write import cf_encoding, write_atlas
 
 AXES = {  # name: (units, long_name, lower, upper)
     "phi": ("rad", "inclination angle", 0.0, 1.5),
@@ -73,7 +76,7 @@ def make_atlas(shape=(17, 11), seed=0) -> xr.Dataset:
                                          for n, c in coords.items()},
              "fixed": FIXED, "layers": list(data)}
     attrs = {
-        "Conventions": atlas.CONVENTIONS,
+        "Conventions": dataset.CONVENTIONS,
         "title": "ladder: solvability map",
         "source": "phasemap 0.1.0",
         "history": "2026-01-01T00:00:00Z phasemap scene compute",
@@ -141,10 +144,10 @@ def test_missing_provenance_is_added_and_existing_kept(tmp_path):
     ds["stagnation"].attrs["flag_values"] = [0, 1]  # a list: stored as int8 all the same
     write_atlas(ds, tmp_path / "atlas.nc")
     back = read_back(tmp_path / "atlas.nc")
-    assert back.attrs["Conventions"] == atlas.CONVENTIONS
+    assert back.attrs["Conventions"] == dataset.CONVENTIONS
     assert re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ", back.attrs["date_created"])
     assert "phasemap" in back.attrs["history"]
-    assert back.attrs["phasemap_version"] == atlas.__version__
+    assert back.attrs["phasemap_version"] == phasemap.__version__
     assert back.attrs["phasemap_model"] == "ladder"
     assert back["stagnation"].attrs["flag_values"].dtype == np.int8
     assert "Conventions" not in ds.attrs  # the caller's dataset is untouched
@@ -197,7 +200,7 @@ def test_default_chunks_are_capped_and_explicit_chunks_win():
     enc = cf_encoding(big)
     assert enc["n_solutions"]["chunksizes"] == (1024, 1024)  # the dask chunk, exactly 1 MiB
     c = enc["coef"]["chunksizes"]
-    assert np.prod(c) * 8 <= atlas.CHUNK_BYTES and c[0] <= 3000 and c[1] <= 2000
+    assert np.prod(c) * 8 <= write.CHUNK_BYTES and c[0] <= 3000 and c[1] <= 2000
     assert enc["phi"] == {"_FillValue": None}
     assert cf_encoding(big, {"f": 5000})["coef"]["chunksizes"][1] == 2000  # clipped to the size
     with pytest.raises(ValueError, match="dimension"):
@@ -210,9 +213,9 @@ def test_default_chunks_are_capped_and_explicit_chunks_win():
 @given(shape=st.lists(st.integers(1, 5000), min_size=1, max_size=4),
        itemsize=st.sampled_from([1, 8]))
 def test_default_chunk_shape_fits(shape, itemsize):
-    chunk = atlas.default_chunks(tuple(shape), itemsize)
+    chunk = write.default_chunks(tuple(shape), itemsize)
     assert all(1 <= c <= n for c, n in zip(chunk, shape))
-    assert np.prod(chunk, dtype=np.int64) * itemsize <= atlas.CHUNK_BYTES
+    assert np.prod(chunk, dtype=np.int64) * itemsize <= write.CHUNK_BYTES
 
 
 # --------------------------------------------------------------------------- atomicity
@@ -316,14 +319,14 @@ def test_a_signal_deferred_in_an_eager_block_ends_it_and_a_handler_of_our_own_is
     import signal
 
     with pytest.raises(KeyboardInterrupt):
-        with atlas.signals_deferred():
+        with atomic.signals_deferred():
             signal.raise_signal(signal.SIGINT)
             done = True  # the block ran to its end: the signal waited
     assert done
     seen = []
     previous = signal.signal(signal.SIGINT, lambda *a: seen.append(a[0]))
     try:
-        with atlas.signals_deferred():
+        with atomic.signals_deferred():
             signal.raise_signal(signal.SIGINT)
         assert seen == [signal.SIGINT]  # the program's own handler ran, nothing was raised
     finally:
@@ -338,7 +341,7 @@ def test_atomic_path_for_a_chunked_writer(tmp_path):
             nc.createDimension("phi", 3)
             nc.createVariable("phi", "f8", ("phi",))[:] = [0.0, 1.0, 2.0]
     assert folder_listing(tmp_path) == ["atlas.nc"]
-    umask = atlas._umask()
+    umask = atomic._umask()
     assert path.stat().st_mode & 0o777 == 0o666 & ~umask
     with pytest.raises(ZeroDivisionError):
         with atomic_path(path) as tmp:
@@ -350,7 +353,7 @@ def test_atomic_path_for_a_chunked_writer(tmp_path):
 
 
 def test_our_temporary_files_older_than_a_day_are_removed_when_writing_beside_them(tmp_path):
-    day = atlas.STALE_PART_SECONDS
+    day = atomic.STALE_PART_SECONDS
     old, fresh = ".phasemap.abcd1234.part", ".phasemap.efgh5678.part"
     others = [".notes.abcd1234.part", ".phasemap.short.part", "phasemap.abcd1234.part"]
     for name in [old, fresh, *others]:
@@ -363,7 +366,7 @@ def test_our_temporary_files_older_than_a_day_are_removed_when_writing_beside_th
 
 
 def test_a_long_legal_file_name_can_be_written(tmp_path):
-    from phasemap.blocks import check_output
+    from phasemap.maps.blocks import check_output
 
     name = "a" * 238 + ".nc"   # 241 bytes: open() takes it; a temporary name must be short
     assert len(name.encode()) == 241
@@ -384,7 +387,7 @@ def test_without_overwrite_a_file_that_appeared_meanwhile_is_kept(tmp_path, monk
         raise OSError(errno.EINVAL, "not supported here")
 
     if how != "renameat2":
-        monkeypatch.setattr(atlas, "_renameat2_noreplace", unsupported)
+        monkeypatch.setattr(atomic, "_renameat2_noreplace", unsupported)
     if how == "check and rename":
         monkeypatch.setattr(os, "link", lambda *args: unsupported())
     path = tmp_path / "atlas.nc"
@@ -508,7 +511,7 @@ def test_describe_counts_every_cell_once(tmp_path, shape):
 
 
 def test_describe_counts_in_slabs(tmp_path, monkeypatch):
-    monkeypatch.setattr(atlas, "_SLAB_BYTES", 40)  # a few rows at a time
+    monkeypatch.setattr(read, "_SLAB_BYTES", 40)  # a few rows at a time
     ds = make_atlas((17, 11))
     counts = _class_counts(describe_atlas(write_atlas(ds, tmp_path / "atlas.nc")), "n_solutions")
     assert list(counts.values()) == [int((ds["n_solutions"].values == v).sum()) for v in range(5)]
@@ -542,7 +545,7 @@ def test_cfchecker_finds_no_errors_and_no_warnings(tmp_path, shape):
     report = cfchecks(path, tmp_path)
     assert "ERRORS detected: 0" in report, report
     assert "WARNINGS given: 0" in report, report
-    assert f"Checking against CF Version {atlas.CONVENTIONS}" in report, report
+    assert f"Checking against CF Version {dataset.CONVENTIONS}" in report, report
 
 
 def test_ncdump_prints_the_header(tmp_path):
@@ -554,7 +557,7 @@ def test_ncdump_prints_the_header(tmp_path):
     assert "byte n_solutions(phi, f, omega)" in header
     assert 'n_solutions:flag_meanings = "none unique two continuum three_or_more"' in header
     assert "n_solutions:flag_values = 0b, 1b, 2b, 3b, 4b" in header
-    assert f':Conventions = "{atlas.CONVENTIONS}"' in header
+    assert f':Conventions = "{dataset.CONVENTIONS}"' in header
     assert ':phasemap_model = "ladder"' in header
 
 
@@ -631,7 +634,7 @@ def test_a_temporary_file_that_cannot_be_removed_is_named_not_denied(tmp_path, m
 
     monkeypatch.setattr(os, "replace", denied)
     monkeypatch.setattr(pathlib.Path, "unlink", denied)
-    with pytest.raises(atlas.WriteError) as caught:
+    with pytest.raises(atomic.WriteError) as caught:
         write_atlas(ds, path)
     (part,) = [p for p in tmp_path.iterdir() if p.name.endswith(".part")]
     message = str(caught.value)
@@ -639,7 +642,7 @@ def test_a_temporary_file_that_cannot_be_removed_is_named_not_denied(tmp_path, m
     assert message.endswith(f"its temporary file {part} could not be removed (Permission "
                             "denied): remove it by hand")
     monkeypatch.undo()
-    with pytest.raises(atlas.WriteError, match="; no file was left$"):
-        with atlas.no_partial_file(path) as tmp:
+    with pytest.raises(atomic.WriteError, match="; no file was left$"):
+        with atomic.no_partial_file(path) as tmp:
             raise OSError(errno.ENOSPC, "No space left on device")
     assert not path.exists() and not tmp.exists()

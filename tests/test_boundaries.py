@@ -333,7 +333,7 @@ def test_applicable_conditions_are_those_of_the_statuses_at_the_probes():
     slice's centre (and corners, where the velocity is an axis), rest-only conditions
     only at rest, the velocity's condition only on a velocity axis (rest read from the
     model's velocity scale)."""
-    from phasemap import _numerics as nx
+    from phasemap.core import numerics as nx
     from phasemap.bifurcation import tracing
 
     for model, axes, fixed in (
@@ -402,11 +402,11 @@ def test_full_buffers_are_grown_and_the_trace_is_the_same(monkeypatch):
 
 def test_the_check_raster_is_the_grid_evaluators():
     """The 128^2 check raster, from the scene's grid kernel called directly, is what
-    phasemap.grid.evaluate makes of the same cells (axes in either order, derived
+    phasemap.maps.grid.evaluate makes of the same cells (axes in either order, derived
     inputs on the outer or the inner axis)."""
     from phasemap.bifurcation import tracing
-    from phasemap.grid import evaluate
-    from phasemap.layers import layers_for
+    from phasemap.maps.grid import evaluate
+    from phasemap.maps.layers import layers_for
 
     changing = 0
     for model, axes, fixed, layer in (

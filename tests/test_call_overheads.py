@@ -10,14 +10,14 @@ import numpy as np
 import pytest
 
 import phasemap
-from phasemap import _declared
-from phasemap.simulate import Options
+from phasemap.declare import runtime
+from phasemap.motion.simulate import Options
 
 
 def test_checked_options_are_remembered_per_type_not_per_value():
     """1 and True hash alike; a remembered max_events=1 must not let True through."""
     assert Options(max_events=1).checked("ladder").max_events == 1
-    with pytest.raises(phasemap._args.WrongType, match="max_events"):
+    with pytest.raises(phasemap.core.args.WrongType, match="max_events"):
         Options(max_events=True).checked("ladder")
     assert Options(rtol=1e-9).checked("ladder") is Options(rtol=1e-9).checked("ladder")
     assert Options(rtol=np.float64(1e-9)).checked("ladder").rtol == 1e-9
@@ -58,7 +58,7 @@ def test_the_domain_check_on_arrays_is_the_generated_function_value_by_value():
     theta = np.linspace(0.05, 1.55, 301)
     h = np.array([0.1, 0.5, 0.9, 1.3])[:, None]
     args = (1.0, h, np.sin(theta), np.cos(theta))
-    fast = _declared.on_arrays(m.inside.py_func)(*args)
+    fast = runtime.on_arrays(m.inside.py_func)(*args)
     slow = np.vectorize(m.inside.py_func, otypes=[bool])(*args)
     assert list(m.inside.py_func.__code__.co_varnames[:4]) == names
     assert fast.shape == slow.shape == (4, 301) and fast.any() and not fast.all()
@@ -71,7 +71,7 @@ def test_code_that_takes_one_number_falls_back_to_a_call_per_value():
     def inside(x):
         return max(x, 0.0) > 0.5  # max() of an array raises: np.vectorize takes over
 
-    check = _declared.checks("demo", None, type("F", (), {"py_func": staticmethod(inside)})(),
+    check = runtime.checks("demo", None, type("F", (), {"py_func": staticmethod(inside)})(),
                              "x > 0.5")
     check({"x": np.array([0.6, 0.7])})
     with pytest.raises(ValueError, match="demo: outside the domain: x > 0.5"):

@@ -293,7 +293,7 @@ def test_a_huge_grid_is_refused_before_any_work(tmp_path):
 
 
 def test_above_a_billion_cells_asks_for_yes(tmp_path):
-    from phasemap import blocks
+    from phasemap.maps import blocks
 
     scene = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 40000),
                                            "f": np.linspace(0, 3, 40000)}, layers=["singular"])

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 import phasemap
-from phasemap import _declared
+from phasemap.declare import loader as _declared
 
 ROOT = Path(__file__).resolve().parents[1]
 

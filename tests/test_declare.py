@@ -16,7 +16,7 @@ import pytest
 import sympy as sp
 
 import phasemap
-from phasemap import _numerics as nx
+from phasemap.core import numerics as nx
 from phasemap.declare import Body, Coordinate, Parameter, PointContact, Rate, System
 
 import oracles
@@ -429,7 +429,7 @@ def test_a_condition_named_after_a_layer_has_the_layer_sign(name):
     condition's value has the sign of the layer's quantity (of -N for a two-sided contact's
     negative branch, whose condition is -N > 0)."""
     from phasemap.declare import conditions
-    from phasemap.layers import layers_for
+    from phasemap.maps.layers import layers_for
 
     m = phasemap.get_model(name)
     layers = layers_for(m)
@@ -539,8 +539,8 @@ def test_conditions_need_a_declaration_or_a_twin():
 
 def test_a_classification_holds_branch_results_not_branch_definitions():
     """Two classes were named Branch: the result of classify is BranchResult (the old name
-    kept as an alias), the candidate's definition stays phasemap.model.Branch."""
-    from phasemap import model
+    kept as an alias), the candidate's definition stays phasemap.core.model.Branch."""
+    from phasemap.core import model
 
     got = phasemap.classify("hinge_pendulum", phi=0.05, omega=0.0)
     assert got.candidates and all(type(b) is phasemap.BranchResult for b in got.candidates)

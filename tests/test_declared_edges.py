@@ -168,7 +168,7 @@ def test_a_non_finite_acceleration_or_reaction_is_never_a_solution(name, values)
     not counted: no solution here, where a NaN acceleration used to count as one."""
     import numpy as np
 
-    from phasemap import _numerics as nx
+    from phasemap.core import numerics as nx
 
     m = phasemap.get_model(name)
     out = np.full((len(m.branches), m.n_fields), np.nan)
@@ -183,7 +183,7 @@ def test_edge_rows_say_which_closed_bound_they_exist_on():
     """The rows of an edge that is a declared bound carry it (Branch.bound), and the
     integrator's constant maps them to the integrated state's index and side: what its
     'on the bound, moving out' rule reads.  The Painleve rod's bounds are no edges."""
-    from phasemap._compile import contract_constants
+    from phasemap.core.compile import contract_constants
 
     bounds = {name: {b.bound for b in phasemap.get_model(name).candidates}
               for name in ("ladder", "rod_on_step", "painleve_rod")}

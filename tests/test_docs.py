@@ -135,12 +135,14 @@ def test_guide_code_block_runner_catches_a_wrong_example(tmp_path):
     assert (tmp_path / "made.py").read_text() == "# made.py\nX = 1\n"
 
 
-@pytest.mark.parametrize("module", ["phasemap._args", "phasemap.classify", "phasemap.scene", "phasemap.simulate",
-                                    "phasemap.phase", "phasemap.plot", "phasemap.study",
-                                    "phasemap.atlas", "phasemap.layers", "phasemap.models", "phasemap.systems",
+@pytest.mark.parametrize("module", ["phasemap.core.args", "phasemap.maps.classify", "phasemap.maps.scene",
+                                    "phasemap.motion.simulate",
+                                    "phasemap.motion.phase", "phasemap.plot", "phasemap.study",
+                                    "phasemap.atlas.atomic", "phasemap.atlas.write", "phasemap.atlas.read",
+                                    "phasemap.maps.layers", "phasemap.models", "phasemap.systems",
                                     "phasemap.systems.seeds.closed_forms",
-                                    "phasemap.model", "phasemap.events", "phasemap.cache",
-                                    "phasemap.blocks", "phasemap.declare.system",
+                                    "phasemap.core.model", "phasemap.core.events", "phasemap.core.cache",
+                                    "phasemap.maps.blocks", "phasemap.declare.system",
                                     "phasemap.declare.api", "phasemap.declare.contacts",
                                     "phasemap.declare.law", "phasemap.declare.admissibility"])
 def test_docstring_examples(module):

@@ -11,7 +11,7 @@ import xarray as xr
 from conftest import assert_atlas_round_trip
 
 import phasemap
-from phasemap import _numerics as nx
+from phasemap.core import numerics as nx
 
 G = 9.81
 # per model: axis candidates with ranges inside the domain (velocity axes include 0)
@@ -115,11 +115,11 @@ def test_metadata_comes_from_the_registry_and_the_model():
     assert ds.N_slide_pos_Npos.attrs["units"] == "N"
     assert ds.attrs["phasemap_model"] == "elliptic_pendulum"
     assert ds.attrs["phasemap_fixed_xdot"] == 1.0
-    assert ds.attrs["Conventions"] == phasemap.atlas.CONVENTIONS
+    assert ds.attrs["Conventions"] == phasemap.atlas.dataset.CONVENTIONS
 
 
 def test_the_dataset_holds_the_kernels_arrays_as_xarray_would_build_it():
-    from phasemap.grid import evaluate
+    from phasemap.maps.grid import evaluate
 
     scene = phasemap.Scene("hinge_pendulum", axes={"phi": np.linspace(-3, 3, 7),
                                                    "omega": [-1.0, 0.0, 2.0]},
@@ -173,7 +173,7 @@ def test_scene_bad_input(kwargs, words):
 
 
 def test_progress_bar_path_equals_the_single_call(monkeypatch):
-    import phasemap.scene as scene_mod
+    import phasemap.maps.scene as scene_mod
 
     scene = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 37),
                                            "f": np.linspace(0, 2, 11)})

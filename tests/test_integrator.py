@@ -1,4 +1,4 @@
-"""The time integrator (phasemap.integrate through phasemap.simulate) against independent solutions.
+"""The time integrator (phasemap.motion.integrate through phasemap.simulate) against independent solutions.
 
 References are written here from the models' docstring derivations, not
 imported from phasemap: the weightless hinge pendulum's closed form (36), and
@@ -18,7 +18,7 @@ from conftest import assert_atlas_round_trip
 from scipy.integrate import solve_ivp
 
 import phasemap
-from phasemap.integrate import METHODS
+from phasemap.motion.integrate import METHODS
 
 G = 9.81
 
@@ -456,7 +456,7 @@ def test_hinge_fate_map_rests_in_the_stagnation_zone_and_round_trips(tmp_path):
 
 # ------------------------------------------------------- work-precision API
 def test_scipy_stage_driver_and_work_precision_rows():
-    import phasemap.workprecision as wp
+    import phasemap.motion.workprecision as wp
 
     staged = wp.solve_ivp_staged("hinge_pendulum", 20.0, method="DOP853", rtol=1e-10,
                                  t_eval=np.linspace(0, 20, 41), phi=2.5, omega=0.0, delta=0.05)
@@ -579,8 +579,8 @@ def test_the_test_after_a_step_decides_as_the_full_classification(name):
     classified, then ON_STAGE and the domain): the same decision at random states,
     moving, at rest and within the rest tolerance, for every branch and coefficient
     sign, and the stage's coefficient where it goes on."""
-    from phasemap import _numerics as nx
-    from phasemap.integrate import stage_kernels
+    from phasemap.core import numerics as nx
+    from phasemap.motion.integrate import stage_kernels
 
     m = phasemap.get_model(name)
     stage = stage_kernels(m)

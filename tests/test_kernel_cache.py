@@ -1,4 +1,4 @@
-"""The kernel cache (phasemap.cache): verified files, safe folders, full disks, one LRU bound.
+"""The kernel cache (phasemap.core.cache): verified files, safe folders, full disks, one LRU bound.
 
 Most tests run phasemap in a child process on a cache folder of their own, so
 that a damaged, planted or full folder never touches the cache the rest of the
@@ -54,7 +54,7 @@ def child(code: str, cache_dir, numba_dir=None, **env) -> subprocess.CompletedPr
 
 def load(stem: str = STEM) -> str:
     """Code that loads the probe module ``stem`` and prints what it computes."""
-    return ("from phasemap._codegen import load_module\n"
+    return ("from phasemap.core.codegen import load_module\n"
             f"m = load_module({stem!r}, lambda: {TEXT!r})\n"
             "print(m.cells(1), m.SPEC, m.__file__)\n")
 
@@ -89,7 +89,7 @@ def copy_of(warm: pathlib.Path, where: pathlib.Path) -> pathlib.Path:
 
 # ------------------------------------------------------------- verified files -----
 def _hashed(body: str) -> bytes:
-    from phasemap import cache
+    from phasemap.core import cache
 
     return f"{cache.HASH_PREFIX}{hashlib.sha256(body.encode()).hexdigest()}\n{body}".encode()
 
@@ -137,7 +137,7 @@ def test_a_damaged_numba_file_is_compiled_again_with_one_line(warm, tmp_path, wh
 def test_a_damaged_system_module_and_contract_leave_classify_working(tmp_path):
     """The issue's case: classify('ladder') must survive its generated files going bad."""
     import phasemap
-    from phasemap import cache
+    from phasemap.core import cache
 
     model = phasemap.MODELS["ladder"]
     declared = pathlib.Path(sys.modules[model.candidates[0].func.py_func.__module__].__file__)
@@ -242,7 +242,7 @@ def fake_cache(tmp_path, monkeypatch):
     stand-in for phasemap's package folder (so that the real compiled files stay)."""
     from numba.core import config
 
-    from phasemap import cache
+    from phasemap.core import cache
 
     root, package = tmp_path / "cache", tmp_path / "package"
     package.mkdir()
@@ -266,7 +266,7 @@ def fake_cache(tmp_path, monkeypatch):
 
 
 def test_one_lru_bound_covers_generated_modules_numba_files_and_integrators(fake_cache):
-    from phasemap import cache
+    from phasemap.core import cache
 
     root, generated, compiled, keep = fake_cache
     before = cache.info()
@@ -285,7 +285,7 @@ def test_one_lru_bound_covers_generated_modules_numba_files_and_integrators(fake
 
 
 def test_clearing_removes_every_entry_and_nothing_else(fake_cache):
-    from phasemap import cache
+    from phasemap.core import cache
 
     root, generated, compiled, keep = fake_cache
     files, freed = cache.clear()
@@ -295,7 +295,7 @@ def test_clearing_removes_every_entry_and_nothing_else(fake_cache):
 
 
 def _prune_rounds(barrier, rounds: int) -> None:
-    from phasemap import cache
+    from phasemap.core import cache
 
     for _ in range(rounds):
         barrier.wait()
@@ -306,7 +306,7 @@ def _prune_rounds(barrier, rounds: int) -> None:
 def test_processes_pruning_one_cache_at_once_never_crash(fake_cache):
     """Four processes prune a cache of many stale entries at the same moment, 12 times:
     files vanish under each other's feet, and no process may fail."""
-    from phasemap import cache
+    from phasemap.core import cache
 
     root, generated, compiled, _ = fake_cache
     ctx = multiprocessing.get_context("fork")
@@ -367,7 +367,7 @@ def test_cache_info_and_clear_from_the_command_line(tmp_path, monkeypatch, capsy
 @pytest.mark.parametrize("text, bound", [("", 500 * 10 ** 6), ("0", 0), ("1.5", 1_500_000),
                                          ("inf", None), ("1e300", None)])
 def test_the_cache_bound_reads_megabytes_and_inf_for_none(monkeypatch, text, bound):
-    from phasemap import cache
+    from phasemap.core import cache
 
     monkeypatch.setenv("PHASEMAP_CACHE_MAX_MB", text)
     assert cache.limit() == (cache.UNBOUNDED if bound is None else bound)
@@ -377,7 +377,7 @@ def test_the_cache_bound_reads_megabytes_and_inf_for_none(monkeypatch, text, bou
 
 @pytest.mark.parametrize("text", ["-5", "-inf", "nan", "lots", "-0.001"])
 def test_a_cache_bound_that_is_no_size_is_refused_in_one_line(monkeypatch, text):
-    from phasemap import cache
+    from phasemap.core import cache
 
     monkeypatch.setenv("PHASEMAP_CACHE_MAX_MB", text)
     with pytest.raises(ValueError, match=r"^PHASEMAP_CACHE_MAX_MB must be a number of "
@@ -498,7 +498,7 @@ def test_info_clear_and_the_bound_see_the_numba_files_of_every_subpackage(fake_c
     """numba keeps a folder per source folder: the integrators' (integrate/), the phase
     tracers' and the hand systems' (systems/) files were missed by ``cache info``, ``cache
     clear`` and the bound (2.8 MB left after a clear, reported as 0 B)."""
-    from phasemap import cache
+    from phasemap.core import cache
 
     root, generated, compiled, keep = fake_cache
     sub = cache._PACKAGE / "systems"

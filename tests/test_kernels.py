@@ -20,11 +20,11 @@ import numpy as np
 import pytest
 
 import phasemap
-from phasemap import _codegen
-from phasemap import _numerics as nx
-from phasemap.grid import evaluate
-from phasemap.layers import SUMMARY, layers_for
-from phasemap.model import Branch
+from phasemap.core import codegen as _codegen
+from phasemap.core import numerics as nx
+from phasemap.maps.grid import evaluate
+from phasemap.maps.layers import SUMMARY, layers_for
+from phasemap.core.model import Branch
 
 # per model: axes with ranges inside the domain (velocity axes pass through 0)
 RANGES = {
@@ -209,7 +209,7 @@ def test_a_branch_function_with_an_unknown_input_is_refused():
 
     broken = Branch("bad", 1.0, bad, (1.0,))
     with pytest.raises(ValueError, match="length"):
-        _codegen._params(broken.func, 1, m.inputs, "hinge_pendulum: branch 'bad'")
+        _codegen.input_names(broken.func, 1, m.inputs, "hinge_pendulum: branch 'bad'")
 
 
 def test_a_model_with_its_contract_built_still_pickles():

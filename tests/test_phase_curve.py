@@ -19,9 +19,9 @@ import xarray as xr
 from references import ladder as hand_ladder
 from scipy.integrate import solve_ivp
 
-from phasemap import phase
-from phasemap.events import Event
-from phasemap.phase import phase_curve
+from phasemap.motion import phase
+from phasemap.core.events import Event
+from phasemap.motion.phase import phase_curve
 
 #: The tracer against references that keep the contacts (the paper's equations) runs on
 #: the hand modules; the running ladder and wheel also count leaving a contact, which
@@ -702,7 +702,7 @@ def test_the_output_pass_solves_a_panel_to_rounding(z):
     """solve_legendre (the output points' pass): du/dtau = z u + h p, u(0) = u0, with p
     interpolating e^(a tau) at the 12 output nodes, against the closed form
     e^(z tau) u0 + h (e^(a tau) - e^(z tau)) / (a - z), at points across the panel."""
-    from phasemap.phase import collocation as col
+    from phasemap.motion.phase import collocation as col
 
     a, u0, h = 0.7, 2.5, 0.4
     nv = np.exp(a * col.OUT_THETA)

@@ -25,7 +25,7 @@ import figure_review
 
 import phasemap
 import phasemap.accessor  # registers ds.phasemap
-from phasemap import events
+from phasemap.core import events
 from phasemap import plot as pplot
 
 
@@ -614,7 +614,7 @@ def test_trajectory_phase_plane(tmp_path):
 
 def test_figures_of_the_real_producers(tmp_path):
     """phasemap.phase_curve and phasemap.simulate write what these figures read."""
-    phase = pytest.importorskip("phasemap.phase")
+    phase = pytest.importorskip("phasemap.motion.phase")
     simulate = pytest.importorskip("phasemap.simulate")
     curve = _roundtrip(phase.phase_curve("hinge_pendulum", phi=2.5, omega=0.0, delta=0.1),
                        tmp_path / "curve.nc")
@@ -740,7 +740,7 @@ def test_save_figure_into_a_missing_folder(tmp_path):
 # --------------------------------------------------------------------------- docs
 
 
-@pytest.mark.parametrize("module", ["phasemap.plot", "phasemap.accessor", "phasemap._dataset",
+@pytest.mark.parametrize("module", ["phasemap.plot", "phasemap.accessor", "phasemap.atlas.dataset",
                                     "phasemap.plot.command"])
 def test_docstring_examples(module):
     import doctest
@@ -825,7 +825,7 @@ def test_a_map_states_what_was_held_fixed(tmp_path):
 
 
 def test_motions_state_their_initial_state_and_parameters(tmp_path):
-    phase = pytest.importorskip("phasemap.phase")
+    phase = pytest.importorskip("phasemap.motion.phase")
     simulate = pytest.importorskip("phasemap.simulate")
     curve = phase.phase_curve("hinge_pendulum", phi=2.5, omega=0.0, delta=0.1)
     heading = quiet(curve.phasemap.plot).axes[0].get_legend().get_title().get_text()

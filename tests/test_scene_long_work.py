@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import phasemap
-from phasemap import blocks
+from phasemap.maps import blocks
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -227,7 +227,7 @@ def test_ctrl_c_stops_the_command_line_while_it_times_its_sample(tmp_path):
 
 
 def test_an_activity_line_ticks_while_nothing_else_prints(capsys):
-    from phasemap import progress
+    from phasemap.core import progress
 
     # forced: capsys's stderr is no terminal, where the command line's ticker is silent
     with progress.enable(True, force=True), progress.activity("waiting"):

@@ -91,7 +91,7 @@ def test_event_codes_are_append_only_and_each_says_whether_it_ends_a_motion():
     """The codes atlases and fate maps store keep their meaning (issue 38: events that
     continue a motion will be added after them), and which events end a motion is named
     event by event, not read from the order of the codes."""
-    from phasemap import events
+    from phasemap.core import events
 
     stored = ["start", "reversal", "stick", "slip", "switch", "rest", "contact_lost",
               "no_solution", "indeterminate", "continuum", "singular", "horizon",

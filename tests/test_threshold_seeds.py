@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import phasemap
-from phasemap.bifurcation import claims
+from phasemap import claims
 
 P = math.pi
 CASES = {f"{c.study}: {c.what}": c for c in claims.CASES}

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import phasemap
-from phasemap.model import MAX_MAGNITUDE, MIN_POSITIVE
+from phasemap.core.model import MAX_MAGNITUDE, MIN_POSITIVE
 from phasemap.models import MODELS
 
 G = 9.81

@@ -21,8 +21,8 @@ import pytest
 import xarray as xr
 
 import phasemap
-from phasemap._dataset import dataset_kind, declaration_hash, vocabulary
-from phasemap.atlas import describe_atlas
+from phasemap.atlas.dataset import dataset_kind, declaration_hash, vocabulary
+from phasemap.atlas.read import describe_atlas
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 OWN_SYSTEM = ROOT / "docs" / "examples" / "own_system.py"
@@ -36,7 +36,7 @@ with open(pathlib.Path(__file__).with_name("MARKER"), "a") as fh:
 #: Every Python entry point that takes a dataset, each on the atlas in the current folder.
 ENTRY_POINTS = """
 import json, sys, xarray as xr, phasemap, phasemap.plot
-from phasemap._dataset import vocabulary
+from phasemap.atlas.dataset import vocabulary
 ds = xr.open_dataset("shared.nc").load()
 calls = {
     "accessor plot": lambda: ds.phasemap.plot(),

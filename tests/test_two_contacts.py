@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import phasemap
-from phasemap import _numerics as nx
+from phasemap.core import numerics as nx
 
 import oracles
 import unseen

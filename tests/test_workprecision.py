@@ -1,4 +1,4 @@
-"""phasemap.workprecision: dimensionless errors with stated scales, the tracer swept
+"""phasemap.motion.workprecision: dimensionless errors with stated scales, the tracer swept
 over tolerances, and the same numbers from the same inputs."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import phasemap
-import phasemap.workprecision as wp
+import phasemap.motion.workprecision as wp
 from phasemap.systems.hinge_pendulum import weightless_motion
 
 TOLS = (1e-5, 1e-8)

@@ -8,7 +8,7 @@ can register its subcommands (:mod:`phasemap.bifurcation.command`) cheaply.
 """
 
 _EXPORTS = {"boundaries": "tracing", "Condition": "conditions", "Threshold": "thresholds",
-            "threshold": "thresholds"}
+            "threshold": "search"}
 
 
 def __getattr__(name: str):

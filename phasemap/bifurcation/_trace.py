@@ -44,8 +44,9 @@ from numba import njit, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-from .. import _numerics as nx
-from .._codegen import CELLS_SIGNATURE
+from phasemap.core import numerics as nx
+from phasemap.core.codegen import CELLS_SIGNATURE
+from phasemap.core.types import B1, B2, F1, F2, I1, I2, S3
 
 # vertex kinds
 REGULAR = 0
@@ -1455,7 +1456,7 @@ def _raster_all(cells_at, v, ix, xs, xslot, xderiv, ys, yderiv, flags, fields):
     """The check raster: the scene's grid kernel ``cells`` (its address ``cells_at``) over
     the values ``xs`` of the input slot ``ix`` (outer; its derived inputs ``xderiv`` in
     the slots ``xslot``) and ``ys`` (inner, derived inputs ``yderiv``), row i into
-    ``flags[:, i * len(ys):]`` (what :func:`phasemap._codegen.driver` does, serially and
+    ``flags[:, i * len(ys):]`` (what :func:`phasemap.core.codegen.driver` does, serially and
     without a call from Python)."""
     ny = ys.shape[0]
     for i in range(xs.shape[0]):
@@ -1744,29 +1745,22 @@ def _hit_around(hit, i, j):
 
 # -- the compiled tracer: entry points with the model's functions as arguments --------------
 
-_F1 = types.Array(types.float64, 1, "C")
-_F2 = types.Array(types.float64, 2, "C")
-_I1 = types.Array(types.int64, 1, "C")
-_I2 = types.Array(types.int64, 2, "C")
-_B1 = types.Array(types.boolean, 1, "C")
-_B2 = types.Array(types.boolean, 2, "C")
-_B3 = types.Array(types.int8, 3, "C")
 _C2 = types.Array(types.int8, 2, "C")
 #: A check raster's arguments (:func:`_raster_all`): the grid kernel's address; x's
 #: values, derived slots and derived values; y's values and derived values.
-RASTER = types.Tuple((types.intp, _F1, _I1, _F2, _F1, _F2))
+RASTER = types.Tuple((types.intp, F1, I1, F2, F1, F2))
 #: What decides the conditions that can bound a class (:func:`_applicable_all`): the
 #: probes (unit square), per condition its branch's index and the velocity and rest-only
 #: masks, whether the velocity is an axis, and its input slot.
-APPLICABLE = types.Tuple((_F2, _I1, _B1, _B1, types.boolean, types.int64))
+APPLICABLE = types.Tuple((F2, I1, B1, B1, types.boolean, types.int64))
 #: ``values(x, out, scale)`` of a generated condition module.
-VALUES_SIG = types.void(_F1, _F1, _F1)
+VALUES_SIG = types.void(F1, F1, F1)
 #: ``gradient(k, x, g)``: (value, tie scale); the gradient in the module's variables into g.
-GRADIENT_SIG = types.UniTuple(types.float64, 2)(types.int64, _F1, _F1)
+GRADIENT_SIG = types.UniTuple(types.float64, 2)(types.int64, F1, F1)
 #: ``hessian(k, x, g, H)``: the same, and the Hessian into H.
-HESSIAN_SIG = types.UniTuple(types.float64, 2)(types.int64, _F1, _F1, _F2)
+HESSIAN_SIG = types.UniTuple(types.float64, 2)(types.int64, F1, F1, F2)
 #: ``classify(v, out, layer)``: the layer's class at the input vector v (a model's).
-CLASS_SIG = types.int64(_F1, _F2, types.int64)
+CLASS_SIG = types.int64(F1, F2, types.int64)
 #: What an entry point takes for the model's functions: the addresses of their compiled
 #: code (:func:`functions`), in the order ``values``, ``gradient``, ``hessian``,
 #: ``classify``.
@@ -1837,7 +1831,7 @@ def _classify(typingctx, addresses, v, out, layer):
 
 @intrinsic
 def _cells(typingctx, address, v, first, lo, hi, inner_values, inner_deriv, flags, fields):
-    """A scene's generated grid kernel ``cells`` (:data:`phasemap._codegen.CELLS_SIGNATURE`)
+    """A scene's generated grid kernel ``cells`` (:data:`phasemap.core.codegen.CELLS_SIGNATURE`)
     at its compiled ``address``: cells lo..hi of the inner axis at the outer state v."""
     args = (v, first, lo, hi, inner_values, inner_deriv, flags, fields)
     if types.unliteral(address) != types.intp or \
@@ -1868,21 +1862,21 @@ def entries() -> dict:
     addresses, :data:`ADDRESSES`).
     """
     if not _ENTRIES:
-        sig_trace = types.int64(ADDRESSES, _F2, _I2, _B1, _F1, _F2, types.int64, types.int64,
-                                _F1, types.int64, _F2, _I2, _I1, _I2, _B3, _B2, types.float64,
+        sig_trace = types.int64(ADDRESSES, F2, I2, B1, F1, F2, types.int64, types.int64,
+                                F1, types.int64, F2, I2, I1, I2, S3, B2, types.float64,
                                 types.float64, types.boolean)
-        sig_seeds = _F2(ADDRESSES, _B1, _F1, types.int64, types.int64, _F1, types.int64, _B2)
-        sig_survey = types.void(ADDRESSES, _F1, types.int64, types.int64, _F1, _F2, _F2)
-        sig_seed_trace = types.Tuple((_C2, _B2, _F2, _I1, _I2, _I2, _F2, _I1, _I1, _I2, _F2,
-                                      _I2, _I2))(
-            ADDRESSES, _F2, _F1, APPLICABLE, RASTER, types.int64, _B1, _I1, _F1,
-            _F2, types.int64, types.int64, _F1, types.int64, types.int64, _F2, _I2, _I1, _I2,
-            _B3, types.float64, types.float64)
-        sig_thin = _F2(ADDRESSES, _B1, _F1, types.int64, types.int64, _F1, types.int64)
-        sig_applicable = types.void(ADDRESSES, _F1, _F2, types.int64, types.int64, _F1,
-                                    APPLICABLE, _B1)
-        sig_raster = types.void(types.intp, _F1, types.int64, _F1, _I1, _F2, _F1, _F2, _C2,
-                                _F2)
+        sig_seeds = F2(ADDRESSES, B1, F1, types.int64, types.int64, F1, types.int64, B2)
+        sig_survey = types.void(ADDRESSES, F1, types.int64, types.int64, F1, F2, F2)
+        sig_seed_trace = types.Tuple((_C2, B2, F2, I1, I2, I2, F2, I1, I1, I2, F2,
+                                      I2, I2))(
+            ADDRESSES, F2, F1, APPLICABLE, RASTER, types.int64, B1, I1, F1,
+            F2, types.int64, types.int64, F1, types.int64, types.int64, F2, I2, I1, I2,
+            S3, types.float64, types.float64)
+        sig_thin = F2(ADDRESSES, B1, F1, types.int64, types.int64, F1, types.int64)
+        sig_applicable = types.void(ADDRESSES, F1, F2, types.int64, types.int64, F1,
+                                    APPLICABLE, B1)
+        sig_raster = types.void(types.intp, F1, types.int64, F1, I1, F2, F1, F2, _C2,
+                                F2)
         for name, fn, sig in (("trace", _trace_all, sig_trace),
                               ("seeds", _seeds_all, sig_seeds),
                               ("seed_trace", _seed_trace_all, sig_seed_trace),
@@ -1906,7 +1900,7 @@ _CLASSIFIERS: dict = {}
 def classifier(model):
     """The model's ``classify(v, out, layer)`` (its own point and summarize), compiled
     with :data:`CLASS_SIG` so that a trace can take it as an argument."""
-    from .._compile import specialize
+    from phasemap.core.compile import specialize
 
     hit = _CLASSIFIERS.get(id(model))
     if hit is not None and hit[0] is model:

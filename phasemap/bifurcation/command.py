@@ -88,9 +88,9 @@ def run(args, parse_values) -> str:
     NAME=VALUE items of --set.  Returns what to print."""
     fixed = parse_values(args.set)
     if args.command == "boundaries":
-        from ..atlas import write_atlas
-        from ..blocks import check_output
-        from .tracing import boundaries
+        from phasemap.atlas.write import write_atlas
+        from phasemap.maps.blocks import check_output
+        from phasemap.bifurcation.tracing import boundaries
 
         axes = _ranges(args.axis, "--axis")
         out = check_output(args.output, overwrite=args.overwrite)
@@ -105,7 +105,7 @@ def run(args, parse_values) -> str:
                 f"{n} = {float(p[f'point_{n}']):.12g}" for n in names)
                 + f"  ({p.point_condition.values}; residual {float(p.point_residual):.1e})")
         return "\n".join(lines)
-    from .thresholds import threshold
+    from phasemap.bifurcation.search import threshold
 
     t = threshold(args.model, args.param, layer=args.layer, value=args.value,
                   over=_ranges(args.over, "--over"), fixed=fixed, side=args.side, tol=args.tol)

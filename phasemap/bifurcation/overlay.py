@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import xarray as xr
 
-from .tracing import LAYERS, boundaries
+from phasemap.bifurcation.tracing import LAYERS, boundaries
 
 
 def map_boundaries(ds: xr.Dataset, layer: str, x: str, y: str, tol: float = 1e-10) -> xr.Dataset:

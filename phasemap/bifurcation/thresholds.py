@@ -1,4 +1,7 @@
-"""``phasemap.threshold``: the least (or greatest) parameter at which a class exists."""
+"""The least (or greatest) parameter at which a class exists, on a line or in a plane:
+:class:`Threshold` (the result), :class:`Spec` (a call's checked arguments) and
+:func:`solve`.  :func:`phasemap.threshold` (:mod:`phasemap.bifurcation.search`) takes
+the other cases."""
 
 from __future__ import annotations
 
@@ -10,15 +13,14 @@ from typing import Mapping
 
 import numpy as np
 
-from .. import _numerics as nx
-from ..grid import evaluate
-from ..layers import layers_for
-from ..model import Model
-from ..models import get_model
-from . import _trace as T
-from .tracing import (LAYERS, Slice, Traced, check_tol, condition_name, make_slice, parse_range,
+from phasemap.core import numerics as nx
+from phasemap.maps.grid import evaluate
+from phasemap.maps.layers import layers_for
+from phasemap.core.model import Model
+from phasemap.bifurcation import _trace as T
+from phasemap.bifurcation.tracing import (LAYERS, Slice, Traced, check_tol, condition_name, make_slice, parse_range,
                       parse_tol, trace, unresolved_points)
-from .conditions import compiled
+from phasemap.bifurcation.conditions import compiled
 
 #: Samples of a one-dimensional threshold's line.
 LINE_SAMPLES = 2048
@@ -79,92 +81,18 @@ class Threshold:
                 f"residual {self.residual:.1e})")
 
 
-def threshold(model, param: str, layer: str = "n_solutions", value: int = 0,
-              over: Mapping | None = None, fixed: Mapping | None = None, side: str = "min",
-              tol: float = 1e-10, *, along: Mapping | None = None, conditions=None):
-    """The least (``side="min"``) or greatest (``"max"``) value of ``param`` over the
-    region where ``layer`` equals ``value``.
-
-    Parameters
-    ----------
-    model:
-        a model name, a declaration file's path or a :class:`phasemap.Model`.
-    param:
-        the parameter (any variable of the model) whose threshold is sought.
-    layer, value:
-        the region: where ``layer`` (``n_solutions``, ``stagnation``,
-        ``contact_lost`` or ``singular``) takes ``value``.  ``singular`` holds on
-        curves, the zero sets of the branches' coefficients.
-    over:
-        ``{name: (lo, hi)}``: the ranges searched; ``param``'s own range may be
-        given here too (otherwise the model's default map's, or its domain if
-        that is finite).  One other name: the exact boundaries of that slice are
-        traced (:func:`phasemap.boundaries`); none: the line of ``param``; two,
-        ``x`` and ``a`` (in that order): the threshold of the slice in ``x`` is
-        followed in ``a`` (``along=``) and its extremum solved exactly (an
-        interior one where dp/da = 0 on its defining system: for a fold of a
-        condition c, c = c_x = c_a = 0).  The first of the two should be the one
-        whose slice holds the richer boundaries (it is traced; the second is
-        continued).
-    fixed:
-        values of the other variables (the rest take the model's defaults).
-    side:
-        ``"min"`` (the infimum) or ``"max"`` (the supremum).
-    tol:
-        the accuracy of the threshold and of its point, in each coordinate.
-    along:
-        ``{name: (lo, hi)}``: trace the threshold as a curve in a further
-        variable; a Dataset is returned instead (see :func:`threshold_curve`).
-    conditions:
-        the conditions to use instead of the model's own.
-
-    Returns
-    -------
-    Threshold or None
-        None where the region is empty in the given ranges (a region thinner than
-        a raster cell included: the extrema of every condition are searched).
-
-    Raises
-    ------
-    ValueError
-        naming the argument: an unknown model, parameter, variable or layer, a
-        range that is empty or outside the domain, more than two names in ``over``
-        besides the parameter (not supported), a region whose extremum cannot
-        be located to ``tol``, or no region found where an extremum of a
-        condition could not be resolved (a warning names it; with a region, the
-        Threshold lists such points in ``unresolved``).
-
-    Examples
-    --------
-    The Painleve rod's first paradox, pushed towards its end at rest (Genot and
-    Brogliato 1999): f = 4/3, at theta = arctan 2.
-
-    >>> import phasemap
-    >>> t = phasemap.threshold("painleve_rod", "f", value=0, over={"theta": (0.1, 1.5)},
-    ...                        fixed={"xdot": -1.0, "omega": 0.0})       # doctest: +SKIP
-    >>> round(t.value, 12), round(t.at["theta"], 12), t.kind          # doctest: +SKIP
-    (1.333333333333, 1.107148717794, 'fold_f')
-    """
-    m = get_model(model)
-    if along is not None:
-        from .curve import threshold_curve
-
-        return threshold_curve(m, param, layer, value, over, fixed, side, tol, along,
-                               conditions)
-    spec = _Spec.make(m, param, layer, value, over, fixed, side, tol)
+def solve(spec: "Spec", conditions=None) -> "Threshold | None":
+    """The threshold of ``spec`` on a line (no further ranged name) or in a plane (one):
+    what :func:`phasemap.threshold` computes in those cases."""
     if len(spec.others) == 0:
-        result = _line(spec, conditions)
-    elif len(spec.others) == 2:
-        from .curve import threshold_volume
-
-        result = threshold_volume(spec, conditions)
-    else:
-        result = _plane(spec, conditions)
-    _on_a_default_edge(spec, over or {}, result)
-    return result
+        return _line(spec, conditions)
+    if len(spec.others) == 1:
+        return _plane(spec, conditions)
+    raise ValueError(f"solve: {len(spec.others)} further ranged names; over two, "
+                     "phasemap.threshold takes the volume")
 
 
-def _on_a_default_edge(spec: "_Spec", over: Mapping, result: "Threshold | None") -> None:
+def on_a_default_edge(spec: "Spec", over: Mapping, result: "Threshold | None") -> None:
     """Warn where the threshold lies on an edge of the parameter's default range (one the
     user did not give): the region goes on beyond it, and so may the threshold."""
     if result is None or spec.param in over:
@@ -180,7 +108,7 @@ def _on_a_default_edge(spec: "_Spec", over: Mapping, result: "Threshold | None")
 
 
 @dataclass
-class _Spec:
+class Spec:
     """A validated threshold problem."""
 
     model: Model
@@ -198,7 +126,7 @@ class _Spec:
         return 1.0 if self.side == "min" else -1.0
 
     @staticmethod
-    def make(m: Model, param, layer, value, over, fixed, side, tol) -> "_Spec":
+    def make(m: Model, param, layer, value, over, fixed, side, tol) -> "Spec":
         if param not in m.variables:
             raise ValueError(f"{m.name}: unknown variable {param!r}; allowed: {', '.join(m.names)}")
         if layer not in LAYERS + ("singular",):
@@ -238,7 +166,7 @@ class _Spec:
                              f"{', '.join(others)}: fix the others (fixed=), or follow the "
                              "threshold in one of them with along= for each value of the rest")
         check_tol(tol, ranges)
-        return _Spec(m, param, layer, value, ranges, others, fixed, side, tol)
+        return Spec(m, param, layer, value, ranges, others, fixed, side, tol)
 
 
 def _default_range(m: Model, param: str) -> tuple[float, float]:
@@ -254,7 +182,7 @@ def _default_range(m: Model, param: str) -> tuple[float, float]:
 
 # -- two dimensions: the exact boundaries of the slice ------------------------------------
 
-def _plane(spec: _Spec, conditions) -> Threshold | None:
+def _plane(spec: Spec, conditions) -> Threshold | None:
     other, p = spec.others[0], spec.param
     axes = {other: spec.ranges[other], p: spec.ranges[p]}
     sl = make_slice(spec.model, axes, spec.fixed, conditions)
@@ -278,7 +206,7 @@ def _plane(spec: _Spec, conditions) -> Threshold | None:
     return result
 
 
-def _plane_best(sl: Slice, spec: _Spec, tr: Traced) -> Threshold | None:
+def _plane_best(sl: Slice, spec: Spec, tr: Traced) -> Threshold | None:
     """The threshold of the traced slice ``tr`` (:func:`_best` over the pieces that bound
     the region, and the raster's cells in it)."""
     p = spec.param
@@ -299,7 +227,7 @@ def _plane_best(sl: Slice, spec: _Spec, tr: Traced) -> Threshold | None:
                  bound=bound)
 
 
-def _best(sl: Slice, spec: _Spec, tr: Traced, rows: np.ndarray, edge, bound) -> Threshold | None:
+def _best(sl: Slice, spec: Spec, tr: Traced, rows: np.ndarray, edge, bound) -> Threshold | None:
     """The least (greatest) parameter among the candidate vertices ``rows`` and, where
     the region reaches the parameter's own edge (cells ``edge`` along the other
     axis), that edge."""
@@ -373,7 +301,7 @@ def _class_at(m: Model, v: np.ndarray, slot: int, x: float, layer: str) -> int:
 
 # -- one dimension: the line of the parameter ------------------------------------------------
 
-def _line(spec: _Spec, conditions) -> Threshold | None:
+def _line(spec: Spec, conditions) -> Threshold | None:
     m, p = spec.model, spec.param
     lo, hi = spec.ranges[p]
     C = compiled(m, (p,), conditions)
@@ -562,4 +490,4 @@ def _line(spec: _Spec, conditions) -> Threshold | None:
     return sliver
 
 
-__all__ = ["Threshold", "threshold"]
+__all__ = ["Spec", "Threshold", "solve"]

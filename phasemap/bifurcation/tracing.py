@@ -12,14 +12,14 @@ from typing import Mapping
 import numpy as np
 import xarray as xr
 
-from .. import _args
-from .._dataset import cf_header
-from .._codegen import CELLS_SIGNATURE, grid_kernel
-from ..layers import layers_for
-from ..model import Model
-from ..models import get_model
-from . import _trace as T
-from .conditions import Conditions, compiled
+from phasemap.core import args as _args
+from phasemap.atlas.dataset import cf_header
+from phasemap.core.codegen import CELLS_SIGNATURE, grid_kernel
+from phasemap.maps.layers import layers_for
+from phasemap.core.model import Model
+from phasemap.systems import get_model
+from phasemap.bifurcation import _trace as T
+from phasemap.bifurcation.conditions import Conditions, compiled
 
 #: Layers whose classes fill regions of a slice (``singular`` holds on curves).
 LAYERS = ("n_solutions", "stagnation", "contact_lost")
@@ -99,7 +99,7 @@ def parse_range(m: Model, what: str, value) -> tuple[float, float]:
 
 def header(m: Model, kind: str, fixed: Mapping, **extra) -> dict:
     """The global attributes of a result: the CF header every phasemap Dataset carries
-    (:func:`phasemap._dataset.cf_header`), then ``extra`` and the fixed values."""
+    (:func:`phasemap.atlas.dataset.cf_header`), then ``extra`` and the fixed values."""
     attrs = cf_header(m, kind) | extra
     for name, value in fixed.items():
         attrs[f"phasemap_fixed_{name}"] = value
@@ -404,7 +404,7 @@ def _cell_centres(sl: Slice, n: int) -> dict:
 
 def _check_raster(sl: Slice, layer: str, axes: dict) -> np.ndarray:
     """The layer's classes at the cell centres ``axes`` (x outer, y inner): the scene's
-    own grid kernel (:func:`phasemap._codegen.grid_kernel`), what :func:`phasemap.grid.evaluate`
+    own grid kernel (:func:`phasemap.core.codegen.grid_kernel`), what :func:`phasemap.maps.grid.evaluate`
     runs, called row by row from compiled code (:func:`phasemap.bifurcation._trace._raster_all`;
     a trace computes it inside its one call)."""
     at, x, xslot, xderiv, y, yderiv = _raster_args(sl, layer, axes)

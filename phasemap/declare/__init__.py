@@ -5,7 +5,7 @@ coordinates, parameters, bodies (mass, position, inertia), potential energy
 and contacts.  phasemap derives the equations of motion with sympy (Lagrange),
 enumerates every combination of contact modes, solves each in closed form,
 and prints the result as numba branch functions in the kernel contract of
-:mod:`phasemap.model`.  Every feature (``classify``, atlases, the CLI,
+:mod:`phasemap.core.model`.  Every feature (``classify``, atlases, the CLI,
 ``simulate``, fate maps, phase curves, plots) then works for the system.
 
 Example: the classic Painleve rod
@@ -119,11 +119,12 @@ The package
 
 from __future__ import annotations
 
-from .api import Body, Coordinate, Parameter, Rate
-from .admissibility import Condition, conditions
-from .contacts import EdgeContact, Joint, PointContact, RollingContact
-from .law import ContactLaw
-from .system import System, load
+from phasemap.declare.api import Body, Coordinate, Parameter, Rate
+from phasemap.declare.admissibility import Condition, conditions
+from phasemap.declare.contacts import EdgeContact, Joint, PointContact, RollingContact
+from phasemap.declare.law import ContactLaw
+from phasemap.declare.loader import load
+from phasemap.declare.system import System
 
 __all__ = ["Parameter", "Rate", "Coordinate", "Body", "PointContact", "EdgeContact",
            "RollingContact", "Joint", "ContactLaw", "System", "load",

@@ -111,15 +111,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _numerics as nx
-from .algebra import pythagorean, scale_in, scale_of
-from .derivation import derive
-from .emit import accelerations, channel_acceleration, family_coefficients
-from .law import Accelerates
-from .modes import Presence
-from .solvers import joint_parts, solve_joint
-from .system import System
-from .validation import validate
+from phasemap.core import numerics as nx
+from phasemap.declare.algebra import pythagorean, scale_in, scale_of
+from phasemap.declare.derivation import derive
+from phasemap.declare.emit import accelerations, channel_acceleration, family_coefficients
+from phasemap.declare.law import Accelerates
+from phasemap.declare.modes import Presence
+from phasemap.declare.solvers import joint_parts, solve_joint
+from phasemap.declare.loader import twin
+from phasemap.declare.system import System
+from phasemap.declare.validation import validate
 
 SENSES = ("!= 0", ">= 0", "> 0")
 
@@ -220,7 +221,7 @@ _CACHE: dict[int, tuple] = {}
 def conditions(system_or_model) -> tuple[Condition, ...]:
     """Every condition that decides a branch's status, per branch in row order, then the
     domain's; for a :class:`phasemap.declare.System`, a declared :class:`phasemap.Model`,
-    or a hand-written model with a declared twin (:data:`phasemap.systems.seeds.TWINS`,
+    or a hand-written model with a declared twin (:attr:`phasemap.Model.twin`,
     whose branches carry the hand model's names: the twin's conditions of those
     branches, in the hand model's row order).  Derived with sympy once per declaration.
 
@@ -269,23 +270,15 @@ def presence(system_or_model) -> dict[str, Presence]:
 
 def _declaration(x):
     """The declaration behind ``x``, and the hand model it stands in for (or None)."""
-    import importlib
-
-    from ..systems.seeds import TWINS  # the registry of twins, beside the declarations
-
     if isinstance(x, System):
         return x, None
     S = getattr(x, "declaration", None)
     if S is not None:  # a model loaded from the kernel cache holds a lazy Declaration
         return getattr(S, "system", S), None
-    twin = TWINS.get(getattr(x, "name", None))
-    if twin is None:
+    S = twin(x) if hasattr(x, "branches") else None
+    if S is None:
         raise TypeError(f"conditions: {getattr(x, 'name', x)!r} is not a declared system or "
-                        "model, and has no declared twin (phasemap.systems.seeds.TWINS)")
-    S = importlib.import_module(twin).SYSTEM
-    missing = sorted(set(x.branches) - set(S.model.branches))
-    if missing:
-        raise TypeError(f"conditions: the twin of {x.name!r} has no branch {missing[0]!r}")
+                        "model, and has no declared twin (phasemap.Model.twin)")
     return S, x
 
 

@@ -12,14 +12,14 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .. import _codegen
-from .. import _numerics as nx
-from .._declared import checks, declare_sources
-from .._version import __version__
-from ..model import Branch, Derived, Dynamics, Model, Variable
-from .api import Coordinate, numeric_bound, sym
-from .emit import GENERATION, module_source
-from .validation import IDENT, fail, validate
+from phasemap.core import codegen as _codegen
+from phasemap.core import numerics as nx
+from phasemap.declare.runtime import checks, declare_sources
+from phasemap._version import __version__
+from phasemap.core.model import Branch, Derived, Dynamics, Model, Variable
+from phasemap.declare.api import Coordinate, numeric_bound, sym
+from phasemap.declare.emit import GENERATION, module_source
+from phasemap.declare.validation import IDENT, fail, validate
 
 
 def canonical(S) -> str:
@@ -222,7 +222,7 @@ def _domain_text(spec) -> str:
 
 def _checks(S, spec, module):
     """The model's Python-level domain check: the declaration's own and the generated
-    ``inside`` (:func:`phasemap._declared.checks`, shared with a model loaded from the
+    ``inside`` (:func:`phasemap.declare.runtime.checks`, shared with a model loaded from the
     cache), then the coordinates' bounds that are expressions."""
     base = checks(S.name, S.check, getattr(module, "inside", None), _domain_text(spec))
     bounds = _bounds_check(S)

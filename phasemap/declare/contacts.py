@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..model import Variable
-from .api import sym
-from .law import (
+from phasemap.core.model import Variable
+from phasemap.declare.api import sym
+from phasemap.declare.law import (
     SEPARATED,
     SLIP,
     ROLL,

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .edges import Edge, edge_candidates, find_edges, on_edge
-from .equations import Equations
-from .modes import Candidate, candidates, slip_velocity
-from .solvers import Solution, problem, solve
+from phasemap.declare.edges import Edge, edge_candidates, find_edges, on_edge
+from phasemap.declare.equations import Equations
+from phasemap.declare.modes import Candidate, candidates, slip_velocity
+from phasemap.declare.solvers import Solution, problem, solve
 
 
 @dataclass

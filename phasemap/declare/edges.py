@@ -36,8 +36,8 @@ import itertools
 import math
 from dataclasses import dataclass
 
-from .law import SEPARATED
-from .modes import Candidate, Presence
+from phasemap.declare.law import SEPARATED
+from phasemap.declare.modes import Candidate, Presence
 
 #: Two edges of one coordinate closer than this (in sin and cos) are one edge.
 NEAR = 1e-6
@@ -262,7 +262,7 @@ class EdgeEquations:
 def edge_flag(edge: Edge):
     """The rule that decides the edge at a state, as ``(factors, scales, proximity)``:
     every factor ``|k_c| <= TOL * scale_c``, and the proximity below :data:`NEAR`."""
-    from .algebra import scale_of
+    from phasemap.declare.algebra import scale_of
 
     return list(edge.factors), [scale_of(k) for k in edge.factors], edge.proximity()
 

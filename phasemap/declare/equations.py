@@ -14,9 +14,9 @@ import math
 
 import numpy as np
 
-from .algebra import scale_of
-from .api import Coordinate, numeric_bound, sym
-from .validation import fail
+from phasemap.declare.algebra import scale_of
+from phasemap.declare.api import Coordinate, numeric_bound, sym
+from phasemap.declare.validation import fail
 
 
 class Equations:

@@ -37,7 +37,7 @@ import abc
 from dataclasses import dataclass, field
 from typing import ClassVar
 
-from .api import sym
+from phasemap.declare.api import sym
 
 SLIP, ROLL, TURN, STICK, SEPARATED = "slip", "roll", "turn", "stick", "sep"
 #: How a mode's kind reads in a branch name.
@@ -354,7 +354,7 @@ class ContactLaw(abc.ABC):
 
     @abc.abstractmethod
     def reaction_variables(self) -> tuple:
-        """The reactions it reports, as :class:`phasemap.model.Variable` s."""
+        """The reactions it reports, as :class:`phasemap.core.model.Variable` s."""
 
     def law_expr(self):
         return sym(self.friction_law)

@@ -8,8 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .law import SEPARATED, STICK, STICKING, Mode
-from .validation import fail
+from phasemap.declare.law import SEPARATED, STICK, STICKING, Mode
+from phasemap.declare.validation import fail
 
 
 class Presence(enum.IntEnum):

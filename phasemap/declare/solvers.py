@@ -20,9 +20,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .algebra import cramer, count_ops, pythagorean, reduced, scale_of
-from .law import STICK, LinearProblem, Mode
-from .validation import fail
+from phasemap.declare.algebra import cramer, count_ops, pythagorean, reduced, scale_of
+from phasemap.declare.law import STICK, LinearProblem, Mode
+from phasemap.declare.validation import fail
 
 
 @dataclass

@@ -5,8 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Mapping
 
-from .. import _declared
-from .build import build_model
+from phasemap.declare.build import build_model
 
 
 @dataclass(frozen=True, eq=False)
@@ -67,7 +66,7 @@ class System:
     edges: Mapping = field(default_factory=dict)
     #: optional cross-variable domain check on (possibly array) values: raise ValueError.
     #: Defined in an importable module other than the declaration file, it lets a warm
-    #: process load the model without building the declaration (phasemap._declared).
+    #: process load the model without building the declaration (phasemap.declare.loader).
     check: object = None
     #: optional short names for branches and reactions: ``{generated name: name}``
     #: (such as ``{"floor_slip_pos_wall_slip_pos": "slide_pos", "N_floor": "N"}``);
@@ -91,39 +90,3 @@ class System:
 
 
 _MODELS: dict[int, tuple] = {}
-
-
-def load(path) -> "object":
-    """The Model declared in a Python file: its ``SYSTEM`` (a :class:`System`).
-
-    With a warm kernel cache and an unchanged file, the model is loaded without
-    running the file (and without sympy): see :mod:`phasemap._declared`.
-    ``phasemap.get_model(path)`` and every command that takes a model
-    (``phasemap atlas my_rod.py ...``) call it for a path ending in ``.py``.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        a Python file that assigns a :class:`System` to ``SYSTEM``.
-
-    Returns
-    -------
-    phasemap.Model
-        ``SYSTEM.model``: derived once per declaration, then loaded from the
-        kernel cache.
-
-    Raises
-    ------
-    ValueError
-        naming the file when it cannot be read or declares no system, and the
-        part of the declaration that is wrong.
-
-    Examples
-    --------
-    >>> import phasemap.systems.painleve_rod as rod
-    >>> from phasemap.declare import load
-    >>> model = load(rod.__file__)
-    >>> model.name, [v.name for v in model.state]
-    ('painleve_rod', ['theta', 'omega', 'xdot'])
-    """
-    return _declared.load(path)

@@ -7,8 +7,8 @@ import keyword
 import math
 import re
 
-from .api import Body, Coordinate, Parameter, sym
-from .law import ContactLaw
+from phasemap.declare.api import Body, Coordinate, Parameter, sym
+from phasemap.declare.law import ContactLaw
 
 IDENT = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 

@@ -77,13 +77,13 @@ The package has one room per concern, as xarray's ``plot/`` has:
 :mod:`.command`     ``phasemap plot FILE.nc``: the figure of any file
 ==================  ==========================================================
 
-What a Dataset is (its kind) is decided in :mod:`phasemap._dataset`, without
+What a Dataset is (its kind) is decided in :mod:`phasemap.atlas.dataset`, without
 matplotlib.  A new kind of figure needs: a ``<kind>_figure(ds, ..., ax=None,
 size=...)`` function that opens ``with style():``, gets its axes from
 :func:`.layout._axes` and its labels from :func:`axis_label`, takes category
 colours from :func:`category_colour` and puts legends above with
 :func:`.layout.legend_above`; a rule in
-:func:`phasemap._dataset.dataset_kind`; and a line in :func:`plot`.
+:func:`phasemap.atlas.dataset.dataset_kind`; and a line in :func:`plot`.
 """
 
 from __future__ import annotations
@@ -93,18 +93,18 @@ from typing import Sequence
 import xarray as xr
 from matplotlib.figure import Figure
 
-from .._dataset import KINDS, dataset_kind as atlas_kind
-from .benchmark import METHOD_NAMES, SYSTEM_NAMES, work_precision_figure
-from .curves import curves_figure
-from .labels import (axis_label, fixed_values, fixed_values_text, format_number, format_units,
+from phasemap.atlas.dataset import KINDS, dataset_kind as atlas_kind
+from phasemap.plot.benchmark import METHOD_NAMES, SYSTEM_NAMES, work_precision_figure
+from phasemap.plot.curves import curves_figure
+from phasemap.plot.labels import (axis_label, fixed_values, fixed_values_text, format_number, format_units,
                      wrap)
-from .layout import (WIDE, angle_ticks, define_symbols, figure_legend, figure_texts, label_panels,
+from phasemap.plot.layout import (WIDE, angle_ticks, define_symbols, figure_legend, figure_texts, label_panels,
                      legend_above, legend_columns, outer_labels, panels, save_figure, width_of)
-from .layout import _panel_width  # noqa: F401  (the tests measure a panel with it)
-from .maps import (draw_boundaries, fate_figure, fate_grid_note, map_figure,
+from phasemap.plot.layout import _panel_width  # noqa: F401  (the tests measure a panel with it)
+from phasemap.plot.maps import (draw_boundaries, fate_figure, fate_grid_note, map_figure,
                    mark_inverted_rests, profile_figure)
-from .motion import event_handle, mark_event, phase_curve_figure, trajectory_figure
-from .style import (CATEGORY_COLOURS, CATEGORY_HATCHES, CYCLE, DASHES, EVENT_MARKERS, GREY,
+from phasemap.plot.motion import event_handle, mark_event, phase_curve_figure, trajectory_figure
+from phasemap.plot.style import (CATEGORY_COLOURS, CATEGORY_HATCHES, CYCLE, DASHES, EVENT_MARKERS, GREY,
                     HALO, MARKERS, OKABE_ITO, OVERLAYS, PALE_GREY, SIZES, STYLE, SUNSET,
                     category_colour, category_hatch, overlay_patch, stagnation_patch,
                     stagnation_span, style)

@@ -9,10 +9,10 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from .labels import _visible_length, format_number, format_units, wrap
-from .layout import (WIDE, _axes, legend_above, _legend_fits, _legend_height, define_symbols,
+from phasemap.plot.labels import _visible_length, format_number, format_units, wrap
+from phasemap.plot.layout import (WIDE, _axes, legend_above, _legend_fits, _legend_height, define_symbols,
                      label_panels, legend_columns, width_of)
-from .style import CYCLE, MARKERS, _FONT, _OI, style
+from phasemap.plot.style import CYCLE, MARKERS, _FONT, _OI, style
 
 # --------------------------------------------------------------------------- benchmarks
 
@@ -126,7 +126,7 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
 
     ``table`` is a list of dicts with keys ``method``, ``system``, ``tol``,
     ``error_final``, ``error_l2`` and ``seconds``, one per (method, system,
-    tolerance), as :func:`phasemap.workprecision.work_precision` returns them.
+    tolerance), as :func:`phasemap.motion.workprecision.work_precision` returns them.
     One panel per system (in order of appearance, lettered and named), one
     line per method (the same look in every panel, :data:`METHOD_LOOKS`: a
     phasemap method beside its SciPy counterpart; named as in
@@ -138,7 +138,7 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
     ``error_l2``, or their dimensionless forms ``error_scaled_final`` and
     ``error_scaled_l2`` (each component divided by its scale, the largest
     magnitude it reaches along the reference motion; see
-    :mod:`phasemap.workprecision`).  ``ylabel`` names the error with its
+    :mod:`phasemap.motion.workprecision`).  ``ylabel`` names the error with its
     definition and unit (default: ``ERROR_LABELS``) and ``key`` defines
     the symbols it uses (default: :math:`y`); for a scaled error the key
     always ends with the definition of the scales and each panel's values

@@ -26,12 +26,12 @@ import pathlib
 import xarray as xr
 from matplotlib.figure import Figure
 
-from .._dataset import curve_kind, dataset_kind, first_layer, motion_kind
-from .labels import _value_text, fixed_values_text
-from .layout import WIDE, figure_legend, label_panels, outer_labels, panels, save_figure, \
+from phasemap.atlas.dataset import curve_kind, dataset_kind, first_layer, motion_kind
+from phasemap.plot.labels import _value_text, fixed_values_text
+from phasemap.plot.layout import WIDE, figure_legend, label_panels, outer_labels, panels, save_figure, \
     width_of
-from .maps import fate_figure, map_figure
-from .style import style
+from phasemap.plot.maps import fate_figure, map_figure
+from phasemap.plot.style import style
 
 __all__ = ["MAX_PANELS", "SIZES", "figure_of", "plot_file"]
 
@@ -60,7 +60,7 @@ def plot_file(path: str | os.PathLike, stem: str | os.PathLike | None = None,
     """
     import matplotlib.pyplot as plt
 
-    from ..atlas import open_atlas
+    from phasemap.atlas.read import open_atlas
 
     if size not in SIZES:
         raise ValueError(f"size must be one of {', '.join(SIZES)}, got {size!r}")

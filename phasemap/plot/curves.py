@@ -15,12 +15,12 @@ import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from .._dataset import curve_axes, curve_kind
-from .labels import fixed_values_text
-from .layout import _axes, _label_axis, _panel_width, legend_above, width_of
-from .maps import draw_boundaries
-from .style import OKABE_ITO as _OI
-from .style import style
+from phasemap.atlas.dataset import curve_axes, curve_kind
+from phasemap.plot.labels import fixed_values_text
+from phasemap.plot.layout import _axes, _label_axis, _panel_width, legend_above, width_of
+from phasemap.plot.maps import draw_boundaries
+from phasemap.plot.style import OKABE_ITO as _OI
+from phasemap.plot.style import style
 
 #: How each kind of special point is drawn (an unknown kind gets the last).
 _POINTS = {"crossing": ("o", _OI["vermillion"]), "tangency": ("D", _OI["blue"]),

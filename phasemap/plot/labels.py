@@ -1,7 +1,7 @@
 r"""Label and unit text: axis labels from the model's symbols, fixed values, wrapping.
 
 The words of a figure come from the Dataset itself (its ``phasemap_variables``
-description, see :func:`phasemap._dataset.vocabulary`, and each variable's
+description, see :func:`phasemap.atlas.dataset.vocabulary`, and each variable's
 ``units``, ``long_name`` and ``phasemap_symbol``), so that an atlas of a
 declared system is labelled as a built-in one is: ``$\theta$ (rad)``.
 """
@@ -16,8 +16,8 @@ from typing import Sequence
 import numpy as np
 import xarray as xr
 
-from .._dataset import read_json, squared_units, vocabulary
-from .style import _FONT
+from phasemap.atlas.dataset import read_json, squared_units, vocabulary
+from phasemap.plot.style import _FONT
 
 # --------------------------------------------------------------------------- labels
 
@@ -66,7 +66,7 @@ def _symbol_and_units(ds: xr.Dataset, name: str) -> tuple[str, str | None] | Non
     """The mathtext symbol (without $) and units of ``name``, if the Dataset says them.
 
     A variable's own ``phasemap_symbol`` attribute first; then the model's
-    description (:func:`phasemap._dataset.vocabulary`): a variable, a branch's
+    description (:func:`phasemap.atlas.dataset.vocabulary`): a variable, a branch's
     acceleration, reaction or coefficient (``phi_ddot_slide_pos``), a variable
     at a moment of a motion (``phi_rest``).  None if the symbol is not mathtext
     (the label is then made from the name or ``long_name``).

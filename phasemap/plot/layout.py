@@ -20,10 +20,10 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, MultipleLocator
 from matplotlib.transforms import offset_copy
 
-from .._version import __version__
-from ..atlas import destination, no_partial_file
-from .labels import _units, _visible_length, axis_label, wrap
-from .style import _FONT, SIZES, TITLE_PAD, style
+from phasemap._version import __version__
+from phasemap.atlas.atomic import destination, no_partial_file
+from phasemap.plot.labels import _units, _visible_length, axis_label, wrap
+from phasemap.plot.style import _FONT, SIZES, TITLE_PAD, style
 
 def _annotate(axes: Sequence[Axes], text: str, own_figure: bool) -> None:
     """Put ``text`` (what was held fixed) above the figure.
@@ -349,13 +349,13 @@ def save_figure(fig: Figure, stem: str | os.PathLike, *, dpi: int = 300
     """Write ``fig`` as ``<stem>.pdf`` (vector, fonts embedded) and ``<stem>.png`` (``dpi``).
 
     A ``.pdf`` or ``.png`` suffix on ``stem`` is dropped.  Each file is
-    written atomically (see :func:`phasemap.atlas.atomic_path`).  Returns the
+    written atomically (see :func:`phasemap.atlas.atomic.atomic_path`).  Returns the
     two paths, PDF first.
 
     Raises
     ------
     ValueError
-        if the folder does not exist; as :class:`phasemap.atlas.WriteError` (one
+        if the folder does not exist; as :class:`phasemap.atlas.atomic.WriteError` (one
         line) when writing fails, a full disk say, with no file left.
     """
     stem = pathlib.Path(os.path.expanduser(os.fspath(stem)))

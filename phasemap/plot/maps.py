@@ -20,13 +20,13 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import MaxNLocator
 
-from .. import events as _events
-from .._dataset import dataset_kind as atlas_kind, first_layer, is_categorical, vocabulary
-from .labels import _coord, _flags, _layer, _meaning_text, _units, axis_label, fixed_values_text
-from .layout import (_angle_ticks, _annotate, _axes, _label_axis, _panel_width, _pi_text,
+from phasemap.core import events as _events
+from phasemap.atlas.dataset import dataset_kind as atlas_kind, first_layer, is_categorical, vocabulary
+from phasemap.plot.labels import _coord, _flags, _layer, _meaning_text, _units, axis_label, fixed_values_text
+from phasemap.plot.layout import (_angle_ticks, _annotate, _axes, _label_axis, _panel_width, _pi_text,
                      define_symbols, figure_legend, label_panels, legend_above, outer_labels,
                      width_of)
-from .style import (GREY, HALO, OVERLAYS, SEQUENTIAL, SUNSET, _OI, category_colour, category_hatch,
+from phasemap.plot.style import (GREY, HALO, OVERLAYS, SEQUENTIAL, SUNSET, _OI, category_colour, category_hatch,
                     _patch, overlay_patch, style)
 
 
@@ -429,7 +429,7 @@ def map_figure(ds: xr.Dataset, layer: str | None = None, *, x: str | None = None
         if overlays:
             handles += _overlays(a, ds, layer, xdim, ydim, xc, yc, shown=shown)
         if boundaries is True:
-            from ..bifurcation.overlay import map_boundaries
+            from phasemap.bifurcation.overlay import map_boundaries
 
             boundaries = map_boundaries(ds, layer, xdim, ydim)
         if boundaries is not None and boundaries is not False:

@@ -12,13 +12,13 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
-from .. import events as _events
-from .._dataset import is_categorical
-from .labels import _coord, _flags, _require, _squared_label, _meaning_text, axis_label, \
+from phasemap.core import events as _events
+from phasemap.atlas.dataset import is_categorical
+from phasemap.plot.labels import _coord, _flags, _require, _squared_label, _meaning_text, axis_label, \
     fixed_values_text
-from .layout import (_annotate, _axes, _label_axis, legend_above, _panel_width, label_panels,
+from phasemap.plot.layout import (_annotate, _axes, _label_axis, legend_above, _panel_width, label_panels,
                      width_of)
-from .style import EVENT_MARKERS, GREY, PALE_GREY, _OI, _TERMINAL, style
+from phasemap.plot.style import EVENT_MARKERS, GREY, PALE_GREY, _OI, _TERMINAL, style
 
 # --------------------------------------------------------------------------- motions
 

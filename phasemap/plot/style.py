@@ -15,7 +15,7 @@ import matplotlib.colors as mcolors
 from matplotlib import patheffects
 from matplotlib.patches import Patch
 
-from .. import events as _events
+from phasemap.core import events as _events
 
 # --------------------------------------------------------------------------- style
 

@@ -11,11 +11,11 @@ disk) the first time it is asked for.  What runs, by name:
 * ``elliptic_pendulum``, ``hinge_pendulum``: written by hand
   (:mod:`phasemap.systems.elliptic_pendulum`,
   :mod:`phasemap.systems.hinge_pendulum`, each defining a
-  :class:`phasemap.model.Model` named ``MODEL``), because their contacts cannot
+  :class:`phasemap.core.model.Model` named ``MODEL``), because their contacts cannot
   open and their maps are pinned bit for bit.  Their declarations in
   :mod:`phasemap.systems.seeds` are twins that agree with them state by state
   (tests/test_declare.py) and give the bifurcation tracer their admissibility
-  conditions (``seeds.TWINS``).
+  conditions (each hand model names its twin: :attr:`phasemap.Model.twin`).
 
 The paper's own equations for the ladder and the wheel, with its errata and
 closed forms, are test references (tests/references/), not systems.  A new
@@ -29,9 +29,10 @@ from __future__ import annotations
 import os
 from collections.abc import Mapping
 
-from .. import _args, _declared
-from ..model import Model
-from . import elliptic_pendulum, hinge_pendulum
+from phasemap.core import args as _args
+from phasemap.declare import loader as _declared
+from phasemap.core.model import Model
+from phasemap.systems import elliptic_pendulum, hinge_pendulum
 
 #: Declared built-in systems: name -> the module defining its SYSTEM.
 DECLARED = {"ladder": "phasemap.systems.seeds.ladder", "wheel": "phasemap.systems.seeds.wheel",
@@ -76,7 +77,7 @@ def get_model(model: str | Model) -> Model:
     ----------
     model : str, os.PathLike or Model
         a registered name (``phasemap.MODELS``), the path of a ``.py`` file
-        that declares a ``SYSTEM`` (see :func:`phasemap.declare.load`), or a
+        that declares a ``SYSTEM`` (see :func:`phasemap.declare.loader`), or a
         :class:`Model`, returned as it is.
 
     Returns

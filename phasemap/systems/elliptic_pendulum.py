@@ -58,10 +58,10 @@ import math
 import numpy as np
 from numba import njit
 
-from .._numerics import ADMISSIBLE, CONTINUUM, INADMISSIBLE, NAN, NO_SOLUTION, TOL, is_zero
-from ..model import (SIN_COS_PHI, Branch, Dynamics, Model, Variable, angle_state,
+from phasemap.core.numerics import ADMISSIBLE, CONTINUUM, INADMISSIBLE, NAN, NO_SOLUTION, TOL, is_zero
+from phasemap.core.model import (SIN_COS_PHI, Branch, Dynamics, Model, Variable, angle_state,
                      angular_acceleration, gravity_and_mass)
-from .seeds import citation
+from phasemap.systems.seeds import citation
 
 
 @njit(cache=True, error_model="numpy", forceinline=True)
@@ -122,6 +122,7 @@ def velocity_scale(omega, l, g):
 
 MODEL = Model(
     name="elliptic_pendulum",
+    twin="phasemap.systems.seeds.elliptic_pendulum",
     title="Painleve's elliptic pendulum: slider on a rough two-sided guide with a pendulum",
     citation="Painleve P. (1895), Lecons sur le frottement; "
     + citation("Fig. 3, eq. (16)-(28)"),

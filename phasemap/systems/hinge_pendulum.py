@@ -51,9 +51,9 @@ import math
 import numpy as np
 from numba import njit
 
-from .._numerics import ADMISSIBLE, CONTINUUM, INADMISSIBLE, NAN, NO_SOLUTION, TOL, is_zero
-from ..model import Model, Variable, angle_state, gravity_and_mass, one_angle
-from .seeds import citation
+from phasemap.core.numerics import ADMISSIBLE, CONTINUUM, INADMISSIBLE, NAN, NO_SOLUTION, TOL, is_zero
+from phasemap.core.model import Model, Variable, angle_state, gravity_and_mass, one_angle
+from phasemap.systems.seeds import citation
 
 
 @njit(cache=True, error_model="numpy", forceinline=True)
@@ -104,6 +104,7 @@ def stick(delta, l, g, m, sin_phi, cos_phi):
 
 MODEL = Model(
     name="hinge_pendulum",
+    twin="phasemap.systems.seeds.hinge_pendulum",
     title="Mathematical pendulum with dry friction in its hinge",
     citation=citation("Fig. 4, eq. (29)-(36)"),
     state=angle_state("rod", "angle of the rod from the downward vertical"),

@@ -67,9 +67,9 @@ import math
 
 from numba import njit
 
-from phasemap._numerics import (ADMISSIBLE, CONTACT_LOST, CONTINUUM, INADMISSIBLE, NAN,
+from phasemap.core.numerics import (ADMISSIBLE, CONTACT_LOST, CONTINUUM, INADMISSIBLE, NAN,
                                 NO_SOLUTION, TOL, is_zero, restrict_affine, start_interval)
-from phasemap.model import Model, Variable, angle_state, gravity_and_mass, one_angle
+from phasemap.core.model import Model, Variable, angle_state, gravity_and_mass, one_angle
 from phasemap.systems.seeds import citation
 
 

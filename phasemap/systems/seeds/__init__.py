@@ -22,7 +22,3 @@ def citation(where: str) -> str:
             f"Series Natural Sciences, no. 6 (99), pp. 4-16, {where}. "
             "doi:10.18698/1812-3368-2021-6-4-16")
 
-
-#: hand-written model name -> the module of its declared twin
-TWINS = {"elliptic_pendulum": "phasemap.systems.seeds.elliptic_pendulum",
-         "hinge_pendulum": "phasemap.systems.seeds.hinge_pendulum"}

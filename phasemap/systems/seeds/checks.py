@@ -3,7 +3,7 @@
 A declaration's ``check`` defined in an importable module other than the
 declaration file lets a process with a warm kernel cache load the model
 without building the declaration (and importing sympy): see
-:mod:`phasemap._declared`.
+:mod:`phasemap.declare.loader`.
 """
 
 import numpy as np

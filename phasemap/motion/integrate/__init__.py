@@ -1,0 +1,309 @@
+r"""The time integrator: Dormand-Prince 5(4) or 8(5,3) with exact set-valued friction.
+
+One jitted integrator per model, specialised from the templates below with
+the model's ``point``, ``branch`` and ``derive`` functions (see
+:class:`phasemap.Dynamics`).  It is what :func:`phasemap.simulate` and the
+fate maps run.
+
+Method
+------
+* **Stages.**  A motion is a sequence of stages.  On a stage one branch of the
+  friction law is active (slip in a direction with an assumed sign of N, or
+  stick), and the right-hand side is that branch's accelerations, a smooth
+  function of the state: ``branch(v, b, row)`` keeps the stage's slip
+  direction even at trial points past a velocity zero.
+* **Steps.**  Explicit Runge-Kutta of Dormand and Prince (:data:`METHODS`):
+  ``DOPRI5`` (the default), order 5 with an embedded order-4 error estimate
+  and Hairer's order-4 continuous extension (:mod:`phasemap.motion.integrate.dopri5`; the
+  coefficients of Hairer's ``dopri5`` and scipy's ``RK45``), or ``DOP853``,
+  order 8 with dop853's combined order-5/order-3 error estimate and its
+  order-7 continuous extension (:mod:`phasemap.motion.integrate.dop853`; Hairer's ``dop853``
+  and scipy's ``DOP853``), for tight tolerances.  Both are
+  first-same-as-last, with an RMS error norm over ``atol + rtol |y|`` and the
+  standard step-size controller.
+* **Events by classification.**  After every accepted step the end state is
+  classified with the model's own rows, exactly as :func:`phasemap.classify`
+  does.  The stage goes on while the classification is *unique and equal to
+  the active branch* (and the branch's coefficient of the senior derivative
+  keeps its sign); after a step the integrator reads only that decision,
+  from the statuses of the rows that apply and the stage's coefficient
+  (``GOES_ON`` in :mod:`phasemap.motion.integrate.templates`), and events classify
+  every row.  Otherwise the first state where it
+  stops being so is located by bisection on the dense output, to the
+  resolution of double precision in t, and classified there: a velocity zero
+  (then rest, stick or reversal, with the velocity set to exactly 0), a sign
+  change of a two-sided reaction (switch), a stick that can no longer hold
+  (slip), contact loss, or a state with no solution, two solutions or a
+  continuum, where the motion stops and says so.  There is no smoothing of
+  the friction law, and no branch is ever chosen where the equations leave a
+  choice.
+* **Stick is exact.**  On the elliptic pendulum's stick stage the slider's
+  acceleration is exactly zero, so its velocity stays exactly 0: no creep.
+
+A motion that leaves the model's domain (a state variable beyond its bounds,
+such as the ladder's phi past 0 or pi/2) ends with ``left_domain`` at the
+boundary; running out of ``max_steps`` ends it with ``max_steps``.  Where the
+step size collapses because the stage's own branch has no solution just
+ahead (the hinge pendulum with delta > l leaving the curve l omega^2 + g cos
+phi = 0), the motion ends with the classification found there
+(``no_solution``), not ``step_failure``.
+A state the integrator cannot resolve (the step size falls below double
+precision, which happens as a coefficient of the senior derivative approaches
+zero and the accelerations grow without bound) ends the motion with
+``singular`` (when the active coefficient has fallen below 1e-6 of its
+largest value at a stage start of the motion) or ``step_failure``.
+
+Layout: :mod:`phasemap.motion.integrate.templates` holds the integrator's numba
+templates (its named pieces); this module compiles them per model and method
+(:func:`kernels`) and runs fate maps over grids of initial conditions.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit, prange
+from numba import types as nb_types
+
+from phasemap.motion.integrate import dop853 as _dop853
+from phasemap.motion.integrate import dopri5 as _dopri5
+from phasemap.core import numerics as nx
+from phasemap.core import events as ev
+from phasemap.core.codegen import moving_test, set_cell
+from phasemap.core.types import F1, F2, F3, I1, I2
+from phasemap.core.compile import contract_constants, grow, remember, specialize
+from phasemap.core.codegen import pack_axes
+from phasemap.core.model import Model
+from phasemap.motion.integrate import templates as tp
+
+#: The methods by name (``simulate(method=...)``, the fate layers' ``method`` option).
+METHODS = {m.NAME: m for m in (_dopri5, _dop853)}
+#: The default method.
+DEFAULT_METHOD = _dopri5.NAME
+#: Cells per work unit of a fate map; units interleave over the grid to balance threads.
+FATE_UNITS = 1024
+
+
+def unpack(points, events):
+    """The columns of an integrator's ``points`` and ``events`` (see
+    ``phasemap.motion.integrate.templates._integrate_template``): ``(ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode)``."""
+    return (points[:, 0], points[:, 2:], points[:, 1], events[:, 0], events[:, 1],
+            events[:, 3:], events[:, 2])
+
+
+def _fate_drive(integrate, y_slot, base, shape, axis_slot, axis_values, deriv_slot,
+                deriv_values, y0_fixed, t_end, rtol, atol, h_max, max_steps, max_events,
+                pos_col, fate, n_rev, t_final, pos_rest):
+    """Integrate from every cell of a grid of initial conditions; record how each ends.
+
+    ``integrate`` is a model's integrator, taken as a first-class function, so
+    that this parallel driver compiles once for every model and method (and
+    numba's parfor lowering does not re-optimise the integrator inside it).
+    Work units interleave over the grid (unit u takes cells u, u + U, ...), so
+    that both threads see the same mix of quick and slow cells.
+    """
+    ndim = shape.shape[0]
+    ncells = 1
+    for d in range(ndim):
+        ncells *= shape[d]
+    units = min(FATE_UNITS, ncells)
+    no_eval = np.empty(0)
+    for u in prange(units):
+        v = base.copy()
+        y0 = y0_fixed.copy()
+        for q in range((ncells - u + units - 1) // units):
+            cell = u + q * units
+            set_cell(v, cell, shape, axis_slot, axis_values, deriv_slot, deriv_values)
+            for i in range(y_slot.shape[0]):
+                if y_slot[i] >= 0:
+                    y0[i] = v[y_slot[i]]
+            res = integrate(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, False,
+                            no_eval)
+            fate[cell] = res[0]
+            n_rev[cell] = res[3]
+            t_final[cell] = res[1]
+            for j in range(pos_col.shape[0]):
+                pos_rest[j, cell] = res[2][pos_col[j]] if res[0] == ev.REST else np.nan
+
+
+#: The argument types of every integrator (see templates._integrate_template).
+INTEGRATE_ARGS = (F1, F1, nb_types.float64, nb_types.float64, nb_types.float64,
+                  nb_types.float64, nb_types.int64, nb_types.int64, nb_types.boolean, F1)
+_FATE_DRIVERS: dict = {}
+
+
+def _fate_driver(integrate):
+    """The parallel fate driver for integrators of ``integrate``'s signature (compiled once)."""
+    sig = integrate.nopython_signatures[0]
+    driver = _FATE_DRIVERS.get(sig)
+    if driver is None:
+        fsig = nb_types.void(nb_types.FunctionType(sig), I1, F1, I1, I1, F2, I2, F3, F1,
+                             nb_types.float64, nb_types.float64, nb_types.float64,
+                             nb_types.float64, nb_types.int64, nb_types.int64, I1,
+                             nb_types.Array(nb_types.int8, 1, "C"),
+                             nb_types.Array(nb_types.int32, 1, "C"), F1, F2)
+        driver = _FATE_DRIVERS[sig] = njit(fsig, parallel=True, cache=True,
+                                           error_model="numpy")(_fate_drive)
+    return driver
+
+
+def _batch_drive(integrate, y_slot, v, y0s, t_end, rtol, atol, h_max, max_steps, max_events,
+                 save, t_eval):
+    """Integrate from every row of ``y0s`` (one compiled call for a sweep of starts).
+
+    Returns ``(head, points, point_end, events, event_end, y_eval, eval_end)``:
+    ``head`` one row (fate, t, n_reversals, n_steps) per start; the rows of
+    start i of ``points``, ``events`` and ``y_eval`` (see
+    ``templates._integrate_template``) are those before ``*_end[i]`` and from
+    ``*_end[i - 1]`` on, stacked start after start.
+    """
+    n, ny = y0s.shape
+    head = np.empty((n, 4))
+    point_end = np.empty(n, dtype=np.int64)
+    event_end = np.empty(n, dtype=np.int64)
+    eval_end = np.empty(n, dtype=np.int64)
+    pts = np.empty((0, 2 + ny))
+    evs = np.empty((0, 3 + ny))
+    yev = np.empty((0, ny))
+    n_pts = n_evs = n_yev = 0
+    for i in range(n):
+        y0 = y0s[i].copy()
+        for j in range(y_slot.shape[0]):
+            if y_slot[j] >= 0:
+                v[y_slot[j]] = y0[j]
+        res = integrate(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, save, t_eval)
+        head[i, 0] = res[0]
+        head[i, 1] = res[1]
+        head[i, 2] = res[3]
+        head[i, 3] = res[4]
+        p, e, ye = res[5], res[6], res[7]
+        pts = grow(pts, n_pts + p.shape[0])
+        pts[n_pts:n_pts + p.shape[0]] = p
+        n_pts += p.shape[0]
+        evs = grow(evs, n_evs + e.shape[0])
+        evs[n_evs:n_evs + e.shape[0]] = e
+        n_evs += e.shape[0]
+        yev = grow(yev, n_yev + ye.shape[0])
+        yev[n_yev:n_yev + ye.shape[0]] = ye
+        n_yev += ye.shape[0]
+        point_end[i] = n_pts
+        event_end[i] = n_evs
+        eval_end[i] = n_yev
+    return head, pts[:n_pts], point_end, evs[:n_evs], event_end, yev[:n_yev], eval_end
+
+
+_BATCH_DRIVERS: dict = {}
+
+
+def _batch_driver(integrate):
+    """The batch driver for integrators of ``integrate``'s signature (compiled once)."""
+    sig = integrate.nopython_signatures[0]
+    driver = _BATCH_DRIVERS.get(sig)
+    if driver is None:
+        args = (nb_types.FunctionType(sig), I1, F1, F2, *INTEGRATE_ARGS[2:])
+        driver = _BATCH_DRIVERS[sig] = njit(args, cache=True, error_model="numpy")(
+            _batch_drive)
+    return driver
+
+
+def run_batch(model: Model, method: str, v: np.ndarray, y0s: np.ndarray, *args):
+    """Integrate from every row of ``y0s`` in one compiled call (see :func:`_batch_drive`);
+    ``args`` are the integrator's from ``t_end`` on."""
+    integrate, _ = kernels(model, method)
+    y_slot = stage_kernels(model).constants["Y_SLOT"]
+    return _batch_driver(integrate)(integrate, y_slot, v, y0s, *args)
+
+
+def check_method(method, model_name: str) -> str:
+    """``method`` if it names one of :data:`METHODS`, else ValueError."""
+    if not isinstance(method, str) or method not in METHODS:
+        raise ValueError(f"{model_name}: method must be one of {', '.join(METHODS)}, "
+                         f"got {method!r}")
+    return method
+
+
+class Stage(NamedTuple):
+    """A model's compiled stage pieces (see :mod:`phasemap.motion.integrate.templates`), for
+    a caller that drives stages itself (:func:`phasemap.motion.workprecision.solve_ivp_staged`).
+
+    ``classify(v, y, out)``: (n_solutions, first admissible branch, lost, singular) at
+    the integrated state ``y``; ``still(v, y, out, mode, coef_sign)``: ``y`` goes on
+    with the stage of ``mode``; ``event(v, y, t, t_prev, h, theta_end, r, mode,
+    coef_sign, out, yb)``: the event where a stage stopped (``r``: a dense output in
+    Hairer's nested form, see ``templates.dense``); ``start(v, y, out)``: how a motion
+    starts; ``coefficient(out, mode)``: the stage's coefficient and its sign.
+    """
+
+    classify: object
+    still: object
+    event: object
+    start: object
+    coefficient: object
+    constants: dict
+
+
+def stage_kernels(model: Model) -> Stage:
+    """The model's compiled stage pieces (the same the integrator inlines)."""
+    return remember(("stage", model.name), model, lambda: _stage_kernels(model))
+
+
+def _stage_kernels(model: Model) -> Stage:
+    if model.dynamics is None:
+        raise ValueError(f"{model.name}: this model has no dynamics (Model.dynamics is None); "
+                         "it can be classified and mapped but not integrated in time")
+    consts = contract_constants(model)
+    consts["WATCH"] = np.concatenate([[nx.COEF], consts["REACTIONS"]]).astype(np.int64)
+    consts["MOVING"] = moving_test(model).moving
+    for name, template, inline in tp.PIECES:
+        consts[name] = specialize(template, model, name.lower(), inline=inline, **consts)
+    return Stage(consts["CLASSIFY"], consts["STILL"], consts["EVENT"], consts["START"],
+                 consts["STAGE_COEFFICIENT"], consts)
+
+
+def kernels(model: Model, method: str = DEFAULT_METHOD):
+    """The model's jitted integrator functions for ``method``: ``(integrate, fate_map)``."""
+    check_method(method, model.name)
+    return remember(("integrate", model.name, method), model, lambda: _kernels(model, method))
+
+
+def _kernels(model: Model, method: str):
+    spec = METHODS[method]
+    consts = dict(stage_kernels(model).constants)
+    consts.update(N_STAGES=spec.N_STAGES, FSAL=spec.FSAL, N_DENSE=spec.N_DENSE,
+                  EXPONENT=spec.EXPONENT, STIFF_BOUND=spec.STIFF_BOUND)
+    tag = spec.NAME.lower()
+    for name, template, inline in (("STEP", spec.step_template, True),
+                                   ("DENSE", spec.dense_template, True), *tp.METHOD_PIECES):
+        consts[name] = specialize(template, model, f"{name.lower()}_{tag}", inline=inline,
+                                  **consts)
+    integrate = consts["INTEGRATE"]
+    integrate.compile(INTEGRATE_ARGS)
+    y_slot = consts["Y_SLOT"]
+
+    def fate_map(*args):
+        """Run the shared parallel fate driver with this model's integrator."""
+        return _fate_driver(integrate)(integrate, y_slot, *args)
+
+    return integrate, fate_map
+
+
+def run_fate_map(model: Model, axes: dict[str, np.ndarray], fixed: dict[str, float],
+                 y0_fixed: np.ndarray, t_end: float, rtol: float, atol: float, h_max: float,
+                 max_steps: int, max_events: int, method: str = DEFAULT_METHOD):
+    """Fate of every cell of a grid of initial conditions (validated values)."""
+    _, fate_map = kernels(model, method)
+    packed = pack_axes(model, axes, fixed)
+    shape = packed[1]
+    ncells = int(np.prod(shape))
+    dyn = model.dynamics
+    n_pos = len(dyn.coordinates)
+    fate = np.empty(ncells, dtype=np.int8)
+    n_rev = np.empty(ncells, dtype=np.int32)
+    t_final = np.empty(ncells)
+    pos_rest = np.empty((n_pos, ncells))
+    fate_map(*packed, y0_fixed, t_end, rtol, atol, h_max, max_steps, max_events,
+             np.arange(n_pos, dtype=np.int64), fate, n_rev, t_final, pos_rest)
+    grid = tuple(int(s) for s in shape)
+    return (fate.reshape(grid), n_rev.reshape(grid), t_final.reshape(grid),
+            pos_rest.reshape((n_pos,) + grid))

@@ -1,0 +1,419 @@
+"""Trajectories in time: :func:`simulate`.
+
+A thin Python wrapper over the model's jitted integrator
+(:mod:`phasemap.motion.integrate`): it validates the input, runs the integrator and
+returns a self-describing :class:`xarray.Dataset`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping, NamedTuple, Sequence
+
+import numpy as np
+import xarray as xr
+
+from phasemap.core import args as _args
+from phasemap.core import events as ev
+from phasemap.core.compile import remember
+from phasemap.atlas.dataset import assemble, cf_header, variable_attrs
+from phasemap.motion.integrate import DEFAULT_METHOD, METHODS, check_method, kernels, run_batch, unpack
+from phasemap.core.model import Model, Variable
+from phasemap.systems import get_model
+
+#: Tolerances tighter than this cannot be met in double precision.
+RTOL_MIN = 1e-14
+
+
+#: Validated :class:`Options` by ``(model, settings, their types)`` (see :meth:`Options.checked`).
+_CHECKED: dict = {}
+_CHECKED_MAX = 256
+
+
+@dataclass(frozen=True)
+class Options:
+    """Integrator settings shared by :func:`simulate` and the fate maps."""
+
+    t_end: float = 10.0
+    rtol: float = 1e-8
+    atol: float | None = None
+    max_step: float = math.inf
+    max_steps: int = 1_000_000
+    max_events: int = 10_000
+    method: str = DEFAULT_METHOD
+
+    def checked(self, model: str) -> "Options":
+        """Validated copy (``atol`` defaults to ``rtol``); ValueError (or
+        :class:`phasemap.core.args.WrongType`) naming the setting on bad values.
+        Python and NumPy numbers alike; counts may be whole floats (``1e6``).
+
+        The settings of a call are often those of the last (a sweep): a validated
+        copy is remembered under the settings and their types (``1`` is not ``True``)."""
+        fields = (self.t_end, self.rtol, self.atol, self.max_step, self.max_steps,
+                  self.max_events, self.method)
+        key = (model, fields, tuple(map(type, fields)))
+        try:
+            hit = _CHECKED.get(key)
+        except TypeError:  # an unhashable setting: validation says what is wrong with it
+            return self._checked(model)
+        if hit is None:
+            if len(_CHECKED) >= _CHECKED_MAX:
+                _CHECKED.clear()
+            hit = _CHECKED[key] = self._checked(model)
+        return hit
+
+    def _checked(self, model: str) -> "Options":
+        t_end = _args.finite("t_end", self.t_end, model, lower=0.0, lower_open=True)
+        rtol = _args.real("rtol", self.rtol, model)
+        if not RTOL_MIN <= rtol <= 0.1:
+            raise ValueError(f"{model}: rtol must be in [{RTOL_MIN:g}, 0.1] (tighter is below "
+                             f"double-precision resolution), got {self.rtol!r}")
+        atol = rtol if self.atol is None else _args.finite("atol", self.atol, model, lower=0.0,
+                                                           lower_open=True)
+        max_step = _args.finite("max_step", self.max_step, model, lower=0.0, lower_open=True,
+                                allow_inf=True)
+        counts = [_args.count(name, getattr(self, name), model)
+                  for name in ("max_steps", "max_events")]
+        if not isinstance(self.method, str):
+            raise _args.WrongType(f"{model}: method must be a string, one of "
+                                          f"{', '.join(METHODS)}, got {type(self.method).__name__}")
+        check_method(self.method, model)
+        return Options(t_end, rtol, atol, max_step, *counts, self.method)
+
+    def as_dict(self) -> dict:
+        return {"t_end": self.t_end, "rtol": self.rtol, "atol": self.atol,
+                "max_step": self.max_step, "max_steps": self.max_steps,
+                "max_events": self.max_events, "method": self.method}
+
+
+def integrated_variables(model: Model) -> list[Variable]:
+    """The integrated state: positions, then velocities (with their descriptions)."""
+    return list(_layout(model).integrated)
+
+
+class _Layout(NamedTuple):
+    """What a call of :func:`simulate` reads from its model, derived once per model (a
+    call re-deriving it from the model's properties cost tens of microseconds)."""
+
+    integrated: tuple  # the integrated Variables: positions, then velocities
+    names: tuple  # ... and their names
+    known: dict  # every name a call may set: the model's variables and extra positions
+    state: frozenset  # the names of initial values (the batch form sweeps these)
+    extra: dict  # positions the model integrates but does not take as inputs
+    settable: tuple  # model.names, then the extra positions
+
+
+def _layout(model: Model) -> _Layout:
+    dyn = _dynamics(model)
+    return remember(("simulate", model.name), model, lambda: _make_layout(model, dyn))
+
+
+def _make_layout(model: Model, dyn) -> _Layout:
+    extra = {p.name: p for p in dyn.positions}
+    known = {**model.variables, **extra}
+    integrated = tuple([known[c[0]] for c in dyn.coordinates]
+                       + [known[c[1]] for c in dyn.coordinates])
+    return _Layout(integrated, tuple(v.name for v in integrated), known,
+                   frozenset({v.name for v in model.state} | set(extra)), extra,
+                   (*model.names, *extra))
+
+
+def _dynamics(model: Model):
+    if model.dynamics is None:
+        raise ValueError(f"{model.name}: this model has no dynamics; it can be classified and "
+                         "mapped but not integrated in time")
+    return model.dynamics
+
+
+def split_values(model: Model, values: Mapping[str, float]):
+    """Validate ``values``: model variables (complete) and extra positions (default 0)."""
+    lay = _layout(model)
+    extra = lay.extra
+    values = _args.scalars(values, lay.settable, model.name,
+                           " for simulate(); for grids of initial conditions use a Scene "
+                           "with fate layers")
+    positions = {}
+    for name, var in extra.items():
+        positions[name] = float(values.pop(name, var.default))
+        var.check(model.name, positions[name])
+    return model.complete(values), positions
+
+
+def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
+             atol: float | None = None, max_step: float = math.inf,
+             t_eval: Sequence[float] | None = None, max_steps: int = 1_000_000,
+             max_events: int = 10_000, method: str = DEFAULT_METHOD,
+             **values: float) -> xr.Dataset:
+    """Integrate the motion from an initial state, with exact stick and slip.
+
+    Parameters
+    ----------
+    model:
+        a model name or :class:`phasemap.Model` with dynamics (all four
+        built-in models).
+    t_end:
+        the time horizon (s).
+    rtol, atol:
+        relative and absolute tolerances of the steps (``atol`` defaults to
+        ``rtol``); ``rtol`` in [1e-14, 0.1].
+    max_step:
+        largest step (s); lower it to resolve short excursions between steps.
+    t_eval:
+        sorted times in [0, t_end] at which to report the state (from the
+        dense output).  Default: every accepted step and every event.
+    max_steps, max_events:
+        limits after which the motion ends with ``max_steps`` or ``max_events``.
+    method:
+        ``"DOPRI5"`` (Dormand-Prince 5(4), the default) or ``"DOP853"``
+        (Dormand-Prince 8(5,3) with a dense output of order 7: fewer steps at
+        tight tolerances, below about 1e-8).
+    **values:
+        initial state and parameters by name (``phasemap models`` lists them);
+        missing names take the model's defaults.  The elliptic pendulum also
+        takes the slider position ``x`` (default 0).  **Batch form:** initial
+        values given as 1-D arrays of one length (parameters stay scalars)
+        integrate every start in one compiled call, each exactly as a call of
+        its own would.
+
+    Returns
+    -------
+    xarray.Dataset
+        coordinate ``t``; the state variables by name (positions, then
+        velocities); ``branch``, the active branch; and an events table on
+        dimension ``event``: ``event_t``, ``event_kind`` (see
+        :class:`phasemap.Event`), ``event_branch`` (the branch after the
+        event) and the state at each event.  The first event is ``start`` (or
+        the fate, when the motion cannot start); the last is the fate.
+        ``attrs["end_reason"]`` names the fate, ``attrs["end_message"]``
+        explains it.
+
+        In the batch form, one Dataset with a ``start`` dimension: the
+        variables above on (``start``, ``t``) with ``t_eval`` (NaN past a
+        motion's end), else on (``start``, ``point``) with ``t`` a variable
+        beside them; the events on (``start``, ``event``); ``n_points`` and
+        ``n_events`` count each start's rows (the rest is padding: NaN, and -1
+        for branches and kinds); ``end_reason`` (a fate code, see
+        :class:`phasemap.Event`), ``n_reversals``, ``n_steps`` and
+        ``initial_<name>`` are variables on ``start``.
+
+    Raises
+    ------
+    ValueError
+        for an unknown model or variable, a value outside its domain, or bad
+        integrator settings.
+
+    Examples
+    --------
+    >>> import phasemap
+    >>> ds = phasemap.simulate("hinge_pendulum", t_end=10.0, phi=1.0, omega=0.0, delta=0.1)
+    >>> ds.attrs["end_reason"], int(ds.attrs["n_reversals"])
+    ('rest', 3)
+    >>> abs(float(ds.phi[-1])) <= 0.1                  # rest needs l |sin phi| <= delta
+    True
+    >>> sweep = phasemap.simulate("hinge_pendulum", t_end=10.0, phi=[0.5, 1.0, 2.5],
+    ...                           omega=0.0, delta=0.1)
+    >>> sweep.n_reversals.values.tolist()
+    [1, 3, 5]
+    """
+    m = get_model(model)
+    opts = Options(t_end, rtol, atol, max_step, max_steps, max_events, method).checked(m.name)
+    starts = _starts(m, values)
+    full, positions = split_values(m, {k: (val[0] if k in starts else val)
+                                       for k, val in values.items()})
+    if t_eval is None:
+        te = np.empty(0)
+    else:
+        te = _args.reals("t_eval", t_eval, m.name)
+        if te.ndim != 1 or not np.all(np.isfinite(te)) or np.any(np.diff(te) < 0) or (
+                te.size and (te[0] < 0 or te[-1] > opts.t_end)):
+            raise ValueError(f"{m.name}: t_eval must be a sorted 1-D sequence of times in "
+                             f"[0, t_end = {opts.t_end:g}]")
+    names = list(_layout(m).names)
+    y0 = np.array([positions[n] if n in positions else float(full[n]) for n in names])
+    v = m.input_vector(full)
+    run = (opts.t_end, opts.rtol, opts.atol, opts.max_step, opts.max_steps, opts.max_events,
+           t_eval is None, te)
+    if starts:
+        y0s = np.repeat(y0[None, :], len(next(iter(starts.values()))), axis=0)
+        for j, n in enumerate(names):
+            if n in starts:
+                y0s[:, j] = starts[n]
+        return _batch(m, full, positions, opts, names, y0s, te if t_eval is not None else None,
+                      run_batch(m, opts.method, v.copy(), y0s, *run))
+    integrate, _ = kernels(m, opts.method)
+    fate, t, y, n_rev, n_steps, points, events, y_eval = integrate(v, y0, *run)
+    return _dataset(m, full, positions, opts, names, int(fate), int(n_rev), int(n_steps),
+                    *_columns(points, events, y_eval, te if t_eval is not None else None))
+
+
+def _columns(points, events, y_eval, te):
+    """``(ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode)`` of one motion; at the requested times
+    ``te`` (None: at the saved points)."""
+    ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode = unpack(points, events)
+    if te is not None:
+        ts = te[:len(y_eval)]
+        ys = y_eval
+        # the branch at t: the one after the last event at or before t that
+        # started a stage (a terminal event at t_end ends no stage before it)
+        started = ev_mode >= 0
+        if started.any():
+            at = np.searchsorted(ev_t[started], ts, side="right") - 1
+            ms = ev_mode[started][np.maximum(at, 0)]
+        else:
+            ms = np.full(len(ts), -1.0)
+    return ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode
+
+
+def _starts(m: Model, values: Mapping) -> dict[str, np.ndarray]:
+    """The initial-state values given as 1-D arrays (the batch form), checked: one
+    length for all, every start in the domain, the parameters scalars."""
+    plain = _args.PLAIN
+    if all(type(val) in plain for val in values.values()):
+        return {}  # every value one number: a single motion
+    lay = _layout(m)
+    known, state = lay.known, lay.state
+    starts = {}
+    for k, val in values.items():
+        if type(val) in _args.PLAIN:
+            continue
+        nd = np.ndim(val)
+        if nd == 0:
+            continue
+        if k not in state or nd != 1 or np.size(val) == 0:
+            raise ValueError(f"{m.name}: {k} must be a scalar for simulate()"
+                             + (", or a 1-D array of initial values (the batch form)"
+                                if k in state else " (it is a parameter)")
+                             + "; for grids of initial conditions use a Scene with fate "
+                             "layers")
+        starts[k] = val
+    sizes = {k: np.size(a) for k, a in starts.items()}
+    if len(set(sizes.values())) > 1:
+        raise ValueError(f"{m.name}: the arrays of initial values must have one length, got "
+                         + ", ".join(f"{k}: {n}" for k, n in sizes.items()))
+    for k, a in starts.items():
+        starts[k] = _args.reals(k, a, m.name)
+        known[k].check(m.name, starts[k])
+    return starts
+
+
+def _motion_variables(m: Model, t_dims, event_dims, ys, ms, ev_t, ev_kind, ev_y, ev_mode):
+    """The variables of motions: the state and branch on ``t_dims``, the events table on
+    ``event_dims`` (the last axis of ``ys`` and ``ev_y`` runs over the integrated state)."""
+    branch_attrs = {"long_name": "active branch of the friction law",
+                    "flag_values": np.arange(-1, len(m.branches), dtype=np.int8),
+                    "flag_meanings": " ".join(["none", *m.branches])}
+    kind_attrs = {"long_name": "kind of event",
+                  "flag_values": np.array(ev.EVENT_VALUES, dtype=np.int8),
+                  "flag_meanings": ev.EVENT_MEANINGS}
+    # fastpath: every array is a NumPy array made here, which xarray takes as it is
+    # (without, it asks each whether it is a pandas, dask or masked array: 10 us apiece)
+    data = {
+        "branch": xr.Variable(t_dims, np.asarray(ms, dtype=np.int8), branch_attrs,
+                              fastpath=True),
+        "event_t": xr.Variable(event_dims, np.asarray(ev_t, dtype=float),
+                               {"long_name": "time of the event", "units": "s"}, fastpath=True),
+        "event_kind": xr.Variable(event_dims, ev_kind.astype(np.int8), kind_attrs,
+                                  fastpath=True),
+        "event_branch": xr.Variable(event_dims, ev_mode.astype(np.int8),
+                                    {**branch_attrs,
+                                     "long_name": "active branch after the event"},
+                                    fastpath=True),
+    }
+    for j, var in enumerate(_layout(m).integrated):
+        data[var.name] = xr.Variable(t_dims, ys[..., j], variable_attrs(var), fastpath=True)
+        data[f"event_{var.name}"] = xr.Variable(
+            event_dims, ev_y[..., j], {"long_name": f"{var.long_name} at the event",
+                                       "units": var.units}, fastpath=True)
+    return data
+
+
+def _motion_attrs(m: Model, full, positions, opts: Options, skip=()) -> dict:
+    """The global attributes of motions after their header: how they were integrated
+    and from what (the initial values and parameters, but those named in ``skip``)."""
+    attrs = {
+        "integrator": f"{METHODS[opts.method].DESCRIPTION}, events by classification",
+        # the coordinate and velocity of the phase plane (the first degree of freedom)
+        "phasemap_phase_plane": " ".join(m.dynamics.coordinates[0][:2]),
+    }
+    for k, value in opts.as_dict().items():
+        attrs[f"phasemap_{k}"] = value
+    state = {v.name for v in m.state}
+    for name in m.names:
+        if name not in skip:
+            key = "initial" if name in state else "fixed"
+            attrs[f"phasemap_{key}_{name}"] = float(full[name])
+    for name, value in positions.items():
+        if name not in skip:
+            attrs[f"phasemap_initial_{name}"] = value
+    return attrs
+
+
+def _dataset(m: Model, full, positions, opts: Options, names, fate, n_rev, n_steps, ts, ys,
+             ms, ev_t, ev_kind, ev_y, ev_mode) -> xr.Dataset:
+    data = _motion_variables(m, "t", "event", ys, ms, ev_t, ev_kind, ev_y, ev_mode)
+    fate_event = ev.Event(fate)
+    attrs = {
+        **cf_header(m, "trajectory", "phasemap.simulate"),
+        "end_reason": fate_event.name.lower(),
+        "end_message": ev.end_message(m, fate_event, dict(zip(names, ev_y[-1]))
+                                      if len(ev_y) else None),
+        "n_reversals": np.int32(n_rev),
+        "n_steps": np.int64(n_steps),
+        **_motion_attrs(m, full, positions, opts),
+    }
+    coords = {"t": xr.Variable("t", np.asarray(ts, dtype=float),
+                               {"long_name": "time", "units": "s"}, fastpath=True)}
+    return assemble(data, coords, attrs)
+
+
+def _batch(m: Model, full, positions, opts: Options, names, y0s, te, result) -> xr.Dataset:
+    """The Dataset of a batch of motions (see :func:`simulate`) from the batch driver's
+    ``result`` (:func:`phasemap.motion.integrate.run_batch`); ``te``: the requested times, or
+    None (every saved point)."""
+    head, points, point_end, events, event_end, y_eval, eval_end = result
+    n, ny = y0s.shape
+    cuts = [np.concatenate([[0], ends]) for ends in (point_end, event_end, eval_end)]
+    per = [_columns(points[cuts[0][i]:cuts[0][i + 1]], events[cuts[1][i]:cuts[1][i + 1]],
+                    y_eval[cuts[2][i]:cuts[2][i + 1]], te) for i in range(n)]
+    n_t = len(te) if te is not None else max(len(c[0]) for c in per)
+    n_ev = max(len(c[3]) for c in per)
+    ts, ys, ms = np.full((n, n_t), np.nan), np.full((n, n_t, ny), np.nan), np.full((n, n_t), -1)
+    ev_t, ev_kind = np.full((n, n_ev), np.nan), np.full((n, n_ev), -1.0)
+    ev_y, ev_mode = np.full((n, n_ev, ny), np.nan), np.full((n, n_ev), -1.0)
+    for i, (t_i, y_i, m_i, et_i, ek_i, ey_i, em_i) in enumerate(per):
+        k, e = len(t_i), len(et_i)
+        ts[i, :k], ys[i, :k], ms[i, :k] = t_i, y_i, m_i
+        ev_t[i, :e], ev_kind[i, :e], ev_y[i, :e], ev_mode[i, :e] = et_i, ek_i, ey_i, em_i
+    t_dims = ("start", "t") if te is not None else ("start", "point")
+    data = _motion_variables(m, t_dims, ("start", "event"), ys, ms, ev_t, ev_kind, ev_y,
+                             ev_mode)
+    counts = {"n_points": ("states reported", np.array([len(c[0]) for c in per])),
+              "n_events": ("events", event_end - cuts[1][:-1])}
+    data |= {
+        "end_reason": xr.Variable("start", head[:, 0].astype(np.int8), {
+            "long_name": "how the motion ended",
+            "flag_values": np.array(ev.FATE_VALUES, dtype=np.int8),
+            "flag_meanings": ev.FATE_MEANINGS}),
+        "n_reversals": xr.Variable("start", head[:, 2].astype(np.int32), {
+            "long_name": "number of reversals", "units": "1"}),
+        "n_steps": xr.Variable("start", head[:, 3].astype(np.int64), {
+            "long_name": "number of steps", "units": "1"}),
+        **{k: xr.Variable("start", v.astype(np.int64), {"long_name": f"number of {what}",
+                                                          "units": "1"})
+           for k, (what, v) in counts.items()},
+    }
+    known = _layout(m).known
+    for j, name in enumerate(names):
+        data[f"initial_{name}"] = xr.Variable("start", y0s[:, j].copy(), {
+            "long_name": f"initial {known[name].long_name}", "units": known[name].units})
+    time = {"long_name": "time", "units": "s"}
+    coords = {"start": xr.Variable("start", np.arange(n, dtype=np.int32),
+                                   {"long_name": "index of the initial state", "units": "1"})}
+    if te is not None:
+        coords["t"] = xr.Variable("t", te.copy(), time)
+    else:
+        data["t"] = xr.Variable(t_dims, ts, time)
+    attrs = {**cf_header(m, "trajectory", "phasemap.simulate"),
+             **_motion_attrs(m, full, positions, opts, skip=names)}
+    return assemble(data, coords, attrs)
