@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from phasemap.core import numerics as nx
@@ -73,6 +74,49 @@ MAX_STEPS = 16
 #: motion takes the next free code, and no order of codes says which events end one.
 FATES = frozenset({REST, CONTACT_LOST, NO_SOLUTION, INDETERMINATE, CONTINUUM, SINGULAR,
                    HORIZON, MAX_EVENTS, STEP_FAILURE, STIFF, LEFT_DOMAIN, MAX_STEPS})
+
+#: ``TERMINAL[code]``: whether the event of that code ends a motion (:data:`FATES`), as
+#: an array the compiled rule :func:`after_event` reads.
+TERMINAL = np.array([code in FATES for code in range(MAX_STEPS + 1)])
+
+#: What follows an event (:func:`after_event`): the running stage goes on (the event
+#: was a rounding flicker), the next stage starts, or the motion ends.
+GO_ON, NEXT_STAGE, END = 0, 1, 2
+
+
+@njit(cache=True, forceinline=True)
+def after_event(kind, flickers, n_events, max_events):
+    """The one rule for what follows an event, shared by the integrator
+    (:mod:`phasemap.motion.integrate.templates`), the phase-curve tracer
+    (:mod:`phasemap.motion.phase.tracer`) and the staged scipy driver
+    (:func:`phasemap.motion.workprecision.solve_ivp_staged`).
+
+    ``kind`` is the event's code, or -1 where the stage's end was a rounding flicker;
+    ``flickers`` the flickers in a row before it; ``n_events`` the events recorded so
+    far, of at most ``max_events``.  Returns ``(action, fate, flickers)``:
+
+    * ``GO_ON``: a flicker; the stage goes on (``fate`` -1), or ends the motion with
+      ``step_failure`` after :data:`MAX_FLICKERS` in a row (``END``);
+    * ``END`` with ``fate`` the event itself where it is terminal (:data:`TERMINAL`),
+      or ``max_events`` where the events ran out;
+    * ``NEXT_STAGE``: the motion goes on in the stage the event decided.
+
+    >>> after_event(STICK, 0, 3, 10), after_event(REST, 0, 3, 10)
+    ((1, -1, 0), (2, 5, 0))
+    >>> after_event(-1, 8, 3, 10), after_event(STICK, 0, 10, 10)
+    ((2, 13, 9), (2, 12, 0))
+    """
+    if kind < 0:
+        flickers += 1
+        if flickers > MAX_FLICKERS:
+            return END, STEP_FAILURE, flickers
+        return GO_ON, -1, flickers
+    if TERMINAL[kind]:
+        return END, kind, 0
+    if n_events >= max_events:
+        return END, MAX_EVENTS, 0
+    return NEXT_STAGE, -1, 0
+
 
 #: The most rounding flickers in a row (an event whose state the classification keeps
 #: on the running stage, so the stage goes on) before a motion ends with

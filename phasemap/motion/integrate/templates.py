@@ -668,21 +668,13 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         for i in range(ny):
             y[i] = y1[i]
         t, kind, new_mode = EVENT(v, y, t1, t, h, theta_end, r, mode, coef_sign, out, yb)
-        if kind < 0:  # a rounding flicker: the stage goes on from here
-            flickers += 1
-            if flickers > ev.MAX_FLICKERS:
-                fate = ev.STEP_FAILURE
-                break
+        action, fate, flickers = ev.after_event(kind, flickers, n_ev, max_events)
+        if action == ev.GO_ON:  # a rounding flicker: the stage goes on from here
             RHS(v, y, mode, K, 0)
             continue
-        flickers = 0
         if kind == ev.REVERSAL:
             n_rev += 1
-        if kind == ev.REST or new_mode < 0:
-            fate = kind
-            break
-        if n_ev >= max_events:
-            fate = ev.MAX_EVENTS
+        if action == ev.END:
             break
         evs, n_ev = push(evs, n_ev, t, kind, new_mode, y)
         if save:

@@ -815,24 +815,23 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
             react, piv)
         pts, npts = STAGE_POINTS(v, panels, n_pan, sigma, mode, u_ref, x, u, x_e, u_e, points,
                                  pts, npts, float(nst), vecs, outs, buf, tb, lanes, rows)
-        go = False
         new_mode = mode
         if reason == _ZERO:
             code, m2 = AT_REST(v, x_e, out)
             if code < 0:
-                reason, new_mode, go = ev.REVERSAL, m2, True
+                reason, new_mode = ev.REVERSAL, m2
             else:
                 reason = code
         elif reason == ev.SWITCH:
-            new_mode, go = next_mode, True
+            new_mode = next_mode
         stg = grow(stg, nst + 1)
         stg[nst, 0], stg[nst, 1], stg[nst, 2] = sigma, x, u
         stg[nst, 3], stg[nst, 4], stg[nst, 5] = reason, x_e, u_e
         nst += 1
-        if not go:
-            break
-        if nst >= max_stages:
-            stg[nst - 1, 3] = ev.MAX_EVENTS
+        action, fate, _ = ev.after_event(reason, int(0), nst, max_stages)
+        if action == ev.END:
+            if fate == ev.MAX_EVENTS:  # the stages ran out: the last one says so
+                stg[nst - 1, 3] = ev.MAX_EVENTS
             break
         x, u = x_e, (0.0 if reason == ev.REVERSAL else u_e)
         mode = new_mode

@@ -213,19 +213,13 @@ class StageDriver:
                 stages.append((t, float(t_ev), mode, sol.sol))
             t, y, kind, new_mode = self.event(fun, float(t_ev), sol.y_events[which][-1], mode,
                                               coef_sign)
-            if kind < 0:  # a rounding flicker: the stage goes on from here
-                flickers += 1
-                if flickers > ev.MAX_FLICKERS:
-                    fate = ev.STEP_FAILURE
+            action, code, flickers = ev.after_event(kind, flickers, len(events), max_events)
+            if action == ev.GO_ON:  # a rounding flicker: the stage goes on from here
                 continue
-            flickers = 0
             if kind == ev.REVERSAL:
                 n_rev += 1
-            if kind == ev.REST or new_mode < 0:
-                fate = kind
-                break
-            if len(events) >= max_events:
-                fate = ev.MAX_EVENTS
+            if action == ev.END:
+                fate = int(code)
                 break
             events.append((t, ev.Event(kind).name.lower(), new_mode, y.copy()))
             mode = new_mode
