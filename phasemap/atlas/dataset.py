@@ -36,6 +36,7 @@ from typing import Mapping
 
 import xarray as xr
 
+from phasemap.core.memo import Memo
 from phasemap._version import __version__
 
 __all__ = [
@@ -101,22 +102,19 @@ def cf_header(model, kind: str = "atlas", producer: str = "phasemap") -> dict:
     adds what is its own (the scene, the fixed values, the end of a motion).
     """
     now = _now()
-    key = (id(model), kind, producer)
-    hit = _HEADERS.get(key)
-    if hit is None or hit[0] is not model:
-        if kind not in _TITLES:
-            raise ValueError(f"kind must be one of {', '.join(_TITLES)}, got {kind!r}")
-        hit = _HEADERS[key] = (model, _header(model, kind, producer, now))
-    attrs = dict(hit[1])
+    if kind not in _TITLES:
+        raise ValueError(f"kind must be one of {', '.join(_TITLES)}, got {kind!r}")
+    attrs = dict(_HEADERS.get((model,), (kind, producer),
+                              lambda: _header(model, kind, producer, now)))
     if attrs["date_created"] != now:
         attrs["history"] = f"{now} created by {producer} {__version__}"
         attrs["date_created"] = now
     return attrs
 
 
-#: (id(model), kind, producer) -> (model, its header as first made): the model's
-#: description in JSON is made once (a tenth of a short motion's wrapper otherwise)
-_HEADERS: dict[tuple, tuple] = {}
+#: (model, kind, producer) -> its header as first made: the model's description in JSON
+#: is made once (a tenth of a short motion's wrapper otherwise)
+_HEADERS = Memo("dataset.headers")
 
 
 def _header(model, kind: str, producer: str, now: str) -> dict:
@@ -141,8 +139,8 @@ def _header(model, kind: str, producer: str, now: str) -> dict:
     return attrs
 
 
-#: id(model) -> (model, its declaration's hash)
-_DECLARATION_HASHES: dict[int, tuple] = {}
+#: model -> its declaration's hash
+_DECLARATION_HASHES = Memo("dataset.declaration_hashes")
 
 
 def declaration_hash(model) -> str | None:
@@ -155,15 +153,16 @@ def declaration_hash(model) -> str | None:
     declaration = getattr(model, "declaration", None)
     if declaration is None:
         return None
-    if id(model) not in _DECLARATION_HASHES:
+    def digest():
         # a model loaded from the kernel cache carries its hash (no sympy needed)
-        digest = getattr(declaration, "sha256", None)
-        if digest is None:
-            from phasemap.declare.build import declaration_sha256
+        known = getattr(declaration, "sha256", None)
+        if known is not None:
+            return known
+        from phasemap.declare.build import declaration_sha256
 
-            digest = declaration_sha256(declaration)
-        _DECLARATION_HASHES[id(model)] = (model, digest)
-    return _DECLARATION_HASHES[id(model)][1]
+        return declaration_sha256(declaration)
+
+    return _DECLARATION_HASHES.get((model,), (), digest)
 
 
 def assemble(data_vars: dict, coords: dict, attrs: dict) -> xr.Dataset:

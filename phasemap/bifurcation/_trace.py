@@ -44,6 +44,7 @@ from numba import njit, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from phasemap.core.memo import Memo
 from phasemap.core import numerics as nx
 from phasemap.core.codegen import CELLS_SIGNATURE
 from phasemap.core.types import B1, B2, F1, F2, I1, I2, S3
@@ -1894,7 +1895,7 @@ def _entry_point(dispatcher, sig):
     return dispatcher.overloads[tuple(sig.args)].entry_point
 
 
-_CLASSIFIERS: dict = {}
+_CLASSIFIERS = Memo("trace.classifiers")
 
 
 def classifier(model):
@@ -1902,15 +1903,14 @@ def classifier(model):
     with :data:`CLASS_SIG` so that a trace can take it as an argument."""
     from phasemap.core.compile import specialize
 
-    hit = _CLASSIFIERS.get(id(model))
-    if hit is not None and hit[0] is model:
-        return hit[1]
-    contract = model.contract
-    fn = specialize(_class_template, model, "bif_class", POINT=contract.point,
-                    DERIVE=contract.derive_inline, STICK=model.stick_branch)
-    fn.compile(CLASS_SIG)
-    _CLASSIFIERS[id(model)] = (model, fn)
-    return fn
+    def make():
+        contract = model.contract
+        fn = specialize(_class_template, model, "bif_class", POINT=contract.point,
+                        DERIVE=contract.derive_inline, STICK=model.stick_branch)
+        fn.compile(CLASS_SIG)
+        return fn
+
+    return _CLASSIFIERS.get((model,), (), make)
 
 
 def compiled_address(dispatcher, args) -> int:
@@ -1921,7 +1921,7 @@ def compiled_address(dispatcher, args) -> int:
     return cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name)
 
 
-_FUNCTIONS: dict = {}
+_FUNCTIONS = Memo("trace.functions")
 
 
 def functions(model, conds) -> tuple:
@@ -1935,14 +1935,14 @@ def functions(model, conds) -> tuple:
     The overloads stay alive with their model and module, which this cache keeps.
     """
     mod = conds.module
-    hit = _FUNCTIONS.get((id(model), id(mod)))
-    if hit is not None and hit[0] is model and hit[1] is mod:
-        return hit[2]
-    fns = []
-    for fn, sig in ((mod.values, VALUES_SIG), (mod.gradient, GRADIENT_SIG),
-                    (mod.hessian, HESSIAN_SIG), (classifier(model), CLASS_SIG)):
-        if tuple(sig.args) not in fn.overloads:
-            fn.compile(sig)  # the hessian, compiled (or loaded) when first needed
-        fns.append(compiled_address(fn, sig.args))
-    _FUNCTIONS[(id(model), id(mod))] = (model, mod, tuple(fns))
-    return _FUNCTIONS[(id(model), id(mod))][2]
+
+    def make():
+        fns = []
+        for fn, sig in ((mod.values, VALUES_SIG), (mod.gradient, GRADIENT_SIG),
+                        (mod.hessian, HESSIAN_SIG), (classifier(model), CLASS_SIG)):
+            if tuple(sig.args) not in fn.overloads:
+                fn.compile(sig)  # the hessian, compiled (or loaded) when first needed
+            fns.append(compiled_address(fn, sig.args))
+        return tuple(fns)
+
+    return _FUNCTIONS.get((model, mod), (), make)

@@ -40,6 +40,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from phasemap.core.memo import Memo
 from phasemap.core import codegen as _codegen
 from phasemap._version import __version__
 from phasemap.core.cache import load_module
@@ -178,7 +179,8 @@ class Conditions:
         return len(self.names)
 
 
-_COMPILED: dict = {}
+#: (model, conditions given or None, variables) -> the compiled Conditions
+_COMPILED = Memo("conditions.compiled")
 
 
 def compiled(model: Model, variables, conditions=None) -> Conditions:
@@ -195,10 +197,11 @@ def compiled(model: Model, variables, conditions=None) -> Conditions:
         if name not in model.names:
             raise ValueError(f"{model.name}: {name!r} is not a variable of the model; "
                              f"allowed: {', '.join(model.names)}")
-    quick = (id(model), variables, id(conditions))
-    hit = _COMPILED.get(quick)
-    if hit is not None and hit[0] is model and hit[1] is conditions:
-        return hit[2]
+    return _COMPILED.get((model, conditions), variables,
+                         lambda: _compile(model, variables, conditions))
+
+
+def _compile(model: Model, variables: tuple, conditions) -> Conditions:
     if conditions is None:
         key_text = _source_key(model)
 
@@ -218,10 +221,7 @@ def compiled(model: Model, variables, conditions=None) -> Conditions:
     h.update(f"{numba.__version__} {np.__version__} {__version__}".encode())
     stem = f"{model.name}_conditions_{h.hexdigest()[:16]}"
     module = load_module(stem, lambda: _generate(model, variables, make()))
-    result = Conditions(model, variables, module)
-    # the conditions object is kept with its entry, so that its id is not reused
-    _COMPILED[quick] = (model, conditions, result)
-    return result
+    return Conditions(model, variables, module)
 
 
 def _source_key(model: Model) -> str:

@@ -12,6 +12,7 @@ from typing import Mapping
 import numpy as np
 import xarray as xr
 
+from phasemap.core.memo import Memo
 from phasemap.core import args as _args
 from phasemap.atlas.dataset import cf_header
 from phasemap.core.codegen import CELLS_SIGNATURE, grid_kernel
@@ -162,22 +163,20 @@ def _complete(m: Model, variables: dict, fixed: dict, names: list, lo: list,
 _SURVEY = np.random.default_rng(20261123).uniform(0.02, 0.98, size=(12, 2))
 
 
-_KINDS: dict = {}
+_KINDS = Memo("tracing.kinds")
 
 
 def _kinds(m: Model, conds: Conditions) -> tuple[np.ndarray, np.ndarray]:
     """Per condition, once per model and condition set: the index of its branch among
     the model's candidates (-1 for none or a branch the model does not have), and
     whether it is the velocity condition."""
-    hit = _KINDS.get((id(m), id(conds)))
-    if hit is not None and hit[0] is m and hit[1] is conds:
-        return hit[2]
-    index = {b.name: i for i, b in enumerate(m.candidates)}
-    branch = np.array([index.get(br, -1) if br else -1 for br in conds.branches],
-                      dtype=np.int64)
-    kinds = branch, np.array([k == "velocity" for k in conds.kinds], dtype=bool)
-    _KINDS[(id(m), id(conds))] = (m, conds, kinds)
-    return kinds
+    def make():
+        index = {b.name: i for i, b in enumerate(m.candidates)}
+        branch = np.array([index.get(br, -1) if br else -1 for br in conds.branches],
+                          dtype=np.int64)
+        return branch, np.array([k == "velocity" for k in conds.kinds], dtype=bool)
+
+    return _KINDS.get((m, conds), (), make)
 
 
 #: Where :func:`_applicable` classifies the slice (unit square): its centre, and its
@@ -429,26 +428,23 @@ def _raster_args(sl: Slice, layer: str, axes: dict) -> tuple:
     return at, x, xslot, xderiv, y, yderiv
 
 
-_RASTER_KERNELS: dict = {}
+_RASTER_KERNELS = Memo("tracing.raster_kernels")
 
 
 def _raster_kernel(m: Model, x: str, y: str, layer: str) -> tuple:
     """What the check raster takes that does not depend on the ranges, once per model,
     axes and layer: the address of the layer's grid kernel with y inner, the derived
     inputs of x and of y, and the slots of x's."""
-    key = (id(m), x, y, layer)
-    hit = _RASTER_KERNELS.get(key)
-    if hit is None or hit[0] is not m:
+    def make():
         from_x = [d for d in m.derived if d.source == x]
         slot = {n: i for i, n in enumerate(m.inputs)}
         cells = grid_kernel(m, (layers_for(m)[layer],), y)
-        # the kernel is kept with its address (and the model with both), so that the
-        # code stays loaded and the id is not reused
-        hit = _RASTER_KERNELS[key] = (
-            m, cells, T.compiled_address(cells, CELLS_SIGNATURE.args),
-            from_x, [d for d in m.derived if d.source == y],
-            np.array([slot[d.name] for d in from_x], dtype=np.int64))
-    return hit[2:]
+        # the kernel is kept with its address, so that the code stays loaded
+        return (cells, T.compiled_address(cells, CELLS_SIGNATURE.args),
+                from_x, [d for d in m.derived if d.source == y],
+                np.array([slot[d.name] for d in from_x], dtype=np.int64))
+
+    return _RASTER_KERNELS.get((m,), (x, y, layer), make)[1:]
 
 
 def _unresolved(thin: np.ndarray, mark: np.ndarray) -> np.ndarray:
@@ -561,7 +557,7 @@ def _variable(dim: str, data: np.ndarray, attrs: dict) -> xr.Variable:
     return var
 
 
-_LABELS: dict = {}
+_LABELS = Memo("tracing.labels")
 
 
 def _labels(sl: Slice, layer: str) -> tuple:
@@ -569,16 +565,14 @@ def _labels(sl: Slice, layer: str) -> tuple:
     model, axes and layer: each axis's (units, long_name), and the layer's flag values
     and meanings (the attribute dicts are made anew for every Dataset)."""
     m = sl.model
-    key = (id(m), sl.x, sl.y, layer)
-    hit = _LABELS.get(key)
-    if hit is None or hit[0] is not m:
+    def make():
         variables = m.variables
         reg = layers_for(m)[layer]
-        hit = _LABELS[key] = (m, tuple((variables[n].units, variables[n].long_name)
-                                       for n in (sl.x, sl.y)),
-                              (tuple(reg.flag_values), reg.dtype, reg.flag_meanings)
-                              if reg.flag_values is not None else None)
-    return hit[1:]
+        return (tuple((variables[n].units, variables[n].long_name) for n in (sl.x, sl.y)),
+                (tuple(reg.flag_values), reg.dtype, reg.flag_meanings)
+                if reg.flag_values is not None else None)
+
+    return _LABELS.get((m,), (sl.x, sl.y, layer), make)
 
 
 def to_dataset(sl: Slice, traced: Traced, layer: str, tol: float) -> xr.Dataset:

@@ -39,6 +39,7 @@ import numba.extending
 import numpy as np
 from numba import prange
 
+from phasemap.core.memo import Memo
 from phasemap.core import numerics as nx
 from phasemap._version import __version__
 from phasemap.core.cache import load_module
@@ -517,7 +518,7 @@ def _typeof_first_class(value, context):
     return value.numba_type
 
 
-_FIRST_CLASS: dict = {}
+_FIRST_CLASS = Memo("codegen.first_class")
 
 
 def run_grid(cells, base, outer_shape, outer_slot, outer_values, outer_dslot, outer_dvalues,
@@ -528,15 +529,13 @@ def run_grid(cells, base, outer_shape, outer_slot, outer_values, outer_dslot, ou
     function, numba would type it again at every call (0.1 to 0.3 ms, more
     than a small map's cells).
     """
-    first_class = _FIRST_CLASS.get(cells)
-    if first_class is None:
-        first_class = _FIRST_CLASS[cells] = _FirstClass(cells)
+    first_class = _FIRST_CLASS.get((cells,), (), lambda: _FirstClass(cells))
     driver()(first_class, TASKS_PER_THREAD * numba.get_num_threads(), base, outer_shape,
              outer_slot, outer_values, outer_dslot, outer_dvalues, inner_values, inner_deriv,
              flags, fields)
 
 
-_KERNELS: dict = {}
+_KERNELS = Memo("codegen.grid_kernels")
 
 
 def grid_kernel(model, layers, inner: str):
@@ -550,11 +549,8 @@ def grid_kernel(model, layers, inner: str):
     process, so that a scene computed block by block generates and hashes its
     source once, not once per block.
     """
-    key = (id(model), tuple(l.name for l in layers), inner)
-    if key not in _KERNELS:
-        # the model is kept with its kernel, so that its id is not reused
-        _KERNELS[key] = (model, _generate_grid_kernel(model, layers, inner))
-    return _KERNELS[key][1]
+    return _KERNELS.get((model,), (tuple(l.name for l in layers), inner),
+                        lambda: _generate_grid_kernel(model, layers, inner))
 
 
 def _generate_grid_kernel(model, layers, inner: str):

@@ -22,13 +22,16 @@ import types
 import numpy as np
 from numba import njit
 
+from phasemap.core.memo import Memo
 from phasemap.core import codegen as _codegen
 from phasemap.core import numerics as nx
 from phasemap.core import events
 from phasemap.core.model import Model
 
-_CACHE: dict[tuple[str, str], object] = {}
-_BUILT: dict = {}
+#: (kind, model name, source hash) -> the template compiled for that model
+_CACHE = Memo("compile.specialized")
+#: an engine's key -> what it built for the model under that key (the latest model)
+_BUILT = Memo("compile.built", replace=True)
 
 
 def specialize(template, model: Model, kind: str, parallel: bool = False, inline: bool = False,
@@ -46,8 +49,8 @@ def specialize(template, model: Model, kind: str, parallel: bool = False, inline
     module = sys.modules[template.__module__]
     digest = source_hash(model, module, *getattr(module, "SOURCES", ()))
     key = (kind, model.name, digest)
-    kernel = _CACHE.get(key)
-    if kernel is None:
+
+    def make():
         scope = dict(template.__globals__)
         scope.update(constants)
         name = f"{kind}_{model.name}_{digest}"
@@ -55,22 +58,19 @@ def specialize(template, model: Model, kind: str, parallel: bool = False, inline
         fn.__qualname__ = name  # one on-disk cache index per model and source
         fn.__doc__ = template.__doc__
         if inline == "ir":
-            kernel = _CACHE[key] = njit(cache=True, inline="always", error_model="numpy")(fn)
-        elif inline:
-            kernel = _CACHE[key] = njit(cache=True, forceinline=True, error_model="numpy")(fn)
-        else:
-            kernel = _CACHE[key] = njit(parallel=parallel, cache=True, error_model="numpy")(fn)
-    return kernel
+            return njit(cache=True, inline="always", error_model="numpy")(fn)
+        if inline:
+            return njit(cache=True, forceinline=True, error_model="numpy")(fn)
+        return njit(parallel=parallel, cache=True, error_model="numpy")(fn)
+
+    return _CACHE.get((), key, make)
 
 
 def remember(key, model: Model, build):
     """``build()`` for ``model``, once per process under ``key`` (a new model object of
     the same name, such as a reloaded declaration, is built anew).  The engines keep
     their compiled kernels here, so that a call after the first looks them up."""
-    hit = _BUILT.get(key)
-    if hit is None or hit[0] is not model:
-        hit = _BUILT[key] = (model, build())
-    return hit[1]
+    return _BUILT.get((model,), key, build)
 
 
 def source_hash(model: Model, *modules) -> str:

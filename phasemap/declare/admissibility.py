@@ -111,6 +111,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from phasemap.core.memo import Memo
 from phasemap.core import numerics as nx
 from phasemap.declare.algebra import pythagorean, scale_in, scale_of
 from phasemap.declare.derivation import derive
@@ -215,7 +216,7 @@ def _numpy_function(c: Condition):
 
 # -- building them ------------------------------------------------------------------
 
-_CACHE: dict[int, tuple] = {}
+_CACHE = Memo("admissibility.conditions")
 
 
 def conditions(system_or_model) -> tuple[Condition, ...]:
@@ -248,14 +249,11 @@ def conditions(system_or_model) -> tuple[Condition, ...]:
     ['A_separated', 'A_separated_moving_neg', 'A_slip_neg', 'A_slip_pos', 'stick']
     """
     S, hand = _declaration(system_or_model)
-    cached = _CACHE.get(id(S))
-    if cached is None or cached[0] is not S:
-        cached = (S, _build(S))
-        _CACHE[id(S)] = cached
+    built = _CACHE.get((S,), (), lambda: _build(S))
     if hand is None:
-        return cached[1]
+        return built
     by_branch = {}
-    for c in cached[1]:
+    for c in built:
         by_branch.setdefault(c.branch, []).append(c)
     return tuple(c for b in [*hand.branches, None] for c in by_branch.get(b, []))
 

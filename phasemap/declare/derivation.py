@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from phasemap.core.memo import Memo
 from phasemap.declare.edges import Edge, edge_candidates, find_edges, on_edge
 from phasemap.declare.equations import Equations
 from phasemap.declare.modes import Candidate, candidates, slip_velocity
@@ -60,17 +61,13 @@ class Derivation:
         return sp.sympify(e).xreplace(trig)
 
 
-_DERIVED: dict[int, tuple] = {}
+_DERIVED = Memo("derivation.derived")
 
 
 def derive(S) -> Derivation:
     """Derive the equations of ``S`` and solve every mode combination (sympy; once per
     declaration object)."""
-    cached = _DERIVED.get(id(S))
-    if cached is None or cached[0] is not S:
-        cached = (S, _derive(S))
-        _DERIVED[id(S)] = cached
-    return cached[1]
+    return _DERIVED.get((S,), (), lambda: _derive(S))
 
 
 def _derive(S) -> Derivation:

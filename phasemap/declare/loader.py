@@ -39,6 +39,7 @@ import sys
 import numba
 import numpy as np
 
+from phasemap.core.memo import Memo
 from phasemap.core import codegen as _codegen
 from phasemap._version import __version__
 from phasemap.core.model import Branch, Derived, Dynamics, Model, Variable
@@ -53,8 +54,9 @@ _DYNAMIC = {"open", "exec", "eval", "compile", "__import__", "import_module", "r
             "read_bytes", "loadtxt", "load", "genfromtxt"}
 _PACKAGE = pathlib.Path(__file__).resolve().parents[1]  # phasemap/
 
-_MODELS: dict[str, Model] = {}
-_SYSTEMS: dict[str, object] = {}
+#: a declaration's source (module name or file) -> its Model, and its System
+_MODELS = Memo("loader.models")
+_SYSTEMS = Memo("loader.systems")
 
 
 class _Miss(Exception):
@@ -99,29 +101,31 @@ def load(source) -> Model:
     ('painleve_rod', ['theta', 'omega', 'xdot'])
     """
     source = _normal(source)
-    model = _MODELS.get(source)
+    return _MODELS.get((), (source,), lambda: _load(source))
+
+
+def _load(source: str) -> Model:
+    path = _file(source)
+    key = key_of(path)
+    model = _from_manifest(key, path, source) if key else None
     if model is None:
-        path = _file(source)
-        key = key_of(path)
-        model = _from_manifest(key, path, source) if key else None
-        if model is None:
-            S = system(source)
-            model = S.model
-            if key:
-                _write_manifest(key, path, S, model)
-        _MODELS[source] = model
+        S = system(source)
+        model = S.model
+        if key:
+            _write_manifest(key, path, S, model)
     return model
 
 
 def system(source):
     """The :class:`phasemap.declare.System` of a module name or a declaration file (built
     with sympy)."""
+    source = _normal(source)
+    return _SYSTEMS.get((), (source,), lambda: _system(source))
+
+
+def _system(source: str):
     from phasemap.declare.system import System
 
-    source = _normal(source)
-    S = _SYSTEMS.get(source)
-    if S is not None:
-        return S
     if not source.endswith(".py"):
         S = importlib.import_module(source).SYSTEM
     else:
@@ -138,7 +142,6 @@ def system(source):
         if not isinstance(S, System):
             raise ValueError(f"{source}: the file must define "
                              "SYSTEM = phasemap.declare.System(...)")
-    _SYSTEMS[source] = S
     return S
 
 

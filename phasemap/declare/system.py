@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Mapping
 
+from phasemap.core.memo import Memo
 from phasemap.declare.build import build_model
 
 
@@ -82,11 +83,7 @@ class System:
     @property
     def model(self):
         """The :class:`phasemap.Model` (derived once per declaration, cached on disk)."""
-        cached = _MODELS.get(id(self))
-        if cached is None or cached[0] is not self:
-            cached = (self, build_model(self))
-            _MODELS[id(self)] = cached
-        return cached[1]
+        return _MODELS.get((self,), (), lambda: build_model(self))
 
 
-_MODELS: dict[int, tuple] = {}
+_MODELS = Memo("system.models")

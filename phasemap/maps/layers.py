@@ -29,6 +29,7 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
+from phasemap.core.memo import Memo
 from phasemap.core import numerics as nx
 from phasemap.core import events as ev
 from phasemap.core.model import Model, Solvability
@@ -123,12 +124,14 @@ SUMMARY = tuple(l.name for l in SUMMARY_LAYERS)
 
 #: id(model) -> (model, its layers): two versions of a system (a hand module and its
 #: declaration) share a name but not their branches.
-_REGISTRIES: dict[int, tuple[Model, dict[str, Layer]]] = {}
+_REGISTRIES = Memo("layers.registries")
 
 
 def _registry(model: Model) -> dict[str, Layer]:
-    if id(model) in _REGISTRIES:
-        return _REGISTRIES[id(model)][1]
+    return _REGISTRIES.get((model,), (), lambda: _make_registry(model))
+
+
+def _make_registry(model: Model) -> dict[str, Layer]:
     layers = {l.name: l for l in SUMMARY_LAYERS}
     for b, branch in enumerate(model.branches):
         for j, var in enumerate(model.accelerations + model.reactions):
@@ -159,7 +162,6 @@ def _registry(model: Model) -> dict[str, Layer]:
                 layers[f"{c[0]}_rest"] = Layer(f"{c[0]}_rest", "float64",
                                                f"{var.long_name} at rest", units=var.units,
                                                fate=True, outcome=lambda o, j=j: o.positions[j])
-    _REGISTRIES[id(model)] = (model, layers)
     return layers
 
 

@@ -14,6 +14,7 @@ from typing import Mapping, NamedTuple, Sequence
 import numpy as np
 import xarray as xr
 
+from phasemap.core.memo import Memo
 from phasemap.core import args as _args
 from phasemap.core import events as ev
 from phasemap.core.compile import remember
@@ -27,8 +28,8 @@ RTOL_MIN = 1e-14
 
 
 #: Validated :class:`Options` by ``(model, settings, their types)`` (see :meth:`Options.checked`).
-_CHECKED: dict = {}
-_CHECKED_MAX = 256
+#: (model name, settings, their types) -> the validated settings
+_CHECKED = Memo("simulate.checked", maxsize=256)
 
 
 @dataclass(frozen=True)
@@ -54,14 +55,10 @@ class Options:
                   self.max_events, self.method)
         key = (model, fields, tuple(map(type, fields)))
         try:
-            hit = _CHECKED.get(key)
+            hash(key)
         except TypeError:  # an unhashable setting: validation says what is wrong with it
             return self._checked(model)
-        if hit is None:
-            if len(_CHECKED) >= _CHECKED_MAX:
-                _CHECKED.clear()
-            hit = _CHECKED[key] = self._checked(model)
-        return hit
+        return _CHECKED.get((), key, lambda: self._checked(model))
 
     def _checked(self, model: str) -> "Options":
         t_end = _args.finite("t_end", self.t_end, model, lower=0.0, lower_open=True)

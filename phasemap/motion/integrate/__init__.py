@@ -66,6 +66,7 @@ import numpy as np
 from numba import njit, prange
 from numba import types as nb_types
 
+from phasemap.core.memo import Memo
 from phasemap.motion.integrate import dop853 as _dop853
 from phasemap.motion.integrate import dopri5 as _dopri5
 from phasemap.core import numerics as nx
@@ -130,22 +131,22 @@ def _fate_drive(integrate, y_slot, base, shape, axis_slot, axis_values, deriv_sl
 #: The argument types of every integrator (see templates._integrate_template).
 INTEGRATE_ARGS = (F1, F1, nb_types.float64, nb_types.float64, nb_types.float64,
                   nb_types.float64, nb_types.int64, nb_types.int64, nb_types.boolean, F1)
-_FATE_DRIVERS: dict = {}
+_FATE_DRIVERS = Memo("integrate.fate_drivers")
 
 
 def _fate_driver(integrate):
     """The parallel fate driver for integrators of ``integrate``'s signature (compiled once)."""
     sig = integrate.nopython_signatures[0]
-    driver = _FATE_DRIVERS.get(sig)
-    if driver is None:
+
+    def make():
         fsig = nb_types.void(nb_types.FunctionType(sig), I1, F1, I1, I1, F2, I2, F3, F1,
                              nb_types.float64, nb_types.float64, nb_types.float64,
                              nb_types.float64, nb_types.int64, nb_types.int64, I1,
                              nb_types.Array(nb_types.int8, 1, "C"),
                              nb_types.Array(nb_types.int32, 1, "C"), F1, F2)
-        driver = _FATE_DRIVERS[sig] = njit(fsig, parallel=True, cache=True,
-                                           error_model="numpy")(_fate_drive)
-    return driver
+        return njit(fsig, parallel=True, cache=True, error_model="numpy")(_fate_drive)
+
+    return _FATE_DRIVERS.get((), (sig,), make)
 
 
 def _batch_drive(integrate, y_slot, v, y0s, t_end, rtol, atol, h_max, max_steps, max_events,
@@ -193,18 +194,18 @@ def _batch_drive(integrate, y_slot, v, y0s, t_end, rtol, atol, h_max, max_steps,
     return head, pts[:n_pts], point_end, evs[:n_evs], event_end, yev[:n_yev], eval_end
 
 
-_BATCH_DRIVERS: dict = {}
+_BATCH_DRIVERS = Memo("integrate.batch_drivers")
 
 
 def _batch_driver(integrate):
     """The batch driver for integrators of ``integrate``'s signature (compiled once)."""
     sig = integrate.nopython_signatures[0]
-    driver = _BATCH_DRIVERS.get(sig)
-    if driver is None:
+
+    def make():
         args = (nb_types.FunctionType(sig), I1, F1, F2, *INTEGRATE_ARGS[2:])
-        driver = _BATCH_DRIVERS[sig] = njit(args, cache=True, error_model="numpy")(
-            _batch_drive)
-    return driver
+        return njit(args, cache=True, error_model="numpy")(_batch_drive)
+
+    return _BATCH_DRIVERS.get((), (sig,), make)
 
 
 def run_batch(model: Model, method: str, v: np.ndarray, y0s: np.ndarray, *args):
