@@ -3,7 +3,7 @@
 The house, in nine parts, each importing only from the parts below it (ARCHITECTURE.md
 at the top of the repository says more, with a picture):
 
-- ``core/``: the contract every system gives the rest (``Model``, ``Branch``,
+- ``core/``: the contract every system gives the rest (``Model``, ``Candidate``,
   ``Dynamics``, ``Event``) and the machinery that compiles it (generated kernels, the
   kernel cache, the numba types, the argument checks);
 - ``declare/``: a declared ``System`` made a ``Model`` (contact laws, equations,

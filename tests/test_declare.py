@@ -539,13 +539,14 @@ def test_conditions_need_a_declaration_or_a_twin():
 
 def test_a_classification_holds_branch_results_not_branch_definitions():
     """Two classes were named Branch: the result of classify is BranchResult (the old name
-    kept as an alias), the candidate's definition stays phasemap.core.model.Branch."""
+    kept as an alias), a candidate's definition is phasemap.core.model.Candidate."""
     from phasemap.core import model
 
     got = phasemap.classify("hinge_pendulum", phi=0.05, omega=0.0)
     assert got.candidates and all(type(b) is phasemap.BranchResult for b in got.candidates)
     assert phasemap.Branch is phasemap.BranchResult
-    assert model.Branch is not phasemap.BranchResult
+    assert model.Candidate is not phasemap.BranchResult
+    assert not hasattr(model, "Branch")  # one name per concept
 
 
 def test_a_broken_declaration_names_every_problem_at_once():

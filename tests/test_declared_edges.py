@@ -180,7 +180,7 @@ def test_a_non_finite_acceleration_or_reaction_is_never_a_solution(name, values)
 
 # ------------------------------------------------ motions that reach a closed bound -----
 def test_edge_rows_say_which_closed_bound_they_exist_on():
-    """The rows of an edge that is a declared bound carry it (Branch.bound), and the
+    """The rows of an edge that is a declared bound carry it (Candidate.bound), and the
     integrator's constant maps them to the integrated state's index and side: what its
     'on the bound, moving out' rule reads.  The Painleve rod's bounds are no edges."""
     from phasemap.core.compile import contract_constants

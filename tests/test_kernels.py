@@ -24,7 +24,7 @@ from phasemap.core import codegen as _codegen
 from phasemap.core import numerics as nx
 from phasemap.maps.grid import evaluate
 from phasemap.maps.layers import SUMMARY, layers_for
-from phasemap.core.model import Branch
+from phasemap.core.model import Candidate
 
 # per model: axes with ranges inside the domain (velocity axes pass through 0)
 RANGES = {
@@ -207,7 +207,7 @@ def test_a_branch_function_with_an_unknown_input_is_refused():
     def bad(sigma, rest, omega, length):  # "length" is not an input of the model
         return (1.0, 0.0, 1.0, 0.0, 0.0, 0.0)
 
-    broken = Branch("bad", 1.0, bad, (1.0,))
+    broken = Candidate("bad", 1.0, bad, (1.0,))
     with pytest.raises(ValueError, match="length"):
         _codegen.input_names(broken.func, 1, m.inputs, "hinge_pendulum: branch 'bad'")
 
@@ -285,7 +285,7 @@ def test_a_declared_row_with_no_mass_has_no_solution_and_no_acceleration():
 
 def test_edge_rows_left_out_of_a_loop_give_what_their_own_test_gives():
     """A declared row that exists only on an edge (the ladder's at phi = 0 and pi/2, 16 of
-    its 27 rows) is left out of a grid loop where its edge test (``Branch.edge``, which the
+    its 27 rows) is left out of a grid loop where its edge test (``Candidate.edge``, which the
     row itself calls) reads no inner-axis value and is false at the outer state.  On grids
     through both edges, exactly and within the tie tolerance, with the edge rows outside
     (inner f) and inside (inner omega, the velocity) the loops' regimes, every cell is what

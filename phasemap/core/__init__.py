@@ -1,6 +1,6 @@
 """core: the contract every system gives the rest, and the machinery that compiles it.
 
-``model`` (the contract: ``Model``, ``Branch``, ``Dynamics``), ``events`` (the events and
+``model`` (the contract: ``Model``, ``Candidate``, ``Dynamics``), ``events`` (the events and
 fates a motion can meet), ``numerics`` (tolerances, statuses, branch-free helpers),
 ``codegen`` (the per-point and per-grid kernels generated from a model's branch
 functions), ``compile`` (per-model engine kernels from templates), ``cache`` (the kernel

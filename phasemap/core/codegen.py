@@ -1,7 +1,7 @@
 """Generated kernels: a model's branch functions, unrolled into real Python files.
 
 A model declares its candidate branches as pure scalar functions that return
-their rows (:class:`phasemap.core.model.Branch`).  This module writes, as source
+their rows (:class:`phasemap.core.model.Candidate`).  This module writes, as source
 text, the code that calls them at a state, and imports it:
 
 * the **contract** of a model: ``point(v, out)``, ``branch(v, b, row)`` and
@@ -96,7 +96,7 @@ class _Source:
             names = input_names(spec.func, len(consts), self.inputs, f"{model.name}: branch "
                             f"{spec.name!r}")
             self.calls.append((consts, names))
-        # an edge row's own test (Branch.edge): {branch: (alias, its parameters)}
+        # an edge row's own test (Candidate.edge): {branch: (alias, its parameters)}
         self.edges, aliases = {}, {}
         for b, spec in enumerate(model.candidates):
             if spec.edge is not None:
@@ -387,10 +387,10 @@ def contract(model):
 
 
 def moving_test(model):
-    """The module holding ``moving(v, mode)``, the integrator's test after a step where the
+    """The module holding ``moving(v, branch)``, the integrator's test after a step where the
     velocity is outside its rest tolerance (:func:`phasemap.motion.integrate.templates._goes_on_template`).
 
-    ``moving(v, mode)`` returns ``(sole, coef)``: the row of branch ``mode`` is the one
+    ``moving(v, branch)`` returns ``(sole, coef)``: the row of ``branch`` is the one
     solution (admissible, or a separation; no other row a solution or a continuum) and
     its coefficient (NaN where the branch does not apply).  Moving, ``point`` computes the
     rows of the velocity's direction only, with these arguments; here they are straight
@@ -399,7 +399,7 @@ def moving_test(model):
     src = _Source(model)
     nb = len(model.candidates)
     vel = f"i_{model.velocity}"
-    body = ['    """(the row of branch mode is the one solution, its coefficient) at a moving '
+    body = ['    """(the row of branch is the one solution, its coefficient) at a moving '
             'state v."""']
     body += src.load("    ")
     body += [f"    s{b} = 0" for b in range(nb)] + [f"    c{b} = NAN" for b in range(nb)]
@@ -421,14 +421,14 @@ def moving_test(model):
             body.append("        pass")
     sm, cm = f"s{nb - 1}", f"c{nb - 1}"
     for b in range(nb - 2, -1, -1):
-        sm, cm = f"(s{b} if mode == {b} else {sm})", f"(c{b} if mode == {b} else {cm})"
+        sm, cm = f"(s{b} if branch == {b} else {sm})", f"(c{b} if branch == {b} else {cm})"
     solution = "(({s} == %d) | ({s} == %d))" % (nx.ADMISSIBLE, nx.SEPARATION)
-    other = " | ".join(f"((mode != {b}) & ({solution.format(s=f's{b}')} | (s{b} == "
+    other = " | ".join(f"((branch != {b}) & ({solution.format(s=f's{b}')} | (s{b} == "
                        f"{nx.CONTINUUM})))" for b in range(nb))
     body += [f"    sm = {sm}", f"    other = {other}",
              f"    return {solution.format(s='sm')} & (not other), {cm}"]
     lines = _header(src, "The integrator's test after a step")
-    lines += ['@njit(cache=True, forceinline=True, error_model="numpy")', "def moving(v, mode):",
+    lines += ['@njit(cache=True, forceinline=True, error_model="numpy")', "def moving(v, branch):",
               *body, "", ""]
     return _load(model, "moving", "\n".join(lines) + "\n")
 

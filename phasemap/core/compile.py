@@ -137,7 +137,7 @@ def contract_constants(model: Model) -> dict:
 def bound_rows(model: Model, names: list, lower, upper) -> np.ndarray:
     """Per branch, ``2 i + side`` where it exists only on the finite bound ``side`` (0
     lower, 1 upper) of the integrated variable ``names[i]``, else -1 (see
-    :attr:`phasemap.core.model.Branch.bound`; a bound that depends on parameters is infinite
+    :attr:`phasemap.core.model.Candidate.bound`; a bound that depends on parameters is infinite
     in ``lower``, ``upper`` and not marked)."""
     rows = np.full(len(model.candidates), -1, dtype=np.int64)
     for k, b in enumerate(model.candidates):

@@ -23,7 +23,7 @@ A hand-written model provides:
     Callers compute them once per value, which is how the grid evaluator
     hoists per-axis work out of its inner loop.
 ``candidates``
-    one :class:`Branch` per candidate branch: its name, the sign of the relative
+    one :class:`Candidate` per candidate branch: its name, the sign of the relative
     velocity on it (+1, -1, or 0 for the stick branch) and a pure scalar
     function that returns its row (see below).
 ``accelerations``, ``reactions``, ``coefficient``
@@ -42,7 +42,7 @@ A hand-written model provides:
     optional :class:`Dynamics`: what :func:`phasemap.simulate` and the fate
     maps need to move the system in time (which coordinates are integrated).
 
-Branch functions
+Candidate functions
 ----------------
 A branch function is ``@numba.njit(cache=True, forceinline=True, error_model="numpy")``,
 takes scalars and **returns** its row as a tuple laid out as in
@@ -50,7 +50,7 @@ takes scalars and **returns** its row as a tuple laid out as in
 accelerations..., reactions...)``, the status an integer code (so that the
 grid kernel compares integers), the rest floats, NaN for what it does not
 determine.  Its
-first parameters receive ``Branch.args`` (such as the slip direction); the
+first parameters receive ``Candidate.args`` (such as the slip direction); the
 others are named after model inputs (``phi``, ``f``, ``sin_phi``...), and a
 parameter named ``rest`` receives whether the branch starts from zero
 relative velocity.  Write it without early returns and with ``&``/``|`` and
@@ -220,7 +220,7 @@ class Derived:
 
 
 @dataclass(frozen=True)
-class Branch:
+class Candidate:
     """One candidate branch of the friction law.
 
     ``name``
@@ -255,11 +255,11 @@ class Branch:
     edge: Callable | None = field(default=None, repr=False)
 
     @classmethod
-    def both_ways(cls, name: str, func: Callable) -> tuple[Branch, Branch]:
+    def both_ways(cls, name: str, func: Callable) -> tuple[Candidate, Candidate]:
         """The two slip (or roll, or turn) branches ``name_pos`` and ``name_neg`` of one
         branch function whose first argument is the direction.
 
-        >>> [(b.name, b.direction, b.args) for b in Branch.both_ways("turn", print)]
+        >>> [(b.name, b.direction, b.args) for b in Candidate.both_ways("turn", print)]
         [('turn_pos', 1.0, (1.0,)), ('turn_neg', -1.0, (-1.0,))]
         """
         return (cls(f"{name}_pos", 1.0, func, (1.0,)), cls(f"{name}_neg", -1.0, func, (-1.0,)))
@@ -354,7 +354,7 @@ def one_angle(body: str, motion: str, move: Callable, stick: Callable,
     (['turn_pos', 'turn_neg', 'stick'], (('phi', 'omega', 'phi_ddot'),))
     """
     return dict(derived=SIN_COS_PHI,
-                candidates=(*Branch.both_ways(motion, move), Branch("stick", 0.0, stick)),
+                candidates=(*Candidate.both_ways(motion, move), Candidate("stick", 0.0, stick)),
                 accelerations=(angular_acceleration(body),), velocity="omega",
                 velocity_scale=velocity_scale,
                 dynamics=Dynamics(coordinates=(("phi", "omega", "phi_ddot"),),
@@ -385,7 +385,7 @@ class Model:
     state: tuple[Variable, ...]
     params: tuple[Variable, ...]
     derived: tuple[Derived, ...]
-    candidates: tuple[Branch, ...]
+    candidates: tuple[Candidate, ...]
     accelerations: tuple[Variable, ...]
     reactions: tuple[Variable, ...]
     coefficient: Variable

@@ -16,7 +16,7 @@ from phasemap.core import codegen as _codegen
 from phasemap.core import numerics as nx
 from phasemap.declare.runtime import checks, declare_sources
 from phasemap._version import __version__
-from phasemap.core.model import Branch, Derived, Dynamics, Model, Variable
+from phasemap.core.model import Candidate, Derived, Dynamics, Model, Variable
 from phasemap.declare.api import Coordinate, numeric_bound, sym
 from phasemap.declare.emit import GENERATION, module_source
 from phasemap.declare.validation import IDENT, fail, validate
@@ -91,7 +91,7 @@ def build_model(S) -> Model:
     reactions = _reactions(S, spec)
     renamed = [str(S.names.get(row[0], row[0])) for row in spec["rows"]]
     _check_distinct(S, renamed, reactions)
-    candidates = tuple(Branch(renamed[i], float(direction), getattr(module, fname), tuple(args),
+    candidates = tuple(Candidate(renamed[i], float(direction), getattr(module, fname), tuple(args),
                               None if bound is None else (bound[0], int(bound[1])),
                               None if edge is None else getattr(module, edge))
                        for i, (_, direction, _, fname, args, bound, edge)

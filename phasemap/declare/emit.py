@@ -528,7 +528,7 @@ def module_source(S) -> str:
 
 def _row_bound(d, row):
     """``[coordinate, side]`` where ``row`` exists only on a closed bound of a coordinate
-    (its edge is that bound), else None (:attr:`phasemap.core.model.Branch.bound`)."""
+    (its edge is that bound), else None (:attr:`phasemap.core.model.Candidate.bound`)."""
     edge = None if row.edge is None else d.edges[row.edge]
     return None if edge is None or edge.bound is None else [edge.coordinate, edge.bound]
 

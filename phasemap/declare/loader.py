@@ -42,7 +42,7 @@ import numpy as np
 from phasemap.core.memo import Memo
 from phasemap.core import codegen as _codegen
 from phasemap._version import __version__
-from phasemap.core.model import Branch, Derived, Dynamics, Model, Variable
+from phasemap.core.model import Candidate, Derived, Dynamics, Model, Variable
 from phasemap.declare.runtime import checks, declare_sources
 
 #: Bumped when the manifest's layout changes.
@@ -368,7 +368,7 @@ def build(data: dict, module, check, declaration) -> Model:
         name=data["name"], title=data["title"], citation=data["citation"],
         state=tuple(map(var, data["state"])), params=tuple(map(var, data["params"])),
         derived=tuple(Derived(n, s, getattr(np, f)) for n, s, f in data["derived"]),
-        candidates=tuple(Branch(n, float(d), getattr(module, f), tuple(a),
+        candidates=tuple(Candidate(n, float(d), getattr(module, f), tuple(a),
                                 None if b is None else (b[0], int(b[1])),
                                 None if e is None else getattr(module, e))
                          for n, d, f, a, b, e in data["candidates"]),

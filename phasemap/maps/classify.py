@@ -20,7 +20,7 @@ from phasemap.systems import get_model
 @dataclass(frozen=True)
 class BranchResult:
     """One candidate branch at one state: its status, accelerations and reactions (the
-    result; :class:`phasemap.core.model.Branch` is the candidate's definition).
+    result; :class:`phasemap.core.model.Candidate` is the candidate's definition).
 
     Attributes
     ----------

@@ -59,7 +59,7 @@ import numpy as np
 from numba import njit
 
 from phasemap.core.numerics import ADMISSIBLE, CONTINUUM, INADMISSIBLE, NAN, NO_SOLUTION, TOL, is_zero
-from phasemap.core.model import (SIN_COS_PHI, Branch, Dynamics, Model, Variable, angle_state,
+from phasemap.core.model import (SIN_COS_PHI, Candidate, Dynamics, Model, Variable, angle_state,
                      angular_acceleration, gravity_and_mass)
 from phasemap.systems.seeds import citation
 
@@ -137,11 +137,11 @@ MODEL = Model(
     ),
     derived=SIN_COS_PHI,
     candidates=(
-        Branch("slide_pos_Npos", 1.0, slide, (1.0, 1.0)),
-        Branch("slide_pos_Nneg", 1.0, slide, (1.0, -1.0)),
-        Branch("slide_neg_Npos", -1.0, slide, (-1.0, 1.0)),
-        Branch("slide_neg_Nneg", -1.0, slide, (-1.0, -1.0)),
-        Branch("stick", 0.0, stick),
+        Candidate("slide_pos_Npos", 1.0, slide, (1.0, 1.0)),
+        Candidate("slide_pos_Nneg", 1.0, slide, (1.0, -1.0)),
+        Candidate("slide_neg_Npos", -1.0, slide, (-1.0, 1.0)),
+        Candidate("slide_neg_Nneg", -1.0, slide, (-1.0, -1.0)),
+        Candidate("stick", 0.0, stick),
     ),
     accelerations=(
         Variable("x_ddot", "m s-2", "acceleration of the slider", "\\ddot x"),

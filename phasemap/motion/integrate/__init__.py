@@ -229,11 +229,11 @@ class Stage(NamedTuple):
     a caller that drives stages itself (:func:`phasemap.motion.workprecision.solve_ivp_staged`).
 
     ``classify(v, y, out)``: (n_solutions, first admissible branch, lost, singular) at
-    the integrated state ``y``; ``still(v, y, out, mode, coef_sign)``: ``y`` goes on
-    with the stage of ``mode``; ``event(v, y, t, t_prev, h, theta_end, r, mode,
+    the integrated state ``y``; ``still(v, y, out, branch, coef_sign)``: ``y`` goes on
+    with the stage of ``branch``; ``event(v, y, t, t_prev, h, theta_end, r, branch,
     coef_sign, out, yb)``: the event where a stage stopped (``r``: a dense output in
     Hairer's nested form, see ``templates.dense``); ``start(v, y, out)``: how a motion
-    starts; ``coefficient(out, mode)``: the stage's coefficient and its sign.
+    starts; ``coefficient(out, branch)``: the stage's coefficient and its sign.
     """
 
     classify: object

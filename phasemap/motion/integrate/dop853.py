@@ -117,10 +117,10 @@ D7 = (-25.69393346270375, -154.18974869023643, -231.5293791760455, 357.639117910
       -43.53345659001114, 96.32455395918828, -39.17726167561544, -149.72683625798564)
 
 
-def step_template(v, y, h, mode, K, yt, y1, rtol, atol):
+def step_template(v, y, h, branch, K, yt, y1, rtol, atol):
     """One DOP853 step; returns the error norm (see :mod:`phasemap.motion.integrate.dopri5`)."""
     ny = y.shape[0]
-    run_stages(RHS, v, y, h, mode, K, yt, STAGES)
+    run_stages(RHS, v, y, h, branch, K, yt, STAGES)
     acc5 = 0.0
     acc3 = 0.0
     for i in range(ny):
@@ -135,14 +135,14 @@ def step_template(v, y, h, mode, K, yt, y1, rtol, atol):
     else:
         e = abs(h) * acc5 / np.sqrt((acc5 + 0.01 * acc3) * ny)
     if e <= 1.0:
-        RHS(v, y1, mode, K, FSAL)  # first same as last; v now holds y1
+        RHS(v, y1, branch, K, FSAL)  # first same as last; v now holds y1
     return e
 
 
-def dense_template(v, y, y1, h, mode, K, yt, r):
+def dense_template(v, y, y1, h, branch, K, yt, r):
     """The order-7 continuous extension of the step y -> y1 into ``r`` (8 rows)."""
     ny = y.shape[0]
-    run_stages(RHS, v, y, h, mode, K, yt, DENSE_STAGES)
+    run_stages(RHS, v, y, h, branch, K, yt, DENSE_STAGES)
     for i in range(ny):
         dy = y1[i] - y[i]
         r[0, i] = y[i]

@@ -10,14 +10,14 @@ A method module gives the integrator template (see
 compiled per model with the model's right-hand side ``RHS`` as a global, and
 the constants below.
 
-``step_template(v, y, h, mode, K, yt, y1, rtol, atol) -> error norm``
+``step_template(v, y, h, branch, K, yt, y1, rtol, atol) -> error norm``
     One step of size ``h`` from ``y`` with ``K[0] = f(y)``: the stages into
     ``K``, the solution into ``y1``, and the RMS error norm over
     ``atol + rtol max(|y|, |y1|)``.  When the norm is at most 1 (the step is
     accepted) ``K[FSAL] = f(y1)``, ``yt`` is the point of stage ``FSAL - 1``
     (so that ``h |K[FSAL] - K[FSAL-1]| / |y1 - yt|`` estimates h |lambda| for
     Hairer's stiffness test) and ``v`` holds ``y1`` and its derived inputs.
-``dense_template(v, y, y1, h, mode, K, yt, r)``
+``dense_template(v, y, y1, h, branch, K, yt, r)``
     After an accepted step, the ``N_DENSE`` rows of the continuous extension
     into ``r``: ``y(t + theta h) = r0 + theta (r1 + (1 - theta) (r2 + theta
     (r3 + ...)))`` (:func:`phasemap.motion.integrate.templates.dense`).  It may call ``RHS``
@@ -94,7 +94,7 @@ def combine(K, i, rows, coefs):
     return acc
 
 
-def run_stages(rhs, v, y, h, mode, K, yt, table):
+def run_stages(rhs, v, y, h, branch, K, yt, table):
     """The explicit stages of ``table`` in order: for each (row, rows, coefs),
     ``yt = y + h combine(K, rows, coefs)``, then ``rhs`` fills row ``row`` of ``K``.
 
@@ -105,31 +105,31 @@ def run_stages(rhs, v, y, h, mode, K, yt, table):
     for row, rows, coefs in table:
         for i in range(y.shape[0]):
             yt[i] = y[i] + h * combine(K, i, rows, coefs)
-        rhs(v, yt, mode, K, row)
+        rhs(v, yt, branch, K, row)
 
 
 @overload(run_stages, inline="always")
-def _unrolled_stages(rhs, v, y, h, mode, K, yt, table):
-    lines = ["def stages(rhs, v, y, h, mode, K, yt, table):"]
+def _unrolled_stages(rhs, v, y, h, branch, K, yt, table):
+    lines = ["def stages(rhs, v, y, h, branch, K, yt, table):"]
     for k in range(len(table)):
         lines += ["    for i in range(y.shape[0]):",
                   f"        yt[i] = y[i] + h * combine(K, i, table[{k}][1], table[{k}][2])",
-                  f"    rhs(v, yt, mode, K, table[{k}][0])"]
+                  f"    rhs(v, yt, branch, K, table[{k}][0])"]
     scope = {"combine": combine}
     exec("\n".join(lines), scope)
     return scope["stages"]
 
 
-def step_template(v, y, h, mode, K, yt, y1, rtol, atol):
+def step_template(v, y, h, branch, K, yt, y1, rtol, atol):
     """One Dormand-Prince 5(4) step; returns the error norm (see the module docstring)."""
     ny = y.shape[0]
     for i in range(ny):
         yt[i] = y[i] + h * A21 * K[0, i]
-    RHS(v, yt, mode, K, 1)
-    run_stages(RHS, v, y, h, mode, K, yt, STAGES)
+    RHS(v, yt, branch, K, 1)
+    run_stages(RHS, v, y, h, branch, K, yt, STAGES)
     for i in range(ny):
         y1[i] = y[i] + h * combine(K, i, B_ROWS, B)
-    RHS(v, y1, mode, K, FSAL)
+    RHS(v, y1, branch, K, FSAL)
     acc = 0.0
     for i in range(ny):
         err = h * combine(K, i, E_ROWS, E)
@@ -138,7 +138,7 @@ def step_template(v, y, h, mode, K, yt, y1, rtol, atol):
     return np.sqrt(acc / ny)
 
 
-def dense_template(v, y, y1, h, mode, K, yt, r):
+def dense_template(v, y, y1, h, branch, K, yt, r):
     """Hairer's order-4 continuous extension of the step y -> y1 into ``r`` (5 rows)."""
     for i in range(y.shape[0]):
         dy = y1[i] - y[i]

@@ -93,8 +93,8 @@ STIFF_BOUND = 3.25
 # ------------------------------------------------------------ plain helpers
 
 @njit(cache=True)
-def push(a, n, t, code, mode, y):
-    """Append the row (t, code[, mode], y...) at ``n`` (growing ``a``); return (a, n + 1).
+def push(a, n, t, code, branch, y):
+    """Append the row (t, code[, branch], y...) at ``n`` (growing ``a``); return (a, n + 1).
 
     Saved points have two head columns (t, branch), events three (t, kind, branch).
     """
@@ -103,7 +103,7 @@ def push(a, n, t, code, mode, y):
     a[n, 0] = t
     a[n, 1] = code
     if k == 3:
-        a[n, 2] = mode
+        a[n, 2] = branch
     a[n, k:] = y
     return a, n + 1
 
@@ -162,8 +162,8 @@ def _inside_template(v, y):
     return DOMAIN(v)
 
 
-def _rhs_template(v, y, mode, K, k):
-    """dy/dt on the stage of branch ``mode`` into row ``k`` of the stage array ``K``
+def _rhs_template(v, y, branch, K, k):
+    """dy/dt on the stage of ``branch`` into row ``k`` of the stage array ``K``
     (NaN where the branch has no solution).
 
     The branch row comes back as a tuple from the inlined ``BRANCH_ROW``.  The
@@ -173,7 +173,7 @@ def _rhs_template(v, y, mode, K, k):
     step of the wheel (BENCHMARKS.md, "Fate map of the wheel").
     """
     FILL(v, y)
-    r = BRANCH_ROW(v, mode)
+    r = BRANCH_ROW(v, branch)
     for j in range(N_DOF):
         K[k, j] = y[N_DOF + j]
         K[k, N_DOF + j] = r[ACC_COL[j]]
@@ -186,17 +186,17 @@ def _classify_template(v, y, out):
     return ev.summary(out, STICK)
 
 
-def _on_stage_template(n, adm, out, mode, coef_sign):
+def _on_stage_template(n, adm, out, branch, coef_sign):
     """A classification (``n``, ``adm`` of the rows ``out``) goes on with the stage of
-    branch ``mode``: the unique solution, the same branch, the sign ``coef_sign`` of
+    ``branch``: the unique solution, the same branch, the sign ``coef_sign`` of
     its coefficient kept (0: not watched)."""
-    return n == 1 and adm == mode and (coef_sign == 0.0
-                                       or out[mode, nx.COEF] * coef_sign > 0.0)
+    return n == 1 and adm == branch and (coef_sign == 0.0
+                                       or out[branch, nx.COEF] * coef_sign > 0.0)
 
 
-def _goes_on_template(v, y1, out, mode, coef_sign):
+def _goes_on_template(v, y1, out, branch, coef_sign):
     """After an accepted step to ``y1`` (``v`` holds it and its derived inputs, as the
-    step's last right-hand side left it): the stage of branch ``mode`` goes on.
+    step's last right-hand side left it): the stage of ``branch`` goes on.
 
     The decision of ``ON_STAGE`` on the full classification and of ``INSIDE``, bit
     for bit, from less: the stage goes on where its row is the one solution
@@ -214,25 +214,25 @@ def _goes_on_template(v, y1, out, mode, coef_sign):
     if abs(vel) <= REST_SPEED(v):
         POINT(v, out)
         n, adm, lost, sing = ev.summary(out, STICK)
-        on = ON_STAGE(n, adm, out, mode, coef_sign)
+        on = ON_STAGE(n, adm, out, branch, coef_sign)
     else:
-        sole, coef = MOVING(v, mode)
-        out[mode, nx.COEF] = coef
+        sole, coef = MOVING(v, branch)
+        out[branch, nx.COEF] = coef
         on = sole and (coef_sign == 0.0 or coef * coef_sign > 0.0)
     return on and BOUNDED(y1) and DOMAIN(v)
 
 
-def _still_template(v, yb, out, mode, coef_sign):
-    """The state ``yb`` is still on the stage of branch ``mode`` (ON_STAGE) and inside
+def _still_template(v, yb, out, branch, coef_sign):
+    """The state ``yb`` is still on the stage of ``branch`` (ON_STAGE) and inside
     the domain (``out``: its rows)."""
     n, adm, lost, sing = CLASSIFY(v, yb, out)
-    return ON_STAGE(n, adm, out, mode, coef_sign) and INSIDE(v, yb)
+    return ON_STAGE(n, adm, out, branch, coef_sign) and INSIDE(v, yb)
 
 
-def _stage_coefficient_template(out, mode):
-    """(coefficient, its sign) of the senior derivative on the stage of ``mode`` from its
+def _stage_coefficient_template(out, branch):
+    """(coefficient, its sign) of the senior derivative on the stage of ``branch`` from its
     classified row (0, 0 for the stick branch and for no branch: not watched)."""
-    coef = out[mode, nx.COEF] if (mode >= 0 and mode != STICK) else 0.0
+    coef = out[branch, nx.COEF] if (branch >= 0 and branch != STICK) else 0.0
     return coef, 1.0 if coef > 0.0 else (-1.0 if coef < 0.0 else 0.0)
 
 
@@ -269,34 +269,34 @@ def _leave_template(y, out):
 def _start_template(v, y, out):
     """How the motion from ``y`` starts: (kind, branch), ``START`` and the unique
     admissible branch, or the fate (branch -1, or the stick branch at rest)."""
-    n, mode, lost, sing = CLASSIFY(v, y, out)
+    n, branch, lost, sing = CLASSIFY(v, y, out)
     kind = ev.START
     if LEAVE(y, out):  # on a bound of the domain, moving out
-        mode = -1
+        branch = -1
         kind = ev.LEFT_DOMAIN
     elif n != 1:
-        mode = -1
+        branch = -1
         kind = ev.fate_without_unique(n, lost, sing)
-    elif out[mode, nx.STATUS] == nx.SEPARATION:  # the only motion leaves a contact
-        mode = -1
+    elif out[branch, nx.STATUS] == nx.SEPARATION:  # the only motion leaves a contact
+        branch = -1
         kind = ev.CONTACT_LOST
-    elif mode == STICK and STICK_IS_REST:
+    elif branch == STICK and STICK_IS_REST:
         kind = ev.REST
-    return kind, mode
+    return kind, branch
 
 
-def _first_step_template(v, y, mode, K, yt, err, t_end, rtol, atol, h_max):
+def _first_step_template(v, y, branch, K, yt, err, t_end, rtol, atol, h_max):
     """Hairer's initial step (``hinit``) from the scaled sizes of y and y'; leaves
     ``K[0] = f(y)``."""
     ny = y.shape[0]
-    RHS(v, y, mode, K, 0)
+    RHS(v, y, branch, K, 0)
     d0 = norm(y, y, y, rtol, atol)
     d1 = norm(K[0], y, y, rtol, atol)
     h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
     h0 = min(h0, t_end, h_max)
     for i in range(ny):
         yt[i] = y[i] + h0 * K[0, i]
-    RHS(v, yt, mode, K, 1)
+    RHS(v, yt, branch, K, 1)
     for i in range(ny):
         err[i] = (K[1, i] - K[0, i]) / h0
     d2 = norm(err, y, y, rtol, atol)
@@ -310,14 +310,14 @@ def _first_step_template(v, y, mode, K, yt, err, t_end, rtol, atol, h_max):
 
 # --------------------------------------------------------- step acceptance
 
-def _stalled_template(v, y, h, t_end, mode, coef_sign, coef0, coef_scale, out, K, yb):
+def _stalled_template(v, y, h, t_end, branch, coef_sign, coef0, coef_scale, out, K, yb):
     """The fate where the step size has fallen below what double precision resolves.
 
     ``singular`` where the active coefficient has fallen below 1e-6 of its scale,
     else ``step_failure``; but where the stage's branch has no solution just ahead
     (probed along f(y) up to 1e9 times the step), that classification's fate.
     """
-    c = out[mode, nx.COEF] if coef_sign != 0.0 else coef0
+    c = out[branch, nx.COEF] if coef_sign != 0.0 else coef0
     fate = ev.SINGULAR if abs(c) < 1e-6 * coef_scale else ev.STEP_FAILURE
     s = max(h, 1e-14 * t_end)
     for _ in range(9):
@@ -326,7 +326,7 @@ def _stalled_template(v, y, h, t_end, mode, coef_sign, coef0, coef_scale, out, K
         n2, adm2, lost2, sing2 = CLASSIFY(v, yb, out)
         if n2 != 1:
             return ev.fate_without_unique(n2, lost2, sing2)
-        if adm2 != mode:
+        if adm2 != branch:
             break
         s *= 10.0
     return fate
@@ -364,17 +364,17 @@ def _next_step_template(h, e, h_prev_ok, h_max):
 
 # ---------------------------------------------------------------- events
 
-def _indicator_template(v, r, theta, mode, col, yb):
+def _indicator_template(v, r, theta, branch, col, yb):
     """At ``theta`` of the step (dense output ``r``, into ``yb``): the stage's velocity
     (``col`` < 0) or column ``col`` of its branch row."""
     dense(r, theta, yb)
     if col < 0:
         return yb[VEL_Y]
     FILL(v, yb)
-    return BRANCH_ROW(v, mode)[col]
+    return BRANCH_ROW(v, branch)[col]
 
 
-def _zero_template(v, r, mode, col, sg, level, fa, fb, h, t, yb):
+def _zero_template(v, r, branch, col, sg, level, fa, fb, h, t, yb):
     """Illinois on the step for the zero of ``sg`` times an indicator (see INDICATOR)
     minus ``level``, from ``fa`` > 0 at theta = 0 and ``fb`` <= 0 at theta = 1:
     ``(a, b)``, a bracket of width 4 eps in time."""
@@ -384,7 +384,7 @@ def _zero_template(v, r, mode, col, sg, level, fa, fb, h, t, yb):
         c = (a * fb - b * fa) / (fb - fa)
         if not (a < c < b):
             c = 0.5 * (a + b)
-        fc = sg * INDICATOR(v, r, c, mode, col, yb) - level
+        fc = sg * INDICATOR(v, r, c, branch, col, yb) - level
         if fc > 0.0:
             a, fa = c, fc
             if side == -1:
@@ -400,7 +400,7 @@ def _zero_template(v, r, mode, col, sg, level, fa, fb, h, t, yb):
     return a, b
 
 
-def _locate_template(v, y, y1, h, t, mode, coef_sign, r, out, yb, zs):
+def _locate_template(v, y, y1, h, t, branch, coef_sign, r, out, yb, zs):
     """The first theta of the step ``y`` -> ``y1`` (dense output ``r``) where the stage
     stops being the unique solution, to 2 eps in time (``zs``: scratch, one row per
     WATCH column and one for the velocity).
@@ -422,22 +422,22 @@ def _locate_template(v, y, y1, h, t, mode, coef_sign, r, out, yb, zs):
     whole step.
     """
     nz = 0
-    d = DIRECTIONS[mode]
+    d = DIRECTIONS[branch]
     rest = REST_SPEED(v)
     if d != 0.0 and d * y[VEL_Y] > rest and d * y1[VEL_Y] <= rest:
-        zs[nz, 0], zs[nz, 1] = ZERO(v, r, mode, int(-1), d, rest, d * y[VEL_Y] - rest,
+        zs[nz, 0], zs[nz, 1] = ZERO(v, r, branch, int(-1), d, rest, d * y[VEL_Y] - rest,
                                      d * y1[VEL_Y] - rest, h, t, yb)
         nz += 1
     if WATCH.shape[0] > 0:
         FILL(v, y)
-        g0 = BRANCH_ROW(v, mode)
+        g0 = BRANCH_ROW(v, branch)
         FILL(v, y1)
-        g1 = BRANCH_ROW(v, mode)
+        g1 = BRANCH_ROW(v, branch)
         for q in range(WATCH.shape[0]):
             a0, a1 = g0[WATCH[q]], g1[WATCH[q]]
             if a0 * a1 < 0.0:
                 sg = 1.0 if a0 > 0.0 else -1.0
-                zs[nz, 0], zs[nz, 1] = ZERO(v, r, mode, WATCH[q], sg, 0.0, sg * a0, sg * a1,
+                zs[nz, 0], zs[nz, 1] = ZERO(v, r, branch, WATCH[q], sg, 0.0, sg * a0, sg * a1,
                                              h, t, yb)
                 nz += 1
     lo, hi = 0.0, 1.0
@@ -456,14 +456,14 @@ def _locate_template(v, y, y1, h, t, mode, coef_sign, r, out, yb, zs):
         for past in (0.0, 1e-13, 1e-11):
             c_hi = min(1.0, b + past)
             dense(r, c_hi, yb)
-            if not STILL(v, yb, out, mode, coef_sign):
+            if not STILL(v, yb, out, branch, coef_sign):
                 break
         else:
             continue
         for before in (0.0, 1e-11, 1e-9):
             c_lo = max(0.0, a - before)
             dense(r, c_lo, yb)
-            if STILL(v, yb, out, mode, coef_sign):
+            if STILL(v, yb, out, branch, coef_sign):
                 lo, hi = c_lo, c_hi
                 break
         break
@@ -472,15 +472,15 @@ def _locate_template(v, y, y1, h, t, mode, coef_sign, r, out, yb, zs):
             break
         mid = 0.5 * (lo + hi)
         dense(r, mid, yb)
-        if STILL(v, yb, out, mode, coef_sign):
+        if STILL(v, yb, out, branch, coef_sign):
             lo = mid
         else:
             hi = mid
     return hi
 
 
-def _next_stage_template(out, n, adm, lost, sing, mode, vel_zero):
-    """What happens at an event that ends the stage of ``mode``, from the classification
+def _next_stage_template(out, n, adm, lost, sing, branch, vel_zero):
+    """What happens at an event that ends the stage of ``branch``, from the classification
     there (``n``, ``adm``, ``lost``, ``sing`` of the rows ``out``): ``(kind, branch)``,
     branch -1 where the motion ends (and for ``rest``, the stick branch)."""
     if n != 1:
@@ -489,17 +489,17 @@ def _next_stage_template(out, n, adm, lost, sing, mode, vel_zero):
         return ev.CONTACT_LOST, -1  # the only motion from here leaves a contact
     if adm == STICK:
         return (ev.REST if STICK_IS_REST else ev.STICK), adm
-    if mode == STICK:
+    if branch == STICK:
         return ev.SLIP, adm
-    if DIRECTIONS[adm] == -DIRECTIONS[mode]:
+    if DIRECTIONS[adm] == -DIRECTIONS[branch]:
         return ev.REVERSAL, adm
-    if adm != mode or vel_zero:
+    if adm != branch or vel_zero:
         return ev.SWITCH, adm  # (or the velocity touched zero and the motion goes on)
     return ev.SINGULAR, -1  # same branch, its coefficient changed sign
 
 
-def _event_template(v, y, t, t_prev, h, theta_end, r, mode, coef_sign, out, yb):
-    """The event where the stage of ``mode`` stopped: at ``t`` (theta_end of the step
+def _event_template(v, y, t, t_prev, h, theta_end, r, branch, coef_sign, out, yb):
+    """The event where the stage of ``branch`` stopped: at ``t`` (theta_end of the step
     of size ``h`` from ``t_prev``, dense output ``r``), state ``y`` (updated).
 
     Returns ``(t, kind, branch)`` (see NEXT_STAGE); kind -1 where the stop was a
@@ -516,7 +516,7 @@ def _event_template(v, y, t, t_prev, h, theta_end, r, mode, coef_sign, out, yb):
         for i in range(y.shape[0]):
             y[i] = min(max(y[i], LOWER[i]), UPPER[i])
         return t, ev.LEFT_DOMAIN, -1
-    d = DIRECTIONS[mode]
+    d = DIRECTIONS[branch]
     n, adm, lost, sing = CLASSIFY(v, y, out)
     vel_zero = d != 0.0 and (d * y[VEL_Y] <= 0.0 or out[STICK, nx.STATUS] != nx.ABSENT)
     if not vel_zero and LEAVE(y, out):  # on a bound (its tie band), moving out
@@ -524,7 +524,7 @@ def _event_template(v, y, t, t_prev, h, theta_end, r, mode, coef_sign, out, yb):
     if vel_zero:
         y[VEL_Y] = 0.0
         n, adm, lost, sing = CLASSIFY(v, y, out)
-    elif n != 1 or ON_STAGE(n, adm, out, mode, coef_sign):
+    elif n != 1 or ON_STAGE(n, adm, out, branch, coef_sign):
         first_bad = -1.0
         decided = False
         for k in range(1, 10):
@@ -533,7 +533,7 @@ def _event_template(v, y, t, t_prev, h, theta_end, r, mode, coef_sign, out, yb):
                 break
             dense(r, theta, yb)
             n2, adm2, lost2, sing2 = CLASSIFY(v, yb, out)
-            stage = ON_STAGE(n2, adm2, out, mode, coef_sign)
+            stage = ON_STAGE(n2, adm2, out, branch, coef_sign)
             if not stage and first_bad < 0.0:
                 first_bad = theta
             if n2 == 1 and not stage:
@@ -546,10 +546,10 @@ def _event_template(v, y, t, t_prev, h, theta_end, r, mode, coef_sign, out, yb):
             t = t_prev + first_bad * h
             dense(r, first_bad, y)
         n, adm, lost, sing = CLASSIFY(v, y, out)
-        if n == 1 and adm == mode and not decided and first_bad < 0.0:
-            return t, -1, mode  # a rounding flicker: the stage goes on from here
-    kind, new_mode = NEXT_STAGE(out, n, adm, lost, sing, mode, vel_zero)
-    return t, kind, new_mode
+        if n == 1 and adm == branch and not decided and first_bad < 0.0:
+            return t, -1, branch  # a rounding flicker: the stage goes on from here
+    kind, new_branch = NEXT_STAGE(out, n, adm, lost, sing, branch, vel_zero)
+    return t, kind, new_branch
 
 
 # ------------------------------------------------------------ the integrator
@@ -590,12 +590,12 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
     n_rev = 0
     n_steps = 0
 
-    kind, mode = START(v, y, out)
-    evs, n_ev = push(evs, n_ev, t, kind, mode, y)
+    kind, branch = START(v, y, out)
+    evs, n_ev = push(evs, n_ev, t, kind, branch, y)
     if save:
-        pts, n_saved = push(pts, n_saved, t, mode, mode, y)
+        pts, n_saved = push(pts, n_saved, t, branch, branch, y)
     fate = -1 if kind == ev.START else kind
-    coef0, coef_sign = STAGE_COEFFICIENT(out, mode)
+    coef0, coef_sign = STAGE_COEFFICIENT(out, branch)
     # the scale of the coefficient: its largest size at a stage start of this motion
     # (switches close to a singular state start stages with a coefficient already small)
     coef_scale = abs(coef0)
@@ -606,7 +606,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
     stiff_hits = int(0)  # Hairer's stiffness detection: consecutive steps with h |lambda| > bound
     calm = int(0)
     if fate < 0:
-        h = FIRST_STEP(v, y, mode, K, yt, err, t_end, rtol, atol, h_max)
+        h = FIRST_STEP(v, y, branch, K, yt, err, t_end, rtol, atol, h_max)
 
     while fate < 0:
         if n_steps >= max_steps:
@@ -620,10 +620,10 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
             h = t_end - t
             last = True
         if h <= 16.0 * EPS * abs(t) or h <= 1e-14 * t_end:
-            fate = STALLED(v, y, h, t_end, mode, coef_sign, coef0, coef_scale, out, K, yb)
+            fate = STALLED(v, y, h, t_end, branch, coef_sign, coef0, coef_scale, out, K, yb)
             break
         # -- one step of the method ------------------------------------------
-        e = STEP(v, y, h, mode, K, yt, y1, rtol, atol)
+        e = STEP(v, y, h, branch, K, yt, y1, rtol, atol)
         n_steps += 1
         if not (e <= 1.0):  # also rejects NaN
             fac = FAC_MIN if not (e == e) else max(FAC_MIN, SAFETY * e ** -EXPONENT)
@@ -635,14 +635,14 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
             fate = ev.STIFF
             break
         # v holds y1 and its derived inputs from the last stage of the step
-        still = GOES_ON(v, y1, out, mode, coef_sign)
+        still = GOES_ON(v, y1, out, branch, coef_sign)
         theta_end = 1.0
         # the dense output, only where it is used: to locate an event, at requested times
         if not still or (n_eval < t_eval.shape[0]
                          and t_eval[n_eval] <= (t_end if last else t + h)):
-            DENSE(v, y, y1, h, mode, K, yt, r)
+            DENSE(v, y, y1, h, branch, K, yt, r)
         if not still:
-            theta_end = LOCATE(v, y, y1, h, t, mode, coef_sign, r, out, yb, zs)
+            theta_end = LOCATE(v, y, y1, h, t, branch, coef_sign, r, out, yb, zs)
             dense(r, theta_end, y1)
         t1 = t + theta_end * h
         if theta_end == 1.0 and last:
@@ -659,7 +659,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
                 y[i] = y1[i]
                 K[0, i] = K[FSAL, i]
             if save:
-                pts, n_saved = push(pts, n_saved, t, mode, mode, y)
+                pts, n_saved = push(pts, n_saved, t, branch, branch, y)
             h = NEXT_STEP(h, e, h_prev_ok, h_max)
             h_prev_ok = True
             continue
@@ -667,22 +667,22 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         # -- an event at t1, state y1 --------------------------------------
         for i in range(ny):
             y[i] = y1[i]
-        t, kind, new_mode = EVENT(v, y, t1, t, h, theta_end, r, mode, coef_sign, out, yb)
+        t, kind, new_branch = EVENT(v, y, t1, t, h, theta_end, r, branch, coef_sign, out, yb)
         action, fate, flickers = ev.after_event(kind, flickers, n_ev, max_events)
         if action == ev.GO_ON:  # a rounding flicker: the stage goes on from here
-            RHS(v, y, mode, K, 0)
+            RHS(v, y, branch, K, 0)
             continue
         if kind == ev.REVERSAL:
             n_rev += 1
         if action == ev.END:
             break
-        evs, n_ev = push(evs, n_ev, t, kind, new_mode, y)
+        evs, n_ev = push(evs, n_ev, t, kind, new_branch, y)
         if save:
-            pts, n_saved = push(pts, n_saved, t, new_mode, new_mode, y)
-        mode = new_mode
-        coef0, coef_sign = STAGE_COEFFICIENT(out, mode)
+            pts, n_saved = push(pts, n_saved, t, new_branch, new_branch, y)
+        branch = new_branch
+        coef0, coef_sign = STAGE_COEFFICIENT(out, branch)
         coef_scale = max(coef_scale, abs(coef0))
-        RHS(v, y, mode, K, 0)
+        RHS(v, y, branch, K, 0)
         h_prev_ok = True
 
     # -- the fate, as the last event (unless the motion never started) ------

@@ -86,36 +86,36 @@ CONTACT_END = None
 N_FIELDS = 0
 
 
-def _row_template(v, x, u, sigma, mode):
-    """The row of branch ``mode`` at phi = x, omega = sigma sqrt(u) (u below 0 read as 0)."""
+def _row_template(v, x, u, sigma, branch):
+    """The row of ``branch`` at phi = x, omega = sigma sqrt(u) (u below 0 read as 0)."""
     v[PHI] = x
     v[OMEGA] = sigma * math.sqrt(max(u, 0.0))
     DERIVE(v)
-    return BRANCH_ROW(v, mode)
+    return BRANCH_ROW(v, branch)
 
 
-def _rate_template(v, x, u, sigma, mode, u_ref):
-    """(F, dF/du): phi'' of branch ``mode`` at (x, u = omega^2) and its slope in u.
+def _rate_template(v, x, u, sigma, branch, u_ref):
+    """(F, dF/du): phi'' of ``branch`` at (x, u = omega^2) and its slope in u.
 
     Two evaluations of the branch row, at u and a little above (an affine F is
     exact); below u = 0 the row is continued linearly from u = 0.
     """
     ua = u if u > 0.0 else 0.0
     d = 1e-4 * (ua + u_ref)
-    fa = ROW(v, x, ua, sigma, mode)[ACC]
+    fa = ROW(v, x, ua, sigma, branch)[ACC]
     v[OMEGA] = sigma * math.sqrt(ua + d)
     if OMEGA_DERIVED:
         DERIVE(v)
-    fb = BRANCH_ROW(v, mode)[ACC]
+    fb = BRANCH_ROW(v, branch)[ACC]
     s = (fb - fa) / d
     return fa + s * (u - ua), s
 
 
-def _value_template(v, x, u, sigma, mode, u_ref):
-    """phi'' of branch ``mode`` at (x, u = omega^2) (continued linearly below u = 0)."""
+def _value_template(v, x, u, sigma, branch, u_ref):
+    """phi'' of ``branch`` at (x, u = omega^2) (continued linearly below u = 0)."""
     if u >= 0.0:
-        return ROW(v, x, u, sigma, mode)[ACC]
-    return RATE(v, x, u, sigma, mode, u_ref)[0]
+        return ROW(v, x, u, sigma, branch)[ACC]
+    return RATE(v, x, u, sigma, branch, u_ref)[0]
 
 
 def _classify_template(v, x, omega, out):
@@ -127,20 +127,20 @@ def _classify_template(v, x, omega, out):
     return ev.summary(out, STICK)
 
 
-def _still_template(v, out, x, u, sigma, mode, coef_sign):
-    """The state (x, u) is still on the stage of ``mode``: u > 0, unique, same branch,
+def _still_template(v, out, x, u, sigma, branch, coef_sign):
+    """The state (x, u) is still on the stage of ``branch``: u > 0, unique, same branch,
     same sign of the coefficient, and an omega the model does not count as zero."""
     if not (u > 0.0):
         return False
     n, adm, lost, sing = CLASSIFY(v, x, sigma * math.sqrt(u), out)
-    if n != 1 or adm != mode or not DOMAIN(v):  # (v holds the state: its own domain)
+    if n != 1 or adm != branch or not DOMAIN(v):  # (v holds the state: its own domain)
         return False
     if STICK >= 0 and out[STICK, nx.STATUS] != nx.ABSENT:
         return False
-    return coef_sign == 0.0 or out[mode, nx.COEF] * coef_sign > 0.0
+    return coef_sign == 0.0 or out[branch, nx.COEF] * coef_sign > 0.0
 
 
-def _refine_template(v, theta, x_p, hh, z, u_p, a, c, sigma, mode, u_ref, buf, tb, nv, a2, c2):
+def _refine_template(v, theta, x_p, hh, z, u_p, a, c, sigma, branch, u_ref, buf, tb, nv, a2, c2):
     """u at theta of a panel to the panel's own order: one Gauss pass on [0, theta].
 
     The collocation polynomial is accurate to O(h^(n+1)) inside a panel (its stage
@@ -156,15 +156,15 @@ def _refine_template(v, theta, x_p, hh, z, u_p, a, c, sigma, mode, u_ref, buf, t
     use_series = series(z, u_p, hh, c, tb)
     for j in range(n):
         uj = dense_at(theta * THETA[j], use_series, tb, z, u_p, hh, a, c, buf)
-        fj = VALUE(v, x_p + sigma * hs * THETA[j], uj, sigma, mode, u_ref)
+        fj = VALUE(v, x_p + sigma * hs * THETA[j], uj, sigma, branch, u_ref)
         nv[j] = 2.0 * sigma * fj - beta * uj
     expand(nv, a2, c2)
     return dense(1.0, z * theta, u_p, hs, a2, c2, buf)
 
 
-def _root_template(v, field, sg, lo, hi, glo, ghi, tol, x, hh, z, u, a, c, sigma, mode, u_ref,
+def _root_template(v, field, sg, lo, hi, glo, ghi, tol, x, hh, z, u, a, c, sigma, branch, u_ref,
                    buf, tb, nv, a2, c2, fine):
-    """The zero of g(theta) = sg u (``field`` < 0) or sg (``field`` of the row of ``mode``)
+    """The zero of g(theta) = sg u (``field`` < 0) or sg (``field`` of the row of ``branch``)
     on a panel.
 
     ``g(lo) = glo > 0 >= ghi = g(hi)``; returns ``(lo, hi, u_lo, u_hi)`` with
@@ -193,8 +193,8 @@ def _root_template(v, field, sg, lo, hi, glo, ghi, tol, x, hh, z, u, a, c, sigma
             # bracket closes on that line without more passes
             t = 0.5 * (lo + hi)
             for _it in range(6):
-                ut = REFINE(v, t, x, hh, z, u, a, c, sigma, mode, u_ref, buf, tb, nv, a2, c2)
-                st = 2.0 * sigma * hh * VALUE(v, x + sigma * t * hh, ut, sigma, mode, u_ref)
+                ut = REFINE(v, t, x, hh, z, u, a, c, sigma, branch, u_ref, buf, tb, nv, a2, c2)
+                st = 2.0 * sigma * hh * VALUE(v, x + sigma * t * hh, ut, sigma, branch, u_ref)
                 if not (sg * st < 0.0):
                     break
                 d = -ut / st
@@ -214,8 +214,8 @@ def _root_template(v, field, sg, lo, hi, glo, ghi, tol, x, hh, z, u, a, c, sigma
                 gp = dense_at(t + dt, use_series, tb, z, u, hh, a, c, buf)
                 gm = dense_at(t - dt, use_series, tb, z, u, hh, a, c, buf)
                 if field >= 0:
-                    gp = ROW(v, x + sigma * (t + dt) * hh, gp, sigma, mode)[field]
-                    gm = ROW(v, x + sigma * (t - dt) * hh, gm, sigma, mode)[field]
+                    gp = ROW(v, x + sigma * (t + dt) * hh, gp, sigma, branch)[field]
+                    gm = ROW(v, x + sigma * (t - dt) * hh, gm, sigma, branch)[field]
                 s2 = sg * (gp - gm) / (2.0 * dt)
                 if s2 < 0.0:
                     sl = s2
@@ -230,13 +230,13 @@ def _root_template(v, field, sg, lo, hi, glo, ghi, tol, x, hh, z, u, a, c, sigma
                 t = 0.5 * (lo + hi)
                 stall = 0
             if on_refine:
-                ut = REFINE(v, t, x, hh, z, u, a, c, sigma, mode, u_ref, buf, tb, nv, a2, c2)
+                ut = REFINE(v, t, x, hh, z, u, a, c, sigma, branch, u_ref, buf, tb, nv, a2, c2)
             else:
                 ut = dense_at(t, use_series, tb, z, u, hh, a, c, buf)
             if field < 0:
                 gt = sg * ut
             else:
-                gt = sg * ROW(v, x + sigma * t * hh, ut, sigma, mode)[field]
+                gt = sg * ROW(v, x + sigma * t * hh, ut, sigma, branch)[field]
             if gt > 0.0:
                 lo, glo = t, gt
                 u_lo = ut if on_refine else math.nan
@@ -273,20 +273,20 @@ def _at_rest_template(v, x, out):
     return ev.fate_without_unique(n, lost, sing), -1  # (a continuum is not two solutions)
 
 
-def _stage_start_template(v, mode, sigma, x0, u0, react):
-    """The branch row of ``mode`` at the stage start (x0, u0): its reactions into
+def _stage_start_template(v, branch, sigma, x0, u0, react):
+    """The branch row of ``branch`` at the stage start (x0, u0): its reactions into
     ``react``; returns (coefficient, its sign)."""
     v[PHI] = x0
     v[OMEGA] = sigma * math.sqrt(u0)
     DERIVE(v)
-    r0 = BRANCH_ROW(v, mode)
+    r0 = BRANCH_ROW(v, branch)
     coef0 = r0[nx.COEF]
     for q in range(REACTIONS.shape[0]):
         react[q] = r0[REACTIONS[q]]
     return coef0, 1.0 if coef0 > 0.0 else (-1.0 if coef0 < 0.0 else 0.0)
 
 
-def _collocate_template(v, x, u, hh, z, beta, f0, sigma, mode, u_ref, tol_newton, mats, vecs,
+def _collocate_template(v, x, u, hh, z, beta, f0, sigma, branch, u_ref, tol_newton, mats, vecs,
                         buf, piv):
     """Solve a panel's collocation equations U = E u + hh A N(U): whether Newton's
     method converged (N at the nodes in ``vecs[3]``).
@@ -315,10 +315,10 @@ def _collocate_template(v, x, u, hh, z, beta, f0, sigma, mode, u_ref, tol_newton
         for j in range(n):
             xj = x + sigma * hh * THETA[j]
             if it == 0:
-                fj, sj = RATE(v, xj, U[j], sigma, mode, u_ref)
+                fj, sj = RATE(v, xj, U[j], sigma, branch, u_ref)
                 Jd[j] = 2.0 * sigma * sj - beta
             else:
-                fj = VALUE(v, xj, U[j], sigma, mode, u_ref)
+                fj = VALUE(v, xj, U[j], sigma, branch, u_ref)
             Nv[j] = 2.0 * sigma * fj - beta * U[j]
         for i in range(n):
             acc = 0.0
@@ -361,17 +361,17 @@ def _panel_error_template(a, hh, z, u, u1, rtol, u_ref):
     return hh * grow_z * tail * rho ** 3, rtol * (max(abs(u), abs(u1)) + u_ref)
 
 
-def _kink_template(v, out, x, hh, z, u, a, c, sigma, mode, u_ref, react, buf, tb, nv, a2, c2):
+def _kink_template(v, out, x, hh, z, u, a, c, sigma, branch, u_ref, react, buf, tb, nv, a2, c2):
     """theta of the first sign change inside the panel of a reaction the model names as
     a kink of its law (2 where none changes sign); ``out`` holds the panel's end."""
     first = 2.0
     for q in KINKS:
-        if react[q] * out[mode, REACTIONS[q]] < 0.0:
+        if react[q] * out[branch, REACTIONS[q]] < 0.0:
             sg = 1.0 if react[q] > 0.0 else -1.0
             lo, hi, _ul, _uh = ROOT(v, REACTIONS[q], sg, 0.0, 1.0, sg * react[q],
-                                    sg * out[mode, REACTIONS[q]],
+                                    sg * out[branch, REACTIONS[q]],
                                     4.0 * EPS * max(abs(x), hh) / hh, x, hh, z, u, a, c,
-                                    sigma, mode, u_ref, buf, tb, nv, a2, c2, bool(False))
+                                    sigma, branch, u_ref, buf, tb, nv, a2, c2, bool(False))
             first = min(first, hi)
     return first
 
@@ -387,7 +387,7 @@ def _store_panel_template(panels, n_pan, s, hh, z, u, theta_end, a, c):
     return panels, n_pan + 1
 
 
-def _end_template(v, out, x, hh, z, u, u1, a, c, sigma, mode, u_ref, coef_sign, coef_prev,
+def _end_template(v, out, x, hh, z, u, u1, a, c, sigma, branch, u_ref, coef_sign, coef_prev,
                   react, buf, tb, nv, a2, c2):
     """The first theta of a panel where the stage stops, to double precision in phi.
 
@@ -410,8 +410,8 @@ def _end_template(v, out, x, hh, z, u, u1, a, c, sigma, mode, u_ref, coef_sign, 
         # the zero of u (u > 0 at the panel start, where the stage goes on)
         lo, hi, u_lo, u_hi = ROOT(v, int(-1), 1.0, 0.0, 1.0, u, u1,
                                   4.0 * EPS * max(abs(x), hh) / hh, x, hh, z, u, a, c,
-                                  sigma, mode, u_ref, buf, tb, nv, a2, c2, bool(True))
-        if lo == 0.0 or STILL(v, out, x + sigma * lo * hh, u_lo, sigma, mode, coef_sign):
+                                  sigma, branch, u_ref, buf, tb, nv, a2, c2, bool(True))
+        if lo == 0.0 or STILL(v, out, x + sigma * lo * hh, u_lo, sigma, branch, coef_sign):
             return True, hi, False, -1, 2.0, math.nan, 0.0, 0.0
         th_hi = lo
     c_fld, c_th, c_u = -1, 2.0, math.nan
@@ -424,30 +424,30 @@ def _end_template(v, out, x, hh, z, u, u1, a, c, sigma, mode, u_ref, coef_sign, 
     for q in range(nr + 1):
         fld = REACTIONS[q] if q < nr else nx.COEF
         g0 = react[q] if q < nr else coef_prev
-        g1 = out[mode, fld]
+        g1 = out[branch, fld]
         if g0 * g1 < 0.0:
             sg = 1.0 if g0 > 0.0 else -1.0
             g1 = sg * g1
             top = th_hi
             if c_lo > 0.0:  # a zero found: this one matters only before it
-                g1 = sg * ROW(v, x + sigma * c_lo * hh, c_ulo, sigma, mode)[fld]
+                g1 = sg * ROW(v, x + sigma * c_lo * hh, c_ulo, sigma, branch)[fld]
                 top = c_lo
                 if g1 > 0.0:
                     continue  # its first zero is not before c_lo: not earlier
             l_c, h_c, ul_c, u_c = ROOT(v, fld, sg, 0.0, top, sg * g0, g1, tol_b, x, hh,
-                                       z, u, a, c, sigma, mode, u_ref, buf, tb, nv, a2, c2,
+                                       z, u, a, c, sigma, branch, u_ref, buf, tb, nv, a2, c2,
                                        bool(True))
             if h_c < c_th and u_c == u_c and ul_c == ul_c:
                 c_fld, c_th, c_u, c_lo, c_ulo = fld, h_c, u_c, l_c, ul_c
     for d_try in (1e-11, 1e-8):  # the narrow bracket first: ten bisections fewer
         if guided or not (c_th - d_try > 0.0 and c_th + d_try < th_hi):
             break
-        u_d = REFINE(v, c_th + d_try, x, hh, z, u, a, c, sigma, mode, u_ref, buf, tb,
+        u_d = REFINE(v, c_th + d_try, x, hh, z, u, a, c, sigma, branch, u_ref, buf, tb,
                      nv, a2, c2)
         slope = (u_d - c_u) / d_try
         if STILL(v, out, x + sigma * (c_th - d_try) * hh, c_u - slope * d_try, sigma,
-                 mode, coef_sign) and not STILL(v, out, x + sigma * (c_th + d_try) * hh,
-                                                u_d, sigma, mode, coef_sign):
+                 branch, coef_sign) and not STILL(v, out, x + sigma * (c_th + d_try) * hh,
+                                                u_d, sigma, branch, coef_sign):
             lo, hi, guided, dd = c_th - d_try, c_th + d_try, True, d_try
     for _b in range(200):
         if (hi - lo) * hh <= 2.0 * EPS * max(abs(x), hh):
@@ -456,8 +456,8 @@ def _end_template(v, out, x, hh, z, u, u1, a, c, sigma, mode, u_ref, coef_sign, 
         if guided:
             um = c_u + slope * (mid - c_th)
         else:
-            um = REFINE(v, mid, x, hh, z, u, a, c, sigma, mode, u_ref, buf, tb, nv, a2, c2)
-        if STILL(v, out, x + sigma * mid * hh, um, sigma, mode, coef_sign):
+            um = REFINE(v, mid, x, hh, z, u, a, c, sigma, branch, u_ref, buf, tb, nv, a2, c2)
+        if STILL(v, out, x + sigma * mid * hh, um, sigma, branch, coef_sign):
             lo = mid
         else:
             hi = mid
@@ -478,10 +478,10 @@ def _leave_template(out, sigma):
     return math.nan
 
 
-def _end_reason_template(v, out, x, hh, z, u, a, c, sigma, mode, u_ref, th_e, x_e, u_e,
+def _end_reason_template(v, out, x, hh, z, u, a, c, sigma, branch, u_ref, th_e, x_e, u_e,
                          guided, c_th, c_u, slope, dd, buf, tb, nv, a2, c2):
     """What ends the stage at (x_e, u_e), theta ``th_e`` of the panel, where u is not
-    zero: ``(reason, th_e, x_e, u_e, next_mode)`` (an Event code or _ZERO; the end
+    zero: ``(reason, th_e, x_e, u_e, next_branch)`` (an Event code or _ZERO; the end
     moves past a tie, see below).
 
     Within 1e-12 of a boundary the tie rules can admit two rows (a contact kept
@@ -489,7 +489,7 @@ def _end_reason_template(v, out, x, hh, z, u, a, c, sigma, mode, u_ref, th_e, x_
     indeterminacy persists past the boundary; a tie does not: probe just beyond
     it on this panel's dense output for the first state decided by another row.
     """
-    next_mode = mode
+    next_branch = branch
     n2, adm2, lost2, sing2 = CLASSIFY(v, x_e, sigma * math.sqrt(max(u_e, 0.0)), out)
     if n2 == nx.N_TWO and u_e > 0.0 and th_e < 1.0 and DOMAIN(v):
         for k in range(1, 10):
@@ -499,12 +499,12 @@ def _end_reason_template(v, out, x, hh, z, u, a, c, sigma, mode, u_ref, th_e, x_
             if guided and abs(th_p - c_th) <= dd:
                 u_p = c_u + slope * (th_p - c_th)
             else:
-                u_p = REFINE(v, th_p, x, hh, z, u, a, c, sigma, mode, u_ref, buf, tb,
+                u_p = REFINE(v, th_p, x, hh, z, u, a, c, sigma, branch, u_ref, buf, tb,
                              nv, a2, c2)
             x_p = x + sigma * th_p * hh
             n3, adm3, lost3, sing3 = CLASSIFY(v, x_p, sigma * math.sqrt(max(u_p, 0.0)),
                                               out)
-            if n3 == 1 and u_p > 0.0 and adm3 != mode:
+            if n3 == 1 and u_p > 0.0 and adm3 != branch:
                 th_e, x_e, u_e = th_p, x_p, u_p
                 n2, adm2, lost2, sing2 = n3, adm3, lost3, sing3
                 break
@@ -522,33 +522,33 @@ def _end_reason_template(v, out, x, hh, z, u, a, c, sigma, mode, u_ref, th_e, x_
     elif n2 == 1:
         if out[adm2, nx.STATUS] == nx.SEPARATION:
             reason = ev.CONTACT_LOST  # the only motion from here leaves a contact
-        elif adm2 == mode:
+        elif adm2 == branch:
             reason = ev.SINGULAR  # same branch, its coefficient changed sign
         elif DIRECTIONS[adm2] == sigma:
             reason = ev.SWITCH
-            next_mode = adm2
+            next_branch = adm2
         else:
             reason = ev.NO_SOLUTION
     else:
         reason = ev.fate_without_unique(n2, lost2, sing2)
-    return reason, th_e, x_e, u_e, next_mode
+    return reason, th_e, x_e, u_e, next_branch
 
 
-def _contact_end_template(v, out, x, hh, z, u, a, c, sigma, mode, u_ref, th_e, x_e, u_e,
+def _contact_end_template(v, out, x, hh, z, u, a, c, sigma, branch, u_ref, th_e, x_e, u_e,
                           react, c_fld, c_th, c_u, buf, tb, nv, a2, c2):
     """The end of a stage that loses a contact, moved to N = 0 (the classification flips
     where N < -1e-12 of its scale): ``(th_e, x_e, u_e)``."""
     best = -1.0
     u_best = math.nan
     for q in range(REACTIONS.shape[0]):
-        if react[q] > 0.0 and out[mode, REACTIONS[q]] < 0.0:
+        if react[q] > 0.0 and out[branch, REACTIONS[q]] < 0.0:
             if REACTIONS[q] == c_fld and c_th <= th_e:
                 hi, u_hi = c_th, c_u  # located above
             else:
                 lo, hi, _ul, u_hi = ROOT(v, REACTIONS[q], 1.0, 0.0, th_e, react[q],
-                                         out[mode, REACTIONS[q]],
+                                         out[branch, REACTIONS[q]],
                                          2.0 * EPS * max(abs(x), hh) / hh, x, hh, z, u,
-                                         a, c, sigma, mode, u_ref, buf, tb, nv, a2, c2,
+                                         a, c, sigma, branch, u_ref, buf, tb, nv, a2, c2,
                                          bool(True))
             if hi > best:
                 best, u_best = hi, u_hi
@@ -556,15 +556,15 @@ def _contact_end_template(v, out, x, hh, z, u, a, c, sigma, mode, u_ref, th_e, x
         th_e = best
         x_e = x + sigma * th_e * hh
         u_e = u_best if u_best == u_best else REFINE(v, th_e, x, hh, z, u, a, c, sigma,
-                                                     mode, u_ref, buf, tb, nv, a2, c2)
+                                                     branch, u_ref, buf, tb, nv, a2, c2)
     return th_e, x_e, u_e
 
 
-def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, panels, mats,
+def _stage_template(v, out, branch, sigma, x0, u0, stop, u_ref, rtol, h_max, h, panels, mats,
                     vecs, buf, tb, react, piv):
-    """Follow one stage (branch ``mode``, sign ``sigma``) from (x0, u0) towards ``stop``.
+    """Follow one stage (``branch``, sign ``sigma``) from (x0, u0) towards ``stop``.
 
-    Returns ``(reason, x_end, u_end, n_panels, panels, next_mode, h)``: an Event
+    Returns ``(reason, x_end, u_end, n_panels, panels, next_branch, h)``: an Event
     code or _ZERO, the end state, the panels (rows s0, h, z, u0, theta_end, a,
     c: the dense output), the branch after a switch, and the last panel width.
     ``mats``, ``vecs``, ``buf``, ``tb``, ``react``, ``piv``: scratch of the curve (no heap
@@ -575,7 +575,7 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
     nv = vecs[8]
     a2 = vecs[9]
     c2 = vecs[10]
-    coef0, coef_sign = STAGE_START(v, mode, sigma, x0, u0, react)
+    coef0, coef_sign = STAGE_START(v, branch, sigma, x0, u0, react)
     coef_prev = coef0
     x, u, s = x0, u0, 0.0
     n_pan = int(0)  # not a literal: see the note above PIECES
@@ -587,20 +587,20 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
     for _ in range(10_000_000):
         remaining = sigma * (stop - x)
         if remaining <= 0.0:
-            return ev.HORIZON, x, u, n_pan, panels, mode, h
+            return ev.HORIZON, x, u, n_pan, panels, branch, h
         hh = min(h, h_max, remaining)
-        f0, s0 = RATE(v, x, u, sigma, mode, u_ref)
+        f0, s0 = RATE(v, x, u, sigma, branch, u_ref)
         beta = 2.0 * sigma * s0
         if beta > 0.0 and beta * hh > Z_GROW:
             hh = Z_GROW / beta
         if not (hh > 16.0 * EPS * max(abs(x), 1.0)) or not (beta == beta):
             n2, adm2, lost2, sing2 = CLASSIFY(v, x, sigma * math.sqrt(max(u, 0.0)), out)
-            small = abs(out[mode, nx.COEF]) < 1e-6 * abs(coef0)
+            small = abs(out[branch, nx.COEF]) < 1e-6 * abs(coef0)
             return (ev.SINGULAR if (sing2 or small) else ev.STEP_FAILURE), x, u, n_pan, \
-                panels, mode, h
+                panels, branch, h
         last = hh == remaining
         z = beta * hh
-        if not COLLOCATE(v, x, u, hh, z, beta, f0, sigma, mode, u_ref, tol_newton, mats, vecs,
+        if not COLLOCATE(v, x, u, hh, z, beta, f0, sigma, branch, u_ref, tol_newton, mats, vecs,
                          buf, piv):
             h = 0.25 * hh
             truncated = False
@@ -620,12 +620,12 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
         ratio = max(est / tol, ratio_prev * min(hh / h_prev, 4.0) ** 11)
         h_next = hh * (4.0 if ratio == 0.0 else min(4.0, max(0.2, 0.9 * ratio ** (-1.0 / 11.0))))
         if abs(u1) > U_MAX:
-            return ev.STEP_FAILURE, x, u, n_pan, panels, mode, h
+            return ev.STEP_FAILURE, x, u, n_pan, panels, branch, h
         x1 = stop if last else x + sigma * hh
-        if STILL(v, out, x1, u1, sigma, mode, coef_sign):
+        if STILL(v, out, x1, u1, sigma, branch, coef_sign):
             if not truncated and KINKS.shape[0] > 0:
                 # a reaction with a kink in the law changes sign inside: end the panel there
-                first = KINK(v, out, x, hh, z, u, a, c, sigma, mode, u_ref, react, buf, tb, nv,
+                first = KINK(v, out, x, hh, z, u, a, c, sigma, branch, u_ref, react, buf, tb, nv,
                              a2, c2)
                 if first < 1.0 and first * hh > 1e-9 * max(abs(x), 1.0):
                     h = first * hh
@@ -639,39 +639,39 @@ def _stage_template(v, out, mode, sigma, x0, u0, stop, u_ref, rtol, h_max, h, pa
             truncated = False
             panels, n_pan = STORE_PANEL(panels, n_pan, s, hh, z, u, 1.0, a, c)
             for q in range(REACTIONS.shape[0]):
-                react[q] = out[mode, REACTIONS[q]]
-            coef_prev = out[mode, nx.COEF]
+                react[q] = out[branch, REACTIONS[q]]
+            coef_prev = out[branch, nx.COEF]
             s += hh
             x, u, h = x1, u1, h_next
             if last:
-                return ev.HORIZON, x, u, n_pan, panels, mode, h
+                return ev.HORIZON, x, u, n_pan, panels, branch, h
             continue
         # -- the stage ends inside this panel: locate the first state off it --
         zero, th_e, guided, c_fld, c_th, c_u, slope, dd = END(
-            v, out, x, hh, z, u, u1, a, c, sigma, mode, u_ref, coef_sign, coef_prev, react, buf,
+            v, out, x, hh, z, u, u1, a, c, sigma, branch, u_ref, coef_sign, coef_prev, react, buf,
             tb, nv, a2, c2)
         x_e = stop if (last and th_e == 1.0) else x + sigma * th_e * hh
         reason = _ZERO
         u_e = 0.0
-        next_mode = mode
+        next_branch = branch
         if not zero:  # (at a zero of u the end is the rest state)
             if th_e == 1.0:
                 u_e = u1
             elif guided:
                 u_e = c_u + slope * (th_e - c_th)
             else:
-                u_e = REFINE(v, th_e, x, hh, z, u, a, c, sigma, mode, u_ref, buf, tb, nv, a2, c2)
-            reason, th_e, x_e, u_e, next_mode = END_REASON(
-                v, out, x, hh, z, u, a, c, sigma, mode, u_ref, th_e, x_e, u_e, guided, c_th, c_u,
+                u_e = REFINE(v, th_e, x, hh, z, u, a, c, sigma, branch, u_ref, buf, tb, nv, a2, c2)
+            reason, th_e, x_e, u_e, next_branch = END_REASON(
+                v, out, x, hh, z, u, a, c, sigma, branch, u_ref, th_e, x_e, u_e, guided, c_th, c_u,
                 slope, dd, buf, tb, nv, a2, c2)
         if reason == ev.CONTACT_LOST:
-            th_e, x_e, u_e = CONTACT_END(v, out, x, hh, z, u, a, c, sigma, mode, u_ref, th_e,
+            th_e, x_e, u_e = CONTACT_END(v, out, x, hh, z, u, a, c, sigma, branch, u_ref, th_e,
                                          x_e, u_e, react, c_fld, c_th, c_u, buf, tb, nv, a2, c2)
         if reason == _ZERO:
             u_e = 0.0
         panels, n_pan = STORE_PANEL(panels, n_pan, s, hh, z, u, th_e, a, c)
-        return reason, x_e, u_e, n_pan, panels, next_mode, hh
-    return ev.STEP_FAILURE, x, u, n_pan, panels, mode, h
+        return reason, x_e, u_e, n_pan, panels, next_branch, hh
+    return ev.STEP_FAILURE, x, u, n_pan, panels, branch, h
 
 
 def _flush_template(pts, lanes, rows, nb, uo, nt):
@@ -683,7 +683,7 @@ def _flush_template(pts, lanes, rows, nb, uo, nt):
     return 0
 
 
-def _stage_points_template(v, panels, n_pan, sigma, mode, u_ref, x0, u0, x_e, u_e, points, pts,
+def _stage_points_template(v, panels, n_pan, sigma, branch, u_ref, x0, u0, x_e, u_e, points, pts,
                            npts, stage, vecs, outs, buf, tb, lanes, rows):
     """Append the stage's output points (phi, u, stage): evenly spaced in phi.
 
@@ -734,7 +734,7 @@ def _stage_points_template(v, panels, n_pan, sigma, mode, u_ref, x0, u0, x_e, u_
                     on_series = series(z, up, hh, c, tb)
                     for j in range(OUT_NODES):
                         uj = dense_at(te * OUT_THETA[j], on_series, tb, z, up, hh, a, c, buf)
-                        fj = VALUE(v, xp + sigma * hs * OUT_THETA[j], uj, sigma, mode, u_ref)
+                        fj = VALUE(v, xp + sigma * hs * OUT_THETA[j], uj, sigma, branch, u_ref)
                         nvo[j] = 2.0 * sigma * fj - beta * uj
                     nt = solve_legendre(z * te, up, hs, nvo, uo, wo, ro)
                     ready = p
@@ -746,7 +746,7 @@ def _stage_points_template(v, panels, n_pan, sigma, mode, u_ref, x0, u0, x_e, u_
                 uk = math.nan  # the sum's, when the points are flushed
             else:
                 uk = REFINE(v, theta, x0 + sigma * row[0], hh, z, up, row[5:5 + n],
-                            row[5 + n:5 + 2 * n], sigma, mode, u_ref, buf, tb, nv, a2, c2)
+                            row[5 + n:5 + 2 * n], sigma, branch, u_ref, buf, tb, nv, a2, c2)
         pts[npts + k, 0] = x0 + sigma * sk
         pts[npts + k, 1] = uk
         pts[npts + k, 2] = stage
@@ -780,7 +780,7 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
     react = np.empty(REACTIONS.shape[0])
     piv = np.empty(NODES, dtype=np.int64)
     code = -1
-    mode = -1
+    branch = -1
     if omega0 != 0.0:
         n, adm, lost, sing = CLASSIFY(v, phi0, omega0, out)
         bound = LEAVE(out, omega0)
@@ -794,36 +794,36 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
             if out[adm, nx.STATUS] == nx.SEPARATION:
                 code = ev.CONTACT_LOST  # the only motion leaves a contact
             else:
-                mode = adm
+                branch = adm
         else:
             code = ev.fate_without_unique(n, lost, sing)
     if omega0 == 0.0:
-        code, mode = AT_REST(v, phi0, out)
+        code, branch = AT_REST(v, phi0, out)
     if code >= 0:
         sign = 0.0 if omega0 == 0.0 else (1.0 if omega0 > 0.0 else -1.0)
         pts[0, 0], pts[0, 1], pts[0, 2] = phi0, omega0 * omega0, 0.0
         stg[0, 0], stg[0, 1], stg[0, 2] = sign, phi0, omega0 * omega0
         stg[0, 3], stg[0, 4], stg[0, 5] = code, phi0, omega0 * omega0
         return pts[:1], stg[:1]
-    sigma = DIRECTIONS[mode]
+    sigma = DIRECTIONS[branch]
     x, u = phi0, omega0 * omega0
     h = h_first
     while True:
         stop = hi if sigma > 0.0 else lo
-        reason, x_e, u_e, n_pan, panels, next_mode, h = STAGE(
-            v, out, mode, sigma, x, u, stop, u_ref, rtol, h_max, h, panels, mats, vecs, buf, tb,
+        reason, x_e, u_e, n_pan, panels, next_branch, h = STAGE(
+            v, out, branch, sigma, x, u, stop, u_ref, rtol, h_max, h, panels, mats, vecs, buf, tb,
             react, piv)
-        pts, npts = STAGE_POINTS(v, panels, n_pan, sigma, mode, u_ref, x, u, x_e, u_e, points,
+        pts, npts = STAGE_POINTS(v, panels, n_pan, sigma, branch, u_ref, x, u, x_e, u_e, points,
                                  pts, npts, float(nst), vecs, outs, buf, tb, lanes, rows)
-        new_mode = mode
+        new_branch = branch
         if reason == _ZERO:
             code, m2 = AT_REST(v, x_e, out)
             if code < 0:
-                reason, new_mode = ev.REVERSAL, m2
+                reason, new_branch = ev.REVERSAL, m2
             else:
                 reason = code
         elif reason == ev.SWITCH:
-            new_mode = next_mode
+            new_branch = next_branch
         stg = grow(stg, nst + 1)
         stg[nst, 0], stg[nst, 1], stg[nst, 2] = sigma, x, u
         stg[nst, 3], stg[nst, 4], stg[nst, 5] = reason, x_e, u_e
@@ -834,8 +834,8 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
                 stg[nst - 1, 3] = ev.MAX_EVENTS
             break
         x, u = x_e, (0.0 if reason == ev.REVERSAL else u_e)
-        mode = new_mode
-        sigma = DIRECTIONS[mode]
+        branch = new_branch
+        sigma = DIRECTIONS[branch]
         h = max(h, 1e-3 * h_max)
     return pts[:npts], stg[:nst]
 

@@ -92,8 +92,8 @@ class StageDriver:
         self.key = None
 
     # -- the model, from Python ---------------------------------------------
-    def branch_row(self, t, y, mode):
-        """The row of branch ``mode`` at (t, y), cached on the last (t, y)."""
+    def branch_row(self, t, y, branch):
+        """The row of ``branch`` at (t, y), cached on the last (t, y)."""
         key = (t, y.tobytes())
         if key != self.key:
             v = self.v
@@ -103,45 +103,45 @@ class StageDriver:
             row = self.row
             for c in self.acc_col:
                 row[c] = np.nan
-            self.m.branch(v, mode, row)
+            self.m.branch(v, branch, row)
             self.key = key
         return self.row
 
     # -- one stage ------------------------------------------------------------
-    def stage_functions(self, mode, coef_sign):
-        """The right-hand side and the terminal events of the stage of ``mode``."""
+    def stage_functions(self, branch, coef_sign):
+        """The right-hand side and the terminal events of the stage of ``branch``."""
         nd, cols, branch_row = self.ndof, self.acc_col, self.branch_row
         if nd == 1:
             c0 = cols[0]
 
             def fun(t, y):
-                return (y[1], branch_row(t, y, mode)[c0])
+                return (y[1], branch_row(t, y, branch)[c0])
         elif nd == 2:
             c0, c1 = cols
 
             def fun(t, y):
-                row = branch_row(t, y, mode)
+                row = branch_row(t, y, branch)
                 return (y[2], y[3], row[c0], row[c1])
         else:
             def fun(t, y):
-                row = branch_row(t, y, mode)
+                row = branch_row(t, y, branch)
                 return tuple(y[nd:]) + tuple(row[c] for c in cols)
 
         events = []
-        d, vel = self.directions[mode], self.vel
+        d, vel = self.directions[branch], self.vel
         if d != 0.0:
             def velocity(t, y):
                 return d * y[vel]
             events.append(("velocity", velocity))
         if coef_sign != 0.0:
             def coefficient(t, y):
-                return coef_sign * branch_row(t, y, mode)[nx.COEF]
+                return coef_sign * branch_row(t, y, branch)[nx.COEF]
             events.append(("coefficient", coefficient))
         still, out, v, stick = self.kernels.still, self.out, self.v, self.m.stick_branch
 
         def classification(t, y):
             y = np.ascontiguousarray(y, dtype=float)
-            if still(v, y, out, mode, coef_sign):
+            if still(v, y, out, branch, coef_sign):
                 return 1.0
             # a velocity the model counts as zero: the velocity event's
             zero_velocity = d != 0.0 and out[stick, nx.STATUS] != nx.ABSENT
@@ -152,15 +152,15 @@ class StageDriver:
             e.direction = -1.0
         return fun, events
 
-    def event(self, fun, t, y, mode, coef_sign):
+    def event(self, fun, t, y, branch, coef_sign):
         """The integrator's event piece at a terminal event (t, y) of the stage of
-        ``mode``: ``(t, y, kind, branch)``, kind -1 for a rounding flicker."""
+        ``branch``: ``(t, y, kind, branch)``, kind -1 for a rounding flicker."""
         y = np.array(y, dtype=float)
         h = 1e9 * 2.0 * _EPS * max(1.0, abs(t))  # the probes past a tie reach t + h
         r = np.stack([y, h * np.asarray(fun(t, y), dtype=float)])  # the Euler line
-        t, kind, new_mode = self.kernels.event(self.v, y, t, t, h, 0.0, r, mode, coef_sign,
+        t, kind, new_branch = self.kernels.event(self.v, y, t, t, h, 0.0, r, branch, coef_sign,
                                                self.out, self.yb)
-        return t, y, int(kind), int(new_mode)
+        return t, y, int(kind), int(new_branch)
 
     def run(self, method: str, rtol: float, atol: float, t_end: float, t_eval: np.ndarray,
             dense: bool = False, max_events: int = 10_000, h_max: float = math.inf) -> Staged:
@@ -177,14 +177,14 @@ class StageDriver:
         ts, ys = [], []
         n_rev = nfev = flickers = 0
         events, stages = [], []
-        kind, mode = self.kernels.start(self.v, y, self.out)
+        kind, branch = self.kernels.start(self.v, y, self.out)
         fate = None if kind == ev.START else int(kind)
         if fate is None:
-            events.append((t, "start", mode, y.copy()))
+            events.append((t, "start", branch, y.copy()))
         i_eval = 0
         while fate is None:
-            coef_sign = float(self.kernels.coefficient(self.out, mode)[1])
-            fun, evs = self.stage_functions(mode, coef_sign)
+            coef_sign = float(self.kernels.coefficient(self.out, branch)[1])
+            fun, evs = self.stage_functions(branch, coef_sign)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # rtol near 100 eps; LSODA's own notes
                 sol = solve_ivp(fun, (t, t_end), y, method=method, rtol=rtol, atol=atol,
@@ -202,7 +202,7 @@ class StageDriver:
                 break
             if sol.status == 0:  # reached t_end on this stage
                 if dense:
-                    stages.append((t, t_end, mode, sol.sol))
+                    stages.append((t, t_end, branch, sol.sol))
                 t, y = t_end, np.array(sol.y[:, -1], dtype=float)
                 fate = ev.HORIZON
                 break
@@ -210,8 +210,8 @@ class StageDriver:
             which, t_ev = max(((j, x[-1]) for j, x in enumerate(sol.t_events) if x.size),
                               key=lambda p: p[1])
             if dense:
-                stages.append((t, float(t_ev), mode, sol.sol))
-            t, y, kind, new_mode = self.event(fun, float(t_ev), sol.y_events[which][-1], mode,
+                stages.append((t, float(t_ev), branch, sol.sol))
+            t, y, kind, new_branch = self.event(fun, float(t_ev), sol.y_events[which][-1], branch,
                                               coef_sign)
             action, code, flickers = ev.after_event(kind, flickers, len(events), max_events)
             if action == ev.GO_ON:  # a rounding flicker: the stage goes on from here
@@ -221,8 +221,8 @@ class StageDriver:
             if action == ev.END:
                 fate = int(code)
                 break
-            events.append((t, ev.Event(kind).name.lower(), new_mode, y.copy()))
-            mode = new_mode
+            events.append((t, ev.Event(kind).name.lower(), new_branch, y.copy()))
+            branch = new_branch
         if fate == ev.REST and i_eval < te.size:  # at rest for good
             ts.append(te[i_eval:])
             ys.append(np.repeat(y[None, :], te.size - i_eval, axis=0))
