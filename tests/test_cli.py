@@ -613,7 +613,7 @@ def test_progress_is_silent_in_a_pipe_or_a_log(tmp_path):
     delay) and a bar, in a child whose stderr is a pipe; a library call that asks for
     progress=True still gets it."""
     code = ("import time\n"
-            "from phasemap import progress\n"
+            "from phasemap.core import progress\n"
             "with progress.enable():\n"
             "    with progress.activity('compiling'):\n"
             "        time.sleep(1.6)\n"

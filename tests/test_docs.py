@@ -138,7 +138,7 @@ def test_guide_code_block_runner_catches_a_wrong_example(tmp_path):
 @pytest.mark.parametrize("module", ["phasemap.core.args", "phasemap.maps.classify", "phasemap.maps.scene",
                                     "phasemap.motion.simulate",
                                     "phasemap.motion.phase", "phasemap.plot", "phasemap.study",
-                                    "phasemap.atlas.atomic", "phasemap.atlas.write", "phasemap.atlas.read",
+                                    "phasemap.atlas.write", "phasemap.atlas.read",
                                     "phasemap.maps.layers", "phasemap.models", "phasemap.systems",
                                     "phasemap.systems.seeds.closed_forms",
                                     "phasemap.core.model", "phasemap.core.events", "phasemap.core.cache",

@@ -35,7 +35,7 @@ known ones (:func:`difflib.get_close_matches`).
 Examples
 --------
 >>> import numpy as np
->>> from phasemap import _args
+>>> from phasemap.core import args as _args
 >>> _args.real("phi", np.float32(0.5), where="ladder")
 0.5
 >>> _args.count("max_steps", np.int64(1000))

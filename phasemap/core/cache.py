@@ -48,7 +48,7 @@ owns that folder:
 ``phasemap cache info`` describes the cache and ``phasemap cache clear``
 empties it (:func:`info`, :func:`clear`).
 
->>> from phasemap import cache
+>>> from phasemap.core import cache
 >>> cache.info().limit == cache.limit()
 True
 """
