@@ -142,7 +142,7 @@ def test_guide_code_block_runner_catches_a_wrong_example(tmp_path):
                                     "phasemap.maps.layers", "phasemap.models", "phasemap.systems",
                                     "phasemap.systems.seeds.closed_forms",
                                     "phasemap.core.model", "phasemap.core.events", "phasemap.core.cache",
-                                    "phasemap.core.memo",
+                                    "phasemap.core.memo", "phasemap.motion.impact",
                                     "phasemap.maps.blocks", "phasemap.declare.system",
                                     "phasemap.declare.api", "phasemap.declare.contacts",
                                     "phasemap.declare.law", "phasemap.declare.admissibility"])

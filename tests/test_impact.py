@@ -1,0 +1,202 @@
+"""Frictional impacts of one contact (phasemap.motion.impact), against figures worked
+out independently: the rod's Delassus matrix from its geometry and from its mass matrix
+and contact Jacobian, the three restitution laws on one state, the impact without
+collision of the Painleve rod, random impacts against a regularised Darboux-Keller
+integration by scipy, and the Zeno time against the series of bounce times."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from phasemap.motion.impact import delassus, delassus_body, impact, zeno_time
+
+
+def rod_W(theta: float, m: float = 1.0, l: float = 1.0) -> np.ndarray:
+    """The Delassus matrix of a uniform rod (half-length l) touching the floor with its
+    end A, at angle theta to the floor, in (n, t) = ((0, 1), (1, 0)): the generalised
+    coordinates (x_G, y_G, phi) with M = diag(m, m, m (2l)^2 / 12) and A = G - l (cos
+    phi, sin phi), whose velocity rows are dA/dq."""
+    M = np.diag([m, m, m * (2 * l) ** 2 / 12])
+    J = np.array([[0.0, 1.0, -l * math.cos(theta)],     # y_A' = y_G' - l cos(phi) phi'
+                  [1.0, 0.0, l * math.sin(theta)]])     # x_A' = x_G' + l sin(phi) phi'
+    return J @ np.linalg.solve(M, J.T)
+
+
+def test_two_routes_to_the_rods_W_agree():
+    th = 0.7
+    W = rod_W(th)
+    assert np.allclose(W, delassus(np.diag([1, 1, 1 / 3]), [[0, 1, -math.cos(th)],
+                                                            [1, 0, math.sin(th)]]))
+    assert np.allclose(W, delassus_body(1.0, 1 / 3, (-math.cos(th), -math.sin(th))),
+                       atol=1e-15)
+    assert np.allclose(rod_W(math.pi / 4), [[2.5, -1.5], [-1.5, 2.5]])
+
+
+@pytest.mark.parametrize("law, e, expected", [
+    ("newton", 0.9, (1.0, 0.4, 0.05)),
+    ("poisson", 0.9, (0.83125, 0.29875, -0.0790937500)),
+    ("stronge", 0.9, (0.8546611649, 0.3127966989, -0.0639062500)),
+    ("newton", 1.0, (1.0625, 0.4375, 0.109375)),
+])
+@pytest.mark.filterwarnings("ignore:Newton's law made energy")
+def test_the_three_laws_on_one_state(law, e, expected):
+    """The rod at 45 degrees, at rest, its end A moving at (0.5, -1), mu = 1.  Worked by
+    hand: slip stops at P = 0.125 (v_n = -0.5), then stick with dv_n/dP = det W / W_tt =
+    1.6 and dP_t/dP = 0.6; compression ends at P_c = 0.4375 with work -0.171875; Newton
+    ends at v_n = 0.9 (P = 1), Poisson at 1.9 P_c, Stronge where 0.8 x^2 = 0.81 x 0.171875."""
+    r = impact(rod_W(math.pi / 4), (-1.0, 0.5), mu=1.0, e=e, law=law)
+    assert (r.P_n, r.P_t, r.dKE) == pytest.approx(expected, abs=1e-10)
+    assert r.phases == ("slip_pos", "stick")
+    assert r.P_compression == pytest.approx(0.4375, abs=1e-14)
+    assert r.W_compression == pytest.approx(-0.171875, abs=1e-14)
+    assert r.gains_energy == (law == "newton")
+
+
+def test_newton_says_when_it_makes_energy():
+    with pytest.warns(RuntimeWarning, match="Newton's law made energy"):
+        impact(rod_W(math.pi / 4), (-1.0, 0.5), mu=1.0, e=1.0, law="newton")
+
+
+def test_the_painleve_rods_impact_without_collision():
+    """m = 1, l = 1, f = 1.5, theta = arctan 2, at rest but for x_A' = -1: P_n = 0.3,
+    P_t = 0.4, (x_G', y_G', omega)+ = (-0.6, 0.3, 0.3 sqrt 5), KE from 0.5 to 0.3, and
+    the rod sticks."""
+    th = math.atan(2.0)
+    r = impact(rod_W(th), (0.0, -1.0), mu=1.5, e=0.0)
+    assert r.P_n == pytest.approx(0.3, abs=1e-12)
+    assert r.P_t == pytest.approx(0.4, abs=1e-12)
+    assert r.sticks and r.phases == ("slip_neg", "stick")
+    # the body's velocities from the impulse, by Newton-Euler (independent of W)
+    v_g = np.array([-1.0, 0.0]) + np.array([r.P_t, r.P_n])  # m = 1
+    rho = -np.array([math.cos(th), math.sin(th)])           # A from G
+    omega = 3.0 * (rho[0] * r.P_n - rho[1] * r.P_t)          # I = 1/3
+    assert np.allclose([*v_g, omega], [-0.6, 0.3, 0.3 * math.sqrt(5)], atol=1e-12)
+    ke = 0.5 * (v_g @ v_g) + 0.5 / 3 * omega ** 2
+    assert ke == pytest.approx(0.3, abs=1e-12)
+    assert r.dKE == pytest.approx(-0.2, abs=1e-12)
+
+
+def regularised(W, v0, mu, e, law, eps=1e-9):
+    """The same impact by scipy: dv/dP = W (1, -mu tanh(v_t / eps)) integrated in P (a
+    smooth friction law, whose stick is v_t of order eps), with the work int v_n dP, the
+    compression end at v_n = 0 and the law's end as events."""
+    Wnn, Wnt, Wtt = W[0, 0], W[0, 1], W[1, 1]
+
+    def f(P, y):
+        vn, vt, Pt, work = y
+        k = -mu * math.tanh(vt / eps)
+        return [Wnn + Wnt * k, Wnt + Wtt * k, k, vn]
+
+    opts = dict(method="LSODA", rtol=1e-11, atol=1e-13)
+    cross = lambda P, y: y[0]  # noqa: E731
+    cross.terminal, cross.direction = True, 1
+    y0 = [v0[0], v0[1], 0.0, 0.0]
+    a = solve_ivp(f, (0, 1e3), y0, events=cross, **opts)
+    Pc, yc = a.t_events[0][0], a.y_events[0][0]
+    Wc = yc[3]
+    if e == 0.0:
+        return Pc, yc[2]
+    if law == "poisson":
+        b = solve_ivp(f, (Pc, (1 + e) * Pc), yc, **opts)
+        return b.t[-1], b.y[2, -1]
+    if law == "newton":
+        end = lambda P, y: y[0] + e * v0[0]  # noqa: E731
+    else:
+        end = lambda P, y: (y[3] - Wc) - e * e * (-Wc)  # noqa: E731
+    end.terminal, end.direction = True, 1
+    b = solve_ivp(f, (Pc, 1e3), yc, events=end, **opts)
+    return b.t_events[0][0], b.y_events[0][0][2]
+
+
+def random_cases(n: int, seed: int):
+    rng = np.random.default_rng(seed)
+    for _ in range(n):
+        m = rng.uniform(0.2, 5.0)
+        inertia = m * rng.uniform(0.05, 2.0)
+        r = rng.uniform(-1.5, 1.5, 2)
+        angle = rng.uniform(0, 2 * math.pi)
+        W = delassus_body(m, inertia, r, (math.cos(angle), math.sin(angle)))
+        v = (-rng.uniform(0.1, 3.0), rng.normal() * rng.choice([0.0, 1.0, 3.0]))
+        yield W, v, rng.uniform(0.0, 2.0), rng.choice([0.0, rng.uniform(0, 1), 1.0])
+
+
+@pytest.mark.filterwarnings("ignore:Newton's law made energy")
+def test_random_impacts_keep_their_laws():
+    """200 random bodies and contacts: the velocity jump is W P, the impulse stays in the
+    friction cone, the contact separates or rests, a stuck contact has v_t = 0, each law's
+    end holds, and Stronge and Poisson never make energy."""
+    count = {"stronge": 0, "poisson": 0, "newton": 0}
+    for W, v, mu, e in random_cases(200, 20261129):
+        for law in count:
+            r = impact(W, v, mu=mu, e=e, law=law)
+            P = np.array([r.P_n, r.P_t])
+            assert np.allclose(np.array(v) + W @ P, [r.v_n, r.v_t], atol=1e-12)
+            assert r.P_n > 0 and abs(r.P_t) <= mu * r.P_n * (1 + 1e-12) + 1e-15
+            assert r.v_n >= -1e-12
+            if r.sticks:
+                assert r.v_t == 0.0
+            if law != "newton":
+                assert r.dKE <= 1e-12 * (1 + abs(v[0]) + abs(v[1])) ** 2
+            if law == "poisson":
+                assert r.P_n == pytest.approx((1 + e) * r.P_compression, rel=1e-12)
+            if law == "newton" and e > 0:
+                assert r.v_n == pytest.approx(-e * v[0], rel=1e-12)
+            count[law] += 1
+    assert count == {"stronge": 200, "poisson": 200, "newton": 200}
+
+
+@pytest.mark.filterwarnings("ignore:Newton's law made energy")
+def test_random_impacts_agree_with_a_regularised_integration():
+    """The closed form against scipy's integration of the smoothed law (independent of
+    the phase logic): the impulses agree to the smoothing's own error."""
+    checked = 0
+    for W, v, mu, e in random_cases(25, 7):
+        for law in ("stronge", "poisson", "newton"):
+            r = impact(W, v, mu=mu, e=e, law=law)
+            Pn, Pt = regularised(W, v, mu, e, law)
+            scale = abs(v[0]) / W[0, 0] + abs(v[1]) / W[1, 1]
+            assert abs(r.P_n - Pn) <= 1e-6 * scale and abs(r.P_t - Pt) <= 1e-6 * scale, (
+                W, v, mu, e, law, r, Pn, Pt)
+            checked += 1
+    assert checked == 75
+
+
+def test_zeno_time_is_the_sum_of_the_bounces():
+    """A ball dropped from h0 = 1 with e = 0.5 comes to rest at sqrt(2 h0/g)(1+e)/(1-e) =
+    1.354571 s: the series of its flight times, summed here term by term."""
+    g, h0, e = 9.81, 1.0, 0.5
+    t1, v1 = math.sqrt(2 * h0 / g), math.sqrt(2 * g * h0)
+    series = t1 + sum(2 * v1 * e ** k / g for k in range(1, 200))
+    predicted = zeno_time(t1, e * v1, -g, e)
+    assert predicted == pytest.approx(series, abs=1e-12)
+    assert predicted == pytest.approx(math.sqrt(2 * h0 / g) * (1 + e) / (1 - e), abs=1e-12)
+    assert round(predicted, 6) == 1.354571
+
+
+@pytest.mark.parametrize("args, message", [
+    (([[1, 0], [0, -1]], (-1, 0), 0.5), "positive definite"),
+    (([[1, 0.5], [0, 1]], (-1, 0), 0.5), "symmetric"),
+    (([[1, 0], [0, 1]], (1.0, 0), 0.5), "separates"),
+    (([[1, 0], [0, 1]], (0.0, 1.0), 0.5), "without collision"),
+    (([[1, 0], [0, 1]], (-1.0, 0), -0.1), "mu must be"),
+    (([[1, 0], [0, 1]], (-1.0, 0), float("nan")), "mu must be"),
+    (([[1, 0], [0, 1]], (-1.0, "x"), 0.5), "v_before must be"),
+])
+def test_bad_input_is_refused_in_one_line(args, message):
+    with pytest.raises(ValueError, match=message) as err:
+        impact(*args)
+    assert "\n" not in str(err.value)
+
+
+def test_bad_law_and_restitution():
+    W = [[1, 0], [0, 1]]
+    with pytest.raises(ValueError, match="law must be one of stronge, poisson, newton"):
+        impact(W, (-1, 0), 0.5, law="elastic")
+    with pytest.raises(ValueError, match=r"e must be in \[0, 1\]"):
+        impact(W, (-1, 0), 0.5, e=1.5)
+    with pytest.raises(ValueError, match="e must be in"):
+        zeno_time(0.0, 1.0, -9.81, 1.0)
