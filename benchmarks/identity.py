@@ -82,7 +82,7 @@ def cases():
                                                        t_end=3.0)
     yield "simulate wheel", lambda: phasemap.simulate("wheel", phi=1.0, omega=2.0, t_end=5.0)
     yield "simulate hinge dop853", lambda: phasemap.simulate(
-        "hinge_pendulum", phi=2.0, omega=1.0, t_end=5.0, method="dop853", rtol=1e-10)
+        "hinge_pendulum", phi=2.0, omega=1.0, t_end=5.0, method="DOP853", rtol=1e-10)
     yield "phase hinge", lambda: phasemap.phase_curve("hinge_pendulum", phi=2.5, omega=0.0,
                                                       delta=0.1)
     yield "phase ladder", lambda: phasemap.phase_curve("ladder", phi=0.3, omega=0.0, f=0.2)

@@ -454,6 +454,40 @@ def test_hinge_fate_map_rests_in_the_stagnation_zone_and_round_trips(tmp_path):
     assert_atlas_round_trip(ds, tmp_path, "fates.nc")
 
 
+def test_a_fixed_velocity_starts_every_cell_of_a_fate_map():
+    """Every cell of a fate map starts from the scene's own fixed values, whatever ran
+    before it on its thread.  Over (phi, delta) with omega = 2.5 fixed, the integrator
+    wrote each motion's last omega into the thread's input vector, and in a call of more
+    than FATE_UNITS cells the next cell of a work unit started from it: results depended
+    on the block sizes (a timing), and the rod on a step's theta_rest differed from run
+    to run.  One call over 1 152 cells against blocks of 7 cells (one cell per unit),
+    and every cell against its own simulate."""
+    from phasemap.maps import blocks
+    from phasemap.motion.integrate import FATE_UNITS
+
+    scene = phasemap.Scene("hinge_pendulum",
+                           axes={"phi": np.linspace(-2.5, 2.5, 48),
+                                 "delta": np.linspace(0.05, 0.8, 24)},
+                           fixed={"omega": 2.5}, layers=["fate", "n_reversals", "t_final"],
+                           options={"t_end": 20.0})
+    assert scene.size > FATE_UNITS
+    whole = scene.evaluate()  # one compiled call over every cell
+    parts = {n: np.empty(scene.shape, whole[n].dtype) for n in whole}
+    for index, block in blocks.run_blocks(scene.axes, scene.evaluate, 7, 7, fixed=7):
+        for n in parts:
+            parts[n][index] = block[n]
+    for n in parts:
+        assert np.array_equal(parts[n], whole[n]), n
+    rng = np.random.default_rng(3)
+    for i, j in zip(rng.integers(0, 48, 40), rng.integers(0, 24, 40)):
+        one = phasemap.simulate("hinge_pendulum", 20.0, rtol=1e-6, omega=2.5,
+                                phi=float(scene.axes["phi"][i]),
+                                delta=float(scene.axes["delta"][j]))
+        assert one.attrs["end_reason"] == phasemap.Event(int(whole["fate"][i, j])).name.lower()
+        assert float(one.event_t[-1]) == float(whole["t_final"][i, j])
+        assert int(one.attrs["n_reversals"]) == int(whole["n_reversals"][i, j])
+
+
 # ------------------------------------------------------- work-precision API
 def test_scipy_stage_driver_and_work_precision_rows():
     import phasemap.motion.workprecision as wp

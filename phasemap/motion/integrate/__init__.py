@@ -115,6 +115,11 @@ def _fate_drive(integrate, y_slot, base, shape, axis_slot, axis_values, deriv_sl
         y0 = y0_fixed.copy()
         for q in range((ncells - u + units - 1) // units):
             cell = u + q * units
+            # every cell starts from the scene's inputs: the integrator writes the state
+            # it reaches into v, and a state variable that is not an axis (a fixed
+            # omega) would otherwise start the next cell where the last one ended
+            for i in range(v.shape[0]):
+                v[i] = base[i]
             set_cell(v, cell, shape, axis_slot, axis_values, deriv_slot, deriv_values)
             for i in range(y_slot.shape[0]):
                 if y_slot[i] >= 0:
