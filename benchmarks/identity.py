@@ -63,9 +63,8 @@ def cases():
     }
     for name, (axes, fixed) in maps.items():
         yield f"map {name}", lambda n=name, a=axes, f=fixed: phasemap.Scene(
-            n, axes=a, fixed=f, layers=[ly for ly in phasemap.layers_for(n)
-                                        if ly not in ("fate", "n_reversals", "t_final",
-                                                           "t_rest", "phi_rest")]).compute()
+            n, axes=a, fixed=f, layers=[k for k, ly in phasemap.layers_for(n).items()
+                                        if not ly.fate]).compute()
     yield "fates hinge", lambda: phasemap.Scene(
         "hinge_pendulum", axes={"phi": lin(-3, 3, 21), "omega": lin(-6, 6, 21)},
         layers=["fate", "phi_rest", "n_reversals", "t_final"], options={"t_end": 30.0}).compute()
