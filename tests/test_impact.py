@@ -200,3 +200,71 @@ def test_bad_law_and_restitution():
         impact(W, (-1, 0), 0.5, e=1.5)
     with pytest.raises(ValueError, match="e must be in"):
         zeno_time(0.0, 1.0, -9.81, 1.0)
+
+
+def test_a_rod_landing_flat_on_both_ends():
+    """A uniform rod (m = 1, half-length 1) falling flat at 1 m/s onto the floor with both
+    ends: 4 contact rows on 3 freedoms.  The inelastic impact stops it, each end taking
+    half the normal impulse (symmetry), and the tangential impulses are undetermined
+    (they cancel in a continuum): kinetic energy 0.5 is lost."""
+    from phasemap.motion.impact import simultaneous
+
+    M = np.diag([1.0, 1.0, 1 / 3])
+    J = np.array([[0, 1, -1.0], [1, 0, 0], [0, 1, 1.0], [1, 0, 0]])  # n_A, t_A, n_B, t_B
+    W = J @ np.linalg.solve(M, J.T)
+    sols = simultaneous(W, [-1.0, 0.0, -1.0, 0.0], [0.5, 0.5])
+    assert len(sols) == 1
+    s = sols[0]
+    assert s.modes == ("stick", "stick") and s.continuum
+    assert np.allclose(s.P, [0.5, 0.0, 0.5, 0.0], atol=1e-12)
+    assert np.allclose(s.v, 0.0, atol=1e-12) and s.dKE == pytest.approx(-0.5, abs=1e-12)
+
+
+def test_one_contact_at_once_is_the_plastic_impact():
+    """With one contact, the impulse-level enumeration has exactly one solution, and it is
+    the Darboux-Keller impact with e = 0 wherever the slip does not reverse (both end at
+    v_n = 0 with the same impulse)."""
+    from phasemap.motion.impact import simultaneous
+
+    compared = 0
+    for W, v, mu, _ in random_cases(150, 11):
+        sols = simultaneous(W, v, [mu])
+        assert len(sols) == 1 and not sols[0].continuum
+        s = sols[0]
+        assert s.v[0] == pytest.approx(0.0, abs=1e-12)
+        assert abs(s.P[1]) <= mu * s.P[0] * (1 + 1e-12) + 1e-15 and s.dKE <= 1e-12
+        r = impact(W, v, mu=mu, e=0.0)
+        if "slip_pos" in r.phases and "slip_neg" in r.phases:
+            continue  # a reversal: the path, not only its end, decides P_t
+        assert np.allclose(s.P, [r.P_n, r.P_t], atol=1e-10 * (1 + abs(v[0]) + abs(v[1])))
+        compared += 1
+    assert compared > 100
+
+
+def test_random_simultaneous_impacts_have_a_solution_that_keeps_the_laws():
+    """Two bodies' worth of random 2-contact W (positive definite): at least one solution,
+    each with its modes' complementarity, in the cone, losing energy."""
+    from phasemap.motion.impact import simultaneous
+
+    rng = np.random.default_rng(5)
+    for _ in range(60):
+        J = rng.normal(size=(4, 5))
+        Minv = np.diag(rng.uniform(0.2, 2.0, 5))
+        W = J @ Minv @ J.T
+        v = np.array([-rng.uniform(0.1, 2), rng.normal(), -rng.uniform(0.1, 2), rng.normal()])
+        mu = rng.uniform(0, 1.5, 2)
+        sols = simultaneous(W, v, mu)
+        assert sols
+        for s in sols:
+            for c, mode in enumerate(s.modes):
+                Pn, Pt, vn, vt = s.P[2 * c], s.P[2 * c + 1], s.v[2 * c], s.v[2 * c + 1]
+                if mode == "open":
+                    assert Pn == 0 and Pt == 0 and vn >= -1e-12
+                else:
+                    assert abs(vn) <= 1e-9 and Pn >= -1e-12
+                    assert abs(Pt) <= mu[c] * Pn + 1e-9
+                    if mode == "stick":
+                        assert abs(vt) <= 1e-9
+                    else:
+                        assert (vt > 0) == (mode == "slip_pos")
+            assert s.dKE <= 1e-9

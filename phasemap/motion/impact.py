@@ -289,6 +289,96 @@ def impact(W, v_before, mu: float, e: float = 0.0, law: str = "stronge") -> Impa
                   dKE, names, law, e, bool(gains))
 
 
+@dataclass(frozen=True)
+class Simultaneous:
+    """One solution of :func:`simultaneous`: per contact its mode (``"open"``,
+    ``"stick"``, ``"slip_pos"``, ``"slip_neg"``), the impulses and the velocities after."""
+
+    modes: tuple[str, ...]
+    P: np.ndarray
+    v: np.ndarray
+    dKE: float
+    #: the impulses are not determined (a singular W: more contact rows than the body's
+    #: freedoms, a rod landing flat); ``P`` is the least-norm member of the family
+    continuum: bool = False
+
+
+def simultaneous(W, v_before, mu, *, tol: float = 1e-12) -> list[Simultaneous]:
+    """Every inelastic (Moreau) impulse-level solution of k contacts closing at once.
+
+    ``W`` is the 2k x 2k Delassus matrix in (n1, t1, n2, t2, ...), ``v_before`` the 2k
+    contact velocities before, ``mu`` the k friction coefficients.  Each contact ends
+    *open* (no impulse, v_n >= 0), *stuck* (v_n = v_t = 0, |P_t| <= mu P_n), or
+    *slipping* either way (v_n = 0, P_t = -s mu P_n with s = sgn v_t after); the 4^k
+    combinations are each a linear system, solved and kept where every inequality
+    holds (within ``tol`` relative).  The count is what the acceleration level counts
+    too: for one body it is one (an inelastic impact always has a solution, Anitescu
+    and Potra 1997); more than one is an indeterminate impact, none cannot happen for a
+    positive definite W.  A singular W (more contact rows than freedoms, such as a
+    rod landing flat on both ends) can leave the impulses undetermined: such a mode
+    combination is reported once as a continuum, with its least-norm impulses.
+    Solutions equal to ``tol`` are reported once.
+
+    >>> W = np.array([[2.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 1.0],
+    ...               [1.0, 0.0, 2.0, 0.0], [0.0, 1.0, 0.0, 1.0]]) + np.eye(4) * 0.5
+    >>> [s.modes for s in simultaneous(W, [-1.0, 0.0, -1.0, 0.0], [0.5, 0.5])]
+    [('stick', 'stick')]
+    """
+    W = np.asarray(W, dtype=float)
+    v0 = np.asarray(v_before, dtype=float).ravel()
+    mu = np.atleast_1d(np.asarray(mu, dtype=float))
+    k = mu.size
+    if W.shape != (2 * k, 2 * k) or v0.size != 2 * k:
+        raise ValueError(f"simultaneous: W must be {2 * k}x{2 * k} and v_before {2 * k} long "
+                         f"for {k} friction coefficients, got {W.shape} and {v0.size}")
+    if not (np.all(np.isfinite(W)) and np.all(np.isfinite(v0)) and np.all(mu >= 0)):
+        raise ValueError("simultaneous: W and v_before must be finite and mu >= 0")
+    if not np.allclose(W, W.T) or np.linalg.eigvalsh(W).min() < -1e-12 * np.abs(W).max():
+        raise ValueError("simultaneous: W must be symmetric positive semi-definite")
+    scale = max(float(np.abs(v0).max()), 1e-300)
+    pscale = scale / float(np.abs(W).max())
+    found: list[Simultaneous] = []
+    names = ("open", "stick", "slip_pos", "slip_neg")
+    for combo in np.ndindex(*(4,) * k):
+        A = np.zeros((2 * k, 2 * k))
+        b = np.zeros(2 * k)
+        for c, mode in enumerate(combo):
+            n, t = 2 * c, 2 * c + 1
+            if mode == 0:  # open: no impulse
+                A[n, n] = A[t, t] = 1.0
+            else:  # closed: v_n after = 0
+                A[n], b[n] = W[n], -v0[n]
+                if mode == 1:  # stuck: v_t after = 0
+                    A[t], b[t] = W[t], -v0[t]
+                else:  # slipping: P_t = -s mu P_n
+                    s = 1.0 if mode == 2 else -1.0
+                    A[t, t], A[t, n] = 1.0, s * mu[c]
+        P, _, rank, _ = np.linalg.lstsq(A, b, rcond=1e-12)
+        if np.abs(A @ P - b).max() > 1e-9 * (np.abs(b).max() + pscale):
+            continue  # inconsistent: no impulse puts the contacts in these modes
+        continuum = rank < 2 * k
+        for c, mode in enumerate(combo):
+            if mode == 0:
+                P[2 * c] = P[2 * c + 1] = 0.0  # exactly: least squares leaves rounding
+        v = v0 + W @ P
+        ok = True
+        for c, mode in enumerate(combo):
+            n, t = 2 * c, 2 * c + 1
+            if mode == 0:
+                ok &= v[n] >= -tol * scale
+            else:
+                ok &= P[n] >= -tol * pscale
+                if mode == 1:
+                    ok &= abs(P[t]) <= mu[c] * P[n] + tol * pscale
+                else:
+                    s = 1.0 if mode == 2 else -1.0
+                    ok &= s * v[t] > tol * scale
+        if ok and not any(np.allclose(P, f.P, atol=tol * pscale * 10) for f in found):
+            found.append(Simultaneous(tuple(names[m] for m in combo), P, v,
+                                      float(P @ v0 + 0.5 * P @ W @ P), bool(continuum)))
+    return found
+
+
 def delassus(M, J) -> np.ndarray:
     """W = J M^-1 J^T: the Delassus matrix of the contact rows ``J`` (a 2 x n Jacobian,
     normal row first) of a system with mass matrix ``M`` (n x n, symmetric positive
