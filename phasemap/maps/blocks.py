@@ -39,6 +39,7 @@ from phasemap.atlas.atomic import PART_PREFIX, destination, exists_message, no_p
 from phasemap.atlas.write import cf_encoding, default_chunks, prepare
 from phasemap.maps.layers import layers_for
 from phasemap.core.progress import human_bytes, human_duration
+from phasemap.core.resources import available_memory, resident as _resident
 
 #: Above this many cells the command line asks for ``--yes``.
 YES_CELLS = 10 ** 9
@@ -164,38 +165,6 @@ def _fate_scratch(scene) -> int:
     if not scene.has_fates:
         return 0
     return 1 + 4 + 8 + 8 * len(scene.model.dynamics.coordinates)
-
-
-def _resident() -> int:
-    """This process's resident memory now, in bytes (0 where it cannot tell)."""
-    try:
-        with open("/proc/self/status") as fh:
-            for line in fh:
-                if line.startswith("VmRSS:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    return 0
-
-
-def available_memory() -> int | None:
-    """Memory the system can give this process now, in bytes: the kernel's
-    ``MemAvailable``, less if a cgroup limits the process; None if unknown."""
-    found = []
-    with contextlib.suppress(OSError, ValueError, IndexError):
-        with open("/proc/meminfo") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    found.append(int(line.split()[1]) * 1024)
-    with contextlib.suppress(OSError, ValueError):
-        limit = pathlib.Path("/sys/fs/cgroup/memory.max").read_text().strip()
-        used = pathlib.Path("/sys/fs/cgroup/memory.current").read_text().strip()
-        if limit != "max":
-            found.append(max(0, int(limit) - int(used)))
-    if not found and hasattr(os, "sysconf"):
-        with contextlib.suppress(OSError, ValueError):
-            found.append(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
-    return min(found) if found else None
 
 
 def check_memory(scene, est: Estimate) -> None:

@@ -8,12 +8,15 @@ returns a self-describing :class:`xarray.Dataset`.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from typing import Mapping, NamedTuple, Sequence
 
 import numpy as np
 import xarray as xr
 
+from phasemap.core.progress import human_bytes
+from phasemap.core.resources import available_memory
 from phasemap.core.memo import Memo
 from phasemap.core import args as _args
 from phasemap.core import events as ev
@@ -161,6 +164,10 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
         dense output).  Default: every accepted step and every event.
     max_steps, max_events:
         limits after which the motion ends with ``max_steps`` or ``max_events``.
+        Where the points and events they allow to be saved would not fit in the
+        memory available (``RLIMIT_AS`` and cgroup limits included), they are lowered
+        to what fits: such a motion ends early with ``end_message`` (and a warning)
+        saying so and naming ``t_eval``, and keeps every point it computed.
     method:
         ``"DOPRI5"`` (Dormand-Prince 5(4), the default) or ``"DOP853"``
         (Dormand-Prince 8(5,3) with a dense output of order 7: fewer steps at
@@ -239,9 +246,55 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
         return _batch(m, full, positions, opts, names, y0s, te if t_eval is not None else None,
                       run_batch(m, opts.method, v.copy(), y0s, *run))
     integrate, _ = kernels(m, opts.method)
+    capped = _memory_cap(m, opts, len(names), t_eval is None, te.size)
+    if capped is not None:
+        run = (*run[:4], *capped, *run[6:])
     fate, t, y, n_rev, n_steps, points, events, y_eval = integrate(v, y0, *run)
-    return _dataset(m, full, positions, opts, names, int(fate), int(n_rev), int(n_steps),
-                    *_columns(points, events, y_eval, te if t_eval is not None else None))
+    ds = _dataset(m, full, positions, opts, names, int(fate), int(n_rev), int(n_steps),
+                  *_columns(points, events, y_eval, te if t_eval is not None else None))
+    if capped is not None and int(fate) in (ev.MAX_STEPS, ev.MAX_EVENTS):
+        _say_memory(m, ds, opts, capped)
+    return ds
+
+
+#: Copies of the saved points a motion may hold at once: the integrator's array while it
+#: grows (the old and the new, twice its size), then the columns and the Dataset.
+MEMORY_COPIES = 4
+#: The share of the available memory a motion's saved points may take.
+MEMORY_SHARE = 0.5
+
+
+def _memory_cap(m: Model, opts: Options, ny: int, every_step: bool, n_eval: int):
+    """``(max_steps, max_events)`` lowered so that the saved points and events fit in
+    memory, or None when the requested limits fit already.  Every step is saved when
+    no ``t_eval`` is given (a row of t, branch and the state), and every event always
+    (t, kind, branch and the state); :data:`MEMORY_COPIES` of them may live at once.
+    A motion that ends before either limit is what it would be without the cap."""
+    avail = available_memory()
+    if avail is None:
+        return None
+    budget = MEMORY_SHARE * max(avail - 8 * ny * n_eval * MEMORY_COPIES, 0) / MEMORY_COPIES
+    row_point, row_event = 8 * (2 + ny), 8 * (3 + ny)
+    steps = opts.max_steps + 2 if every_step else 0
+    if steps * row_point + (opts.max_events + 2) * row_event <= budget:
+        return None
+    events = int(min(opts.max_events, max(budget / 4 // row_event - 2, 16)))
+    left = budget - (events + 2) * row_event
+    max_steps = int(min(opts.max_steps, max(left // row_point - 2, 16))) if every_step \
+        else opts.max_steps
+    return max_steps, events
+
+
+def _say_memory(m: Model, ds: xr.Dataset, opts: Options, capped) -> None:
+    """The end of a motion cut by :func:`_memory_cap`: its message says why, and a warning."""
+    what = ("steps" if ds.attrs["end_reason"] == "max_steps" else "events")
+    asked = opts.max_steps if what == "steps" else opts.max_events
+    got = capped[0] if what == "steps" else capped[1]
+    message = (f"stopped after {got:,} {what} of the {asked:,} allowed: saving more would "
+               f"not fit in the memory available ({human_bytes(available_memory() or 0)}); "
+               "pass t_eval= to save the state at chosen times only, or a shorter t_end")
+    ds.attrs["end_message"] = message
+    warnings.warn(f"{m.name}: {message}", RuntimeWarning, stacklevel=3)
 
 
 def _columns(points, events, y_eval, te):

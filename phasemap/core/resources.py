@@ -1,0 +1,55 @@
+"""What the machine can give this process: memory available now, and its own size.
+
+The memory checks of every entry point (a scene's estimate, a long motion's saved
+points) read these, so that what does not fit is refused or cut in one line instead
+of ending in a ``MemoryError`` inside compiled code or the kernel's OOM killer.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import pathlib
+
+
+def resident() -> int:
+    """This process's resident memory now, in bytes (0 where it cannot tell)."""
+    return _status("VmRSS:")
+
+
+def _status(key: str) -> int:
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith(key):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return 0
+
+
+def available_memory() -> int | None:
+    """Memory the system can give this process now, in bytes: the kernel's
+    ``MemAvailable``, less if a cgroup limits the process, less if the process's own
+    address-space limit (``ulimit -v``, ``RLIMIT_AS``) leaves less room; None if unknown."""
+    found = []
+    with contextlib.suppress(OSError, ValueError, IndexError):
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    found.append(int(line.split()[1]) * 1024)
+    with contextlib.suppress(OSError, ValueError):
+        limit = pathlib.Path("/sys/fs/cgroup/memory.max").read_text().strip()
+        used = pathlib.Path("/sys/fs/cgroup/memory.current").read_text().strip()
+        if limit != "max":
+            found.append(max(0, int(limit) - int(used)))
+    with contextlib.suppress(ImportError, OSError, ValueError):
+        import resource
+
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+        if soft != resource.RLIM_INFINITY:
+            found.append(max(0, soft - _status("VmSize:")))
+    if not found and hasattr(os, "sysconf"):
+        with contextlib.suppress(OSError, ValueError):
+            found.append(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+    return min(found) if found else None
