@@ -46,3 +46,17 @@ def test_a_motion_that_fits_is_not_cut():
     assert _memory_cap(phasemap.get_model("hinge_pendulum"), opts, 2, True, 0) is None
     ds = phasemap.simulate("hinge_pendulum", 10.0, phi=2.5, omega=0.0, delta=0.1)
     assert ds.attrs["end_reason"] == "rest"
+
+
+def test_a_batch_shares_the_memory_among_its_starts():
+    """Three starts at once hold three motions' points: each gets a third of the room."""
+    from phasemap.motion.simulate import Options, _memory_cap
+    from phasemap.core import resources
+
+    m = phasemap.get_model("hinge_pendulum")
+    opts = Options(max_steps=10 ** 12, max_events=10 ** 12).checked(m.name)
+    one = _memory_cap(m, opts, 2, True, 0, 1)
+    three = _memory_cap(m, opts, 2, True, 0, 3)
+    assert one is not None and three is not None
+    assert three[0] * 3 <= one[0] * 1.01 and three[0] * 3 >= one[0] * 0.98
+    assert resources.available_memory() > 0

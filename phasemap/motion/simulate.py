@@ -243,8 +243,18 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
         for j, n in enumerate(names):
             if n in starts:
                 y0s[:, j] = starts[n]
-        return _batch(m, full, positions, opts, names, y0s, te if t_eval is not None else None,
-                      run_batch(m, opts.method, v.copy(), y0s, *run))
+        capped = _memory_cap(m, opts, len(names), t_eval is None, te.size, len(y0s))
+        if capped is not None:
+            run = (*run[:4], *capped, *run[6:])
+        ds = _batch(m, full, positions, opts, names, y0s, te if t_eval is not None else None,
+                    run_batch(m, opts.method, v.copy(), y0s, *run))
+        if capped is not None and np.isin(ds.end_reason.values,
+                                          [ev.MAX_STEPS, ev.MAX_EVENTS]).any():
+            warnings.warn(f"{m.name}: some motions stopped at max_steps or max_events lowered "
+                          f"to {capped[0]:,} and {capped[1]:,}, what their saved points can "
+                          "hold in memory; pass t_eval= to save the state at chosen times "
+                          "only", RuntimeWarning, stacklevel=2)
+        return ds
     integrate, _ = kernels(m, opts.method)
     capped = _memory_cap(m, opts, len(names), t_eval is None, te.size)
     if capped is not None:
@@ -264,16 +274,19 @@ MEMORY_COPIES = 4
 MEMORY_SHARE = 0.5
 
 
-def _memory_cap(m: Model, opts: Options, ny: int, every_step: bool, n_eval: int):
+def _memory_cap(m: Model, opts: Options, ny: int, every_step: bool, n_eval: int,
+                starts: int = 1):
     """``(max_steps, max_events)`` lowered so that the saved points and events fit in
     memory, or None when the requested limits fit already.  Every step is saved when
     no ``t_eval`` is given (a row of t, branch and the state), and every event always
     (t, kind, branch and the state); :data:`MEMORY_COPIES` of them may live at once.
-    A motion that ends before either limit is what it would be without the cap."""
+    A motion that ends before either limit is what it would be without the cap.  A batch
+    of ``starts`` motions holds them all at once."""
     avail = available_memory()
     if avail is None:
         return None
-    budget = MEMORY_SHARE * max(avail - 8 * ny * n_eval * MEMORY_COPIES, 0) / MEMORY_COPIES
+    budget = MEMORY_SHARE * max(avail - 8 * ny * n_eval * MEMORY_COPIES * starts, 0) / (
+        MEMORY_COPIES * starts)
     row_point, row_event = 8 * (2 + ny), 8 * (3 + ny)
     steps = opts.max_steps + 2 if every_step else 0
     if steps * row_point + (opts.max_events + 2) * row_event <= budget:
