@@ -268,3 +268,43 @@ def test_random_simultaneous_impacts_have_a_solution_that_keeps_the_laws():
                     else:
                         assert (vt > 0) == (mode == "slip_pos")
             assert s.dKE <= 1e-9
+
+
+def test_simulate_goes_on_through_the_rods_impact_without_collision():
+    """The Painleve rod (m = 1, l = 1, f = 1.5) at theta = arctan 2, at rest but for
+    x_A' = -1 has no solution for its accelerations; simulate applies the impact without
+    collision there (P_n = 0.3, P_t = 0.4, KE 0.5 -> 0.3), the rod sticks, and the motion
+    goes on instead of ending with no_solution."""
+    import phasemap
+
+    th = math.atan(2.0)
+    before = phasemap.classify("painleve_rod", theta=th, omega=0.0, xdot=-1.0, f=1.5)
+    assert before.n_solutions == 0
+    ds = phasemap.simulate("painleve_rod", 2.0, theta=th, omega=0.0, xdot=-1.0, f=1.5)
+    kinds = [phasemap.Event(int(k)).name.lower() for k in ds.event_kind.values]
+    assert kinds[0] == "iwc" and ds.attrs["end_reason"] != "no_solution"
+    assert float(ds.event_t[0]) == 0.0
+    assert float(ds.event_impulse_n[0]) == pytest.approx(0.3, abs=1e-12)
+    assert float(ds.event_impulse_t[0]) == pytest.approx(0.4, abs=1e-12)
+    assert float(ds.event_dKE[0]) == pytest.approx(-0.2, abs=1e-12)
+    assert np.isnan(ds.event_impulse_n.values[1:]).all()
+    omega, xdot = float(ds.event_omega[0]), float(ds.event_xdot[0])
+    assert omega == pytest.approx(0.3 * math.sqrt(5), abs=1e-12)
+    assert xdot == pytest.approx(0.0, abs=1e-12)  # end A stuck
+    m = phasemap.MODELS["painleve_rod"]
+    assert m.branches[int(ds.event_branch[0])] == "stick"
+    # the kinetic energy after, from the state: G = A + l (cos, sin)
+    vg = np.array([xdot - math.sin(th) * omega, math.cos(th) * omega])
+    assert 0.5 * vg @ vg + 0.5 / 3 * omega ** 2 == pytest.approx(0.3, abs=1e-12)
+
+
+def test_motions_without_such_a_state_are_untouched():
+    """A hand-written model's no_solution still ends its motion (it has no declaration to
+    take the impact from), and a declared motion that meets none has no impulse columns."""
+    import phasemap
+
+    ds = phasemap.simulate("elliptic_pendulum", t_end=1.0, phi=0.8, xdot=1.0, f=4.0)
+    assert ds.attrs["end_reason"] == "no_solution"
+    ok = phasemap.simulate("painleve_rod", 1.0, theta=1.0, omega=0.0, xdot=-1.0, f=0.3)
+    assert "event_impulse_n" not in ok and "iwc" not in [
+        phasemap.Event(int(k)).name.lower() for k in ok.event_kind.values]

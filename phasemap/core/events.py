@@ -14,7 +14,12 @@ Events that continue the motion:
   while other coordinates keep moving (the elliptic pendulum's slider);
 * ``slip``: the stick branch stopped being admissible and a slip began;
 * ``switch``: another branch took over without a velocity zero (the sign of
-  the elliptic pendulum's two-sided guide reaction changed).
+  the elliptic pendulum's two-sided guide reaction changed);
+* ``iwc``: an impact without collision: where the accelerations have no solution
+  because the slip forces a contact into the obstacle (a Painleve inconsistency), an
+  impulse at zero normal velocity jumps the velocities (:mod:`phasemap.motion.impact`)
+  and the motion goes on from there (:func:`phasemap.simulate`, for a declared system
+  with one contact).
 
 Events that end it (the *fate*):
 
@@ -68,6 +73,7 @@ STEP_FAILURE = 13
 STIFF = 14
 LEFT_DOMAIN = 15
 MAX_STEPS = 16
+IWC = 17
 
 #: The events that end a motion (its fate), named one by one: event codes are
 #: append-only (atlases and fate maps store them), so a later event that continues a
@@ -77,7 +83,7 @@ FATES = frozenset({REST, CONTACT_LOST, NO_SOLUTION, INDETERMINATE, CONTINUUM, SI
 
 #: ``TERMINAL[code]``: whether the event of that code ends a motion (:data:`FATES`), as
 #: an array the compiled rule :func:`after_event` reads.
-TERMINAL = np.array([code in FATES for code in range(MAX_STEPS + 1)])
+TERMINAL = np.array([code in FATES for code in range(IWC + 1)])
 
 #: What follows an event (:func:`after_event`): the running stage goes on (the event
 #: was a rounding flicker), the next stage starts, or the motion ends.
@@ -196,6 +202,9 @@ class Event(nx.Coded):
              "explicit integrator stops; phase_curve handles such cases")
     LEFT_DOMAIN = LEFT_DOMAIN, "the motion leaves the model's domain"
     MAX_STEPS = MAX_STEPS, "the requested number of integration steps (max_steps) ran out"
+    IWC = (IWC, "an impact without collision: the slip forced the contact into the obstacle (a "
+                "Painleve inconsistency), and an impulse at zero normal velocity changed the "
+                "velocities")
 
     @property
     def terminal(self) -> bool:

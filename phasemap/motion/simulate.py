@@ -259,12 +259,126 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     capped = _memory_cap(m, opts, len(names), t_eval is None, te.size)
     if capped is not None:
         run = (*run[:4], *capped, *run[6:])
-    fate, t, y, n_rev, n_steps, points, events, y_eval = integrate(v, y0, *run)
+    fate, t, y, n_rev, n_steps, points, events, y_eval, impacts = _through_impacts(
+        m, integrate, v, y0, run, names, full)
     ds = _dataset(m, full, positions, opts, names, int(fate), int(n_rev), int(n_steps),
                   *_columns(points, events, y_eval, te if t_eval is not None else None))
+    if impacts:
+        _impact_variables(ds, impacts)
     if capped is not None and int(fate) in (ev.MAX_STEPS, ev.MAX_EVENTS):
         _say_memory(m, ds, opts, capped)
     return ds
+
+
+#: The most impacts without collision one motion goes through (each ends a stage).
+MAX_IMPACTS = 10_000
+
+
+def _through_impacts(m: Model, integrate, v, y0, run, names, full):
+    """Integrate, and where the motion of a declared system ends with ``no_solution`` at
+    a contact that slips into the obstacle (a Painleve inconsistency), apply the impact
+    without collision there (:func:`phasemap.motion.impact.impact`, e = 0) and go on
+    from the state after it: the integrator's outputs joined, times shifted, the fate
+    ``no_solution`` replaced by an ``iwc`` event; and the impacts ``(t, P_n, P_t, dKE)``.
+    A motion that meets no such state is the integrator's own, bit for bit."""
+    t_end, rtol, atol, h_max, max_steps, max_events, save, te = run
+    res = integrate(v, y0, *run)
+    if int(res[0]) != ev.NO_SOLUTION or getattr(m, "declaration", None) is None:
+        return (*res, [])
+    parts, impacts, t0 = [res], [], 0.0
+    while int(res[0]) == ev.NO_SOLUTION and len(impacts) < MAX_IMPACTS:
+        jump = _impact_without_collision(m, names, res[2], full)
+        if jump is None:
+            break
+        y0, kick = jump
+        t0 += float(res[1])
+        impacts.append((t0, *kick))
+        steps = max_steps - sum(int(r[4]) for r in parts)
+        events = max_events - sum(len(r[6]) - 1 for r in parts)
+        if steps <= 0 or events <= 1 or t0 >= t_end:
+            break
+        done = sum(len(r[7]) for r in parts)
+        res = integrate(v, y0, t_end - t0, rtol, atol, h_max, steps, events, save,
+                        te[done:] - t0)
+        parts.append(res)
+    if len(parts) == 1:  # the impact could not go on (no steps, events or time left)
+        return (*res, [])
+    return (*_joined(parts, [i[0] for i in impacts]), impacts[:len(parts) - 1])
+
+
+def _joined(parts, starts):
+    """The integrator outputs of consecutive stages of one motion as one: the times of
+    each after the first shifted by its start; the terminal event of each but the last
+    dropped, and the start event of each after the first called ``iwc``."""
+    offsets = [0.0, *starts[:len(parts) - 1]]
+    points, events, evals = [], [], []
+    for k, (r, t0) in enumerate(zip(parts, offsets)):
+        pts, evs = r[5].copy(), r[6].copy()
+        pts[:, 0] += t0
+        evs[:, 0] += t0
+        if k:
+            evs[0, 1] = ev.IWC
+        if k < len(parts) - 1:
+            evs = evs[:-1]
+        points.append(pts)
+        events.append(evs)
+        evals.append(r[7])
+    last = parts[-1]
+    return (last[0], float(last[1]) + offsets[-1], last[2],
+            sum(int(r[3]) for r in parts), sum(int(r[4]) for r in parts),
+            np.concatenate(points), np.concatenate(events), np.concatenate(evals))
+
+
+def _impact_without_collision(m: Model, names, y, full):
+    """The state after the impact without collision at the end state ``y`` of a declared
+    system with one contact, and ``(P_n, P_t, dKE)``; None where that is not what the
+    state calls for (the normal velocity is not zero, or the slip does not force the
+    contact in: the impact is refused), or the system has other contacts."""
+    from phasemap.declare.impulses import impulses
+    from phasemap.motion.impact import delassus, impact
+
+    S = m.declaration
+    S = getattr(S, "system", S)
+    imp = impulses(S)
+    if len(S.contacts) != 1 or len(imp.rows) != 1:
+        return None
+    contact = next(iter(imp.rows))
+    values = {**full, **dict(zip(names, (float(x) for x in y)))}
+    try:
+        a = imp.at(values)
+    except KeyError:
+        return None
+    M = np.atleast_2d(np.asarray(imp.mass(*a), dtype=float))
+    J = np.asarray(imp.rows[contact](*a), dtype=float)
+    qd = np.asarray(imp.rates(*a), dtype=float).ravel()
+    vn, vt = J @ qd
+    if abs(vn) > 1e-9 * (abs(vt) + 1e-300):
+        return None
+    try:
+        r = impact(delassus(M, J), (0.0, vt), mu=float(imp.friction[contact](*a)), e=0.0)
+    except ValueError:
+        return None
+    after = qd + np.linalg.solve(M, J.T @ np.array([r.P_n, r.P_t]))
+    y1 = np.array(y, dtype=float)
+    for i in imp.free:
+        rate = S.coordinates[i].rate.name
+        if rate in names:
+            y1[names.index(rate)] = after[i]
+    return y1, (r.P_n, r.P_t, r.dKE)
+
+
+def _impact_variables(ds: xr.Dataset, impacts) -> None:
+    """The impulses and the energy change of each impact, on the events: NaN at events
+    that are not impacts."""
+    kinds = ds.event_kind.values
+    at = np.flatnonzero(kinds == ev.IWC)
+    for j, (name, long_name, units) in enumerate((
+            ("event_impulse_n", "normal impulse of the impact on the body", "N s"),
+            ("event_impulse_t", "tangential impulse of the impact on the body", "N s"),
+            ("event_dKE", "change of kinetic energy in the impact", "J"))):
+        col = np.full(kinds.shape, np.nan)
+        col[at] = [i[1 + j] for i in impacts]
+        ds[name] = xr.Variable("event", col, {"long_name": long_name, "units": units})
 
 
 #: Copies of the saved points a motion may hold at once: the integrator's array while it

@@ -150,6 +150,7 @@ EVENT_MARKERS = {
     "max_events": ("h", GREY),
     "max_steps": ("h", GREY),
     "step_failure": ("v", _OI["orange"]),
+    "iwc": ("*", _OI["vermillion"]),
 }
 _TERMINAL = {e.name.lower() for e in _events.Event if e.terminal}
 
