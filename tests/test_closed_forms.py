@@ -190,6 +190,7 @@ def test_erratum_hinge_tangential_equation_spurious_length():
 def test_errata_elliptic_19_23_24():
     """(19) with phi' instead of phi'', (23) without m and (24) with a stray g sin phi fail."""
     rng = np.random.default_rng(7)
+    checked = refuted = 0
     for _ in range(50):
         phi, omega = rng.uniform(-3, 3), rng.normal() * 2
         f, l, m = rng.uniform(0, 2), rng.uniform(0.3, 2), rng.uniform(2, 5)
@@ -197,6 +198,7 @@ def test_errata_elliptic_19_23_24():
         sol = ref.elliptic_slip(phi, omega, 1.0, f, l, G, m, 1.0, 1.0)
         if sol["N"] <= 0:
             continue
+        checked += 1
         k = 1.0
         lam = 1 + s * s - k * f * s * c
         # (19) with the derivative restored holds; as printed it does not.
@@ -211,3 +213,7 @@ def test_errata_elliptic_19_23_24():
         assert x24 == pytest.approx(sol["x_ddot"], rel=1e-9, abs=1e-9)
         if f > 0.1 and abs(s) > 0.1:
             assert abs(printed - sol["x_ddot"]) > 1e-6
+            refuted += 1
+    # the skips (N <= 0; f or sin phi too small to tell (24) from its misprint) leave most
+    # draws checked: 49 and 46 of 50 with this seed
+    assert checked >= 40 and refuted >= 40

@@ -660,6 +660,8 @@ def test_running_models_end_where_the_oracle_says(model, params, start):
         assert a.separating or any(np.min(np.abs(md.N)) < 1e-8 * G for md in a.all_kept)
     elif reason == "indeterminate":  # keeping and leaving are both consistent
         assert a.separating and a.all_kept
+    else:                            # rest (it was allowed here with nothing checked)
+        assert a.stagnation
 
 
 def test_a_looser_rtol_keeps_the_curve_to_its_tolerance():

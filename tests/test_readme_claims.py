@@ -100,6 +100,15 @@ def test_readme_numbers_come_from_code():
         bracket = rho ** 2 + r ** 2 + l ** 2 - 2 * r * l * np.cos(phi) + delta * l * np.sin(phi)
         assert (bracket.min() <= 0) == (delta > wheel_singular_delta(r, l, rho))
     assert wheel_singular_delta(r, l, rho) == pytest.approx(math.sqrt(1.25) / 0.5)
-    f = np.linspace(0, 5, 5001)
-    lam_min = (3 - np.sqrt(1 + f ** 2)) / 2
-    assert f[np.argmax(lam_min <= 0)] == pytest.approx(elliptic_threshold(), abs=1e-3)
+    # lambda_+ = 1 + sin^2 phi - f sin phi cos phi over phi, from its definition (not
+    # from the minimum (3 - sqrt(1 + f^2))/2 that facts.py uses): at the threshold its
+    # minimum touches 0, a relative 1e-6 below it stays above 0 (by ~1.3e-6) and above it
+    # dips below.  The grid (step 3e-5) misses the minimum by at most 3 (1.6e-5)^2 ~ 1e-9.
+    # (The check was a scan of the closed form itself in steps of 1e-3.)
+    f_star = elliptic_threshold()
+    assert f_star == pytest.approx(2 * math.sqrt(2), rel=1e-15)
+
+    def lam_min(f):
+        return np.min(1 + np.sin(phi) ** 2 - f * np.sin(phi) * np.cos(phi))
+    assert lam_min(f_star) == pytest.approx(0.0, abs=1e-8)
+    assert lam_min(f_star * (1 - 1e-6)) > 1e-7 and lam_min(f_star * (1 + 1e-6)) < -1e-7

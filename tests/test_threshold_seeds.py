@@ -1,13 +1,15 @@
 """phasemap.threshold and phasemap.boundaries against the seed systems' closed forms.
 
-Each closed form is derived here (or in :mod:`phasemap.facts`), not read from the
-tracer: the elliptic pendulum's lambda_k = (3 - cos 2 phi - k f sin 2 phi)/2 has its
-least value (3 - sqrt(1 + f^2))/2, zero first at f = 2 sqrt 2 where tan 2 phi = f;
-the ladder's slide coefficient 2 - f^2; its rest (omega = 0) needs tan(phi/2) <= f,
-phi <= 2 arctan f; the hinge's turning coefficient vanishes at delta = l and rest
-holds where l |sin phi| <= delta; the wheel's bracket of (13) vanishes first at
-:func:`phasemap.facts.wheel_singular_delta`.  The hand models (elliptic, hinge) run
-their own kernels for the classes and their declared twins' conditions.
+Each closed form is derived here (INDEPENDENT), not read from the tracer, nor from
+:mod:`phasemap.facts` or the studies' claims, which are checked against it: the
+elliptic pendulum's lambda_k = (3 - cos 2 phi - k f sin 2 phi)/2 has its least value
+(3 - sqrt(1 + f^2))/2, zero first at f = 2 sqrt 2 where tan 2 phi = f; the ladder's
+slide coefficient 2 - f^2; its rest (omega = 0) needs tan(phi/2) <= f, phi <= 2 arctan
+f; the hinge's turning coefficient vanishes at delta = l and rest holds where
+l |sin phi| <= delta; the wheel's bracket of (13) vanishes first where its least value
+over phi, rho^2 + r^2 + l^2 - l sqrt(4 r^2 + delta^2), does.  The hand models
+(elliptic, hinge) run their own kernels for the classes and their declared twins'
+conditions.
 """
 
 from __future__ import annotations
@@ -28,13 +30,37 @@ CASES = {f"{c.study}: {c.what}": c for c in claims.CASES}
 XDIST_GROUP = "studies"
 
 
+#: Each case's value and point, derived here (not read from phasemap.claims
+#: or phasemap.facts, which the studies print): the elliptic pendulum's lambda_+ has least
+#: value (3 - sqrt(1 + f^2))/2, zero at f = sqrt 8 where tan 2 phi = f; the ladder's slide
+#: coefficient 2 - f^2 and its rest tan(phi/2) <= f; the hinge's turning coefficient
+#: vanishes at delta = l and it rests while l |sin phi| <= delta; the wheel's bracket
+#: rho^2 + r^2 + l^2 - 2 r l cos phi + delta l sin phi has least value rho^2 + r^2 + l^2
+#: - l sqrt(4 r^2 + delta^2), zero at delta^2 = ((rho^2 + r^2 + l^2)/l)^2 - 4 r^2 = 5 for
+#: r = 1, l = rho = 1/2; the rod's 1 + 3 cos^2 - 3 f sin cos = 0 needs f = (4 + t^2)/(3 t),
+#: t = tan theta, least (4/3) at t = 2.
+INDEPENDENT = {
+    "elliptic_pendulum: no solution (xdot > 0) first exists":
+        (math.sqrt(8.0), {"phi": 0.5 * math.atan(math.sqrt(8.0))}),
+    "ladder: slide coefficient vanishes": (math.sqrt(2.0), {}),
+    "ladder: static zone (omega = 0, f = 0.5) ends": (2.0 * math.atan(0.5), {}),
+    "hinge_pendulum: turning coefficient vanishes": (1.0, {}),
+    "hinge_pendulum: stagnation zone (omega = 0, delta = 0.5) ends": (P / 6, {}),
+    "wheel: singular bracket first vanishes": (math.sqrt(5.0), {}),
+    "painleve_rod: first paradox (xdot < 0)": (4.0 / 3.0, {"theta": math.atan(2.0)}),
+}
+
+
 @pytest.mark.parametrize("name", list(CASES))
 def test_threshold_closed_form(name):
     case = CASES[name]
+    value, at = INDEPENDENT[name]
+    # the closed form the studies print is this one (to rounding)
+    assert abs(case.value - value) <= 1e-15 * value and set(case.at) == set(at)
     t = phasemap.threshold(**case.call)
     assert t is not None and t.kind == case.kind
-    assert abs(t.value - case.value) <= 1e-10, (t, case.value)
-    for var, want in case.at.items():
+    assert abs(t.value - value) <= 1e-10, (t, value)
+    for var, want in at.items():
         assert abs(t.at[var] - want) <= 1e-10, (t, var, want)
     assert t.residual <= 1e-12
     if math.isfinite(t.bound):  # the raster's best cell bounds the exact value

@@ -59,9 +59,15 @@ def test_tie_elliptic_zero_normal_reaction_counted_once():
 
 
 def test_tie_singular_within_tolerance_of_sqrt2():
-    assert phasemap.classify("ladder", phi=0.5, omega=1.0, f=math.sqrt(2.0)).singular
-    assert phasemap.classify("ladder", phi=0.5, omega=1.0, f=1.4142135623730951).singular
-    assert not phasemap.classify("ladder", phi=0.5, omega=1.0, f=1.41421356).singular
+    """2 - f^2 is a tie within TOL = 1e-12 of the magnitude of its terms (about 4): f a
+    relative 1e-13 off sqrt 2 (2 - f^2 ~ 4e-13) is singular on either side, 1e-11 off
+    (4e-11) and 1.41421356 (7e-9) are not.  (f = 1.4142135623730951 was tested here
+    beside math.sqrt(2.0): the same double, so nothing within the tolerance was.)"""
+    r2 = math.sqrt(2.0)
+    for f in (r2, r2 * (1 - 1e-13), r2 * (1 + 1e-13)):
+        assert phasemap.classify("ladder", phi=0.5, omega=1.0, f=f).singular, f
+    for f in (r2 * (1 - 1e-11), r2 * (1 + 1e-11), 1.41421356):
+        assert not phasemap.classify("ladder", phi=0.5, omega=1.0, f=f).singular, f
 
 
 def test_tie_hinge_singular_at_delta_equal_l():
