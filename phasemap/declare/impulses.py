@@ -73,11 +73,13 @@ def _make(S) -> Impulses:
                     fn(sp.Matrix(rates)), rows, friction)
 
 
-def velocity_jump(imp: Impulses, contact: str, values: dict, P) -> np.ndarray:
-    """The full coordinates' rates after the impulse ``P = (P_n, P_t)`` at ``contact``,
-    from the state and parameters ``values``: ``q'+ = q'- + M^-1 J^T P``."""
+def at_contact(imp: Impulses, contact: str, values: dict):
+    """``(M, J, q', mu)`` at the state and parameters ``values`` (names of
+    :attr:`Impulses.args`; KeyError naming a missing one): the mass matrix, the contact's
+    normal and tangential rows, every coordinate's rate, and its friction coefficient.
+    The jump of an impulse P there is ``q'+ = q' + M^-1 J^T P``."""
     a = imp.at(values)
-    M = np.atleast_2d(np.asarray(imp.mass(*a), dtype=float))
-    J = np.asarray(imp.rows[contact](*a), dtype=float)
-    qd = np.asarray(imp.rates(*a), dtype=float).ravel()
-    return qd + np.linalg.solve(M, J.T @ np.asarray(P, dtype=float))
+    return (np.atleast_2d(np.asarray(imp.mass(*a), dtype=float)),
+            np.asarray(imp.rows[contact](*a), dtype=float),
+            np.asarray(imp.rates(*a), dtype=float).ravel(),
+            float(imp.friction[contact](*a)))

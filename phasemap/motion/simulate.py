@@ -31,7 +31,6 @@ RTOL_MIN = 1e-14
 
 
 #: Validated :class:`Options` by ``(model, settings, their types)`` (see :meth:`Options.checked`).
-#: (model name, settings, their types) -> the validated settings
 _CHECKED = Memo("simulate.checked", maxsize=256)
 
 
@@ -236,16 +235,15 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     names = list(_layout(m).names)
     y0 = np.array([positions[n] if n in positions else float(full[n]) for n in names])
     v = m.input_vector(full)
-    run = (opts.t_end, opts.rtol, opts.atol, opts.max_step, opts.max_steps, opts.max_events,
-           t_eval is None, te)
+    n_starts = len(next(iter(starts.values()))) if starts else 1
+    capped = _memory_cap(m, opts, len(names), t_eval is None, te.size, n_starts)
+    run = (opts.t_end, opts.rtol, opts.atol, opts.max_step,
+           *((opts.max_steps, opts.max_events) if capped is None else capped), t_eval is None, te)
     if starts:
-        y0s = np.repeat(y0[None, :], len(next(iter(starts.values()))), axis=0)
+        y0s = np.repeat(y0[None, :], n_starts, axis=0)
         for j, n in enumerate(names):
             if n in starts:
                 y0s[:, j] = starts[n]
-        capped = _memory_cap(m, opts, len(names), t_eval is None, te.size, len(y0s))
-        if capped is not None:
-            run = (*run[:4], *capped, *run[6:])
         ds = _batch(m, full, positions, opts, names, y0s, te if t_eval is not None else None,
                     run_batch(m, opts.method, v.copy(), y0s, *run))
         if capped is not None and np.isin(ds.end_reason.values,
@@ -256,9 +254,6 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
                           "only", RuntimeWarning, stacklevel=2)
         return ds
     integrate, _ = kernels(m, opts.method)
-    capped = _memory_cap(m, opts, len(names), t_eval is None, te.size)
-    if capped is not None:
-        run = (*run[:4], *capped, *run[6:])
     fate, t, y, n_rev, n_steps, points, events, y_eval, impacts = _through_impacts(
         m, integrate, v, y0, run, names, full)
     ds = _dataset(m, full, positions, opts, names, int(fate), int(n_rev), int(n_steps),
@@ -334,7 +329,7 @@ def _impact_without_collision(m: Model, names, y, full):
     system with one contact, and ``(P_n, P_t, dKE)``; None where that is not what the
     state calls for (the normal velocity is not zero, or the slip does not force the
     contact in: the impact is refused), or the system has other contacts."""
-    from phasemap.declare.impulses import impulses
+    from phasemap.declare.impulses import at_contact, impulses
     from phasemap.motion.impact import delassus, impact
 
     S = m.declaration
@@ -345,17 +340,14 @@ def _impact_without_collision(m: Model, names, y, full):
     contact = next(iter(imp.rows))
     values = {**full, **dict(zip(names, (float(x) for x in y)))}
     try:
-        a = imp.at(values)
+        M, J, qd, mu = at_contact(imp, contact, values)
     except KeyError:
         return None
-    M = np.atleast_2d(np.asarray(imp.mass(*a), dtype=float))
-    J = np.asarray(imp.rows[contact](*a), dtype=float)
-    qd = np.asarray(imp.rates(*a), dtype=float).ravel()
     vn, vt = J @ qd
     if abs(vn) > 1e-9 * (abs(vt) + 1e-300):
         return None
     try:
-        r = impact(delassus(M, J), (0.0, vt), mu=float(imp.friction[contact](*a)), e=0.0)
+        r = impact(delassus(M, J), (0.0, vt), mu=mu, e=0.0)
     except ValueError:
         return None
     after = qd + np.linalg.solve(M, J.T @ np.array([r.P_n, r.P_t]))
