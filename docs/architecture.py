@@ -241,15 +241,15 @@ def draw(path: pathlib.Path) -> None:
     for m in known:
         members[part(m)].append(m.split(".", 2)[-1] if part(m) != "front" else
                                 (m.split(".", 1)[-1] if "." in m else "__init__"))
-    fig, ax = plt.subplots(figsize=(9.0, 10.5))
-    ax.set_xlim(0, 10)
+    fig, ax = plt.subplots(figsize=(10.4, 10.5))
+    ax.set_xlim(0, 12.4)
     ax.set_ylim(-0.5, len(PARTS) - 0.3)
     ax.axis("off")
     xs = {}
     for i, p in enumerate(PARTS):
         x = 1.2 + 0.9 * (i % 3)
         xs[p] = x
-        ax.add_patch(plt.Rectangle((0.05, i - 0.42), 9.9, 0.84, color="0.93", zorder=0))
+        ax.add_patch(plt.Rectangle((0.05, i - 0.42), 12.3, 0.84, color="0.93", zorder=0))
         ax.text(x, i, p, ha="center", va="center", fontsize=11, weight="bold",
                 bbox=dict(boxstyle="round", fc="white", ec="0.3"), zorder=3)
         names = sorted({n.split(".")[0] for n in members[p]} - {p, "__init__"})
