@@ -71,6 +71,21 @@ class PhasemapAccessor:
 
         return plot(self._ds, layer, ax=ax, size=size, **kw)
 
+    def strip(self, times: Sequence[float] | None = None, ax=None, *, forces: bool = True,
+              size: str | float = "one_column") -> Figure:
+        """A motion in full coordinates as a strip of the body's outlines at ``times``, its
+        contact forces and impulses marked (:func:`phasemap.plot.motion.outline_figure`).
+
+        >>> import phasemap
+        >>> ds = phasemap.simulate("ladder", t_end=1.0, phi=0.5, omega=0.0, f=0.0)
+        >>> fig = ds.phasemap.strip()                # the ladder leaves the wall, falls flat
+        >>> len(fig.axes)                            # the strip and its time scale
+        2
+        """
+        from phasemap.plot.motion import outline_figure
+
+        return outline_figure(self._ds, times=times, ax=ax, forces=forces, size=size)
+
     def savefig(self, path_stem: str | os.PathLike, layer: str | Sequence[str] | None = None,
                 *, dpi: int = 300, **kw) -> tuple[pathlib.Path, pathlib.Path]:
         """Draw :meth:`plot` and write it as ``<stem>.pdf`` and ``<stem>.png``; return both paths.

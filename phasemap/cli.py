@@ -33,6 +33,8 @@ EXAMPLES = {
     "simulate": [
         ("phasemap simulate hinge_pendulum phi=2.5 omega=0 --t-end 20 -o swing.nc", ""),
         ("phasemap simulate elliptic_pendulum phi=1 xdot=1 f=0.3 --t-end 5", ""),
+        ("phasemap simulate ladder phi=0.5236 omega=0 f=0 l=0.5 --t-end 1",
+         "leaves the wall, falls on"),
     ],
     "info": [("phasemap info elliptic.nc", "axes, fixed values, cells per class")],
     "plot": [("phasemap plot elliptic.nc -o elliptic --size two", "elliptic.pdf and .png")],
@@ -178,6 +180,19 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                    "(default %(default)s)")
     p.add_argument("--method", default="DOPRI5", help="DOPRI5 (Dormand-Prince 5(4), the "
                    "default) or DOP853 (order 8, for tight tolerances)")
+    p.add_argument("--impact-law", default="stronge", metavar="LAW",
+                   help="stronge (the default), poisson or newton: the restitution law of "
+                   "impacts, once a declared system's motion leaves its contacts")
+    p.add_argument("--restitution", type=float, default=0.0, metavar="E",
+                   help="coefficient of restitution (default 0: plastic)")
+    p.add_argument("--painleve", default="liftoff", metavar="POLICY",
+                   help="liftoff (the default), iwc or stop: what follows where the "
+                   "accelerations have two solutions")
+    p.add_argument("--zeno-speed", type=float, default=1e-6, metavar="V",
+                   help="rebound speed below which impacts accumulate (default %(default)s)")
+    p.add_argument("--reduced", action="store_true",
+                   help="end where the model with every contact closed ends (contact_lost), "
+                   "as phase curves and fate maps do, instead of going on in full coordinates")
     p.add_argument("-o", "--output", metavar="OUT.nc", help="write the trajectory as netCDF")
     p.add_argument("--overwrite", action="store_true", help="replace OUT.nc if it exists")
     p = subs["info"] = _sub(sub, "info", "summarise an atlas, trajectory or phase curve",
@@ -425,14 +440,29 @@ def _simulate(args) -> str:
     values = _parse_values(args.values, model=model)
     out = check_output(args.output, overwrite=args.overwrite) if args.output else None
     with progress.activity(f"{model.name}: integrating to t = {args.t_end:g} s"):
-        ds = simulate(model, args.t_end, rtol=args.rtol, method=args.method, **values)
-    names = [v.name for v in integrated_variables(model)]
-    rows = [("t (s)", "event", "branch after", *names)]
-    meanings = ["none", *model.branches]
+        ds = simulate(model, args.t_end, rtol=args.rtol, method=args.method,
+                      impact_law=args.impact_law, restitution=args.restitution,
+                      painleve=args.painleve, zeno_speed=args.zeno_speed,
+                      through_contacts=not args.reduced, **values)
+    full = ds.attrs.get("phasemap_coordinates") == "full"
+    if full:   # the motion went on through contact changes, in full coordinates
+        names = [str(v)[len("event_"):] for v in ds.data_vars if str(v).startswith("event_")
+                 and ds[v].dims == ("event",) and str(v)[len("event_"):] in ds.data_vars
+                 and ds[str(v)[len("event_"):]].dims == ("t",)
+                 and not str(v).startswith("event_mode_")]
+        rows = [("t (s)", "event", "contact", "P_n (N s)", *names)]
+        meanings = ["none", *str(ds.event_contact.attrs["flag_meanings"]).split()[1:]]
+    else:
+        names = [v.name for v in integrated_variables(model)]
+        rows = [("t (s)", "event", "branch after", *names)]
+        meanings = ["none", *model.branches]
     for i in range(ds.sizes["event"]):
         e = ds.isel(event=i)
+        which = (int(e.event_contact) if full else int(e.event_branch)) + 1
+        extra = ((f"{float(e.event_impulse_n):.6g}" if math.isfinite(float(e.event_impulse_n))
+                  else "",) if full else ())
         rows.append((f"{float(e.event_t):.6g}", Event(int(e.event_kind)).name.lower(),
-                     meanings[int(e.event_branch) + 1],
+                     meanings[which], *extra,
                      *(f"{float(e[f'event_{n}']):.6g}" for n in names)))
     widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
     lines = ["  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]

@@ -98,6 +98,7 @@ def test_event_codes_are_append_only_and_each_says_whether_it_ends_a_motion():
               "max_events", "step_failure", "stiff", "left_domain", "max_steps"]
     assert [e.name.lower() for e in phasemap.Event][:len(stored)] == stored
     assert [int(e) for e in phasemap.Event][:len(stored)] == list(range(len(stored)))
-    continuing = {"start", "reversal", "stick", "slip", "switch", "iwc"}
+    continuing = {"start", "reversal", "stick", "slip", "switch", "iwc", "liftoff", "impact",
+                  "recontact", "zeno"}
     assert {e.name.lower() for e in phasemap.Event if not e.terminal} == continuing
     assert events.FATE_VALUES == tuple(sorted(events.FATES))

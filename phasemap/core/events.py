@@ -20,6 +20,10 @@ Events that continue the motion:
   impulse at zero normal velocity jumps the velocities (:mod:`phasemap.motion.impact`)
   and the motion goes on from there (:func:`phasemap.simulate`, for a declared system
   with one contact).
+* ``liftoff``, ``impact``, ``recontact``, ``zeno``: a contact opened, a gap closed with
+  an impulse or without one, or the impacts of a bouncing contact accumulated: the
+  motion through contact changes in a declared system's full coordinates
+  (:mod:`phasemap.motion.hybrid`).
 
 Events that end it (the *fate*):
 
@@ -74,6 +78,10 @@ STIFF = 14
 LEFT_DOMAIN = 15
 MAX_STEPS = 16
 IWC = 17
+LIFTOFF = 18
+IMPACT = 19
+RECONTACT = 20
+ZENO = 21
 
 #: The events that end a motion (its fate), named one by one: event codes are
 #: append-only (atlases and fate maps store them), so a later event that continues a
@@ -83,7 +91,7 @@ FATES = frozenset({REST, CONTACT_LOST, NO_SOLUTION, INDETERMINATE, CONTINUUM, SI
 
 #: ``TERMINAL[code]``: whether the event of that code ends a motion (:data:`FATES`), as
 #: an array the compiled rule :func:`after_event` reads.
-TERMINAL = np.array([code in FATES for code in range(IWC + 1)])
+TERMINAL = np.array([code in FATES for code in range(ZENO + 1)])
 
 #: What follows an event (:func:`after_event`): the running stage goes on (the event
 #: was a rounding flicker), the next stage starts, or the motion ends.
@@ -205,6 +213,12 @@ class Event(nx.Coded):
     IWC = (IWC, "an impact without collision: the slip forced the contact into the obstacle (a "
                 "Painleve inconsistency), and an impulse at zero normal velocity changed the "
                 "velocities")
+    LIFTOFF = LIFTOFF, "a one-sided contact opened: the body leaves it and flies"
+    IMPACT = (IMPACT, "a gap closed with the contact approaching: an impulse changed the "
+                      "velocities (phasemap.motion.impact)")
+    RECONTACT = RECONTACT, "a gap closed without approach: the contact closed without an impulse"
+    ZENO = (ZENO, "the impacts of a bouncing contact accumulated (Zeno): the contact closed "
+                  "at their predicted accumulation time")
 
     @property
     def terminal(self) -> bool:

@@ -31,16 +31,7 @@ class Equations:
     """
 
     def __init__(self, S):
-        import sympy as sp
-
-        self.S = S
-        self.q = [sp.Symbol(c.name, real=True) for c in S.coordinates]
-        self.qd = [sp.Symbol(c.rate.name, real=True) if c.rate else
-                   sp.Symbol(f"_k_v_{c.name}", real=True) for c in S.coordinates]
-        self.n = len(S.coordinates)
-        self.params = [sp.Symbol(p.name, real=True) for p in S.parameters]
-        self.rates = [self.qd[i] for i, c in enumerate(S.coordinates) if c.rate]
-        self._rng = np.random.default_rng(20261123)
+        self._symbols(S)
         M, h = self._lagrange()
         gaps, constraints = self._contacts()
         self.dep = [i for i, c in enumerate(S.coordinates) if c.rate is None]
@@ -53,6 +44,18 @@ class Equations:
         self._check_closed()
         self.regular = self._regular()
         self._check_constraints()
+
+    def _symbols(self, S):
+        import sympy as sp
+
+        self.S = S
+        self.q = [sp.Symbol(c.name, real=True) for c in S.coordinates]
+        self.qd = [sp.Symbol(c.rate.name, real=True) if c.rate else
+                   sp.Symbol(f"_k_v_{c.name}", real=True) for c in S.coordinates]
+        self.n = len(S.coordinates)
+        self.params = [sp.Symbol(p.name, real=True) for p in S.parameters]
+        self.rates = [self.qd[i] for i, c in enumerate(S.coordinates) if c.rate]
+        self._rng = np.random.default_rng(20261123)
 
     def vel(self, e):
         """The time derivative of a position expression ``e``."""
@@ -336,3 +339,31 @@ class Equations:
                         "_k_sig") else (extra or {}).get(s.name, self._rng.uniform(-1, 1))
             out.append(complex(e.xreplace(subs).evalf()).real)
         return np.array(out)
+
+
+class FreeEquations(Equations):
+    """The equations of the free system, every coordinate with its rate and no contact
+    closed: ``M``, ``h`` (:meth:`Equations._lagrange`) and each contact's channels and
+    gaps, unclosed (``channels[c][key] = (w, bias, v)``, the velocity ``v = w . qd`` and
+    its acceleration ``w . q'' + bias``; ``gaps[c]``).  What the motion through contact
+    changes integrates (:mod:`phasemap.declare.full`); the same Lagrangian and contact
+    kinematics as the closed equations."""
+
+    def __init__(self, S):
+        import sympy as sp
+
+        self._symbols(S)
+        self.M, self.h = self._lagrange()
+        self.gaps, self.channels, self.domain = {}, {}, []
+        for c in S.contacts:
+            kin = c.kinematics(self.vel)
+            self.gaps[c.name] = kin.gaps
+            self.domain += [(e, c.name) for e in kin.domain.values()]
+            chans = {}
+            for k, v in kin.channels.items():
+                v = sp.sympify(v)
+                w = [sp.diff(v, a) for a in self.qd]
+                bias = sum((sp.diff(v, self.q[j]) * self.qd[j] for j in range(self.n)),
+                           sp.Integer(0))
+                chans[k] = (w, bias, v)
+            self.channels[c.name] = chans

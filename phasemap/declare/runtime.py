@@ -18,13 +18,15 @@ _DECLARE = pathlib.Path(__file__).resolve().parent
 #: The modules of phasemap.declare that do not shape a generated module: the
 #: admissibility conditions (the bifurcation tracer's) and the loader (hashed by
 #: :func:`phasemap.declare.loader.key_of` itself).
-_NOT_SOURCES = ("admissibility.py", "loader.py")
+#: Not read by the generation of a declared model's module: the tracer's conditions, the
+#: loader, and the full-coordinate pieces of the motion through contact changes.
+_NOT_SOURCES = ("admissibility.py", "loader.py", "full.py", "impulses.py")
 
 
 def declare_sources() -> list[pathlib.Path]:
     """The sources a declared model's generated module and its manifest are derived by:
-    :mod:`phasemap.declare` (but the conditions, which the generated text does not use)
-    and the shared numerics."""
+    :mod:`phasemap.declare` (but :data:`_NOT_SOURCES`, which the generated text does not
+    use) and the shared numerics."""
     declare = sorted(_DECLARE.glob("*.py"))
     return [f for f in declare if f.name not in _NOT_SOURCES] + [pathlib.Path(nx.__file__)]
 

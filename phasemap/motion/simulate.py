@@ -22,6 +22,7 @@ from phasemap.core import args as _args
 from phasemap.core import events as ev
 from phasemap.core.compile import remember
 from phasemap.atlas.dataset import assemble, cf_header, variable_attrs
+from phasemap.motion import hybrid
 from phasemap.motion.integrate import DEFAULT_METHOD, METHODS, check_method, kernels, run_batch, unpack
 from phasemap.core.model import Model, Variable
 from phasemap.systems import get_model
@@ -143,7 +144,9 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
              atol: float | None = None, max_step: float = math.inf,
              t_eval: Sequence[float] | None = None, max_steps: int = 1_000_000,
              max_events: int = 10_000, method: str = DEFAULT_METHOD,
-             **values: float) -> xr.Dataset:
+             impact_law: str = "stronge", restitution: float = 0.0,
+             painleve: str = "liftoff", zeno_speed: float = hybrid.ZENO_SPEED,
+             through_contacts: bool = True, **values: float) -> xr.Dataset:
     """Integrate the motion from an initial state, with exact stick and slip.
 
     Parameters
@@ -171,6 +174,18 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
         ``"DOPRI5"`` (Dormand-Prince 5(4), the default) or ``"DOP853"``
         (Dormand-Prince 8(5,3) with a dense output of order 7: fewer steps at
         tight tolerances, below about 1e-8).
+    impact_law, restitution, painleve, zeno_speed:
+        how a declared system's motion goes on through contact changes
+        (:mod:`phasemap.motion.hybrid`): the impact law (``"stronge"``, the default,
+        ``"poisson"`` or ``"newton"``, which can gain energy where a slip reverses), its
+        coefficient of restitution (default 0: plastic), what follows where the
+        accelerations have two solutions (``"liftoff"``, the default, ``"iwc"`` or
+        ``"stop"``), and the rebound speed below which the impacts of one contact are
+        taken to accumulate (Zeno, default 1e-6).
+    through_contacts:
+        go on through contact changes (the default), or end where the reduced model
+        (every contact closed) ends, with ``contact_lost``, ``no_solution`` or
+        ``indeterminate``: the fate :func:`phasemap.phase_curve` and the fate maps give.
     **values:
         initial state and parameters by name (``phasemap models`` lists them);
         missing names take the model's defaults.  The elliptic pendulum also
@@ -190,6 +205,18 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
         the fate, when the motion cannot start); the last is the fate.
         ``attrs["end_reason"]`` names the fate, ``attrs["end_message"]``
         explains it.
+
+        **Through contact changes.**  For a declared system (its contacts point or
+        edge contacts) the motion does not end where a contact opens: from there it
+        goes on in the full coordinates (every coordinate and its rate, the fixed ones
+        named ``<name>_dot``), through lift-off, flight, impacts, impacts without
+        collision and Zeno, and the Dataset holds the full coordinates throughout
+        (``attrs["phasemap_coordinates"] = "full"``), each contact's mode
+        (``mode_<contact>``), and per event its contact and impulses
+        (``event_contact``, ``event_impulse_n``, ``event_impulse_t``, ``event_dKE``).
+        A start given in full coordinates (a value for a coordinate the contacts fix,
+        or its rate), or a declaration (:class:`phasemap.declare.System`) whose contacts
+        cannot all be closed at once, starts there.
 
         In the batch form, one Dataset with a ``start`` dimension: the
         variables above on (``start``, ``t``) with ``t_eval`` (NaN past a
@@ -219,19 +246,25 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     >>> sweep.n_reversals.values.tolist()
     [1, 3, 5]
     """
-    m = get_model(model)
-    opts = Options(t_end, rtol, atol, max_step, max_steps, max_events, method).checked(m.name)
+    S, m = _model_of(model, values)
+    name = m.name if m is not None else S.name
+    opts = Options(t_end, rtol, atol, max_step, max_steps, max_events, method).checked(name)
+    contact = hybrid.check_contact_options(name, impact_law, restitution, painleve,
+                                           zeno_speed)
+    if not isinstance(through_contacts, bool):
+        raise _args.WrongType(f"{name}: through_contacts must be True or False, got "
+                              f"{through_contacts!r}")
+    if not through_contacts:
+        if m is None:
+            raise ValueError(f"{name}: its contacts cannot all be closed at once, so it has "
+                             "no reduced model: through_contacts=False has nothing to run")
+        S = None
+    if S is not None and (m is None or _full_start(m, S, values)):
+        return _simulate_full(S, m, opts, contact, t_eval, values)
     starts = _starts(m, values)
     full, positions = split_values(m, {k: (val[0] if k in starts else val)
                                        for k, val in values.items()})
-    if t_eval is None:
-        te = np.empty(0)
-    else:
-        te = _args.reals("t_eval", t_eval, m.name)
-        if te.ndim != 1 or not np.all(np.isfinite(te)) or np.any(np.diff(te) < 0) or (
-                te.size and (te[0] < 0 or te[-1] > opts.t_end)):
-            raise ValueError(f"{m.name}: t_eval must be a sorted 1-D sequence of times in "
-                             f"[0, t_end = {opts.t_end:g}]")
+    te = np.empty(0) if t_eval is None else _times(m.name, t_eval, opts)
     names = list(_layout(m).names)
     y0 = np.array([positions[n] if n in positions else float(full[n]) for n in names])
     v = m.input_vector(full)
@@ -256,12 +289,159 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     integrate, _ = kernels(m, opts.method)
     fate, t, y, n_rev, n_steps, points, events, y_eval, impacts = _through_impacts(
         m, integrate, v, y0, run, names, full)
+    if S is not None and int(fate) in GOES_ON and float(t) < opts.t_end and not impacts:
+        # (a motion that went through an impact without collision of the reduced model
+        # keeps its reduced coordinates and its end)
+        ds = _continued(S, m, opts, contact, names, full, positions, points, events,
+                        y_eval, te if t_eval is not None else None, float(t), y,
+                        int(n_steps))
+        if ds is not None:
+            return ds
     ds = _dataset(m, full, positions, opts, names, int(fate), int(n_rev), int(n_steps),
                   *_columns(points, events, y_eval, te if t_eval is not None else None))
     if impacts:
         _impact_variables(ds, impacts)
     if capped is not None and int(fate) in (ev.MAX_STEPS, ev.MAX_EVENTS):
         _say_memory(m, ds, opts, capped)
+    return ds
+
+
+#: The fates of the reduced integrator from which a declared system's motion goes on in
+#: its full coordinates (:mod:`phasemap.motion.hybrid`).
+GOES_ON = (ev.CONTACT_LOST, ev.NO_SOLUTION, ev.INDETERMINATE)
+
+
+def _model_of(model, values):
+    """``(declaration or None, Model or None)`` of what :func:`simulate` was given: a name,
+    a Model, or a :class:`phasemap.declare.System` (whose contacts may be too many to
+    close at once: then it has no reduced model, and moves in full coordinates only; nor
+    is its reduced model built for a start in full coordinates)."""
+    from phasemap.declare.system import System
+
+    if isinstance(model, System):
+        reduced = {p.name for p in model.parameters} | {
+            n for c in model.coordinates if c.rate is not None for n in (c.name, c.rate.name)}
+        if set(values) - reduced:
+            try:
+                if set(values) & hybrid.full_names(hybrid_mechanics(model)) - reduced:
+                    return model, None
+            except ValueError:
+                pass
+        try:
+            return model, model.model
+        except ValueError as err:
+            try:
+                hybrid_mechanics(model)
+            except ValueError:
+                raise err from None
+            return model, None
+    m = get_model(model)
+    return hybrid.declaration_of(m), m
+
+
+def hybrid_mechanics(S):
+    from phasemap.declare.full import mechanics
+
+    return mechanics(S)
+
+
+def _full_start(m: Model, S, values) -> bool:
+    """Whether ``values`` name a full-coordinate variable the reduced model does not have
+    (a coordinate the contacts fix, or a rate of one)."""
+    known = set(_layout(m).known) | set(m.names)
+    extra = set(values) - known
+    if not extra:
+        return False
+    try:
+        mech = hybrid_mechanics(S)
+    except ValueError:
+        return False
+    return bool(extra & hybrid.full_names(mech))
+
+
+def _full_attrs(S, m, opts: Options, contact: dict, values) -> dict:
+    if m is not None:
+        attrs = cf_header(m, "trajectory", "phasemap.simulate")
+    else:
+        from phasemap._version import __version__
+        from phasemap.atlas.dataset import CONVENTIONS
+
+        attrs = {"Conventions": CONVENTIONS,
+                 "title": f"phasemap trajectory: {S.title}",
+                 "source": f"phasemap {__version__}", "references": S.citation,
+                 "phasemap_kind": "trajectory", "phasemap_model": S.name,
+                 "phasemap_version": __version__}
+    for k, value in opts.as_dict().items():
+        attrs[f"phasemap_{k}"] = value
+    for k, value in contact.items():
+        attrs[f"phasemap_{k}"] = value
+    for k, value in values.items():
+        attrs[f"phasemap_initial_{k}"] = float(value)
+    return attrs
+
+
+def _simulate_full(S, m, opts: Options, contact: dict, t_eval, values) -> xr.Dataset:
+    """A motion that starts in the full coordinates of the declaration ``S``."""
+    mech = hybrid_mechanics(S)
+    if any(np.ndim(x) for x in values.values()):
+        raise ValueError(f"{mech.name}: a start in full coordinates takes one number per "
+                         "variable (the batch form runs on the reduced model only)")
+    te = _times(mech.name, t_eval, opts)
+    q, u, p = hybrid.start_values(mech, values)
+    rec = hybrid.run_full(mech, p, q, u, t_eval=te, **_run_settings(opts), **contact)
+    return hybrid.dataset(mech, rec, _full_attrs(S, m, opts, contact, values), p=p)
+
+
+def _run_settings(opts: Options) -> dict:
+    return {"t_end": opts.t_end, "rtol": opts.rtol, "atol": opts.atol,
+            "max_step": opts.max_step, "max_steps": opts.max_steps,
+            "max_events": opts.max_events}
+
+
+def _times(name, t_eval, opts: Options):
+    if t_eval is None:
+        return None
+    te = _args.reals("t_eval", t_eval, name)
+    if te.ndim != 1 or not np.all(np.isfinite(te)) or np.any(np.diff(te) < 0) or (
+            te.size and (te[0] < 0 or te[-1] > opts.t_end)):
+        raise ValueError(f"{name}: t_eval must be a sorted 1-D sequence of times in "
+                         f"[0, t_end = {opts.t_end:g}]")
+    return te
+
+
+def _continued(S, m: Model, opts: Options, contact: dict, names, full, positions, points,
+               events, y_eval, te, t_stop: float, y_stop, n_steps: int
+               ) -> xr.Dataset | None:
+    """The reduced motion that ended at ``t_stop`` where a contact opens (or the
+    accelerations have no or two solutions) goes on in full coordinates: the Dataset of
+    both, or None where the declaration's contacts are not the kind that can open."""
+    from phasemap.declare.full import closure
+
+    try:
+        mech = hybrid_mechanics(S)
+    except ValueError:
+        return None
+    close = closure(S)
+    ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode = _columns(points, events, y_eval, te)
+
+    def full_of(y):
+        vals = {**full, **dict(zip(names, (float(x) for x in y)))}
+        q, u = close(vals)
+        return np.concatenate([q, u])
+
+    py = np.array([full_of(y) for y in ys]).reshape(-1, 2 * mech.n)
+    pey = np.array([full_of(y) for y in ev_y[:-1]]).reshape(-1, 2 * mech.n)
+    q0, u0 = np.split(full_of(y_stop), 2)
+    p = np.array([float(full[k]) for k in mech.parameters])
+    rest = None if te is None else te[te > t_stop]
+    rec = hybrid.run_full(mech, p, q0, u0, t0=t_stop, t_eval=rest, first=-1,
+                          **_run_settings(opts), **contact)
+    prefix = (np.asarray(ts, float), py, ms, np.asarray(ev_t[:-1], float),
+              np.asarray(ev_kind[:-1]), pey)
+    attrs = _full_attrs(S, m, opts, contact, {**full, **positions})
+    rec.n_steps += n_steps
+    ds = hybrid.dataset(mech, rec, attrs, prefix, p=p)
+    ds.attrs["phasemap_reduced_end"] = ev.Event(int(events[-1, 1])).name.lower()
     return ds
 
 

@@ -237,3 +237,168 @@ def _mark_events(ax: Axes, ds: xr.Dataset, kinds: list[str], xname: str, yname: 
         ax.plot(xs[sel], ys[sel], **_event_style(name))
 
 
+
+
+# ------------------------------------------------------------------- outline strips
+
+#: The events whose times an outline strip draws by default, beside evenly spaced ones.
+STRIP_EVENTS = ("liftoff", "impact", "iwc", "recontact", "zeno", "stick", "rest",
+                "left_domain")
+
+
+def _outline(centre: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The outline drawn for a body: the convex hull of its contact points and their
+    reflections through its centre of mass (exact for a uniform rod or a box), closed."""
+    cloud = np.concatenate([points, 2.0 * centre - points, centre[None, :]])
+    cloud = cloud[np.all(np.isfinite(cloud), axis=1)]
+    if len(cloud) < 3 or np.ptp(cloud, axis=0).max() == 0.0:
+        return cloud
+    # Andrew's monotone chain
+    pts = sorted(map(tuple, np.unique(np.round(cloud, 12), axis=0)))
+    if len(pts) < 3:
+        return np.array(pts)
+
+    def half(seq):
+        out = []
+        for p in seq:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0:
+                out.pop()
+            out.append(p)
+        return out
+    hull = half(pts)[:-1] + half(pts[::-1])[:-1]
+    return np.array(hull + hull[:1])
+
+
+def outline_figure(ds: xr.Dataset, *, times: Sequence[float] | None = None, ax=None,
+                   forces: bool = True, size: str | float = "one_column") -> Figure:
+    """A body's motion as a strip of its outlines at chosen times, in the plane: the
+    figure a paper on the ladder or the rod prints.
+
+    Needs a motion in full coordinates (:func:`phasemap.simulate` through contact
+    changes: ``centre_x``, ``centre_y`` and ``point_x_<contact>``, ``point_y_<contact>``
+    on ``t``).  Each outline is the convex hull of the contact points and their
+    reflections through the centre of mass (a uniform rod, a box), shaded from light to
+    dark with time, its centre of mass dotted.  ``times`` default to seven evenly spaced
+    times and those of the events that change a contact (lift-off, impact...).  With
+    ``forces``, each closed contact's reaction (``N_<c>``, ``F_<c>``) is an arrow at its
+    point, and each impact's impulse a vermillion arrow; the surfaces of the point
+    contacts (``phasemap_surface_<c>``) are drawn, hatched on the obstacle's side.
+    """
+    import matplotlib as mpl
+
+    _require(ds, ("t", "centre_x", "centre_y"), "outline strip")
+    contacts = [str(v)[len("point_x_"):] for v in ds.data_vars if str(v).startswith("point_x_")]
+    t = np.asarray(ds.t.values, float)
+    if times is None:
+        times = list(np.linspace(t.min(), t.max(), 7))
+        if "event_kind" in ds:
+            flags = _event_flags(ds.event_kind)
+            times += [float(tt) for tt, k in zip(ds.event_t.values, ds.event_kind.values)
+                      if flags.get(int(k)) in STRIP_EVENTS]
+        times = sorted({float(x) for x in np.round(times, 12) if t.min() <= x <= t.max()})
+    times = np.asarray(times, float)
+    if times.ndim != 1 or not times.size or np.any(~np.isfinite(times)) or (
+            times.min() < t.min() or times.max() > t.max()):
+        raise ValueError(f"times must be a 1-D sequence of times in [{t.min():g}, "
+                         f"{t.max():g}], the motion's")
+
+    def at(name, tt):
+        return np.interp(tt, t, np.asarray(ds[name].values, float))
+
+    width = width_of(size)
+    with style():
+        (a,) = _axes(ax, 1, (width, width * 0.75), "outline_figure")
+        a.set_aspect("equal")
+        cmap = mpl.colormaps["Greys"]
+        span = max(times.max() - times.min(), 1e-300)
+        xs_all, ys_all, drawn = [], [], []
+        for tt in times:
+            c = np.array([at("centre_x", tt), at("centre_y", tt)])
+            pts = np.array([[at(f"point_x_{k}", tt), at(f"point_y_{k}", tt)] for k in contacts])
+            hull = _outline(c, pts)
+            shade = cmap(0.35 + 0.65 * (tt - times.min()) / span)
+            if len(hull) >= 2:
+                a.plot(hull[:, 0], hull[:, 1], color=shade, lw=1.4, solid_capstyle="round",
+                       zorder=3)
+            a.plot([c[0]], [c[1]], "o", ms=2.5, color=shade, zorder=4)
+            xs_all += list(hull[:, 0]) + [c[0]]
+            ys_all += list(hull[:, 1]) + [c[1]]
+            drawn.append((tt, c, pts))
+        xs_all, ys_all = np.array(xs_all), np.array(ys_all)
+        ext = max(np.ptp(xs_all), np.ptp(ys_all), 1e-9)
+        lo_x, hi_x = xs_all.min() - 0.15 * ext, xs_all.max() + 0.15 * ext
+        lo_y, hi_y = ys_all.min() - 0.15 * ext, ys_all.max() + 0.15 * ext
+        surfaces = {}
+        for k in contacts:
+            s = ds.attrs.get(f"phasemap_surface_{k}")
+            if s is not None:
+                surfaces.setdefault(tuple(np.round(np.asarray(s, float), 12)), []).append(k)
+        for (nx, ny, off) in surfaces:
+            tx, ty = ny, -nx
+            p0 = np.array([nx * off, ny * off])
+            ts_ = np.linspace(-3 * ext, 3 * ext, 2)
+            line = p0[None, :] + ts_[:, None] * np.array([tx, ty])[None, :]
+            a.plot(line[:, 0], line[:, 1], color=GREY, lw=0.8, zorder=1)
+            for s_ in np.linspace(-3 * ext, 3 * ext, 121):
+                b = p0 + s_ * np.array([tx, ty])
+                e = b - 0.04 * ext * np.array([nx, ny]) + 0.03 * ext * np.array([tx, ty])
+                a.plot([b[0], e[0]], [b[1], e[1]], color=GREY, lw=0.5, zorder=1)
+        if forces:
+            _force_arrows(a, ds, contacts, drawn, at, ext)
+        a.set_xlim(lo_x, hi_x)
+        a.set_ylim(lo_y, hi_y)
+        a.set_xlabel("x (m)")
+        a.set_ylabel("y (m)")
+        norm = mpl.colors.Normalize(times.min(), times.max())
+        sm = mpl.cm.ScalarMappable(norm=norm, cmap=mpl.colors.LinearSegmentedColormap.from_list(
+            "strip", [cmap(0.35), cmap(1.0)]))
+        bar = a.figure.colorbar(sm, ax=a, fraction=0.05, pad=0.02)
+        bar.set_label("t (s)")
+        _annotate([a], fixed_values_text(ds, _panel_width(a)), ax is None)
+    return a.figure
+
+
+def _force_arrows(a, ds, contacts, drawn, at, ext) -> None:
+    """The reactions at the drawn times and the impulses of the impacts, as arrows."""
+    normals = {}
+    for k in contacts:
+        s = ds.attrs.get(f"phasemap_surface_{k}")
+        if s is not None:
+            normals[k] = np.asarray(s, float)[:2]
+    forces = []
+    for tt, c, pts in drawn:
+        for j, k in enumerate(contacts):
+            if k not in normals or f"N_{k}" not in ds:
+                continue
+            N, F = at(f"N_{k}", tt), at(f"F_{k}", tt)
+            if np.isfinite(N) and np.isfinite(F) and (N != 0.0 or F != 0.0):
+                n = normals[k]
+                forces.append((pts[j], N * n + F * np.array([n[1], -n[0]])))
+    _arrows(a, forces, 0.25 * ext, _OI["blue"], 0.8, 5)
+    if "event_impulse_n" not in ds or "event_contact" not in ds:
+        return
+    names = _flags(ds.event_contact)[1] if is_categorical(ds.event_contact) else []
+    hits = []
+    for i in np.flatnonzero(np.isfinite(np.asarray(ds.event_impulse_n.values, float))):
+        c = int(ds.event_contact.values[i])
+        name = names[c + 1] if 0 <= c + 1 < len(names) else None
+        if name not in normals:
+            continue
+        tt = float(ds.event_t.values[i])
+        p = np.array([at(f"point_x_{name}", tt), at(f"point_y_{name}", tt)])
+        n = normals[name]
+        P = (float(ds.event_impulse_n.values[i]) * n
+             + float(ds.event_impulse_t.values[i]) * np.array([n[1], -n[0]]))
+        hits.append((p, P))
+    _arrows(a, hits, 0.3 * ext, _OI["vermillion"], 1.2, 6)
+
+
+def _arrows(a, items, length, colour, lw, zorder) -> None:
+    """Arrows ``(point, vector)``, the largest ``length`` long, the others in proportion."""
+    if not items:
+        return
+    big = max(np.hypot(*v) for _, v in items) or 1.0
+    for p, v in items:
+        a.annotate("", xy=p + length * v / big, xytext=p,
+                   arrowprops={"arrowstyle": "-|>", "color": colour, "lw": lw}, zorder=zorder)

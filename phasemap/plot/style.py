@@ -151,6 +151,10 @@ EVENT_MARKERS = {
     "max_steps": ("h", GREY),
     "step_failure": ("v", _OI["orange"]),
     "iwc": ("*", _OI["vermillion"]),
+    "liftoff": ("^", "white"),
+    "impact": ("v", _OI["vermillion"]),
+    "recontact": ("v", "white"),
+    "zeno": ("p", _OI["orange"]),
 }
 _TERMINAL = {e.name.lower() for e in _events.Event if e.terminal}
 

@@ -1,0 +1,691 @@
+"""The event-driven motion in full coordinates: phases, their events, what follows each
+(see :mod:`phasemap.motion.hybrid`)."""
+
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from phasemap.core import events as ev
+
+OPEN, SMOOTH, STICK, SLIP_POS, SLIP_NEG = 0, 1, 2, 3, 4
+MODE_NAMES = ("open", "smooth", "stick", "slip_pos", "slip_neg")
+#: The Painleve policies where the accelerations have two or more solutions.
+POLICIES = ("liftoff", "iwc", "stop")
+#: The rebound speed (of the contact's normal velocity, in its units) below which the
+#: impacts of one contact are taken to accumulate (Zeno), by default.
+ZENO_SPEED = 1e-6
+#: The kind passed to ``_decide`` after an event already recorded (an impact).
+QUIET = -2
+#: Relative tolerance of the mode tests (GUIDE section 1: 1e-12 of a quantity's scale
+#: for ties; the integrated state carries the step's error, so 1e-9 here).
+TOL = 1e-9
+
+
+@dataclass
+class Options:
+    t_end: float
+    rtol: float = 1e-10
+    atol: float | None = None
+    max_step: float = math.inf
+    max_steps: int = 1_000_000
+    max_events: int = 10_000
+    impact_law: str = "stronge"
+    restitution: float = 0.0
+    painleve: str = "liftoff"
+    zeno_speed: float = ZENO_SPEED
+
+
+@dataclass
+class Record:
+    """What a motion through contact changes saves."""
+
+    t: list = field(default_factory=list)
+    y: list = field(default_factory=list)
+    modes: list = field(default_factory=list)
+    ev_t: list = field(default_factory=list)
+    ev_kind: list = field(default_factory=list)
+    ev_contact: list = field(default_factory=list)
+    ev_y: list = field(default_factory=list)
+    ev_modes: list = field(default_factory=list)
+    ev_impulse: list = field(default_factory=list)   # (P_n, P_t, dKE) or NaNs
+    fate: int = ev.HORIZON
+    n_steps: int = 0
+
+    def point(self, t, y, modes):
+        self.t.append(float(t))
+        self.y.append(np.array(y, dtype=float))
+        self.modes.append(tuple(modes))
+
+    def event(self, t, kind, contact, y, modes, impulse=(math.nan,) * 3):
+        self.ev_t.append(float(t))
+        self.ev_kind.append(int(kind))
+        self.ev_contact.append(int(contact))
+        self.ev_y.append(np.array(y, dtype=float))
+        self.ev_modes.append(tuple(modes))
+        self.ev_impulse.append(tuple(float(x) for x in impulse))
+
+
+class Motion:
+    """The motion of one declaration (its :class:`phasemap.declare.full.Mechanics`) at the
+    parameters ``p`` (array, in ``mech.parameters`` order)."""
+
+    def __init__(self, mech, p, opts: Options):
+        self.mech, self.p, self.o = mech, np.asarray(p, dtype=float), opts
+        self.n, self.k = mech.n, len(mech.contacts)
+        self.one_sided = np.array([c.one_sided for c in mech.contacts], dtype=bool)
+        self.bounds = mech.bounds(self.p)
+        self.zeno_until = -math.inf
+
+    # -- the accelerations of a phase ---------------------------------------------
+
+    def solve(self, q, u, modes, rho=None):
+        """``(u', N, F, a, pieces)`` of the phase ``modes`` at ``(q, u)``: accelerations,
+        reactions and the contacts' accelerations ``a`` (k, 2); None where the phase's
+        linear system is singular.  ``rho``: the sign of N each two-sided contact's
+        friction assumes (+1 for the one-sided)."""
+        M, h, g, J, b, mu = P = self.mech.pieces(q, u, self.p)
+        cols, rows, rhs = [], [], []
+        owner = []
+        for c, m in enumerate(modes):
+            if m == OPEN:
+                continue
+            r = 1.0 if rho is None else rho[c]
+            s = 1.0 if m == SLIP_POS else (-1.0 if m == SLIP_NEG else 0.0)
+            cols.append(J[c, 0] - s * r * mu[c] * J[c, 1])
+            rows.append(J[c, 0])
+            rhs.append(-b[c, 0])
+            owner.append((c, 0))
+            if m == STICK:
+                cols.append(J[c, 1])
+                rows.append(J[c, 1])
+                rhs.append(-b[c, 1])
+                owner.append((c, 1))
+        N, F = np.zeros(self.k), np.zeros(self.k)
+        if not cols:
+            ud = np.linalg.solve(M, h)
+        else:
+            G = np.array(cols).T
+            R = np.array(rows)
+            X = np.linalg.solve(M, np.column_stack([h, G]))
+            A = R @ X[:, 1:]
+            r_ = np.array(rhs) - R @ X[:, 0]
+            lam = None
+            if np.linalg.cond(A) < 1e12:
+                lam = np.linalg.solve(A, r_)
+            else:   # redundant contacts: a family of reactions, one member admissible
+                lam = self._member(A, r_, owner, modes, rho, P)
+            if lam is None or not np.all(np.isfinite(lam)):
+                return None
+            ud = X[:, 0] + X[:, 1:] @ lam
+            for (c, j), x in zip(owner, lam):
+                (N if j == 0 else F)[c] = x
+            for c, m in enumerate(modes):
+                if m in (SLIP_POS, SLIP_NEG):
+                    r = 1.0 if rho is None else rho[c]
+                    F[c] = -(1.0 if m == SLIP_POS else -1.0) * r * mu[c] * N[c]
+        a = J @ ud + b
+        return ud, N, F, a, P
+
+    def _member(self, A, r, owner, modes, rho, P):
+        """Of the reactions ``A lam = r`` of redundant contacts (a rod lying flat on
+        two rough points: a one-parameter family), one that every closed contact admits
+        (N >= 0, |F| <= mu N where stuck), by linear programming; the least-norm member
+        where none does (the mode is then refused by its own tests); None where
+        ``A lam = r`` has no solution."""
+        from scipy.optimize import linprog
+
+        lam, *_ = np.linalg.lstsq(A, r, rcond=1e-12)
+        scale = np.abs(r).max() + np.abs(A).max() * np.abs(lam).max() + 1e-300
+        if np.abs(A @ lam - r).max() > 1e-9 * scale:
+            return None
+        mu = P[5]
+        ub, b = [], []
+        idx = {key: j for j, key in enumerate(owner)}
+        for c, m in enumerate(modes):
+            if m == OPEN:
+                continue
+            row = np.zeros(len(owner))
+            row[idx[(c, 0)]] = -rho[c]
+            if self.one_sided[c] or m != SMOOTH:
+                ub.append(row)
+                b.append(0.0)
+            if m == STICK:
+                for sgn in (1.0, -1.0):
+                    row = np.zeros(len(owner))
+                    row[idx[(c, 1)]] = sgn
+                    row[idx[(c, 0)]] = -mu[c] * rho[c]
+                    ub.append(row)
+                    b.append(0.0)
+        res = linprog(np.zeros(len(owner)), A_ub=np.array(ub) if ub else None,
+                      b_ub=np.array(b) if b else None, A_eq=A, b_eq=r,
+                      bounds=[(None, None)] * len(owner), method="highs")
+        return res.x if res.status == 0 else lam
+
+    # -- which phase follows -------------------------------------------------------
+
+    def scales(self, q, u, P):
+        """Scales of the contact velocities, reactions and accelerations at a state."""
+        M, h, g, J, b, mu = P
+        v = J @ u
+        ud0 = np.linalg.solve(M, h)
+        acc = float(np.abs(J @ ud0).max() + np.abs(b).max()) if self.k else 1.0
+        force = float(np.abs(h).max() + np.abs(M).max() * np.abs(ud0).max())
+        vel = float(np.abs(v).max()) if self.k else 0.0
+        length = float(1.0 + np.abs(q).max())
+        return (max(vel, math.sqrt(acc * length), 1e-300), max(force, 1e-300),
+                max(acc, 1e-300), length)
+
+    def candidates(self, q, u, P, sc):
+        """Per contact, the modes it may take at ``(q, u)``."""
+        M, h, g, J, b, mu = P
+        v = J @ u
+        vs, _, _, L = sc
+        out = []
+        for c in range(self.k):
+            vn, vt = v[c]
+            if self.one_sided[c] and (g[c] > TOL * L or vn > TOL * vs):
+                out.append((OPEN,))
+                continue
+            ms = (OPEN,) if self.one_sided[c] else ()
+            if mu[c] == 0.0:
+                ms += (SMOOTH,)
+            elif abs(vt) > TOL * vs:
+                ms += (SLIP_POS if vt > 0 else SLIP_NEG,)
+            else:
+                ms += (STICK, SLIP_POS, SLIP_NEG)
+            out.append(ms)
+        return out
+
+    def admissible(self, q, u, modes, sc, prefer=None):
+        """``(u', N, F, a, rho)`` of the phase ``modes`` if it is admissible at
+        ``(q, u)``, else None (a two-sided contact's friction tries each sign of N)."""
+        vs, fs, acs, L = sc
+        two = [c for c, m in enumerate(modes) if m != OPEN and not self.one_sided[c]]
+        for signs in np.ndindex(*(2,) * len(two)):
+            rho = np.ones(self.k)
+            for c, s in zip(two, signs):
+                rho[c] = 1.0 - 2.0 * s
+            sol = self.solve(q, u, modes, rho)
+            if sol is None:
+                continue
+            ud, N, F, a, P = sol
+            M, h, g, J, b, mu = P
+            v = J @ u
+            ok = True
+            for c, m in enumerate(modes):
+                if m == OPEN:
+                    if g[c] <= TOL * L and v[c, 0] <= TOL * vs:
+                        ok &= a[c, 0] >= -TOL * acs
+                    continue
+                ok &= rho[c] * N[c] >= -TOL * fs
+                if m == STICK:
+                    ok &= abs(F[c]) <= mu[c] * rho[c] * N[c] + TOL * fs
+                elif m in (SLIP_POS, SLIP_NEG) and abs(v[c, 1]) <= TOL * vs:
+                    # a slip starts where its acceleration points its way; at the stuck
+                    # contact's friction limit (the event ``prefer`` names) it may start
+                    # from a zero acceleration, the tie with stick decided by the event
+                    s = 1.0 if m == SLIP_POS else -1.0
+                    tie = prefer is not None and prefer.get(c) == m
+                    ok &= s * a[c, 1] >= -TOL * acs if tie else s * a[c, 1] > TOL * acs
+            if ok:
+                return ud, N, F, a, rho
+        return None
+
+    def enumerate(self, q, u, prefer=None):
+        """Every admissible phase at ``(q, u)``, grouped by their accelerations (phases
+        that move the body alike, such as slip with N = 0 and open with g'' = 0, are one
+        motion): a list of groups, each a list of ``(modes, solution)``.  ``prefer``:
+        ``{contact: mode}`` orders each group (the mode an event points to first)."""
+        P = self.mech.pieces(q, u, self.p)
+        sc = self.scales(q, u, P)
+        groups = []
+        cand = self.candidates(q, u, P, sc)
+        for pick in np.ndindex(*[len(m) for m in cand]):
+            modes = tuple(cand[c][i] for c, i in enumerate(pick))
+            sol = self.admissible(q, u, modes, sc, prefer)
+            if sol is None:
+                continue
+            for grp in groups:
+                if np.allclose(grp[0][1][0], sol[0], rtol=1e-7, atol=1e-7 * sc[2]):
+                    grp.append((modes, sol))
+                    break
+            else:
+                groups.append([(modes, sol)])
+        prefer = prefer or {}
+
+        def rank(item):
+            modes = item[0]
+            return (-sum(modes[c] == m for c, m in prefer.items()),
+                    -sum(m == OPEN for m in modes), -sum(m in (SLIP_POS, SLIP_NEG)
+                                                          for m in modes))
+        return [sorted(g, key=rank) for g in groups]
+
+    # -- projections ------------------------------------------------------------------
+
+    def project(self, q, u, closed, held=(), fixed=()):
+        """The state put on the contacts ``closed`` in the mass metric: positions on their
+        gaps' zero, velocities on ``J_n u = 0`` for the closed contacts and ``J_t u = 0``
+        for those in ``held``: the smallest change in kinetic-energy norm."""
+        closed = list(closed)
+        if not closed:
+            return q, u
+        q0, q = q, q.copy()
+        for _ in range(20):
+            M, h, g, J, b, mu = self.mech.pieces(q, u, self.p)
+            r = g[closed]
+            if np.abs(r).max() <= 4e-16 * (1.0 + np.abs(q).max()):
+                break
+            G = J[closed, 0]
+            if fixed:    # coordinates held where they are (one on its bound)
+                G = np.vstack([G, np.eye(self.n)[list(fixed)]])
+                r = np.concatenate([r, np.zeros(len(fixed))])
+            X = np.linalg.solve(M, G.T)
+            q = q - X @ np.linalg.solve(G @ X, r)
+            for j in fixed:
+                q[j] = q0[j]
+        M, h, g, J, b, mu = self.mech.pieces(q, u, self.p)
+        A = np.array([J[c, 0] for c in closed] + [J[c, 1] for c in held])
+        X = np.linalg.solve(M, A.T)
+        u = u - X @ np.linalg.lstsq(A @ X, A @ u, rcond=None)[0]
+        return q, u
+
+    # -- the events of a phase ----------------------------------------------------------
+
+    def watch(self, q, u, modes, rho, sc):
+        """The event functions of a phase at ``(q, u)``, each >= 0 while it goes on:
+        per contact two (open: its gap; closed: its N; slipping: its slip velocity;
+        stuck: its friction slack), then each coordinate's bounds and the declared
+        domain conditions."""
+        out = np.ones(self.k * 2 + 2 * self.n + self.mech.n_domain)
+        ud, N, F, a, P = self.solve(q, u, modes, rho)
+        M, h, g, J, b, mu = P
+        vs, fs, acs, L = sc
+        for c, m in enumerate(modes):
+            if m == OPEN:
+                if self.one_sided[c]:
+                    out[2 * c] = g[c]
+                continue
+            if self.one_sided[c]:
+                out[2 * c] = N[c]
+            elif m != SMOOTH:
+                out[2 * c] = rho[c] * N[c]
+            if m == STICK:
+                out[2 * c + 1] = mu[c] * rho[c] * N[c] - abs(F[c])
+            elif m in (SLIP_POS, SLIP_NEG):
+                out[2 * c + 1] = (1.0 if m == SLIP_POS else -1.0) * (J[c, 1] @ u)
+        i = 2 * self.k
+        out[i:i + self.n] = q - self.bounds[:, 0]
+        out[i + self.n:i + 2 * self.n] = self.bounds[:, 1] - q
+        if self.mech.n_domain:
+            out[i + 2 * self.n:] = self.mech.domain(*q, *self.p)
+        return out
+
+    def gap_rate(self, q, u, c):
+        """``g'`` of contact ``c``."""
+        M, h, g, J, b, mu = self.mech.pieces(q, u, self.p)
+        return float(J[c, 0] @ u)
+
+    # -- the motion -------------------------------------------------------------------------
+
+    def run(self, q, u, t0=0.0, t_eval=None, first=ev.START) -> Record:
+        """The motion from ``(q, u)`` at ``t0`` to ``opts.t_end``: a :class:`Record`.
+        ``first``: the first event's kind (-1: the one the modes found name, for a motion
+        that goes on from the reduced model's end with every contact closed)."""
+        from scipy.integrate import DOP853
+
+        o, n = self.o, self.n
+        rec = Record()
+        self.rec = rec
+        self.t_eval = np.asarray(t_eval, dtype=float) if t_eval is not None else None
+        self.i_eval = 0
+        q, u = np.array(q, dtype=float), np.array(u, dtype=float)
+        P = self.mech.pieces(q, u, self.p)
+        sc = self.scales(q, u, P)
+        g = P[2]
+        for c in range(self.k):
+            if self.one_sided[c] and g[c] < -1e-9 * sc[3]:
+                raise ValueError(f"{self.mech.name}: the start is inside the obstacle at "
+                                 f"contact {self.mech.contacts[c].name!r} (gap {g[c]:.6g}): "
+                                 "give the coordinates a state on or off every contact")
+        t = t0
+        modes = tuple(OPEN if (self.one_sided[c] and g[c] > 1e-9 * sc[3]) else STICK
+                      for c in range(self.k))
+        step = self._decide(t, q, u, modes, first, -1, {})
+        atol = o.rtol if o.atol is None else o.atol
+        same, t_last = 0, math.nan
+        while step is not None:
+            t, q, u, modes, rho = step
+            same = same + 1 if t == t_last else 0
+            t_last = t
+            if same > ev.MAX_FLICKERS:   # phases of zero length, one after another
+                self._end(t, q, u, modes, ev.STEP_FAILURE)
+                break
+            if rec.ev_t and len(rec.ev_t) >= o.max_events:
+                self._end(t, q, u, modes, ev.MAX_EVENTS)
+                break
+            sc = self.scales(q, u, self.mech.pieces(q, u, self.p))
+
+            def f(_, y, modes=modes, rho=rho):
+                return np.concatenate([y[n:], self.solve(y[:n], y[n:], modes, rho)[0]])
+
+            t_stop = o.t_end
+            if self.zeno_until > t:
+                t_stop = min(t_stop, self.zeno_until)
+            solver = DOP853(f, t, np.concatenate([q, u]), t_stop, rtol=o.rtol, atol=atol,
+                            max_step=o.max_step)
+            # a function the event's projection left a rounding error below zero starts
+            # at zero (a gap just closed or opened, a slip velocity just zero)
+            w0 = self.watch(q, u, modes, rho, sc)
+            w0[(w0 < 0.0) & (w0 >= -TOL * self._scale_of(sc))] = 0.0
+            step = None
+            while True:
+                if rec.n_steps >= o.max_steps:
+                    self._end(solver.t, solver.y[:n], solver.y[n:], modes, ev.MAX_STEPS)
+                    break
+                t_old = solver.t
+                solver.step()
+                rec.n_steps += 1
+                if solver.status == "failed":
+                    self._end(t_old, solver.y[:n], solver.y[n:], modes, ev.STEP_FAILURE)
+                    break
+                y1 = solver.y
+                w1 = self.watch(y1[:n], y1[n:], modes, rho, sc)
+                dense = solver.dense_output()
+                hit = self._first_event(dense, t_old, solver.t, w0, w1, modes, rho, sc)
+                t_hit = hit[0] if hit else solver.t
+                self._save_eval(dense, t_old, t_hit, modes)
+                if hit is not None:
+                    th, i = hit
+                    y = dense(th)
+                    if self.t_eval is None:
+                        rec.point(th, y, modes)
+                    step = self._event(th, y[:n], y[n:], modes, rho, i)
+                    break
+                if self.t_eval is None:
+                    rec.point(solver.t, y1, modes)
+                w0 = w1
+                if solver.status == "finished":
+                    y = solver.y
+                    if solver.t >= o.t_end:
+                        self._end(o.t_end, y[:n], y[n:], modes, ev.HORIZON)
+                    else:   # the impacts' accumulation time
+                        step = self._zeno(solver.t, y[:n], y[n:], modes)
+                    break
+        return rec
+
+    @staticmethod
+    def _scale_of(sc):
+        """The scale the event functions' rounding errors are measured on."""
+        return max(sc)
+
+    def _save_eval(self, dense, t0, t1, modes):
+        if self.t_eval is None:
+            return
+        te = self.t_eval
+        while self.i_eval < te.size and te[self.i_eval] <= t1:
+            if te[self.i_eval] >= t0:
+                self.rec.point(te[self.i_eval], dense(te[self.i_eval]), modes)
+            self.i_eval += 1
+
+    def _first_event(self, dense, t0, t1, w0, w1, modes, rho, sc):
+        """``(t, index)`` of the earliest event function to reach zero in the step, or None.
+        A gap whose rate turns from negative to positive inside the step is checked at
+        its minimum too (an impact between the step's ends)."""
+        from scipy.optimize import brentq
+
+        n = self.n
+
+        def at(t, i):
+            if t <= t0:
+                return w0[i]
+            y = dense(t)
+            return self.watch(y[:n], y[n:], modes, rho, sc)[i]
+
+        xtol = 4.0 * np.finfo(float).eps * max(abs(t0), abs(t1), 1e-300)
+        best = None
+        for i in np.flatnonzero((w0 >= 0.0) & (w1 < 0.0)):
+            a = t0
+            if w0[i] == 0.0:   # starts at zero (a gap just opened): the root after its rise
+                for k in range(1, 60):
+                    tm = t0 + (t1 - t0) * 0.5 ** k
+                    if tm <= t0:
+                        break
+                    if at(tm, i) > 0.0:
+                        a = tm
+                        break
+            r = brentq(lambda t: at(t, i), a, t1, xtol=xtol, rtol=4 * np.finfo(float).eps)
+            r = self._onto_root(at, i, r, t1)
+            if best is None or r < best[0]:
+                best = (r, int(i))
+        for c, m in enumerate(modes):
+            if m != OPEN or not self.one_sided[c] or w1[2 * c] < 0.0:
+                continue
+            y0, y1 = dense(t0), dense(t1)
+            r0, r1 = self.gap_rate(y0[:n], y0[n:], c), self.gap_rate(y1[:n], y1[n:], c)
+            if r0 < 0.0 < r1:
+                tm = brentq(lambda t: self.gap_rate(dense(t)[:n], dense(t)[n:], c), t0, t1,
+                            xtol=xtol)
+                if at(tm, 2 * c) < 0.0:
+                    r = brentq(lambda t: at(t, 2 * c), t0, tm, xtol=xtol)
+                    r = self._onto_root(at, 2 * c, r, tm)
+                    if best is None or r < best[0]:
+                        best = (r, 2 * c)
+        return best
+
+    @staticmethod
+    def _onto_root(at, i, r, t1):
+        """The root ``r`` moved, by ulps, to where the function is no longer positive."""
+        for _ in range(64):
+            if at(r, i) <= 0.0 or r >= t1:
+                return min(r, t1)
+            r = np.nextafter(r, math.inf) if _ < 8 else r + (t1 - r) * 1e-12 * 2 ** (_ - 8)
+        return r
+
+    # -- events -----------------------------------------------------------------------------
+
+    def _end(self, t, q, u, modes, fate, contact=-1, fixed=()):
+        q, u = self.project(q, u, [c for c, m in enumerate(modes) if m != OPEN],
+                            [c for c, m in enumerate(modes) if m == STICK], fixed)
+        if self.t_eval is None and (not self.rec.t or self.rec.t[-1] != t):
+            self.rec.point(t, np.concatenate([q, u]), modes)
+        self.rec.event(t, fate, contact, np.concatenate([q, u]), modes)
+        self.rec.fate = fate
+
+    def _event(self, t, q, u, modes, rho, i):
+        """What follows the event ``i`` of the phase ``modes`` at ``(t, q, u)``."""
+        if i >= 2 * self.k:
+            j = i - 2 * self.k
+            fixed = ()
+            if j < 2 * self.n:     # a coordinate's bound: exactly on it
+                fixed = (j % self.n,)
+                q = q.copy()
+                q[j % self.n] = self.bounds[j % self.n, j // self.n]
+            self._end(t, q, u, modes, ev.LEFT_DOMAIN, fixed=fixed)
+            return None
+        c, which = divmod(i, 2)
+        closed = [d for d, m in enumerate(modes) if m != OPEN]
+        if modes[c] == OPEN:            # a gap closes
+            return self._closing(t, q, u, modes, c)
+        if which == 0:                  # a normal reaction reaches zero
+            q, u = self.project(q, u, closed)
+            return self._decide(t, q, u, modes, ev.LIFTOFF, c, {c: OPEN})
+        if modes[c] == STICK:           # a stuck contact reaches its friction limit
+            F = self.solve(q, u, modes, rho)[2][c]
+            q, u = self.project(q, u, closed)
+            return self._decide(t, q, u, modes, ev.SLIP, c,
+                                {c: SLIP_POS if F < 0.0 else SLIP_NEG})
+        q, u = self.project(q, u, closed, held=(c,))   # a slip velocity reaches zero
+        return self._decide(t, q, u, modes, ev.STICK, c, {c: STICK})
+
+    def _closing(self, t, q, u, modes, c):
+        """An open contact's gap reached zero: an impact, or a contact without one."""
+        from phasemap.motion.impact import impact, simultaneous
+
+        closed = [d for d, m in enumerate(modes) if m != OPEN]
+        q, u = self._positions_only(q, u, closed + [c], closed)
+        M, h, g, J, b, mu = self.mech.pieces(q, u, self.p)
+        v = J @ u
+        sc = self.scales(q, u, (M, h, g, J, b, mu))
+        y = np.concatenate([q, u])
+        if v[c, 0] >= -TOL * sc[0]:    # touching without approaching: no impulse
+            q, u = self.project(q, u, closed + [c])
+            return self._decide(t, q, u, modes, ev.RECONTACT, c, {})
+        o = self.o
+        if not closed:
+            W = J[c] @ np.linalg.solve(M, J[c].T)
+            r = impact(W, v[c], mu=float(mu[c]), e=o.restitution, law=o.impact_law)
+            Pc = np.array([r.P_n, r.P_t])
+            u = u + np.linalg.solve(M, J[c].T @ Pc)
+            self.rec.event(t, ev.IMPACT, c, y, modes, (r.P_n, r.P_t, r.dKE))
+            if r.v_n > TOL * sc[0]:     # a rebound
+                a_n = self.solve(q, u, modes, None)[3][c, 0]
+                if a_n < 0.0 and r.v_n < o.zeno_speed and o.restitution < 1.0:
+                    from phasemap.motion.impact import zeno_time
+
+                    self.zeno_until = zeno_time(t, r.v_n, a_n, o.restitution)
+                    self.zeno_contact = c
+                    q, u = self.project(q, u, [c])
+                return self._decide(t, q, u, modes, QUIET, c, {})
+            q, u = self.project(q, u, [c])
+            return self._decide(t, q, u, modes, QUIET, c, {})
+        K = closed + [c]
+        JK = np.concatenate([J[d] for d in K])
+        W = JK @ np.linalg.solve(M, JK.T)
+        sols = simultaneous(W, np.concatenate([v[d] for d in K]), mu[K])
+        if len(sols) != 1:
+            self._end(t, q, u, modes, ev.INDETERMINATE, c)
+            return None
+        s = sols[0]
+        u = u + np.linalg.solve(M, JK.T @ s.P)
+        j = 2 * K.index(c)
+        self.rec.event(t, ev.IMPACT, c, y, modes, (s.P[j], s.P[j + 1], s.dKE))
+        now = [d for d, mode in zip(K, s.modes) if mode != "open"]
+        q, u = self.project(q, u, now)
+        return self._decide(t, q, u, modes, QUIET, c, {})
+
+    def _positions_only(self, q, u, on, closed):
+        """Positions put on the contacts ``on`` and velocities on the ``closed`` only."""
+        q2, _ = self.project(q, u, on)
+        if closed:
+            _, u = self.project(q2, u, closed)
+        return q2, u
+
+    def _zeno(self, t, q, u, modes):
+        """The impacts accumulate at ``t``: the contact is closed, a ``zeno`` event."""
+        c = self.zeno_contact
+        closed = [d for d, m in enumerate(modes) if m != OPEN]
+        q, u = self.project(q, u, sorted(set(closed) | {c}))
+        self.rec.event(t, ev.ZENO, c, np.concatenate([q, u]), modes)
+        self.zeno_until = -math.inf
+        return self._decide(t, q, u, modes, QUIET, c, {})
+
+    def _decide(self, t, q, u, old, kind, contact, prefer, depth=0):
+        """The phase that follows at ``(t, q, u)``; records the event (``kind``, or the one
+        the change of modes names where ``kind`` is -1) and returns ``(t, q, u, modes,
+        rho)``, or None where the motion ends."""
+        groups = self.enumerate(q, u, prefer)
+        y = np.concatenate([q, u])
+        if len(groups) != 1:
+            if not groups or self.o.painleve == "iwc":
+                jump = self._iwc(t, q, u, old) if depth < 4 else None
+                if jump is not None:
+                    return self._decide(t, *jump, old, QUIET, -1, {}, depth + 1)
+                if not groups:
+                    self._end(t, q, u, old, ev.NO_SOLUTION, contact)
+                    return None
+            if self.o.painleve == "liftoff":
+                opens = [sum(m == OPEN for m in g[0][0]) for g in groups]
+                best = [i for i, k in enumerate(opens) if k == max(opens)]
+                if len(best) == 1:
+                    groups = [groups[best[0]]]
+            if len(groups) != 1:
+                self._end(t, q, u, old, ev.INDETERMINATE, contact)
+                return None
+        modes, (ud, N, F, a, rho) = groups[0][0]
+        held = [c for c, m in enumerate(modes) if m == STICK]
+        q, u = self.project(q, u, [c for c, m in enumerate(modes) if m != OPEN], held)
+        y = np.concatenate([q, u])
+        sc = self.scales(q, u, self.mech.pieces(q, u, self.p))
+        if (np.abs(u).max() <= TOL * sc[0]
+                and np.abs(ud).max() <= TOL * sc[2] / max(sc[3], 1.0)):
+            if self.zeno_until > t:
+                te = self.zeno_until
+                self.rec.event(te, ev.ZENO, self.zeno_contact, y, modes)
+                self.zeno_until = -math.inf
+                t = te
+            self._end(t, q, u, modes, ev.REST, contact)
+            return None
+        if kind == -1:
+            kind = _kind_of(old, modes, contact)
+            if contact < 0:
+                changed = [c for c in range(self.k) if (old[c] == OPEN) != (modes[c] == OPEN)]
+                changed = changed or [c for c in range(self.k) if old[c] != modes[c]]
+                contact = changed[0] if len(changed) == 1 else -1
+        elif kind == ev.LIFTOFF and modes[contact] != OPEN:
+            kind = ev.SWITCH
+        elif kind == ev.STICK and modes[contact] != STICK:
+            kind = ev.REVERSAL if modes[contact] != old[contact] else ev.SWITCH
+        if kind >= 0:
+            self.rec.event(t, kind, contact, y, modes)
+        elif kind == QUIET and self.t_eval is None:   # the state just after a jump
+            self.rec.point(t, y, modes)
+        return t, q, u, modes, rho
+
+    def _iwc(self, t, q, u, modes):
+        """An impact without collision at the one closed contact that slips into the
+        obstacle: the state after it, or None."""
+        from phasemap.motion.impact import impact
+
+        M, h, g, J, b, mu = self.mech.pieces(q, u, self.p)
+        sc = self.scales(q, u, (M, h, g, J, b, mu))
+        v = J @ u
+        touching = [c for c in range(self.k) if self.one_sided[c] and g[c] <= TOL * sc[3]
+                    and abs(v[c, 0]) <= TOL * sc[0]]
+        jumps = []
+        for c in touching:
+            if abs(v[c, 1]) <= TOL * sc[0] or len(touching) != 1:
+                continue
+            W = J[c] @ np.linalg.solve(M, J[c].T)
+            try:
+                r = impact(W, (0.0, v[c, 1]), mu=float(mu[c]), e=0.0)
+            except ValueError:
+                continue
+            if r.P_n <= 0.0:
+                continue
+            jumps.append((c, r))
+        if len(jumps) != 1:
+            return None
+        c, r = jumps[0]
+        self.rec.event(t, ev.IWC, c, np.concatenate([q, u]), modes, (r.P_n, r.P_t, r.dKE))
+        u = u + np.linalg.solve(M, J[c].T @ np.array([r.P_n, r.P_t]))
+        return self.project(q, u, [c])
+
+
+def _kind_of(old, new, contact):
+    """The event a change of contact modes from ``old`` to ``new`` is."""
+    if contact >= 0:
+        a, b = old[contact], new[contact]
+        if a != OPEN and b == OPEN:
+            return ev.LIFTOFF
+        if a == OPEN and b != OPEN:
+            return ev.RECONTACT
+    for a, b in zip(old, new):
+        if a != OPEN and b == OPEN:
+            return ev.LIFTOFF
+    for a, b in zip(old, new):
+        if a == OPEN and b != OPEN:
+            return ev.RECONTACT
+    for a, b in zip(old, new):
+        if a in (SLIP_POS, SLIP_NEG) and b == STICK:
+            return ev.STICK
+        if a == STICK and b in (SLIP_POS, SLIP_NEG):
+            return ev.SLIP
+        if {a, b} == {SLIP_POS, SLIP_NEG}:
+            return ev.REVERSAL
+    return ev.SWITCH if tuple(old) != tuple(new) else -1
+
+

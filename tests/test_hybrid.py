@@ -1,0 +1,262 @@
+"""Motion through contact changes (issue 38): lift-off, flight, impacts, impacts without
+collision and Zeno, each checked against a closed form derived here."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import phasemap
+from phasemap.core import events as ev
+from phasemap.declare import Body, Coordinate, Parameter, PointContact, Rate, System
+from phasemap.declare.full import mechanics
+from phasemap.motion import hybrid
+from phasemap.systems.seeds.ladder import SYSTEM as LADDER
+
+G = 9.81
+
+
+def _ladder_with_top_on_floor():
+    """The seed ladder with a third contact: its top end B on the floor (it cannot close
+    all three at once, so it has no reduced model: full coordinates only)."""
+    phi, xc, yc = LADDER.coordinates
+    f, l = LADDER.parameters[0], LADDER.parameters[1]
+    top = PointContact("top", (xc - l * sp.sin(phi), yc + l * sp.cos(phi)), normal=(0, 1),
+                       friction=f)
+    return dataclasses.replace(LADDER, name="ladder_three", contacts=LADDER.contacts + (top,),
+                               coordinates=(dataclasses.replace(phi, upper=math.inf), xc, yc),
+                               names={})
+
+
+def _ball():
+    m = Parameter("m", "kg", "mass of the ball", 1.0, 0.0, lower_open=True)
+    g = Parameter("g", "m s-2", "gravitational acceleration", G, 0.0)
+    f = Parameter("f", "1", "friction coefficient", 0.3, 0.0)
+    x = Coordinate("x", "m", "horizontal position",
+                   rate=Rate("vx", "m s-1", "horizontal velocity"))
+    y = Coordinate("y", "m", "height above the floor")
+    return System("ball", "A ball on a rough floor", "test", coordinates=(x, y),
+                  parameters=(m, g, f), bodies=(Body(m, (x, y)),), potential=m * g * y,
+                  contacts=(PointContact("floor", (x, y), normal=(0, 1), friction=f),))
+
+
+BALL = _ball()
+
+
+@pytest.fixture(scope="module")
+def falling_ladder():
+    """The frictionless ladder (length 2l = 1) released at rest from 60 degrees to the
+    floor (phi0 = 30 degrees from the wall), through its release from the wall."""
+    return phasemap.simulate("ladder", t_end=1.0, rtol=1e-12, phi=math.radians(30),
+                             omega=0.0, f=0.0, l=0.5)
+
+
+def test_ladder_leaves_the_wall_where_energy_says(falling_ladder):
+    ds = falling_ladder
+    kinds = ds.event_kind.values.tolist()
+    assert kinds == [ev.START, ev.LIFTOFF, ev.LEFT_DOMAIN]
+    assert ds.attrs["phasemap_coordinates"] == "full"
+    assert ds.attrs["phasemap_reduced_end"] == "contact_lost"
+    at = kinds.index(ev.LIFTOFF)
+    assert ds.event_contact.values[at] == 1      # the wall
+    # both contacts smooth, the centre on a circle of radius l: N_wall = 0 where
+    # cos phi = (2/3) cos phi0, i.e. sin theta = (2/3) sin theta0 from the floor
+    theta0 = math.radians(60.0)
+    theta_s = math.asin(2.0 / 3.0 * math.sin(theta0))
+    assert abs((math.pi / 2 - float(ds.event_phi[at])) - theta_s) <= 1e-9
+    # (2/3) m l^2 omega^2 = m g l (cos phi0 - cos phi)
+    l = 0.5
+    omega_s = math.sqrt(1.5 * G / l * (math.sin(theta0) - math.sin(theta_s)))
+    assert abs(float(ds.event_omega[at]) - omega_s) <= 1e-8
+    assert abs(float(ds.event_t[at]) - 0.325031) <= 5e-7        # the issue's figure
+    # after the release the centre keeps the horizontal velocity it had
+    assert np.allclose(ds.xc_dot.values[ds.t.values > ds.event_t.values[at]],
+                       l * math.cos(math.pi / 2 - theta_s) * omega_s, rtol=1e-8)
+
+
+def test_ladder_lies_flat_at_the_issues_time(falling_ladder):
+    ds = falling_ladder
+    assert ds.attrs["end_reason"] == "left_domain"
+    assert abs(float(ds.event_t[-1]) - 0.485174) <= 5e-7
+    assert abs(float(ds.event_omega[-1]) - 4.833549) <= 5e-6
+    assert abs(float(ds.event_phi[-1]) - math.pi / 2) <= 1e-12
+    # the floor contact held throughout the flight: the foot's height is zero
+    foot = ds.yc.values - 0.5 * np.cos(ds.phi.values)
+    assert np.abs(foot).max() <= 1e-10
+
+
+def test_reduced_motions_are_untouched():
+    """A motion that meets no contact change is the reduced integrator's own Dataset."""
+    ds = phasemap.simulate("ladder", t_end=2.0, phi=0.2, omega=0.0, f=0.5)
+    assert "phasemap_coordinates" not in ds.attrs
+    assert ds.attrs["end_reason"] == "rest"
+
+
+def test_ladder_lands_on_its_top_plastically():
+    S = _ladder_with_top_on_floor()
+    ds = phasemap.simulate(S, t_end=0.6, rtol=1e-12, phi=math.radians(30), omega=0.0,
+                           xc=0.25, yc=0.5 * math.cos(math.radians(30)), f=0.0, l=0.5)
+    kinds = ds.event_kind.values.tolist()
+    assert kinds[:3] == [ev.START, ev.LIFTOFF, ev.IMPACT]
+    i = kinds.index(ev.IMPACT)
+    assert ds.event_contact.values[i] == 2
+    # landing flat, frictionless, both ends held: the vertical velocity of the centre
+    # and the rotation stop; the horizontal one goes on
+    m, l = 1.0, 0.5
+    lost = 0.5 * m * float(ds.event_yc_dot[i]) ** 2 + 0.5 * m * l**2 / 3 * float(
+        ds.event_omega[i]) ** 2
+    assert abs(float(ds.event_dKE[i]) + lost) <= 1e-9
+    assert abs(float(ds.event_dKE[i]) + 3.893867) <= 5e-7      # the issue's figure
+    after = ds.t.values > ds.event_t.values[i]
+    assert np.abs(ds.omega.values[after]).max() <= 1e-9
+    assert ds.attrs["end_reason"] == "horizon"
+
+
+def test_bouncing_ball_comes_to_rest_at_the_zeno_time():
+    e, h0 = 0.5, 1.0
+    ds = phasemap.simulate(BALL, t_end=3.0, rtol=1e-12, restitution=e, x=0.0, y=h0,
+                           vx=0.0, y_dot=0.0)
+    kinds = ds.event_kind.values.tolist()
+    assert kinds[-2:] == [ev.ZENO, ev.REST]
+    t_inf = math.sqrt(2 * h0 / G) * (1 + e) / (1 - e)
+    assert abs(float(ds.event_t[-1]) - t_inf) <= 1e-9
+    assert kinds.count(ev.IMPACT) < 40                          # bounded work
+    # each rebound is e times the speed before it
+    at = np.flatnonzero(ds.event_kind.values == ev.IMPACT)
+    v = -ds.event_y_dot.values[at]
+    assert np.allclose(v[1:] / v[:-1], e, rtol=1e-9)
+
+
+def test_no_drift_after_a_hundred_impacts():
+    ds = phasemap.simulate(BALL, t_end=60.0, rtol=1e-10, restitution=0.95, x=0.0, y=1.0,
+                           vx=0.5, y_dot=0.0)
+    at = np.flatnonzero(ds.event_kind.values == ev.IMPACT)
+    assert at.size >= 100
+    assert np.abs(ds.event_y.values[at]).max() <= 1e-12
+    assert ds.y.values.min() >= -1e-12
+    assert np.all(ds.event_dKE.values[at] <= 0.0)
+
+
+def test_impact_without_collision_of_the_rod_in_full_coordinates():
+    """Genot and Brogliato's tangential impact: theta = arctan 2, f = 1.5, x_A' = -1."""
+    from phasemap.systems.painleve_rod import SYSTEM as ROD
+
+    mech = mechanics(ROD)
+    p = np.array([{"f": 1.5, "l": 1.0, "g": G, "m": 1.0}[k] for k in mech.parameters])
+    theta = math.atan(2.0)
+    rec = hybrid.run_full(mech, p, np.array([theta, 0.0, 0.0]), np.array([0.0, -1.0, 0.0]),
+                          t_end=0.1, rtol=1e-12, atol=1e-12, max_step=math.inf,
+                          max_steps=10_000, max_events=100)
+    assert rec.ev_kind[0] == ev.IWC
+    P_n, P_t, dKE = rec.ev_impulse[0]
+    assert abs(P_n - 0.3) <= 1e-12 and abs(P_t - 0.4) <= 1e-12
+    assert abs(dKE + 0.2) <= 1e-12                                # 0.5 -> 0.3
+    # the state after it (the first point saved; the event holds the state before): the
+    # rod sticks
+    assert rec.t[0] == 0.0 and rec.ev_y[0][4] == -1.0
+    y = rec.y[0]
+    th, w, xd, yd = y[0], y[3], y[4], y[5]
+    assert abs(w - 0.3 * math.sqrt(5)) <= 1e-12
+    assert abs((xd - math.sin(th) * w) + 0.6) <= 1e-12           # x_G'
+    assert abs((yd + math.cos(th) * w) - 0.3) <= 1e-12           # y_G'
+    assert rec.modes[0] == (hybrid.STICK,)
+
+
+@pytest.mark.parametrize("bad, message", [
+    ({"impact_law": "elastic"}, "impact_law must be one of"),
+    ({"restitution": 1.5}, "restitution must be in"),
+    ({"painleve": "guess"}, "painleve must be one of"),
+    ({"zeno_speed": -1.0}, "zeno_speed"),
+])
+def test_contact_options_are_checked(bad, message):
+    with pytest.raises(ValueError, match=message):
+        phasemap.simulate(BALL, t_end=1.0, y=1.0, **bad)
+
+
+def test_full_starts_are_checked():
+    with pytest.raises(ValueError, match="inside the obstacle"):
+        phasemap.simulate(BALL, t_end=1.0, y=-0.1)
+    with pytest.raises(ValueError, match="unknown variable"):
+        phasemap.simulate(BALL, t_end=1.0, y=1.0, z_dot=2.0)
+    with pytest.raises(ValueError, match="one number per"):
+        phasemap.simulate(BALL, t_end=1.0, y=[1.0, 2.0])
+
+
+def test_full_motion_dataset_is_self_describing(tmp_path):
+    ds = phasemap.simulate(BALL, t_end=0.5, x=0.0, y=0.5, vx=1.0, y_dot=1.0, restitution=0.3,
+                           t_eval=np.linspace(0.0, 0.5, 11))
+    assert ds.t.size == 11 and np.all(np.isfinite(ds.y.values))
+    assert ds.mode_floor.attrs["flag_meanings"].split()[1:] == list(hybrid.MODE_NAMES)
+    assert ds.y_dot.attrs["units"] == "m s-1"
+    path = tmp_path / "ball.nc"
+    ds.to_netcdf(path)
+    import xarray as xr
+
+    with xr.open_dataset(path) as back:
+        assert back.attrs["phasemap_impact_law"] == "stronge"
+        assert int((back.event_kind == ev.IMPACT).sum()) >= 1
+
+
+def _rod_with_both_ends():
+    """Painleve's rod with its other end B declared as a second contact (open at first)."""
+    from phasemap.systems.painleve_rod import SYSTEM as ROD
+
+    theta, x, y = ROD.coordinates
+    f, l = ROD.parameters[:2]
+    end_b = PointContact("B", (x + 2 * l * sp.cos(theta), y + 2 * l * sp.sin(theta)),
+                         friction=f)
+    return dataclasses.replace(ROD, name="rod_two_ends", contacts=ROD.contacts + (end_b,),
+                               coordinates=(dataclasses.replace(theta, lower=-math.inf), x, y))
+
+
+def test_rod_lands_on_its_other_end_and_comes_to_rest():
+    """The rod falls sliding, lands flat on B (a plastic impact with A closed: Moreau's
+    impulse-level solution of both contacts), and stops: a rest held by a family of
+    friction forces (two rough points on one line), found by linear programming."""
+    ds = phasemap.simulate(_rod_with_both_ends(), theta=1.0, omega=0.0, xdot=1.0, f=0.3,
+                           t_end=3.0, rtol=1e-10)
+    kinds = [phasemap.Event(int(k)).name.lower() for k in ds.event_kind.values]
+    assert kinds[-2:] == ["impact", "rest"], kinds
+    assert ds.event_contact.values[-2] == 1
+    assert abs(float(ds.event_theta[-1])) <= 1e-12          # lying flat
+    assert float(ds.event_t[-1]) < 3.0
+    state = [v for v in ("omega", "xdot", "y_dot") if v in ds]
+    assert all(abs(float(ds[f"event_{v}"][-1])) <= 1e-12 for v in state)
+    assert float(ds.event_dKE[-2]) < 0.0
+    # the floor reactions at rest carry the weight
+    assert abs(float(ds.N_A[-1] + ds.N_B[-1]) - G) <= 1e-9
+
+
+def test_through_contacts_false_is_the_reduced_fate():
+    ds = phasemap.simulate("ladder", t_end=1.0, phi=math.radians(30), omega=0.0, f=0.0, l=0.5,
+                           through_contacts=False)
+    assert ds.attrs["end_reason"] == "contact_lost"
+    assert "phasemap_coordinates" not in ds.attrs
+    with pytest.raises(ValueError, match="no reduced model"):
+        phasemap.simulate(_ladder_with_top_on_floor(), t_end=1.0, through_contacts=False)
+
+
+def test_outline_strip_draws_the_motion(falling_ladder, tmp_path):
+    import matplotlib.pyplot as plt
+
+    fig = falling_ladder.phasemap.strip()
+    ax = fig.axes[0]
+    # one outline per drawn time, and the floor and the wall
+    assert len(ax.lines) > 7
+    assert any(t.get_text() for t in fig.texts) or ax.get_title() is not None
+    fig.savefig(tmp_path / "strip.png")
+    plt.close(fig)
+    with pytest.raises(ValueError, match="times must be"):
+        falling_ladder.phasemap.strip(times=[5.0])
+
+
+def test_cli_prints_a_motion_through_contact_changes(capsys):
+    from phasemap.cli import main
+
+    code = main(["simulate", "ladder", "phi=0.5236", "omega=0", "f=0", "l=0.5", "--t-end",
+                 "1"])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "liftoff" in out and "wall" in out and "xc_dot" in out
