@@ -260,3 +260,65 @@ def test_cli_prints_a_motion_through_contact_changes(capsys):
     out = capsys.readouterr().out
     assert code == 0
     assert "liftoff" in out and "wall" in out and "xc_dot" in out
+
+
+def _random_body():
+    """A body of random shape: its centre of mass off the line through the contact point,
+    its inertia a parameter of its own, one point A on the floor."""
+    m = Parameter("m", "kg", "mass", 1.0, 0.0, lower_open=True)
+    g = Parameter("g", "m s-2", "gravitational acceleration", G, 0.0)
+    f = Parameter("f", "1", "friction coefficient", 0.5, 0.0)
+    a = Parameter("a", "m", "centre of mass along the body", 1.0)
+    b = Parameter("b", "m", "centre of mass across the body", 0.0)
+    J = Parameter("J", "kg m2", "moment of inertia about the centre", 0.3, 0.0,
+                  lower_open=True)
+    th = Coordinate("theta", "rad", "angle", 1.0, rate=Rate("omega", "rad s-1", "rate"))
+    x = Coordinate("x", "m", "A along the floor", rate=Rate("xdot", "m s-1", "A's velocity"))
+    y = Coordinate("y", "m", "A's height")
+    c, s = sp.cos(th), sp.sin(th)
+    G_ = (x + a * c - b * s, y + a * s + b * c)
+    return System("random_body", "a body of random shape on a floor", "test",
+                  coordinates=(th, x, y), parameters=(m, g, f, a, b, J),
+                  bodies=(Body(m, G_, inertia=J, angle=th),), potential=m * g * G_[1],
+                  contacts=(PointContact("A", (x, y), friction=f),))
+
+
+@pytest.mark.parametrize("law", ["stronge", "poisson"])
+def test_random_impacts_never_gain_energy_and_end_complementary(law):
+    """Random single-contact impacts of the declared rod and of a random body: under
+    Stronge's and Poisson's laws the kinetic energy never grows, and after the impact
+    the contact does not approach (v_n >= 0), is closed where it does not separate, and
+    has pushed (P_n >= 0)."""
+    from phasemap.systems.painleve_rod import SYSTEM as ROD
+
+    rng = np.random.default_rng(38)
+    n_impacts = 0
+    for S in (ROD, _random_body()):
+        mech = mechanics(S)
+        for _ in range(40):
+            vals = {"f": rng.uniform(0.0, 2.0), "l": rng.uniform(0.3, 2.0), "g": G,
+                    "m": rng.uniform(0.5, 3.0), "a": rng.uniform(0.2, 2.0),
+                    "b": rng.uniform(-0.5, 0.5), "J": rng.uniform(0.05, 1.0)}
+            p = np.array([vals[k] for k in mech.parameters])
+            q = np.array([rng.uniform(0.1, 1.5), 0.0, 0.0])
+            u = np.array([rng.uniform(-3, 3), rng.uniform(-2, 2), rng.uniform(-3, -0.1)])
+            rec = hybrid.run_full(mech, p, q, u, t_end=0.05, rtol=1e-10, atol=1e-10,
+                                  max_step=math.inf, max_steps=5_000, max_events=50,
+                                  impact_law=law, restitution=rng.uniform(0.0, 1.0))
+            for i, kind in enumerate(rec.ev_kind):
+                if kind != ev.IMPACT:
+                    continue
+                n_impacts += 1
+                P_n, P_t, dKE = rec.ev_impulse[i]
+                y = rec.ev_y[i]
+                ke = 0.5 * y[3:] @ mech.pieces(y[:3], y[3:], p)[0] @ y[3:]
+                assert dKE <= 1e-12 * max(ke, 1.0) and P_n >= 0.0
+                # the state just after: the last point saved at the impact's time
+                at = [j for j, t in enumerate(rec.t) if t == rec.ev_t[i]]
+                after = rec.y[at[-1]]
+                J = mech.pieces(after[:3], after[3:], p)[3][0]
+                v_n = J[0] @ after[3:]
+                assert v_n >= -1e-9 * (1.0 + abs(J[0] @ y[3:]))
+                if rec.modes[at[-1]][0] != hybrid.OPEN:      # closed: it does not move off
+                    assert abs(v_n) <= 1e-9 * (1.0 + abs(J[0] @ y[3:]))
+    assert n_impacts >= 80

@@ -354,7 +354,17 @@ class Motion:
         t = t0
         modes = tuple(OPEN if (self.one_sided[c] and g[c] > 1e-9 * sc[3]) else STICK
                       for c in range(self.k))
-        step = self._decide(t, q, u, modes, first, -1, {})
+        v = P[3] @ u
+        hit = [c for c in range(self.k) if self.one_sided[c] and g[c] <= 1e-9 * sc[3]
+               and v[c, 0] < -TOL * sc[0]]
+        if hit:   # a start on a contact, approaching it: an impact first
+            modes = tuple(OPEN if c in hit or modes[c] == OPEN else modes[c]
+                          for c in range(self.k))
+            if first == ev.START:
+                self.rec.event(t, ev.START, -1, np.concatenate([q, u]), modes)
+            step = self._closing(t, q, u, modes, hit[0])
+        else:
+            step = self._decide(t, q, u, modes, first, -1, {})
         atol = o.rtol if o.atol is None else o.atol
         same, t_last = 0, math.nan
         while step is not None:
