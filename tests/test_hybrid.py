@@ -322,3 +322,23 @@ def test_random_impacts_never_gain_energy_and_end_complementary(law):
                 if rec.modes[at[-1]][0] != hybrid.OPEN:      # closed: it does not move off
                     assert abs(v_n) <= 1e-9 * (1.0 + abs(J[0] @ y[3:]))
     assert n_impacts >= 80
+
+
+def test_painleve_policies_where_the_accelerations_have_two_solutions():
+    """The rod sliding back, turning fast: slipping on and lifting off both solve the
+    accelerations (n = 2).  ``liftoff`` lifts off, ``iwc`` jumps by an impact without
+    collision, ``stop`` ends the motion there."""
+    start = dict(theta=0.7, omega=-5.0, xdot=-1.0, f=2.0)
+    assert phasemap.classify("painleve_rod", **start).n_solutions == 2
+
+    def kinds(policy):
+        ds = phasemap.simulate("painleve_rod", t_end=0.3, painleve=policy, **start)
+        return [phasemap.Event(int(k)).name.lower() for k in ds.event_kind.values], ds
+
+    lift, ds = kinds("liftoff")
+    assert lift[0] == "liftoff" and float(ds.event_t[0]) == 0.0
+    assert float(ds.y.max()) > 0.0                     # it flies
+    jump, ds = kinds("iwc")
+    assert jump[0] == "iwc" and float(ds.event_impulse_n[0]) > 0.0
+    stop, _ = kinds("stop")
+    assert stop == ["indeterminate"]
