@@ -97,7 +97,19 @@ def mechanics(S) -> Mechanics:
 
     Raises ValueError naming the contact where a contact is not a point or edge contact
     (a rolling contact or a joint: their motion through contact changes is not built)."""
-    return _MECHANICS.get((S,), (), lambda: _make(S))
+    made = _MECHANICS.get((S,), (), lambda: _made(S))
+    if isinstance(made, ValueError):
+        raise made
+    return made
+
+
+def _made(S):
+    """:func:`_make`, or the ValueError it raised (kept, so that a declaration whose
+    contacts cannot open is derived once, not at every motion that ends at one)."""
+    try:
+        return _make(S)
+    except ValueError as err:
+        return err
 
 
 def rate_name(c) -> str:
@@ -118,8 +130,8 @@ def _make(S) -> Mechanics:
         ch = eqs.channels[c.name]
         if set(ch) != {"N", "T"} or len(eqs.gaps[c.name]) != 1:
             fail(S, f"contact {c.name!r}", "motion through contact changes takes point and "
-                 "edge contacts (a normal and a tangent, one gap); this contact has "
-                 f"{sorted(ch)}")
+                 f"edge contacts (a normal and a tangent, one gap), not a {type(c).__name__} "
+                 "(a rolling contact or a joint cannot open yet)")
         contacts.append(Contact(c.name, getattr(c, "sided", "one") == "one", len(contacts)))
         g.append(eqs.gaps[c.name][0])
         J += list(ch["N"][0]) + list(ch["T"][0])
