@@ -342,3 +342,20 @@ def test_painleve_policies_where_the_accelerations_have_two_solutions():
     assert jump[0] == "iwc" and float(ds.event_impulse_n[0]) > 0.0
     stop, _ = kinds("stop")
     assert stop == ["indeterminate"]
+
+
+def test_rod_on_step_lifts_off_the_floor_and_lands_again():
+    """The rod on the step lifts its foot off the floor (the reduced model's
+    contact_lost), flies about the step's corner, and lands: plastic impacts that
+    alternate between the floor and the corner, each smaller than the one before, until
+    both stay closed and the rod slides on to the end of the step."""
+    ds = phasemap.simulate("rod_on_step", theta=1.2, omega=-1.0, f=0.3, h=0.8, t_end=3.0)
+    kinds = [phasemap.Event(int(k)).name.lower() for k in ds.event_kind.values]
+    assert kinds[:3] == ["start", "liftoff", "impact"]
+    assert kinds[-1] == "left_domain"
+    at = np.flatnonzero(ds.event_kind.values == ev.IMPACT)
+    P = ds.event_impulse_n.values[at]
+    assert np.all(P > 0.0) and np.all(np.diff(P) < 0.0)
+    assert np.all(ds.event_dKE.values[at] <= 0.0)
+    foot = ds.point_y_floor.values                     # never below the floor
+    assert foot.min() >= -1e-9

@@ -206,9 +206,9 @@ def closure(S) -> Closure:
 def _closure(S) -> Closure:
     import sympy as sp
 
-    from phasemap.declare.derivation import derive
+    from phasemap.declare.equations import Equations
 
-    eqs = derive(S).eqs
+    eqs = Equations(S)        # the closed equations only: no mode is solved for this
     free = [i for i, c in enumerate(S.coordinates) if c.rate is not None]
     args = [eqs.q[i] for i in free] + [eqs.qd[i] for i in free] + list(eqs.params)
     pos = [eqs.on(eqs.q[i]) for i in range(eqs.n)]

@@ -283,7 +283,8 @@ def outline_figure(ds: xr.Dataset, *, times: Sequence[float] | None = None, ax=N
     times and those of the events that change a contact (lift-off, impact...).  With
     ``forces``, each closed contact's reaction (``N_<c>``, ``F_<c>``) is an arrow at its
     point, and each impact's impulse a vermillion arrow; the surfaces of the point
-    contacts (``phasemap_surface_<c>``) are drawn, hatched on the obstacle's side.
+    contacts (``phasemap_surface_<c>``) are drawn, hatched on the obstacle's side, and an
+    edge contact's corner as a grey wedge.
     """
     import matplotlib as mpl
 
@@ -344,6 +345,10 @@ def outline_figure(ds: xr.Dataset, *, times: Sequence[float] | None = None, ax=N
                 b = p0 + s_ * np.array([tx, ty])
                 e = b - 0.04 * ext * np.array([nx, ny]) + 0.03 * ext * np.array([tx, ty])
                 a.plot([b[0], e[0]], [b[1], e[1]], color=GREY, lw=0.5, zorder=1)
+        for k in contacts:      # an edge contact's obstacle is a fixed corner
+            if ds.attrs.get(f"phasemap_surface_{k}") is None:
+                a.plot([at(f"point_x_{k}", times[0])], [at(f"point_y_{k}", times[0])],
+                       marker="^", ms=7, color=GREY, ls="none", zorder=2)
         if forces:
             _force_arrows(a, ds, contacts, drawn, at, ext)
         a.set_xlim(lo_x, hi_x)

@@ -256,13 +256,51 @@ class Motion:
             else:
                 groups.append([(modes, sol)])
         prefer = prefer or {}
+        touching = [c for c in range(self.k) if len(cand[c]) > 1]
 
         def rank(item):
             modes = item[0]
             return (-sum(modes[c] == m for c, m in prefer.items()),
                     -sum(m == OPEN for m in modes), -sum(m in (SLIP_POS, SLIP_NEG)
                                                           for m in modes))
-        return [sorted(g, key=rank) for g in groups]
+        out = []
+        for g in groups:
+            g = sorted(g, key=rank)
+            if len(g) > 1:   # a tie: the next derivative decides (kept stable: sorted)
+                g = sorted(g, key=lambda item: not self._holds(q, u, item, touching, sc))
+            out.append(g)
+        return out
+
+    def _holds(self, q, u, item, touching, sc) -> bool:
+        """Whether the phase ``item`` (modes and solution) still holds a moment later
+        along its own motion: the tie between phases that move the body alike at an
+        event (slip with N = 0 and open with g'' = 0; stick at the friction limit and a
+        slip from zero acceleration) decided by the next derivative, as Siconos does.
+        The touching contacts' conditions, strictly, at the state ``1e-6`` of the
+        motion's time scale later (second-order Taylor)."""
+        modes, (ud, N, F, a, rho) = item
+        dt = 1e-6 * math.sqrt(sc[3] / sc[2])
+        q1 = q + dt * u + 0.5 * dt * dt * ud
+        u1 = u + dt * ud
+        sol = self.solve(q1, u1, modes, rho)
+        if sol is None:
+            return False
+        ud1, N1, F1, a1, P1 = sol
+        mu = P1[5]
+        for c in touching:
+            m = modes[c]
+            if m == OPEN:
+                if a1[c, 0] < 0.0 and P1[2][c] <= 0.0:
+                    return False
+            elif rho[c] * N1[c] < 0.0:
+                return False
+            elif m == STICK and abs(F1[c]) > mu[c] * rho[c] * N1[c]:
+                return False
+            elif m in (SLIP_POS, SLIP_NEG):
+                s = 1.0 if m == SLIP_POS else -1.0
+                if s * (P1[3][c, 1] @ u1) < 0.0:
+                    return False
+        return True
 
     # -- projections ------------------------------------------------------------------
 
@@ -472,8 +510,8 @@ class Motion:
             if best is None or r < best[0]:
                 best = (r, int(i))
         for c, m in enumerate(modes):
-            if m != OPEN or not self.one_sided[c] or w1[2 * c] < 0.0:
-                continue
+            if m != OPEN or not self.one_sided[c] or w1[2 * c] < 0.0 or w0[2 * c] <= 0.0:
+                continue   # (a gap that starts at zero has just opened: rounding, not a dip)
             y0, y1 = dense(t0), dense(t1)
             r0, r1 = self.gap_rate(y0[:n], y0[n:], c), self.gap_rate(y1[:n], y1[n:], c)
             if r0 < 0.0 < r1:
