@@ -340,9 +340,10 @@ def _model_of(model, values):
 
 
 def hybrid_mechanics(S):
+    """The full-coordinate mechanics of a declaration (or a loaded model's lazy one)."""
     from phasemap.declare.full import mechanics
 
-    return mechanics(S)
+    return mechanics(hybrid.system_of(S))
 
 
 def _full_start(m: Model, S, values) -> bool:
@@ -421,6 +422,7 @@ def _continued(S, m: Model, opts: Options, contact: dict, names, full, positions
         mech = hybrid_mechanics(S)
     except ValueError:
         return None
+    S = hybrid.system_of(S)
     close = closure(S)
     ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode = _columns(points, events, y_eval, te)
 

@@ -6,12 +6,22 @@ from __future__ import annotations
 import numpy as np
 
 from phasemap.core import events as ev
-from phasemap.motion.hybrid.engine import MODE_NAMES, POLICIES, Motion, Options, Record
+from phasemap.motion.hybrid.engine import (MODE_NAMES, POLICIES, ZENO_SPEED, Motion, Options,
+                                           Record)
+
+
+#: The settings by default, as :func:`check_contact_options` returns them.
+DEFAULTS = {"impact_law": "stronge", "restitution": 0.0, "painleve": "liftoff",
+            "zeno_speed": ZENO_SPEED}
 
 
 def check_contact_options(name: str, impact_law, restitution, painleve, zeno_speed) -> dict:
     """The motion-through-contact-changes settings of :func:`phasemap.simulate`, checked
     (a one-line ValueError naming the setting)."""
+    if (type(impact_law) is str and type(painleve) is str and type(restitution) is float
+            and type(zeno_speed) is float and (impact_law, restitution, painleve, zeno_speed)
+            == tuple(DEFAULTS.values())):
+        return dict(DEFAULTS)   # (every motion passes here: the defaults cost nothing)
     from phasemap.core import args as _args
     from phasemap.motion.impact import LAWS
 
@@ -29,8 +39,14 @@ def check_contact_options(name: str, impact_law, restitution, painleve, zeno_spe
 
 
 def declaration_of(model):
-    """The declared :class:`phasemap.declare.System` behind a model, or None."""
-    S = getattr(model, "declaration", None)
+    """The declaration behind a model, or None: a :class:`phasemap.declare.System`, or a
+    loaded model's lazy :class:`phasemap.declare.loader.Declaration`, resolved by
+    :func:`system_of` where it is needed (a motion that meets a contact change)."""
+    return getattr(model, "declaration", None)
+
+
+def system_of(S):
+    """The :class:`phasemap.declare.System` of :func:`declaration_of`'s result."""
     return getattr(S, "system", S)
 
 
