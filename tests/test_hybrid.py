@@ -359,3 +359,17 @@ def test_rod_on_step_lifts_off_the_floor_and_lands_again():
     assert np.all(ds.event_dKE.values[at] <= 0.0)
     foot = ds.point_y_floor.values                     # never below the floor
     assert foot.min() >= -1e-9
+
+
+def test_a_full_motion_keeps_to_the_memory_available(monkeypatch):
+    """Issue 42: the saved points of a motion in full coordinates are bounded by the
+    memory available, as the reduced integrator's are; a motion cut there says so."""
+    from phasemap.motion import simulate as sim
+
+    monkeypatch.setattr(sim, "available_memory", lambda: 4_000_000)
+    with pytest.warns(RuntimeWarning, match="would not fit in the memory"):
+        ds = phasemap.simulate(BALL, t_end=60.0, rtol=1e-10, restitution=0.95, y=1.0,
+                               max_step=1e-3)
+    assert ds.attrs["end_reason"] == "max_steps"
+    assert "pass t_eval=" in ds.attrs["end_message"]
+    assert ds.t.size < 5_000

@@ -389,14 +389,41 @@ def _simulate_full(S, m, opts: Options, contact: dict, t_eval, values) -> xr.Dat
                          "variable (the batch form runs on the reduced model only)")
     te = _times(mech.name, t_eval, opts)
     q, u, p = hybrid.start_values(mech, values)
-    rec = hybrid.run_full(mech, p, q, u, t_eval=te, **_run_settings(opts), **contact)
-    return hybrid.dataset(mech, rec, _full_attrs(S, m, opts, contact, values), p=p)
+    settings = _run_settings(opts, mech.n if te is None else 0)
+    rec = hybrid.run_full(mech, p, q, u, t_eval=te, **settings, **contact)
+    ds = hybrid.dataset(mech, rec, _full_attrs(S, m, opts, contact, values), p=p)
+    _say_full_memory(ds, opts, settings)
+    return ds
 
 
-def _run_settings(opts: Options) -> dict:
+#: Bytes a saved point of a motion in full coordinates takes while it is integrated (a
+#: Python list entry: its state array, its modes, its time), per coordinate and fixed.
+FULL_POINT_BYTES = (48, 400)
+
+
+def _run_settings(opts: Options, n: int = 0) -> dict:
+    """The settings of a motion in full coordinates of ``n`` coordinates: ``max_steps``
+    lowered, as the reduced integrator's (:func:`_memory_cap`), to what its saved points
+    can hold in the memory available."""
+    steps = opts.max_steps
+    avail = available_memory()
+    if avail is not None and n:
+        per_point = FULL_POINT_BYTES[0] * n + FULL_POINT_BYTES[1]
+        steps = int(min(steps, max(MEMORY_SHARE * avail / (MEMORY_COPIES * per_point), 16)))
     return {"t_end": opts.t_end, "rtol": opts.rtol, "atol": opts.atol,
-            "max_step": opts.max_step, "max_steps": opts.max_steps,
-            "max_events": opts.max_events}
+            "max_step": opts.max_step, "max_steps": steps, "max_events": opts.max_events}
+
+
+def _say_full_memory(ds: xr.Dataset, opts: Options, settings: dict) -> None:
+    """A motion in full coordinates cut by :func:`_run_settings`' memory cap says so."""
+    if ds.attrs["end_reason"] == "max_steps" and settings["max_steps"] < opts.max_steps:
+        message = (f"stopped after {settings['max_steps']:,} steps of the "
+                   f"{opts.max_steps:,} allowed: saving more would not fit in the memory "
+                   f"available ({human_bytes(available_memory() or 0)}); pass t_eval= to "
+                   "save the state at chosen times only, or a shorter t_end")
+        ds.attrs["end_message"] = message
+        warnings.warn(f"{ds.attrs.get('phasemap_model', '')}: {message}", RuntimeWarning,
+                      stacklevel=3)
 
 
 def _times(name, t_eval, opts: Options):
@@ -436,14 +463,16 @@ def _continued(S, m: Model, opts: Options, contact: dict, names, full, positions
     q0, u0 = np.split(full_of(y_stop), 2)
     p = np.array([float(full[k]) for k in mech.parameters])
     rest = None if te is None else te[te > t_stop]
+    settings = _run_settings(opts, mech.n if rest is None else 0)
     rec = hybrid.run_full(mech, p, q0, u0, t0=t_stop, t_eval=rest, first=-1,
-                          **_run_settings(opts), **contact)
+                          **settings, **contact)
     prefix = (np.asarray(ts, float), py, ms, np.asarray(ev_t[:-1], float),
               np.asarray(ev_kind[:-1]), pey)
     attrs = _full_attrs(S, m, opts, contact, {**full, **positions})
     rec.n_steps += n_steps
     ds = hybrid.dataset(mech, rec, attrs, prefix, p=p)
     ds.attrs["phasemap_reduced_end"] = ev.Event(int(events[-1, 1])).name.lower()
+    _say_full_memory(ds, opts, settings)
     return ds
 
 

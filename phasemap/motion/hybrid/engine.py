@@ -113,10 +113,13 @@ class Motion:
             X = np.linalg.solve(M, np.column_stack([h, G]))
             A = R @ X[:, 1:]
             r_ = np.array(rhs) - R @ X[:, 0]
-            lam = None
-            if np.linalg.cond(A) < 1e12:
+            # redundant contacts (a family of reactions, one member admissible) where the
+            # system is near singular: its determinant against Hadamard's bound (the
+            # product of its rows' norms), cheaper than a condition number
+            rows_ = np.sqrt((A * A).sum(axis=1))
+            if abs(np.linalg.det(A)) > 1e-12 * np.prod(rows_):
                 lam = np.linalg.solve(A, r_)
-            else:   # redundant contacts: a family of reactions, one member admissible
+            else:
                 lam = self._member(A, r_, owner, modes, rho, P)
             if lam is None or not np.all(np.isfinite(lam)):
                 return None
