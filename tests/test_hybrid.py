@@ -373,3 +373,25 @@ def test_a_full_motion_keeps_to_the_memory_available(monkeypatch):
     assert ds.attrs["end_reason"] == "max_steps"
     assert "pass t_eval=" in ds.attrs["end_message"]
     assert ds.t.size < 5_000
+
+
+def test_a_declaration_may_give_the_fixed_coordinate_a_rate():
+    """The issue's bouncing ball: a point mass with x, y and both rates, and one smooth
+    floor. Closing its contact fixes y, so it has no reduced model with y's rate; it moves
+    in full coordinates, its rates named as declared. Without friction it slides on after
+    the impacts accumulate."""
+    m = Parameter("m", "kg", "mass", 1.0, 0.0, lower_open=True)
+    g = Parameter("g", "m s-2", "gravitational acceleration", G, 0.0)
+    x = Coordinate("x", "m", "position", rate=Rate("vx", "m s-1", "horizontal velocity"))
+    y = Coordinate("y", "m", "height", rate=Rate("vy", "m s-1", "vertical velocity"))
+    ball = System("ball_rates", "a ball with both rates", "test", coordinates=(x, y),
+                  parameters=(m, g), bodies=(Body(m, (x, y)),), potential=m * g * y,
+                  contacts=(PointContact("floor", (x, y)),))
+    ds = phasemap.simulate(ball, t_end=3.0, rtol=1e-12, restitution=0.5, y=1.0, vy=0.0,
+                           vx=0.2)
+    kinds = [phasemap.Event(int(k)).name.lower() for k in ds.event_kind.values]
+    assert "zeno" in kinds and kinds[-1] == "horizon"
+    t_inf = math.sqrt(2.0 / G) * 1.5 / 0.5
+    assert abs(float(ds.event_t[kinds.index("zeno")]) - t_inf) <= 1e-9
+    assert np.allclose(ds.vx.values, 0.2, rtol=0, atol=1e-12)      # no friction
+    assert abs(float(ds.x[-1]) - 0.2 * 3.0) <= 1e-9
