@@ -576,3 +576,29 @@ def test_a_broken_declaration_names_every_problem_at_once():
         System("alone", "no body", "-", coordinates=(x,), parameters=(m,), bodies=(),
                contacts=(PointContact("A", (x, sp.Integer(0)), normal=(0, 1), friction=m),
                          )).model
+
+
+def test_a_normal_that_depends_on_a_parameter():
+    """Issue 41 item 11: a slope whose angle is a parameter. Unbounded, the slip factor
+    1/cos(alpha) changes sign, and the error names alpha; bounded to (-1.2, 1.2) rad, the
+    declaration derives."""
+    import dataclasses
+
+    import sympy as sp
+
+    from phasemap.declare import Parameter
+    from phasemap.declare.derivation import derive
+    from phasemap.systems import painleve_rod
+
+    rod = painleve_rod.SYSTEM
+    (floor,) = rod.contacts
+    for lo, hi in ((-math.inf, math.inf), (-1.2, 1.2)):
+        alpha = Parameter("alpha", "rad", "inclination of the slope", 0.3, lo, hi)
+        slope = dataclasses.replace(floor, normal=(-sp.sin(alpha), sp.cos(alpha)))
+        S = dataclasses.replace(rod, name="rod_on_a_slope", contacts=(slope,),
+                                parameters=rod.parameters + (alpha,))
+        if math.isinf(hi):
+            with pytest.raises(ValueError, match="depends on alpha"):
+                derive(S)
+        else:
+            assert derive(S).kappa == {"A": 1}

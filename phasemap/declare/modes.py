@@ -86,9 +86,12 @@ def slip_velocity(eqs):
         elif np.all(big < 0):
             kappa[c.name] = -1
         else:
+            on = sorted(str(x) for x in k.free_symbols if not str(x).startswith("_k_"))
             fail(S, f"contact {c.name!r}", f"its slip velocity {v} changes sign against "
-                 f"{r} inside the domain: restrict the domain of the coordinates (their "
-                 "bounds, which may be parameters or expressions, or check=)")
+                 f"{r} inside the domain (the factor {k} depends on "
+                 f"{', '.join(on) or 'nothing'}): restrict the domain of "
+                 + ("those parameters and coordinates" if on else "the coordinates")
+                 + " (their bounds, which may be parameters or expressions, or check=)")
         factors[c.name] = k
     return velocity, kappa, factors
 
