@@ -19,8 +19,8 @@ _DECLARE = pathlib.Path(__file__).resolve().parent
 #: admissibility conditions (the bifurcation tracer's) and the loader (hashed by
 #: :func:`phasemap.declare.loader.key_of` itself).
 #: Not read by the generation of a declared model's module: the tracer's conditions, the
-#: loader, and the full-coordinate pieces of the motion through contact changes.
-_NOT_SOURCES = ("admissibility.py", "loader.py", "full.py", "impulses.py")
+#: loader, and the full-coordinate numbers of the motion through contact changes.
+_NOT_SOURCES = ("admissibility.py", "loader.py", "full.py")
 
 
 def declare_sources() -> list[pathlib.Path]:

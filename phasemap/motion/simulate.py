@@ -540,33 +540,29 @@ def _impact_without_collision(m: Model, names, y, full):
     system with one contact, and ``(P_n, P_t, dKE)``; None where that is not what the
     state calls for (the normal velocity is not zero, or the slip does not force the
     contact in: the impact is refused), or the system has other contacts."""
-    from phasemap.declare.impulses import at_contact, impulses
-    from phasemap.motion.impact import delassus, impact
+    from phasemap.declare.full import closure
 
-    S = m.declaration
-    S = getattr(S, "system", S)
-    imp = impulses(S)
-    if len(S.contacts) != 1 or len(imp.rows) != 1:
+    S = hybrid.system_of(m.declaration)
+    if len(S.contacts) != 1:
         return None
-    contact = next(iter(imp.rows))
     values = {**full, **dict(zip(names, (float(x) for x in y)))}
     try:
-        M, J, qd, mu = at_contact(imp, contact, values)
-    except KeyError:
-        return None
-    vn, vt = J @ qd
+        mech = hybrid_mechanics(S)
+        q, qd = closure(S)(values)
+    except (ValueError, KeyError):
+        return None     # a contact that cannot take an impulse, or a value missing
+    M, _, _, J, _, mu = mech.pieces(q, qd, [float(values[k]) for k in mech.parameters])
+    vn, vt = J[0] @ qd
     if abs(vn) > 1e-9 * (abs(vt) + 1e-300):
         return None
     try:
-        r = impact(delassus(M, J), (0.0, vt), mu=mu, e=0.0)
+        after, r = hybrid.tangential_impact(M, J[0], qd, float(mu[0]))
     except ValueError:
         return None
-    after = qd + np.linalg.solve(M, J.T @ np.array([r.P_n, r.P_t]))
     y1 = np.array(y, dtype=float)
-    for i in imp.free:
-        rate = S.coordinates[i].rate.name
+    for rate, value in zip(mech.rates, after):
         if rate in names:
-            y1[names.index(rate)] = after[i]
+            y1[names.index(rate)] = value
     return y1, (r.P_n, r.P_t, r.dKE)
 
 

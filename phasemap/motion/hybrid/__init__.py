@@ -47,11 +47,11 @@ does not come to rest before it.
 __all__ = ["MODE_NAMES", "OPEN", "POLICIES", "QUIET", "SLIP_NEG", "SLIP_POS", "SMOOTH",
            "STICK", "TOL", "ZENO_SPEED", "Motion", "Options", "Record",
            "check_contact_options", "dataset", "declaration_of", "full_names", "run_full",
-           "start_values", "system_of"]
+           "start_values", "system_of", "tangential_impact"]
 
 from phasemap.motion.hybrid.engine import (  # noqa: F401 - the package's names
     MODE_NAMES, OPEN, POLICIES, QUIET, SLIP_NEG, SLIP_POS, SMOOTH, STICK, TOL, ZENO_SPEED,
-    Motion, Options, Record)
+    Motion, Options, Record, tangential_impact)
 from phasemap.motion.hybrid.results import (  # noqa: F401
     check_contact_options, dataset, declaration_of, full_names, run_full, start_values,
     system_of)

@@ -689,8 +689,6 @@ class Motion:
     def _iwc(self, t, q, u, modes):
         """An impact without collision at the one closed contact that slips into the
         obstacle: the state after it, or None."""
-        from phasemap.motion.impact import impact
-
         M, h, g, J, b, mu = self.mech.pieces(q, u, self.p)
         sc = self.scales(q, u, (M, h, g, J, b, mu))
         v = J @ u
@@ -700,20 +698,32 @@ class Motion:
         for c in touching:
             if abs(v[c, 1]) <= TOL * sc[0] or len(touching) != 1:
                 continue
-            W = J[c] @ np.linalg.solve(M, J[c].T)
             try:
-                r = impact(W, (0.0, v[c, 1]), mu=float(mu[c]), e=0.0)
+                after, r = tangential_impact(M, J[c], u, float(mu[c]))
             except ValueError:
                 continue
             if r.P_n <= 0.0:
                 continue
-            jumps.append((c, r))
+            jumps.append((c, after, r))
         if len(jumps) != 1:
             return None
-        c, r = jumps[0]
+        c, after, r = jumps[0]
         self.rec.event(t, ev.IWC, c, np.concatenate([q, u]), modes, (r.P_n, r.P_t, r.dKE))
-        u = u + np.linalg.solve(M, J[c].T @ np.array([r.P_n, r.P_t]))
-        return self.project(q, u, [c])
+        return self.project(q, after, [c])
+
+
+def tangential_impact(M, Jc, u, mu):
+    """The impact without collision at one contact (Genot and Brogliato 1999): at zero
+    normal velocity, the slip ``Jc[1] @ u`` forced into the obstacle, the impulse
+    integrated until the slip stops (:func:`phasemap.motion.impact.impact`, e = 0).
+    ``M`` the mass matrix, ``Jc`` the contact's normal and tangential rows.  Returns the
+    rates after it and the :class:`phasemap.motion.impact.Impact`; ValueError where the
+    impact is refused (the slip does not force the contact in).  The reduced model's
+    impacts without collision (:func:`phasemap.simulate`) and this engine's take it."""
+    from phasemap.motion.impact import delassus, impact
+
+    r = impact(delassus(M, Jc), (0.0, float(Jc[1] @ u)), mu=mu, e=0.0)
+    return u + np.linalg.solve(M, Jc.T @ np.array([r.P_n, r.P_t])), r
 
 
 def _kind_of(old, new, contact):
