@@ -307,11 +307,14 @@ class Motion:
 
     # -- projections ------------------------------------------------------------------
 
-    def project(self, q, u, closed, held=(), fixed=()):
+    def project(self, q, u, closed, held=(), fixed=(), moving=None):
         """The state put on the contacts ``closed`` in the mass metric: positions on their
-        gaps' zero, velocities on ``J_n u = 0`` for the closed contacts and ``J_t u = 0``
-        for those in ``held``: the smallest change in kinetic-energy norm."""
+        gaps' zero, velocities on ``J_n u = 0`` for the closed contacts (or for those in
+        ``moving``, where given: a contact that closes with an impact keeps its approach)
+        and ``J_t u = 0`` for those in ``held``: the smallest change in kinetic-energy
+        norm.  ``fixed``: coordinates held where they are."""
         closed = list(closed)
+        moving = closed if moving is None else list(moving)
         if not closed:
             return q, u
         q0, q = q, q.copy()
@@ -328,8 +331,10 @@ class Motion:
             q = q - X @ np.linalg.solve(G @ X, r)
             for j in fixed:
                 q[j] = q0[j]
+        if not moving and not held:
+            return q, u
         M, h, g, J, b, mu = self.mech.pieces(q, u, self.p)
-        A = np.array([J[c, 0] for c in closed] + [J[c, 1] for c in held])
+        A = np.array([J[c, 0] for c in moving] + [J[c, 1] for c in held])
         X = np.linalg.solve(M, A.T)
         u = u - X @ np.linalg.lstsq(A @ X, A @ u, rcond=None)[0]
         return q, u
@@ -577,7 +582,7 @@ class Motion:
         from phasemap.motion.impact import impact, simultaneous
 
         closed = [d for d, m in enumerate(modes) if m != OPEN]
-        q, u = self._positions_only(q, u, closed + [c], closed)
+        q, u = self.project(q, u, closed + [c], moving=closed)
         M, h, g, J, b, mu = self.mech.pieces(q, u, self.p)
         v = J @ u
         sc = self.scales(q, u, (M, h, g, J, b, mu))
@@ -618,13 +623,6 @@ class Motion:
         q, u = self.project(q, u, now)
         return self._decide(t, q, u, modes, QUIET, c, {})
 
-    def _positions_only(self, q, u, on, closed):
-        """Positions put on the contacts ``on`` and velocities on the ``closed`` only."""
-        q2, _ = self.project(q, u, on)
-        if closed:
-            _, u = self.project(q2, u, closed)
-        return q2, u
-
     def _zeno(self, t, q, u, modes):
         """The impacts accumulate at ``t``: the contact is closed, a ``zeno`` event."""
         c = self.zeno_contact
@@ -639,7 +637,6 @@ class Motion:
         the change of modes names where ``kind`` is -1) and returns ``(t, q, u, modes,
         rho)``, or None where the motion ends."""
         groups = self.enumerate(q, u, prefer)
-        y = np.concatenate([q, u])
         if len(groups) != 1:
             if not groups or self.o.painleve == "iwc":
                 jump = self._iwc(t, q, u, old) if depth < 4 else None
