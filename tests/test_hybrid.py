@@ -386,7 +386,7 @@ def test_a_declaration_may_give_the_fixed_coordinate_a_rate():
     y = Coordinate("y", "m", "height", rate=Rate("vy", "m s-1", "vertical velocity"))
     ball = System("ball_rates", "a ball with both rates", "test", coordinates=(x, y),
                   parameters=(m, g), bodies=(Body(m, (x, y)),), potential=m * g * y,
-                  contacts=(PointContact("floor", (x, y)),))
+                  contacts=(PointContact("floor", (x, y), friction=0),))
     ds = phasemap.simulate(ball, t_end=3.0, rtol=1e-12, restitution=0.5, y=1.0, vy=0.0,
                            vx=0.2)
     kinds = [phasemap.Event(int(k)).name.lower() for k in ds.event_kind.values]
@@ -395,3 +395,20 @@ def test_a_declaration_may_give_the_fixed_coordinate_a_rate():
     assert abs(float(ds.event_t[kinds.index("zeno")]) - t_inf) <= 1e-9
     assert np.allclose(ds.vx.values, 0.2, rtol=0, atol=1e-12)      # no friction
     assert abs(float(ds.x[-1]) - 0.2 * 3.0) <= 1e-9
+
+
+def test_a_full_coordinate_declaration_is_validated_like_any_other():
+    """A system that moves in full coordinates only is checked as every declaration is:
+    the problem named in one line, not a sympy error from deep inside."""
+    m = Parameter("m", "kg", "mass", 1.0, 0.0, lower_open=True)
+    g = Parameter("g", "m s-2", "gravitational acceleration", G, 0.0)
+    x = Coordinate("x", "m", "position", rate=Rate("vx", "m s-1", "horizontal velocity"))
+    y = Coordinate("y", "m", "height", rate=Rate("vy", "m s-1", "vertical velocity"))
+    ball = System("ball_no_law", "a ball", "test", coordinates=(x, y), parameters=(m, g),
+                  bodies=(Body(m, (x, y)),), potential=m * g * y,
+                  contacts=(PointContact("floor", (x, y)),))
+    for call in (lambda: mechanics(ball),
+                 lambda: phasemap.simulate(ball, t_end=1.0, y=1.0, vy=0.0)):
+        with pytest.raises(ValueError,
+                           match="ball_no_law: contact 'floor': has no friction law"):
+            call()

@@ -58,7 +58,7 @@ class Mechanics:
     #: (q, p) -> [x, y of each body's centre of mass, then of each contact's body point]
     _points: Callable = None
     #: p -> per contact (nx, ny, offset) of its surface (a point contact) or (nan, nan,
-    #: nan) (an edge contact: the obstacle is a corner, ``corners``)
+    #: nan) (an edge contact: the obstacle is the corner, its body point in ``points``)
     surfaces: Callable = None
     n_bodies: int = 0
 
@@ -121,9 +121,11 @@ def _make(S) -> Mechanics:
     import sympy as sp
 
     from phasemap.declare.api import sym
-    from phasemap.declare.equations import Equations, FreeEquations
-    from phasemap.declare.validation import fail
+    from phasemap.declare.contacts import _unit_normal
+    from phasemap.declare.equations import FreeEquations
+    from phasemap.declare.validation import fail, validate
 
+    validate(S)       # what every declaration passes: a problem named, not a sympy error
     eqs = FreeEquations(S)
     contacts, g, J, b, mu = [], [], [], [], []
     for c in S.contacts:
@@ -136,8 +138,7 @@ def _make(S) -> Mechanics:
         g.append(eqs.gaps[c.name][0])
         J += list(ch["N"][0]) + list(ch["T"][0])
         b += [ch["N"][1], ch["T"][1]]
-        mu.append(sym(getattr(c, c.friction_field)) if getattr(c, c.friction_field, None)
-                  is not None else sp.Integer(0))
+        mu.append(c.law_expr())
     pts, surf = [], []
     for body in S.bodies:
         pts += [sym(body.position[0]), sym(body.position[1])]
@@ -147,9 +148,7 @@ def _make(S) -> Mechanics:
             surf += [sp.nan, sp.nan, sp.nan]
         else:
             pts += [sym(c.point[0]), sym(c.point[1])]
-            nv = [sym(a) for a in c.normal]
-            norm = sp.sqrt(nv[0] ** 2 + nv[1] ** 2)
-            surf += [nv[0] / norm, nv[1] / norm, sym(c.offset)]
+            surf += [*_unit_normal(c.normal), sym(c.offset)]
     flat = [*eqs.M, *eqs.h, *g, *J, *b, *mu]
     args = [*eqs.q, *eqs.qd, *eqs.params]
     pieces = sp.lambdify(args, flat, modules="math", cse=True)
@@ -157,10 +156,9 @@ def _make(S) -> Mechanics:
     dom = [e for e, _ in eqs.domain]
     domain = sp.lambdify(qp, dom or [sp.Integer(1)], modules="math", cse=True)
     bounds_e = []
-    closed = Equations.__new__(Equations)
     for c in S.coordinates:
         for side in ("lower", "upper"):
-            e = closed.bound_expr(c, side)
+            e = eqs.bound_expr(c, side)
             bounds_e.append(sp.Float(-math.inf if side == "lower" else math.inf)
                             if e is None else e)
     bounds = sp.lambdify(eqs.params, bounds_e, modules="math")
