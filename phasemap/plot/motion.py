@@ -8,6 +8,7 @@ import matplotlib.colors as mcolors
 import numpy as np
 import xarray as xr
 from matplotlib.axes import Axes
+from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
@@ -330,21 +331,22 @@ def outline_figure(ds: xr.Dataset, *, times: Sequence[float] | None = None, ax=N
         ext = max(np.ptp(xs_all), np.ptp(ys_all), 1e-9)
         lo_x, hi_x = xs_all.min() - 0.15 * ext, xs_all.max() + 0.15 * ext
         lo_y, hi_y = ys_all.min() - 0.15 * ext, ys_all.max() + 0.15 * ext
-        surfaces = {}
+        surfaces = {}     # each surface once (a floor under two contacts)
         for k in contacts:
             s = ds.attrs.get(f"phasemap_surface_{k}")
             if s is not None:
-                surfaces.setdefault(tuple(np.round(np.asarray(s, float), 12)), []).append(k)
+                surfaces[tuple(np.round(np.asarray(s, float), 12))] = None
         for (nx, ny, off) in surfaces:
             tx, ty = ny, -nx
             p0 = np.array([nx * off, ny * off])
             ts_ = np.linspace(-3 * ext, 3 * ext, 2)
             line = p0[None, :] + ts_[:, None] * np.array([tx, ty])[None, :]
             a.plot(line[:, 0], line[:, 1], color=GREY, lw=0.8, zorder=1)
-            for s_ in np.linspace(-3 * ext, 3 * ext, 121):
-                b = p0 + s_ * np.array([tx, ty])
-                e = b - 0.04 * ext * np.array([nx, ny]) + 0.03 * ext * np.array([tx, ty])
-                a.plot([b[0], e[0]], [b[1], e[1]], color=GREY, lw=0.5, zorder=1)
+            # the hatch on the obstacle's side: one collection, not an artist per stroke
+            starts = p0 + np.linspace(-3 * ext, 3 * ext, 121)[:, None] * np.array([tx, ty])
+            ends = starts - 0.04 * ext * np.array([nx, ny]) + 0.03 * ext * np.array([tx, ty])
+            a.add_collection(LineCollection(np.stack([starts, ends], axis=1), colors=GREY,
+                                            linewidths=0.5, zorder=1))
         for k in contacts:      # an edge contact's obstacle is a fixed corner
             if ds.attrs.get(f"phasemap_surface_{k}") is None:
                 a.plot([at(f"point_x_{k}", times[0])], [at(f"point_y_{k}", times[0])],
