@@ -13,8 +13,8 @@ it is split into the sign cases ``u`` and ``-u`` (both zero sets together are
 the original's), so that Newton's method and the fold conditions see smooth
 functions.  sympy then differentiates every condition with respect to the
 variables a computation moves in (the two axes of a slice, a threshold's
-parameters), and the value, gradient and Hessian are printed as numba
-functions into a real ``.py`` file in the kernel cache (GUIDE section 6),
+parameters), and the values and gradients are printed as numba functions
+into a real ``.py`` file in the kernel cache (GUIDE section 6),
 named after a hash of what decides them, and imported:
 
 ``values(x, out, scale)``
@@ -23,7 +23,9 @@ named after a hash of what decides them, and imported:
 ``gradient(k, x, g)``
     condition ``k``'s value and tie scale, its gradient in ``g``;
 ``hessian(k, x, g, H)``
-    the same, and its Hessian in ``H``.
+    the same, and its Hessian in ``H``, by central differences of the exact
+    gradient (it is only Newton's Jacobian where the residual is a value and a
+    gradient: :func:`_hessian_by_differences`).
 
 The module also holds ``SPEC``, a JSON text with each condition's name,
 branch, kind and ``rest_only``: a warm start loads the file without sympy.
@@ -260,6 +262,58 @@ _VALUES = "void(float64[::1], float64[::1], float64[::1])"
 _GRADIENT = "UniTuple(float64, 2)(int64, float64[::1], float64[::1])"
 
 
+#: The relative step of the Hessian's central differences: the cube root of the machine
+#: epsilon, which balances the truncation (h^2) and the rounding (eps / h) errors.
+_H_STEP = float(np.finfo(float).eps ** (1.0 / 3.0))
+
+
+def _hessian_by_differences(slots: list[int]) -> list[str]:
+    """The text of the generated ``hessian(k, x, g, H)``: the value, the tie scale and the
+    exact gradient of condition ``k`` at ``x`` (from ``gradient``), and its Hessian by
+    central differences of that exact gradient.
+
+    The Hessian serves only as the Jacobian of Newton's method on the systems whose
+    residuals are values and exact gradients (a fold, an extremum, a tangency): an error
+    of about 1e-10 relative in it slows Newton's last step a little and leaves the root
+    where the exact residual puts it.  Printing it symbolically cost as much compile time
+    as the gradient (the drawer: 51 s of 127 s for its conditions module).  The step is
+    ``_H_STEP * max(1, |x_i|)``, rounded to what ``x_i +- h`` represents; where one side
+    is NaN (the edge of a condition's domain) the difference is one-sided.  ``x`` is
+    perturbed in place and restored bit for bit; ``H``'s rows hold the forward gradients,
+    so the function needs no scratch of its own.
+    """
+    lines = ['@njit(cache=True, error_model="numpy")',
+             "def hessian(_k, _x, _g, _H):",
+             '    """Condition k: (value, tie scale), its gradient into g and its Hessian '
+             'into H (central differences of the exact gradient)."""',
+             f"    _slots = {tuple(slots)!r}",
+             f"    for _i in range({len(slots)}):",
+             "        _u = _x[_slots[_i]]",
+             f"        _h = {_H_STEP!r} * max(1.0, abs(_u))",
+             "        _x[_slots[_i]] = _u + _h",
+             "        _hp = _x[_slots[_i]] - _u",
+             "        _row = _H[_i]",
+             "        gradient(_k, _x, _row)",
+             "        _x[_slots[_i]] = _u - _h",
+             "        _hm = _u - _x[_slots[_i]]",
+             "        gradient(_k, _x, _g)",
+             "        _x[_slots[_i]] = _u",
+             "        _den = _hp + _hm",
+             "        if np.isnan(_row).any():",
+             "            gradient(_k, _x, _row)",
+             "            _den = _hm",
+             "        elif np.isnan(_g).any():",
+             "            gradient(_k, _x, _g)",
+             "            _den = _hp",
+             f"        for _j in range({len(slots)}):",
+             "            _row[_j] = (_row[_j] - _g[_j]) / _den",
+             f"    for _i in range({len(slots)}):",
+             f"        for _j in range(_i + 1, {len(slots)}):",
+             "            _H[_i, _j] = _H[_j, _i] = 0.5 * (_H[_i, _j] + _H[_j, _i])",
+             "    return gradient(_k, _x, _g)", "", ""]
+    return lines
+
+
 def _generate(model: Model, variables: tuple[str, ...], conds) -> str:
     """The generated module's text (sympy runs here, and only here), printed by the declared
     systems' own printer (:func:`phasemap.declare.emit.printer`)."""
@@ -336,33 +390,21 @@ def _generate(model: Model, variables: tuple[str, ...], conds) -> str:
             '    """Every condition\'s value into out, its tie scale into scale."""',
             f"    _vscale = {vsc}"]
     out += body(pairs) + ["", ""]
-    # one function per derivative order, every condition's body in its own branch:
-    # a function per condition costs numba a compilation each (measured on the
-    # ladder's 54 conditions: 26.5 s of CPU against 17.7 s for these two)
-    n = len(variables)
+    # every condition's body in its own branch of one function: numba's compile time is
+    # about linear in the operations (the drawer's 62 conditions: 69 s in one function,
+    # 67-76 s in 4 to 62), so only fewer operations save time; the Hessian is not printed
+    # (_hessian_by_differences)
     gradient = [f'@njit("{_GRADIENT}", cache=True, error_model="numpy")',
                 "def gradient(_k, _x, _g):",
                 '    """Condition k: (value, tie scale), its gradient into the arrays."""']
-    # compiled at its first use (a boundary's trace takes its address; a threshold never
-    # calls it): a third of a module's compile time, saved where only values and
-    # gradients are read
-    hessian = ['@njit(cache=True, error_model="numpy")',
-               "def hessian(_k, _x, _g, _H):",
-               '    """Condition k: (value, tie scale), its hessian into the arrays."""']
     for k, (e, s) in enumerate(zip(exprs, scales)):
         grad = [sp.diff(e, v) for v in var_syms]
-        hess = {(i, j): sp.diff(grad[i], var_syms[j]) for i in range(n) for j in range(i, n)}
         first = [("_c", e), ("_s", scale_of(s))] + [(f"_g[{i}]", d) for i, d in enumerate(grad)]
         test = f"    {'if' if k == 0 else 'elif'} _k == {k}:"
         gradient += [test, f"        _vscale = {vsc}"]
         gradient += ["    " + line for line in body(first)] + ["        return _c, _s"]
-        hessian += [test, f"        _vscale = {vsc}"]
-        hessian += ["    " + line for line in body(first + [(f"_H[{i}, {j}]", d)
-                                                          for (i, j), d in hess.items()])]
-        hessian += [f"        _H[{j}, {i}] = _H[{i}, {j}]" for (i, j) in hess if i != j]
-        hessian += ["        return _c, _s"]
-    for what in (gradient, hessian):
-        out += what + ["    return np.nan, np.nan", "", ""]
+    out += gradient + ["    return np.nan, np.nan", "", ""]
+    out += _hessian_by_differences([slot[v] for v in variables])
     spec = [{"name": c.name, "branch": c.branch, "kind": c.kind, "rest_only": c.rest_only}
             for c in conds]
     out += [f"VARIABLES = {tuple(variables)!r}", f"SPEC = {json.dumps(spec)!r}", ""]
