@@ -502,3 +502,46 @@ def test_map_figure_draws_the_exact_boundary():
         assert np.max(np.abs(1 / 3 + c**2 - f * s * c) / (4 / 3 + f)) <= 1e-12
     finally:
         plt.close(fig)
+
+
+def test_the_generated_hessian_is_the_exact_one_to_differencing_accuracy():
+    """The conditions module's hessian (forward differences of the exact gradient) against
+    sympy's exact Hessian, at random points of the rod's conditions and of one with a
+    domain edge (sqrt(3 - f): its forward point is NaN within a step of f = 3, where the
+    difference goes backward and is finite, with the exact one's signs, though not
+    accurate: the curvature there changes on the scale of the step); its value and
+    gradient are the exact ones, and the input vector comes back bit for bit."""
+    from phasemap.bifurcation.conditions import compiled
+
+    m = phasemap.get_model("painleve_rod")
+    edge = Condition("edge", "", "domain", sp.sqrt(3 - F) * sp.sin(TH) ** 2, 1)
+    conds = ROD + [edge]
+    C = compiled(m, ("theta", "f"), conds)
+    rng = np.random.default_rng(11)
+    names = {"theta": TH, "f": F, "omega": OM, "l": L, "g": G, "m": M}
+    for k, name in enumerate(C.names):
+        if name == m.velocity:
+            continue
+        expr = next(c.expr for c in conds if c.name == name)
+        grad = [sp.diff(expr, TH), sp.diff(expr, F)]
+        hess = sp.hessian(expr, (TH, F))
+        for i in range(20):
+            point = dict(theta=rng.uniform(0.05, 1.5), omega=rng.uniform(-3, 3),
+                         f=rng.uniform(0, 3), l=rng.uniform(0.5, 2), g=9.81, m=1.0)
+            if name == "edge" and i == 0:
+                point["f"] = 3.0 - 1e-9  # the forward point leaves the domain
+            v = m.input_vector({**point, "xdot": -1.0})
+            before = v.copy()
+            g, H = np.empty(2), np.empty((2, 2))
+            c, s = C.module.hessian(k, v, g, H)
+            assert np.array_equal(v, before)
+            subs = {names[n]: point[n] for n in names}
+            assert c == pytest.approx(float(expr.subs(subs)), rel=1e-13, abs=1e-13)
+            assert g == pytest.approx([float(d.subs(subs)) for d in grad], rel=1e-12, abs=1e-12)
+            want = np.array(hess.subs(subs), dtype=float)
+            size = np.abs(want).max() + np.abs(g).max() + abs(c)
+            assert np.all(np.isfinite(H)), (name, point)
+            if name == "edge" and i == 0:
+                assert np.array_equal(np.sign(H), np.sign(want)), (H, want)
+                continue
+            assert np.abs(H - want).max() <= 1e-6 * size, (name, point, H, want)

@@ -23,7 +23,7 @@ named after a hash of what decides them, and imported:
 ``gradient(k, x, g)``
     condition ``k``'s value and tie scale, its gradient in ``g``;
 ``hessian(k, x, g, H)``
-    the same, and its Hessian in ``H``, by central differences of the exact
+    the same, and its Hessian in ``H``, by forward differences of the exact
     gradient (it is only Newton's Jacobian where the residual is a value and a
     gradient: :func:`_hessian_by_differences`).
 
@@ -262,56 +262,52 @@ _VALUES = "void(float64[::1], float64[::1], float64[::1])"
 _GRADIENT = "UniTuple(float64, 2)(int64, float64[::1], float64[::1])"
 
 
-#: The relative step of the Hessian's central differences: the cube root of the machine
-#: epsilon, which balances the truncation (h^2) and the rounding (eps / h) errors.
-_H_STEP = float(np.finfo(float).eps ** (1.0 / 3.0))
+#: The relative step of the Hessian's forward differences: the square root of the machine
+#: epsilon, which balances the truncation (h) and the rounding (eps / h) errors.
+_H_STEP = float(np.sqrt(np.finfo(float).eps))
 
 
 def _hessian_by_differences(slots: list[int]) -> list[str]:
     """The text of the generated ``hessian(k, x, g, H)``: the value, the tie scale and the
     exact gradient of condition ``k`` at ``x`` (from ``gradient``), and its Hessian by
-    central differences of that exact gradient.
+    forward differences of that exact gradient, symmetrised.
 
-    The Hessian serves only as the Jacobian of Newton's method on the systems whose
-    residuals are values and exact gradients (a fold, an extremum, a tangency): an error
-    of about 1e-10 relative in it slows Newton's last step a little and leaves the root
-    where the exact residual puts it.  Printing it symbolically cost as much compile time
-    as the gradient (the drawer: 51 s of 127 s for its conditions module).  The step is
-    ``_H_STEP * max(1, |x_i|)``, rounded to what ``x_i +- h`` represents; where one side
-    is NaN (the edge of a condition's domain) the difference is one-sided.  ``x`` is
-    perturbed in place and restored bit for bit; ``H``'s rows hold the forward gradients,
-    so the function needs no scratch of its own.
+    The Hessian serves only as the Jacobian of Newton's method on systems whose residuals
+    are values and exact gradients (a fold, an extremum, a tangency): an error of about
+    1e-8 relative in it makes Newton's last step linear with that ratio and leaves the
+    root where the exact residual puts it.  Printed symbolically it cost as much compile
+    time as the gradient (the drawer: 36 s of 72 s for its conditions module); central
+    differences cost n + 1 more gradients a call than these (the hinge pendulum's
+    boundaries 10-24 % slower warm, against the printed Hessian).  The step is
+    ``_H_STEP * max(1, |x_i|)``, rounded to what ``x_i + h`` represents; where the
+    forward point is NaN (the edge of a condition's domain) the difference is backward.
+    ``x`` is perturbed in place and restored bit for bit, and ``H``'s rows hold the
+    shifted gradients, so the function needs no scratch of its own.
     """
-    lines = ['@njit(cache=True, error_model="numpy")',
-             "def hessian(_k, _x, _g, _H):",
-             '    """Condition k: (value, tie scale), its gradient into g and its Hessian '
-             'into H (central differences of the exact gradient)."""',
-             f"    _slots = {tuple(slots)!r}",
-             f"    for _i in range({len(slots)}):",
-             "        _u = _x[_slots[_i]]",
-             f"        _h = {_H_STEP!r} * max(1.0, abs(_u))",
-             "        _x[_slots[_i]] = _u + _h",
-             "        _hp = _x[_slots[_i]] - _u",
-             "        _row = _H[_i]",
-             "        gradient(_k, _x, _row)",
-             "        _x[_slots[_i]] = _u - _h",
-             "        _hm = _u - _x[_slots[_i]]",
-             "        gradient(_k, _x, _g)",
-             "        _x[_slots[_i]] = _u",
-             "        _den = _hp + _hm",
-             "        if np.isnan(_row).any():",
-             "            gradient(_k, _x, _row)",
-             "            _den = _hm",
-             "        elif np.isnan(_g).any():",
-             "            gradient(_k, _x, _g)",
-             "            _den = _hp",
-             f"        for _j in range({len(slots)}):",
-             "            _row[_j] = (_row[_j] - _g[_j]) / _den",
-             f"    for _i in range({len(slots)}):",
-             f"        for _j in range(_i + 1, {len(slots)}):",
-             "            _H[_i, _j] = _H[_j, _i] = 0.5 * (_H[_i, _j] + _H[_j, _i])",
-             "    return gradient(_k, _x, _g)", "", ""]
-    return lines
+    n = len(slots)
+    return ['@njit(cache=True, error_model="numpy")',
+            "def hessian(_k, _x, _g, _H):",
+            '    """Condition k: (value, tie scale), its gradient into g and its Hessian '
+            'into H (forward differences of the exact gradient)."""',
+            "    _c, _s = gradient(_k, _x, _g)",
+            f"    _slots = {tuple(slots)!r}",
+            f"    for _i in range({n}):",
+            "        _u = _x[_slots[_i]]",
+            f"        _x[_slots[_i]] = _u + {_H_STEP!r} * max(1.0, abs(_u))",
+            "        _h = _x[_slots[_i]] - _u",
+            "        _row = _H[_i]",
+            "        gradient(_k, _x, _row)",
+            "        if np.isnan(_row).any():",
+            "            _x[_slots[_i]] = _u - _h",
+            "            _h = _x[_slots[_i]] - _u",
+            "            gradient(_k, _x, _row)",
+            "        _x[_slots[_i]] = _u",
+            f"        for _j in range({n}):",
+            "            _row[_j] = (_row[_j] - _g[_j]) / _h",
+            f"    for _i in range({n}):",
+            f"        for _j in range(_i + 1, {n}):",
+            "            _H[_i, _j] = _H[_j, _i] = 0.5 * (_H[_i, _j] + _H[_j, _i])",
+            "    return _c, _s", "", ""]
 
 
 def _generate(model: Model, variables: tuple[str, ...], conds) -> str:
