@@ -1,0 +1,164 @@
+"""A new declaration's first calls from empty caches: derivation, classify, map, boundaries.
+
+For each declaration a fresh process, with an empty kernel cache
+(``PHASEMAP_CACHE_DIR``) and an empty numba cache (``NUMBA_CACHE_DIR``) of its own,
+at numba's default optimisation (what a user's process compiles), runs in turn
+
+* *derive*: ``System.model``: sympy's derivation and the generated module's text;
+* *first classify*: one ``phasemap.classify`` at the declaration's defaults;
+* *first map*: a 64 x 64 ``n_solutions`` Scene over the slice below;
+* *first boundaries*: ``phasemap.boundaries`` over the same slice;
+
+and reports each step's wall and CPU time (the process's user + system time), and
+the compile time numba spent in it, per kind of compiled function (the conditions
+module, the tracer's shared drivers, the model's own point and class functions).
+The shared drivers (the grid driver, the tracer) are compiled once per machine and
+shared by every model; a second declaration pays only its own functions and its
+conditions (the columns *conditions* and *own*).
+
+The declarations: the README's rod (``docs/examples/own_system.py``, one contact), the
+drawer in a slot and the rod on a peg (``tests/unseen.py``, two contacts each, issue 37).
+
+    python benchmarks/first_calls.py [--only NAME ...] [--jobs 2]
+
+``--jobs 2`` runs two declarations at once (one core each: numba compiles on one
+thread); the CPU columns are the steadier figures then.  Writes the section "First
+calls of a new declaration" of ../BENCHMARKS.md.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import tempfile
+from concurrent.futures import ThreadPoolExecutor
+
+from _report import load, machine, parser, publish
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+#: name -> (the code that makes the System, the slice (two axes, ranges), fixed values)
+CASES = {
+    "README rod": ("sys.path.insert(0, str(ROOT / 'docs' / 'examples'))\n"
+                   "from own_system import SYSTEM as S",
+                   {"theta": (0.05, 1.5), "f": (0.0, 2.0)}, {"omega": 0.0, "xdot": -1.0}),
+    "drawer": ("sys.path.insert(0, str(ROOT / 'tests'))\nimport unseen\nS = unseen.drawer()",
+               {"d": (-1.0, 1.0), "f": (0.0, 2.0)}, {"xdot": 0.0}),
+    "peg rod": ("sys.path.insert(0, str(ROOT / 'tests'))\nimport unseen\nS = unseen.peg_rod()",
+                {"theta": (0.05, 0.95), "f": (0.0, 2.0)}, {"omega": 0.0}),
+}
+
+CHILD = r'''
+import json, pathlib, resource, sys, time
+ROOT = pathlib.Path({root!r})
+from numba.core import dispatcher
+
+def cpu():
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+compiles = []
+_orig, _depth = dispatcher.Dispatcher.compile, [0]
+
+def _timed(self, sig):
+    t = time.perf_counter()
+    _depth[0] += 1
+    try:
+        return _orig(self, sig)
+    finally:
+        _depth[0] -= 1
+        if _depth[0] == 0:
+            compiles.append((self.py_func.__module__, self.py_func.__name__,
+                             time.perf_counter() - t))
+
+dispatcher.Dispatcher.compile = _timed
+steps, marks = [], [(time.perf_counter(), cpu(), 0)]
+
+def mark(name):
+    now = (time.perf_counter(), cpu(), len(compiles))
+    w0, c0, k0 = marks[-1]
+    kinds = {{}}
+    own = getattr(globals().get("S"), "name", None) or "\0"
+    for module, fname, dt in compiles[k0:]:
+        # a model's own: its generated modules, and the drivers specialised to it
+        # (named after it: the tracer's class function, the integrator)
+        kind = ("conditions" if "_conditions_" in module else
+                "own" if not module.startswith("phasemap.") or own in fname else
+                "shared")
+        kinds[kind] = kinds.get(kind, 0.0) + dt
+    steps.append(dict(step=name, wall=now[0] - w0, cpu=now[1] - c0, compile=kinds))
+    marks.append(now)
+
+import numpy as np
+import phasemap
+mark("import phasemap")
+{make}
+m = S.model
+mark("derive")
+phasemap.classify(m)
+mark("first classify")
+axes = {axes!r}
+fixed = {fixed!r}
+phasemap.Scene(m, axes={{k: np.linspace(a, b, 64) for k, (a, b) in axes.items()}},
+               fixed=fixed, layers=("n_solutions",)).compute()
+mark("first map")
+phasemap.boundaries(m, axes, fixed=fixed)
+mark("first boundaries")
+print("RESULT " + json.dumps(steps))
+'''
+
+
+def run(name: str) -> list[dict]:
+    make, axes, fixed = CASES[name]
+    with tempfile.TemporaryDirectory() as tmp:
+        env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_OPT",)}
+        env.update(PHASEMAP_CACHE_DIR=str(pathlib.Path(tmp) / "kernels"),
+                   NUMBA_CACHE_DIR=str(pathlib.Path(tmp) / "numba"), MPLBACKEND="Agg")
+        code = CHILD.format(root=str(ROOT), make=make, axes=axes, fixed=fixed)
+        out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                             text=True, cwd=tmp)
+    for line in out.stdout.splitlines():
+        if line.startswith("RESULT "):
+            return json.loads(line[7:])
+    raise RuntimeError(f"{name}: the child failed:\n{out.stderr[-3000:]}")
+
+
+def main() -> None:
+    ap = parser(__doc__)
+    ap.add_argument("--only", nargs="*", choices=list(CASES), default=list(CASES))
+    ap.add_argument("--jobs", type=int, default=1)
+    args = ap.parse_args()
+    before = load()
+    with ThreadPoolExecutor(args.jobs) as pool:
+        results = dict(zip(args.only, pool.map(run, args.only)))
+    lines = [
+        "## First calls of a new declaration (`benchmarks/first_calls.py`)",
+        "",
+        f"Machine: {machine()}; load average {before} before, {load()} after.  ",
+        f"Command: `python benchmarks/first_calls.py --jobs {args.jobs}`",
+        "",
+        "A fresh process per declaration with empty kernel and numba caches, at numba's "
+        "default optimisation; each step's wall and CPU time (s), and the compile time "
+        "numba spent in it: the conditions module (values, exact gradients, the Hessian "
+        "by differences), the drivers every model shares (compiled once per machine; the "
+        "tracer's class function, specialised to the model, is still counted here), "
+        "and the model's own functions.  A second declaration pays its own functions "
+        "and its conditions, not the shared drivers.",
+        "",
+        "| declaration | step | wall | CPU | compile: conditions | shared drivers | own |",
+        "|---|---|---:|---:|---:|---:|---:|",
+    ]
+    for name, steps in results.items():
+        for s in steps:
+            c = s["compile"]
+            lines.append(f"| {name} | {s['step']} | {s['wall']:.1f} | {s['cpu']:.1f} | "
+                         f"{c.get('conditions', 0.0):.1f} | {c.get('shared', 0.0):.1f} | "
+                         f"{c.get('own', 0.0):.1f} |")
+    publish(lines, "## First calls of a new declaration", not args.no_write)
+
+
+if __name__ == "__main__":
+    main()
