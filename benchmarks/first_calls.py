@@ -143,8 +143,7 @@ def main() -> None:
         "A fresh process per declaration with empty kernel and numba caches, at numba's "
         "default optimisation; each step's wall and CPU time (s), and the compile time "
         "numba spent in it: the conditions module (values, exact gradients, the Hessian "
-        "by differences), the drivers every model shares (compiled once per machine; the "
-        "tracer's class function, specialised to the model, is still counted here), "
+        "by differences), the drivers every model shares (compiled once per machine), "
         "and the model's own functions.  A second declaration pays its own functions "
         "and its conditions, not the shared drivers.",
         "",

@@ -1204,9 +1204,9 @@ def _seed_rows(cv, need, ks, n, seeds):
 @njit(cache=True, error_model="numpy")
 def _minimum(F, k, v, ix, iy, geo, u, w, radius):
     """From a node where |c_k| is least among its neighbours: the zero set of c_k
-    nearby, if c_k changes sign near its stationary point.  Newton on grad c = 0
-    (the exact gradient; the Hessian by its differences), then on c along the direction of least curvature.  Returns
-    (ok, u, w): a point of the zero set."""
+    nearby, if c_k changes sign near its stationary point.  Newton on grad c = 0 (the
+    exact gradient; the Hessian by its differences), then on c along the direction of
+    least curvature.  Returns (ok, u, w): a point of the zero set."""
     g = np.empty(2)
     H = np.empty((2, 2))
     u0, w0 = u, w

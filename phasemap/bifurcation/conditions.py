@@ -277,7 +277,7 @@ def _hessian_by_differences(slots: list[int]) -> list[str]:
     1e-8 relative in it makes Newton's last step linear with that ratio and leaves the
     root where the exact residual puts it.  Printed symbolically it cost as much compile
     time as the gradient (the drawer: 36 s of 72 s for its conditions module); central
-    differences cost n + 1 more gradients a call than these (the hinge pendulum's
+    differences cost n more gradients a call than these (the hinge pendulum's
     boundaries 10-24 % slower warm, against the printed Hessian).  The step is
     ``_H_STEP * max(1, |x_i|)``, rounded to what ``x_i + h`` represents; where the
     forward point is NaN (the edge of a condition's domain) the difference is backward.
