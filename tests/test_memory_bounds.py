@@ -60,3 +60,96 @@ def test_a_batch_shares_the_memory_among_its_starts():
     assert one is not None and three is not None
     assert three[0] * 3 <= one[0] * 1.01 and three[0] * 3 >= one[0] * 0.98
     assert resources.available_memory() > 0
+
+
+def _child(code: str) -> dict:
+    """Run ``code`` in a fresh interpreter (the suite's kernel cache inherited) and return
+    the JSON of its last line."""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+LIMIT = """
+import json, resource, warnings
+import numpy as np
+import phasemap
+
+def limit(margin_mib):
+    vm = int([l for l in open("/proc/self/status") if l.startswith("VmSize")][0].split()[1])
+    resource.setrlimit(resource.RLIMIT_AS, (vm * 1024 + margin_mib * 2 ** 20,
+                                            resource.RLIM_INFINITY))
+
+def refused(call):
+    try:
+        call()
+    except ValueError as err:
+        return str(err)
+    return None
+"""
+
+CURVE = LIMIT + """
+kw = dict(phi=2.5, omega=0.0, delta=0.0)
+phasemap.phase_curve("hinge_pendulum", max_stages=2, **kw)     # compiled (or loaded) first
+limit(600)
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    ds = phasemap.phase_curve("hinge_pendulum", max_stages=10 ** 9, points_per_stage=10 ** 5,
+                              **kw)
+limit(100)
+one_stage = refused(lambda: phasemap.phase_curve("hinge_pendulum", points_per_stage=10 ** 6,
+                                                 **kw))
+print(json.dumps({"end": ds.attrs["end_reason"], "message": ds.attrs["end_message"],
+                  "stages": ds.sizes["stage"], "points": ds.sizes["point"],
+                  "reversals": int(ds.attrs["n_reversals"]), "one_stage": one_stage,
+                  "warnings": [str(w.message) for w in caught]}))
+"""
+
+
+def test_a_phase_curve_of_endless_stages_under_a_memory_limit_stops_cleanly():
+    """The frictionless hinge pendulum reverses for ever: asked for 10^9 stages of 10^5
+    points (2.4 PB) under a 600 MiB limit, the curve stops where its points still fit,
+    says so and keeps what it traced; a single stage that cannot fit is refused."""
+    phase_curve = phasemap.phase_curve
+    phase_curve("hinge_pendulum", phi=2.5, omega=0.0, delta=0.0, max_stages=2)
+    got = _child(CURVE)
+    assert got["end"] == "max_events"
+    assert "not fit in the memory available" in got["message"]
+    assert "points_per_stage" in got["message"] and "\n" not in got["message"]
+    assert any("not fit in the memory available" in w for w in got["warnings"])
+    # 600 MiB at 4 copies in half of it: about 30 stages of 2.4 MB; every one traced whole
+    assert 5 <= got["stages"] <= 200 and got["points"] == got["stages"] * 10 ** 5
+    assert got["reversals"] == got["stages"] - 1
+    assert got["one_stage"] is not None and "points_per_stage" in got["one_stage"]
+    assert got["one_stage"].startswith("hinge_pendulum: ") and "\n" not in got["one_stage"]
+
+
+def test_a_phase_curve_that_fits_is_not_cut():
+    from phasemap.motion.phase import _stage_cap
+
+    m = phasemap.get_model("hinge_pendulum")
+    assert _stage_cap(m, 50, 200) is None
+    assert _stage_cap(m, 2 ** 31 - 1, 10 ** 6) is not None
+
+
+MAPS = LIMIT + """
+limit(300)
+fate = refused(lambda: phasemap.Scene(
+    "hinge_pendulum", axes={"phi": np.linspace(-3, 3, 40000), "omega": np.linspace(-6, 6, 40000)},
+    layers=["fate", "t_final", "phi_rest"]).compute())
+grid = refused(lambda: phasemap.Scene(
+    "ladder", axes={"phi": np.linspace(0.1, 1.5, 50000), "f": np.linspace(0, 3, 50000)},
+    fixed={"omega": 0.0}).compute())
+print(json.dumps({"fate": fate, "grid": grid}))
+"""
+
+
+def test_maps_and_fate_maps_too_large_for_memory_are_refused_before_any_work():
+    """1.6e9 fate cells and 2.5e9 map cells under a 300 MiB limit: one line each that says
+    how much is needed and what to do, before anything is compiled or allocated."""
+    got = _child(MAPS)
+    for key, model in (("fate", "hinge_pendulum"), ("grid", "ladder")):
+        text = got[key]
+        assert text is not None and text.startswith(f"{model}: ") and "\n" not in text, text
+        assert "more memory" in text and "chunks=" in text, text

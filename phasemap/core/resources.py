@@ -11,6 +11,13 @@ import contextlib
 import os
 import pathlib
 
+#: The share of the available memory one call's saved results may take (a motion's
+#: points, a phase curve's points): the rest is for the caller and the Dataset built.
+MEMORY_SHARE = 0.5
+#: How many copies of saved results may live at once: the compiled arrays while they
+#: grow by doubling (the old and the new), and the Dataset's columns built from them.
+MEMORY_COPIES = 4
+
 
 def resident() -> int:
     """This process's resident memory now, in bytes (0 where it cannot tell)."""

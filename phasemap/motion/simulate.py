@@ -16,7 +16,7 @@ import numpy as np
 import xarray as xr
 
 from phasemap.core.progress import human_bytes
-from phasemap.core.resources import available_memory
+from phasemap.core.resources import MEMORY_COPIES, MEMORY_SHARE, available_memory
 from phasemap.core.memo import Memo
 from phasemap.core import args as _args
 from phasemap.core import events as ev
@@ -580,11 +580,6 @@ def _impact_variables(ds: xr.Dataset, impacts) -> None:
         ds[name] = xr.Variable("event", col, {"long_name": long_name, "units": units})
 
 
-#: Copies of the saved points a motion may hold at once: the integrator's array while it
-#: grows (the old and the new, twice its size), then the columns and the Dataset.
-MEMORY_COPIES = 4
-#: The share of the available memory a motion's saved points may take.
-MEMORY_SHARE = 0.5
 
 
 def _memory_cap(m: Model, opts: Options, ny: int, every_step: bool, n_eval: int,

@@ -142,6 +142,7 @@ from __future__ import annotations
 
 import inspect
 import math
+import warnings
 
 import numpy as np
 import xarray as xr
@@ -151,6 +152,8 @@ from phasemap.core import events as ev
 from phasemap.core.compile import contract_constants, remember, specialize
 from phasemap.atlas.dataset import assemble, cf_header, squared_units
 from phasemap.core.model import Model
+from phasemap.core.progress import human_bytes
+from phasemap.core.resources import MEMORY_COPIES, MEMORY_SHARE, available_memory
 from phasemap.systems import get_model
 from phasemap.motion.phase import tracer
 from phasemap.motion.phase.collocation import NODES
@@ -286,9 +289,12 @@ def phase_curve(model: str | Model, *, phi: float | None = None, omega: float | 
         bounded (the ladder's [0, pi/2]), else ``(phi - 4 pi, phi + 4 pi)``.
     max_stages:
         the largest number of stages; a curve still reversing after that many
-        ends with ``max_events``.
+        ends with ``max_events``.  Where that many stages' points would not fit
+        in half the memory available, fewer are traced, and a curve cut there
+        says so in ``end_message`` and with a RuntimeWarning.
     points_per_stage:
-        points evenly spaced in phi on each stage, its ends included.
+        points evenly spaced in phi on each stage, its ends included (24 bytes
+        each; ValueError where not even one stage fits in memory).
     rtol:
         the error of omega^2 allowed per panel, relative to ``|omega^2| +
         u_ref`` (u_ref the square of the model's velocity scale), in
@@ -346,12 +352,46 @@ def phase_curve(model: str | Model, *, phi: float | None = None, omega: float | 
     rtol = _args.real("rtol", rtol, m.name)
     if not RTOL <= rtol <= 1e-3:
         raise ValueError(f"{m.name}: rtol must be in [1e-14, 1e-3], got {rtol!r}")
-    pts, stages = trace(m, full, (lo, hi), max_stages, points, rtol=rtol)
+    capped = _stage_cap(m, max_stages, points)
+    pts, stages = trace(m, full, (lo, hi), max_stages if capped is None else capped, points,
+                        rtol=rtol)
     stages = stages.copy()
     var = m.variables[pos]
     if stages[-1, 3] == ev.HORIZON and stages[-1, 4] in (var.lower, var.upper):
         stages[-1, 3] = ev.LEFT_DOMAIN  # the model's own edge (the ladder lies flat)
-    return _dataset(m, full, (lo, hi), max_stages, points, pts, stages, rtol)
+    ds = _dataset(m, full, (lo, hi), max_stages, points, pts, stages, rtol)
+    if capped is not None and stages[-1, 3] == ev.MAX_EVENTS:
+        message = (f"stopped after {capped:,} stages of the {max_stages:,} allowed: more "
+                   f"points would not fit in the memory available "
+                   f"({human_bytes(available_memory() or 0)}); pass fewer points_per_stage "
+                   f"(now {points:,}) or fewer max_stages")
+        ds.attrs["end_message"] = message
+        warnings.warn(f"{m.name}: {message}", RuntimeWarning, stacklevel=2)
+    return ds
+
+
+#: Bytes of a phase curve's saved point (phi, omega^2 and its stage) and of a stage's row.
+POINT_BYTES, STAGE_BYTES = 24, 48
+
+
+def _stage_cap(m: Model, max_stages: int, points: int) -> int | None:
+    """``max_stages`` lowered so that the curve's points fit in the memory available, or
+    None where the stages asked for fit (:data:`MEMORY_COPIES` copies of the points may
+    live at once, in :data:`MEMORY_SHARE` of the memory).  A curve that ends before the
+    lowered count is what it would be without the cap.  ValueError, in one line, where
+    not even one stage fits."""
+    avail = available_memory()
+    if avail is None:
+        return None
+    budget = MEMORY_SHARE * avail / MEMORY_COPIES
+    per_stage = points * POINT_BYTES + STAGE_BYTES
+    if max_stages * per_stage <= budget:
+        return None
+    if per_stage > budget:
+        raise ValueError(f"{m.name}: points_per_stage = {points:,} needs about "
+                         f"{human_bytes(MEMORY_COPIES * per_stage / MEMORY_SHARE)} of memory "
+                         f"and {human_bytes(avail)} is available; pass fewer points_per_stage")
+    return int(budget // per_stage)
 
 
 def _checked_range(m: Model, pos: str, phi: float, phi_range) -> tuple[float, float]:
