@@ -21,6 +21,7 @@ The public API is re-exported here explicitly.
 """
 
 from phasemap._version import __version__
+from phasemap.core import interrupts as _interrupts
 from phasemap.atlas.read import describe_atlas, open_atlas
 from phasemap.atlas.write import write_atlas
 from phasemap.maps.classify import Branch, BranchResult, Classification, classify
@@ -32,6 +33,9 @@ from phasemap.motion.phase import phase_curve
 from phasemap.maps.scene import Scene
 from phasemap.motion.simulate import simulate
 from phasemap import accessor as _accessor  # noqa: F401  (registers Dataset.phasemap)
+
+# a Ctrl-C during a compile ends the call, never lost inside LLVM's callbacks into Python
+_interrupts.install()
 
 
 def __getattr__(name: str):

@@ -5,6 +5,7 @@ fates a motion can meet), ``numerics`` (tolerances, statuses, branch-free helper
 ``codegen`` (the per-point and per-grid kernels generated from a model's branch
 functions), ``compile`` (per-model engine kernels from templates), ``cache`` (the kernel
 cache and its bound), ``args`` (the argument checks every entry point shares) and
-``progress`` (bars and activity lines).  Nothing here imports from another part of
+``progress`` (bars and activity lines), ``interrupts`` (a signal during a compile is
+raised where Python can raise it).  Nothing here imports from another part of
 phasemap.
 """
