@@ -251,6 +251,10 @@ def main(argv: list[str] | None = None) -> int:
             print(subs["tour"].format_usage().rstrip(), file=sys.stderr)
         print(f"phasemap: error: {err}", file=sys.stderr)
         return 2
+    except OSError as err:  # the file system refused (a full disk, a name too long)
+        where = f" ({err.filename})" if getattr(err, "filename", None) else ""
+        print(f"phasemap: error: {err.strerror or err}{where}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("\nphasemap: interrupted; no partial file was left", file=sys.stderr)
         return 130
@@ -297,6 +301,9 @@ def _run(args) -> int:
 
         report, ok = cfcheck(args.path)
         print(report)
+        if not ok:
+            print(f"phasemap: {args.path} does not pass the CF checker (its report is above)",
+                  file=sys.stderr)
         return 0 if ok else 1
     elif args.command == "classify":
         from phasemap.maps.classify import classify

@@ -584,6 +584,8 @@ def test_cfcheck_runs_offline_from_the_command_line(tmp_path):
     r = subprocess.run(PHASEMAP + ["cfcheck", str(tmp_path / "named.nc")],
                        capture_output=True, text=True, env=offline, timeout=300)
     assert r.returncode == 1 and "ERRORS detected: 0" not in r.stdout
+    assert r.stderr.strip().splitlines()[-1].endswith("does not pass the CF checker (its "
+                                                      "report is above)")
 
 
 # ------------------------------------------- 13. help and tables -------------

@@ -602,3 +602,12 @@ def test_a_normal_that_depends_on_a_parameter():
                 derive(S)
         else:
             assert derive(S).kappa == {"A": 1}
+
+
+def test_an_extreme_gravity_is_answered_at_once():
+    """Issue 42 item 5: this call had not returned after 30 s.  It was rod_on_step's first
+    compile; the call itself answers: two solutions, with finite reactions."""
+    c = phasemap.classify("rod_on_step", omega=-8.17853977099021, f=4.187210838180927,
+                          h=1.3312392722024802, g=1e-16, m=2.5041213288033703)
+    assert c.n_solutions == 2
+    assert all(math.isfinite(v) for b in c.branches for v in b.reactions.values())

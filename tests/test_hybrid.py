@@ -361,6 +361,17 @@ def test_rod_on_step_lifts_off_the_floor_and_lands_again():
     assert foot.min() >= -1e-9
 
 
+def test_a_step_of_almost_no_height_makes_redundant_contacts_that_answer():
+    """The fuzz (issue 42) found simulate('rod_on_step', h=1e-12) raising TypeError: the
+    floor and the step's corner nearly coincide, the reactions of the two closed contacts
+    form a family, and the search for an admissible member read the sign of N of a
+    one-sided contact from an argument that is None for them."""
+    ds = phasemap.simulate("rod_on_step", 0.5, h=1e-12)
+    assert ds.attrs["end_reason"] in ("left_domain", "rest", "horizon")
+    assert np.all(np.isfinite(ds.N_floor.values[np.isfinite(ds.N_floor.values)]))
+    assert np.isfinite(ds.N_floor.values).any()
+
+
 def test_a_full_motion_keeps_to_the_memory_available(monkeypatch):
     """Issue 42: the saved points of a motion in full coordinates are bounded by the
     memory available, as the reduced integrator's are; a motion cut there says so."""

@@ -724,3 +724,15 @@ def test_the_output_pass_solves_a_panel_to_rounding(z):
         col.legendre_many(lanes, taus.size, u, terms)
         assert [float(x) for x in lanes[1, :taus.size]] == [
             col.legendre_at(float(t), u, terms) for t in taus]
+
+
+def test_many_points_per_stage_answer():
+    """Issue 42 item 4: ``points_per_stage=100000`` once raised numba's ``RuntimeError: no
+    compiled object yet``; from the issue's state the ladder loses its wall contact at
+    once, and the hinge's stages hold every point asked for."""
+    ds = phase_curve("ladder", phi=0.39, omega=6.36, points_per_stage=100000)
+    assert ds.attrs["end_reason"] == "contact_lost" and ds.sizes["point"] >= 1
+    ds = phase_curve("hinge_pendulum", phi=0.5, omega=0.0, max_stages=3,
+                     points_per_stage=100000)
+    assert ds.sizes["point"] == 100000 * ds.sizes["stage"]
+    assert np.all(np.isfinite(ds.omega.values))

@@ -38,6 +38,7 @@ import time
 from typing import Iterator
 
 
+from phasemap.core import args as _args
 from phasemap.core.progress import human_bytes
 
 
@@ -349,11 +350,15 @@ def destination(path: str | os.PathLike) -> pathlib.Path:
     nothing but a regular file (or a symbolic link, which a write replaces, never its
     target) if it exists.  A device node, a FIFO or a socket is never replaced, not even
     with ``overwrite`` (as root, ``-o /dev/null --overwrite`` would replace the real one)."""
-    path = pathlib.Path(os.path.expanduser(os.fspath(path)))
+    path = _args.path("path", path)
     folder = path.parent
-    if not folder.is_dir():
+    try:
+        folder_exists, is_folder = folder.is_dir(), path.is_dir()
+    except OSError as err:  # a name too long, a folder that cannot be searched
+        raise ValueError(f"cannot write {path}: {err.strerror or err}") from None
+    if not folder_exists:
         raise ValueError(f"cannot write {path}: folder {folder} does not exist")
-    if path.is_dir():
+    if is_folder:
         raise ValueError(f"cannot write {path}: it is a folder")
     _check_replaceable(path)
     return path

@@ -16,6 +16,8 @@ import shutil
 import subprocess
 import tempfile
 
+from phasemap.core import args as _args
+
 #: cfchecks option -> the XML of an empty table of that kind.
 CF_TABLES = {
     "cf_standard_names": "<standard_name_table><version_number>0</version_number>"
@@ -34,10 +36,12 @@ def cfcheck(path: str | os.PathLike, timeout: float = 300) -> tuple[str, bool]:
     the file is missing or not netCDF, when cfchecks is not installed, or when
     cfchecks itself fails (its traceback's last line).
     """
-    path = pathlib.Path(path)
-    if not path.is_file():
-        raise ValueError(f"{path}: no such file")
-    if not is_netcdf(path):
+    path = _args.existing_file("path", path, "cfcheck")
+    try:
+        netcdf = is_netcdf(path)
+    except OSError as err:
+        raise ValueError(f"{path}: {err.strerror or err}") from None
+    if not netcdf:
         raise ValueError(f"{path}: not a netCDF file (neither netCDF classic nor netCDF-4/HDF5 "
                          "by its first bytes); cfchecks checks netCDF files")
     exe = shutil.which("cfchecks")

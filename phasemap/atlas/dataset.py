@@ -414,7 +414,7 @@ def dataset_kind(ds: xr.Dataset) -> str:
         atlas of 3 or more dimensions (select a 2-D slice first).
     """
     if not isinstance(ds, xr.Dataset):
-        raise ValueError(f"not a phasemap atlas: expected an xarray.Dataset, "
+        raise ValueError(f"not a phasemap atlas: ds must be an xarray.Dataset, "
                          f"got {type(ds).__name__}")
     kind = ds.attrs.get("phasemap_kind")
     if kind is not None and not isinstance(kind, str):

@@ -13,6 +13,8 @@ from typing import Iterator
 import numpy as np
 import xarray as xr
 
+from phasemap.core import args as _args
+
 from phasemap.atlas.dataset import curve_axes, curve_kind, motion_kind
 
 
@@ -53,9 +55,7 @@ def open_atlas(path: str | os.PathLike, **kwargs) -> xr.Dataset:
 
     Reading one back is shown in :func:`write_atlas`.
     """
-    path = pathlib.Path(os.path.expanduser(os.fspath(path)))
-    if not path.is_file():
-        raise ValueError(f"{path}: no such file")
+    path = _args.existing_file("path", path, "open_atlas")
     kwargs.setdefault("engine", "netcdf4")
     kwargs.setdefault("decode_times", False)
     kwargs.setdefault("decode_timedelta", False)
@@ -110,6 +110,8 @@ def describe_atlas(path_or_ds: str | os.PathLike | xr.Dataset) -> str:
     if isinstance(path_or_ds, xr.Dataset):
         _check_is_atlas(path_or_ds, "dataset")
         return _describe(path_or_ds, "(in memory)")
+    if not isinstance(path_or_ds, (str, os.PathLike)):
+        _args.path("path_or_ds", path_or_ds, "describe_atlas")  # says what it must be
     with open_atlas(path_or_ds) as ds:
         try:
             return _describe(ds, str(path_or_ds))

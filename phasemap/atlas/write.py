@@ -40,6 +40,7 @@ from typing import Iterator, Mapping
 import numpy as np
 import xarray as xr
 
+from phasemap.core import args as _args
 from phasemap.atlas.dataset import CONVENTIONS
 from phasemap._version import __version__
 from phasemap.atlas.atomic import destination, exists_message, no_partial_file, signals_deferred
@@ -79,9 +80,8 @@ def cf_encoding(ds: xr.Dataset, chunks: Mapping[str, int] | None = None, *,
         (categorical) layers and coordinates get ``_FillValue: None`` (no fill
         value attribute), float layers ``_FillValue: NaN``.
     """
-    if not 1 <= int(complevel) <= 9:
-        raise ValueError(f"complevel must be between 1 and 9, got {complevel}")
-    chunks = dict(chunks or {})
+    complevel = _args.count("complevel", complevel, "write_atlas", least=1, most=9)
+    chunks = _args.mapping("chunks", chunks, "write_atlas")
     for dim, n in chunks.items():
         if dim not in ds.dims:
             raise ValueError(f"chunks: {dim!r} is not a dimension of the atlas "

@@ -42,11 +42,13 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from phasemap.core.args import WrongType, describe
 from phasemap.core.memo import Memo
 from phasemap.core import codegen as _codegen
 from phasemap._version import __version__
 from phasemap.core.cache import load_module
 from phasemap.core.model import Model
+from phasemap.declare import admissibility as _declare
 from phasemap.declare.loader import twin
 
 __all__ = ["Condition", "Conditions", "conditions_of", "compiled"]
@@ -194,6 +196,12 @@ def compiled(model: Model, variables, conditions=None) -> Conditions:
     once per model, variables and conditions (sympy runs only then), then
     loaded from the kernel cache.
     """
+    if conditions is not None:
+        if isinstance(conditions, (str, bytes)) or not isinstance(conditions, (list, tuple)) \
+                or not all(isinstance(c, (Condition, _declare.Condition)) for c in conditions):
+            raise WrongType(f"{model.name}: conditions must be a list of "
+                            f"phasemap.declare.Condition, got {describe(conditions)}")
+        conditions = tuple(conditions)
     variables = tuple(variables)
     for name in variables:
         if name not in model.names:

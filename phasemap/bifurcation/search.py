@@ -33,6 +33,7 @@ from typing import Mapping
 import numpy as np
 import xarray as xr
 
+from phasemap.core import args as _args
 from phasemap.core.model import Model
 from phasemap.systems import get_model
 from phasemap.bifurcation.tracing import check_tol, header, parse_range
@@ -165,14 +166,14 @@ def threshold_curve(m: Model, param: str, layer: str, value: int, over, fixed, s
     """
     if not isinstance(along, Mapping) or len(along) != 1:
         raise ValueError(f"along must name one variable with its range, {{name: (lo, hi)}}; "
-                         f"got {along!r}")
-    (name, rng), = along.items()
+                         f"got {_args.describe(along)}")
+    (name, rng), = _args.mapping("along", along, m.name).items()
     if name not in m.variables:
         raise ValueError(f"{m.name}: unknown variable {name!r} in along; "
                          f"allowed: {', '.join(m.names)}")
     a_lo, a_hi = parse_range(m, f"along[{name!r}]", rng)
-    fixed = dict(fixed or {})
-    if name == param or name in (over or {}) or name in fixed:
+    fixed = _args.mapping("fixed", fixed, m.name)
+    if name == param or name in _args.mapping("over", over, m.name) or name in fixed:
         raise ValueError(f"{m.name}: {name!r} in along must be neither the parameter, "
                          "ranged over, nor fixed")
     spec = Spec.make(m, param, layer, value, over, {**fixed, name: a_lo}, side, tol)

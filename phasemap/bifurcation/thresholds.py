@@ -13,6 +13,7 @@ from typing import Mapping
 
 import numpy as np
 
+from phasemap.core import args as _args
 from phasemap.core import numerics as nx
 from phasemap.maps.grid import evaluate
 from phasemap.maps.layers import layers_for
@@ -127,27 +128,26 @@ class Spec:
 
     @staticmethod
     def make(m: Model, param, layer, value, over, fixed, side, tol) -> "Spec":
+        if not isinstance(param, str):
+            raise _args.WrongType(f"{m.name}: param must be a variable name (a string), got "
+                                  f"{_args.describe(param)}")
         if param not in m.variables:
             raise ValueError(f"{m.name}: unknown variable {param!r}; allowed: {', '.join(m.names)}")
-        if layer not in LAYERS + ("singular",):
+        if not isinstance(layer, str) or layer not in LAYERS + ("singular",):
             raise ValueError(f"layer must be one of {', '.join(LAYERS + ('singular',))}, "
-                             f"got {layer!r}")
+                             f"got {_args.describe(layer)}")
         reg = layers_for(m)[layer]
-        try:
-            value = int(value)
-        except (TypeError, ValueError):
-            raise ValueError(f"value must be one of the flag values of {layer}, "
-                             f"got {value!r}") from None
+        value = _args.count("value", value, m.name, least=-2 ** 31)
         if value not in reg.flag_values:
             raise ValueError(f"value must be one of the flag values of {layer} "
                              f"({reg.flag_meanings}: {list(reg.flag_values)}), got {value}")
         if layer == "singular" and value != 1:
             raise ValueError("layer singular holds on curves: only value=1 has a threshold")
-        if side not in ("min", "max"):
-            raise ValueError(f"side must be 'min' or 'max', got {side!r}")
+        if not isinstance(side, str) or side not in ("min", "max"):
+            raise ValueError(f"side must be 'min' or 'max', got {_args.describe(side)}")
         tol = parse_tol(tol)
-        over = dict(over or {})
-        fixed = dict(fixed or {})
+        over = _args.mapping("over", over, m.name)
+        fixed = _args.mapping("fixed", fixed, m.name)
         if param in fixed:
             raise ValueError(f"{m.name}: {param!r} is the parameter and cannot be fixed")
         ranges = {}

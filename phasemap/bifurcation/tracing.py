@@ -71,9 +71,9 @@ class Slice:
 def parse_tol(tol) -> float:
     """The tolerance ``tol`` as a float in (0, 1), or ValueError naming it."""
     try:
-        tol = float(tol)
+        tol = _args.real("tol", tol)
     except (TypeError, ValueError):
-        raise ValueError(f"tol must be a number, got {tol!r}") from None
+        raise ValueError(f"tol must be a number, got {_args.describe(tol)}") from None
     if not 0.0 < tol < 1.0:
         raise ValueError(f"tol must be in (0, 1), got {tol:g}")
     return tol
@@ -112,8 +112,9 @@ def make_slice(model, axes: Mapping, fixed: Mapping | None, conditions=None) -> 
     m = get_model(model)
     if not isinstance(axes, Mapping) or len(axes) != 2:
         raise ValueError(f"{m.name}: axes must name two variables with their ranges, "
-                         f"{{x: (lo, hi), y: (lo, hi)}}; got {axes!r}")
-    fixed = dict(fixed or {})
+                         f"{{x: (lo, hi), y: (lo, hi)}}; got {_args.describe(axes)}")
+    axes = _args.mapping("axes", axes, m.name)
+    fixed = _args.mapping("fixed", fixed, m.name)
     names = list(axes)
     variables = m.variables
     lo, hi = [], []
@@ -746,9 +747,9 @@ def boundaries(model, axes: Mapping, fixed: Mapping | None = None, layer: str = 
     >>> float(b.point_f[fold][0])                                    # doctest: +SKIP
     1.3333333333333333
     """
-    if layer not in LAYERS:
+    if not isinstance(layer, str) or layer not in LAYERS:
         raise ValueError(f"layer must be one of {', '.join(LAYERS)} (classes that fill "
-                         f"regions), got {layer!r}")
+                         f"regions), got {_args.describe(layer)}")
     tol = parse_tol(tol)
     sl = make_slice(model, axes, fixed, conditions)
     check_tol(tol, {sl.x: (sl.lo[0], sl.hi[0]), sl.y: (sl.lo[1], sl.hi[1])})

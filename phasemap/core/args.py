@@ -59,6 +59,9 @@ import difflib
 import math
 import numbers
 import operator
+import os
+import pathlib
+import stat
 from typing import Iterable, Mapping
 
 import numpy as np
@@ -83,8 +86,9 @@ def _prefix(where: str) -> str:
     return f"{where}: " if where else ""
 
 
-def _describe(value) -> str:
-    """``value`` for a message: short, with its type where the repr does not show it."""
+def describe(value) -> str:
+    """``value`` for a message: short, with its type where the repr does not show it
+    (and never an error, not even for an integer of thousands of digits)."""
     if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**20:
         # the digits without str(), which refuses integers of more than 4300 digits
         digits = int((abs(value).bit_length() - 1) * math.log10(2)) + 1
@@ -92,7 +96,10 @@ def _describe(value) -> str:
         exact = abs(value) == 10 ** (digits - 1)
         return f"{'-' if value < 0 else ''}10**{digits - 1}" if exact else \
             f"an integer of {digits} digits"
-    text = repr(value)
+    try:
+        text = repr(value)
+    except ValueError:  # it holds an integer of more digits than str() converts
+        return f"a {type(value).__name__} holding an integer of thousands of digits"
     if len(text) > 60:
         text = text[:57] + "..."
     kind = type(value).__name__
@@ -101,6 +108,9 @@ def _describe(value) -> str:
 
 #: Python and NumPy real scalar types, accepted without further checks (not bool).
 PLAIN = frozenset({float, int, np.float64, np.float32, np.int64, np.int32})
+
+
+_describe = describe
 
 
 def _is_real_type(value) -> bool:
@@ -202,13 +212,15 @@ def finite_range(name: str, value, where: str = "", ends: tuple[str, str] = ("lo
     """
     lo_word, hi_word = ends
     try:
-        lo, hi = (float(t) for t in value)
+        if isinstance(value, (str, bytes)):
+            raise TypeError
+        lo, hi = (real(name, t, where) for t in value)
     except (TypeError, ValueError):
         raise ValueError(f"{_prefix(where)}{name} must be two numbers ({lo_word}, {hi_word}), "
-                         f"got {value!r}") from None
+                         f"got {_describe(value)}") from None
     if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
         raise ValueError(f"{_prefix(where)}{name} must be finite with {lo_word} < {hi_word}, "
-                         f"got {value!r}")
+                         f"got {_describe(value)}")
     return lo, hi
 
 
@@ -294,9 +306,67 @@ def scalar_or_array(name: str, value, where: str = "") -> float | np.ndarray:
     return real(name, value, where)
 
 
+def path(name: str, value, where: str = "") -> pathlib.Path:
+    """``value`` (a ``str`` or an ``os.PathLike``, ``~`` expanded) as a Path.
+
+    >>> path("path", 3.5, "open_atlas")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    phasemap.core.args.WrongType: open_atlas: path must be a file name ..., got 3.5
+    """
+    if isinstance(value, str) and not value:
+        raise ValueError(f"{_prefix(where)}{name} is empty: give a file name")
+    if not isinstance(value, (str, os.PathLike)):
+        raise WrongType(f"{_prefix(where)}{name} must be a file name (a str or os.PathLike), "
+                        f"got {_describe(value)}")
+    try:
+        text = os.fspath(value)
+    except TypeError as err:  # a PathLike whose __fspath__ returns something else
+        raise WrongType(f"{_prefix(where)}{name}: {err}") from None
+    if not isinstance(text, str):
+        raise WrongType(f"{_prefix(where)}{name} must be a file name (a str or os.PathLike), "
+                        f"got {_describe(value)}")
+    if "\0" in text:
+        raise ValueError(f"{_prefix(where)}{name} {text!r} contains a null character")
+    return pathlib.Path(os.path.expanduser(text))
+
+
+def existing_file(name: str, value, where: str = "") -> pathlib.Path:
+    """:func:`path`, which must name an existing regular file: else ValueError, in one
+    line that starts with the path (missing, a folder, a device, a name too long)."""
+    found = path(name, value, where)
+    try:
+        mode = found.stat().st_mode
+    except FileNotFoundError:
+        raise ValueError(f"{found}: no such file") from None
+    except OSError as err:
+        raise ValueError(f"{found}: {err.strerror or err}") from None
+    if stat.S_ISDIR(mode):
+        raise ValueError(f"{found}: a folder, not a file")
+    if not stat.S_ISREG(mode):
+        raise ValueError(f"{found}: not a regular file")
+    return found
+
+
+def mapping(name: str, value, where: str = "", *, none: bool = True) -> dict:
+    """``value`` (a mapping with string keys; None when ``none``) as a dict."""
+    if value is None and none:
+        return {}
+    if not isinstance(value, Mapping):
+        raise WrongType(f"{_prefix(where)}{name} must be a mapping of names to values "
+                        f"(a dict), got {_describe(value)}")
+    for key in value:
+        if not isinstance(key, str):
+            raise WrongType(f"{_prefix(where)}{name}: a name must be a string, got "
+                            f"{_describe(key)}")
+    return dict(value)
+
+
 def suggest(name: str, known: Iterable[str]) -> str:
     """``"; did you mean 'x'?"`` for the closest of ``known`` to ``name``, or ``""``."""
-    close = difflib.get_close_matches(str(name), list(known), n=3, cutoff=0.6)
+    if not isinstance(name, str):
+        return ""
+    close = difflib.get_close_matches(name, list(known), n=3, cutoff=0.6)
     if not close:
         return ""
     return "; did you mean " + " or ".join(repr(c) for c in close) + "?"
@@ -313,8 +383,9 @@ def unknown(kind: str, name, known: Iterable[str], where: str = "", listing: str
     known = list(known)
     listing = listing or f"allowed: {', '.join(known)}"
     hint = suggest(name, known)
-    return (f"{_prefix(where)}unknown {kind} {name!r}{hint} ({listing})" if hint
-            else f"{_prefix(where)}unknown {kind} {name!r}; {listing}")
+    shown = repr(name) if isinstance(name, str) else _describe(name)
+    return (f"{_prefix(where)}unknown {kind} {shown}{hint} ({listing})" if hint
+            else f"{_prefix(where)}unknown {kind} {shown}; {listing}")
 
 
 def check_name(kind: str, name, known: Iterable[str], where: str = "",

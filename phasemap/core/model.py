@@ -531,8 +531,28 @@ class Model:
                     and var._fine(float(value.min())) and var._fine(float(value.max()))):
                 var.check(self.name, value)
         if self.check is not None:
-            self.check(full)
+            try:
+                self.check(full)
+            except ValueError as err:
+                raise ValueError(f"{err}{self._where(full, str(err))}") from None
         return full
+
+    def _where(self, full: Mapping[str, object], message: str) -> str:
+        """``", at theta = 0.1, h = 0.8"``: the values a declared model's domain condition
+        (its generated ``inside``) reads, for a message that does not give them already
+        (scalar values only)."""
+        if self.inside is None or " = " in message:
+            return ""
+        import inspect
+
+        names = []
+        for n in inspect.signature(getattr(self.inside, "py_func", self.inside)).parameters:
+            n = n[4:] if n.startswith(("sin_", "cos_")) else n
+            if n in full and n not in names:
+                names.append(n)
+        if not names or not all(np.ndim(full[n]) == 0 for n in names):
+            return ""
+        return ", at " + ", ".join(f"{n} = {_fmt(float(full[n]))}" for n in names)
 
     @functools.cached_property
     def _completion(self) -> tuple[dict[str, float], tuple[tuple[str, Variable], ...]]:

@@ -104,7 +104,7 @@ class Scene:
                 raise _args.WrongType(f"{m.name}: {what} must be a mapping "
                                               f"{{name: value}}, got {type(given).__name__}")
         if not axes:
-            raise ValueError(f"{m.name}: a scene needs at least one axis; "
+            raise ValueError(f"{m.name}: axes is empty: a scene needs at least one axis; "
                              f"choose from {', '.join(m.names)}")
         fixed = dict(fixed or {})
         both = set(axes) & set(fixed)

@@ -648,7 +648,11 @@ def _starts(m: Model, values: Mapping) -> dict[str, np.ndarray]:
     for k, val in values.items():
         if type(val) in _args.PLAIN:
             continue
-        nd = np.ndim(val)
+        try:
+            nd = np.ndim(val)
+        except (TypeError, ValueError):  # a ragged nesting: [0.1, [0.2]]
+            raise ValueError(f"{m.name}: {k} must be a number or a 1-D array of numbers, "
+                             f"got {_args.describe(val)}") from None
         if nd == 0:
             continue
         if k not in state or nd != 1 or np.size(val) == 0:

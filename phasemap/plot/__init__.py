@@ -94,6 +94,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from phasemap.atlas.dataset import KINDS, dataset_kind as atlas_kind
+from phasemap.core.args import describe as _describe
 from phasemap.plot.benchmark import METHOD_NAMES, SYSTEM_NAMES, work_precision_figure
 from phasemap.plot.curves import curves_figure
 from phasemap.plot.labels import (axis_label, fixed_values, fixed_values_text, format_number, format_units,
@@ -193,10 +194,10 @@ def plot(ds: xr.Dataset, layer: str | Sequence[str] | None = None, *, ax=None,
         return map_figure(ds, layer, ax=ax, size=size, **kw)
     if kind == "phase_curve":
         if layer is not None:
-            raise ValueError(f"a phase curve has no layers to choose; got layer={layer!r}")
+            raise ValueError(f"a phase curve has no layers to choose; got layer={_describe(layer)}")
         return phase_curve_figure(ds, ax=ax, size=size, **kw)
     if kind in ("boundaries", "threshold"):
         if layer is not None:
-            raise ValueError(f"a {kind} file has no layers to choose; got layer={layer!r}")
+            raise ValueError(f"a {kind} file has no layers to choose; got layer={_describe(layer)}")
         return curves_figure(ds, ax=ax, size=size, **kw)
     return trajectory_figure(ds, states=layer, ax=ax, size=size, **kw)

@@ -17,6 +17,7 @@ import numpy as np
 import xarray as xr
 
 from phasemap.atlas.dataset import read_json, squared_units, vocabulary
+from phasemap.core.args import describe
 from phasemap.plot.style import _FONT
 
 # --------------------------------------------------------------------------- labels
@@ -298,7 +299,8 @@ def _flags(var: xr.DataArray) -> tuple[list[int], list[str]]:
 
 def _layer(ds: xr.Dataset, name: str) -> xr.DataArray:
     if not isinstance(name, str) or name not in ds.data_vars:
-        raise ValueError(f"unknown layer {name!r}; this dataset has: "
+        shown = repr(name) if isinstance(name, str) else describe(name)
+        raise ValueError(f"unknown layer {shown}; this dataset has: "
                          f"{', '.join(map(str, ds.data_vars))}")
     return ds[name]
 

@@ -17,6 +17,8 @@ import numpy as np
 import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+
+from phasemap.core.args import describe
 from matplotlib.ticker import FuncFormatter, MultipleLocator
 from matplotlib.transforms import offset_copy
 
@@ -130,6 +132,10 @@ def define_symbols(fig: Figure, definitions: Sequence[str], width: float | None 
 # --------------------------------------------------------------------------- figure plumbing
 
 
+#: The widest figure, in inches (a poster's; at 300 dpi, 15 000 pixels).
+MAX_WIDTH = 50.0
+
+
 def width_of(size: str | float) -> float:
     """The width in inches of ``size``: ``"one_column"`` (3.5), ``"two_column"`` (7.2) or a
     positive number of inches; ValueError otherwise."""
@@ -139,12 +145,15 @@ def width_of(size: str | float) -> float:
                              "or a width in inches")
         return SIZES[size]
     try:
+        if isinstance(size, (bool, bytes)):
+            raise TypeError
         width = float(size)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f"size must be one of {', '.join(SIZES)} or a width in inches, "
-                         f"got {size!r}") from None
-    if not math.isfinite(width) or width <= 0:
-        raise ValueError(f"size must be a positive width in inches, got {size!r}")
+                         f"got {describe(size)}") from None
+    if not math.isfinite(width) or not 0 < width <= MAX_WIDTH:
+        raise ValueError(f"size must be a positive width in inches, at most {MAX_WIDTH:g}, "
+                         f"got {describe(size)}")
     return width
 
 

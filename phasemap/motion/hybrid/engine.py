@@ -151,8 +151,9 @@ class Motion:
         for c, m in enumerate(modes):
             if m == OPEN:
                 continue
+            sign = 1.0 if rho is None else rho[c]  # as solve() reads it
             row = np.zeros(len(owner))
-            row[idx[(c, 0)]] = -rho[c]
+            row[idx[(c, 0)]] = -sign
             if self.one_sided[c] or m != SMOOTH:
                 ub.append(row)
                 b.append(0.0)
@@ -160,7 +161,7 @@ class Motion:
                 for sgn in (1.0, -1.0):
                     row = np.zeros(len(owner))
                     row[idx[(c, 1)]] = sgn
-                    row[idx[(c, 0)]] = -mu[c] * rho[c]
+                    row[idx[(c, 0)]] = -mu[c] * sign
                     ub.append(row)
                     b.append(0.0)
         res = linprog(np.zeros(len(owner)), A_ub=np.array(ub) if ub else None,

@@ -27,13 +27,13 @@ def check_contact_options(name: str, impact_law, restitution, painleve, zeno_spe
 
     if not isinstance(impact_law, str) or impact_law not in LAWS:
         raise ValueError(f"{name}: impact_law must be one of {', '.join(LAWS)}, got "
-                         f"{impact_law!r}")
+                         f"{_args.describe(impact_law)}")
     e = _args.finite("restitution", restitution, name, lower=0.0)
     if e > 1.0:
-        raise ValueError(f"{name}: restitution must be in [0, 1], got {restitution!r}")
+        raise ValueError(f"{name}: restitution must be in [0, 1], got {_args.describe(restitution)}")
     if not isinstance(painleve, str) or painleve not in POLICIES:
         raise ValueError(f"{name}: painleve must be one of {', '.join(POLICIES)}, got "
-                         f"{painleve!r}")
+                         f"{_args.describe(painleve)}")
     z = _args.finite("zeno_speed", zeno_speed, name, lower=0.0)
     return {"impact_law": impact_law, "restitution": e, "painleve": painleve, "zeno_speed": z}
 
