@@ -153,3 +153,27 @@ def test_maps_and_fate_maps_too_large_for_memory_are_refused_before_any_work():
         text = got[key]
         assert text is not None and text.startswith(f"{model}: ") and "\n" not in text, text
         assert "more memory" in text and "chunks=" in text, text
+
+
+BATCH = LIMIT + """
+kw = dict(xdot=0.0, f=0.0)
+phasemap.simulate("elliptic_pendulum", 0.1, phi=[0.1, 0.2], **kw)  # compiled (or loaded)
+limit(600)
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    ds = phasemap.simulate("elliptic_pendulum", 1e7, phi=[1.0, 1.1, 1.2],
+                           max_steps=10 ** 12, max_events=10 ** 12, **kw)
+print(json.dumps({"ends": [str(e) for e in ds.end_reason.values],
+                  "starts": ds.sizes["start"],
+                  "warnings": [str(w.message) for w in caught]}))
+"""
+
+
+def test_a_batch_of_endless_motions_under_a_memory_limit_stops_cleanly():
+    """Three frictionless elliptic pendulums for 10^7 s in one call: each stops where the
+    three motions' points still fit together, and one warning says why."""
+    got = _child(BATCH)
+    assert got["starts"] == 3
+    cut = {str(int(phasemap.Event.MAX_STEPS)), str(int(phasemap.Event.MAX_EVENTS))}
+    assert set(got["ends"]) <= cut, got["ends"]
+    assert any("what their saved points can hold in memory" in w for w in got["warnings"])
