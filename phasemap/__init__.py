@@ -21,6 +21,7 @@ The public API is re-exported here explicitly.
 """
 
 from phasemap._version import __version__
+from phasemap.core import compiletime as _compiletime
 from phasemap.core import interrupts as _interrupts
 from phasemap.atlas.read import describe_atlas, open_atlas
 from phasemap.atlas.write import write_atlas
@@ -34,8 +35,10 @@ from phasemap.maps.scene import Scene
 from phasemap.motion.simulate import simulate
 from phasemap import accessor as _accessor  # noqa: F401  (registers Dataset.phasemap)
 
-# a Ctrl-C during a compile ends the call, never lost inside LLVM's callbacks into Python
+# a Ctrl-C during a compile ends the call, never lost inside LLVM's callbacks into Python;
+# and the time numba compiles is counted, for the tour's and --timing's reports
 _interrupts.install()
+_compiletime.install()
 
 
 def __getattr__(name: str):

@@ -110,6 +110,9 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
         description="Solvability and stagnation maps of mechanical systems with dry friction.",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"phasemap {__version__}")
+    parser.add_argument("--timing", action="store_true", help="say on stderr, at the end, "
+                        "how long the command took and how much of it numba spent compiling "
+                        "kernels (the first run of each kind of work; later runs load them)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     models = _model_names()
     subs = {}
@@ -131,6 +134,9 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
     p.add_argument("--studies", metavar="DIR", help="folder of the study scripts "
                    "(default: the repository's studies/)")
     p.add_argument("--only", metavar="A,B", help="run only these studies")
+    p.add_argument("--jobs", type=int, default=None, metavar="N",
+                   help="studies run at once, one process each (default: one per core; 1 "
+                   "runs them in turn in this process)")
     p.add_argument("--size", choices=["two_column", "one_column", "both"], default="two_column",
                    help="lay the figures out for a journal's two columns (7.2 in, the "
                    "default), one column (3.5 in, files *_one_column) or both")
@@ -239,10 +245,23 @@ def main(argv: list[str] | None = None) -> int:
     from phasemap.core import progress
     from phasemap.atlas.atomic import Terminated, removed_on_signals
 
+    if args.timing:
+        import time
+
+        from phasemap.core import compiletime
+
+        start, compiled = time.perf_counter(), compiletime.seconds()
     try:
         with progress.enable(), removed_on_signals():
             code = _run(args)
             sys.stdout.flush()  # a closed pipe shows here, not at exit
+            if args.timing:
+                took = time.perf_counter() - start
+                spent = compiletime.seconds() - compiled
+                print(f"phasemap: {took:.1f} s in all, {spent:.1f} s of it compiling numba "
+                      f"kernels" + (" (in this process; the tour's studies report their "
+                                    "own)" if args.command == "tour" else ""),
+                      file=sys.stderr)
             return code
     except BrokenPipeError:  # the reader left (phasemap ... | head): end quietly
         return _stdout_closed()
@@ -281,7 +300,8 @@ def _run(args) -> int:
         from phasemap.tour import tour
 
         return tour(args.out, full=args.full, studies=args.studies,
-                    only=args.only.split(",") if args.only else None, size=args.size)
+                    only=args.only.split(",") if args.only else None, size=args.size,
+                    jobs=args.jobs)
     elif args.command == "models":
         print(_models(args.model))
     elif args.command == "atlas":

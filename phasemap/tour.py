@@ -3,18 +3,23 @@
 The studies live in the repository's ``studies/`` folder (phasemap/ only
 defines; studies produce).  The tour finds that folder next to the package
 (an editable install or a run from the clone) or in the working directory,
-runs each study's ``main(["--quick", "--out", DIR])`` in turn with a progress
-line, and ends with the list of figures and the count of verdicts.  With
-progress on (the command line), each study runs under a ticking line on
-stderr that names it and its elapsed time, so that no wait is silent, not even
-numba compiling the kernels on a cold cache; the study's own progress bars
-appear beneath it and its printing above.
+runs each study's ``main(["--quick", "--out", DIR])`` and ends with the list of
+figures, the count of verdicts, and how much of the time numba spent compiling.
+
+The studies are independent: on a machine with several cores they run at once, one
+process each (``jobs``, default one per core), which on a cold cache compiles their
+kernels in parallel (numba compiles on one thread).  Each study's printing is shown
+whole, in the tour's order, as it ends; a ticking line on stderr names the studies
+running and the time so far.  With ``jobs=1`` the studies run in this process in turn,
+each under its own ticking line, its progress bars beneath it and its printing above.
 """
 
 from __future__ import annotations
 
 import contextlib
+import io
 import importlib.util
+import os
 import pathlib
 import sys
 import time
@@ -87,12 +92,18 @@ def load(path: pathlib.Path):
 
 
 def tour(out: str = "phasemap-out", *, full: bool = False, studies: str | None = None,
-         only: Sequence[str] | None = None, size: str = "two_column") -> int:
+         only: Sequence[str] | None = None, size: str = "two_column",
+         jobs: int | None = None) -> int:
     """Run the studies into ``out``; return 0, or 1 when a claim disagrees.
 
     ``size`` lays the figures out for a journal's ``"two_column"`` width (the
     default), ``"one_column"`` or ``"both"`` (see :func:`phasemap.study.save_figures`).
+    ``jobs``: studies run at once, one process each (default: one per core, at most
+    one per study); 1 runs them in this process, in turn.
     """
+    from phasemap.core import compiletime
+    from phasemap.core.args import count
+
     folder = find_studies(studies)
     names = [n for n in ORDER if (folder / f"{n}.py").is_file()]
     if only:
@@ -100,25 +111,115 @@ def tour(out: str = "phasemap-out", *, full: bool = False, studies: str | None =
         if unknown:
             raise ValueError(f"unknown study {unknown[0]!r}; available: {', '.join(names)}")
         names = [n for n in names if n in only]
+    jobs = max(min(count("jobs", (os.cpu_count() or 1) if jobs is None else jobs, "tour"),
+                   len(names)), 1)
     out_dir = pathlib.Path(out)
     out_dir.mkdir(parents=True, exist_ok=True)
     argv = ["--out", str(out_dir), "--size", size] + ([] if full else ["--quick"])
     verdicts: dict[str, int] = {}
     start = time.perf_counter()
-    for i, name in enumerate(names, 1):
-        print(f"\n[{i}/{len(names)}] {name} ({'full' if full else 'quick'}), "
-              f"{time.perf_counter() - start:.0f} s so far", flush=True)
-        # a ticking line on stderr for the whole study (compiling included), the
-        # study's own bars beneath it, and its printing above both
-        with progress.activity(f"[{i}/{len(names)}] {name}"), _above_the_bars():
-            claims = load(folder / f"{name}.py").main(argv)
-        for c in claims:
-            verdicts[c.verdict] = verdicts.get(c.verdict, 0) + 1
+    compiled = compiletime.seconds()
+    print(f"phasemap tour: {len(names)} stud{'ies' if len(names) > 1 else 'y'} "
+          f"({'full' if full else 'quick'}) into {out_dir}/"
+          + (f", {jobs} at a time in processes of their own" if jobs > 1 else ""),
+          flush=True)
+    if jobs == 1:
+        for i, name in enumerate(names, 1):
+            print(f"\n[{i}/{len(names)}] {name} ({'full' if full else 'quick'}), "
+                  f"{time.perf_counter() - start:.0f} s so far", flush=True)
+            # a ticking line on stderr for the whole study (compiling included), the
+            # study's own bars beneath it, and its printing above both
+            with progress.activity(f"[{i}/{len(names)}] {name}"), _above_the_bars():
+                claims = load(folder / f"{name}.py").main(argv)
+            for c in claims:
+                verdicts[c.verdict] = verdicts.get(c.verdict, 0) + 1
+        compiled = compiletime.seconds() - compiled
+    else:
+        compiled = _in_parallel(folder, names, argv, jobs, full, start, verdicts)
     figures = sorted(out_dir.glob("*.png"))
-    print(f"\nphasemap tour: {len(names)} studies in {time.perf_counter() - start:.0f} s; "
+    took = time.perf_counter() - start
+    at_once = f", {jobs} at a time" if jobs > 1 else ""
+    print(f"\nphasemap tour: {len(names)} studies in {took:.0f} s{at_once}; "
           f"atlases and figures in {out_dir}/")
+    if compiled >= 1.0:
+        summed = "summed over the processes; " if jobs > 1 else ""
+        print(f"numba compiled kernels for {compiled:.0f} s of that ({summed}a second run "
+              "loads them from the cache)")
     for png in figures:
         print(f"  {png}  (+ .pdf)")
     print("verdicts: " + ", ".join(f"{n} {k}" for k, n in sorted(verdicts.items())))
     sys.stdout.flush()
     return 1 if verdicts.get("DISAGREES") else 0
+
+
+def _in_parallel(folder: pathlib.Path, names: list[str], argv: list[str], jobs: int,
+                 full: bool, start: float, verdicts: dict) -> float:
+    """Run the studies ``jobs`` at a time, one process each; print each one's output
+    in order as it ends; return the seconds numba compiled in them, summed."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    compiled = 0.0
+    # spawn: a fresh interpreter per worker (forking a process that has numba's threads
+    # and LLVM loaded is not safe)
+    pool = ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn"))
+    n = len(names)
+    try:
+        futures = [pool.submit(run_study, str(folder), name, argv) for name in names]
+        with progress.activity(f"tour, {jobs} studies at a time"):
+            for i, (name, future) in enumerate(zip(names, futures), 1):
+                while True:
+                    running = [f"[{j}/{n}] {m}" for j, (m, f) in
+                               enumerate(zip(names, futures), 1) if f.running()]
+                    progress.status(f"{', '.join(running) or 'starting'}; {i - 1}/{n} done")
+                    try:
+                        text, counts, seconds, compile_s = future.result(timeout=0.5)
+                        break
+                    except TimeoutError:
+                        continue
+                print(f"\n[{i}/{len(names)}] {name} ({'full' if full else 'quick'}), "
+                      f"{seconds:.0f} s, ended {time.perf_counter() - start:.0f} s into "
+                      "the tour", flush=True)
+                sys.stdout.write(text)
+                sys.stdout.flush()
+                compiled += compile_s
+                for k, n in counts.items():
+                    verdicts[k] = verdicts.get(k, 0) + n
+    except BaseException:
+        _stop(pool)
+        raise
+    pool.shutdown()
+    return compiled
+
+
+def _stop(pool) -> None:
+    """Cancel what has not started and end the studies running: SIGTERM, which each
+    worker turns into an exception that removes its temporary files
+    (:func:`phasemap.atlas.atomic.removed_on_signals`), then wait for them."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())  # no public handle
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in processes:
+        if proc.is_alive():
+            proc.terminate()
+    for proc in processes:
+        proc.join(timeout=30)
+        if proc.is_alive():
+            proc.kill()
+
+
+def run_study(folder: str, name: str, argv: list[str]) -> tuple[str, dict, float, float]:
+    """One study in a worker process: ``(its printing, {verdict: count}, seconds, seconds
+    numba compiled)``.  Progress bars stay off (the tour's own line shows progress)."""
+    import phasemap  # noqa: F401 - installs the compile-time listener
+    from phasemap.core import compiletime
+
+    from phasemap.atlas.atomic import removed_on_signals
+
+    t0, c0 = time.perf_counter(), compiletime.seconds()
+    out = io.StringIO()
+    with progress.enable(False), removed_on_signals(), contextlib.redirect_stdout(out):
+        claims = load(pathlib.Path(folder) / f"{name}.py").main(argv)
+    counts: dict[str, int] = {}
+    for c in claims:
+        counts[c.verdict] = counts.get(c.verdict, 0) + 1
+    return out.getvalue(), counts, time.perf_counter() - t0, compiletime.seconds() - c0

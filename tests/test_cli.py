@@ -199,6 +199,36 @@ def test_tour_runs_the_studies_it_finds(tmp_path):
     assert missing.returncode == 2 and "no study scripts found" in missing.stderr
 
 
+def test_the_tour_runs_its_studies_at_once_in_processes_of_their_own(tmp_path):
+    """Two studies, two jobs: each runs in a worker process (its pid differs from the
+    tour's and from the other's), their printing comes whole and in the tour's order,
+    whichever ends first, and the verdicts add up."""
+    studies = tmp_path / "studies"
+    studies.mkdir()
+    for name, wait in (("ladder", 1.5), ("wheel", 0.0)):
+        (studies / f"{name}.py").write_text(
+            "import os, time\n"
+            "from phasemap.study import Claim, arguments\n"
+            "def main(argv=None):\n"
+            "    args = arguments('fake study', argv)\n"
+            f"    time.sleep({wait})\n"
+            f"    print('{name} says', os.getpid())\n"
+            f"    return [Claim('{name}', 'yes', 'yes', 'agrees')]\n")
+    r = run("tour", "--studies", str(studies), "--out", str(tmp_path / "out"), "--jobs", "2")
+    assert r.returncode == 0, r.stderr
+    assert "2 at a time in processes of their own" in r.stdout
+    lines = r.stdout.splitlines()
+    said = [line.split() for line in lines if " says " in line]
+    assert [s[0] for s in said] == ["ladder", "wheel"], r.stdout
+    pids = {int(s[2]) for s in said}
+    assert len(pids) == 2
+    assert lines.index(next(x for x in lines if x.startswith("[1/2] ladder"))) < \
+        lines.index(next(x for x in lines if x.startswith("ladder says")))
+    assert "verdicts: 2 agrees" in r.stdout
+    bad = run("tour", "--studies", str(studies), "--jobs", "0")
+    assert bad.returncode == 2 and "jobs must be an integer >= 1" in bad.stderr
+
+
 # ---------------------------------------- a new user without a traceback -----
 def test_a_closed_pipe_ends_quietly():
     """``phasemap classify ... | head`` with the reader gone before the output."""

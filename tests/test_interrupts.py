@@ -1,5 +1,6 @@
-"""A Ctrl-C during a first compile ends the call (issue 44): it is never lost inside
-LLVM's callbacks into Python (phasemap.core.interrupts)."""
+"""numba's compile events: a Ctrl-C during a first compile ends the call (issue 44), never
+lost inside LLVM's callbacks into Python (phasemap.core.interrupts); and the time numba
+compiles is counted (phasemap.core.compiletime, issue 40)."""
 
 from __future__ import annotations
 
@@ -67,3 +68,31 @@ def test_handlers_are_restored_after_the_compile():
     assert signal.getsignal(signal.SIGINT) is before
     if callable(before):
         assert getattr(during, "phasemap_wraps", None) is before
+
+
+def test_compile_time_counts_outermost_compiles_only():
+    """A function that calls another: one outermost compile, timed once; a second call
+    compiles nothing."""
+    import time
+
+    from numba import njit
+
+    import phasemap  # noqa: F401 - installs the listener
+    from phasemap.core import compiletime
+
+    @njit
+    def inner(x):
+        return x * 2.0
+
+    @njit
+    def outer(x):
+        return inner(x) + 1.0
+
+    n0, s0 = compiletime.count(), compiletime.seconds()
+    t0 = time.perf_counter()
+    assert outer(1.0) == 3.0
+    wall = time.perf_counter() - t0
+    assert compiletime.count() == n0 + 1
+    assert 0.0 < compiletime.seconds() - s0 <= wall
+    assert outer(2.0) == 5.0
+    assert compiletime.count() == n0 + 1

@@ -6,6 +6,6 @@ fates a motion can meet), ``numerics`` (tolerances, statuses, branch-free helper
 functions), ``compile`` (per-model engine kernels from templates), ``cache`` (the kernel
 cache and its bound), ``args`` (the argument checks every entry point shares) and
 ``progress`` (bars and activity lines), ``interrupts`` (a signal during a compile is
-raised where Python can raise it).  Nothing here imports from another part of
+raised where Python can raise it) and ``compiletime`` (how long numba has compiled).  Nothing here imports from another part of
 phasemap.
 """

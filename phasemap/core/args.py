@@ -208,7 +208,7 @@ def finite_range(name: str, value, where: str = "", ends: tuple[str, str] = ("lo
     >>> finite_range("phi_range", (1, 0), "ladder", ("low", "high"))
     Traceback (most recent call last):
     ...
-    ValueError: ladder: phi_range must be finite with low < high, got (1, 0)
+    ValueError: ladder: phi_range must be finite with low < high, got (1, 0) (tuple)
     """
     lo_word, hi_word = ends
     try:
