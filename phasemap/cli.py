@@ -50,6 +50,10 @@ EXAMPLES = {
         ("phasemap cache info", "where compiled kernels are kept, and how much"),
         ("phasemap cache clear", "delete them all (they compile again on use)"),
     ],
+    "warm": [
+        ("phasemap warm", "compile every built-in model's kernels, before a long job"),
+        ("phasemap warm ladder my_system.py --jobs 2", "two models, two calls at once"),
+    ],
 }
 EXAMPLES |= _bif.EXAMPLES  # phasemap boundaries, phasemap threshold
 
@@ -233,6 +237,16 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                              "(PHASEMAP_CACHE_MAX_MB).  info lists its folders, entries and "
                              "size; clear deletes every entry.")
     p.add_argument("action", choices=["info", "clear"])
+    p = subs["warm"] = _sub(sub, "warm", "compile what a model's work needs, before the work",
+                            "Makes one small call of each kind of work each MODEL supports "
+                            "(classify, its default map, simulate, a fate map, a phase curve, "
+                            "its default slice's boundaries), several at once, so that numba "
+                            "compiles their kernels into the cache now and later calls load "
+                            "them.  For a script or a cluster job, before the job.")
+    p.add_argument("models", nargs="*", metavar="MODEL", help=models + " (default: every "
+                   "built-in model)")
+    p.add_argument("--jobs", type=int, default=None, metavar="N",
+                   help="calls at once, one process each (default: one per core)")
     subs |= _bif.add_parsers(sub, _sub, models)
     return parser, subs
 
@@ -337,9 +351,27 @@ def _run(args) -> int:
         print(classify(model, **_parse_values(args.values, model=model)))
     elif args.command == "cache":
         print(_cache(args.action))
+    elif args.command == "warm":
+        print(_warm(args.models, args.jobs))
     elif args.command in ("boundaries", "threshold"):
         print(_bif.run(args, _parse_values))
     return 0
+
+
+def _warm(models: list[str], jobs: int | None) -> str:
+    """``phasemap warm``'s table: per model and kind of work, the time and the compiling."""
+    from phasemap.warm import warm
+
+    done = warm(models or None, jobs=jobs)
+    width = max(len(w.model) for w in done)
+    rows = [f"{'model':<{width}}  {'work':<11}  {'time':>7}  {'compiling':>9}"]
+    rows += [f"{w.model:<{width}}  {w.kind:<11}  {w.seconds:6.1f}s  {w.compiling:8.1f}s"
+             for w in done]
+    total, compiling = sum(w.seconds for w in done), sum(w.compiling for w in done)
+    rows.append(f"warm: {len(done)} calls, {total:.0f} s of work, {compiling:.0f} s of it "
+                "compiling (summed over the processes); later calls load these kernels from "
+                "the cache")
+    return "\n".join(rows)
 
 
 def _cache(action: str) -> str:

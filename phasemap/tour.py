@@ -160,6 +160,7 @@ def _in_parallel(folder: pathlib.Path, names: list[str], argv: list[str], jobs: 
     from concurrent.futures import ProcessPoolExecutor
 
     compiled = 0.0
+    wall_start = time.time() - (time.perf_counter() - start)  # the clocks of two processes
     # spawn: a fresh interpreter per worker (forking a process that has numba's threads
     # and LLVM loaded is not safe)
     pool = ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn"))
@@ -173,13 +174,13 @@ def _in_parallel(folder: pathlib.Path, names: list[str], argv: list[str], jobs: 
                                enumerate(zip(names, futures), 1) if f.running()]
                     progress.status(f"{', '.join(running) or 'starting'}; {i - 1}/{n} done")
                     try:
-                        text, counts, seconds, compile_s = future.result(timeout=0.5)
+                        text, counts, seconds, compile_s, ended = future.result(timeout=0.5)
                         break
                     except TimeoutError:
                         continue
                 print(f"\n[{i}/{len(names)}] {name} ({'full' if full else 'quick'}), "
-                      f"{seconds:.0f} s, ended {time.perf_counter() - start:.0f} s into "
-                      "the tour", flush=True)
+                      f"{seconds:.0f} s, ended {ended - wall_start:.0f} s into the tour",
+                      flush=True)
                 sys.stdout.write(text)
                 sys.stdout.flush()
                 compiled += compile_s
@@ -207,9 +208,11 @@ def _stop(pool) -> None:
             proc.kill()
 
 
-def run_study(folder: str, name: str, argv: list[str]) -> tuple[str, dict, float, float]:
+def run_study(folder: str, name: str, argv: list[str]
+              ) -> tuple[str, dict, float, float, float]:
     """One study in a worker process: ``(its printing, {verdict: count}, seconds, seconds
-    numba compiled)``.  Progress bars stay off (the tour's own line shows progress)."""
+    numba compiled, when it ended by the wall clock)``.  Progress bars stay off (the tour's
+    own line shows progress)."""
     import phasemap  # noqa: F401 - installs the compile-time listener
     from phasemap.core import compiletime
 
@@ -222,4 +225,5 @@ def run_study(folder: str, name: str, argv: list[str]) -> tuple[str, dict, float
     counts: dict[str, int] = {}
     for c in claims:
         counts[c.verdict] = counts.get(c.verdict, 0) + 1
-    return out.getvalue(), counts, time.perf_counter() - t0, compiletime.seconds() - c0
+    return (out.getvalue(), counts, time.perf_counter() - t0, compiletime.seconds() - c0,
+            time.time())

@@ -697,3 +697,29 @@ def test_classify_names_what_it_needs_and_refuses_a_name_given_twice():
     for command in ("classify", "atlas", "simulate", "threshold", "boundaries", "models"):
         text = " ".join(quiet(command, "--help").stdout.split())
         assert "or a declaration file (path/to/system.py, defining SYSTEM)" in text, command
+
+
+def test_warm_compiles_each_kind_of_work_once_and_a_second_run_loads_it():
+    """``phasemap warm MODEL``: a row per kind of work the model supports; the second run,
+    in new processes, compiles nothing (every kernel comes from the cache)."""
+    from phasemap.warm import kinds_of
+
+    for attempt in range(2):
+        r = run("warm", "hinge_pendulum", "--jobs", "2")
+        assert r.returncode == 0, r.stderr
+        rows = [line.split() for line in r.stdout.splitlines()[1:-1]]
+        assert [row[1] for row in rows] == list(kinds_of("hinge_pendulum"))
+        assert all(row[0] == "hinge_pendulum" for row in rows)
+        assert r.stdout.splitlines()[-1].startswith("warm: 6 calls")
+    assert all(float(row[3].rstrip("s")) == 0.0 for row in rows), r.stdout
+    bad = run("warm", "nosuch")
+    assert bad.returncode == 2 and "unknown model 'nosuch'" in bad.stderr
+
+
+def test_timing_says_how_much_of_a_command_was_compiling():
+    r = run("--timing", "classify", "ladder", "phi=0.3")
+    assert r.returncode == 0, r.stderr
+    last = r.stderr.strip().splitlines()[-1]
+    m = re.fullmatch(r"phasemap: ([\d.]+) s in all, ([\d.]+) s of it compiling numba kernels",
+                     last)
+    assert m and float(m.group(2)) <= float(m.group(1)), last
