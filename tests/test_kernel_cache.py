@@ -172,7 +172,8 @@ def test_an_unusable_cache_folder_falls_back_to_a_private_one_and_says_so_once(t
 
 
 @pytest.mark.parametrize("owner", ["another user", "us, writable by others"])
-def test_a_planted_fallback_folder_is_refused_and_its_code_never_runs(tmp_path, owner):
+def test_a_planted_fallback_folder_is_refused_and_its_code_never_runs(tmp_path, owner,
+                                                                      request):
     tmp = tmp_path / "tmp"
     planted = tmp / f"phasemap-kernels-{os.getuid()}"
     planted.mkdir(parents=True)
@@ -181,9 +182,7 @@ def test_a_planted_fallback_folder_is_refused_and_its_code_never_runs(tmp_path, 
                                         "def cells(x):\n    return 42 + x - 1\nSPEC = 'probe'\n")
     os.chmod(planted, 0o777)
     if owner == "another user":
-        if os.getuid() != 0:
-            pytest.skip("making a folder another user's needs root")
-        os.chown(planted, 65534, 65534)
+        os.chown(planted, *request.getfixturevalue("other_user"))
     blocker = tmp_path / "a-file"
     blocker.write_text("")
     r = child(load(), blocker / "kernels", TMPDIR=str(tmp))
@@ -391,6 +390,39 @@ def _needs_root():
         pytest.skip("making a file another user's needs root")
 
 
+@pytest.fixture(scope="module")
+def other_user():
+    """A second account, made for these tests and removed after them: ``(uid, gid)``.
+    The attacks of issue 44 came from another user's processes; these tests run code as
+    that user (``subprocess.run(..., user=uid)``) or give it files."""
+    import pwd
+
+    if os.getuid() != 0:
+        pytest.skip("making another account needs root")
+    if shutil.which("useradd") is None or shutil.which("userdel") is None:
+        pytest.skip("no useradd/userdel here to make another account")
+    name = f"pm-other-{os.getpid()}"
+    made = subprocess.run(["useradd", "--system", "--no-create-home", "--shell",
+                           "/usr/sbin/nologin", name], capture_output=True, text=True)
+    if made.returncode != 0:
+        pytest.skip(f"useradd could not make an account: {made.stderr.strip()}")
+    try:
+        entry = pwd.getpwnam(name)
+        yield entry.pw_uid, entry.pw_gid
+    finally:
+        subprocess.run(["userdel", name], capture_output=True)
+
+
+def as_user(who, script: str, data: bytes = b"") -> None:
+    """Run the shell ``script`` as the account ``who`` (``(uid, gid)``), ``data`` on its
+    standard input (a shell: this interpreter may sit where the account cannot read)."""
+    uid, gid = who
+    done = subprocess.run(["/bin/sh", "-c", script], user=uid, group=gid, extra_groups=[],
+                          input=data, capture_output=True, timeout=60, cwd="/",
+                          env={"PATH": "/usr/bin:/bin"})
+    assert done.returncode == 0, done.stderr.decode(errors="replace")
+
+
 EVIL_PICKLE = b"cos\nsystem\n(S'touch {marker}'\ntR."  # pickle protocol 0: os.system(...)
 
 
@@ -411,7 +443,7 @@ def test_a_flipped_bit_in_compiled_code_is_found_and_compiled_again_with_one_lin
 
 
 @pytest.mark.parametrize("which", ["index", "hash file", "folder"])
-def test_numba_files_another_user_owns_are_never_unpickled(warm, tmp_path, which):
+def test_numba_files_another_user_owns_are_never_unpickled(warm, tmp_path, which, other_user):
     """A pickle planted as numba's index (where anyone can compute the name, in a shared
     NUMBA_CACHE_DIR) would run its code on the next load: a file or folder of another
     user's is never read, and never removed; the function is compiled instead."""
@@ -422,39 +454,46 @@ def test_numba_files_another_user_owns_are_never_unpickled(warm, tmp_path, which
     (index,) = numba.glob(f"{STEM}.cells-*.nbi")
     index.write_bytes(EVIL_PICKLE.replace(b"{marker}", str(marker).encode()))
     target = {"index": index, "hash file": index.with_suffix(".nbh"), "folder": numba}[which]
-    os.chown(target, 65534, 65534)
+    uid, gid = other_user
+    os.chown(target, uid, gid)
     r = child(load(), root)
     loaded(r)
     assert not marker.exists()
     assert len(lines(r)) == 1 and "not loading numba's cache" in r.stderr and \
-        "owned by another user (uid 65534)" in r.stderr, r.stderr
-    assert target.exists() and os.stat(target).st_uid == 65534
+        f"owned by another user (uid {uid})" in r.stderr, r.stderr
+    assert target.exists() and os.stat(target).st_uid == uid
 
 
-def test_a_shared_world_writable_numba_cache_dir_keeps_each_users_files_apart(tmp_path):
-    """NUMBA_CACHE_DIR shared like /tmp (mode 1777): another user pre-creates the folder
-    numba will use for the cache's functions and plants an index there."""
-    _needs_root()
-    shared = tmp_path / "shared"
-    shared.mkdir()
-    os.chmod(shared, 0o1777)
+def test_a_shared_world_writable_numba_cache_dir_keeps_each_users_files_apart(tmp_path,
+                                                                              other_user):
+    """NUMBA_CACHE_DIR shared like /tmp (mode 1777): another user, in a process of their
+    own, creates the folder numba will use for the cache's functions before we ever run,
+    and plants an index there; we never unpickle it."""
+    import tempfile
+
     root = tmp_path / "cache"
     marker = tmp_path / "planted-code-ran"
-    first = child(load(), root, numba_dir=shared)   # ours: the folder numba uses is made
-    loaded(first)
-    (index,) = shared.rglob(f"{STEM}.cells-*.nbi")
-    folder = index.parent
-    shutil.rmtree(folder)
-    folder.mkdir()
-    index.write_bytes(EVIL_PICKLE.replace(b"{marker}", str(marker).encode()))
-    for p in (folder, index):
-        os.chown(p, 65534, 65534)
-    os.chmod(folder, 0o777)
-    r = child(load(), root, numba_dir=shared)
-    loaded(r)
-    assert not marker.exists()
-    said = lines(r)
-    assert said and all("owned by another user" in line for line in said), r.stderr
+    scout = tmp_path / "scout"   # where numba puts the index, learnt from a run of ours
+    scout.mkdir()
+    loaded(child(load(), root, numba_dir=scout))
+    (index,) = scout.rglob(f"{STEM}.cells-*.nbi")
+    relative = index.relative_to(scout)
+    shared = pathlib.Path(tempfile.mkdtemp(prefix="phasemap-shared-"))  # others reach /tmp
+    try:
+        os.chmod(shared, 0o1777)
+        evil = EVIL_PICKLE.replace(b"{marker}", str(marker).encode())
+        planted = shared / relative
+        as_user(other_user, f"umask 0 && mkdir -p '{planted.parent}' && cat > '{planted}'",
+                evil)
+        assert os.stat(planted).st_uid == other_user[0]
+        r = child(load(), root, numba_dir=shared)
+        loaded(r)
+        assert not marker.exists()
+        said = lines(r)
+        assert said and all("owned by another user" in line for line in said), r.stderr
+        assert planted.read_bytes() == evil   # never read, never removed
+    finally:
+        shutil.rmtree(shared, ignore_errors=True)
 
 
 @pytest.mark.parametrize("mode", [0o775, 0o777])
