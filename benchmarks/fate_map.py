@@ -23,6 +23,7 @@ import numpy as np
 
 import phasemap
 from phasemap.models import get_model
+from phasemap.motion.integrate import NO_STOP
 from phasemap.motion.simulate import Options
 
 HERE = pathlib.Path(__file__).resolve().parent
@@ -199,7 +200,7 @@ def step_profile(model, cells: int = 1500, repeat: int = 5, fit_cells: int = 400
         for _ in range(n):
             for i in range(ys.shape[0]):
                 steps += integrate(v, ys[i], t_end, rtol, atol, h_max, max_steps,
-                                   max_events, False, no_eval)[4]
+                                   max_events, False, no_eval, NO_STOP)[4]
         return steps
 
     @njit
@@ -218,7 +219,7 @@ def step_profile(model, cells: int = 1500, repeat: int = 5, fit_cells: int = 400
     # CPU times of 10 runs
     rows = []
     for y0 in starts[:fit_cells]:
-        res = integrate(v, y0, *args, True, no_eval)
+        res = integrate(v, y0, *args, True, no_eval, NO_STOP)
         best, _ = _cpu(lambda: all_cells(v, y0[None, :], *args, 10), 3)
         rows.append((res[4], len(res[6]), 1.0, best / 10))
     fit = np.linalg.lstsq(np.array([r[:3] for r in rows], float),

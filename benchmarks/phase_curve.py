@@ -39,6 +39,7 @@ from scipy.integrate import solve_ivp
 
 import phasemap
 from phasemap.motion import phase
+from phasemap.motion.integrate import NO_STOP
 from phasemap.systems import get_model
 from phasemap.systems import hinge_pendulum as hinge
 from phasemap.systems.seeds.closed_forms import ladder_omega_squared
@@ -116,7 +117,7 @@ def runners(name, values, t_end, before):
         "simulate": lambda: phasemap.simulate(name, t_end, rtol=1e-12, method="DOP853",
                                               **values),
         "simulate kernel": lambda: integrate(v, y0, t_end, 1e-12, 1e-12, math.inf, 10**6,
-                                             10**4, True, no_eval),
+                                             10**4, True, no_eval, NO_STOP),
     }
 
 
@@ -188,7 +189,7 @@ def equal_accuracy(repeat):
                 atol = tol * math.sqrt(u_ref)
                 errors[method, tol] = err(sim_end(method, tol))
                 calls[method, tol] = lambda integrate=integrate, tol=tol, atol=atol: integrate(
-                    v, y0, t_end, tol, atol, math.inf, 10**6, 10**4, True, no_eval)
+                    v, y0, t_end, tol, atol, math.inf, 10**6, 10**4, True, no_eval, NO_STOP)
         times = {key: [] for key in calls}
         for fn in calls.values():
             fn()  # (compiled above; first calls out of the timing)
@@ -250,7 +251,7 @@ def target_five(repeat):
             integrate, _ = phasemap.motion.integrate.kernels(m, method)
             calls[method, tol, "kernel"] = (
                 lambda integrate=integrate, tol=tol, atol=atol: integrate(
-                    v, y0, t_end, tol, atol, math.inf, 10**6, 10**4, True, no_eval))
+                    v, y0, t_end, tol, atol, math.inf, 10**6, 10**4, True, no_eval, NO_STOP))
     times = {key: [] for key in calls}
     for _ in range(repeat):
         for key, fn in calls.items():

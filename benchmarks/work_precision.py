@@ -163,7 +163,7 @@ def public_call(rounds: int = 200) -> tuple[str, list]:
     from scipy.integrate import solve_ivp
 
     import phasemap
-    from phasemap.motion.integrate import kernels
+    from phasemap.motion.integrate import NO_STOP, kernels
 
     sim = sys.modules["phasemap.simulate"]  # the module (phasemap.simulate is the function)
 
@@ -178,7 +178,7 @@ def public_call(rounds: int = 200) -> tuple[str, list]:
     checked = sim.Options(**opts).checked(m.name)
 
     def kernel():
-        return integrate(v, y0, 20.0, 1e-9, 1e-9, math.inf, 1_000_000, 10_000, True, te)
+        return integrate(v, y0, 20.0, 1e-9, 1e-9, math.inf, 1_000_000, 10_000, True, te, NO_STOP)
 
     res = kernel()
     cols = sim._columns(res[5], res[6], res[7], None)

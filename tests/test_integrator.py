@@ -10,6 +10,8 @@ keeps them between runs).
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -645,3 +647,33 @@ def test_the_test_after_a_step_decides_as_the_full_classification(name):
                 if got and coef_sign != 0.0:
                     assert cut[mode, nx.COEF] == full[mode, nx.COEF]
     assert decided[True] > 0 and decided[False] > 0, decided
+
+
+STOPPED = """
+import os, signal, threading, time
+import phasemap
+
+def scene(t_end):
+    return phasemap.Scene("hinge_pendulum", axes={"phi": [2.5, 2.4]},
+                          fixed={"omega": 0.0, "delta": 0.0}, layers=["fate"],
+                          options={"t_end": t_end, "max_steps": 10 ** 12,
+                                   "max_events": 10 ** 12})
+
+scene(0.1).compute()                       # compiled (or loaded) first
+threading.Timer(1.0, os.kill, (os.getpid(), signal.SIGINT)).start()
+try:
+    scene(1e9).compute()                   # frictionless: 10^9 s of swinging per cell
+    print("finished")
+except KeyboardInterrupt:
+    print("interrupted")
+"""
+
+
+def test_a_ctrl_c_stops_a_fate_map_inside_a_long_trajectory():
+    """Issue 44: a fate map whose cells are long trajectories took 19 s to stop on
+    Ctrl-C (a signal waits for compiled code to return).  Each cell here would swing for
+    10^9 s; the interrupt ends the map within a step of the integrator (the child's
+    timeout bounds a hang, it times nothing)."""
+    done = subprocess.run([sys.executable, "-c", STOPPED], capture_output=True, text=True,
+                          timeout=300)
+    assert done.stdout.strip().splitlines()[-1] == "interrupted", done.stderr[-2000:]

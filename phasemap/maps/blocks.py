@@ -69,8 +69,12 @@ TYPICAL_RATIO = {"int8": 0.05, "int32": 0.15, "float64": 0.5}
 #: Resident memory that loading a scene's compiled kernels adds to a process
 #: (numba and LLVM; measured 105-125 MB), counted when the estimate is not timed.
 KERNEL_BYTES = 125_000_000
-#: Resident memory that the netCDF writer adds (the library and HDF5's chunk caches).
-WRITER_BYTES = 25_000_000
+#: Resident memory that the netCDF writer adds (the library, HDF5's chunk caches and
+#: its chunk index).  Measured with ``phasemap atlas ladder`` (one int8 layer, kernels
+#: loaded): the peak above the rest of the estimate was 31, 57, 71 and 54 MB for 10^8,
+#: 10^9, 4 * 10^9 and 2 * 10^10 cells; at 25 MB the 4 * 10^9-cell estimate was 24 % below
+#: its peak (issue 44).
+WRITER_BYTES = 65_000_000
 #: Copies of a block that writing it holds at once (the result, HDF5's conversion
 #: and compression buffers; 1.45 measured for 4 * 10^6 cells of int8 + float64).
 WRITER_COPIES = 2

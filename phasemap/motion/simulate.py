@@ -23,7 +23,8 @@ from phasemap.core import events as ev
 from phasemap.core.compile import remember
 from phasemap.atlas.dataset import assemble, cf_header, variable_attrs
 from phasemap.motion import hybrid
-from phasemap.motion.integrate import DEFAULT_METHOD, METHODS, check_method, kernels, run_batch, unpack
+from phasemap.motion.integrate import (DEFAULT_METHOD, METHODS, NO_STOP, check_method, kernels,
+                                       run_batch, unpack)
 from phasemap.core.model import Model, Variable
 from phasemap.systems import get_model
 
@@ -488,7 +489,7 @@ def _through_impacts(m: Model, integrate, v, y0, run, names, full):
     ``no_solution`` replaced by an ``iwc`` event; and the impacts ``(t, P_n, P_t, dKE)``.
     A motion that meets no such state is the integrator's own, bit for bit."""
     t_end, rtol, atol, h_max, max_steps, max_events, save, te = run
-    res = integrate(v, y0, *run)
+    res = integrate(v, y0, *run, NO_STOP)
     if int(res[0]) != ev.NO_SOLUTION or getattr(m, "declaration", None) is None:
         return (*res, [])
     parts, impacts, t0 = [res], [], 0.0
@@ -505,7 +506,7 @@ def _through_impacts(m: Model, integrate, v, y0, run, names, full):
             break
         done = sum(len(r[7]) for r in parts)
         res = integrate(v, y0, t_end - t0, rtol, atol, h_max, steps, events, save,
-                        te[done:] - t0)
+                        te[done:] - t0, NO_STOP)
         parts.append(res)
     if len(parts) == 1:  # the impact could not go on (no steps, events or time left)
         return (*res, [])

@@ -60,6 +60,7 @@ templates (its named pieces); this module compiles them per model and method
 
 from __future__ import annotations
 
+import threading
 from typing import NamedTuple
 
 import numpy as np
@@ -95,8 +96,11 @@ def unpack(points, events):
 
 def _fate_drive(integrate, y_slot, base, shape, axis_slot, axis_values, deriv_slot,
                 deriv_values, y0_fixed, t_end, rtol, atol, h_max, max_steps, max_events,
-                pos_col, fate, n_rev, t_final, pos_rest):
+                pos_col, fate, n_rev, t_final, pos_rest, stop):
     """Integrate from every cell of a grid of initial conditions; record how each ends.
+
+    ``stop`` (one int64), set nonzero by another thread, ends the work within a step
+    (:func:`run_stoppable`); the cells not done are left as they were.
 
     ``integrate`` is a model's integrator, taken as a first-class function, so
     that this parallel driver compiles once for every model and method (and
@@ -114,6 +118,8 @@ def _fate_drive(integrate, y_slot, base, shape, axis_slot, axis_values, deriv_sl
         v = base.copy()
         y0 = y0_fixed.copy()
         for q in range((ncells - u + units - 1) // units):
+            if stop[0] != 0:
+                break
             cell = u + q * units
             # every cell starts from the scene's inputs: the integrator writes the state
             # it reaches into v, and a state variable that is not an axis (a fixed
@@ -125,7 +131,7 @@ def _fate_drive(integrate, y_slot, base, shape, axis_slot, axis_values, deriv_sl
                 if y_slot[i] >= 0:
                     y0[i] = v[y_slot[i]]
             res = integrate(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, False,
-                            no_eval)
+                            no_eval, stop)
             fate[cell] = res[0]
             n_rev[cell] = res[3]
             t_final[cell] = res[1]
@@ -135,7 +141,10 @@ def _fate_drive(integrate, y_slot, base, shape, axis_slot, axis_values, deriv_sl
 
 #: The argument types of every integrator (see templates._integrate_template).
 INTEGRATE_ARGS = (F1, F1, nb_types.float64, nb_types.float64, nb_types.float64,
-                  nb_types.float64, nb_types.int64, nb_types.int64, nb_types.boolean, F1)
+                  nb_types.float64, nb_types.int64, nb_types.int64, nb_types.boolean, F1, I1)
+#: The ``stop`` of a motion nothing stops (simulate's: a Ctrl-C there ends the call between
+#: its compiled pieces).
+NO_STOP = np.zeros(1, dtype=np.int64)
 _FATE_DRIVERS = Memo("integrate.fate_drivers")
 
 
@@ -148,14 +157,16 @@ def _fate_driver(integrate):
                              nb_types.float64, nb_types.float64, nb_types.float64,
                              nb_types.float64, nb_types.int64, nb_types.int64, I1,
                              nb_types.Array(nb_types.int8, 1, "C"),
-                             nb_types.Array(nb_types.int32, 1, "C"), F1, F2)
-        return njit(fsig, parallel=True, cache=True, error_model="numpy")(_fate_drive)
+                             nb_types.Array(nb_types.int32, 1, "C"), F1, F2, I1)
+        # nogil: it runs in a thread of its own while the main thread waits for a signal
+        return njit(fsig, parallel=True, nogil=True, cache=True,
+                    error_model="numpy")(_fate_drive)
 
     return _FATE_DRIVERS.get((), (sig,), make)
 
 
 def _batch_drive(integrate, y_slot, v, y0s, t_end, rtol, atol, h_max, max_steps, max_events,
-                 save, t_eval):
+                 save, t_eval, stop):
     """Integrate from every row of ``y0s`` (one compiled call for a sweep of starts).
 
     Returns ``(head, points, point_end, events, event_end, y_eval, eval_end)``:
@@ -178,7 +189,8 @@ def _batch_drive(integrate, y_slot, v, y0s, t_end, rtol, atol, h_max, max_steps,
         for j in range(y_slot.shape[0]):
             if y_slot[j] >= 0:
                 v[y_slot[j]] = y0[j]
-        res = integrate(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, save, t_eval)
+        res = integrate(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, save, t_eval,
+                        stop)
         head[i, 0] = res[0]
         head[i, 1] = res[1]
         head[i, 2] = res[3]
@@ -218,7 +230,7 @@ def run_batch(model: Model, method: str, v: np.ndarray, y0s: np.ndarray, *args):
     ``args`` are the integrator's from ``t_end`` on."""
     integrate, _ = kernels(model, method)
     y_slot = stage_kernels(model).constants["Y_SLOT"]
-    return _batch_driver(integrate)(integrate, y_slot, v, y0s, *args)
+    return _batch_driver(integrate)(integrate, y_slot, v, y0s, *args, NO_STOP)
 
 
 def check_method(method, model_name: str) -> str:
@@ -308,8 +320,42 @@ def run_fate_map(model: Model, axes: dict[str, np.ndarray], fixed: dict[str, flo
     n_rev = np.empty(ncells, dtype=np.int32)
     t_final = np.empty(ncells)
     pos_rest = np.empty((n_pos, ncells))
-    fate_map(*packed, y0_fixed, t_end, rtol, atol, h_max, max_steps, max_events,
-             np.arange(n_pos, dtype=np.int64), fate, n_rev, t_final, pos_rest)
+    stop = np.zeros(1, dtype=np.int64)
+    run_stoppable(lambda: fate_map(*packed, y0_fixed, t_end, rtol, atol, h_max, max_steps,
+                                   max_events, np.arange(n_pos, dtype=np.int64), fate, n_rev,
+                                   t_final, pos_rest, stop), stop)
     grid = tuple(int(s) for s in shape)
     return (fate.reshape(grid), n_rev.reshape(grid), t_final.reshape(grid),
             pos_rest.reshape((n_pos,) + grid))
+
+
+def run_stoppable(call, stop: np.ndarray) -> None:
+    """``call()``, a compiled call that releases the GIL and reads ``stop[0]`` at every
+    step, in a thread of its own while this (the main) thread waits for it: a signal
+    that raises here (Ctrl-C's KeyboardInterrupt, or phasemap's ``Terminated``) sets
+    ``stop[0]``, waits the step or so the call takes to notice, and is raised.  A fate
+    cell can be a trajectory of minutes, which a signal could not otherwise interrupt.
+    Off the main thread (a dask worker), where no signal is raised, the call runs as it
+    is."""
+    if threading.current_thread() is not threading.main_thread():
+        call()
+        return
+    failed = []
+
+    def target():
+        try:
+            call()
+        except BaseException as err:  # handed to the waiting thread
+            failed.append(err)
+
+    worker = threading.Thread(target=target, name="phasemap-fates", daemon=True)
+    worker.start()
+    try:
+        while worker.is_alive():
+            worker.join(0.05)
+    except BaseException:
+        stop[0] = 1
+        worker.join()
+        raise
+    if failed:
+        raise failed[0]

@@ -554,12 +554,15 @@ def _event_template(v, y, t, t_prev, h, theta_end, r, branch, coef_sign, out, yb
 
 # ------------------------------------------------------------ the integrator
 
-def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, save, t_eval):
+def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, save, t_eval,
+                        stop):
     """Integrate from ``y0`` (positions then velocities) at t = 0 until a fate or ``t_end``.
 
     ``v`` is the model's input vector holding the parameters (its state slots
     are overwritten).  With ``save`` every accepted step is recorded; the
-    states at the sorted times ``t_eval`` are always recorded.
+    states at the sorted times ``t_eval`` are always recorded.  ``stop`` (one
+    int64) is read at every step: set nonzero by another thread (a Ctrl-C while
+    a fate map runs), the motion ends there, as at ``max_steps``.
 
     Returns ``(fate, t, y, n_reversals, n_steps, points, events, y_eval)``:
     ``points`` has one row (t, branch, y...) per saved point, ``events`` one row
@@ -609,7 +612,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         h = FIRST_STEP(v, y, branch, K, yt, err, t_end, rtol, atol, h_max)
 
     while fate < 0:
-        if n_steps >= max_steps:
+        if n_steps >= max_steps or stop[0] != 0:
             fate = ev.MAX_STEPS
             break
         if t >= t_end:

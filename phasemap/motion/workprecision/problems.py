@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from phasemap.core import events as ev
-from phasemap.motion.integrate import kernels
+from phasemap.motion.integrate import NO_STOP, kernels
 from phasemap.systems import get_model
 from phasemap.systems import hinge_pendulum as _hinge
 from phasemap.systems.seeds.closed_forms import ladder_omega_squared
@@ -311,5 +311,5 @@ def kernel_run(p: Problem, tol: float, method: str = "DOPRI5"):
 
     def go():
         return integrate(v, y0, t_end, opts.rtol, opts.atol, opts.max_step, opts.max_steps,
-                         opts.max_events, False, te)
+                         opts.max_events, False, te, NO_STOP)
     return go
