@@ -273,9 +273,9 @@ def main(argv: list[str] | None = None) -> int:
                 took = time.perf_counter() - start
                 spent = compiletime.seconds() - compiled
                 print(f"phasemap: {took:.1f} s in all, {spent:.1f} s of it compiling numba "
-                      f"kernels" + (" (in this process; the tour's studies report their "
-                                    "own)" if args.command == "tour" else ""),
-                      file=sys.stderr)
+                      "kernels in this process" + (" (the tour's own summary counts its "
+                                                   "workers' too)" if args.command == "tour"
+                                                   else ""), file=sys.stderr)
             return code
     except BrokenPipeError:  # the reader left (phasemap ... | head): end quietly
         return _stdout_closed()
@@ -314,7 +314,8 @@ def _run(args) -> int:
         from phasemap.tour import tour
 
         return tour(args.out, full=args.full, studies=args.studies,
-                    only=args.only.split(",") if args.only else None, size=args.size,
+                    only=args.only.split(",") if args.only is not None else None,
+                    size=args.size,
                     jobs=args.jobs)
     elif args.command == "models":
         print(_models(args.model))

@@ -19,7 +19,6 @@ from __future__ import annotations
 import contextlib
 import io
 import importlib.util
-import os
 import pathlib
 import sys
 import time
@@ -103,6 +102,7 @@ def tour(out: str = "phasemap-out", *, full: bool = False, studies: str | None =
     """
     from phasemap.core import compiletime
     from phasemap.core.args import count
+    from phasemap.workers import default_jobs
 
     folder = find_studies(studies)
     names = [n for n in ORDER if (folder / f"{n}.py").is_file()]
@@ -111,7 +111,7 @@ def tour(out: str = "phasemap-out", *, full: bool = False, studies: str | None =
         if unknown:
             raise ValueError(f"unknown study {unknown[0]!r}; available: {', '.join(names)}")
         names = [n for n in names if n in only]
-    jobs = max(min(count("jobs", (os.cpu_count() or 1) if jobs is None else jobs, "tour"),
+    jobs = max(min(count("jobs", default_jobs() if jobs is None else jobs, "tour"),
                    len(names)), 1)
     out_dir = pathlib.Path(out)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -154,58 +154,30 @@ def tour(out: str = "phasemap-out", *, full: bool = False, studies: str | None =
 
 def _in_parallel(folder: pathlib.Path, names: list[str], argv: list[str], jobs: int,
                  full: bool, start: float, verdicts: dict) -> float:
-    """Run the studies ``jobs`` at a time, one process each; print each one's output
-    in order as it ends; return the seconds numba compiled in them, summed."""
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
+    """Run the studies ``jobs`` at a time, one process each
+    (:func:`phasemap.workers.in_processes`); print each one's output in order as it ends;
+    return the seconds numba compiled in them, summed."""
+    from phasemap.workers import in_processes
 
     compiled = 0.0
     wall_start = time.time() - (time.perf_counter() - start)  # the clocks of two processes
-    # spawn: a fresh interpreter per worker (forking a process that has numba's threads
-    # and LLVM loaded is not safe)
-    pool = ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn"))
-    n = len(names)
-    try:
-        futures = [pool.submit(run_study, str(folder), name, argv) for name in names]
-        with progress.activity(f"tour, {jobs} studies at a time"):
-            for i, (name, future) in enumerate(zip(names, futures), 1):
-                while True:
-                    running = [f"[{j}/{n}] {m}" for j, (m, f) in
-                               enumerate(zip(names, futures), 1) if f.running()]
-                    progress.status(f"{', '.join(running) or 'starting'}; {i - 1}/{n} done")
-                    try:
-                        text, counts, seconds, compile_s, ended = future.result(timeout=0.5)
-                        break
-                    except TimeoutError:
-                        continue
-                print(f"\n[{i}/{len(names)}] {name} ({'full' if full else 'quick'}), "
-                      f"{seconds:.0f} s, ended {ended - wall_start:.0f} s into the tour",
-                      flush=True)
-                sys.stdout.write(text)
-                sys.stdout.flush()
-                compiled += compile_s
-                for k, n in counts.items():
-                    verdicts[k] = verdicts.get(k, 0) + n
-    except BaseException:
-        _stop(pool)
-        raise
-    pool.shutdown()
+    total = len(names)
+
+    def status(running: list[int], done: int) -> None:
+        now = ", ".join(f"[{i + 1}/{total}] {names[i]}" for i in running)
+        progress.status(f"{now or 'starting'}; {done}/{total} done")
+
+    calls = [(str(folder), name, argv) for name in names]
+    with progress.activity(f"tour, {jobs} studies at a time"), _above_the_bars():
+        for i, (text, counts, seconds, compile_s, ended) in in_processes(
+                run_study, calls, jobs, status):
+            print(f"\n[{i + 1}/{total}] {names[i]} ({'full' if full else 'quick'}), "
+                  f"{seconds:.0f} s, ended {ended - wall_start:.0f} s into the tour")
+            print(text, end="", flush=True)
+            compiled += compile_s
+            for verdict, count in counts.items():
+                verdicts[verdict] = verdicts.get(verdict, 0) + count
     return compiled
-
-
-def _stop(pool) -> None:
-    """Cancel what has not started and end the studies running: SIGTERM, which each
-    worker turns into an exception that removes its temporary files
-    (:func:`phasemap.atlas.atomic.removed_on_signals`), then wait for them."""
-    processes = list((getattr(pool, "_processes", None) or {}).values())  # no public handle
-    pool.shutdown(wait=False, cancel_futures=True)
-    for proc in processes:
-        if proc.is_alive():
-            proc.terminate()
-    for proc in processes:
-        proc.join(timeout=30)
-        if proc.is_alive():
-            proc.kill()
 
 
 def run_study(folder: str, name: str, argv: list[str]
@@ -215,12 +187,11 @@ def run_study(folder: str, name: str, argv: list[str]
     own line shows progress)."""
     import phasemap  # noqa: F401 - installs the compile-time listener
     from phasemap.core import compiletime
-
-    from phasemap.atlas.atomic import removed_on_signals
+    from phasemap.workers import ended_by_signal
 
     t0, c0 = time.perf_counter(), compiletime.seconds()
     out = io.StringIO()
-    with progress.enable(False), removed_on_signals(), contextlib.redirect_stdout(out):
+    with progress.enable(False), ended_by_signal(), contextlib.redirect_stdout(out):
         claims = load(pathlib.Path(folder) / f"{name}.py").main(argv)
     counts: dict[str, int] = {}
     for c in claims:

@@ -29,8 +29,8 @@ scenes need (other layers, another innermost axis) compile on their first use, a
 
 from __future__ import annotations
 
-import os
 import time
+import warnings
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -73,39 +73,28 @@ def warm(models: Sequence[str] | None = None, jobs: int | None = None,
     ValueError
         for an unknown model, or ``jobs`` below 1.
     """
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-
     from phasemap.core.args import count
     from phasemap.systems import MODELS, get_model
+    from phasemap.workers import default_jobs, in_processes
 
     names = list(models) if models else list(MODELS)
     for name in names:
         get_model(name)  # an unknown name fails here, in one line, before any work
     work = [(name, kind) for name in names for kind in kinds_of(name)]
-    jobs = max(min(count("jobs", (os.cpu_count() or 1) if jobs is None else jobs, "warm"),
+    jobs = max(min(count("jobs", default_jobs() if jobs is None else jobs, "warm"),
                    len(work)), 1)
-    if jobs == 1:
-        done = []
-        with progress.bar(len(work), "warming", unit="call") as bar:
+    done = []
+    desc = "warming" + (f", {jobs} at a time" if jobs > 1 else "")
+    with progress.enable(progress.wanted(show), force=show is True), \
+            progress.bar(len(work), desc, unit="call") as bar:
+        if jobs == 1:
             for name, kind in work:
                 done.append(warm_one(name, kind))
                 bar.update(1)
-        return done
-    pool = ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn"))
-    try:
-        futures = [pool.submit(warm_one, name, kind) for name, kind in work]
-        with progress.bar(len(work), f"warming, {jobs} at a time", unit="call") as bar:
-            done = []
-            for future in futures:
-                done.append(future.result())
+        else:
+            for _, warmed in in_processes(warm_one, work, jobs):
+                done.append(warmed)
                 bar.update(1)
-    except BaseException:
-        from phasemap.tour import _stop
-
-        _stop(pool)
-        raise
-    pool.shutdown()
     return done
 
 
@@ -116,10 +105,13 @@ def warm_one(model: str, kind: str) -> Warmed:
     import phasemap
     from phasemap.core import compiletime
 
+    from phasemap.workers import ended_by_signal
+
     m = phasemap.get_model(model)
     t0, c0 = time.perf_counter(), compiletime.seconds()
     axes = {n: np.linspace(lo, hi, 3) for n, (lo, hi, _) in m.default_axes.items()}
-    with progress.enable(False):
+    with progress.enable(False), ended_by_signal(), warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # (an unexplained class change of the small slice)
         if kind == "classify":
             phasemap.classify(m)
         elif kind == "map":

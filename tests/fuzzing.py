@@ -23,6 +23,7 @@ import io
 import math
 import pathlib
 import random
+import re
 import time
 import warnings
 
@@ -333,7 +334,7 @@ class Cases:
             return entry, "path", value, lambda: phasemap.open_atlas(path).load()
         if entry == "describe_atlas":
             path = value if value is not None else self.atlas
-            return entry, "path", value, lambda: phasemap.describe_atlas(path)
+            return entry, "path_or_ds", value, lambda: phasemap.describe_atlas(path)
         kw = {"ds": self.ds, "path": self.folder / f"out{self.rng.randrange(4)}.nc"}
         if value is not None or arg != "path":
             kw[arg] = value
@@ -393,8 +394,10 @@ class Cases:
             argv.insert(where, token)
         if name == "cache" and "clear" in argv:  # never empty the cache under the fuzz
             argv = ["cache", "info"]
-        if name == "tour" and "--only" not in argv:  # a valid tour runs for minutes
-            argv += ["--only", "nosuch"]
+        if name == "tour":  # a valid tour runs for minutes: never ask for one
+            at = argv.index("--only") if "--only" in argv else -1
+            if at < 0 or at + 1 >= len(argv) or argv[at + 1] != "nosuch":
+                argv += ["--only", "nosuch"]
         return "phasemap " + name, "argv", argv, lambda: _command(argv)
 
 
@@ -498,8 +501,9 @@ def _judge(tally: Tally, entry: str, arg: str, value, call) -> None:
 def _names(text: str, arg: str, value) -> bool:
     """Whether a refusal names what was wrong: the argument, or (for a path, a mapping's
     key or a list) the value itself."""
-    if arg in text or arg.replace("_", " ") in text:
-        return True
+    words = {arg, arg.replace("_", " ")}
+    if any(re.search(rf"(?<![A-Za-z0-9_]){re.escape(w)}(?![A-Za-z0-9_])", text) for w in words):
+        return True  # the name as a word: "f" is not named by "omega must be finite"
     if "outside the domain" in text:
         return True  # the model's own domain condition, with the values it read
     if value is None:

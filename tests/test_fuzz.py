@@ -5,6 +5,9 @@ BENCHMARKS.md."""
 
 from __future__ import annotations
 
+import dataclasses
+import math
+
 import numpy as np
 import pytest
 
@@ -55,5 +58,13 @@ def test_the_fuzz_can_fail():
                    lambda: (2, "", "Traceback (most recent call last):\n  ..."))
     fuzzing._judge(tally, "phasemap atlas", "argv", ["x"], lambda: (2, "", "oops\n"))
     fuzzing._judge(tally, "classify", "phi", 1.0, lambda: phasemap.classify("ladder"))
-    assert len(tally.failures) == 4, tally.failures
-    assert tally.calls == 5
+    good = phasemap.classify("ladder")
+    branch = dataclasses.replace(good.branches[0], accelerations={"phi_ddot": math.nan})
+    fuzzing._judge(tally, "classify", "phi", 1.0,
+                   lambda: dataclasses.replace(good, branches=(branch,)))
+    # "f" is not named by a message about omega being finite
+    fuzzing._judge(tally, "classify", "f", 1.0,
+                   lambda: (_ for _ in ()).throw(ValueError("omega must be finite")))
+    assert len(tally.failures) == 6, tally.failures
+    assert "non-finite" in tally.failures[4] and "does not name 'f'" in tally.failures[5]
+    assert tally.calls == 7

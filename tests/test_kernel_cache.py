@@ -410,7 +410,11 @@ def other_user():
         entry = pwd.getpwnam(name)
         yield entry.pw_uid, entry.pw_gid
     finally:
-        subprocess.run(["userdel", name], capture_output=True)
+        gone = subprocess.run(["userdel", name], capture_output=True, text=True)
+        if gone.returncode != 0:
+            import warnings
+
+            warnings.warn(f"userdel {name} failed: {gone.stderr.strip()}")
 
 
 def as_user(who, script: str, data: bytes = b"") -> None:

@@ -110,8 +110,7 @@ def describe_atlas(path_or_ds: str | os.PathLike | xr.Dataset) -> str:
     if isinstance(path_or_ds, xr.Dataset):
         _check_is_atlas(path_or_ds, "dataset")
         return _describe(path_or_ds, "(in memory)")
-    if not isinstance(path_or_ds, (str, os.PathLike)):
-        _args.path("path_or_ds", path_or_ds, "describe_atlas")  # says what it must be
+    _args.path("path_or_ds", path_or_ds, "describe_atlas")  # a file name, or says so
     with open_atlas(path_or_ds) as ds:
         try:
             return _describe(ds, str(path_or_ds))

@@ -162,7 +162,8 @@ def write_atlas(ds: xr.Dataset, path: str | os.PathLike, *, complevel: int = 4,
     ('CF-1.8', (4, 3))
     """
     if not isinstance(ds, xr.Dataset):
-        raise TypeError(f"write_atlas needs an xarray.Dataset, got {type(ds).__name__}")
+        raise TypeError(f"write_atlas: ds must be an xarray.Dataset (an atlas), got "
+                        f"{type(ds).__name__}")
     path = destination(path)
     if not overwrite and path.exists():
         raise ValueError(exists_message(path))

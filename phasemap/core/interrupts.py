@@ -15,6 +15,8 @@ SIGHUP are wrapped: a signal that arrives inside one of those callbacks is sent 
 the handler runs at once, as before.  Handlers are restored when the outermost compile
 ends.  Nothing changes for a signal that is ignored or left to the operating system.
 ``import phasemap`` installs it (:func:`install`), for every numba compile in the process.
+Loading a compiled function from numba's cache fires no compile event and is not covered;
+it takes milliseconds, where a compile takes seconds to minutes.
 """
 
 from __future__ import annotations

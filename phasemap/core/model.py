@@ -534,14 +534,21 @@ class Model:
             try:
                 self.check(full)
             except ValueError as err:
-                raise ValueError(f"{err}{self._where(full, str(err))}") from None
+                where = self._where(full, str(err))
+                if not where:
+                    raise
+                try:
+                    again = type(err)(f"{err}{where}")  # its kind kept (WrongType ...)
+                except Exception:  # noqa: BLE001 - an exception type that takes no text
+                    again = ValueError(f"{err}{where}")
+                raise again from None
         return full
 
     def _where(self, full: Mapping[str, object], message: str) -> str:
         """``", at theta = 0.1, h = 0.8"``: the values a declared model's domain condition
-        (its generated ``inside``) reads, for a message that does not give them already
-        (scalar values only)."""
-        if self.inside is None or " = " in message:
+        (its generated ``inside``) reads, for its message (``outside the domain``), when the
+        message does not give them already (scalar values only)."""
+        if self.inside is None or " = " in message or "outside the domain" not in message:
             return ""
         import inspect
 

@@ -299,9 +299,11 @@ def _kernels(model: Model, method: str):
     integrate.compile(INTEGRATE_ARGS)
     y_slot = consts["Y_SLOT"]
 
+    driver = _fate_driver(integrate)  # compiled here, not in the thread that runs it
+
     def fate_map(*args):
         """Run the shared parallel fate driver with this model's integrator."""
-        return _fate_driver(integrate)(integrate, y_slot, *args)
+        return driver(integrate, y_slot, *args)
 
     return integrate, fate_map
 
@@ -340,22 +342,31 @@ def run_stoppable(call, stop: np.ndarray) -> None:
     if threading.current_thread() is not threading.main_thread():
         call()
         return
+    import numba
+
     failed = []
+    threads = numba.get_num_threads()  # numba's thread count is per thread: the caller's
 
     def target():
         try:
+            numba.set_num_threads(threads)
             call()
         except BaseException as err:  # handed to the waiting thread
             failed.append(err)
 
     worker = threading.Thread(target=target, name="phasemap-fates", daemon=True)
-    worker.start()
     try:
+        worker.start()
         while worker.is_alive():
             worker.join(0.05)
-    except BaseException:
+    finally:
+        # on any way out (a signal, even one between two lines here) the work stops
+        # within a step and is waited for: no compiled work runs on behind the caller
         stop[0] = 1
-        worker.join()
-        raise
+        while worker.is_alive():
+            try:
+                worker.join()
+            except BaseException:  # a second Ctrl-C: the work is ending already
+                continue
     if failed:
         raise failed[0]
