@@ -15,7 +15,7 @@ at the top of the repository says more, with a picture):
 - ``bifurcation/``: the bifurcation set (``boundaries``, ``threshold``);
 - ``plot/``: figures;
 - the front door (this file, ``cli.py``, ``study.py``, ``tour.py``, ``warm.py``,
-  ``accessor.py``):
+  ``workers.py``, ``accessor.py``):
   what users, the study scripts and the command line call.
 
 The public API is re-exported here explicitly.
