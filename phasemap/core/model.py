@@ -531,35 +531,8 @@ class Model:
                     and var._fine(float(value.min())) and var._fine(float(value.max()))):
                 var.check(self.name, value)
         if self.check is not None:
-            try:
-                self.check(full)
-            except ValueError as err:
-                where = self._where(full, str(err))
-                if not where:
-                    raise
-                try:
-                    again = type(err)(f"{err}{where}")  # its kind kept (WrongType ...)
-                except Exception:  # noqa: BLE001 - an exception type that takes no text
-                    again = ValueError(f"{err}{where}")
-                raise again from None
+            self.check(full)
         return full
-
-    def _where(self, full: Mapping[str, object], message: str) -> str:
-        """``", at theta = 0.1, h = 0.8"``: the values a declared model's domain condition
-        (its generated ``inside``) reads, for its message (``outside the domain``), when the
-        message does not give them already (scalar values only)."""
-        if self.inside is None or " = " in message or "outside the domain" not in message:
-            return ""
-        import inspect
-
-        names = []
-        for n in inspect.signature(getattr(self.inside, "py_func", self.inside)).parameters:
-            n = n[4:] if n.startswith(("sin_", "cos_")) else n
-            if n in full and n not in names:
-                names.append(n)
-        if not names or not all(np.ndim(full[n]) == 0 for n in names):
-            return ""
-        return ", at " + ", ".join(f"{n} = {_fmt(float(full[n]))}" for n in names)
 
     @functools.cached_property
     def _completion(self) -> tuple[dict[str, float], tuple[tuple[str, Variable], ...]]:

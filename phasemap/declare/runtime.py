@@ -12,6 +12,7 @@ import types
 
 import numpy as np
 
+from phasemap.core import args as _args
 from phasemap.core import numerics as nx
 
 _DECLARE = pathlib.Path(__file__).resolve().parent
@@ -56,9 +57,18 @@ def checks(name: str, check, inside, text: str):
         except (TypeError, ValueError, AttributeError):  # a builtin that takes one number
             ok = np.vectorize(inside.py_func, otypes=[bool])(*args)
         if not np.all(ok):
-            raise ValueError(f"{name}: outside the domain: {text}")
+            raise ValueError(f"{name}: outside the domain: {text}{_at(names, values)}")
 
     return both
+
+
+def _at(names: list[str], values) -> str:
+    """``", at l = 1, h = 0.8, theta = 0.1"``: the values the domain condition read (its
+    parameters, ``sin_x``/``cos_x`` read as ``x``), where every one is a single number."""
+    read = list(dict.fromkeys(n[4:] if n.startswith(("sin_", "cos_")) else n for n in names))
+    if not all(np.ndim(values[n]) == 0 for n in read):
+        return ""
+    return ", at " + ", ".join(f"{n} = {_args.bound(float(values[n]))}" for n in read)
 
 
 class _ArrayMath:
