@@ -30,6 +30,7 @@ import warnings
 import numpy as np
 
 import phasemap
+from phasemap.core import compiletime  # counts numba's compiles (import phasemap installs it)
 
 HUGE = 10**400
 
@@ -423,40 +424,10 @@ WEIGHTS = {"classify": 30, "registry": 4, "scene": 16, "from_spec": 3, "simulate
 
 # ---------------------------------------------------------------------- judging -----
 
-class _Compiles:
-    """Counts numba's compilations (its ``numba:compile`` event fires for a real compile,
-    not for a load from the cache), so that a first call's compile is not taken for a
-    hang."""
-
-    def __init__(self):
-        self.count = 0
-        self.installed = False
-
-    def install(self):
-        if self.installed:
-            return
-        from numba.core import event
-
-        outer = self
-
-        class Listener(event.Listener):
-            def on_start(self, ev):
-                outer.count += 1
-
-            def on_end(self, ev):
-                pass
-
-        event.register("numba:compile", Listener())
-        self.installed = True
-
-
-_COMPILES = _Compiles()
-
-
 def _judge(tally: Tally, entry: str, arg: str, value, call) -> None:
     """Run one case and record what it did."""
     text_value = repr(value) if entry.startswith("phasemap ") else describe(value)
-    compiles = _COMPILES.count
+    compiles = compiletime.count()
     t0 = time.perf_counter()
     problem = None
     try:
@@ -488,11 +459,11 @@ def _judge(tally: Tally, entry: str, arg: str, value, call) -> None:
             problem = "an admissible branch with a non-finite value"
         counts[entry] = counts.get(entry, 0) + 1
     took = time.perf_counter() - t0
-    if _COMPILES.count != compiles:
+    if compiletime.count() != compiles:
         tally.compiling += 1
     elif took > BOUND:
         problem = problem or f"took {took:.1f} s (bound {BOUND:g} s)"
-    if took > tally.slowest[0] and _COMPILES.count == compiles:
+    if took > tally.slowest[0] and compiletime.count() == compiles:
         tally.slowest = (took, f"{entry} {arg}={text_value}")
     if problem:
         tally.failures.append(f"{entry}({arg}={text_value}): {problem}")
@@ -537,7 +508,6 @@ def run(n: int, seed: int, models: list[str], folder: pathlib.Path, atlas: pathl
     too.  ``slices``: the models whose slices ``boundaries`` and ``threshold`` trace
     (default: every one of ``models``).  A call that never returns is caught by
     ``faulthandler``: the process dumps its stack and exits after :data:`WATCHDOG`."""
-    _COMPILES.install()
     rng = random.Random(seed)
     cases = Cases(rng, models, folder, atlas, heavy, slices)
     weights = dict(weights or WEIGHTS)

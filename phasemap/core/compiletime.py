@@ -47,16 +47,21 @@ def _end() -> None:
 
 def install() -> None:
     """Listen to numba's compile events (once per process)."""
-    if _STATE["installed"]:
-        return
+    if not _STATE["installed"]:
+        on_compile(_start, _end)
+        _STATE["installed"] = True
+
+
+def on_compile(start, end) -> None:
+    """Call ``start()`` as each numba compile begins and ``end()`` as it ends (also when
+    it fails), nested compiles included, in the thread that compiles."""
     from numba.core import event
 
     class Listener(event.Listener):
         def on_start(self, ev):
-            _start()
+            start()
 
         def on_end(self, ev):
-            _end()
+            end()
 
     event.register("numba:compile", Listener())
-    _STATE["installed"] = True

@@ -85,16 +85,8 @@ def _end() -> None:
 
 def install() -> None:
     """Listen to numba's compile events (once per process)."""
-    if _STATE["installed"]:
-        return
-    from numba.core import event
+    from phasemap.core.compiletime import on_compile
 
-    class Listener(event.Listener):
-        def on_start(self, ev):
-            _start()
-
-        def on_end(self, ev):
-            _end()
-
-    event.register("numba:compile", Listener())
-    _STATE["installed"] = True
+    if not _STATE["installed"]:
+        on_compile(_start, _end)
+        _STATE["installed"] = True
