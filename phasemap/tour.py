@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+from collections import Counter
 import importlib.util
 import pathlib
 import sys
@@ -116,7 +117,7 @@ def tour(out: str = "phasemap-out", *, full: bool = False, studies: str | None =
     out_dir = pathlib.Path(out)
     out_dir.mkdir(parents=True, exist_ok=True)
     argv = ["--out", str(out_dir), "--size", size] + ([] if full else ["--quick"])
-    verdicts: dict[str, int] = {}
+    verdicts: Counter[str] = Counter()
     start = time.perf_counter()
     compiled = compiletime.seconds()
     print(f"phasemap tour: {len(names)} stud{'ies' if len(names) > 1 else 'y'} "
@@ -131,8 +132,7 @@ def tour(out: str = "phasemap-out", *, full: bool = False, studies: str | None =
             # study's own bars beneath it, and its printing above both
             with progress.activity(f"[{i}/{len(names)}] {name}"), _above_the_bars():
                 claims = load(folder / f"{name}.py").main(argv)
-            for c in claims:
-                verdicts[c.verdict] = verdicts.get(c.verdict, 0) + 1
+            verdicts.update(c.verdict for c in claims)
         compiled = compiletime.seconds() - compiled
     else:
         compiled = _in_parallel(folder, names, argv, jobs, full, start, verdicts)
@@ -153,7 +153,7 @@ def tour(out: str = "phasemap-out", *, full: bool = False, studies: str | None =
 
 
 def _in_parallel(folder: pathlib.Path, names: list[str], argv: list[str], jobs: int,
-                 full: bool, start: float, verdicts: dict) -> float:
+                 full: bool, start: float, verdicts: Counter) -> float:
     """Run the studies ``jobs`` at a time, one process each
     (:func:`phasemap.workers.in_processes`); print each one's output in order as it ends;
     return the seconds numba compiled in them, summed."""
@@ -175,8 +175,7 @@ def _in_parallel(folder: pathlib.Path, names: list[str], argv: list[str], jobs: 
                   f"{seconds:.0f} s, ended {ended - wall_start:.0f} s into the tour")
             print(text, end="", flush=True)
             compiled += compile_s
-            for verdict, count in counts.items():
-                verdicts[verdict] = verdicts.get(verdict, 0) + count
+            verdicts.update(counts)
     return compiled
 
 
@@ -193,8 +192,5 @@ def run_study(folder: str, name: str, argv: list[str]
     out = io.StringIO()
     with progress.enable(False), ended_by_signal(), contextlib.redirect_stdout(out):
         claims = load(pathlib.Path(folder) / f"{name}.py").main(argv)
-    counts: dict[str, int] = {}
-    for c in claims:
-        counts[c.verdict] = counts.get(c.verdict, 0) + 1
-    return (out.getvalue(), counts, time.perf_counter() - t0, compiletime.seconds() - c0,
-            time.time())
+    return (out.getvalue(), Counter(c.verdict for c in claims), time.perf_counter() - t0,
+            compiletime.seconds() - c0, time.time())

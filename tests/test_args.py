@@ -215,7 +215,7 @@ def test_fuzz_public_entry_points(small_scene):
 
 
 def _check_call(name, call, value):
-    value_text = _args._describe(value)  # repr() refuses an integer of 5000 digits
+    value_text = _args.describe(value)  # repr() refuses an integer of 5000 digits
     try:
         result = call(value)
     except (ValueError, TypeError) as err:

@@ -10,12 +10,37 @@ import sys
 
 import phasemap
 
-CHILD = """
+
+def _child(code: str) -> dict:
+    """Run ``code`` in a fresh interpreter (the suite's kernel cache inherited) and return
+    the JSON of its last line."""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+LIMIT = """
 import json, resource, warnings
+import numpy as np
 import phasemap
+
+def limit(margin_mib):
+    vm = int([l for l in open("/proc/self/status") if l.startswith("VmSize")][0].split()[1])
+    resource.setrlimit(resource.RLIMIT_AS, (vm * 1024 + margin_mib * 2 ** 20,
+                                            resource.RLIM_INFINITY))
+
+def refused(call):
+    try:
+        call()
+    except ValueError as err:
+        return str(err)
+    return None
+"""
+
+CHILD = LIMIT + """
 phasemap.simulate("hinge_pendulum", 1.0, phi=2.5, omega=0.0)      # compiled (or loaded) first
-vm = int([l for l in open("/proc/self/status") if l.startswith("VmSize")][0].split()[1]) * 1024
-resource.setrlimit(resource.RLIMIT_AS, (vm + 600 * 2 ** 20, resource.RLIM_INFINITY))
+limit(600)
 with warnings.catch_warnings(record=True) as caught:
     warnings.simplefilter("always")
     ds = phasemap.simulate("hinge_pendulum", 1e7, phi=2.5, omega=0.0, delta=0.0,
@@ -27,10 +52,7 @@ print(json.dumps({"end": ds.attrs["end_reason"], "message": ds.attrs["end_messag
 
 
 def test_a_long_motion_under_a_memory_limit_stops_cleanly():
-    done = subprocess.run([sys.executable, "-c", CHILD], capture_output=True, text=True,
-                          timeout=600)
-    assert done.returncode == 0, done.stderr[-2000:]
-    got = json.loads(done.stdout.strip().splitlines()[-1])
+    got = _child(CHILD)
     assert got["end"] in ("max_steps", "max_events")
     assert "not fit in the memory available" in got["message"] and "t_eval" in got["message"]
     assert "\n" not in got["message"]
@@ -61,33 +83,6 @@ def test_a_batch_shares_the_memory_among_its_starts():
     assert three[0] * 3 <= one[0] * 1.01 and three[0] * 3 >= one[0] * 0.98
     assert resources.available_memory() > 0
 
-
-def _child(code: str) -> dict:
-    """Run ``code`` in a fresh interpreter (the suite's kernel cache inherited) and return
-    the JSON of its last line."""
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=600)
-    assert done.returncode == 0, done.stderr[-2000:]
-    return json.loads(done.stdout.strip().splitlines()[-1])
-
-
-LIMIT = """
-import json, resource, warnings
-import numpy as np
-import phasemap
-
-def limit(margin_mib):
-    vm = int([l for l in open("/proc/self/status") if l.startswith("VmSize")][0].split()[1])
-    resource.setrlimit(resource.RLIMIT_AS, (vm * 1024 + margin_mib * 2 ** 20,
-                                            resource.RLIM_INFINITY))
-
-def refused(call):
-    try:
-        call()
-    except ValueError as err:
-        return str(err)
-    return None
-"""
 
 CURVE = LIMIT + """
 kw = dict(phi=2.5, omega=0.0, delta=0.0)

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import math
 import os
-import pathlib
 from typing import Iterator
 
 import numpy as np
@@ -110,8 +109,8 @@ def describe_atlas(path_or_ds: str | os.PathLike | xr.Dataset) -> str:
     if isinstance(path_or_ds, xr.Dataset):
         _check_is_atlas(path_or_ds, "dataset")
         return _describe(path_or_ds, "(in memory)")
-    _args.path("path_or_ds", path_or_ds, "describe_atlas")  # a file name, or says so
-    with open_atlas(path_or_ds) as ds:
+    path = _args.path("path_or_ds", path_or_ds, "describe_atlas")  # a file name, or says so
+    with open_atlas(path) as ds:
         try:
             return _describe(ds, str(path_or_ds))
         except (OSError, RuntimeError) as err:  # a damaged file opens but fails to read

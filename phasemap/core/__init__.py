@@ -4,8 +4,8 @@
 fates a motion can meet), ``numerics`` (tolerances, statuses, branch-free helpers),
 ``codegen`` (the per-point and per-grid kernels generated from a model's branch
 functions), ``compile`` (per-model engine kernels from templates), ``cache`` (the kernel
-cache and its bound), ``args`` (the argument checks every entry point shares) and
+cache and its bound), ``args`` (the argument checks every entry point shares),
 ``progress`` (bars and activity lines), ``interrupts`` (a signal during a compile is
-raised where Python can raise it) and ``compiletime`` (how long numba has compiled).  Nothing here imports from another part of
-phasemap.
+raised where Python can raise it) and ``compiletime`` (how long numba has compiled).
+Nothing here imports from another part of phasemap.
 """

@@ -110,9 +110,6 @@ def describe(value) -> str:
 PLAIN = frozenset({float, int, np.float64, np.float32, np.int64, np.int32})
 
 
-_describe = describe
-
-
 def _is_real_type(value) -> bool:
     """Whether ``value`` is a real scalar of an accepted type (its size not yet checked)."""
     if type(value) in PLAIN:  # the common case, without the slow ABC check below
@@ -162,11 +159,11 @@ def real(name: str, value, where: str = "") -> float:
                 if not isinstance(value, (str, bytes, Mapping)) and _has_dimensions(value)
                 else "a real number")
         raise WrongType(f"{_prefix(where)}{name} must be {what}, "
-                                f"got {_describe(value)}")
+                                f"got {describe(value)}")
     try:
         return float(value)
     except OverflowError:
-        raise ValueError(f"{_prefix(where)}{name} = {_describe(value)} is too large to be "
+        raise ValueError(f"{_prefix(where)}{name} = {describe(value)} is too large to be "
                          f"represented: |{name}| must be below {np.finfo(float).max:.4g}"
                          ) from None
 
@@ -190,10 +187,10 @@ def finite(name: str, value, where: str = "", *, lower: float = -math.inf,
     if x < lower or (lower_open and x == lower):
         what = ("a positive number" if lower == 0 and lower_open
                 else f"{'>' if lower_open else '>='} {bound(lower)}")
-        raise ValueError(f"{_prefix(where)}{name} must be {what}, got {_describe(value)}")
+        raise ValueError(f"{_prefix(where)}{name} must be {what}, got {describe(value)}")
     if x > upper:
         raise ValueError(f"{_prefix(where)}{name} must be <= {bound(upper)}, "
-                         f"got {_describe(value)}")
+                         f"got {describe(value)}")
     return x
 
 
@@ -217,10 +214,10 @@ def finite_range(name: str, value, where: str = "", ends: tuple[str, str] = ("lo
         lo, hi = (real(name, t, where) for t in value)
     except (TypeError, ValueError):
         raise ValueError(f"{_prefix(where)}{name} must be two numbers ({lo_word}, {hi_word}), "
-                         f"got {_describe(value)}") from None
+                         f"got {describe(value)}") from None
     if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
         raise ValueError(f"{_prefix(where)}{name} must be finite with {lo_word} < {hi_word}, "
-                         f"got {_describe(value)}")
+                         f"got {describe(value)}")
     return lo, hi
 
 
@@ -256,12 +253,12 @@ def count(name: str, value, where: str = "", *, least: int = 1,
         x = real(name, value, where)
         if not (math.isfinite(x) and x == int(x)):
             raise ValueError(f"{_prefix(where)}{name} must be a whole number, "
-                             f"got {_describe(value)}")
+                             f"got {describe(value)}")
         n = int(x)
     if n < least:
         raise ValueError(f"{_prefix(where)}{name} must be an integer >= {least}, got {n}")
     if n > most:
-        raise ValueError(f"{_prefix(where)}{name} = {_describe(n)} is too large: at most "
+        raise ValueError(f"{_prefix(where)}{name} = {describe(n)} is too large: at most "
                          f"{most}")
     return n
 
@@ -282,12 +279,12 @@ def reals(name: str, values, where: str = "") -> np.ndarray:
     """
     if isinstance(values, (str, bytes, Mapping)) or values is None:
         raise WrongType(f"{_prefix(where)}{name} must be a sequence of real numbers, "
-                                f"got {_describe(values)}")
+                                f"got {describe(values)}")
     try:
         a = np.asarray(values)
     except (TypeError, ValueError):  # ragged nesting
         raise WrongType(f"{_prefix(where)}{name} must be a sequence of real numbers, "
-                                f"got {_describe(values)}") from None
+                                f"got {describe(values)}") from None
     if a.dtype.kind in "iuf":
         return a.astype(float)
     if a.dtype.kind == "O":  # Python ints beyond int64, or mixed objects: one by one
@@ -318,14 +315,14 @@ def path(name: str, value, where: str = "") -> pathlib.Path:
         raise ValueError(f"{_prefix(where)}{name} is empty: give a file name")
     if not isinstance(value, (str, os.PathLike)):
         raise WrongType(f"{_prefix(where)}{name} must be a file name (a str or os.PathLike), "
-                        f"got {_describe(value)}")
+                        f"got {describe(value)}")
     try:
         text = os.fspath(value)
     except TypeError as err:  # a PathLike whose __fspath__ returns something else
         raise WrongType(f"{_prefix(where)}{name}: {err}") from None
     if not isinstance(text, str):
         raise WrongType(f"{_prefix(where)}{name} must be a file name (a str or os.PathLike), "
-                        f"got {_describe(value)}")
+                        f"got {describe(value)}")
     if "\0" in text:
         raise ValueError(f"{_prefix(where)}{name} {text!r} contains a null character")
     return pathlib.Path(os.path.expanduser(text))
@@ -354,11 +351,11 @@ def mapping(name: str, value, where: str = "", *, none: bool = True) -> dict:
         return {}
     if not isinstance(value, Mapping):
         raise WrongType(f"{_prefix(where)}{name} must be a mapping of names to values "
-                        f"(a dict), got {_describe(value)}")
+                        f"(a dict), got {describe(value)}")
     for key in value:
         if not isinstance(key, str):
             raise WrongType(f"{_prefix(where)}{name}: a name must be a string, got "
-                            f"{_describe(key)}")
+                            f"{describe(key)}")
     return dict(value)
 
 
@@ -383,7 +380,7 @@ def unknown(kind: str, name, known: Iterable[str], where: str = "", listing: str
     known = list(known)
     listing = listing or f"allowed: {', '.join(known)}"
     hint = suggest(name, known)
-    shown = repr(name) if isinstance(name, str) else _describe(name)
+    shown = repr(name) if isinstance(name, str) else describe(name)
     return (f"{_prefix(where)}unknown {kind} {shown}{hint} ({listing})" if hint
             else f"{_prefix(where)}unknown {kind} {shown}; {listing}")
 
@@ -395,7 +392,7 @@ def check_name(kind: str, name, known: Iterable[str], where: str = "",
     known = list(known)
     if not isinstance(name, str):
         raise WrongType(f"{_prefix(where)}a {kind} name must be a string, "
-                                f"got {_describe(name)}")
+                                f"got {describe(name)}")
     if name not in known:
         raise ValueError(unknown(kind, name, known, where, listing))
     return name
@@ -456,12 +453,12 @@ def layers(given, known: Iterable[str], where: str = "", listing: str = "") -> l
     if isinstance(given, (bytes, Mapping)) or not isinstance(given, Iterable) or (
             isinstance(given, np.ndarray) and given.ndim == 0):
         raise WrongType(f"{_prefix(where)}layers must be a layer name or a list of "
-                                f"them, got {_describe(given)}")
+                                f"them, got {describe(given)}")
     names = list(given)
     for name in names:
         if not isinstance(name, str):
             raise WrongType(f"{_prefix(where)}layers must be layer names (strings), "
-                                    f"got {_describe(name)}")
+                                    f"got {describe(name)}")
     names = list(dict.fromkeys(names))
     known = list(known)
     for name in names:
@@ -494,7 +491,7 @@ def chunks(given, axes: Mapping[str, int], where: str = ""):
     elif isinstance(given, (str, bytes)) or not (
             isinstance(given, (numbers.Real, np.ndarray)) and np.ndim(given) == 0):
         raise WrongType(f"{_prefix(where)}chunks must be an int, a mapping "
-                                f"{{axis: int}}, 'auto' or None, got {_describe(given)}")
+                                f"{{axis: int}}, 'auto' or None, got {describe(given)}")
     else:
         size = count("chunks", given, where)
         sizes = {name: size for name in axes}

@@ -17,10 +17,10 @@ import numpy as np
 import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
-
-from phasemap.core.args import describe
 from matplotlib.ticker import FuncFormatter, MultipleLocator
 from matplotlib.transforms import offset_copy
+
+from phasemap.core.args import describe
 
 from phasemap._version import __version__
 from phasemap.atlas.atomic import destination, no_partial_file
