@@ -642,3 +642,50 @@ def peg_rod(theta, omega, f, l, p, g, m):
     w2 = omega * omega * (1.0 + (p / (l * cs * cs)) ** 2)
     return enumerate_modes(q, qd, M, Q, [wall, peg], m * (g + l * w2) * (1.0 + f), g + l * w2,
                            l, math.sqrt(g * l) + l * math.sqrt(w2))
+
+
+def barrow(phi, omega, f, delta, r, g, m, lw, k, mu, L, tau):
+    """The wheelbarrow on its handles (tests/unseen.py), in the generalised coordinates
+    q = (xa, ya, phi, theta) of its two bodies: the wheel's centre A, its clockwise angle
+    phi, the handles' angle theta to the floor.  The wheel (mass m, centre of mass
+    C_w = A - lw r (sin phi, cos phi), J_w = m k^2 r^2, body angle -phi) rolls with rolling
+    friction delta on the floor y = 0 (contact ``wheel``: normal velocity ya', slip
+    xa' - r phi', rolling rate -phi'); the handles, a uniform rod of mass mu m and length
+    L r hinged at A (C_r = A - (L r / 2) e, e = (cos theta, sin theta), J_r = mu m (L r)^2 / 12)
+    touch the floor at B = A - L r e with friction f (contact ``handles``).  The
+    equations M q'' + h = Q + sum G^T lambda, with M = sum m_b J_b^T J_b + J_b a_b a_b^T, h
+    the velocity terms sum m_b J_b^T (J_b' q'), Q the gravity forces and the torque tau on
+    phi.  Both contacts kept: ya = r, sin theta = 1 / L, xa' = r omega."""
+    mr = mu * m
+    Lr = L * r
+    sth = 1.0 / L
+    th = math.asin(sth)
+    q = np.array([r * phi, r, phi, th])
+    qd = np.array([r * omega, 0.0, omega, 0.0])
+    sp_, cp = math.sin(phi), math.cos(phi)
+    st, ct = math.sin(th), math.cos(th)
+    Jw = np.array([[1.0, 0.0, -lw * r * cp, 0.0], [0.0, 1.0, lw * r * sp_, 0.0]])
+    Jr = np.array([[1.0, 0.0, 0.0, Lr / 2 * st], [0.0, 1.0, 0.0, -Lr / 2 * ct]])
+    aw, ar = np.array([0.0, 0.0, -1.0, 0.0]), np.array([0.0, 0.0, 0.0, 1.0])
+    M = (m * Jw.T @ Jw + m * (k * r) ** 2 * np.outer(aw, aw)
+         + mr * Jr.T @ Jr + mr * Lr * Lr / 12.0 * np.outer(ar, ar))
+    w2, t2 = omega * omega, 0.0
+    dw = np.array([lw * r * sp_ * w2, lw * r * cp * w2])        # J_w' q'
+    dr = np.array([Lr / 2 * ct * t2, Lr / 2 * st * t2])         # J_r' q'
+    h = m * Jw.T @ dw + mr * Jr.T @ dr
+    Q = np.array([0.0, -(m + mr) * g, -m * g * lw * r * sp_ + tau, mr * g * Lr / 2 * ct]) - h
+
+    def handles_v(q, qd):
+        c, s = _rot(q[3])
+        return qd[0] + Lr * s * qd[3], qd[1] - Lr * c * qd[3]
+
+    wheel = Contact("wheel", vn=lambda q, qd: qd[1], vt=lambda q, qd: qd[0] - r * qd[2],
+                    rho=lambda q, qd: -qd[2], delta=delta)
+    handles = Contact("handles", vn=lambda q, qd: handles_v(q, qd)[1],
+                      vt=lambda q, qd: handles_v(q, qd)[0], f=f)
+    force = (m + mr) * (g + r * w2) * (1.0 + f + delta / r) + abs(tau) / r
+    ans = enumerate_modes(q, qd, M, Q, [wheel, handles], force, g + r * w2, r,
+                          math.sqrt(g * r) + r * abs(omega))
+    for md in ans.modes:
+        md.extra = {"phi_ddot": md.qdd[2], "N_wheel": md.N[0], "N_handles": md.N[1]}
+    return ans

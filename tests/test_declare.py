@@ -611,3 +611,23 @@ def test_an_extreme_gravity_is_answered_at_once():
                           h=1.3312392722024802, g=1e-16, m=2.5041213288033703)
     assert c.n_solutions == 2
     assert all(math.isfinite(v) for b in c.branches for v in b.reactions.values())
+
+
+def test_a_slip_velocity_that_is_a_parameter_times_a_rate():
+    """A contact that slips at r w, r a parameter: its factor r is a bare symbol, and the
+    derivation read its sign by substituting a number, which sympy hands back as a Python
+    float (AttributeError: 'float' object has no attribute 'evalf').  Found by a
+    wheelbarrow whose handles slide at r omega (issue 37, tests/unseen.py)."""
+    from phasemap.declare.derivation import derive
+
+    f = Parameter("f", "1", "friction coefficient", 0.5, 0.0)
+    r = Parameter("r", "m", "length of the lever", 1.0, 0.0, lower_open=True)
+    g = Parameter("g", "m s-2", "gravitational acceleration", 9.81, 0.0)
+    m = Parameter("m", "kg", "mass", 1.0, 0.0, lower_open=True)
+    s = Coordinate("s", "1", "turn of the lever", rate=Rate("w", "s-1", "its rate"))
+    y = Coordinate("y", "m", "height")
+    S = System("lever_block", "a block moved by a lever", "test", coordinates=(s, y),
+               parameters=(f, r, g, m), bodies=(Body(m, (r * s, y)),), potential=m * g * y,
+               contacts=(PointContact("A", (r * s, y), normal=(0, 1), friction=f),))
+    d = derive(S)
+    assert d.velocity.name == "w" and d.kappa == {"A": 1}

@@ -284,3 +284,45 @@ def test_the_peg_rods_boundaries_across_omega_zero(peg_rod):
             == b.class_left.values[p]
         assert oracles.peg_rod(th, right, 1.5, 1.0, 0.8, 9.81, 1.0).n_solutions \
             == b.class_right.values[p]
+
+
+@pytest.mark.parametrize("seed, traced", [(1, True), (4, False)])
+def test_random_barrows_cell_by_cell_and_traced(seed, traced):
+    """Random two-contact declarations with a rolling contact (tests/unseen.py: a wheel
+    rolling with rolling friction, its handles sliding on the floor, of random mass
+    distribution, length and motor torque): a raster over (omega, f) through omega = 0,
+    cell by cell against the generalised-coordinate enumeration (tests/oracles.py); then,
+    for one of them (``traced``: the trace costs 2 min of sympy and compilation on a fresh
+    clone), the boundaries of that slice, every class change of the check raster
+    explained (or boundaries raises), and each piece's side classes against the
+    enumeration.  Both slices hold no solution (the Painleve paradox where the handles are
+    pushed ahead: omega < 0, f large), the wheel lifting off, rolling either way, and
+    the statically indeterminate rest (five reactions, four equations)."""
+    system, st = unseen.barrow(seed)
+    model = system.model
+    phi = float(np.random.default_rng(seed).uniform(-np.pi, np.pi))
+    tau = st["tau"] * 9.81
+
+    def oracle(omega, f):
+        return oracles.barrow(phi, omega, f, 0.05, 1.0, 9.81, 1.0, st["lw"], st["k"], st["mu"],
+                              st["L"], tau)
+
+    wrong, n, seen = [], 0, set()
+    for omega in np.linspace(-2.0, 2.0, 21):
+        for f in np.linspace(0.0, 6.0, 25):
+            want = oracle(omega, f)
+            if want.margin < 1e-6:
+                continue
+            got = phasemap.classify(model, phi=phi, omega=omega, f=f)
+            n += 1
+            seen.add((want.n_solutions, want.stagnation))
+            if (int(got.n_solutions), bool(got.stagnation)) != (want.n_solutions,
+                                                                 want.stagnation):
+                wrong.append((omega, f))
+    assert n > 400 and not wrong, wrong[:3]
+    assert len(seen) >= 3, seen          # the slice holds several classes
+    if not traced:
+        return
+    b = phasemap.boundaries(model, {"omega": (-2.0, 2.0), "f": (0.0, 6.0)}, fixed={"phi": phi})
+    assert b.sizes["piece"] >= 2 and np.all(b.point_residual.values <= 1e-10)
+    _sides_agree(b, "omega", (-2.0, 2.0), (0.0, 6.0), lambda om, f: oracle(om, f).n_solutions)

@@ -1,7 +1,8 @@
 """Systems phasemap has never seen, declared with the public API (issue 23)."""
 import math
 import sympy as sp
-from phasemap.declare import Body, Coordinate, EdgeContact, Parameter, PointContact, Rate, System
+from phasemap.declare import (Body, Coordinate, EdgeContact, Parameter, PointContact, Rate,
+                              RollingContact, System)
 
 PI = float(sp.pi)
 
@@ -165,3 +166,50 @@ def peg_rod():
                   contacts=(PointContact("wall", (xa, ya), normal=(1, 0), friction=f),
                             EdgeContact("peg", (xa, ya), corner=(p, 0), angle=th, friction=f,
                                         extent=(0, 2 * l))))
+
+
+def barrow(seed: int):
+    """A wheelbarrow resting on its handles, of random structure (issue 37: two contacts,
+    one of them rolling): a disc (radius r, mass m, its centre of mass l_w from its centre A,
+    radius of gyration k) rolls with rolling friction delta on a rough floor; a uniform
+    rod (length L, mass mu m) hinged at A trails behind it with its end B sliding on the
+    floor with friction f, at the fixed angle asin(r / L) while both contacts hold; a
+    motor torque tau turns the wheel.  Both contacts kept leave one degree of freedom, the
+    wheel's clockwise angle phi; B slides at r phi'.  Returns the System and its random
+    structure, for :func:`oracles.barrow`."""
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+    lw = sp.Rational(int(rng.integers(0, 80)), 100)          # in r
+    k2 = sp.Rational(int(rng.integers(20, 100)), 100)        # in r^2
+    mu = sp.Rational(int(rng.integers(20, 200)), 100)        # rod mass, in m
+    # in r, with sin theta = 1 / L rational and cos theta too (a Pythagorean triple), so
+    # that sympy's closure of the handles' angle is a rational number
+    L = sp.Rational(*[(5, 3), (13, 5), (25, 7), (17, 8), (29, 20), (41, 9)][rng.integers(6)])
+    tau = sp.Rational(int(rng.integers(-50, 50)), 100)       # in m g r
+    f = Parameter("f", "1", "friction coefficient of the handles", 0.5, 0.0)
+    delta = Parameter("delta", "m", "rolling friction coefficient", 0.05, 0.0)
+    r = Parameter("r", "m", "radius of the wheel", 1.0, 0.0, lower_open=True)
+    g = Parameter("g", "m s-2", "gravitational acceleration", 9.81, 0.0)
+    m = Parameter("m", "kg", "mass of the wheel", 1.0, 0.0, lower_open=True)
+    phi = Coordinate("phi", "rad", "clockwise angle of the wheel", 0.0,
+                     rate=Rate("omega", "rad s-1", "angular velocity of the wheel",
+                               scale=sp.sqrt(g / r)))
+    xa, ya = Coordinate("xa", "m", "wheel centre, x"), Coordinate("ya", "m", "wheel centre, y")
+    th = Coordinate("theta", "rad", "angle of the handles to the floor", 0.5, 0.0, PI / 2,
+                    lower_open=True)
+    Cw = (xa - lw * r * sp.sin(phi), ya - lw * r * sp.cos(phi))
+    Cr = (xa - L * r / 2 * sp.cos(th), ya - L * r / 2 * sp.sin(th))
+    B = (xa - L * r * sp.cos(th), ya - L * r * sp.sin(th))
+    system = System(
+        f"barrow_{seed}", "a random wheelbarrow on its handles", "test",
+        coordinates=(phi, xa, ya, th), parameters=(f, delta, r, g, m),
+        bodies=(Body(m, Cw, inertia=m * k2 * r**2, angle=-phi),
+                Body(mu * m, Cr, inertia=mu * m * (L * r) ** 2 / 12, angle=th)),
+        potential=m * g * Cw[1] + mu * m * g * Cr[1], forces={phi: tau * m * g * r},
+        contacts=(RollingContact("wheel", (xa, ya), radius=r, angle=-phi, normal=(0, 1),
+                                 rolling_friction=delta),
+                  PointContact("handles", B, normal=(0, 1), friction=f)))
+    structure = {"lw": float(lw), "k": float(sp.sqrt(k2)), "mu": float(mu), "L": float(L),
+                 "tau": float(tau)}
+    return system, structure

@@ -164,8 +164,8 @@ def _numbers(e, pt):
     import sympy as sp
 
     try:
-        x = complex(sp.sympify(e).xreplace(
-            {sp.Symbol(k, real=True): v for k, v in pt.items()}).evalf())
+        x = complex(sp.N(sp.sympify(e).xreplace(
+            {sp.Symbol(k, real=True): v for k, v in pt.items()})))
     except (TypeError, ValueError, ZeroDivisionError):
         return None
     return x.real if abs(x.imag) <= 1e-12 and math.isfinite(x.real) else None
