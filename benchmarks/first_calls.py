@@ -8,6 +8,9 @@ at numba's default optimisation (what a user's process compiles), runs in turn
 * *first classify*: one ``phasemap.classify`` at the declaration's defaults;
 * *first map*: a 64 x 64 ``n_solutions`` Scene over the slice below;
 * *first boundaries*: ``phasemap.boundaries`` over the same slice;
+* *boundaries, second slice*: the same axes at another velocity (moving where the first
+  is at rest, or the other way): only the derivatives of the conditions that can bound
+  a class there are compiled (:func:`phasemap.bifurcation.tracing.make_slice`);
 
 and reports each step's wall and CPU time (the process's user + system time), and
 the compile time numba spent in it, per kind of compiled function (the conditions
@@ -40,15 +43,17 @@ from _report import load, machine, parser, publish
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
-#: name -> (the code that makes the System, the slice (two axes, ranges), fixed values)
+#: name -> (the code that makes the System, the slice (two axes, ranges), fixed values,
+#: the fixed values of a second slice on the same axes, moving where the first is at rest)
 CASES = {
     "README rod": ("sys.path.insert(0, str(ROOT / 'docs' / 'examples'))\n"
                    "from own_system import SYSTEM as S",
-                   {"theta": (0.05, 1.5), "f": (0.0, 2.0)}, {"omega": 0.0, "xdot": -1.0}),
+                   {"theta": (0.05, 1.5), "f": (0.0, 2.0)}, {"omega": 0.0, "xdot": -1.0},
+                   {"omega": 0.0, "xdot": 1.0}),
     "drawer": ("sys.path.insert(0, str(ROOT / 'tests'))\nimport unseen\nS = unseen.drawer()",
-               {"d": (-1.0, 1.0), "f": (0.0, 2.0)}, {"xdot": 0.0}),
+               {"d": (-1.0, 1.0), "f": (0.0, 2.0)}, {"xdot": 0.0}, {"xdot": 0.5}),
     "peg rod": ("sys.path.insert(0, str(ROOT / 'tests'))\nimport unseen\nS = unseen.peg_rod()",
-                {"theta": (0.05, 0.95), "f": (0.0, 2.0)}, {"omega": 0.0}),
+                {"theta": (0.05, 0.95), "f": (0.0, 2.0)}, {"omega": 0.0}, {"omega": 0.5}),
 }
 
 CHILD = r'''
@@ -85,7 +90,7 @@ def mark(name):
     for module, fname, dt in compiles[k0:]:
         # a model's own: its generated modules, and the drivers specialised to it
         # (named after it: the tracer's class function, the integrator)
-        kind = ("conditions" if "_conditions_" in module else
+        kind = ("conditions" if "_conditions_" in module or "_condvalues_" in module else
                 "own" if not module.startswith("phasemap.") or own in fname else
                 "shared")
         kinds[kind] = kinds.get(kind, 0.0) + dt
@@ -107,17 +112,20 @@ phasemap.Scene(m, axes={{k: np.linspace(a, b, 64) for k, (a, b) in axes.items()}
 mark("first map")
 phasemap.boundaries(m, axes, fixed=fixed)
 mark("first boundaries")
+phasemap.boundaries(m, axes, fixed={moving!r})
+mark("boundaries, second slice")
 print("RESULT " + json.dumps(steps))
 '''
 
 
 def run(name: str) -> list[dict]:
-    make, axes, fixed = CASES[name]
+    make, axes, fixed, moving = CASES[name]
     with tempfile.TemporaryDirectory() as tmp:
         env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_OPT",)}
         env.update(PHASEMAP_CACHE_DIR=str(pathlib.Path(tmp) / "kernels"),
                    NUMBA_CACHE_DIR=str(pathlib.Path(tmp) / "numba"), MPLBACKEND="Agg")
-        code = CHILD.format(root=str(ROOT), make=make, axes=axes, fixed=fixed)
+        code = CHILD.format(root=str(ROOT), make=make, axes=axes, fixed=fixed,
+                            moving=moving)
         out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                              text=True, cwd=tmp)
     for line in out.stdout.splitlines():
@@ -142,8 +150,9 @@ def main() -> None:
         "",
         "A fresh process per declaration with empty kernel and numba caches, at numba's "
         "default optimisation; each step's wall and CPU time (s), and the compile time "
-        "numba spent in it: the conditions module (values, exact gradients, the Hessian "
-        "by differences), the drivers every model shares (compiled once per machine), "
+        "numba spent in it: the conditions modules (every condition's values, once per "
+        "declaration; exact gradients in the slice's axes of the conditions that can bound "
+        "a class in it, and the Hessian by differences), the drivers every model shares (compiled once per machine), "
         "and the model's own functions.  A second declaration pays its own functions "
         "and its conditions, not the shared drivers.",
         "",

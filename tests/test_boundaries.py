@@ -365,6 +365,43 @@ def test_applicable_conditions_are_those_of_the_statuses_at_the_probes():
         active, last = tracing._applicable(sl)
         assert np.array_equal(active, want) and np.array_equal(last, v), (model, axes, fixed)
         assert 0 < active.sum() < len(active)
+        # only those conditions' derivatives are compiled (issue 37, speed)
+        assert conds.subset == tuple(np.flatnonzero(active)), (model, axes, fixed)
+
+
+def test_a_slice_compiles_the_derivatives_of_the_conditions_it_can_meet():
+    """Issue 37 (speed): a slice's derivative module holds the gradients of the conditions
+    that can bound a class in it (a moving slice of the drawer: 11 of 62, compiled in a
+    third of the time), bit for bit those of the module of every condition; any other
+    condition's gradient and Hessian are NaN, and the values are the model's one module,
+    whatever the slice; the trace asks for no other condition."""
+    from phasemap.bifurcation import conditions, tracing
+
+    axes = {"phi": (-3, 3), "delta": (0.05, 1.4)}
+    sl = tracing.make_slice("hinge_pendulum", axes, {"omega": 0.7})
+    m, conds = sl.model, sl.conds
+    sub = set(conds.subset)
+    assert 0 < len(sub) < len(conds)
+    assert conds.values is conditions.values_of(m).values
+    assert tracing.make_slice("hinge_pendulum", axes, {"omega": 0.0}).conds.values \
+        is conds.values
+    whole = conditions.compiled(m, ("phi", "delta"))
+    assert whole.subset is None and whole.values is conds.values
+    rng = np.random.default_rng(3)
+    g, gw, H, Hw = np.empty(2), np.empty(2), np.empty((2, 2)), np.empty((2, 2))
+    for _ in range(20):
+        v = sl.base.copy()
+        v[sl.slots[0]], v[sl.slots[1]] = rng.uniform(-3, 3), rng.uniform(0.05, 1.4)
+        for k in range(len(conds)):
+            got, want = conds.module.hessian(k, v, g, H), whole.module.hessian(k, v, gw, Hw)
+            if k in sub:
+                assert np.array_equal(np.array(got + tuple(g) + tuple(H.ravel())),
+                                      np.array(want + tuple(gw) + tuple(Hw.ravel())),
+                                      equal_nan=True), k
+            else:
+                assert np.all(np.isnan(got)) and np.all(np.isnan(conds.module.gradient(k, v, g)))
+    tr = tracing.trace(sl, "n_solutions", 1e-10)
+    assert set(np.flatnonzero(tr.active)) <= sub
 
 
 def test_class_changes_are_a_plain_scans():

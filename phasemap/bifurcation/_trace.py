@@ -1924,10 +1924,25 @@ def compiled_address(dispatcher, args) -> int:
 _FUNCTIONS = Memo("trace.functions")
 
 
+@njit(GRADIENT_SIG, cache=True)
+def _no_gradient(k, x, g):
+    """The gradient of a values-only condition set (:func:`functions`): none."""
+    return np.nan, np.nan
+
+
+@njit(HESSIAN_SIG, cache=True)
+def _no_hessian(k, x, g, H):
+    """The Hessian of a values-only condition set (:func:`functions`): none."""
+    return np.nan, np.nan
+
+
 def functions(model, conds) -> tuple:
     """The addresses of the functions a trace of ``model`` with the two-variable
     condition module ``conds`` takes (:data:`ADDRESSES`), made once per model and
-    module: per function, its compiled overload's code.
+    module: per function, its compiled overload's code.  A values-only condition set
+    (:func:`phasemap.bifurcation.conditions.values_of`) has no derivatives: its
+    gradient and Hessian are NaN, for the entry points that read only values and
+    classes (:func:`_applicable_all`).
 
     A jitted function passed as such is looked up in its dispatcher at every call
     (0.2 ms a call), and a first-class function object is unboxed through Python at
@@ -1935,14 +1950,16 @@ def functions(model, conds) -> tuple:
     The overloads stay alive with their model and module, which this cache keeps.
     """
     mod = conds.module
+    gradient, hessian = (_no_gradient, _no_hessian) if mod is None else (mod.gradient,
+                                                                         mod.hessian)
 
     def make():
         fns = []
-        for fn, sig in ((mod.values, VALUES_SIG), (mod.gradient, GRADIENT_SIG),
-                        (mod.hessian, HESSIAN_SIG), (classifier(model), CLASS_SIG)):
+        for fn, sig in ((conds.values, VALUES_SIG), (gradient, GRADIENT_SIG),
+                        (hessian, HESSIAN_SIG), (classifier(model), CLASS_SIG)):
             if tuple(sig.args) not in fn.overloads:
                 fn.compile(sig)  # the hessian, compiled (or loaded) when first needed
             fns.append(compiled_address(fn, sig.args))
         return tuple(fns)
 
-    return _FUNCTIONS.get((model, mod), (), make)
+    return _FUNCTIONS.get((model, mod if mod is not None else conds.values), (), make)

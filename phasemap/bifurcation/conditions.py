@@ -14,20 +14,22 @@ the original's), so that Newton's method and the fold conditions see smooth
 functions.  sympy then differentiates every condition with respect to the
 variables a computation moves in (the two axes of a slice, a threshold's
 parameters), and the values and gradients are printed as numba functions
-into a real ``.py`` file in the kernel cache (GUIDE section 6),
+into real ``.py`` files in the kernel cache (GUIDE section 6),
 named after a hash of what decides them, and imported:
 
 ``values(x, out, scale)``
     every condition's value and tie scale at the input vector ``x`` (the
-    model's :attr:`~phasemap.Model.inputs`; only the names are read);
+    model's :attr:`~phasemap.Model.inputs`; only the names are read), in a module of
+    its own (one per model, whatever the variables);
 ``gradient(k, x, g)``
-    condition ``k``'s value and tie scale, its gradient in ``g``;
+    condition ``k``'s value and tie scale, its gradient in ``g``, for the conditions
+    of the call at hand (a slice compiles only those that can bound a class in it);
 ``hessian(k, x, g, H)``
     the same, and its Hessian in ``H``, by forward differences of the exact
     gradient (it is only Newton's Jacobian where the residual is a value and a
     gradient: :func:`_hessian_by_differences`).
 
-The module also holds ``SPEC``, a JSON text with each condition's name,
+Both modules hold ``SPEC``, a JSON text with each condition's name,
 branch, kind and ``rest_only``: a warm start loads the file without sympy.
 """
 
@@ -162,56 +164,84 @@ def _smooth(cond) -> list[Condition]:
 class Conditions:
     """The conditions of one model with their derivatives in ``variables``, compiled.
 
-    ``module``: the generated module (``values``, ``gradient``, ``hessian``);
+    ``values``: the compiled ``values(x, out, scale)`` of every condition (its own
+    module, one per model whatever the variables); ``module``: the generated module of
+    the derivatives (``gradient``, ``hessian``), None where only the values are
+    compiled (:func:`values_of`); ``subset``: the conditions whose derivatives
+    ``module`` holds (None: every one; for any other ``gradient`` returns NaN);
     ``names``, ``branches``, ``kinds``, ``rest_only``: per condition, in the
-    module's order; ``tag``: a short hash naming the module (kernels that call
-    it are named after it).
+    module's order; ``tag``: a short hash naming the module.
     """
 
-    def __init__(self, model: Model, variables: tuple[str, ...], module):
+    def __init__(self, model: Model, variables: tuple[str, ...], module, values_module,
+                 subset: tuple[int, ...] | None = None):
         self.model = model
         self.variables = variables
         self.module = module
-        spec = json.loads(module.SPEC)
+        self.values = values_module.values
+        self.subset = subset
+        spec = json.loads(values_module.SPEC)
         self.names = tuple(c["name"] for c in spec)
         self.branches = tuple(c["branch"] for c in spec)
         self.kinds = tuple(c["kind"] for c in spec)
         self.rest_only = np.array([c["rest_only"] for c in spec], dtype=bool)
-        self.tag = module.__name__.rsplit("_", 1)[-1]
+        self.tag = (module or values_module).__name__.rsplit("_", 1)[-1]
 
     def __len__(self) -> int:
         return len(self.names)
 
 
-#: (model, conditions given or None, variables) -> the compiled Conditions
+#: (model, conditions given or None; variables, subset) -> the compiled Conditions
 _COMPILED = Memo("conditions.compiled")
+#: (model, conditions given or None) -> the Conditions with their values only
+_VALUES_ONLY = Memo("conditions.values")
 
 
-def compiled(model: Model, variables, conditions=None) -> Conditions:
+def compiled(model: Model, variables, conditions=None, subset=None) -> Conditions:
     """The model's conditions with exact derivatives in ``variables`` (names of the model:
     a slice's two axes, a threshold's parameters).
 
     ``conditions``: a sequence of :class:`Condition` to use instead of the
-    model's own (the velocity condition is added to them too).  Generated
-    once per model, variables and conditions (sympy runs only then), then
-    loaded from the kernel cache.
+    model's own (the velocity condition is added to them too).  ``subset``: the
+    indices of the conditions whose derivatives are needed (None: all of them); the
+    others' are not compiled, which is most of a module's compile time on a slice
+    where the velocity's sign leaves few branches (:func:`phasemap.bifurcation.tracing.
+    make_slice`).  Generated once per model, variables, conditions and subset (sympy
+    runs only then), then loaded from the kernel cache.
     """
+    conditions = _given(model, conditions)
+    variables = tuple(variables)
+    for name in variables:
+        if name not in model.names:
+            raise ValueError(f"{model.name}: {name!r} is not a variable of the model; "
+                             f"allowed: {', '.join(model.names)}")
+    if subset is not None:
+        subset = tuple(sorted({int(k) for k in subset}))
+    return _COMPILED.get((model, conditions), (variables, subset),
+                         lambda: _compile(model, variables, conditions, subset))
+
+
+def values_of(model: Model, conditions=None) -> Conditions:
+    """The model's conditions with their values only (no derivatives): what decides
+    which conditions a slice needs, before their derivatives are compiled."""
+    conditions = _given(model, conditions)
+    return _VALUES_ONLY.get((model, conditions), (), lambda: Conditions(
+        model, (), None, _values_module(model, *_source(model, conditions))))
+
+
+def _given(model: Model, conditions):
     if conditions is not None:
         if isinstance(conditions, (str, bytes)) or not isinstance(conditions, (list, tuple)) \
                 or not all(isinstance(c, (Condition, _declare.Condition)) for c in conditions):
             raise WrongType(f"{model.name}: conditions must be a list of "
                             f"phasemap.declare.Condition, got {describe(conditions)}")
         conditions = tuple(conditions)
-    variables = tuple(variables)
-    for name in variables:
-        if name not in model.names:
-            raise ValueError(f"{model.name}: {name!r} is not a variable of the model; "
-                             f"allowed: {', '.join(model.names)}")
-    return _COMPILED.get((model, conditions), variables,
-                         lambda: _compile(model, variables, conditions))
+    return conditions
 
 
-def _compile(model: Model, variables: tuple, conditions) -> Conditions:
+def _source(model: Model, conditions) -> tuple:
+    """``(hash, make)``: what decides the conditions' text, hashed with the code that
+    prints them, and a function that lists them (sympy runs there)."""
     if conditions is None:
         key_text = _source_key(model)
 
@@ -225,13 +255,25 @@ def _compile(model: Model, variables: tuple, conditions) -> Conditions:
             return given
     h = hashlib.sha256(key_text.encode())
     # the generated file imports the model's velocity scale by its module's name
-    h.update(repr((model.name, model.inputs, variables,
+    h.update(repr((model.name, model.inputs,
                    _module_of(model.velocity_scale).__name__)).encode())
     h.update(pathlib.Path(__file__).read_bytes())
     h.update(f"{numba.__version__} {np.__version__} {__version__}".encode())
+    return h, make
+
+
+def _values_module(model: Model, h, make):
+    stem = f"{model.name}_condvalues_{h.hexdigest()[:16]}"
+    return load_module(stem, lambda: _generate_values(model, make()))
+
+
+def _compile(model: Model, variables: tuple, conditions, subset) -> Conditions:
+    h, make = _source(model, conditions)
+    values = _values_module(model, h.copy(), make)
+    h.update(repr((variables, subset)).encode())
     stem = f"{model.name}_conditions_{h.hexdigest()[:16]}"
-    module = load_module(stem, lambda: _generate(model, variables, make()))
-    return Conditions(model, variables, module)
+    module = load_module(stem, lambda: _generate(model, variables, make(), subset))
+    return Conditions(model, variables, module, values, subset)
 
 
 def _source_key(model: Model) -> str:
@@ -318,98 +360,125 @@ def _hessian_by_differences(slots: list[int]) -> list[str]:
             "    return _c, _s", "", ""]
 
 
-def _generate(model: Model, variables: tuple[str, ...], conds) -> str:
-    """The generated module's text (sympy runs here, and only here), printed by the declared
-    systems' own printer (:func:`phasemap.declare.emit.printer`)."""
-    import sympy as sp
+class _Printing:
+    """What both generated modules print from: the conditions made smooth, their
+    expressions and tie scales in one symbol per name, and :meth:`body`, which prints
+    assignments with common subexpressions (sympy runs here, and only here), by the
+    declared systems' own printer (:func:`phasemap.declare.emit.printer`)."""
 
-    from phasemap.declare.emit import printer
+    def __init__(self, model: Model, conds):
+        import sympy as sp
 
-    conds = [c for cond in conds for c in _smooth(cond)]
-    names = set(model.names)
-    symbols = {}
-    for c in conds:
-        for s in sp.sympify(c.expr).free_symbols | sp.sympify(c.scale).free_symbols:
-            if s.name not in names and s.name != "_velocity_scale":
-                raise ValueError(f"{model.name}: condition {c.name!r} uses {s.name!r}, which is "
-                                 f"not a variable of the model ({', '.join(model.names)})")
-            symbols.setdefault(s.name, s)
-    # one symbol per name (a user's sympy Symbol may differ in assumptions from ours)
-    canon = {n: sp.Symbol(n, real=True) for n in names}
+        from phasemap.declare.emit import printer
 
-    def canonical(e):
-        e = sp.sympify(e)
-        return e.xreplace({s: canon[s.name] for s in e.free_symbols if s.name in canon})
+        self.sp = sp
+        self.model = model
+        self.conds = conds = [c for cond in conds for c in _smooth(cond)]
+        names = self.names = set(model.names)
+        for c in conds:
+            for s in sp.sympify(c.expr).free_symbols | sp.sympify(c.scale).free_symbols:
+                if s.name not in names and s.name != "_velocity_scale":
+                    raise ValueError(f"{model.name}: condition {c.name!r} uses {s.name!r}, "
+                                     f"which is not a variable of the model "
+                                     f"({', '.join(model.names)})")
+        # one symbol per name (a user's sympy Symbol may differ in assumptions from ours)
+        self.canon = canon = {n: sp.Symbol(n, real=True) for n in names}
 
-    exprs = [canonical(c.expr) for c in conds]
-    scales = [canonical(c.scale) for c in conds]
-    var_syms = [canon[v] for v in variables]
-    slot = {n: i for i, n in enumerate(model.inputs)}
-    P = printer()
-    fresh = sp.numbered_symbols("_t")
-    # sin and cos of an input become locals computed once
-    trig = {}
-    for e in exprs + scales:
-        for f in e.atoms(sp.sin, sp.cos):
-            if f.args[0].is_Symbol:
-                trig[f] = sp.Symbol(f"_{type(f).__name__}_{f.args[0].name}", real=True)
+        def canonical(e):
+            e = sp.sympify(e)
+            return e.xreplace({s: canon[s.name] for s in e.free_symbols if s.name in canon})
 
-    def load(used: set) -> list[str]:
-        lines = [f"    {n} = _x[{slot[n]}]" for n in sorted(used & names, key=slot.get)]
-        for f, s in trig.items():
+        self.exprs = [canonical(c.expr) for c in conds]
+        self.scales = [canonical(c.scale) for c in conds]
+        self.slot = {n: i for i, n in enumerate(model.inputs)}
+        self.P = printer()
+        self.fresh = sp.numbered_symbols("_t")
+        # sin and cos of an input become locals computed once
+        self.trig = {}
+        for e in self.exprs + self.scales:
+            for f in e.atoms(sp.sin, sp.cos):
+                if f.args[0].is_Symbol:
+                    self.trig[f] = sp.Symbol(f"_{type(f).__name__}_{f.args[0].name}", real=True)
+        vscale = model.velocity_scale
+        vargs = _codegen.input_names(vscale, 0, model.inputs, f"{model.name}: velocity_scale")
+        self.vsc = f"VSCALE({', '.join(f'_x[{self.slot[n]}]' for n in vargs)})"
+        self.head = ["import math", "import numpy as np", "from numba import njit",
+                     _codegen.import_line(vscale, "VSCALE"), ""]
+        spec = [{"name": c.name, "branch": c.branch, "kind": c.kind, "rest_only": c.rest_only}
+                for c in conds]
+        self.spec = f"SPEC = {json.dumps(spec)!r}"
+
+    def load(self, used: set) -> list[str]:
+        slot = self.slot
+        lines = [f"    {n} = _x[{slot[n]}]" for n in sorted(used & self.names, key=slot.get)]
+        for f, s in self.trig.items():
             if s.name in used:
                 lines.append(f"    {s.name} = math.{type(f).__name__}({f.args[0].name})")
         return lines
 
-    def body(pairs) -> list[str]:
+    def body(self, pairs) -> list[str]:
         """Lines assigning ``target = expr`` for (target, expr), with common subexpressions."""
+        sp, trig = self.sp, self.trig
         red_in = [e.xreplace(trig) for _, e in pairs]
-        reps, red = sp.cse(red_in, symbols=fresh, order="none")
+        reps, red = sp.cse(red_in, symbols=self.fresh, order="none")
         used = set()
         for e in red_in:
             used |= {s.name for s in e.free_symbols}
         # a trig local is read through its argument's name
         used |= {f.args[0].name for f, s in trig.items() if s.name in used}
-        lines = load(used)
-        lines += [f"    {s} = {P.doprint(e)}" for s, e in reps]
-        lines += [f"    {t} = {P.doprint(e)}" for (t, _), e in zip(pairs, red)]
+        lines = self.load(used)
+        lines += [f"    {s} = {self.P.doprint(e)}" for s, e in reps]
+        lines += [f"    {t} = {self.P.doprint(e)}" for (t, _), e in zip(pairs, red)]
         return lines
 
-    vscale = model.velocity_scale
-    vargs = _codegen.input_names(vscale, 0, model.inputs, f"{model.name}: velocity_scale")
-    out = [f'"""Conditions of {model.name} and their derivatives in ({", ".join(variables)}): '
-           'generated by phasemap.bifurcation, do not edit."""',
-           "import math", "import numpy as np", "from numba import njit",
-           _codegen.import_line(vscale, "VSCALE"), ""]
-    vsc = f"VSCALE({', '.join(f'_x[{slot[n]}]' for n in vargs)})"
-
-    def scale_of(e):
+    def scale_of(self, e):
+        sp = self.sp
         return e.xreplace({sp.Symbol("_velocity_scale"): sp.Symbol("_vscale")})
 
-    # values and scales of every condition
-    pairs = [(f"_out[{k}]", e) for k, e in enumerate(exprs)]
-    pairs += [(f"_scale[{k}]", scale_of(s)) for k, s in enumerate(scales)]
+
+def _generate_values(model: Model, conds) -> str:
+    """The text of the values module: every condition's value and tie scale."""
+    pr = _Printing(model, conds)
+    out = [f'"""Conditions of {model.name}, their values: generated by phasemap.bifurcation, '
+           'do not edit."""', *pr.head]
+    pairs = [(f"_out[{k}]", e) for k, e in enumerate(pr.exprs)]
+    pairs += [(f"_scale[{k}]", pr.scale_of(s)) for k, s in enumerate(pr.scales)]
     out += [f'@njit("{_VALUES}", cache=True, error_model="numpy")',
             "def values(_x, _out, _scale):",
             '    """Every condition\'s value into out, its tie scale into scale."""',
-            f"    _vscale = {vsc}"]
-    out += body(pairs) + ["", ""]
+            f"    _vscale = {pr.vsc}"]
+    out += pr.body(pairs) + ["", ""]
+    out += [pr.spec, ""]
+    return "\n".join(out)
+
+
+def _generate(model: Model, variables: tuple[str, ...], conds, subset=None) -> str:
+    """The text of the derivatives' module: ``gradient`` and ``hessian`` in ``variables``
+    for the conditions of ``subset`` (None: all)."""
+    pr = _Printing(model, conds)
+    sp = pr.sp
+    var_syms = [pr.canon[v] for v in variables]
+    keep = range(len(pr.exprs)) if subset is None else subset
+    which = "" if subset is None else f", for {len(keep)} of {len(pr.exprs)} conditions"
+    out = [f'"""Conditions of {model.name}, their derivatives in ({", ".join(variables)})'
+           f'{which}: generated by phasemap.bifurcation, do not edit."""', *pr.head]
     # every condition's body in its own branch of one function: numba's compile time is
     # about linear in the operations (the drawer's 62 conditions: 69 s in one function,
-    # 67-76 s in 4 to 62), so only fewer operations save time; the Hessian is not printed
+    # 67-76 s in 4 to 62), so only fewer operations save time: the conditions a slice
+    # cannot meet are left out (subset); the Hessian is not printed
     # (_hessian_by_differences)
     gradient = [f'@njit("{_GRADIENT}", cache=True, error_model="numpy")',
                 "def gradient(_k, _x, _g):",
                 '    """Condition k: (value, tie scale), its gradient into the arrays."""']
-    for k, (e, s) in enumerate(zip(exprs, scales)):
+    for i, k in enumerate(keep):
+        e, s = pr.exprs[k], pr.scales[k]
         grad = [sp.diff(e, v) for v in var_syms]
-        first = [("_c", e), ("_s", scale_of(s))] + [(f"_g[{i}]", d) for i, d in enumerate(grad)]
-        test = f"    {'if' if k == 0 else 'elif'} _k == {k}:"
-        gradient += [test, f"        _vscale = {vsc}"]
-        gradient += ["    " + line for line in body(first)] + ["        return _c, _s"]
+        first = [("_c", e), ("_s", pr.scale_of(s))] + [(f"_g[{j}]", d)
+                                                      for j, d in enumerate(grad)]
+        test = f"    {'if' if i == 0 else 'elif'} _k == {k}:"
+        gradient += [test, f"        _vscale = {pr.vsc}"]
+        gradient += ["    " + line for line in pr.body(first)] + ["        return _c, _s"]
     out += gradient + ["    return np.nan, np.nan", "", ""]
-    out += _hessian_by_differences([slot[v] for v in variables])
-    spec = [{"name": c.name, "branch": c.branch, "kind": c.kind, "rest_only": c.rest_only}
-            for c in conds]
-    out += [f"VARIABLES = {tuple(variables)!r}", f"SPEC = {json.dumps(spec)!r}", ""]
+    out += _hessian_by_differences([pr.slot[v] for v in variables])
+    out += [f"VARIABLES = {tuple(variables)!r}", f"SUBSET = {subset!r}", pr.spec, ""]
     return "\n".join(out)

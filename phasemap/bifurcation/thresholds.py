@@ -316,7 +316,7 @@ def _line(spec: Spec, conditions) -> Threshold | None:
     v = base.copy()
     for i, x in enumerate(samples):
         v[slot] = x
-        C.module.values(v, values[i], scales[i])
+        C.values(v, values[i], scales[i])
     # a sample within a condition's ties (|c| <= TOL scale) may be classed on either side:
     # the condition changes sign there as far as the classes can tell
     with np.errstate(invalid="ignore"):

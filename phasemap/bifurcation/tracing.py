@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import warnings
+import dataclasses
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
 from typing import Mapping
@@ -20,7 +21,7 @@ from phasemap.maps.layers import layers_for
 from phasemap.core.model import Model
 from phasemap.systems import get_model
 from phasemap.bifurcation import _trace as T
-from phasemap.bifurcation.conditions import Conditions, compiled
+from phasemap.bifurcation.conditions import Conditions, compiled, values_of
 
 #: Layers whose classes fill regions of a slice (``singular`` holds on curves).
 LAYERS = ("n_solutions", "stagnation", "contact_lost")
@@ -131,10 +132,18 @@ def make_slice(model, axes: Mapping, fixed: Mapping | None, conditions=None) -> 
             raise ValueError(f"{m.name}: fixed value {name} must be a scalar")
     full = _complete(m, variables, fixed, names, lo, hi)
     fixed = {n: float(v) for n, v in full.items() if n not in axes}
-    conds = compiled(m, tuple(names), conditions)
-    fns = T.functions(m, conds)
     base = m.input_vector({**fixed, names[0]: lo[0], names[1]: lo[1]})
-    return Slice(m, names[0], names[1], np.array(lo), np.array(hi), fixed, conds, fns, base)
+    # which conditions can bound a class here, read from the values alone; only their
+    # derivatives are compiled (a moving slice of the drawer needs 11 of its 62), and
+    # the trace's own test (phasemap.bifurcation._trace._applicable_all, the same
+    # function on the same arguments) never asks for another's
+    values = values_of(m, conditions)
+    probe = Slice(m, names[0], names[1], np.array(lo), np.array(hi), fixed, values,
+                  T.functions(m, values), base)
+    active, _ = _applicable(probe)
+    subset = None if active.all() else tuple(np.flatnonzero(active).tolist())
+    conds = compiled(m, tuple(names), conditions, subset)
+    return dataclasses.replace(probe, conds=conds, fns=T.functions(m, conds))
 
 
 def _complete(m: Model, variables: dict, fixed: dict, names: list, lo: list,
@@ -497,7 +506,7 @@ def _rescue_seeds(sl: Slice, active, bad, n: int) -> np.ndarray:
         for (u, w, out) in ((ua, wa, a), (ub, wb, b)):
             v[ix] = sl.lo[0] + u * (sl.hi[0] - sl.lo[0])
             v[iy] = sl.lo[1] + w * (sl.hi[1] - sl.lo[1])
-            C.module.values(v, out, s)
+            C.values(v, out, s)
         for k in np.flatnonzero(active):
             if a[k] * b[k] < 0:
                 t = a[k] / (a[k] - b[k])
