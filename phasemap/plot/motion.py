@@ -2,6 +2,7 @@ r"""Motion figures: phase curves and trajectories, their events marked by kind."
 
 from __future__ import annotations
 
+import warnings
 from typing import Sequence
 
 import matplotlib.colors as mcolors
@@ -22,6 +23,59 @@ from phasemap.plot.layout import (_annotate, _axes, _label_axis, legend_above, _
 from phasemap.plot.style import EVENT_MARKERS, GREY, PALE_GREY, _OI, _TERMINAL, style
 
 # --------------------------------------------------------------------------- motions
+
+#: The times at which a trajectory figure samples its motion's dense output.
+DENSE_POINTS = 600
+
+#: The options of :func:`phasemap.simulate` that a trajectory records in its attributes
+#: (``phasemap_<option>``), and that a dense re-run passes on.
+_RUN_OPTIONS = ("t_end", "rtol", "atol", "max_step", "max_steps", "max_events", "method",
+                "impact_law", "restitution", "painleve", "zeno_speed")
+
+
+def dense_motion(ds: xr.Dataset, times) -> xr.Dataset | None:
+    """The motion of ``ds`` again, saved at ``times`` from the integrator's dense output.
+
+    A trajectory saved at its steps (``simulate`` without ``t_eval``) holds only the
+    points where the integrator stopped; drawn through them, a curve has kinks between
+    steps (a rod's fall: 20 points over 0.53 s).  The motion is run again from the
+    model, initial state, parameters and options its attributes record, with
+    ``t_eval=times``; the run is deterministic, so it is the same motion, and the
+    re-run is accepted only where its steps, fate and events are those of ``ds``
+    (bit for bit).  None where that cannot be done: a batch, a model its name no longer
+    finds (a declaration file), or a re-run that differs.  ``ds`` is not changed.
+    """
+    a = ds.attrs
+    if a.get("phasemap_kind") != "trajectory" or "phasemap_model" not in a \
+            or ds["t"].dims != ("t",) or any(d not in ("t", "event") for d in ds.dims):
+        return None
+    from phasemap.motion.simulate import simulate
+
+    values = {k.split("_", 2)[2]: float(v) for k, v in a.items()
+              if k.startswith(("phasemap_initial_", "phasemap_fixed_"))}
+    options = {k: a[f"phasemap_{k}"] for k in _RUN_OPTIONS if f"phasemap_{k}" in a}
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            again = simulate(str(a["phasemap_model"]), t_eval=np.asarray(times, float),
+                             **options, **values)
+    except (ValueError, TypeError, KeyError, LookupError, MemoryError):
+        return None
+    same = all(again.attrs.get(k) == a.get(k) for k in ("n_steps", "end_reason")) and all(
+        k in again and again[k].shape == ds[k].shape
+        and np.array_equal(again[k].values, ds[k].values, equal_nan=True)
+        for k in ("event_t", "event_kind") if k in ds)
+    return again if same else None
+
+
+def _dense_times(ds: xr.Dataset, t: np.ndarray) -> np.ndarray:
+    """Times to draw a motion at: ``DENSE_POINTS`` evenly spaced over its span, with its
+    saved times (steps and events, where a curve has its corners)."""
+    extra = [t]
+    if "event_t" in ds:
+        ev = np.asarray(ds.event_t.values, float)
+        extra.append(ev[np.isfinite(ev) & (ev >= t.min()) & (ev <= t.max())])
+    return np.unique(np.concatenate([np.linspace(t.min(), t.max(), DENSE_POINTS), *extra]))
 
 
 def _event_flags(var: xr.DataArray) -> dict[int, str]:
@@ -132,7 +186,7 @@ def phase_curve_figure(ds: xr.Dataset, *, squared: bool = False, ax=None,
 
 def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = None,
                       phase_plane: bool = False, ax=None,
-                      size: str | float = "one_column") -> Figure:
+                      size: str | float = "one_column", dense: bool = True) -> Figure:
     r"""A trajectory: each state against time, one panel per state, events marked.
 
     Each event after the start is marked on every state's curve by its kind
@@ -144,6 +198,14 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
     :math:`\varphi` (the model's first coordinate and its velocity, from the
     attribute ``phasemap_phase_plane``; or ``states=(x, y)``) instead, where
     the start is marked too.
+
+    The curves follow the integrator's dense output, not straight lines between
+    the saved steps: with ``dense`` (the default) the motion is run again at
+    :data:`DENSE_POINTS` times and its saved ones (:func:`dense_motion`); where it
+    cannot be (a batch, a declaration file's model, a Dataset not made by
+    :func:`phasemap.simulate`), or with ``dense=False``, the saved points are drawn.
+    For a figure of a motion you keep, ``simulate(..., t_eval=...)`` saves it densely
+    once.
 
     Needs a coordinate ``t`` and state variables on it (categorical
     variables such as the active ``branch`` are not states); events, when
@@ -168,6 +230,21 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
     if not states:
         raise ValueError("this trajectory has no state variables on dimension 't'")
     t = _coord(ds, "t")
+    curve = {name: (t, np.asarray(ds[name].values, float)) for name in states}
+    if dense and t.size > 1:
+        times = _dense_times(ds, t)
+        again = dense_motion(ds, times)
+        if again is not None:
+            ta = np.asarray(again.t.values, float)
+            # through the saved points themselves (an event's state is exact there: a
+            # velocity at a reversal is 0, the dense output 3e-12)
+            at = np.minimum(np.searchsorted(ta, t), ta.size - 1)
+            hit = ta[at] == t
+            for name in states:
+                y = np.array(again[name].values, float)
+                y[at[hit]] = np.asarray(ds[name].values, float)[hit]
+                keep = np.isfinite(y)
+                curve[name] = (ta[keep], y[keep])
     has_events = "event_kind" in ds.variables and "event_t" in ds.variables
     if has_events:
         flags = _event_flags(ds.event_kind)
@@ -180,7 +257,9 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
         if phase_plane:
             (a,) = _axes(ax, 1, (width, width * (0.78 if width < 5 else 0.45)),
                          "trajectory_figure")
-            xs, ys = (np.asarray(ds[s].values, float) for s in states)
+            (_, xs), (_, ys) = (curve[s] for s in states)
+            if xs.shape != ys.shape:  # NaN in one state only: draw the saved points
+                xs, ys = (np.asarray(ds[s].values, float) for s in states)
             a.plot(xs, ys, color=_OI["black"], lw=1.0, zorder=3)
             _mark_events(a, ds, kinds, states[0], states[1], start=True)
             _zero_line(a, ys)
@@ -193,8 +272,8 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
                          "trajectory_figure", sharex=True)
             terminal = [tt for tt, k in zip(t_ev, kinds) if k in _TERMINAL]
             for a, name in zip(axes, states):
-                values = np.asarray(ds[name].values, float)
-                a.plot(t, values, color=_OI["black"], lw=1.0, zorder=3)
+                tc, values = curve[name]
+                a.plot(tc, values, color=_OI["black"], lw=1.0, zorder=3)
                 # a short panel: at least three labelled ticks (angles spanning pi or more
                 # get multiples of pi from _label_axis)
                 a.yaxis.set_major_locator(MaxNLocator(nbins=4, min_n_ticks=3))
@@ -305,7 +384,18 @@ def outline_figure(ds: xr.Dataset, *, times: Sequence[float] | None = None, ax=N
         raise ValueError(f"times must be a 1-D sequence of times in [{t.min():g}, "
                          f"{t.max():g}], the motion's")
 
+    # the outlines at their times from the dense output (dense_motion), not interpolated
+    # straight between steps, which shortens a turning rod; the saved points elsewhere
+    # (an impulse at its event, which the saved points hold)
+    dense_t = np.unique(times)
+    again = dense_motion(ds, dense_t)
+
     def at(name, tt):
+        if again is not None:
+            ta = again.t.values
+            i = np.searchsorted(ta, tt)
+            if i < ta.size and ta[i] == tt and np.isfinite(again[name].values[i]):
+                return float(again[name].values[i])
         return np.interp(tt, t, np.asarray(ds[name].values, float))
 
     width = width_of(size)
