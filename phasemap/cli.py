@@ -158,9 +158,9 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
         "an hour it asks for --yes.")
     p.add_argument("model", metavar="MODEL", help=models)
     p.add_argument("--axis", action="append", default=[], metavar="NAME=START:STOP:COUNT",
-                   help="an axis of COUNT values from START to STOP; STOP may be below "
-                   "START (a descending axis); START and STOP may be arithmetic with pi "
-                   "(pi/2, -2*pi/3); repeat for more axes")
+                   help="an axis of COUNT values from START up to STOP (every range on "
+                   "the command line is written low end first); START and STOP may be "
+                   "arithmetic with pi (pi/2, -2*pi/3); repeat for more axes")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="fix a state variable or parameter; VALUE may be arithmetic with pi "
                    "(repeatable)")
@@ -442,6 +442,13 @@ def _parse_axis(item: str, model=None) -> tuple[str, object]:
     if count > 1 and start == stop:
         raise ValueError(f"--axis {name}: START = STOP = {start:g} with COUNT {count} would "
                          "repeat one value; give COUNT 1, or --set the value")
+    if start > stop:
+        # one rule for every command: a range is written low end first (threshold's --over
+        # and --along, boundaries' --axis refuse the other order too); an atlas's values
+        # still increase along its axis, which a plot may turn round
+        raise ValueError(f"--axis {name}: START {start:g} is above STOP {stop:g}; every range "
+                         f"on the command line is written low end first: "
+                         f"{name}={parts[1]}:{parts[0]}:{parts[2]}")
     return name, np.linspace(start, stop, count)
 
 

@@ -558,11 +558,17 @@ def test_an_axis_that_repeats_a_value_is_refused(tmp_path):
                    "START = STOP = 0.5 with COUNT 3 would repeat one value")
     assert quiet("atlas", "ladder", "--axis", "phi=0.5:0.5:1", "-o", tmp_path / "one.nc"
                ).returncode == 0
-    r = quiet("atlas", "ladder", "--axis", "phi=1.5:0:4", "-o", tmp_path / "down.nc")
-    assert r.returncode == 0, r.stderr
-    with xr.open_dataset(tmp_path / "down.nc") as ds:
-        assert list(ds.phi.values) == [1.5, 1.0, 0.5, 0.0]
-    assert "descending" in quiet("atlas", "--help").stdout
+    # one rule for every command (issue 41 item 7): a range is written low end first
+    one_line_error(quiet("atlas", "ladder", "--axis", "phi=1.5:0:4", "-o", tmp_path / "d.nc"),
+                   "START 1.5 is above STOP 0; every range on the command line is written "
+                   "low end first: phi=0:1.5:4")
+    assert not (tmp_path / "d.nc").exists()
+    one_line_error(quiet("threshold", "painleve_rod", "f", "--over", "theta=1.5:0.1", "--set",
+                         "xdot=-1", "--set", "omega=0"), "lo < hi")
+    one_line_error(quiet("boundaries", "painleve_rod", "--axis", "theta=1.5:0.2", "--axis",
+                         "f=0:3", "--set", "xdot=-1", "--set", "omega=0", "-o",
+                         tmp_path / "b.nc"), "lo < hi")
+    assert "low end first" in quiet("atlas", "--help").stdout
     for axis, words in (([0.1, 0.1, 0.2], "repeats a value"),
                         ([0.1, 0.3, 0.2], "goes back and forth")):
         with pytest.raises(ValueError, match=words):
