@@ -114,6 +114,39 @@ def test_ladder_lands_on_its_top_plastically():
     assert ds.attrs["end_reason"] == "horizon"
 
 
+def test_ladder_bounces_on_its_top_and_comes_to_rest():
+    """The same landing with restitution e = 0.5 (issue 38: several contacts with e > 0):
+    the foot, closed and sliding, is held; the top takes P = m (1 + e) v / 3, v = 2 l omega
+    (its effective mass with the foot held is m / 3), loses (1 - e^2) of 3.893867 J and
+    bounces.  Each bounce lasts e times the one before, each loses e^2 times the energy,
+    and the impacts accumulate where that geometric series ends: a zeno event there, then
+    the ladder lies flat."""
+    S = _ladder_with_top_on_floor()
+    e, m, l = 0.5, 1.0, 0.5
+    ds = phasemap.simulate(S, t_end=3.0, rtol=1e-12, phi=math.radians(30), omega=0.0,
+                           xc=0.25, yc=0.5 * math.cos(math.radians(30)), f=0.0, l=l,
+                           restitution=e)
+    kinds = ds.event_kind.values.tolist()
+    assert kinds[:3] == [ev.START, ev.LIFTOFF, ev.IMPACT] and ev.ZENO in kinds
+    impacts = [i for i, k in enumerate(kinds) if k == ev.IMPACT]
+    assert 10 < len(impacts) < 60                                 # bounded work
+    i = impacts[0]
+    v = 2 * l * float(ds.event_omega[i])
+    assert float(ds.event_impulse_n[i]) == pytest.approx(m * (1 + e) * v / 3, rel=1e-9)
+    assert float(ds.event_dKE[i]) == pytest.approx(-(1 - e * e) * 3.893867, abs=5e-7)
+    assert float(ds.event_dKE[i]) == pytest.approx(-(1 - e * e) * m * v * v / 6, rel=1e-9)
+    t = ds.event_t.values[impacts]
+    ratio = np.diff(t)[1:] / np.diff(t)[:-1]
+    assert np.all(np.abs(ratio - e) <= 2e-3) and abs(ratio[-1] - e) <= 1e-6
+    loss = ds.event_dKE.values[impacts]
+    assert np.allclose(loss[1:5] / loss[:4], e * e, rtol=1e-2)
+    t_zeno = float(ds.event_t[kinds.index(ev.ZENO)])
+    assert abs(t_zeno - (t[-1] + (t[-1] - t[-2]) * e / (1 - e))) <= 1e-9
+    after = ds.t.values > t_zeno
+    assert np.abs(ds.omega.values[after]).max() <= 1e-9
+    assert np.abs(ds.phi.values[after] - math.pi / 2).max() <= 1e-9
+
+
 def test_bouncing_ball_comes_to_rest_at_the_zeno_time():
     e, h0 = 0.5, 1.0
     ds = phasemap.simulate(BALL, t_end=3.0, rtol=1e-12, restitution=e, x=0.0, y=h0,

@@ -270,6 +270,42 @@ def test_random_simultaneous_impacts_have_a_solution_that_keeps_the_laws():
             assert s.dKE <= 1e-9
 
 
+def test_simultaneous_impacts_with_restitution():
+    """Moreau's generalised Newton law at several contacts (issue 38: e > 0 was ignored
+    where another contact was closed).  A uniform rod (m = 1, half-length 1) lying flat
+    with end A on the floor (v_n = 0) and end B landing at v: with A held, B's effective
+    mass is m / 3, so P_B = m (1 + e) v / 3, P_A = P_B / 2, B leaves at e v, A stays, and
+    (1 - e^2) m v^2 / 6 is lost.  Random frictionless cases never gain energy, and each
+    contact ends at v_n = -e v_n before where it takes an impulse."""
+    from phasemap.motion.impact import simultaneous
+
+    M = np.diag([1.0, 1.0, 1 / 3])
+    J = np.array([[0, 1, -1.0], [1, 0, 0], [0, 1, 1.0], [1, 0, 0]])  # n_A, t_A, n_B, t_B
+    W = J @ np.linalg.solve(M, J.T)
+    for e, v in ((0.0, 1.0), (0.5, 1.0), (1.0, 2.0)):
+        (s,) = simultaneous(W, [0.0, 0.0, -v, 0.0], [0.0, 0.0], e=e)
+        assert np.allclose(s.P, [(1 + e) * v / 6, 0.0, (1 + e) * v / 3, 0.0], atol=1e-12)
+        assert np.allclose(s.v[[0, 2]], [0.0, e * v], atol=1e-12)
+        assert s.dKE == pytest.approx(-(1 - e * e) * v * v / 6, abs=1e-12)
+    rng = np.random.default_rng(8)
+    for _ in range(60):
+        Jr = rng.normal(size=(4, 5))
+        Wr = Jr @ np.diag(rng.uniform(0.2, 2.0, 5)) @ Jr.T
+        v = np.array([-rng.uniform(0.1, 2), rng.normal(), -rng.uniform(0, 2), rng.normal()])
+        e = rng.uniform(0, 1, 2)
+        sols = simultaneous(Wr, v, [0.0, 0.0], e=e)
+        assert sols
+        for s in sols:
+            assert s.dKE <= 1e-9
+            for c, mode in enumerate(s.modes):
+                if mode != "open":
+                    assert s.v[2 * c] == pytest.approx(-e[c] * v[2 * c], abs=1e-9)
+                else:
+                    assert s.v[2 * c] >= -e[c] * v[2 * c] - 1e-12
+    with pytest.raises(ValueError, match=r"e must be in \[0, 1\]"):
+        simultaneous(W, [0.0, 0.0, -1.0, 0.0], [0.0, 0.0], e=1.5)
+
+
 def test_simulate_goes_on_through_the_rods_impact_without_collision():
     """The Painleve rod (m = 1, l = 1, f = 1.5) at theta = arctan 2, at rest but for
     x_A' = -1 has no solution for its accelerations; simulate applies the impact without

@@ -303,21 +303,28 @@ class Simultaneous:
     continuum: bool = False
 
 
-def simultaneous(W, v_before, mu, *, tol: float = 1e-12) -> list[Simultaneous]:
-    """Every inelastic (Moreau) impulse-level solution of k contacts closing at once.
+def simultaneous(W, v_before, mu, *, e=0.0, tol: float = 1e-12) -> list[Simultaneous]:
+    """Every impulse-level solution of k contacts closing at once, by Moreau's law
+    (inelastic), or with restitution ``e`` by Moreau's generalised Newton law.
 
     ``W`` is the 2k x 2k Delassus matrix in (n1, t1, n2, t2, ...), ``v_before`` the 2k
-    contact velocities before, ``mu`` the k friction coefficients.  Each contact ends
-    *open* (no impulse, v_n >= 0), *stuck* (v_n = v_t = 0, |P_t| <= mu P_n), or
-    *slipping* either way (v_n = 0, P_t = -s mu P_n with s = sgn v_t after); the 4^k
-    combinations are each a linear system, solved and kept where every inequality
-    holds (within ``tol`` relative).  The count is what the acceleration level counts
-    too: for one body it is one (an inelastic impact always has a solution, Anitescu
-    and Potra 1997); more than one is an indeterminate impact, none cannot happen for a
-    positive definite W.  A singular W (more contact rows than freedoms, such as a
-    rod landing flat on both ends) can leave the impulses undetermined: such a mode
-    combination is reported once as a continuum, with its least-norm impulses.
-    Solutions equal to ``tol`` are reported once.
+    contact velocities before, ``mu`` the k friction coefficients, ``e`` the
+    coefficients of restitution (one for all, or one per contact, in [0, 1]).  With
+    w_c = -e_c min(v_n before, 0) (a contact that approaches rebounds; a closed one,
+    v_n = 0 before, does not), each contact ends *open* (no impulse, v_n >= w), *stuck*
+    (v_n = w, v_t = 0, |P_t| <= mu P_n), or *slipping* either way (v_n = w, P_t = -s mu
+    P_n with s = sgn v_t after): 0 <= P_n is complementary to v_n after + e v_n before
+    >= 0 (Glocker 2004; Pfeiffer and Glocker 1996).  The 4^k combinations are each a
+    linear system, solved and kept where every inequality holds (within ``tol``
+    relative).  The count is what the acceleration level counts too: for one body it is
+    one (an inelastic impact always has a solution, Anitescu and Potra 1997); more than
+    one is an indeterminate impact, none cannot happen for a positive definite W.  A
+    singular W (more contact rows than freedoms, such as a rod landing flat on both
+    ends) can leave the impulses undetermined: such a mode combination is reported once
+    as a continuum, with its least-norm impulses.  Solutions equal to ``tol`` are
+    reported once.  Without friction the generalised Newton law never gains energy
+    for e <= 1; with friction it can, where a slip stops or reverses (as Newton's law
+    at one contact): ``dKE`` says so.
 
     >>> W = np.array([[2.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 1.0],
     ...               [1.0, 0.0, 2.0, 0.0], [0.0, 1.0, 0.0, 1.0]]) + np.eye(4) * 0.5
@@ -333,6 +340,14 @@ def simultaneous(W, v_before, mu, *, tol: float = 1e-12) -> list[Simultaneous]:
                          f"for {k} friction coefficients, got {W.shape} and {v0.size}")
     if not (np.all(np.isfinite(W)) and np.all(np.isfinite(v0)) and np.all(mu >= 0)):
         raise ValueError("simultaneous: W and v_before must be finite and mu >= 0")
+    try:
+        e = np.broadcast_to(np.asarray(e, dtype=float), (k,))
+    except (TypeError, ValueError):
+        raise ValueError(f"simultaneous: e must be one number or {k}, got {e!r}") from None
+    if not np.all((e >= 0.0) & (e <= 1.0)):
+        raise ValueError(f"simultaneous: e must be in [0, 1], got {e.tolist()}")
+    w = np.zeros(2 * k)
+    w[0::2] = -e * np.minimum(v0[0::2], 0.0)   # the normal velocity a closed contact ends at
     if not np.allclose(W, W.T) or np.linalg.eigvalsh(W).min() < -1e-12 * np.abs(W).max():
         raise ValueError("simultaneous: W must be symmetric positive semi-definite")
     scale = max(float(np.abs(v0).max()), 1e-300)
@@ -346,8 +361,8 @@ def simultaneous(W, v_before, mu, *, tol: float = 1e-12) -> list[Simultaneous]:
             n, t = 2 * c, 2 * c + 1
             if mode == 0:  # open: no impulse
                 A[n, n] = A[t, t] = 1.0
-            else:  # closed: v_n after = 0
-                A[n], b[n] = W[n], -v0[n]
+            else:  # closed: v_n after = w (0 for an inelastic impact)
+                A[n], b[n] = W[n], w[n] - v0[n]
                 if mode == 1:  # stuck: v_t after = 0
                     A[t], b[t] = W[t], -v0[t]
                 else:  # slipping: P_t = -s mu P_n
@@ -365,7 +380,7 @@ def simultaneous(W, v_before, mu, *, tol: float = 1e-12) -> list[Simultaneous]:
         for c, mode in enumerate(combo):
             n, t = 2 * c, 2 * c + 1
             if mode == 0:
-                ok &= v[n] >= -tol * scale
+                ok &= v[n] >= w[n] - tol * scale
             else:
                 ok &= P[n] >= -tol * pscale
                 if mode == 1:

@@ -178,8 +178,9 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     impact_law, restitution, painleve, zeno_speed:
         how a declared system's motion goes on through contact changes
         (:mod:`phasemap.motion.hybrid`): the impact law (``"stronge"``, the default,
-        ``"poisson"`` or ``"newton"``, which can gain energy where a slip reverses), its
-        coefficient of restitution (default 0: plastic), what follows where the
+        ``"poisson"`` or ``"newton"``, which can gain energy where a slip reverses, for
+        a contact that lands alone; where others are closed, Moreau's generalised Newton
+        law), its coefficient of restitution (default 0: plastic), what follows where the
         accelerations have two solutions (``"liftoff"``, the default, ``"iwc"`` or
         ``"stop"``), and the rebound speed below which the impacts of one contact are
         taken to accumulate (Zeno, default 1e-6).

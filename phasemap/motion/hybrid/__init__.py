@@ -25,7 +25,8 @@ rooted on the dense output of DOP853 (scipy's, stepped here) to a few ulps in ti
   step, where ``g'`` turns from negative to positive, is found too).  With ``g' < 0``
   it is an **impact**: one contact's is integrated in its normal impulse
   (:func:`phasemap.motion.impact.impact`, the law chosen), several contacts at once take
-  the inelastic (Moreau) impulse-level solution (:func:`phasemap.motion.impact.simultaneous`);
+  Moreau's impulse-level solution, inelastic or with the restitution by his generalised
+  Newton law (:func:`phasemap.motion.impact.simultaneous`);
   with ``g' = 0`` the contact **recontacts** without an impulse;
 * a coordinate's bound or a declared domain condition: the motion leaves the model
   (``left_domain``).

@@ -612,7 +612,9 @@ class Motion:
         K = closed + [c]
         JK = np.concatenate([J[d] for d in K])
         W = JK @ np.linalg.solve(M, JK.T)
-        sols = simultaneous(W, np.concatenate([v[d] for d in K]), mu[K])
+        # Moreau's generalised Newton law: the landing contact rebounds with e times its
+        # approach; the closed ones (v_n = 0 before) take impulses and stay
+        sols = simultaneous(W, np.concatenate([v[d] for d in K]), mu[K], e=o.restitution)
         if len(sols) != 1:
             self._end(t, q, u, modes, ev.INDETERMINATE, c)
             return None
@@ -620,8 +622,18 @@ class Motion:
         u = u + np.linalg.solve(M, JK.T @ s.P)
         j = 2 * K.index(c)
         self.rec.event(t, ev.IMPACT, c, y, modes, (s.P[j], s.P[j + 1], s.dKE))
-        now = [d for d, mode in zip(K, s.modes) if mode != "open"]
+        rebound = s.v[j] > TOL * sc[0]
+        now = [d for i, (d, mode) in enumerate(zip(K, s.modes))
+               if mode != "open" and not (d == c and rebound)]
         q, u = self.project(q, u, now)
+        if rebound and s.v[j] < o.zeno_speed and o.restitution < 1.0:
+            free = self.solve(q, u, [m if d in now else OPEN for d, m in enumerate(modes)])
+            if free is not None and free[3][c, 0] < 0.0:
+                # it bounces on the contacts that hold: the impacts accumulate
+                from phasemap.motion.impact import zeno_time
+
+                self.zeno_until = zeno_time(t, s.v[j], free[3][c, 0], o.restitution)
+                self.zeno_contact = c
         return self._decide(t, q, u, modes, QUIET, c, {})
 
     def _zeno(self, t, q, u, modes):
