@@ -291,7 +291,8 @@ def test_the_accessor_draws_the_figure_of_each_kind(elliptic_map, hinge_profile)
     assert legend_texts(fig.axes[0]) == ["start", "reversal", "rest"]
     fig = trajectory_dataset().phasemap.plot()
     assert len(fig.axes) == 4
-    assert legend_texts(fig.axes[0]) == ["reversal", "stick", "slip", "no solution"]
+    assert legend_texts(fig.axes[0]) == ["reversal", "stick", "slip", "end of the motion",
+                                        "no solution"]
 
 
 # --------------------------------------------------------------------------- maps
@@ -597,6 +598,8 @@ def test_trajectory_marks_events_and_the_terminal_one(tmp_path):
         assert len(dashed) == 1 and dashed[0].get_xdata()[0] == pytest.approx(3.3)
     markers = {l.get_label(): l for l in axes[0].get_legend().legend_handles}
     assert markers["no solution"].get_markersize() > markers["stick"].get_markersize()
+    # the dashed line has its legend entry (issue 41, the third referee pass)
+    assert markers["end of the motion"].get_linestyle() == "--"
     assert_legend_outside(fig, axes[0])
     render(fig, tmp_path)
 

@@ -291,7 +291,13 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
             if len(axes) > 1:
                 axes[0].figure.align_ylabels(axes)
         shown = [k for k in kinds if phase_plane or k != "start"]
-        legend_above(axes[0], _event_handles(shown))
+        handles = _event_handles(shown)
+        if not phase_plane and any(k in _TERMINAL for k in kinds):
+            # the dashed line drawn at the end across the panels says what it is
+            # (before the terminal event's marker, which stays last and says why)
+            handles.insert(max(len(handles) - 1, 0), Line2D(
+                [], [], color=GREY, lw=0.6, ls="--", label="end of the motion"))
+        legend_above(axes[0], handles)
         if len(axes) > 1:
             label_panels(axes)
         _annotate(axes, fixed_values_text(ds, width * 0.97 if ax is None and len(axes) > 1
