@@ -673,6 +673,26 @@ def test_a_trajectory_is_drawn_through_its_dense_output(tmp_path):
     render(fig, tmp_path, "dense")
 
 
+def test_the_dense_curve_keeps_every_saved_point_and_its_jumps():
+    """An impact is saved twice at its time (before, after), the dense re-run once: the
+    drawn curve holds both, so it jumps there, with the re-run's samples between; a
+    variable the re-run does not give as the Dataset holds it (converted after the run)
+    keeps its saved points."""
+    from phasemap.plot.motion import _through_saved
+
+    t = np.array([0.0, 1.0, 1.0, 2.0])
+    ds = xr.Dataset({"v": ("t", [0.0, -1.0, 0.5, 0.0]), "deg": ("t", [0.0, 57.0, 57.0, 90.0])},
+                    coords={"t": t})
+    again = xr.Dataset({"v": ("t", [0.0, -0.5, -1.0, 0.3, 0.0]),
+                        "deg": ("t", [0.0, 0.5, 1.0, 1.2, 1.5])},
+                       coords={"t": [0.0, 0.5, 1.0, 1.5, 2.0]})
+    got = _through_saved(ds, again, t, ["v", "deg"])
+    assert list(got) == ["v"]
+    tt, v = got["v"]
+    assert tt.tolist() == [0.0, 0.5, 1.0, 1.0, 1.5, 2.0]
+    assert v.tolist() == [0.0, -0.5, -1.0, 0.5, 0.3, 0.0]
+
+
 # --------------------------------------------------------------------------- benchmarks
 
 

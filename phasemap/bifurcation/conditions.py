@@ -180,6 +180,10 @@ class Conditions:
         self.module = module
         self.values = values_module.values
         self.subset = subset
+        if module is not None and module.SPEC != values_module.SPEC:
+            raise RuntimeError(f"{model.name}: the kernel cache's conditions modules "
+                               f"{values_module.__name__} and {module.__name__} list "
+                               "different conditions; clear the cache (phasemap cache clear)")
         spec = json.loads(values_module.SPEC)
         self.names = tuple(c["name"] for c in spec)
         self.branches = tuple(c["branch"] for c in spec)

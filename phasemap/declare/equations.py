@@ -357,7 +357,7 @@ class Equations:
                     dtype=float), (k,))
             if np.all(np.isfinite(out)):
                 return np.array(out)
-        except (TypeError, ValueError, ZeroDivisionError, NameError):
+        except Exception:  # noqa: BLE001 - sympy's own evaluation below is the reference
             pass
         return np.array([complex(sp.N(e.xreplace(r))).real for r in rows])
 

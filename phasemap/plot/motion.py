@@ -51,10 +51,10 @@ def dense_motion(ds: xr.Dataset, times) -> xr.Dataset | None:
         return None
     from phasemap.motion.simulate import simulate
 
-    values = {k.split("_", 2)[2]: float(v) for k, v in a.items()
-              if k.startswith(("phasemap_initial_", "phasemap_fixed_"))}
     options = {k: a[f"phasemap_{k}"] for k in _RUN_OPTIONS if f"phasemap_{k}" in a}
     try:
+        values = {k.split("_", 2)[2]: float(v) for k, v in a.items()
+                  if k.startswith(("phasemap_initial_", "phasemap_fixed_"))}
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             again = simulate(str(a["phasemap_model"]), t_eval=np.asarray(times, float),
@@ -66,6 +66,37 @@ def dense_motion(ds: xr.Dataset, times) -> xr.Dataset | None:
         and np.array_equal(again[k].values, ds[k].values, equal_nan=True)
         for k in ("event_t", "event_kind") if k in ds)
     return again if same else None
+
+
+def _through_saved(ds: xr.Dataset, again: xr.Dataset, t: np.ndarray, names) -> dict:
+    """Per name, ``(times, values)``: the dense re-run's samples at the times that are not
+    saved, and every saved point itself (an event's state is exact there, and an impact
+    is saved twice at its time, before and after: the curve jumps there), in time
+    order.  A name the re-run does not give as the Dataset holds it at its saved steps
+    (a variable added or converted after the run) keeps its saved points."""
+    ta = np.asarray(again.t.values, float)
+    fresh = ~np.isin(ta, t)
+    order = np.argsort(np.concatenate([ta[fresh], t]), kind="stable")
+    once = np.flatnonzero(np.r_[True, np.diff(t) > 0] & np.r_[np.diff(t) > 0, True])
+    at = np.minimum(np.searchsorted(ta, t[once]), ta.size - 1)
+    ok = ta[at] == t[once]
+    out = {}
+    for name in names:
+        saved = np.asarray(ds[name].values, float)
+        if name not in again or again[name].dims != ("t",):
+            continue
+        y = np.asarray(again[name].values, float)
+        # the re-run's values at the steps saved once must be the Dataset's there (to
+        # rounding: the dense output at a step's end is its state)
+        a, b = y[at[ok]], saved[once[ok]]
+        both = np.isfinite(a) & np.isfinite(b)
+        scale = np.max(np.abs(b[both]), initial=0.0) + 1e-300
+        if not (np.array_equal(np.isfinite(a), np.isfinite(b))
+                and np.all(np.abs(a[both] - b[both]) <= 1e-9 * scale)):
+            continue
+        out[name] = (np.concatenate([ta[fresh], t])[order],
+                     np.concatenate([y[fresh], saved])[order])
+    return out
 
 
 def _dense_times(ds: xr.Dataset, t: np.ndarray) -> np.ndarray:
@@ -235,16 +266,8 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
         times = _dense_times(ds, t)
         again = dense_motion(ds, times)
         if again is not None:
-            ta = np.asarray(again.t.values, float)
-            # through the saved points themselves (an event's state is exact there: a
-            # velocity at a reversal is 0, the dense output 3e-12)
-            at = np.minimum(np.searchsorted(ta, t), ta.size - 1)
-            hit = ta[at] == t
-            for name in states:
-                y = np.array(again[name].values, float)
-                y[at[hit]] = np.asarray(ds[name].values, float)[hit]
-                keep = np.isfinite(y)
-                curve[name] = (ta[keep], y[keep])
+            for name, merged in _through_saved(ds, again, t, states).items():
+                curve[name] = merged
     has_events = "event_kind" in ds.variables and "event_t" in ds.variables
     if has_events:
         flags = _event_flags(ds.event_kind)
@@ -257,8 +280,8 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
         if phase_plane:
             (a,) = _axes(ax, 1, (width, width * (0.78 if width < 5 else 0.45)),
                          "trajectory_figure")
-            (_, xs), (_, ys) = (curve[s] for s in states)
-            if xs.shape != ys.shape:  # NaN in one state only: draw the saved points
+            (tx, xs), (ty, ys) = (curve[s] for s in states)
+            if tx.shape != ty.shape or np.any(tx != ty):  # one state dense, one not
                 xs, ys = (np.asarray(ds[s].values, float) for s in states)
             a.plot(xs, ys, color=_OI["black"], lw=1.0, zorder=3)
             _mark_events(a, ds, kinds, states[0], states[1], start=True)
@@ -391,13 +414,13 @@ def outline_figure(ds: xr.Dataset, *, times: Sequence[float] | None = None, ax=N
                          f"{t.max():g}], the motion's")
 
     # the outlines at their times from the dense output (dense_motion), not interpolated
-    # straight between steps, which shortens a turning rod; the saved points elsewhere
-    # (an impulse at its event, which the saved points hold)
+    # straight between steps, which shortens a turning rod; at a saved time (an event's)
+    # the saved point after it, as before (the reactions of a contact an impact closed)
     dense_t = np.unique(times)
     again = dense_motion(ds, dense_t)
 
     def at(name, tt):
-        if again is not None:
+        if again is not None and not np.any(t == tt):   # a saved time: its saved point
             ta = again.t.values
             i = np.searchsorted(ta, tt)
             if i < ta.size and ta[i] == tt and np.isfinite(again[name].values[i]):

@@ -626,7 +626,7 @@ class Motion:
         now = [d for i, (d, mode) in enumerate(zip(K, s.modes))
                if mode != "open" and not (d == c and rebound)]
         q, u = self.project(q, u, now)
-        if rebound and s.v[j] < o.zeno_speed and o.restitution < 1.0:
+        if rebound and 0.0 < o.restitution < 1.0 and s.v[j] < o.zeno_speed:
             free = self.solve(q, u, [m if d in now else OPEN for d, m in enumerate(modes)])
             if free is not None and free[3][c, 0] < 0.0:
                 # it bounces on the contacts that hold: the impacts accumulate
