@@ -356,13 +356,13 @@ def test_above_a_billion_cells_asks_for_yes(tmp_path):
 
 
 def test_the_estimate_is_printed_and_the_blocks_equal_the_eager_atlas(tmp_path):
-    args = ["atlas", "hinge_pendulum", "--axis", "phi=3:-3:37", "--axis", "omega=-6:6:9",
+    args = ["atlas", "hinge_pendulum", "--axis", "phi=-3:3:37", "--axis", "omega=-6:6:9",
             "--layers", "fate,t_final,phi_rest,n_solutions", "--option", "t_end=2"]
     r = quiet(*args, "--chunk-cells", "10", "-o", tmp_path / "blocks.nc")
     assert r.returncode == 0, r.stderr
     assert "333 cells (37 phi x 9 omega)" in r.stderr and "typical" in r.stderr
     assert "time about" in r.stderr
-    scene = phasemap.Scene("hinge_pendulum", axes={"phi": np.linspace(3, -3, 37),
+    scene = phasemap.Scene("hinge_pendulum", axes={"phi": np.linspace(-3, 3, 37),
                                                    "omega": np.linspace(-6, 6, 9)},
                            layers=["fate", "t_final", "phi_rest", "n_solutions"],
                            options={"t_end": 2.0})
