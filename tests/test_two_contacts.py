@@ -286,18 +286,19 @@ def test_the_peg_rods_boundaries_across_omega_zero(peg_rod):
             == b.class_right.values[p]
 
 
-@pytest.mark.parametrize("seed, traced", [(1, True), (4, False)])
-def test_random_barrows_cell_by_cell_and_traced(seed, traced):
+@pytest.mark.parametrize("seed", [1])
+def test_random_barrows_cell_by_cell_and_traced(seed):
     """Random two-contact declarations with a rolling contact (tests/unseen.py: a wheel
     rolling with rolling friction, its handles sliding on the floor, of random mass
     distribution, length and motor torque): a raster over (omega, f) through omega = 0,
-    cell by cell against the generalised-coordinate enumeration (tests/oracles.py); then,
-    for one of them (``traced``: the trace costs 2 min of sympy and compilation on a fresh
-    clone), the boundaries of that slice, every class change of the check raster
-    explained (or boundaries raises), and each piece's side classes against the
-    enumeration.  Both slices hold no solution (the Painleve paradox where the handles are
-    pushed ahead: omega < 0, f large), the wheel lifting off, rolling either way, and
-    the statically indeterminate rest (five reactions, four equations)."""
+    cell by cell against the generalised-coordinate enumeration (tests/oracles.py); then
+    the boundaries of that slice, every class change of the check raster explained (or
+    boundaries raises), and each piece's side classes against the enumeration.  The slice
+    holds no solution (the Painleve paradox where the handles are pushed ahead: omega < 0,
+    f large), the wheel lifting off, rolling either way, and the statically indeterminate
+    rest (five reactions, four equations).  One seed: a declaration costs 2 to 4 min of
+    sympy and compilation on a fresh clone (seed 4 agreed on every cell of its raster
+    too, in the CI replays of this change)."""
     system, st = unseen.barrow(seed)
     model = system.model
     phi = float(np.random.default_rng(seed).uniform(-np.pi, np.pi))
@@ -321,8 +322,6 @@ def test_random_barrows_cell_by_cell_and_traced(seed, traced):
                 wrong.append((omega, f))
     assert n > 400 and not wrong, wrong[:3]
     assert len(seen) >= 3, seen          # the slice holds several classes
-    if not traced:
-        return
     b = phasemap.boundaries(model, {"omega": (-2.0, 2.0), "f": (0.0, 6.0)}, fixed={"phi": phi})
     assert b.sizes["piece"] >= 2 and np.all(b.point_residual.values <= 1e-10)
     _sides_agree(b, "omega", (-2.0, 2.0), (0.0, 6.0), lambda om, f: oracle(om, f).n_solutions)
