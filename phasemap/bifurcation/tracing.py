@@ -5,8 +5,7 @@ from __future__ import annotations
 import json
 import math
 import warnings
-import dataclasses
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property, lru_cache
 from typing import Mapping
 
@@ -143,7 +142,7 @@ def make_slice(model, axes: Mapping, fixed: Mapping | None, conditions=None) -> 
     active, _ = _applicable(probe)
     subset = None if active.all() else tuple(np.flatnonzero(active).tolist())
     conds = compiled(m, tuple(names), conditions, subset)
-    return dataclasses.replace(probe, conds=conds, fns=T.functions(m, conds))
+    return replace(probe, conds=conds, fns=T.functions(m, conds))
 
 
 def _complete(m: Model, variables: dict, fixed: dict, names: list, lo: list,

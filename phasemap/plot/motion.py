@@ -27,11 +27,6 @@ from phasemap.plot.style import EVENT_MARKERS, GREY, PALE_GREY, _OI, _TERMINAL, 
 #: The times at which a trajectory figure samples its motion's dense output.
 DENSE_POINTS = 600
 
-#: The options of :func:`phasemap.simulate` that a trajectory records in its attributes
-#: (``phasemap_<option>``), and that a dense re-run passes on.
-_RUN_OPTIONS = ("t_end", "rtol", "atol", "max_step", "max_steps", "max_events", "method",
-                "impact_law", "restitution", "painleve", "zeno_speed")
-
 
 def dense_motion(ds: xr.Dataset, times) -> xr.Dataset | None:
     """The motion of ``ds`` again, saved at ``times`` from the integrator's dense output.
@@ -49,9 +44,15 @@ def dense_motion(ds: xr.Dataset, times) -> xr.Dataset | None:
     if a.get("phasemap_kind") != "trajectory" or "phasemap_model" not in a \
             or ds["t"].dims != ("t",) or any(d not in ("t", "event") for d in ds.dims):
         return None
-    from phasemap.motion.simulate import simulate
+    import dataclasses
 
-    options = {k: a[f"phasemap_{k}"] for k in _RUN_OPTIONS if f"phasemap_{k}" in a}
+    from phasemap.motion.hybrid.results import DEFAULTS
+    from phasemap.motion.simulate import Options, simulate
+
+    # the options a trajectory records (phasemap_<option>): the integrator's settings and
+    # the contact options, as simulate writes them
+    names = [f.name for f in dataclasses.fields(Options)] + list(DEFAULTS)
+    options = {k: a[f"phasemap_{k}"] for k in names if f"phasemap_{k}" in a}
     try:
         values = {k.split("_", 2)[2]: float(v) for k, v in a.items()
                   if k.startswith(("phasemap_initial_", "phasemap_fixed_"))}
@@ -82,9 +83,9 @@ def _through_saved(ds: xr.Dataset, again: xr.Dataset, t: np.ndarray, names) -> d
     ok = ta[at] == t[once]
     out = {}
     for name in names:
-        saved = np.asarray(ds[name].values, float)
         if name not in again or again[name].dims != ("t",):
             continue
+        saved = np.asarray(ds[name].values, float)
         y = np.asarray(again[name].values, float)
         # the re-run's values at the steps saved once must be the Dataset's there (to
         # rounding: the dense output at a step's end is its state)

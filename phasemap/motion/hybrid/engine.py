@@ -623,8 +623,7 @@ class Motion:
         j = 2 * K.index(c)
         self.rec.event(t, ev.IMPACT, c, y, modes, (s.P[j], s.P[j + 1], s.dKE))
         rebound = s.v[j] > TOL * sc[0]
-        now = [d for i, (d, mode) in enumerate(zip(K, s.modes))
-               if mode != "open" and not (d == c and rebound)]
+        now = [d for d, mode in zip(K, s.modes) if mode != "open" and not (d == c and rebound)]
         q, u = self.project(q, u, now)
         if rebound and 0.0 < o.restitution < 1.0 and s.v[j] < o.zeno_speed:
             free = self.solve(q, u, [m if d in now else OPEN for d, m in enumerate(modes)])
