@@ -363,6 +363,7 @@ def figure_phi_omega(maps, motion, size="two_column"):
                                              [float(motion.event_omega[-1])]))
         pplot.mark_event(ax, "start", *_wrapped([float(motion.phi[0])],
                                                 [float(motion.omega[0])]))
+        ax.lines[-1].set_zorder(8)  # the first stick lies within a marker of the start: on top
         lines = [Line2D([], [], label=r"$\lambda_{+1} = 0$ (singular)", **LAMBDA_STYLE[1.0]),
                  Line2D([], [], label=r"$\lambda_{-1} = 0$ (singular)", **LAMBDA_STYLE[-1.0]),
                  Line2D([], [], label=r"$g + l\cos\varphi\,\omega^2 = 0$", **Q_STYLE),
@@ -403,6 +404,8 @@ def figure_motion(ds, states, inset: float | None = None, size="two_column"):
         for ax in axes:
             for a, b in zip(edges[::2], edges[1::2]):
                 pplot.stagnation_span(ax, t[a], t[b - 1])
+            # room for the markers at the top and bottom, inside the hatched band's height
+            ax.margins(y=0.12)
         ax = axes[0]
         leg = ax.get_legend()
         handles = list(leg.legend_handles)

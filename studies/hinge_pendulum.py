@@ -53,14 +53,16 @@ SWINGS = ((1.0, 0.0), (2.0, 0.0), (3.0, 0.0), (0.0, 8.0))
 WEIGHTLESS = ((0.0, 5.0), (1.0, -3.0))
 #: Time horizon of the fate map (s).
 T_FATE = 40.0
-DELTA_LABEL = r"$\delta/l$  ($l$ = 1 m)"
+DELTA_LABEL = r"$\delta/l$"
 #: What delta and l are, for the key under a figure.
 DELTA_KEY = [r"$\delta$: radius of the hinge's friction circle (friction moment "
              r"$\delta|R|$)", r"$l$: rod length"]
 #: The looks of the phase curves (and of the weightless runs), one per start: a colour
 #: none of the study's classes fills, and a dash pattern, so that greyscale tells them apart.
+#: The study's curves: colours that fill no class of its maps (reddish purple is the
+#: continuum), each with its own dashes.
 CURVE_LOOKS = [{"color": pplot.OKABE_ITO[c], "ls": pplot.DASHES[i]}
-               for i, c in enumerate(("blue", "orange", "black", "reddish_purple"))]
+               for i, c in enumerate(("blue", "orange", "black", "sky_blue"))]
 #: The curve l omega^2 + g cos phi = 0 (the hinge reaction vanishes): a reference curve.
 FREE_STYLE = {"color": "black", "lw": 1.4, "ls": pplot.DASHES[1], "path_effects": pplot.HALO}
 
@@ -172,10 +174,13 @@ def _wide(size) -> bool:
 
 
 def figure_rest(ds, size="two_column"):
-    """Stagnation over (phi, delta/l) with the closed-form boundary l |sin phi| = delta."""
+    """Stagnation over (phi, delta/l) with the closed-form boundary l |sin phi| = delta;
+    off the zone the motion is unique (checked here), so the plain class is named so."""
+    n = ds.n_solutions.values[ds.stagnation.values == 0]
+    if not np.all(n == 1):
+        raise AssertionError("a state at rest off the stagnation zone is not unique")
     with pplot.style():
-        fig = pplot.map_figure(ds, "stagnation", x="phi", overlays=False,
-                               size=size)
+        fig = pplot.map_figure(ds, "stagnation", x="phi", overlays=False, size=size)
         ax = fig.axes[0]
         phi = np.linspace(-math.pi, math.pi, 2001)
         ax.plot(phi, L * np.abs(np.sin(phi)), color="black", lw=1.0)
@@ -184,7 +189,9 @@ def figure_rest(ds, size="two_column"):
         leg = ax.get_legend()
         cats = list(leg.legend_handles)
         for h, t in zip(cats, leg.get_texts()):
-            h.set_label(t.get_text())
+            # the plain class reads as in the study's other maps
+            h.set_label({"no stagnation": "unique (no stagnation)"}.get(t.get_text(),
+                                                                         t.get_text()))
         handles = cats + [
             Line2D([], [], color="black", lw=1.0, label=r"$l|\sin\varphi| = \delta$, i.e. (35)"),
             Line2D([], [], color="black", lw=0.8, ls=pplot.DASHES[1],
@@ -225,7 +232,7 @@ def figure_moving(by_delta, by_omega, size="two_column"):
         ax.plot(angles, [L] * len(angles), ls="none", marker="*", ms=8, mfc=cont, mec="black",
                 mew=0.5, zorder=6, clip_on=False)
         ax.set_ylabel(DELTA_LABEL)
-        cats = [handles[k] for k in ("none", "unique") if k in handles]
+        cats = [handles[k] for k in ("none", "unique", "continuum") if k in handles]
         cats += [h for k, h in handles.items() if k.startswith("singular")]
         items = cats + [
             Line2D([], [], label=r"$l\omega^2 + g\cos\varphi = 0$: unique ($R = 0$)",
@@ -235,8 +242,9 @@ def figure_moving(by_delta, by_omega, size="two_column"):
         pplot.legend_above(ax, items, title=pplot.fixed_values_text(
             by_delta, 0.9 * fig.get_figwidth()), ncols=2 if _wide(size) else 1)
         pplot.define_symbols(fig, DELTA_KEY + [
-            rf"over ($\varphi$, $\omega$) at $\delta/l$ = {DELTA_ABOVE / L:g}",
-            r"none but on $l\omega^2 + g\cos\varphi = 0$"])
+            rf"not drawn, one class: at $\delta/l$ = {DELTA_ABOVE / L:g} every state "
+            r"($\varphi$, $\omega$) has none, but on $l\omega^2 + g\cos\varphi = 0$ "
+            "(the study checks each cell)"])
     return fig
 
 
@@ -257,12 +265,13 @@ def figure_phase(curves, size="two_column"):
             before = len(ax.lines)
             pplot.phase_curve_figure(ds, ax=ax)
             look = CURVE_LOOKS[i % len(CURVE_LOOKS)]
+            phi0, omega0 = SWINGS[i]
             for line in ax.lines[before:]:
                 # the curve is black and drawn with a line; the markers and zero line stay
                 if line.get_linestyle() != "None" and to_hex(line.get_color()) == "#000000":
                     line.set_color(look["color"])
                     line.set_linestyle(look["ls"])
-            phi0, omega0 = SWINGS[i]
+                    line.set_label(f"swing {i}")  # the same curve in (b): one look
             starts.append(Line2D([], [], lw=1.0, **look,
                                  label=rf"$\varphi_0$ = {phi0:g} rad, "
                                        rf"$\omega_0$ = {omega0:g} rad s$^{{-1}}$"))
@@ -297,11 +306,13 @@ def _zoom_on_zone(ax, zoom):
     x0, x1, y0, y1 = -1.3 * half, 1.3 * half, -0.8, 0.8
     for line in ax.lines:
         x, y = line.get_data()
-        zoom.plot(x, y, color=line.get_color(), ls=line.get_linestyle(),
+        offset, dashes = line._unscaled_dash_pattern  # get_linestyle() names no pattern
+        zoom.plot(x, y, color=line.get_color(),
+                  ls=(offset, dashes) if dashes else line.get_linestyle(),
                   lw=line.get_linewidth(), marker=line.get_marker(),
                   ms=line.get_markersize(), mfc=line.get_markerfacecolor(),
                   mec=line.get_markeredgecolor(), mew=line.get_markeredgewidth(),
-                  zorder=line.get_zorder())
+                  zorder=line.get_zorder(), label=line.get_label())
         if line.get_marker() == "s":  # rest
             x, y = np.asarray(x, float), np.asarray(y, float)
             if np.all((x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)):
@@ -311,8 +322,11 @@ def _zoom_on_zone(ax, zoom):
     zoom.set_ylim(y0, y1)
     zoom.set_xlabel(r"$\varphi$ (rad)")
     zoom.set_ylabel(r"$\omega$ (rad s$^{-1}$)")
-    ax.indicate_inset((x0, y0, x1 - x0, y1 - y0), inset_ax=zoom, edgecolor="0.3", lw=0.6,
-                      alpha=1.0, zorder=6)
+    # the window alone: lines to (b) would cross the curves and (b)'s tick labels
+    box = ax.indicate_inset((x0, y0, x1 - x0, y1 - y0), inset_ax=zoom, edgecolor="0.3",
+                            lw=0.6, alpha=1.0, zorder=6)
+    for line in box.connectors:
+        line.set_visible(False)
 
 
 #: simulate's states, every few steps: small crosses, not the start's ring.
@@ -344,7 +358,7 @@ def figure_weightless(runs, size="two_column"):
             dots = SIMULATE_DOTS
             at = weightless_motion(t, phi0, omega0, DELTA_WEIGHTLESS, L)
             for k, (name, ex, ref) in enumerate(zip(("phi", "omega"), exact, at)):
-                axes[k].plot(tt, ex, lw=2.4, alpha=0.45, solid_capstyle="butt", **look)
+                axes[k].plot(tt, ex, lw=1.4, solid_capstyle="butt", **look)
                 axes[k].plot(t[::every], ds[name].values[::every], **dots)
                 err = np.abs(ds[name].values - ref)
                 errors.append(err[1:])
@@ -359,7 +373,8 @@ def figure_weightless(runs, size="two_column"):
             axes[k].set_ylabel(label)
             axes[k].set_title(what, loc="left")
         lo = 10.0 ** math.floor(math.log10(max(best, worst * 1e-6)))
-        hi = 10.0 ** math.ceil(math.log10(worst))
+        # a third of a decade above the top tick: its label clear of the panel's title
+        hi = 10.0 ** (math.ceil(math.log10(worst)) + 0.5)
         for a in axes[2:]:
             a.set_ylim(lo, hi)
             a.yaxis.set_major_locator(LogLocator(base=10.0, numticks=12))
@@ -369,15 +384,18 @@ def figure_weightless(runs, size="two_column"):
             a.set_xlim(0.0, max(float(ds.t[-1]) for ds in runs))
         fig.align_ylabels(axes)
         pplot.label_panels(axes)
-        handles = [Line2D([], [], lw=2.4, alpha=0.45, **look,
-                          label=rf"exact (36) from $\varphi_0$ = {_signed(p0)} rad, "
+        handles = [Line2D([], [], lw=1.4, **look,
+                          label=rf"from $\varphi_0$ = {_signed(p0)} rad, "
                                 rf"$\omega_0$ = {_signed(w0)} rad s$^{{-1}}$")
                    for look, (p0, w0) in zip(CURVE_LOOKS, WEIGHTLESS)]
         handles.append(Line2D([], [], label="simulate (every few steps)", **SIMULATE_DOTS))
         pplot.figure_legend(fig, handles, ncols=1,
                             title=rf"$g$ = 0 m s$^{{-2}}$, $\delta$ = {DELTA_WEIGHTLESS:g} m, "
                                   rf"$l$ = {L:g} m")
-        pplot.define_symbols(fig, [r"$\Delta$: simulate minus the exact solution (36)"])
+        pplot.define_symbols(fig, [
+            "lines: the exact solution (36) in (a) and (b), the error of simulate in (c) "
+            "and (d), one look per start",
+            r"$\Delta$: simulate minus the exact solution (36)"])
     return fig
 
 

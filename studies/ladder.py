@@ -229,7 +229,9 @@ def solvability_figure(atlas: xr.Dataset, size="two_column"):
         if "class boundary" in handles:  # beside the other curves, after the classes
             handles["class boundary"] = handles.pop("class boundary")
         if "singular" in handles:  # the coefficient 2 - f^2 of (8) vanishes
-            handles[r"singular: $f = \sqrt{2}$"] = handles.pop("singular")
+            # the continuum's cells lie on that row, under its line: named with it
+            more = r" (or a continuum)" if handles.pop("continuum", None) else ""
+            handles[rf"singular: $f = \sqrt{{2}}${more}"] = handles.pop("singular")
         handles[r"$\varphi = 2\,\arctan f$ (rest boundary)"] = Line2D([], [], **REST_BOUNDARY)
         order = ["unique", "contact lost", "a contact would pull", "stagnation"]
         keys = sorted(handles, key=lambda s: order.index(s) if s in order else len(order))
@@ -287,6 +289,14 @@ def portrait_figure(regions: xr.Dataset, curves, size="two_column"):
         for k, (ax, f) in enumerate(zip(axes, PORTRAIT_F)):
             reg = regions.sel(f=f)
             if f < SQRT2:
+                # every cell but where a contact would pull has one motion: the panel is
+                # "unique" as in (b), its grey under the hatch and the curves
+                n = reg.n_solutions.transpose("phi", "omega").values
+                lost = reg.contact_lost.transpose("phi", "omega").values == 1
+                if not np.all((n == 1) | lost):
+                    raise AssertionError(f"f = {f}: a class other than unique off the "
+                                         "contact region")
+                ax.set_facecolor(pplot.CATEGORY_COLOURS["unique"])
                 _pull_region(ax, f, U_TOP[f], blue, check=reg)
                 for pc in curves[f]:
                     pplot.phase_curve_figure(pc, squared=True, ax=ax)

@@ -9,9 +9,9 @@ Two figures a reader of the paper meets first:
   Dormand-Prince integrators beside SciPy's (RK45, DOP853) driven stage by
   stage, and the first-integral tracer at the same tolerances
   (``benchmarks/work_precision.py`` runs every system and method);
-* **fate map**: how the wheel's motion from each initial (phi, omega) ends:
-  at rest in a stagnation zone after so many reversals, or bouncing off the
-  floor (contact lost, condition (12)).
+* **fate map**: how the wheel's motion from each initial (phi, omega) ends, at
+  delta/l = 0.2: at rest in a stagnation zone, and how long that takes, or
+  bouncing off the floor (contact lost, condition (12)).
 
     python studies/overview.py [--quick] [--out DIR]
 
@@ -107,12 +107,12 @@ def main(argv=None) -> list[Claim]:
     n = 240 if args.quick else 400  # a cell under 3 px at 300 dpi: no visible stair-steps
     scene = phasemap.Scene("wheel", axes={"phi": np.linspace(-math.pi, math.pi, n),
                                           "omega": np.linspace(-8.0, 8.0, n)},
-                           fixed={"delta": 0.05},
+                           fixed={"delta": 0.1},  # delta/l = 0.2: not the wheel study's
                            layers=["fate", "phi_rest", "n_reversals", "t_rest"],
                            options={"t_end": 60.0})
     fates = scene.compute()   # a bar where a terminal watches, none in a log
     files.append(save_atlas(fates, out, f"{NAME}_wheel_fates", NAME))
-    files += save_figures(lambda size: phasemap.plot.fate_figure(fates, extra="n_reversals",
+    files += save_figures(lambda size: phasemap.plot.fate_figure(fates, extra="t_rest",
                                                                  size=size),
                           out, f"{NAME}_wheel_fates", args.sizes)
 

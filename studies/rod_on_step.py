@@ -33,6 +33,7 @@ import math
 
 import numpy as np
 from matplotlib.lines import Line2D
+from matplotlib.ticker import FormatStrFormatter, MultipleLocator
 
 import phasemap
 from phasemap import plot as pplot
@@ -259,6 +260,9 @@ def figure_motion(ds, size="two_column"):
             value = f"{w:g}".replace("-", "\u2212")
             ax.set_title(rf"({'abc'[k]}) $\omega$ = {value} rad s$^{{-1}}$", loc="left")
         pplot.outer_labels(axs)
+        for ax in axs:  # one tick format in every panel ((c) shows a corner of (a)'s axes)
+            ax.xaxis.set_major_formatter(FormatStrFormatter("%.2f"))
+            ax.yaxis.set_major_formatter(FormatStrFormatter("%.2f"))
         handles["(S3) = 0: both contacts slipping"] = Line2D([], [], **S3_STYLE)
         handles[r"floor alone: $f = (1 + 3\cos^2\theta)/(3\sin\theta\,\cos\theta)$"] = \
             Line2D([], [], **FLOOR_STYLE)
@@ -280,6 +284,7 @@ def _corner(ax, ds) -> None:
     lo_f = f[max(jj.min() - 40, 0)]
     ax.set_xlim(lo_t, th[-1])
     ax.set_ylim(lo_f, f[-1])
+    ax.xaxis.set_major_locator(MultipleLocator(0.05))  # ticks that two decimals state
 
 
 def figure_slide(ds, t_off, size="two_column"):

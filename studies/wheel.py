@@ -155,8 +155,8 @@ def maps_figure(stag: xr.Dataset, bounce: xr.Dataset, n: dict, size="two_column"
     newton = {"color": black, "lw": 0.9, "ls": pplot.DASHES[0], "path_effects": pplot.HALO}
     printed = {"color": black, "lw": 0.9, "ls": pplot.DASHES[2], "path_effects": pplot.HALO}
     with pplot.style():
-        fig, (a, b) = pplot.panels(2, size, height=3.3, panel_height=2.6, extra=0.9)
-        pplot.map_figure(_per_l(stag), "stagnation", x="phi", ax=a)
+        fig, (a, b) = pplot.panels(2, size, height=3.5, panel_height=2.6, extra=1.1)
+        pplot.map_figure(_per_l(stag), "n_solutions", x="phi", ax=a)
         pp = np.linspace(-math.pi, math.pi, 721)
         a.plot(pp, np.abs(np.sin(pp)), **zone)
         a.axhline(1.0, color=black, lw=0.6, ls=pplot.DASHES[2])
@@ -176,13 +176,14 @@ def maps_figure(stag: xr.Dataset, bounce: xr.Dataset, n: dict, size="two_column"
         b.contour(phi, w, n["printed_13"].T, levels=[0.0], colors=[black], linewidths=0.9,
                   linestyles=[printed["ls"]]).set_path_effects(pplot.HALO)
         b.set_title(rf"(b) bounce (12), $\delta/l$ = {LOW:g}", loc="left")
-        names = {"unique": r"rolls ($N \geq 0$) or hops", "none": r"none: $N < 0$, no hop"}
+        names = {"none": r"none: $N < 0$, no hop",
+                 "a contact would pull": "a contact would pull: hops"}
         pplot.legend_above(b, _entries(b, names) + [
             Line2D([], [], label=r"$N = 0$, Newton–Euler", **newton),
-            Line2D([], [], label=r"$N = 0$, (13) as printed", **printed)], ncols=2)
+            Line2D([], [], label=r"$N = 0$, (13) as printed", **printed)],
+            ncols=2 if pplot.width_of(size) >= pplot.WIDE else 1)
         pplot.define_symbols(fig, [pplot.fixed_values_text(stag.drop_vars("delta"))
-                                   .replace(r"$\omega$ = 0 rad s$^{-1}$, ", ""), *KEY,
-                                   "a contact would pull: the wheel hops"])
+                                   .replace(r"$\omega$ = 0 rad s$^{-1}$, ", ""), *KEY])
     return fig
 
 
@@ -453,8 +454,9 @@ def fates_figure(fates, size="two_column"):
         pplot.label_panels(axes)
         pplot.figure_legend(fig, handles, labels, title=pplot.wrap(
             _fixed_items() + [rf"$t_\mathrm{{end}}$ = {T_END:g} s",
-                              rf"at $\delta/l$ = {HIGH:g} the fate differs from (a) in "
-                              f"{differ} of {low.fate.size} cells"],
+                              rf"the fate at $\delta/l$ = {HIGH:g} (not drawn) differs from "
+                              rf"(a)'s, at $\delta/l$ = {LOW:g}, in {differ} of "
+                              f"{low.fate.size} cells"],
             0.95 * fig.get_figwidth()).replace(" kg,", " kg;"))
         pplot.define_symbols(fig, KEY + [pplot.fate_grid_note(low, "phi")])
     return fig

@@ -25,12 +25,22 @@ The layout review is geometric, on the drawn figure at its printed size:
 * no label box or legend lies over plotted data (lines, markers, meshes,
   filled regions) inside a panel;
 * every axis and every stated value ("$\\omega$ = 0 rad s$^{-1}$") has its
-  unit, unless the quantity is dimensionless (:func:`dimensionless`).
+  unit, unless the quantity is dimensionless (:func:`dimensionless`);
+* every legend entry is drawn where a reader can see it (:data:`MIN_SEEN_MM2` of
+  its colour in a panel the legend speaks for, or a line, marker or hatch of its
+  look), and every filled region a reader can see is named by a legend entry or
+  read on a colour bar (:func:`legend_drawn_problems`);
+* the classes of one categorical map differ in grey level by at least
+  :data:`GREY_STEP`, hatched or not (:func:`class_contrast_problems`);
+* one label, one look: two curves or markers with the same label in two panels
+  are drawn alike, and a class of one layer has one colour in every panel
+  (:func:`drawn_two_ways_problems`).
 
 Across the figures of one study (:func:`check`): one meaning, one look.  A
 legend label has one look (colour, hatch, dashes, marker) in every figure; a
-filled class or a marker's look names one label; and a colour that fills a
-class is not the colour of a curve or marker that means something else.
+filled class or a marker's look names one label; a colour that fills a
+class is not the colour of a curve or marker that means something else; and one
+layer has one label on every colour bar (:func:`layer_label_problems`).
 """
 
 from __future__ import annotations
@@ -47,6 +57,7 @@ from matplotlib.collections import Collection
 from matplotlib.image import AxesImage
 from matplotlib.legend import Legend
 from matplotlib.lines import Line2D
+from matplotlib.markers import MarkerStyle
 from matplotlib.patches import Patch
 
 import phasemap
@@ -75,7 +86,7 @@ def recording():
                   and a.get_position().height > 0.2 and a.get_position().width > 0.15]
         seen[name] = {"texts": pplot.figure_texts(fig), "panels": len(panels),
                       "width": fig.get_figwidth(), "problems": layout_problems(fig),
-                      "looks": legend_looks(fig)}
+                      "looks": legend_looks(fig), "layers": layer_labels(fig)}
         return original(fig, out, name)
 
     study.save_figure = save
@@ -113,6 +124,7 @@ def check(seen: dict[str, dict], exempt_fixed=()) -> None:
         assert spelled is None, (name, f"{spelled and spelled.group(0)!r}: a symbol spelled out")
         assert not what["problems"], (name, what["problems"])
     problems = look_problems({name: what["looks"] for name, what in seen.items()})
+    problems += layer_label_problems({name: what["layers"] for name, what in seen.items()})
     assert not problems, problems
 
 
@@ -238,6 +250,9 @@ def layout_problems(fig) -> list[str]:
     problems += greyscale_problems(fig)
     problems += covering_problems(fig, renderer, texts)
     problems += unit_problems(fig)
+    problems += legend_drawn_problems(fig, renderer)
+    problems += class_contrast_problems(fig)
+    problems += drawn_two_ways_problems(fig)
     return problems
 
 
@@ -586,4 +601,316 @@ def look_problems(looks_by_figure: dict[str, dict]) -> list[str]:
                 if colour in fills and meaning(fills[colour][0]) != meaning(label):
                     problems.append(f"{label!r} ({figure}) is drawn in the colour of the class "
                                     f"{fills[colour][0]!r} ({fills[colour][1]})")
+    return problems
+
+
+
+# --------------------------------------------------------------------------- legend and drawing
+
+#: The least area (mm^2 of the printed page) of a colour that a reader sees: a legend
+#: entry whose colour covers less of every panel it speaks for is not drawn, and a region
+#: of less needs no entry.
+MIN_SEEN_MM2 = 1.0
+#: Two rendered colours within this many levels (of 255) in every channel are one colour.
+COLOUR_TOL = 6
+
+
+def _pixels(fig) -> np.ndarray:
+    """The canvas drawn last, (rows top down, columns, RGB) in 0..255."""
+    return np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(np.int16)
+
+
+def _crop(pixels: np.ndarray, box) -> np.ndarray:
+    """The pixels inside a display-space box (y up), a pixel in from its edges (spines)."""
+    h, w = pixels.shape[:2]
+    x0, x1 = max(int(np.ceil(box.x0)) + 1, 0), min(int(np.floor(box.x1)) - 1, w)
+    y0, y1 = max(int(np.ceil(box.y0)) + 1, 0), min(int(np.floor(box.y1)) - 1, h)
+    if x1 <= x0 or y1 <= y0:
+        return np.zeros((0, 3), np.int16)
+    return pixels[h - y1:h - y0, x0:x1].reshape(-1, 3)
+
+
+def _on_white(colour) -> np.ndarray:
+    """A colour as drawn on white, in 0..255."""
+    r, g, b, a = mcolors.to_rgba(colour)
+    return np.array([a * r + 1 - a, a * g + 1 - a, a * b + 1 - a]) * 255.0
+
+
+def _seen_px(pixels: np.ndarray, colour) -> int:
+    return int((np.abs(pixels - _on_white(colour)).max(axis=1) <= COLOUR_TOL).sum())
+
+
+def _min_px(fig) -> float:
+    return MIN_SEEN_MM2 * (fig.dpi / 25.4) ** 2
+
+
+def _panels(fig) -> list:
+    return [ax for ax in _all_axes(fig) if ax.get_visible() and ax.axison
+            and ax.get_label() != "<colorbar>"]
+
+
+def _legend_scope(legend, fig) -> list:
+    """The panels a legend speaks for: its own panel (a legend above it), or every panel
+    of the figure (or subfigure) it belongs to."""
+    parent = legend.parent
+    panels = _panels(fig)
+    if parent in panels:
+        return [parent] + [ax for ax in panels if _parent(ax, panels) is parent]
+    return [ax for ax in panels if ax.get_figure(root=False) is parent
+            or parent is fig]
+
+
+def _white(colour) -> bool:
+    return bool(np.all(_on_white(colour) >= 255 - COLOUR_TOL))
+
+
+def _region_artists(ax) -> list:
+    """(artist, [face colours]) of what ``ax`` fills: a categorical mesh's class colours
+    (the classes present), filled contours, filled polygons and patches.  A mesh read on a
+    colour bar is left out (the colour bar names its colours)."""
+    from matplotlib.collections import LineCollection, PathCollection, QuadMesh
+    from matplotlib.contour import ContourSet
+
+    out = []
+    for artist in [*ax.collections, *ax.images, *ax.patches]:
+        if not artist.get_visible():
+            continue
+        if isinstance(artist, (QuadMesh, AxesImage)):
+            if getattr(artist, "colorbar", None) is not None:
+                continue
+            values = np.ma.masked_invalid(np.ma.asarray(artist.get_array(), dtype=float))
+            values = np.unique(values.compressed())
+            if values.size:
+                out.append((artist, [mcolors.to_hex(c, keep_alpha=True)
+                                     for c in artist.to_rgba(values)]))
+        elif isinstance(artist, (LineCollection, PathCollection)) and \
+                not isinstance(artist, ContourSet):
+            continue  # lines and markers
+        elif isinstance(artist, ContourSet) and not artist.filled:
+            continue
+        elif isinstance(artist, Collection):
+            faces = [c for c in artist.get_facecolor() if c[3] > 0]
+            out.append((artist, sorted({mcolors.to_hex(c, keep_alpha=True) for c in faces})))
+        elif isinstance(artist, Patch):
+            face = artist.get_facecolor()
+            if face[3] > 0:
+                out.append((artist, [mcolors.to_hex(face, keep_alpha=True)]))
+    return out
+
+
+def _same_colour(a, b) -> bool:
+    return bool(np.abs(_on_white(a) - _on_white(b)).max() <= COLOUR_TOL)
+
+
+def _line_like(ax):
+    """(colour, dashes or None, marker or None) of every line, marker or contour line of
+    ``ax`` with some of it inside the view."""
+    from matplotlib.collections import LineCollection, PathCollection
+    from matplotlib.contour import ContourSet
+
+    out = []
+    box = ax.bbox
+    for line in ax.get_lines():
+        if not line.get_visible() or not len(line.get_xdata()):
+            continue
+        v = line.get_transform().transform(line.get_xydata())
+        inside = (v[:, 0] >= box.x0 - 1) & (v[:, 0] <= box.x1 + 1) & \
+            (v[:, 1] >= box.y0 - 1) & (v[:, 1] <= box.y1 + 1)
+        if not inside.any():
+            continue
+        marker = line.get_marker()
+        marker = None if marker in ("None", "none", "", " ", None) else str(marker)
+        has_line = line.get_linestyle() not in ("None", "none", " ", "")
+        out.append((line.get_color(), _dashes(line) if has_line else None, marker,
+                    line.get_markerfacecolor() if marker else None))
+    for artist in ax.collections:
+        if not artist.get_visible():
+            continue
+        if isinstance(artist, PathCollection) and not isinstance(artist, ContourSet):
+            for c in artist.get_facecolor():
+                out.append((mcolors.to_hex(c), None, "collection", mcolors.to_hex(c)))
+        elif isinstance(artist, (LineCollection, ContourSet)) and \
+                not getattr(artist, "filled", False):
+            for c in artist.get_edgecolor():
+                out.append((mcolors.to_hex(c), "collection", None, None))
+    return out
+
+
+def _hatches(ax) -> set[str]:
+    out = set()
+    for artist in [*ax.collections, *ax.patches]:
+        if not artist.get_visible():
+            continue
+        hatch = artist.get_hatch() if hasattr(artist, "get_hatch") else None
+        out.update(h for h in [hatch, *(getattr(artist, "hatches", None) or [])] if h)
+    return out
+
+
+def _entry_drawn(handle, scope, pixels, fig) -> bool:
+    """Whether what legend entry ``handle`` shows is drawn in a panel of ``scope``."""
+    if isinstance(handle, Patch):
+        face = handle.get_facecolor()
+        if face[3] > 0:
+            return any(_seen_px(_crop(pixels, ax.bbox), face) >= _min_px(fig)
+                       for ax in scope)
+        hatch = handle.get_hatch()
+        return not hatch or any(hatch in _hatches(ax) for ax in scope)
+    if isinstance(handle, Line2D):
+        marker = handle.get_marker()
+        marker = None if marker in ("None", "none", "", " ", None) else str(marker)
+        has_line = handle.get_linestyle() not in ("None", "none", " ", "")
+        for ax in scope:
+            for colour, dashes, mark, face in _line_like(ax):
+                if marker and (mark == marker or mark == "collection") and \
+                        (_same_colour(face or colour, handle.get_markerfacecolor())
+                         or _same_colour(colour, handle.get_color())
+                         or not MarkerStyle(marker).is_filled()):
+                    return True
+                if has_line and not marker and _same_colour(colour, handle.get_color()) \
+                        and (dashes == "collection" or dashes == _dashes(handle)):
+                    return True
+        return False
+    return True
+
+
+def legend_drawn_problems(fig, renderer=None) -> list[str]:
+    """A legend entry whose look no panel it speaks for shows (a class with no cells a
+    reader can see, a curve never drawn), and a filled region a reader can see (at least
+    :data:`MIN_SEEN_MM2`) whose colour no legend entry over its panel names and no colour
+    bar reads."""
+    if renderer is None:
+        fig.canvas.draw()
+    pixels = _pixels(fig)
+    problems = []
+    named: dict = {}
+    for legend in _legends(fig):
+        scope = _legend_scope(legend, fig)
+        for handle, text in zip(legend.legend_handles, legend.get_texts()):
+            label = text.get_text()
+            if not label.strip() or handle is None:
+                continue
+            if not _entry_drawn(handle, scope, pixels, fig):
+                problems.append(f"legend entry {label!r}: nothing drawn shows it")
+            if isinstance(handle, Patch) and handle.get_facecolor()[3] > 0:
+                for ax in scope:
+                    named.setdefault(ax, []).append(handle.get_facecolor())
+    for ax in _panels(fig):
+        crop = _crop(pixels, ax.bbox)
+        told = set()
+        for artist, colours in _region_artists(ax):
+            for colour in colours:
+                if colour in told or _white(colour) or \
+                        any(_same_colour(colour, c) for c in named.get(ax, [])):
+                    continue
+                told.add(colour)
+                seen = _seen_px(crop, colour)
+                if seen >= _min_px(fig):
+                    mm2 = seen / (fig.dpi / 25.4) ** 2
+                    problems.append(f"a region of {_name(ax)} in {colour} ({mm2:.0f} mm^2) "
+                                    "has no legend entry")
+    return problems
+
+
+# --------------------------------------------------------------------------- classes in grey
+
+
+def _categories(artist) -> tuple[str, list[str]] | None:
+    """(layer, meanings in colour-map order) of a categorical mesh drawn by
+    phasemap.plot (its gid ``phasemap:LAYER:M1,M2,...``), else None."""
+    gid = artist.get_gid() or ""
+    parts = gid.split(":")
+    if len(parts) == 3 and parts[0] == "phasemap" and parts[2]:
+        return parts[1], parts[2].split(",")
+    return None
+
+
+def class_contrast_problems(fig) -> list[str]:
+    """Two classes of one categorical map whose fills differ in grey level by less than
+    :data:`GREY_STEP`: in a greyscale print only a hatch tells them apart, and a hatch
+    is lost on a region a few cells wide."""
+    from matplotlib.collections import QuadMesh
+
+    problems = []
+    for ax in _panels(fig):
+        for artist in [*ax.collections, *ax.images]:
+            if not isinstance(artist, (QuadMesh, AxesImage)) or \
+                    getattr(artist, "colorbar", None) is not None:
+                continue
+            values = np.unique(np.ma.masked_invalid(
+                np.ma.asarray(artist.get_array(), dtype=float)).compressed())
+            if values.size < 2:
+                continue
+            cats = _categories(artist)
+            names = [cats[1][int(v)] if cats and 0 <= int(v) < len(cats[1]) else f"{v:g}"
+                     for v in values]
+            colours = artist.to_rgba(values)
+            for (a, ca), (b, cb) in itertools.combinations(zip(names, colours), 2):
+                # one fill on purpose (a yes/no flag drawn as a hatch over its cells): the
+                # legend check tells such entries apart by their hatch
+                if np.array_equal(ca, cb):
+                    continue
+                if abs(grey(ca) - grey(cb)) < GREY_STEP:
+                    problems.append(f"classes {a!r} and {b!r} of {_name(ax)} are "
+                                    f"{abs(grey(ca) - grey(cb)):.2f} apart in grey")
+    return problems
+
+
+# --------------------------------------------------------------------------- one label, one look
+
+
+def drawn_two_ways_problems(fig) -> list[str]:
+    """One label drawn two ways in one figure: curves or markers of one label (not
+    ``_hidden``) with different colours, dashes or markers in two panels, and one class
+    of one layer in two colours in two panels."""
+    problems = []
+    lines: dict[str, tuple] = {}
+    classes: dict[tuple[str, str], str] = {}
+    for ax in _panels(fig):
+        for line in ax.get_lines():
+            label = line.get_label()
+            if not label or label.startswith("_") or not line.get_visible():
+                continue
+            look = (_hex(line.get_color()), _dashes(line), str(line.get_marker()),
+                    _hex(line.get_markerfacecolor()))
+            first = lines.setdefault(label, (look, ax))
+            if first[0] != look and first[1] is not ax:
+                problems.append(f"{label!r} is drawn one way in {_name(first[1])} and "
+                                f"another in {_name(ax)}")
+        for artist in ax.collections:
+            cats = _categories(artist)
+            if cats is None:
+                continue
+            layer, meanings = cats
+            for i, m in enumerate(meanings):
+                colour = mcolors.to_hex(artist.cmap(artist.norm(i)), keep_alpha=True)
+                first = classes.setdefault((layer, m), colour)
+                if first != colour:
+                    problems.append(f"class {m!r} of {layer!r} is {first} in one panel "
+                                    f"and {colour} in another")
+    return problems
+
+
+def layer_labels(fig) -> list[tuple[str, str]]:
+    """(layer, colour bar label) of every mesh phasemap.plot drew with a colour bar (its
+    gid ``phasemap:LAYER``)."""
+    out = []
+    for ax in _panels(fig):
+        for artist in [*ax.collections, *ax.images]:
+            gid = artist.get_gid() or ""
+            bar = getattr(artist, "colorbar", None)
+            if gid.startswith("phasemap:") and bar is not None:
+                out.append((gid.split(":")[1], bar.ax.get_ylabel() or bar.ax.get_xlabel()))
+    return out
+
+
+def layer_label_problems(labels_by_figure: dict[str, list[tuple[str, str]]]) -> list[str]:
+    """One layer under two labels on the colour bars of a study's figures (or of one)."""
+    problems = []
+    first: dict[str, tuple[str, str]] = {}
+    for figure, labels in labels_by_figure.items():
+        for layer, label in labels:
+            seen = first.setdefault(layer, (label, figure))
+            if " ".join(seen[0].split()) != " ".join(label.split()):
+                problems.append(f"layer {layer!r} is {seen[0]!r} in {seen[1]} and {label!r} "
+                                f"in {figure}")
     return problems

@@ -251,3 +251,121 @@ def test_one_meaning_one_look_across_a_study():
               "portraits": fr.legend_looks(_legend_figure([
                   Patch(label="a contact would pull", **hatch), pplot.stagnation_patch()]))}
     assert fr.look_problems(mended) == []
+
+
+# --------------------------------------------------------------------------- what the legend names
+
+
+def _class_map(colours, legend_colours, codes=None, bar=False, hide_row=False):
+    """A categorical map of ``colours`` (classes 0, 1, ...) and a legend naming
+    ``legend_colours``; ``hide_row`` draws a thick line over the one row of class 2."""
+    import matplotlib.colors as mcolors
+
+    fig, (ax,) = _figure()
+    if codes is None:
+        codes = np.zeros((30, 30))
+        codes[:, 15:] = 1
+        if len(colours) > 2:
+            codes[14, :] = 2  # one row
+    n = len(colours)
+    mesh = ax.pcolormesh(codes, cmap=mcolors.ListedColormap(colours),
+                         norm=mcolors.BoundaryNorm(np.arange(n + 1) - 0.5, n))
+    if bar:
+        fig.colorbar(mesh, ax=ax, label="$v$ (m s$^{-1}$)")
+    if hide_row:
+        ax.axhline(14.5, color="black", lw=6)
+    ax.set_xlabel("$x$ (m)")
+    ax.set_ylabel("$y$ (m)")
+    if legend_colours:
+        pplot.legend_above(ax, [Patch(facecolor=c, label=f"class {c}") for c in legend_colours])
+    fig.canvas.draw()
+    return fig
+
+
+def test_a_legend_entry_with_nothing_drawn_is_caught():
+    """The referee's case: the ladder's legend listed "continuum", whose one row of cells
+    lay under the singular line."""
+    grey, red, pink = pplot.PALE_GREY, OI["vermillion"], OI["reddish_purple"]
+    problems = fr.legend_drawn_problems(_class_map([grey, red], [grey, red, pink]))
+    assert problems == [f"legend entry 'class {pink}': nothing drawn shows it"]
+    hidden = fr.legend_drawn_problems(_class_map([grey, red, pink], [grey, red, pink],
+                                                 hide_row=True))
+    assert hidden == [f"legend entry 'class {pink}': nothing drawn shows it"]
+    assert fr.legend_drawn_problems(_class_map([grey, red, pink], [grey, red, pink])) == []
+    # a curve in the legend that no panel draws
+    fig, (ax,) = _figure()
+    ax.plot([0, 1], [0, 1], color="black", label="drawn")
+    pplot.legend_above(ax, [*ax.get_lines(), Line2D([], [], color=OI["blue"], ls="--",
+                                                    label="never drawn")])
+    fig.canvas.draw()
+    assert fr.legend_drawn_problems(fig) == ["legend entry 'never drawn': nothing drawn "
+                                             "shows it"]
+
+
+def test_a_region_with_no_legend_entry_is_caught():
+    """The referee's case: the wheel's map at rest drew its plain class grey, unnamed."""
+    grey, red = pplot.PALE_GREY, OI["vermillion"]
+    problems = fr.legend_drawn_problems(_class_map([grey, red], [red]))
+    assert len(problems) == 1 and "in #ddddddff" in problems[0] \
+        and "has no legend entry" in problems[0], problems
+    assert fr.legend_drawn_problems(_class_map([grey, red], [grey, red])) == []
+    # a colour bar names its colours
+    assert fr.legend_drawn_problems(_class_map([grey, red], [], bar=True)) == []
+
+
+def test_classes_alike_in_grey_are_caught_hatched_or_not():
+    """The referee's case: rest (Okabe and Ito's bluish green) beside no solution
+    (vermillion, hatched): 0.05 apart in grey."""
+    import xarray as xr
+
+    codes = np.ones((30, 30), np.int8)
+    codes[:, 15:] = 2
+    ds = xr.Dataset({"fate": (("omega", "phi"), codes,
+                              {"flag_values": np.array([1, 2], np.int8),
+                               "flag_meanings": "rest no_solution"})},
+                    coords={"phi": np.linspace(0, 1, 30), "omega": np.linspace(0, 1, 30)})
+    old = pplot.CATEGORY_COLOURS["rest"]
+    try:
+        pplot.CATEGORY_COLOURS["rest"] = OI["bluish_green"]
+        fig = pplot.map_figure(ds, "fate", x="phi")
+        problems = fr.class_contrast_problems(fig)
+        assert len(problems) == 1 and "'rest' and 'no_solution'" in problems[0], problems
+    finally:
+        pplot.CATEGORY_COLOURS["rest"] = old
+    assert fr.class_contrast_problems(pplot.map_figure(ds, "fate", x="phi")) == []
+
+
+def test_one_label_drawn_two_ways_is_caught():
+    """The referee's case: a phase curve dotted in (a) and dashed in its zoom (b)."""
+    def draw(second):
+        fig, axes = _figure(2, 7.2)
+        x = np.linspace(0, 1, 20)
+        axes[0].plot(x, x, color="black", ls=pplot.DASHES[2], label="swing 2")
+        axes[1].plot(x, x, color="black", label="swing 2", **second)
+        return fig
+    problems = fr.drawn_two_ways_problems(draw({"ls": "--"}))
+    assert len(problems) == 1 and "'swing 2' is drawn one way" in problems[0]
+    assert fr.drawn_two_ways_problems(draw({"ls": pplot.DASHES[2]})) == []
+
+
+def test_one_layer_with_two_labels_is_caught():
+    """The referee's case: n_reversals was "Reversals before rest" in a fate figure and
+    its long name in a map; both now read it the same."""
+    assert fr.layer_label_problems({"fates": [("n_reversals", "Reversals before rest")],
+                                    "map": [("n_reversals", "Number of reversals")]})
+    import xarray as xr
+
+    import phasemap
+
+    fate = np.full((20, 20), int(phasemap.Event.REST), np.int8)
+    ds = xr.Dataset({"fate": (("omega", "phi"), fate,
+                              {"flag_values": np.array([int(phasemap.Event.REST)], np.int8),
+                               "flag_meanings": "rest"}),
+                     "n_reversals": (("omega", "phi"), np.arange(400).reshape(20, 20) % 5,
+                                     {"long_name": "number of reversals", "units": "1"})},
+                    coords={"phi": np.linspace(0, 1, 20), "omega": np.linspace(0, 1, 20)},
+                    attrs={"phasemap_model": "wheel"})
+    labels = {"fates": fr.layer_labels(pplot.fate_figure(ds, extra="n_reversals")),
+              "map": fr.layer_labels(pplot.map_figure(ds, "n_reversals", x="phi"))}
+    assert labels["fates"] and labels["map"]
+    assert fr.layer_label_problems(labels) == []

@@ -12,6 +12,7 @@ import pathlib
 import warnings
 
 import matplotlib
+import matplotlib.colors as mcolors
 
 matplotlib.use("Agg")
 
@@ -19,6 +20,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 import xarray as xr
+from matplotlib.collections import QuadMesh
 from matplotlib.contour import ContourSet
 
 import figure_review
@@ -391,7 +393,9 @@ def test_a_row_of_singular_cells_is_drawn_as_a_line(tmp_path):
     ax = fig.axes[0]
     assert legend_texts(ax) == ["none", "unique", r"singular ($l^2-\delta^2 = 0$)"]
     handle = ax.get_legend().legend_handles[-1]
-    assert handle.get_linestyle() == "-" and handle.get_marker() in ("None", "", None)
+    # a line in the singular set's own dashes (a class boundary is solid)
+    assert handle.get_linestyle() == "--" and handle.get_marker() in ("None", "", None)
+    assert handle._unscaled_dash_pattern[1] == pplot.DASHES[4][1]
     assert not [l for l in ax.lines if l.get_marker() == "o"], "dots where a line belongs"
     rows = [l for l in ax.lines if np.ptp(l.get_ydata()) == 0 and len(l.get_ydata()) == 2]
     assert len(rows) == 1 and rows[0].get_ydata()[0] == pytest.approx(1.0)
@@ -700,8 +704,9 @@ def test_the_dense_curve_keeps_every_saved_point_and_its_jumps():
 def test_work_precision_one_panel_per_system_one_line_per_method(size, tmp_path):
     fig = quiet(pplot.work_precision_figure, work_precision_table(), size=size)
     axes = [a for a in fig.axes if a.axison]
-    assert [a.get_title(loc="left") for a in axes] == \
-        ["(a) ladder", "(b) hinge pendulum", "(c) elliptic pendulum"]
+    # each panel states what its problem holds fixed beyond the model's own (g)
+    assert [" ".join(a.get_title(loc="left").split()) for a in axes] == \
+        ["(a) ladder", r"(b) hinge pendulum, $g$ = 9.81 m s$^{-2}$", "(c) elliptic pendulum"]
     names = ["phasemap, Dormand–Prince 5(4)", "solve_ivp RK45", "solve_ivp DOP853"]
     for a in axes:
         assert a.get_xscale() == "log" and a.get_yscale() == "log"
@@ -902,30 +907,33 @@ def test_motions_state_their_initial_state_and_parameters(tmp_path):
     render(fig, tmp_path)
 
 
-def test_fate_map_states_its_parameters_and_rings_inverted_rests(tmp_path):
+def test_fate_map_states_its_parameters_and_fills_inverted_rests(tmp_path):
     ds = fate_dataset()
     ds["phi_rest"][0, 0] = 3.0  # a rest near the upper position
     fig = quiet(ds.phasemap.plot, extra="n_reversals", size="two_column")
     texts = pplot.figure_texts(fig)
     assert any(r"$\delta$ = 0.1 m" in t for t in texts)
     assert r"rest inverted ($\cos\varphi_\mathrm{rest} < 0$)" in legend_texts(fig.axes[0])
-    rings = [l for a in fig.axes[:2] for l in a.lines if l.get_marker() == "o"
-             and l.get_markerfacecolor() == "none"]
-    assert len(rings) == 2 and all(len(r.get_xdata()) == 1 for r in rings)
+    # the one cell filled on the fate panel, in its own grey; nothing ringed or drawn over
+    # the other panels
+    fills = [c for c in fig.axes[0].collections if isinstance(c, QuadMesh)
+             and np.ma.count(c.get_array()) == 1]
+    assert len(fills) == 1
+    assert mcolors.to_hex(fills[0].to_rgba(np.ma.compressed(fills[0].get_array()))[0]) == \
+        pplot.DARK_GREY.lower()
+    assert not [l for a in fig.axes for l in a.lines if l.get_marker() == "o"]
     render(fig, tmp_path)
 
 
-def test_inverted_rests_on_a_fine_fate_map_are_thin_rings_two_cells_wide(tmp_path):
-    """Wide rings would cover a fine map (such rests line up along curves there): thin
-    rings two cells wide instead, hollow, so that none reads as a reversal dot."""
+def test_inverted_rests_on_a_fine_fate_map_fill_their_cells(tmp_path):
+    """Rings covered a fine map (such rests line up along curves there): the cells
+    themselves are filled, so that the classes around them stay in view."""
     ds = fate_dataset().interp(phi=np.linspace(-np.pi, np.pi, 400), method="nearest")
     ds["phi_rest"][:, 0] = 3.0
     fig = quiet(ds.phasemap.plot, extra="n_reversals", size="two_column")
-    marks = [l for l in fig.axes[0].lines if l.get_marker() == "o"]
-    assert len(marks) == 1 and len(marks[0].get_xdata()) == 400
-    assert marks[0].get_markerfacecolor() == "none"
-    cell = pplot._panel_width(fig.axes[0]) * 72.0 / 400
-    assert marks[0].get_markersize() <= max(2.0 * cell, 1.5)
+    fills = [c for c in fig.axes[0].collections if isinstance(c, QuadMesh)
+             and np.ma.count(c.get_array()) == int((np.cos(ds.phi_rest) < 0).sum())]
+    assert len(fills) == 1
     assert r"rest inverted ($\cos\varphi_\mathrm{rest} < 0$)" in legend_texts(fig.axes[0])
     render(fig, tmp_path)
 

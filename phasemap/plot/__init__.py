@@ -105,8 +105,9 @@ from phasemap.plot.layout import _panel_width  # noqa: F401  (the tests measure 
 from phasemap.plot.maps import (draw_boundaries, fate_figure, fate_grid_note, map_figure,
                    mark_inverted_rests, profile_figure)
 from phasemap.plot.motion import event_handle, mark_event, phase_curve_figure, trajectory_figure
-from phasemap.plot.style import (CATEGORY_COLOURS, CATEGORY_HATCHES, CYCLE, DASHES, EVENT_MARKERS, GREY,
-                    HALO, MARKERS, OKABE_ITO, OVERLAYS, PALE_GREY, SIZES, STYLE, SUNSET,
+from phasemap.plot.style import (CATEGORY_COLOURS, CATEGORY_HATCHES, CYCLE, DARK_GREY, DASHES,
+                    EVENT_MARKERS, GREY, HALO, MARKERS, OKABE_ITO, OVERLAYS, PALE_GREEN, PALE_GREY, SIZES,
+                    STYLE, SUNSET,
                     category_colour, category_hatch, overlay_patch, stagnation_patch,
                     stagnation_span, style)
 
@@ -114,6 +115,7 @@ __all__ = [
     "CATEGORY_COLOURS",
     "CATEGORY_HATCHES",
     "CYCLE",
+    "DARK_GREY",
     "DASHES",
     "EVENT_MARKERS",
     "GREY",
@@ -123,6 +125,7 @@ __all__ = [
     "METHOD_NAMES",
     "OKABE_ITO",
     "OVERLAYS",
+    "PALE_GREEN",
     "PALE_GREY",
     "SIZES",
     "STYLE",

@@ -60,7 +60,7 @@ def _method_look(method: str, j: int) -> dict:
 #: The built-in work-precision problems as panel headings.
 SYSTEM_NAMES = {
     "hinge_weightless": r"hinge pendulum, $g$ = 0 m s$^{-2}$",
-    "hinge_pendulum": "hinge pendulum",
+    "hinge_pendulum": r"hinge pendulum, $g$ = 9.81 m s$^{-2}$",
     "ladder": "ladder",
     "wheel": "wheel",
     "elliptic_pendulum": "elliptic pendulum",
@@ -247,8 +247,13 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
             if not long_x:
                 key.append("run time: per trajectory")
             if spread:
+                loads = [float(r["load"]) for r in rows
+                         if math.isfinite(float(r.get("load", math.nan)))]
+                cores = max((int(r.get("cores", 0)) for r in rows), default=0)
+                load = (f" (load average up to {max(loads):.1f}" +
+                        (f" on {cores} cores)" if cores else ")")) if loads else ""
                 key.append(f"points: the fastest of {rounds} timing rounds, bars: the slowest"
-                           if rounds > 1 else "one timing round")
+                           + load if rounds > 1 else "one timing round" + load)
             define_symbols(fig, key)
     return axes[0].figure
 

@@ -26,7 +26,7 @@ from phasemap.plot.labels import _coord, _flags, _layer, _meaning_text, _units, 
 from phasemap.plot.layout import (_angle_ticks, _annotate, _axes, _label_axis, _panel_width, _pi_text,
                      define_symbols, figure_legend, label_panels, legend_above, outer_labels,
                      width_of)
-from phasemap.plot.style import (GREY, HALO, OVERLAYS, SEQUENTIAL, SUNSET, _OI, category_colour, category_hatch,
+from phasemap.plot.style import (COUNTS, DARK_GREY, DASHES, GREY, HALO, OVERLAYS, SEQUENTIAL, SUNSET, _OI, category_colour, category_hatch,
                     _patch, overlay_patch, style)
 
 
@@ -105,17 +105,21 @@ def _draw_categorical(ax: Axes, xc, yc, codes: np.ndarray, var: xr.DataArray,
         index[mask] = i
     cmap = mcolors.ListedColormap(colours)
     norm = mcolors.BoundaryNorm(np.arange(len(present) + 1) - 0.5, len(present))
-    ax.pcolormesh(_edges(xc), _edges(yc), np.ma.masked_less(index, 0), cmap=cmap, norm=norm,
-                  shading="flat", rasterized=True, linewidth=0)
     layer = str(var.name)
+    # the gid names the layer and its classes in colour order, for a review of the figure
+    ax.pcolormesh(_edges(xc), _edges(yc), np.ma.masked_less(index, 0), cmap=cmap, norm=norm,
+                  shading="flat", rasterized=True, linewidth=0,
+                  gid=f"phasemap:{layer}:{','.join(m for m, _ in present)}")
     for m, mask in present:
         hatch, hatch_colour = category_hatch(m, layer)
         if hatch and mask.any():
             _hatch_cells(ax, xc, yc, mask, hatch, hatch_colour)
     if layer in OVERLAYS and sorted(meanings) == ["no", "yes"]:
-        # a flag that is an overlay elsewhere: its hatch, listed as the overlay is; the
-        # unhatched ordinary class needs no entry
-        return [overlay_patch(layer) for m, _ in present if m == "yes"]
+        # a flag that is an overlay elsewhere: its hatch, listed as the overlay is, and the
+        # unhatched class in its fill ("no stagnation"), so that every region is named
+        return [overlay_patch(layer) if m == "yes" else
+                _patch(c, _category_label(layer, m, meanings), m, layer)
+                for c, (m, _) in zip(colours, present)]
     return [_patch(c, _category_label(layer, m, meanings), m, layer)
             for c, (m, _) in zip(colours, present)]
 
@@ -157,7 +161,7 @@ def _draw_continuous(ax: Axes, xc, yc, data: np.ndarray, label: str, *, robust: 
         vhi = p98 if hi - p98 > spread else hi
     signed = lo < 0 < hi
     if integer and hi - lo <= 16:
-        cmap = mpl.colormaps[SEQUENTIAL].resampled(int(hi - lo) + 1)
+        cmap = COUNTS.resampled(int(hi - lo) + 1)
         norm = mcolors.BoundaryNorm(np.arange(lo, hi + 2) - 0.5, cmap.N)
     elif signed:
         cmap, m = SUNSET, max(-vlo, vhi, np.finfo(float).tiny)
@@ -243,13 +247,33 @@ def _draw_angle(ax: Axes, xc, yc, data: np.ndarray, label: str, location: str):
     return cbar
 
 
-def _mask_overlay(ax: Axes, xc, yc, mask: np.ndarray, name: str) -> Patch | None:
-    """Hatch the cells where ``mask`` (rows y, columns x) holds, and outline them."""
+def _dark_cells(ax: Axes, shape) -> np.ndarray | None:
+    """The cells (rows y, columns x) of the class map drawn on ``ax`` whose fill is dark
+    (grey level below 0.5, as a greyscale print shows it), or None without one."""
+    for artist in ax.collections:
+        gid = artist.get_gid() or ""
+        if gid.startswith("phasemap:") and gid.count(":") == 2:
+            rgba = artist.to_rgba(np.ma.asarray(artist.get_array()))
+            if rgba.shape[:-1] != tuple(shape):
+                rgba = rgba.reshape(*shape, 4)
+            level = 0.299 * rgba[..., 0] + 0.587 * rgba[..., 1] + 0.114 * rgba[..., 2]
+            return (level < 0.5) & (rgba[..., 3] > 0)
+    return None
+
+
+def _mask_overlay(ax: Axes, xc, yc, mask: np.ndarray, name: str,
+                  dark: np.ndarray | None = None) -> Patch | None:
+    """Hatch the cells where ``mask`` (rows y, columns x) holds, and outline them; over
+    ``dark`` cells the hatch is white, so that it shows on a dark class."""
     if not mask.any():
         return None
     look = OVERLAYS[name]
     xp, yp, z = _padded(xc, yc, mask)
-    _hatch_cells(ax, xc, yc, mask, look.hatch, look.colour)
+    if dark is not None and (mask & dark).any():
+        _hatch_cells(ax, xc, yc, mask & ~dark, look.hatch, look.colour)
+        _hatch_cells(ax, xc, yc, mask & dark, look.hatch, "white")
+    else:
+        _hatch_cells(ax, xc, yc, mask, look.hatch, look.colour)
     if not mask.all():
         ax.contour(xp, yp, z, levels=[0.5], colors=[look.colour], linewidths=0.6,
                    linestyles=look.linestyle)
@@ -268,13 +292,14 @@ def _overlays(ax: Axes, ds: xr.Dataset, main: str, x: str, y: str, xc, yc,
     without it).
     """
     handles = []
+    dark = _dark_cells(ax, (len(yc), len(xc)))
     for name in OVERLAYS:
         if name == main or name not in ds.data_vars or set(ds[name].dims) != {x, y}:
             continue
         mask = np.asarray(ds[name].transpose(y, x).values) == 1
         if name == "contact_lost" and shown is not None:
             mask = mask & ~shown
-        h = _mask_overlay(ax, xc, yc, mask, name)
+        h = _mask_overlay(ax, xc, yc, mask, name, dark=dark if name == "stagnation" else None)
         if h is not None:
             handles.append(h)
     if main != "singular" and "singular" in ds.data_vars and set(ds.singular.dims) == {x, y}:
@@ -301,13 +326,14 @@ def _singular_set(ax: Axes, ds: xr.Dataset, mask: np.ndarray, x: str, y: str, xc
     if not mask.any() and not coefs:
         return handles
     drawn = np.zeros_like(mask)
+    # dash-dot-dot, not solid: a class boundary is a solid black line (draw_boundaries)
     line = {"color": _OI["black"], "lw": 1.2, "zorder": 4}
-    styles = ["solid", "dashed", "dashdot", "dotted"]
+    styles = [DASHES[4], "dashed", "dashdot", "dotted"]
     for i, name in enumerate(coefs):
         z = np.asarray(ds[name].transpose(y, x).values, float)
         if np.nanmin(z) < 0 < np.nanmax(z):
             ax.contour(xc, yc, z, levels=[0.0], colors=[_OI["black"]], linewidths=1.2,
-                       linestyles=styles[i % len(styles)], zorder=4)
+                       linestyles=[styles[i % len(styles)]], zorder=4)
             branch = str(name)[len("coef_"):]
             handles.append(Line2D([], [], ls=styles[i % len(styles)], label=(
                 f"{label}, {_meaning_text(branch)}" if len(coefs) > 1 else label), **line))
@@ -316,13 +342,13 @@ def _singular_set(ax: Axes, ds: xr.Dataset, mask: np.ndarray, x: str, y: str, xc
         rows = np.flatnonzero(mask.all(axis=1))
         cols = np.flatnonzero(mask.all(axis=0))
         for j in rows:
-            ax.axhline(yc[j], **line)
+            ax.axhline(yc[j], ls=styles[0], **line)
             drawn[j, :] = True
         for i in cols:
-            ax.axvline(xc[i], **line)
+            ax.axvline(xc[i], ls=styles[0], **line)
             drawn[:, i] = True
         if rows.size or cols.size:
-            handles.append(Line2D([], [], label=label, **line))
+            handles.append(Line2D([], [], ls=styles[0], label=label, **line))
     rest = mask & ~drawn
     if rest.any():
         jj, ii = np.nonzero(rest)
@@ -424,8 +450,9 @@ def map_figure(ds: xr.Dataset, layer: str | None = None, *, x: str | None = None
                 none = dict(zip(_flags(var)[1], _flags(var)[0])).get("none")
                 shown = lost & (data == none)
         else:
-            _draw_continuous(a, xc, yc, data, axis_label(ds, layer), robust=robust,
-                             location=colorbar, units=_units(ds, layer))
+            bar = _draw_continuous(a, xc, yc, data, _map_label(ds, layer), robust=robust,
+                                   location=colorbar, units=_units(ds, layer))
+            bar.mappable.set_gid(f"phasemap:{layer}")
         if overlays:
             handles += _overlays(a, ds, layer, xdim, ydim, xc, yc, shown=shown)
         if boundaries is True:
@@ -511,6 +538,13 @@ def _layer_title(var: xr.DataArray) -> str:
 _AT_REST = {"n_reversals": "Reversals before rest"}
 
 
+def _map_label(ds: xr.Dataset, name: str) -> str:
+    """A layer's colour-bar label, the same in a map and in a fate figure."""
+    if ds[name].dtype.kind in "iu" and name in _AT_REST:
+        return _AT_REST[name]
+    return axis_label(ds, name)
+
+
 def fate_figure(ds: xr.Dataset, *, extra: str | Sequence[str] | None = None,
                 x: str | None = None, ax=None, size: str | float = "one_column",
                 robust: bool = True) -> Figure:
@@ -568,10 +602,11 @@ def fate_figure(ds: xr.Dataset, *, extra: str | Sequence[str] | None = None,
                 data = np.where(codes == _events.REST, data.astype(float), np.nan)
             if data.dtype.kind == "f":
                 blank = blank or bool(np.isnan(data).any())
-            label = _AT_REST.get(name, axis_label(ds, name)) if ds[name].dtype.kind in "iu" \
-                else axis_label(ds, name)
-            _draw_continuous(a, xc, yc, data, label, robust=robust,
-                             location="right" if wide else "bottom", units=_units(ds, name))
+            label = _map_label(ds, name)
+            bar = _draw_continuous(a, xc, yc, data, label, robust=robust,
+                                   location="right" if wide else "bottom",
+                                   units=_units(ds, name))
+            bar.mappable.set_gid(f"phasemap:{name}")
         for a in axes:
             _label_axis(a, ds, "x", xdim, xe)
             _label_axis(a, ds, "y", ydim, ye)
@@ -619,12 +654,15 @@ def fate_grid_note(ds: xr.Dataset, x: str | None = None) -> str:
 
 def mark_inverted_rests(axes: Sequence[Axes], ds: xr.Dataset, x: str, y: str, xc, yc
                         ) -> list:
-    """Ring the cells whose motion came to rest in an inverted zone (cos phi_rest < 0).
+    """Fill, in the first of ``axes``, the cells whose motion came to rest in an inverted
+    zone (cos phi_rest < 0), in dark grey; return their legend entry.
 
     Such rests are rare and isolated (the motion has just the energy to creep
     into the zone about the upper position, often with no reversal), and a
-    reader would take them for noise; the ring and its legend entry say what
-    they are.  Needs ``phi_rest`` on the map's axes.
+    reader would take them for noise; the fill and its legend entry say what
+    they are.  The cells themselves are filled, not ringed: on a fine map they
+    lie along curves, where rings hid the classes around them.  Needs
+    ``phi_rest`` on the map's axes.
     """
     if "phi_rest" not in ds.data_vars or set(ds.phi_rest.dims) != {x, y}:
         return []
@@ -633,15 +671,8 @@ def mark_inverted_rests(axes: Sequence[Axes], ds: xr.Dataset, x: str, y: str, xc
         inverted = np.cos(phi_rest) < 0
     if not inverted.any():
         return []
-    jj, ii = np.nonzero(inverted)
-    # a ring a little wider than a cell on a coarse map; on a fine one (cells under 2 pt,
-    # where such rests line up along curves) a thin ring two cells wide, which hides
-    # little: a ring, not a dot, so that it is not read as a reversal (a black dot)
-    cell = min(_panel_width(a) for a in axes) * 72.0 / max(len(xc), 1)
-    coarse = cell >= 2.0
-    mark = {"ls": "none", "marker": "o", "mec": _OI["black"], "mfc": "none"}
-    for a in axes:
-        a.plot(xc[ii], yc[jj], ms=4.0 if coarse else max(2.0 * cell, 1.5),
-               mew=0.7 if coarse else 0.4, zorder=6, **mark)
-    return [Line2D([], [], ms=4.0, mew=0.7,
-                   label=r"rest inverted ($\cos\varphi_\mathrm{rest} < 0$)", **mark)]
+    axes[0].pcolormesh(_edges(xc), _edges(yc), np.ma.masked_where(~inverted, inverted),
+                       cmap=mcolors.ListedColormap([DARK_GREY]), vmin=0.5, vmax=1.5,
+                       shading="flat", rasterized=True, linewidth=0, zorder=2.5)
+    return [Patch(facecolor=DARK_GREY, edgecolor=DARK_GREY, linewidth=0.4,
+                  label=r"rest inverted ($\cos\varphi_\mathrm{rest} < 0$)")]

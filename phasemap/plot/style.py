@@ -12,6 +12,7 @@ from typing import Sequence
 
 import matplotlib as mpl
 import matplotlib.colors as mcolors
+import numpy as np
 from matplotlib import patheffects
 from matplotlib.patches import Patch
 
@@ -37,8 +38,13 @@ OKABE_ITO = {
 _OI = OKABE_ITO
 #: The ordinary class (a unique solution, a flag that is off): out of the way.
 PALE_GREY = "#DDDDDD"
+#: A neutral colour for what is neither a class nor a curve of its own (a stopped motion).
 GREY = "#999999"
-#: Stagnation's hatch: dark enough over every class, lighter than a black curve over it.
+#: Okabe and Ito's bluish green, 53 % of the way to white: grey level 0.73, 0.11 from
+#: sky blue (contact lost) and from yellow (horizon), 0.26 from vermillion (no solution).
+PALE_GREEN = "#88D2BD"
+#: Stagnation's hatch: dark enough over every class, lighter than a black curve over it;
+#: a curve's colour that fills no class.
 DARK_GREY = "#555555"
 
 #: One colour per category meaning, the same in every figure.
@@ -48,11 +54,13 @@ CATEGORY_COLOURS = {
     "unique": PALE_GREY,
     "two": _OI["blue"],
     "continuum": _OI["reddish_purple"],
-    "three_or_more": _OI["yellow"],
+    # rare, and often a strip a few cells wide: dark, to be seen beside every class
+    "three_or_more": _OI["black"],
     # yes/no flags
     "no": PALE_GREY,
-    # fates (the terminal events)
-    "rest": _OI["bluish_green"],
+    # fates (the terminal events); rest in a pale bluish green: Okabe and Ito's own is
+    # within 0.05 in grey of no_solution's vermillion, and rest is the commonest fate
+    "rest": PALE_GREEN,
     "contact_lost": _OI["sky_blue"],
     "no_solution": _OI["vermillion"],
     "indeterminate": _OI["blue"],
@@ -91,7 +99,7 @@ CATEGORY_HATCHES = {
     "stiff": "++++",
 }
 #: The colour of a category's hatch lines, by meaning (default white).
-HATCH_COLOURS = {"contact_lost": _OI["blue"], "three_or_more": _OI["black"]}
+HATCH_COLOURS = {"contact_lost": _OI["blue"], "three_or_more": _OI["yellow"]}
 
 
 @dataclass(frozen=True)
@@ -130,6 +138,10 @@ SUNSET = mcolors.LinearSegmentedColormap.from_list("phasemap_sunset", [
     "#364B9A", "#4A7BB7", "#6EA6CD", "#98CAE1", "#C2E4EF", "#EAECCC",
     "#FEDA8B", "#FDB366", "#F67E4B", "#DD3D2D", "#A50026"])
 SEQUENTIAL = "viridis"
+#: Counts (reversals before rest): ColorBrewer's YlOrBr from its pale yellow on, one colour
+#: per count, so that a count beside a continuous layer (viridis) never reads as it.
+COUNTS = mcolors.LinearSegmentedColormap.from_list(
+    "phasemap_counts", mpl.colormaps["YlOrBr"](np.linspace(0.25, 1.0, 256)))
 
 #: Event markers, by event name: (marker, face colour).  Events that end a
 #: motion are filled, larger and edged in black; the others are small.

@@ -103,6 +103,7 @@ from __future__ import annotations
 
 import gc
 import math
+import os
 import statistics
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -288,7 +289,9 @@ def work_precision(problem: Problem | str, tolerances: Sequence[float] = DEFAULT
         ``error_scaled_final``, ``error_scaled_l2`` (dimensionless; see the
         module docstring), ``scales`` (``(name, y_hat, units, symbol)`` per
         state component), ``seconds`` (median per trajectory), ``seconds_min`` and
-        ``seconds_max`` (the spread of the ``n_samples`` rounds), ``fate``, ``n_reversals``,
+        ``seconds_max`` (the spread of the ``n_samples`` rounds), ``load`` (the
+        machine's one-minute load average as the rounds ended) and ``cores``,
+        ``fate``, ``n_reversals``,
         ``same_fate`` (fate and reversal count equal the reference's),
         ``n_steps`` (phasemap), ``nfev`` (scipy), ``skipped`` and the
         reference's ``reference`` kind, ``floor`` and ``cross_check``.
@@ -347,8 +350,11 @@ def work_precision(problem: Problem | str, tolerances: Sequence[float] = DEFAULT
                 if row["_took"] > slow and row["_samples"]:
                     continue
                 row["_samples"].append(_sample(row["_go"], min_time))
+    # the machine's one-minute load average as the rounds end: what a bar's spread says
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else math.nan
     rows = []
     for row in jobs.values():
+        row["load"], row["cores"] = float(load), os.cpu_count() or 0
         if not row["skipped"]:
             samples = row.pop("_samples")
             row["seconds"] = float(statistics.median(samples))
