@@ -267,6 +267,21 @@ def test_through_contacts_false_is_the_reduced_fate():
                            through_contacts=False)
     assert ds.attrs["end_reason"] == "contact_lost"
     assert "phasemap_coordinates" not in ds.attrs
+    # recorded, so that a figure's dense curve runs the same motion again (the default
+    # would go on through the lift-off: another motion, and its saved points were drawn)
+    from phasemap.plot.motion import dense_motion
+
+    assert ds.attrs["phasemap_through_contacts"] == "false"
+    mid = 0.5 * (ds.t.values[1:] + ds.t.values[:-1])
+    again = dense_motion(ds, mid)
+    assert again is not None and again.attrs["end_reason"] == "contact_lost"
+    tight = phasemap.simulate("ladder", t_end=1.0, phi=math.radians(30), omega=0.0, f=0.0,
+                              l=0.5, through_contacts=False, rtol=1e-12, t_eval=mid)
+    assert np.allclose(again.phi.values, tight.phi.values, rtol=0, atol=1e-6)
+    del ds.attrs["phasemap_through_contacts"]
+    assert dense_motion(ds, mid) is None
+    assert "phasemap_through_contacts" not in phasemap.simulate(
+        "ladder", t_end=1.0, phi=math.radians(30), omega=0.0, f=0.0, l=0.5).attrs
     with pytest.raises(ValueError, match="no reduced model"):
         phasemap.simulate(_ladder_with_top_on_floor(), t_end=1.0, through_contacts=False)
 

@@ -26,8 +26,8 @@ from phasemap.plot.labels import _coord, _flags, _layer, _meaning_text, _units, 
 from phasemap.plot.layout import (_angle_ticks, _annotate, _axes, _label_axis, _panel_width, _pi_text,
                      define_symbols, figure_legend, label_panels, legend_above, outer_labels,
                      width_of)
-from phasemap.plot.style import (COUNTS, DARK_GREY, DASHES, GREY, HALO, OVERLAYS, SEQUENTIAL, SUNSET, _OI, category_colour, category_hatch,
-                    _patch, overlay_patch, style)
+from phasemap.plot.style import (COUNTS, DARK_GREY, DASHES, GREY, HALO, OVERLAYS, SEQUENTIAL, SUNSET,
+                    _OI, category_colour, category_hatch, _patch, overlay_patch, style)
 
 
 #: Layers drawn over a map rather than as the map itself.
@@ -269,11 +269,10 @@ def _mask_overlay(ax: Axes, xc, yc, mask: np.ndarray, name: str,
         return None
     look = OVERLAYS[name]
     xp, yp, z = _padded(xc, yc, mask)
-    if dark is not None and (mask & dark).any():
-        _hatch_cells(ax, xc, yc, mask & ~dark, look.hatch, look.colour)
-        _hatch_cells(ax, xc, yc, mask & dark, look.hatch, "white")
-    else:
-        _hatch_cells(ax, xc, yc, mask, look.hatch, look.colour)
+    dark = np.zeros_like(mask) if dark is None else dark
+    for cells, colour in ((mask & ~dark, look.colour), (mask & dark, "white")):
+        if cells.any():
+            _hatch_cells(ax, xc, yc, cells, look.hatch, colour)
     if not mask.all():
         ax.contour(xp, yp, z, levels=[0.5], colors=[look.colour], linewidths=0.6,
                    linestyles=look.linestyle)

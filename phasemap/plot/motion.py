@@ -53,6 +53,8 @@ def dense_motion(ds: xr.Dataset, times) -> xr.Dataset | None:
     # the contact options, as simulate writes them
     names = [f.name for f in dataclasses.fields(Options)] + list(DEFAULTS)
     options = {k: a[f"phasemap_{k}"] for k in names if f"phasemap_{k}" in a}
+    if a.get("phasemap_through_contacts") == "false":   # ended where the reduced model ends
+        options["through_contacts"] = False
     try:
         values = {k.split("_", 2)[2]: float(v) for k, v in a.items()
                   if k.startswith(("phasemap_initial_", "phasemap_fixed_"))}
