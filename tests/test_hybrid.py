@@ -300,6 +300,29 @@ def test_outline_strip_draws_the_motion(falling_ladder, tmp_path):
         falling_ladder.phasemap.strip(times=[5.0])
 
 
+def test_a_full_coordinate_motion_is_drawn_by_its_coordinates(falling_ladder, tmp_path):
+    """Its default figure drew every variable on t (17 panels, the labels overlapping):
+    the coordinates alone now; their rates and the reactions by name."""
+    import matplotlib.pyplot as plt
+
+    import figure_review
+
+    ds = falling_ladder
+    fig = ds.phasemap.plot()
+    panels = [a for a in fig.axes if a.axison]
+    coordinates = [n for n in ds.data_vars if f"event_{n}" in ds.data_vars
+                   and ds[n].dims == ("t",) and "flag_values" not in ds[n].attrs
+                   and not ds[n].attrs.get("units", "").endswith("s-1")]
+    assert len(panels) == len(coordinates) == 3, coordinates
+    assert not figure_review.layout_problems(fig)
+    plt.close(fig)
+    rates = [n for n in ds.data_vars if f"event_{n}" in ds.data_vars and ds[n].dims == ("t",)
+             and ds[n].attrs.get("units", "").endswith("s-1")]
+    fig = ds.phasemap.plot(rates[:2])   # named: drawn
+    assert len([a for a in fig.axes if a.axison]) == 2
+    plt.close(fig)
+
+
 def test_cli_prints_a_motion_through_contact_changes(capsys):
     from phasemap.cli import main
 

@@ -227,7 +227,9 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
     (reversal, stick, rest...), the terminal event larger and edged, with a
     dashed vertical line at its time across the panels; the legend above
     lists the kinds present.  ``states`` picks and orders the states
-    (default: every state variable on dimension ``t``).  With
+    (default: every state variable on dimension ``t``; for a motion in full
+    coordinates, which also carries their rates, each contact's reactions, gaps
+    and points, the coordinates alone: name the others to draw them).  With
     ``phase_plane=True``, one panel of :math:`\omega` against
     :math:`\varphi` (the model's first coordinate and its velocity, from the
     attribute ``phasemap_phase_plane``; or ``states=(x, y)``) instead, where
@@ -252,6 +254,10 @@ def trajectory_figure(ds: xr.Dataset, *, states: str | Sequence[str] | None = No
     if states is None:
         plane = str(ds.attrs.get("phasemap_phase_plane", "phi omega")).split()
         states = plane if phase_plane else available
+        if not phase_plane and ds.attrs.get("phasemap_coordinates") == "full":
+            # the coordinates: saved at every event too, and not rates (units ... s-1)
+            states = [n for n in available if f"event_{n}" in ds.data_vars
+                      and not str(ds[n].attrs.get("units", "")).endswith("s-1")] or states
     elif isinstance(states, str):
         states = [states]
     states = list(states)
