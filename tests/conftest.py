@@ -114,8 +114,11 @@ def pytest_collection_modifyitems(config, items):
         if group == "studies":
             studies.add(item.nodeid)
     # the studies are the longest group: scheduled first, one worker runs them while the
-    # other takes the rest, instead of one worker running them alone at the end
-    items.sort(key=lambda item: item.nodeid not in studies)
+    # other takes the rest, instead of one worker running them alone at the end; then the
+    # long tests of a group of their own (@pytest.mark.early): last, one of them kept a
+    # worker busy for four minutes after the other had finished (a CI replay)
+    items.sort(key=lambda item: 0 if item.nodeid in studies else
+               1 if item.get_closest_marker("early") else 2)
 
 
 def _compile_log(folder: str):

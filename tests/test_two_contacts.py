@@ -239,6 +239,7 @@ def random_step_rod(seed: int):
 # each random declaration compiles kernels of its own (nothing the drawer or the peg rod
 # needs): a group of its own, so that the two workers share the module's long tests
 @pytest.mark.slow
+@pytest.mark.early
 @pytest.mark.kernels_with("tests/test_two_contacts.py::random_step_rod")
 @pytest.mark.parametrize("seed", [2])
 def test_random_step_rods_cell_by_cell_and_traced(seed):
@@ -289,6 +290,7 @@ def test_the_peg_rods_boundaries_across_omega_zero(peg_rod):
             == b.class_right.values[p]
 
 
+@pytest.mark.early
 @pytest.mark.kernels_with("tests/test_two_contacts.py::barrow")
 @pytest.mark.parametrize("seed", [1])
 def test_random_barrows_cell_by_cell_and_traced(seed):
