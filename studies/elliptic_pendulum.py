@@ -363,7 +363,9 @@ def figure_phi_omega(maps, motion, size="two_column"):
                                              [float(motion.event_omega[-1])]))
         pplot.mark_event(ax, "start", *_wrapped([float(motion.phi[0])],
                                                 [float(motion.omega[0])]))
-        ax.lines[-1].set_zorder(8)  # the first stick lies within a marker of the start: on top
+        # the first stick lies within a marker of the start: the start's ring is drawn
+        # over the stick's square, whole
+        ax.lines[-1].set_zorder(8)
         lines = [Line2D([], [], label=r"$\lambda_{+1} = 0$ (singular)", **LAMBDA_STYLE[1.0]),
                  Line2D([], [], label=r"$\lambda_{-1} = 0$ (singular)", **LAMBDA_STYLE[-1.0]),
                  Line2D([], [], label=r"$g + l\cos\varphi\,\omega^2 = 0$", **Q_STYLE),

@@ -59,8 +59,6 @@ DELTA_KEY = [r"$\delta$: radius of the hinge's friction circle (friction moment 
              r"$\delta|R|$)", r"$l$: rod length"]
 #: The looks of the phase curves (and of the weightless runs), one per start: a colour
 #: none of the study's classes fills, and a dash pattern, so that greyscale tells them apart.
-#: The study's curves: colours that fill no class of its maps (reddish purple is the
-#: continuum), each with its own dashes.
 CURVE_LOOKS = [{"color": pplot.OKABE_ITO[c], "ls": pplot.DASHES[i]}
                for i, c in enumerate(("blue", "orange", "black", "sky_blue"))]
 #: The curve l omega^2 + g cos phi = 0 (the hinge reaction vanishes): a reference curve.
@@ -242,9 +240,8 @@ def figure_moving(by_delta, by_omega, size="two_column"):
         pplot.legend_above(ax, items, title=pplot.fixed_values_text(
             by_delta, 0.9 * fig.get_figwidth()), ncols=2 if _wide(size) else 1)
         pplot.define_symbols(fig, DELTA_KEY + [
-            rf"not drawn, one class: at $\delta/l$ = {DELTA_ABOVE / L:g} every state "
-            r"($\varphi$, $\omega$) has none, but on $l\omega^2 + g\cos\varphi = 0$ "
-            "(the study checks each cell)"])
+            rf"not drawn: at $\delta/l$ = {DELTA_ABOVE / L:g}, none at every $\omega \neq 0$ "
+            r"but on $l\omega^2 + g\cos\varphi = 0$ (each cell checked)"])
     return fig
 
 
@@ -373,7 +370,7 @@ def figure_weightless(runs, size="two_column"):
             axes[k].set_ylabel(label)
             axes[k].set_title(what, loc="left")
         lo = 10.0 ** math.floor(math.log10(max(best, worst * 1e-6)))
-        # a third of a decade above the top tick: its label clear of the panel's title
+        # half a decade above the top tick: its label clear of the panel's title
         hi = 10.0 ** (math.ceil(math.log10(worst)) + 0.5)
         for a in axes[2:]:
             a.set_ylim(lo, hi)

@@ -655,9 +655,12 @@ def _legend_scope(legend, fig) -> list:
     parent = legend.parent
     panels = _panels(fig)
     if parent in panels:
-        return [parent] + [ax for ax in panels if _parent(ax, panels) is parent]
-    return [ax for ax in panels if ax.get_figure(root=False) is parent
-            or parent is fig]
+        # its insets, and a twin drawn on the same area (twinx)
+        return [parent] + [ax for ax in panels if _parent(ax, panels) is parent
+                           or (ax is not parent and ax.bbox.bounds == parent.bbox.bounds)]
+    if hasattr(parent, "get_figure") and not hasattr(parent, "legends"):
+        parent = parent.get_figure(root=False)   # a legend in a spare panel, axis off
+    return [ax for ax in panels if ax.get_figure(root=False) is parent or parent is fig]
 
 
 def _white(colour) -> bool:
@@ -673,16 +676,14 @@ def _region_artists(ax) -> list:
 
     out = []
     for artist in [*ax.collections, *ax.images, *ax.patches]:
-        if not artist.get_visible():
+        if not artist.get_visible() or getattr(artist, "colorbar", None) is not None:
             continue
         if isinstance(artist, (QuadMesh, AxesImage)):
-            if getattr(artist, "colorbar", None) is not None:
-                continue
             values = np.ma.masked_invalid(np.ma.asarray(artist.get_array(), dtype=float))
             values = np.unique(values.compressed())
             if values.size:
-                out.append((artist, [mcolors.to_hex(c, keep_alpha=True)
-                                     for c in artist.to_rgba(values)]))
+                out.append((artist, [mcolors.to_hex(c, keep_alpha=True) for c in
+                                     artist.to_rgba(values, alpha=artist.get_alpha())]))
         elif isinstance(artist, (LineCollection, PathCollection)) and \
                 not isinstance(artist, ContourSet):
             continue  # lines and markers
@@ -727,7 +728,7 @@ def _line_like(ax):
         if not artist.get_visible():
             continue
         if isinstance(artist, PathCollection) and not isinstance(artist, ContourSet):
-            for c in artist.get_facecolor():
+            for c in [*artist.get_facecolor(), *artist.get_edgecolor()]:  # hollow too
                 out.append((mcolors.to_hex(c), None, "collection", mcolors.to_hex(c)))
         elif isinstance(artist, (LineCollection, ContourSet)) and \
                 not getattr(artist, "filled", False):
@@ -780,7 +781,15 @@ def legend_drawn_problems(fig, renderer=None) -> list[str]:
     bar reads."""
     if renderer is None:
         fig.canvas.draw()
-    pixels = _pixels(fig)
+        renderer = fig.canvas.get_renderer()
+    pixels = _pixels(fig).copy()
+    # a legend's swatches and the texts are not what a panel draws: blanked out, so that
+    # an entry inside its panel is not seen in its own swatch
+    h = pixels.shape[0]
+    for _, box, _, _ in _texts(fig, renderer):
+        x0, x1 = max(int(box.x0) - 1, 0), int(np.ceil(box.x1)) + 1
+        y0, y1 = max(int(box.y0) - 1, 0), int(np.ceil(box.y1)) + 1
+        pixels[max(h - y1, 0):max(h - y0, 0), x0:x1] = -1000
     problems = []
     named: dict = {}
     for legend in _legends(fig):
@@ -836,18 +845,20 @@ def class_contrast_problems(fig) -> list[str]:
             if not isinstance(artist, (QuadMesh, AxesImage)) or \
                     getattr(artist, "colorbar", None) is not None:
                 continue
+            cats = _categories(artist)
+            if cats is None:   # a class map phasemap.plot drew (its gid names the classes)
+                continue
             values = np.unique(np.ma.masked_invalid(
                 np.ma.asarray(artist.get_array(), dtype=float)).compressed())
             if values.size < 2:
                 continue
-            cats = _categories(artist)
-            names = [cats[1][int(v)] if cats and 0 <= int(v) < len(cats[1]) else f"{v:g}"
+            names = [cats[1][int(v)] if 0 <= int(v) < len(cats[1]) else f"{v:g}"
                      for v in values]
             colours = artist.to_rgba(values)
+            flag = set(cats[1]) <= {"no", "yes"}
             for (a, ca), (b, cb) in itertools.combinations(zip(names, colours), 2):
-                # one fill on purpose (a yes/no flag drawn as a hatch over its cells): the
-                # legend check tells such entries apart by their hatch
-                if np.array_equal(ca, cb):
+                # a yes/no flag drawn as a hatch over one fill: its hatch tells them apart
+                if flag and np.array_equal(ca, cb):
                     continue
                 if abs(grey(ca) - grey(cb)) < GREY_STEP:
                     problems.append(f"classes {a!r} and {b!r} of {_name(ax)} are "
@@ -890,6 +901,12 @@ def drawn_two_ways_problems(fig) -> list[str]:
     return problems
 
 
+def _label_core(label: str) -> str:
+    """A colour bar's label without what depends on the data drawn (an angle map's
+    largest remainder, "(\u00b10.12 rad)"), spaces made one."""
+    return " ".join(re.sub(r"\(\u00b1[^)]*\)", "", label).split())
+
+
 def layer_labels(fig) -> list[tuple[str, str]]:
     """(layer, colour bar label) of every mesh phasemap.plot drew with a colour bar (its
     gid ``phasemap:LAYER``)."""
@@ -910,7 +927,7 @@ def layer_label_problems(labels_by_figure: dict[str, list[tuple[str, str]]]) -> 
     for figure, labels in labels_by_figure.items():
         for layer, label in labels:
             seen = first.setdefault(layer, (label, figure))
-            if " ".join(seen[0].split()) != " ".join(label.split()):
+            if _label_core(seen[0]) != _label_core(label):
                 problems.append(f"layer {layer!r} is {seen[0]!r} in {seen[1]} and {label!r} "
                                 f"in {figure}")
     return problems

@@ -292,6 +292,12 @@ def test_a_legend_entry_with_nothing_drawn_is_caught():
                                                  hide_row=True))
     assert hidden == [f"legend entry 'class {pink}': nothing drawn shows it"]
     assert fr.legend_drawn_problems(_class_map([grey, red, pink], [grey, red, pink])) == []
+    # a legend inside its panel is not seen in its own swatches
+    fig = _class_map([grey, red], [])
+    fig.axes[0].legend([Patch(facecolor=c, label=c) for c in (grey, red, pink)],
+                       [grey, red, pink], loc="center")
+    fig.canvas.draw()
+    assert fr.legend_drawn_problems(fig) == [f"legend entry '{pink}': nothing drawn shows it"]
     # a curve in the legend that no panel draws
     fig, (ax,) = _figure()
     ax.plot([0, 1], [0, 1], color="black", label="drawn")

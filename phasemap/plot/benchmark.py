@@ -250,8 +250,9 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
                 loads = [float(r["load"]) for r in rows
                          if math.isfinite(float(r.get("load", math.nan)))]
                 cores = max((int(r.get("cores", 0)) for r in rows), default=0)
-                load = (f" (load average up to {max(loads):.1f}" +
-                        (f" on {cores} cores)" if cores else ")")) if loads else ""
+                load = (f" (load average {max(loads):.1f}" +
+                        (f" on {cores} cores" if cores else "") +
+                        " as the rounds ended, this run included)") if loads else ""
                 key.append(f"points: the fastest of {rounds} timing rounds, bars: the slowest"
                            + load if rounds > 1 else "one timing round" + load)
             define_symbols(fig, key)

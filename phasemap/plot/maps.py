@@ -114,13 +114,11 @@ def _draw_categorical(ax: Axes, xc, yc, codes: np.ndarray, var: xr.DataArray,
         hatch, hatch_colour = category_hatch(m, layer)
         if hatch and mask.any():
             _hatch_cells(ax, xc, yc, mask, hatch, hatch_colour)
-    if layer in OVERLAYS and sorted(meanings) == ["no", "yes"]:
-        # a flag that is an overlay elsewhere: its hatch, listed as the overlay is, and the
-        # unhatched class in its fill ("no stagnation"), so that every region is named
-        return [overlay_patch(layer) if m == "yes" else
-                _patch(c, _category_label(layer, m, meanings), m, layer)
-                for c, (m, _) in zip(colours, present)]
-    return [_patch(c, _category_label(layer, m, meanings), m, layer)
+    # a flag hatched as its overlay is elsewhere (stagnation) is listed as the overlay is;
+    # every class, the plain one too ("no stagnation"), has an entry: every region is named
+    return [overlay_patch(layer) if m == "yes" and layer in OVERLAYS
+            and category_hatch(m, layer)[0] == OVERLAYS[layer].hatch else
+            _patch(c, _category_label(layer, m, meanings), m, layer)
             for c, (m, _) in zip(colours, present)]
 
 
@@ -130,7 +128,10 @@ def _category_label(layer: str, meaning: str, meanings: Sequence[str]) -> str:
     if sorted(meanings) != ["no", "yes"]:
         return _meaning_text(meaning)
     name = OVERLAYS[layer].label if layer in OVERLAYS else _meaning_text(layer)
-    return name if meaning == "yes" else f"no {name}"
+    if meaning == "yes":
+        return name
+    # "a contact would pull" -> "no contact would pull"; "stagnation" -> "no stagnation"
+    return f"no {name[2:]}" if name.startswith("a ") else f"no {name}"
 
 
 def _draw_continuous(ax: Axes, xc, yc, data: np.ndarray, label: str, *, robust: bool = True,
@@ -449,7 +450,11 @@ def map_figure(ds: xr.Dataset, layer: str | None = None, *, x: str | None = None
                 none = dict(zip(_flags(var)[1], _flags(var)[0])).get("none")
                 shown = lost & (data == none)
         else:
-            bar = _draw_continuous(a, xc, yc, data, _map_label(ds, layer), robust=robust,
+            fate = ds.get("fate")
+            codes = np.asarray(fate.transpose(ydim, xdim).values) if fate is not None \
+                and set(fate.dims) == {xdim, ydim} else None
+            data, label = _at_rest(ds, layer, data, codes)
+            bar = _draw_continuous(a, xc, yc, data, label, robust=robust,
                                    location=colorbar, units=_units(ds, layer))
             bar.mappable.set_gid(f"phasemap:{layer}")
         if overlays:
@@ -537,11 +542,15 @@ def _layer_title(var: xr.DataArray) -> str:
 _AT_REST = {"n_reversals": "Reversals before rest"}
 
 
-def _map_label(ds: xr.Dataset, name: str) -> str:
-    """A layer's colour-bar label, the same in a map and in a fate figure."""
-    if ds[name].dtype.kind in "iu" and name in _AT_REST:
-        return _AT_REST[name]
-    return axis_label(ds, name)
+def _at_rest(ds: xr.Dataset, name: str, data: np.ndarray, codes: np.ndarray | None
+             ) -> tuple[np.ndarray, str]:
+    """A layer's values to draw and its colour-bar label, the same in a map and in a fate
+    figure: a count of :data:`_AT_REST` where the motion came to rest (``codes``: the
+    fate on the same cells) is drawn there only, NaN elsewhere, so that no blank class
+    reads as "0"; any other layer as it is."""
+    if data.dtype.kind in "iu" and name in _AT_REST and codes is not None:
+        return np.where(codes == _events.REST, data.astype(float), np.nan), _AT_REST[name]
+    return data, axis_label(ds, name)
 
 
 def fate_figure(ds: xr.Dataset, *, extra: str | Sequence[str] | None = None,
@@ -599,9 +608,11 @@ def fate_figure(ds: xr.Dataset, *, extra: str | Sequence[str] | None = None,
             data = np.asarray(ds[name].transpose(ydim, xdim).values)
             if data.dtype.kind in "iu":  # a count: defined where the motion came to rest
                 data = np.where(codes == _events.REST, data.astype(float), np.nan)
+                label = _AT_REST.get(name, axis_label(ds, name))
+            else:
+                label = axis_label(ds, name)
             if data.dtype.kind == "f":
                 blank = blank or bool(np.isnan(data).any())
-            label = _map_label(ds, name)
             bar = _draw_continuous(a, xc, yc, data, label, robust=robust,
                                    location="right" if wide else "bottom",
                                    units=_units(ds, name))

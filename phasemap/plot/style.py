@@ -44,7 +44,7 @@ GREY = "#999999"
 #: sky blue (contact lost) and from yellow (horizon), 0.26 from vermillion (no solution).
 PALE_GREEN = "#88D2BD"
 #: Stagnation's hatch: dark enough over every class, lighter than a black curve over it;
-#: a curve's colour that fills no class.
+#: also the fill of the rare rests in an inverted zone on a fate map.
 DARK_GREY = "#555555"
 
 #: One colour per category meaning, the same in every figure.
@@ -59,7 +59,7 @@ CATEGORY_COLOURS = {
     # yes/no flags
     "no": PALE_GREY,
     # fates (the terminal events); rest in a pale bluish green: Okabe and Ito's own is
-    # within 0.05 in grey of no_solution's vermillion, and rest is the commonest fate
+    # 0.05 in grey from no_solution's vermillion, and rest is the commonest fate
     "rest": PALE_GREEN,
     "contact_lost": _OI["sky_blue"],
     "no_solution": _OI["vermillion"],
@@ -139,7 +139,8 @@ SUNSET = mcolors.LinearSegmentedColormap.from_list("phasemap_sunset", [
     "#FEDA8B", "#FDB366", "#F67E4B", "#DD3D2D", "#A50026"])
 SEQUENTIAL = "viridis"
 #: Counts (reversals before rest): ColorBrewer's YlOrBr from its pale yellow on, one colour
-#: per count, so that a count beside a continuous layer (viridis) never reads as it.
+#: per count (up to 17 counts; a wider range is drawn as a continuous layer), so that a
+#: count beside a continuous layer (viridis) never reads as it.
 COUNTS = mcolors.LinearSegmentedColormap.from_list(
     "phasemap_counts", mpl.colormaps["YlOrBr"](np.linspace(0.25, 1.0, 256)))
 
