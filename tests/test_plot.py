@@ -1182,3 +1182,19 @@ def test_a_file_with_more_cells_than_a_figure_is_read_at_its_resolution(tmp_path
     assert png.exists() and drawn == [{"phi": 76, "f": 7}]
     small = command.reduced(ds.isel(phi=slice(0, 50)))
     assert small[1] == "" and small[0].sizes["phi"] == 50
+
+
+def test_a_yes_no_map_names_both_classes_in_their_own_look(tmp_path):
+    """A flag map's plain class has its entry too (the referee's grey region with none),
+    and a flag not hatched as its overlay is listed as its cells look."""
+    ds = phasemap.Scene("wheel", axes={"phi": np.linspace(-3, 3, 40),
+                                       "omega": np.linspace(-8, 8, 30)},
+                        layers=["contact_lost", "stagnation"]).compute()
+    for layer, texts in (("contact_lost", ["no contact would pull", "a contact would pull"]),
+                         ("stagnation", ["no stagnation", "stagnation"])):
+        fig = quiet(pplot.map_figure, ds, layer, x="phi", overlays=False)
+        present = {int(v) for v in np.unique(ds[layer].values)}
+        assert sorted(legend_texts(fig.axes[0])) == sorted(
+            t for t, v in zip(texts, (0, 1)) if v in present), layer
+        assert not figure_review.legend_drawn_problems(fig), layer
+        plt.close(fig)
