@@ -902,9 +902,10 @@ def drawn_two_ways_problems(fig) -> list[str]:
 
 
 def _label_core(label: str) -> str:
-    """A colour bar's label without what depends on the data drawn (an angle map's
-    largest remainder, "(\u00b10.12 rad)"), spaces made one."""
-    return " ".join(re.sub(r"\(\u00b1[^)]*\)", "", label).split())
+    """A colour bar's label without what depends on the data drawn: an angle map drawn as
+    the nearest multiples of pi says so after its label (", nearest multiple of pi
+    (\u00b10.12 rad)"); spaces made one."""
+    return " ".join(re.sub(r",\s*nearest\s+multiple of .*$", "", label, flags=re.S).split())
 
 
 def layer_labels(fig) -> list[tuple[str, str]]:

@@ -62,3 +62,15 @@ def test_readme_tour_counts_are_the_studies_own(studies):
             f"{count['erratum']} confirm errata, {count['sharper']} is sharper and "
             f"{count['finding']} are findings") in readme
     assert re.search(rf"an overview, {figures} figures", readme)
+
+
+def test_one_layer_has_one_label_across_the_tour(studies):
+    """The referee read the tour's figures together: ``n_reversals`` was "Reversals
+    before rest" in the wheel's fate figure and its long name in the hinge pendulum's
+    map.  Each study's review checks its own figures; this checks them all."""
+    from phasemap.tour import ORDER
+
+    labels = {f"{n}/{fig}": what["layers"] for n in ORDER
+              for fig, what in studies(n).seen.items()}
+    assert any(layer == "n_reversals" for pairs in labels.values() for layer, _ in pairs)
+    assert figure_review.layer_label_problems(labels) == []

@@ -187,9 +187,8 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     through_contacts:
         go on through contact changes (the default), or end where the reduced model
         (every contact closed) ends, with ``contact_lost``, ``no_solution`` or
-        ``indeterminate``: the fate :func:`phasemap.phase_curve` and the fate maps give.
-        ``False`` is recorded (attribute ``phasemap_through_contacts = "false"``), so that
-        the motion can be run again as it was (a figure's dense curve does).
+        ``indeterminate``: the fate :func:`phasemap.phase_curve` and the fate maps give
+        (``False`` is recorded, ``phasemap_through_contacts = "false"``, for a re-run).
     **values:
         initial state and parameters by name (``phasemap models`` lists them);
         missing names take the model's defaults.  The elliptic pendulum also
@@ -283,8 +282,7 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
                 y0s[:, j] = starts[n]
         ds = _batch(m, full, positions, opts, names, y0s, te if t_eval is not None else None,
                     run_batch(m, opts.method, v.copy(), y0s, *run))
-        if not through_contacts:
-            ds.attrs["phasemap_through_contacts"] = "false"
+        ds.attrs.update({} if through_contacts else {"phasemap_through_contacts": "false"})
         if capped is not None and np.isin(ds.end_reason.values,
                                           [ev.MAX_STEPS, ev.MAX_EVENTS]).any():
             warnings.warn(f"{m.name}: some motions stopped at max_steps or max_events lowered "
@@ -307,8 +305,7 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
                   *_columns(points, events, y_eval, te if t_eval is not None else None))
     if impacts:
         _impact_variables(ds, impacts)
-    if not through_contacts:   # the default is not written: every other motion as before
-        ds.attrs["phasemap_through_contacts"] = "false"
+    ds.attrs.update({} if through_contacts else {"phasemap_through_contacts": "false"})
     if capped is not None and int(fate) in (ev.MAX_STEPS, ev.MAX_EVENTS):
         _say_memory(m, ds, opts, capped)
     return ds
