@@ -253,8 +253,8 @@ def work_precision_figure(table: Sequence[Mapping], *, error: str = "error_final
                 load = (f" (load average {max(loads):.1f}" +
                         (f" on {cores} cores" if cores else "") +
                         " as the rounds ended, this run included)") if loads else ""
-                key.append(f"points: the fastest of {rounds} timing rounds, bars: the slowest"
-                           + load if rounds > 1 else "one timing round" + load)
+                key.append((f"points: the fastest of {rounds} timing rounds, bars: the slowest"
+                            if rounds > 1 else "one timing round") + load)
             define_symbols(fig, key)
     return axes[0].figure
 

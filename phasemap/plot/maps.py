@@ -27,7 +27,8 @@ from phasemap.plot.layout import (_angle_ticks, _annotate, _axes, _label_axis, _
                      define_symbols, figure_legend, label_panels, legend_above, outer_labels,
                      width_of)
 from phasemap.plot.style import (COUNTS, DARK_GREY, DASHES, GREY, HALO, OVERLAYS, SEQUENTIAL, SUNSET,
-                    _OI, category_colour, category_hatch, _patch, overlay_patch, style)
+                    _OI, category_colour, category_hatch, grey_level, _patch, overlay_patch,
+                    style)
 
 
 #: Layers drawn over a map rather than as the map itself.
@@ -77,8 +78,9 @@ def _hatch_cells(ax: Axes, xc, yc, mask: np.ndarray, hatch: str, colour: str):
 
 def _draw_categorical(ax: Axes, xc, yc, codes: np.ndarray, var: xr.DataArray,
                       all_categories: bool = False, lost: np.ndarray | None = None
-                      ) -> list[Patch]:
-    """A categorical layer (rows y, columns x) in its category colours; the legend handles.
+                      ) -> tuple[list[Patch], np.ndarray]:
+    """A categorical layer (rows y, columns x) in its category colours; the legend handles,
+    and the cells whose class is dark in a greyscale print (a hatch over them is white).
 
     Categories with a hatch (:data:`CATEGORY_HATCHES`) are hatched over their
     colour.  ``lost`` (rows y, columns x) marks where a one-sided contact
@@ -114,12 +116,16 @@ def _draw_categorical(ax: Axes, xc, yc, codes: np.ndarray, var: xr.DataArray,
         hatch, hatch_colour = category_hatch(m, layer)
         if hatch and mask.any():
             _hatch_cells(ax, xc, yc, mask, hatch, hatch_colour)
+    dark = np.zeros(codes.shape, dtype=bool)
+    for c, (_, mask) in zip(colours, present):
+        if grey_level(c) < 0.5:
+            dark |= mask
     # a flag hatched as its overlay is elsewhere (stagnation) is listed as the overlay is;
     # every class, the plain one too ("no stagnation"), has an entry: every region is named
     return [overlay_patch(layer) if m == "yes" and layer in OVERLAYS
             and category_hatch(m, layer)[0] == OVERLAYS[layer].hatch else
             _patch(c, _category_label(layer, m, meanings), m, layer)
-            for c, (m, _) in zip(colours, present)]
+            for c, (m, _) in zip(colours, present)], dark
 
 
 def _category_label(layer: str, meaning: str, meanings: Sequence[str]) -> str:
@@ -248,20 +254,6 @@ def _draw_angle(ax: Axes, xc, yc, data: np.ndarray, label: str, location: str):
     return cbar
 
 
-def _dark_cells(ax: Axes, shape) -> np.ndarray | None:
-    """The cells (rows y, columns x) of the class map drawn on ``ax`` whose fill is dark
-    (grey level below 0.5, as a greyscale print shows it), or None without one."""
-    for artist in ax.collections:
-        gid = artist.get_gid() or ""
-        if gid.startswith("phasemap:") and gid.count(":") == 2:
-            rgba = artist.to_rgba(np.ma.asarray(artist.get_array()))
-            if rgba.shape[:-1] != tuple(shape):
-                rgba = rgba.reshape(*shape, 4)
-            level = 0.299 * rgba[..., 0] + 0.587 * rgba[..., 1] + 0.114 * rgba[..., 2]
-            return (level < 0.5) & (rgba[..., 3] > 0)
-    return None
-
-
 def _mask_overlay(ax: Axes, xc, yc, mask: np.ndarray, name: str,
                   dark: np.ndarray | None = None) -> Patch | None:
     """Hatch the cells where ``mask`` (rows y, columns x) holds, and outline them; over
@@ -281,7 +273,7 @@ def _mask_overlay(ax: Axes, xc, yc, mask: np.ndarray, name: str,
 
 
 def _overlays(ax: Axes, ds: xr.Dataset, main: str, x: str, y: str, xc, yc,
-              shown: np.ndarray | None = None) -> list:
+              shown: np.ndarray | None = None, dark: np.ndarray | None = None) -> list:
     """Hatch ``stagnation`` and ``contact_lost`` and draw the ``singular`` set over a map.
 
     Each in its one look (:data:`~phasemap.plot.style.OVERLAYS`).  ``shown``
@@ -289,10 +281,10 @@ def _overlays(ax: Axes, ds: xr.Dataset, main: str, x: str, y: str, xc, yc,
     :func:`_draw_categorical`); they are not hatched twice.  Over any other
     class the blue hatch says that a branch would need a contact to pull
     while another branch holds (the contact opens, or the motion goes on
-    without it).
+    without it).  ``dark`` marks the cells of a class map that print dark: the
+    stagnation hatch is white over them.
     """
     handles = []
-    dark = _dark_cells(ax, (len(yc), len(xc)))
     for name in OVERLAYS:
         if name == main or name not in ds.data_vars or set(ds[name].dims) != {x, y}:
             continue
@@ -438,14 +430,14 @@ def map_figure(ds: xr.Dataset, layer: str | None = None, *, x: str | None = None
         (a,) = _axes(ax, 1, (width, height), "map_figure")
         xc, yc = _coord(ds, xdim), _coord(ds, ydim)
         data = np.asarray(var.transpose(ydim, xdim).values)
-        handles = []
+        handles, dark = [], None
         lost = None
         if overlays and "contact_lost" in ds.data_vars and layer != "contact_lost" \
                 and set(ds.contact_lost.dims) == {xdim, ydim}:
             lost = np.asarray(ds.contact_lost.transpose(ydim, xdim).values) == 1
         shown = None
         if is_categorical(var):
-            handles = _draw_categorical(a, xc, yc, data, var, all_categories, lost=lost)
+            handles, dark = _draw_categorical(a, xc, yc, data, var, all_categories, lost=lost)
             if lost is not None and str(var.name) == "n_solutions":
                 none = dict(zip(_flags(var)[1], _flags(var)[0])).get("none")
                 shown = lost & (data == none)
@@ -458,7 +450,7 @@ def map_figure(ds: xr.Dataset, layer: str | None = None, *, x: str | None = None
                                    location=colorbar, units=_units(ds, layer))
             bar.mappable.set_gid(f"phasemap:{layer}")
         if overlays:
-            handles += _overlays(a, ds, layer, xdim, ydim, xc, yc, shown=shown)
+            handles += _overlays(a, ds, layer, xdim, ydim, xc, yc, shown=shown, dark=dark)
         if boundaries is True:
             from phasemap.bifurcation.overlay import map_boundaries
 
@@ -545,11 +537,12 @@ _AT_REST = {"n_reversals": "Reversals before rest"}
 def _at_rest(ds: xr.Dataset, name: str, data: np.ndarray, codes: np.ndarray | None
              ) -> tuple[np.ndarray, str]:
     """A layer's values to draw and its colour-bar label, the same in a map and in a fate
-    figure: a count of :data:`_AT_REST` where the motion came to rest (``codes``: the
+    figure: a count (an integer layer) where the motion came to rest (``codes``: the
     fate on the same cells) is drawn there only, NaN elsewhere, so that no blank class
-    reads as "0"; any other layer as it is."""
-    if data.dtype.kind in "iu" and name in _AT_REST and codes is not None:
-        return np.where(codes == _events.REST, data.astype(float), np.nan), _AT_REST[name]
+    reads as "0", under its :data:`_AT_REST` label; any other layer as it is."""
+    if data.dtype.kind in "iu" and codes is not None:
+        return (np.where(codes == _events.REST, data.astype(float), np.nan),
+                _AT_REST.get(name, axis_label(ds, name)))
     return data, axis_label(ds, name)
 
 
@@ -602,15 +595,11 @@ def fate_figure(ds: xr.Dataset, *, extra: str | Sequence[str] | None = None,
         xc, yc = _coord(ds, xdim), _coord(ds, ydim)
         xe, ye = _edges(xc), _edges(yc)
         codes = np.asarray(fate.transpose(ydim, xdim).values)
-        handles = _draw_categorical(axes[0], xc, yc, codes, fate)
+        handles, _ = _draw_categorical(axes[0], xc, yc, codes, fate)
         blank = False
         for a, name in zip(axes[1:], extras):
-            data = np.asarray(ds[name].transpose(ydim, xdim).values)
-            if data.dtype.kind in "iu":  # a count: defined where the motion came to rest
-                data = np.where(codes == _events.REST, data.astype(float), np.nan)
-                label = _AT_REST.get(name, axis_label(ds, name))
-            else:
-                label = axis_label(ds, name)
+            data, label = _at_rest(ds, name, np.asarray(ds[name].transpose(ydim, xdim).values),
+                                   codes)
             if data.dtype.kind == "f":
                 blank = blank or bool(np.isnan(data).any())
             bar = _draw_continuous(a, xc, yc, data, label, robust=robust,

@@ -268,6 +268,12 @@ def stagnation_patch(label: str | None = None) -> Patch:
     return overlay_patch("stagnation", label)
 
 
+def grey_level(colour) -> float:
+    """The grey level of an opaque ``colour`` in a greyscale print (0 black, 1 white)."""
+    r, g, b = mcolors.to_rgb(colour)
+    return 0.299 * r + 0.587 * g + 0.114 * b
+
+
 def category_colour(meaning: str, layer: str | None = None, used: Sequence[str] = ()) -> str:
     """The colour of category ``meaning`` of ``layer``: the same in every figure."""
     if meaning == "yes" and layer in FLAG_COLOURS:
