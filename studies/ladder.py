@@ -229,14 +229,18 @@ def solvability_figure(atlas: xr.Dataset, size="two_column"):
         if "class boundary" in handles:  # beside the other curves, after the classes
             handles["class boundary"] = handles.pop("class boundary")
         if "singular" in handles:  # the coefficient 2 - f^2 of (8) vanishes
-            # the continuum's cells lie on that row, under its line: named with it
-            more = r" (or a continuum)" if handles.pop("continuum", None) else ""
-            handles[rf"singular: $f = \sqrt{{2}}${more}"] = handles.pop("singular")
+            handles[r"singular: $f = \sqrt{2}$"] = handles.pop("singular")
+        # the continuum is the ladder lying flat at rest: the edge column phi = pi/2 of
+        # (a), too thin to see, so named in the key rather than the legend
+        flat = handles.pop("continuum", None) is not None
         handles[r"$\varphi = 2\,\arctan f$ (rest boundary)"] = Line2D([], [], **REST_BOUNDARY)
         order = ["unique", "contact lost", "a contact would pull", "stagnation"]
         keys = sorted(handles, key=lambda s: order.index(s) if s in order else len(order))
         pplot.figure_legend(fig, [handles[k] for k in keys], keys, ncols=_half(keys, size),
                             title=pplot.fixed_values_text(atlas, 0.95 * fig.get_figwidth()))
+        if flat:
+            pplot.define_symbols(fig, [r"a continuum at rest where the ladder lies flat "
+                                       r"($\varphi = \pi/2$, the right edge of (a))"])
     return fig
 
 
