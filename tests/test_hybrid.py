@@ -446,9 +446,9 @@ def test_a_step_of_almost_no_height_makes_redundant_contacts_that_answer():
 def test_a_full_motion_keeps_to_the_memory_available(monkeypatch):
     """Issue 42: the saved points of a motion in full coordinates are bounded by the
     memory available, as the reduced integrator's are; a motion cut there says so."""
-    from phasemap.motion import simulate as sim
+    from phasemap.motion.hybrid import start
 
-    monkeypatch.setattr(sim, "available_memory", lambda: 4_000_000)
+    monkeypatch.setattr(start, "available_memory", lambda: 4_000_000)
     with pytest.warns(RuntimeWarning, match="would not fit in the memory"):
         ds = phasemap.simulate(BALL, t_end=60.0, rtol=1e-10, restitution=0.95, y=1.0,
                                max_step=1e-3)

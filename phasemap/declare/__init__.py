@@ -119,7 +119,7 @@ The package
 
 from __future__ import annotations
 
-from phasemap.declare.api import Body, Coordinate, Parameter, Rate
+from phasemap.declare.api import SLIP_SPEED, TIME, Body, Coordinate, Parameter, Rate
 from phasemap.declare.admissibility import Condition, conditions
 from phasemap.declare.contacts import EdgeContact, Joint, PointContact, RollingContact
 from phasemap.declare.law import ContactLaw
@@ -128,4 +128,4 @@ from phasemap.declare.system import System
 
 __all__ = ["Parameter", "Rate", "Coordinate", "Body", "PointContact", "EdgeContact",
            "RollingContact", "Joint", "ContactLaw", "System", "load",
-           "Condition", "conditions"]
+           "Condition", "conditions", "TIME", "SLIP_SPEED"]

@@ -43,6 +43,38 @@ def sym(x):
     return x._sympy_() if isinstance(x, _Symbolic) else sp.sympify(x)
 
 
+class _Special(_Symbolic):
+    """A name phasemap gives a meaning to (:data:`TIME`, :data:`SLIP_SPEED`)."""
+
+    def __init__(self, name: str, doc: str):
+        self.name, self.__doc__ = name, doc
+
+    def _sympy_(self):
+        import sympy as sp
+
+        return sp.Symbol(self.name, real=True)
+
+    def __repr__(self):
+        return self.name
+
+
+#: The time ``t`` (s), in the applied forces (``forces=``) and a surface's velocity
+#: (``surface_velocity=``) of a forced system, which declares its ``period=``:
+#: ``F0 * sp.cos(Omega * TIME)``.
+TIME = _Special("t", "The time t (s) of a forced system (see System's period=).")
+#: A contact's relative sliding speed ``|v_rel|`` (>= 0), in a slip coefficient that
+#: depends on it (a Stribeck curve): ``friction=f_s / (1 + delta * SLIP_SPEED)``.
+SLIP_SPEED = _Special("slip_speed", "A contact's relative sliding speed |v_rel| (>= 0), in "
+                      "a friction law that depends on it.")
+#: The names above, which a declaration may not give to its own quantities.
+SPECIAL_NAMES = frozenset({TIME.name, SLIP_SPEED.name})
+
+
+def uses(e, special) -> bool:
+    """Whether the expression ``e`` depends on the special name ``special``."""
+    return sym(special) in sym(e).free_symbols
+
+
 def numeric_bound(bound) -> bool:
     """Whether a coordinate's bound is a number (else an expression of the parameters,
     checked through sympy by the model's ``check``): one rule for the build, the

@@ -19,7 +19,7 @@ from phasemap._version import __version__
 from phasemap.core.model import Candidate, Derived, Dynamics, Model, Variable
 from phasemap.declare.api import Coordinate, numeric_bound, sym
 from phasemap.declare.emit import GENERATION, module_source
-from phasemap.declare.validation import IDENT, fail, validate
+from phasemap.declare.validation import IDENT, fail, reduced_limits, validate
 
 
 def canonical(S) -> str:
@@ -45,15 +45,24 @@ def canonical(S) -> str:
     parts.append(e(S.potential))
     parts.append(repr(sorted((k.name if isinstance(k, Coordinate) else k, e(v))
                              for k, v in S.forces.items())))
+    if sym(S.dissipation) != 0:      # (appended only where declared: the keys of the
+        parts.append("dissipation " + e(S.dissipation))   # declarations before stay)
+    if S.period is not None:
+        parts.append("period " + e(S.period))
     for c in S.contacts:
         d = {k: (e(v) if not isinstance(v, (str, tuple)) else
                  (tuple(e(x) for x in v) if isinstance(v, tuple) else v))
-             for k, v in c.__dict__.items()}
+             for k, v in c.__dict__.items() if k not in _UNLESS_SET or v != _UNLESS_SET[k]}
         parts.append(type(c).__name__ + repr(sorted(d.items())))
     parts.append(repr(sorted((k, tuple(v)) for k, v in S.default_axes.items())))
     parts.append(repr(sorted(S.edges.items())))
     parts.append(repr(getattr(S.check, "__qualname__", None)))
     return "\n".join(parts)
+
+
+#: Contact fields a declaration's key holds only where they are set (they came after
+#: atlases recorded their declarations' keys): the field's value when not set.
+_UNLESS_SET = {"static_friction": None, "surface_velocity": 0}
 
 
 def declaration_sha256(S) -> str:
@@ -79,6 +88,7 @@ def cache_stem(S) -> str:
 def generated(S):
     """The generated module of ``S`` (validated; derived once, then loaded from the cache)."""
     validate(S)
+    reduced_limits(S)
     return _codegen.load_module(cache_stem(S), lambda: module_source(S))
 
 

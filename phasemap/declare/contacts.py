@@ -60,9 +60,22 @@ class PointContact(ContactLaw):
     normal : tuple of two numbers, default (0, 1)
     offset : number or expression, default 0
     friction : Parameter or expression, optional
-        the Coulomb coefficient; None for a smooth contact.
+        the Coulomb coefficient (while slipping: the kinetic one); 0 for a smooth
+        contact.  It may depend on the relative sliding speed
+        :data:`phasemap.declare.SLIP_SPEED` (a Stribeck curve).
     sided : {"one", "two"}, default "one"
     long_name : str
+    static_friction : Parameter or expression, optional
+        the static coefficient f_s >= ``friction`` (at zero speed): the limit of
+        sticking, and what a slip must overcome to start.  None: ``friction``.
+    surface_velocity : expression, default 0
+        the surface's own velocity along the tangent (a belt; an expression of the
+        parameters and :data:`phasemap.declare.TIME`): slipping and sticking are
+        relative to it, sticking means moving with the surface.
+
+    A contact with ``static_friction``, ``surface_velocity`` or a speed-dependent
+    ``friction`` moves in full coordinates (:func:`phasemap.simulate`,
+    :mod:`phasemap.motion.hybrid`); the maps of such a system are not built yet.
 
     Examples
     --------
@@ -81,8 +94,11 @@ class PointContact(ContactLaw):
     friction: object = None
     sided: str = "one"
     long_name: str = ""
+    static_friction: object = None
+    surface_velocity: object = 0
 
     friction_field = "friction"
+    speed_field = "friction"
     slip_channel = "T"
     point_fields = ("point", "normal")
     scalar_fields = ("offset",)
@@ -90,6 +106,26 @@ class PointContact(ContactLaw):
     def check_choices(self, fail):
         if self.sided not in ("one", "two"):
             fail(f"sided must be 'one' or 'two', got {self.sided!r}")
+
+    def validate(self, fail, expr) -> None:
+        from phasemap.declare.api import TIME
+
+        super().validate(fail, expr)
+        part = f"contact {self.name!r}"
+        if self.static_friction is not None:
+            expr(f"{part} static_friction", self.static_friction)
+        expr(f"{part} surface_velocity", self.surface_velocity, allow=(TIME.name,))
+        if sym(self.surface_velocity) != 0 and hasattr(self, "corner"):
+            fail(f"{part} surface_velocity", "an edge contact's obstacle is a fixed corner: "
+                 "it has no surface to move")
+
+    def static_expr(self):
+        """The static coefficient (the friction law at zero speed where not declared)."""
+        from phasemap.declare.api import SLIP_SPEED
+
+        if self.static_friction is not None:
+            return sym(self.static_friction)
+        return self.law_expr().xreplace({sym(SLIP_SPEED): 0})
 
     def kinematics(self, vel):
         nv = _unit_normal(self.normal)

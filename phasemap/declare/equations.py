@@ -79,11 +79,13 @@ class Equations:
         V = sym(S.potential)
         forces = {(k.name if isinstance(k, Coordinate) else k): sym(v)
                   for k, v in S.forces.items()}
+        D = sym(S.dissipation)
         h = []
         for i in range(n):
             p = sp.diff(T, qd[i])
             h.append(sp.diff(T, q[i]) - sum(sp.diff(p, q[j]) * qd[j] for j in range(n))
-                     - sp.diff(V, q[i]) + forces.get(S.coordinates[i].name, 0))
+                     - sp.diff(V, q[i]) + forces.get(S.coordinates[i].name, 0)
+                     - (sp.diff(D, qd[i]) if D != 0 else 0))
         return M, h
 
     def _contacts(self):

@@ -53,7 +53,8 @@ class Mechanics:
     #: the declared domain conditions (each >= 0) as one function of (q, p)
     domain: Callable
     n_domain: int
-    #: (q, u, p) -> the flat list [M (n*n), h (n), g (k), J (2k*n), bias (2k), mu (k)]
+    #: (q, u, p, t) -> the flat list [M (n*n), h (n), g (k), J (2k*n), bias (2k), mu (k)]
+    #: (``mu``: the static coefficients, the limits of sticking)
     _pieces: Callable
     #: (q, p) -> [x, y of each body's centre of mass, then of each contact's body point]
     _points: Callable = None
@@ -61,6 +62,14 @@ class Mechanics:
     #: nan) (an edge contact: the obstacle is the corner, its body point in ``points``)
     surfaces: Callable = None
     n_bodies: int = 0
+    #: (p, t) -> per contact its surface's tangential velocity, then its rate (2k), or
+    #: None where every surface is at rest
+    _surface: Callable | None = None
+    #: per contact, (q, u, p, t, speed) -> its slip coefficient at the sliding speed,
+    #: or None where every contact slips with its static coefficient (plain Coulomb)
+    _kinetic: tuple | None = None
+    #: p -> the forcing period, or None: the system does not depend on the time
+    period: Callable | None = None
 
     def points(self, q, p):
         """``(centres, contacts)``: each body's centre of mass (b, 2) and each contact's
@@ -73,11 +82,39 @@ class Mechanics:
     def n(self) -> int:
         return len(self.coordinates)
 
-    def pieces(self, q, u, p):
-        """``(M, h, g, J, b, mu)`` at the state ``(q, u)`` and parameters ``p`` (arrays;
-        ``J`` is (k, 2, n), ``b`` (k, 2): normal then tangential)."""
+    @property
+    def can_rest(self) -> bool:
+        """Whether a motion that stops stays stopped: no forcing in time, no moving
+        surface."""
+        return self.period is None and self._surface is None
+
+    @property
+    def plain(self) -> bool:
+        """Surfaces at rest and Coulomb's law with one coefficient per contact."""
+        return self._surface is None and self._kinetic is None
+
+    def surface(self, p, t):
+        """``(s, s')``: each contact surface's tangential velocity and its rate at ``t``."""
+        k = len(self.contacts)
+        if self._surface is None:
+            return np.zeros(k), np.zeros(k)
+        a = np.array(self._surface(*p, t), dtype=float)
+        return a[:k], a[k:]
+
+    def kinetic(self, q, u, p, t, speed, mu):
+        """Each contact's slip coefficient at the sliding speeds ``speed`` (k,); ``mu`` the
+        static ones (:meth:`pieces`), which plain Coulomb slips with."""
+        if self._kinetic is None:
+            return mu
+        return np.array([fn(*q, *u, *p, t, float(v)) for fn, v in zip(self._kinetic, speed)],
+                        dtype=float)
+
+    def pieces(self, q, u, p, t=0.0):
+        """``(M, h, g, J, b, mu)`` at the state ``(q, u)``, parameters ``p`` and time ``t``
+        (arrays; ``J`` is (k, 2, n), ``b`` (k, 2): normal then tangential; ``mu`` the
+        static coefficients)."""
         n, k = self.n, len(self.contacts)
-        flat = np.array(self._pieces(*q, *u, *p), dtype=float)
+        flat = np.array(self._pieces(*q, *u, *p, t), dtype=float)
         i = 0
         M = flat[i:i + n * n].reshape(n, n)
         i += n * n
@@ -120,7 +157,7 @@ def rate_name(c) -> str:
 def _make(S) -> Mechanics:
     import sympy as sp
 
-    from phasemap.declare.api import sym
+    from phasemap.declare.api import SLIP_SPEED, TIME, sym
     from phasemap.declare.contacts import _unit_normal
     from phasemap.declare.equations import FreeEquations
     from phasemap.declare.validation import fail, validate
@@ -138,7 +175,7 @@ def _make(S) -> Mechanics:
         g.append(eqs.gaps[c.name][0])
         J += list(ch["N"][0]) + list(ch["T"][0])
         b += [ch["N"][1], ch["T"][1]]
-        mu.append(c.law_expr())
+        mu.append(c.static_expr() if hasattr(c, "static_expr") else c.law_expr())
     pts, surf = [], []
     for body in S.bodies:
         pts += [sym(body.position[0]), sym(body.position[1])]
@@ -150,8 +187,20 @@ def _make(S) -> Mechanics:
             pts += [sym(c.point[0]), sym(c.point[1])]
             surf += [*_unit_normal(c.normal), sym(c.offset)]
     flat = [*eqs.M, *eqs.h, *g, *J, *b, *mu]
-    args = [*eqs.q, *eqs.qd, *eqs.params]
+    t, speed = sym(TIME), sym(SLIP_SPEED)
+    args = [*eqs.q, *eqs.qd, *eqs.params, t]
     pieces = sp.lambdify(args, flat, modules="math", cse=True)
+    moving = [sym(getattr(c, "surface_velocity", 0)) for c in S.contacts]
+    surface = None
+    if any(v != 0 for v in moving):
+        surface = sp.lambdify([*eqs.params, t], moving + [sp.diff(v, t) for v in moving],
+                              modules="math")
+    kinetic = None
+    if any(sp.sympify(c.law_expr()) != m_ for c, m_ in zip(S.contacts, mu)):
+        kinetic = tuple(sp.lambdify([*args, speed], c.law_expr(), modules="math")
+                        for c in S.contacts)
+    period = None if S.period is None else sp.lambdify(eqs.params, sym(S.period),
+                                                        modules="math")
     qp = [*eqs.q, *eqs.params]
     dom = [e for e, _ in eqs.domain]
     domain = sp.lambdify(qp, dom or [sp.Integer(1)], modules="math", cse=True)
@@ -174,7 +223,7 @@ def _make(S) -> Mechanics:
         sp.lambdify(qp, pts, modules="math"),
         _surfaces(sp.lambdify(eqs.params, surf or [sp.Integer(0)], modules="math"),
                   len(S.contacts)),
-        len(S.bodies))
+        len(S.bodies), surface, kinetic, period)
 
 
 def _surfaces(fn, k):

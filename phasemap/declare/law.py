@@ -295,6 +295,8 @@ class ContactLaw(abc.ABC):
     slip_channel: ClassVar[str]
     #: the friction law is squared to be solved (at most one such contact per system)
     squared_law: ClassVar[bool] = False
+    #: the field whose law may depend on the sliding speed (``SLIP_SPEED``), if any
+    speed_field: ClassVar[str | None] = None
     #: fields that are points (x, y) and scalar expressions, validated as expressions
     point_fields: ClassVar[tuple[str, ...]] = ()
     scalar_fields: ClassVar[tuple[str, ...]] = ()
@@ -321,7 +323,10 @@ class ContactLaw(abc.ABC):
         if self.friction_law is None:
             fail(part, f"has no friction law: give {law}= (a parameter or an expression; 0 for "
                  "a frictionless contact)")
-        expr(f"{part} {law}", self.friction_law)
+        from phasemap.declare.api import SLIP_SPEED
+
+        expr(f"{part} {law}", self.friction_law,
+             allow=(SLIP_SPEED.name,) if self.speed_field == law else ())
         self.check_choices(lambda why: fail(part, why))
         for name in self.point_fields:
             v = getattr(self, name)

@@ -14,7 +14,12 @@ class System:
     """A declared planar system with dry friction.  ``System(...).model`` is its Model.
 
     ``potential`` is the potential energy; ``forces`` optional generalised
-    forces ``{coordinate: expression}`` (they may depend on rates).
+    forces ``{coordinate: expression}`` (they may depend on rates, and on
+    :data:`phasemap.declare.TIME` in a forced system); ``dissipation`` a Rayleigh
+    dissipation function ``D`` of the rates (viscous damping: the generalised force
+    on ``q_i`` is ``-dD/dq_i'``, so ``D = c * xdot**2 / 2`` is a damper ``c``);
+    ``period`` the forcing period of a system whose forces or surfaces depend on
+    the time (an expression of the parameters, ``2 * sp.pi / Omega``).
     ``default_axes`` is the map ``phasemap atlas NAME`` draws by default;
     ``edges`` what reaching a bound of a coordinate means (see
     :class:`phasemap.Dynamics`).
@@ -31,7 +36,7 @@ class System:
     contacts : tuple of ContactLaw
         :class:`PointContact`, :class:`EdgeContact`, :class:`RollingContact`,
         :class:`Joint`, or a law of one's own.
-    potential, forces, default_axes, edges, check, names
+    potential, forces, dissipation, period, default_axes, edges, check, names
         as above and in the attribute comments of the source.
 
     Raises
@@ -63,6 +68,10 @@ class System:
     contacts: tuple
     potential: object = 0
     forces: Mapping = field(default_factory=dict)
+    #: Rayleigh's dissipation function of the rates (viscous damping), 0 for none
+    dissipation: object = 0
+    #: the forcing period of a system that depends on the time (None: autonomous)
+    period: object = None
     default_axes: Mapping = field(default_factory=dict)
     edges: Mapping = field(default_factory=dict)
     #: optional cross-variable domain check on (possibly array) values: raise ValueError.

@@ -7,7 +7,8 @@ import keyword
 import math
 import re
 
-from phasemap.declare.api import Body, Coordinate, Parameter, sym
+from phasemap.declare.api import (SLIP_SPEED, SPECIAL_NAMES, TIME, Body, Coordinate, Parameter,
+                                  sym, uses)
 from phasemap.declare.law import ContactLaw
 
 IDENT = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
@@ -53,9 +54,10 @@ def validate(S) -> None:
             if nm not in {c.name for c in S.coordinates}:
                 problems.append(f"forces: {nm!r} is not a coordinate")
             else:
-                attempt(expr, f"force on {nm}", e)
-        if bodies:
-            attempt(_check_contacts, S, expr, at)
+                attempt(expr, f"force on {nm}", e, (TIME.name,))
+        attempt(expr, "dissipation", S.dissipation)
+        if bodies and attempt(_check_contacts, S, expr, at)[1]:
+            attempt(_check_period, S, expr, at)
     if problems:
         raise ValueError(prefix + "; ".join(problems))
 
@@ -75,6 +77,9 @@ def _declared_names(S) -> set[str]:
                         or nm.startswith(("sin_", "cos_")):
                     fail(S, f"{kind} {nm!r}", "a name must be an identifier (not starting "
                          "with sin_ or cos_)")
+                if nm in SPECIAL_NAMES:
+                    fail(S, f"{kind} {nm!r}", "the name is phasemap's own (TIME is t, "
+                         "SLIP_SPEED slip_speed, from phasemap.declare): rename it")
                 if nm in RESERVED:
                     fail(S, f"{kind} {nm!r}", "the name is one the generated code uses (a "
                          "Python builtin or one of rest, math, np, NAN, ...): rename it")
@@ -184,13 +189,22 @@ def _expression_check(S, known):
     """``expr(part, e)``: ``e`` as a sympy expression of declared names, or a ValueError."""
     import sympy as sp
 
-    def expr(part, e):
+    def expr(part, e, allow=()):
+        """``e`` as an expression of the declared names and the special names ``allow``
+        (:data:`TIME`, :data:`SLIP_SPEED`) may use."""
         try:
             x = sym(e)
         except (sp.SympifyError, TypeError) as err:
             fail(S, part, f"{e!r} is not an expression ({err})")
-        unknown = sorted(str(s) for s in x.free_symbols if str(s) not in known)
+        unknown = sorted(str(s) for s in x.free_symbols if str(s) not in known
+                         and str(s) not in allow)
         if unknown:
+            where = {TIME.name: "forces= and surface_velocity=",
+                     SLIP_SPEED.name: "a point contact's friction="}
+            if unknown[0] in where:
+                const = "TIME" if unknown[0] == TIME.name else "SLIP_SPEED"
+                fail(S, part, f"{unknown[0]!r} ({const}) may appear only in "
+                     f"{where[unknown[0]]}")
             fail(S, part, f"unknown name {unknown[0]!r} (declared: {', '.join(sorted(known))})")
         return x
 
@@ -237,10 +251,72 @@ def _check_contacts(S, expr, at) -> None:
             fail(S, f"contact {c.name!r}", "a contact needs a unique identifier as its name")
         seen.add(c.name)
         c.validate(lambda part, why: fail(S, part, why), expr)
-        x = at(c.law_expr())
+        kinetic = c.law_expr().xreplace({sym(SLIP_SPEED): 0})
+        x = at(kinetic)
         if x is not None and x < 0:
             fail(S, f"contact {c.name!r} {c.friction_field}", f"is {x:g} at the defaults: a "
                  "friction coefficient must be at least 0")
+        if getattr(c, "static_friction", None) is not None:
+            fs = at(c.static_friction)
+            if x is not None and fs is not None and fs < x:
+                fail(S, f"contact {c.name!r} static_friction", f"is {fs:g} at the defaults, "
+                     f"below the kinetic friction {x:g} (at zero speed): f_s >= f_k")
     if sum(c.squared_law for c in S.contacts) > 1:
         fail(S, "contacts", "at most one Joint with friction is supported (two friction "
              "moments make a system of quadratic equations)")
+
+
+def _check_period(S, expr, at) -> None:
+    """A system that depends on the time declares its forcing period, and only such a
+    system does: a positive expression of the parameters."""
+    timed = time_dependent(S)
+    if S.period is None:
+        if timed:
+            fail(S, "period", "the forces or a surface's velocity depend on the time t: "
+                 "declare the forcing period (period=, such as 2 * sp.pi / Omega)")
+        return
+    if not timed:
+        fail(S, "period", "is declared, but nothing depends on the time t (TIME): drop it, "
+             "or use TIME in forces= or surface_velocity=")
+    e = expr("period", S.period)
+    params = {p.name for p in S.parameters}
+    if any(x.name not in params for x in e.free_symbols):
+        fail(S, "period", f"must be an expression of the parameters, got {e}")
+    x = at(e)
+    if x is None or not x > 0:
+        fail(S, "period", f"must be positive at the parameters' defaults, got {e}")
+
+
+def time_dependent(S) -> bool:
+    """Whether the declaration depends on the time (a forced system)."""
+    return (any(uses(e, TIME) for e in S.forces.values())
+            or any(uses(getattr(c, "surface_velocity", 0), TIME) for c in S.contacts))
+
+
+def oscillator_features(S) -> list[str]:
+    """What the declaration has that only its motion in full coordinates takes yet: the
+    time, a moving surface, a static coefficient above the kinetic one, a friction law
+    that depends on the sliding speed."""
+    out = []
+    if time_dependent(S):
+        out.append("forcing in time")
+    for c in S.contacts:
+        if sym(getattr(c, "surface_velocity", 0)) != 0:
+            out.append(f"a moving surface (contact {c.name!r})")
+        fs = getattr(c, "static_friction", None)
+        if fs is not None and sym(fs) != c.law_expr():
+            out.append(f"static friction (contact {c.name!r})")
+        if uses(c.law_expr(), SLIP_SPEED):
+            out.append(f"speed-dependent friction (contact {c.name!r})")
+    return out
+
+
+def reduced_limits(S) -> None:
+    """A ValueError where the declaration needs what its reduced model (maps, classify,
+    the fate maps, the phase curves) does not take yet: its motion runs in full
+    coordinates (:func:`phasemap.simulate`)."""
+    found = oscillator_features(S)
+    if found:
+        fail(S, "model", "maps, classify and the phase curves do not take "
+             f"{' and '.join(found)} yet: phasemap.simulate runs its motion (in full "
+             "coordinates)")

@@ -434,3 +434,16 @@ def zeno_time(t_k: float, v_k: float, a_n: float, e: float) -> float:
         raise ValueError("a_n must be nonzero: without an acceleration towards the obstacle "
                          "the impacts do not accumulate")
     return t_k + 2.0 * v_k / (abs(a_n) * (1.0 - e))
+
+
+def tangential_impact(M, Jc, u, mu, slip=None):
+    """The impact without collision at one contact (Genot and Brogliato 1999): at zero
+    normal velocity, the slip ``Jc[1] @ u`` forced into the obstacle, the impulse
+    integrated until the slip stops (:func:`phasemap.motion.impact.impact`, e = 0).
+    ``M`` the mass matrix, ``Jc`` the contact's normal and tangential rows.  Returns the
+    rates after it and the :class:`phasemap.motion.impact.Impact`; ValueError where the
+    impact is refused (the slip does not force the contact in).  The reduced model's
+    impacts without collision (:func:`phasemap.simulate`) and this engine's take it."""
+    slip = float(Jc[1] @ u) if slip is None else float(slip)
+    r = impact(delassus(M, Jc), (0.0, slip), mu=mu, e=0.0)
+    return u + np.linalg.solve(M, Jc.T @ np.array([r.P_n, r.P_t])), r

@@ -23,10 +23,12 @@ from phasemap.core import events as ev
 from phasemap.core.compile import remember
 from phasemap.atlas.dataset import assemble, cf_header, variable_attrs
 from phasemap.motion import hybrid
+from phasemap.motion.hybrid.start import (full_attrs, mechanics_of, run_settings,
+                                          say_full_memory, simulate_full)
 from phasemap.motion.integrate import (DEFAULT_METHOD, METHODS, NO_STOP, check_method, kernels,
                                        run_batch, unpack)
 from phasemap.core.model import Model, Variable
-from phasemap.systems import get_model
+from phasemap.systems import OSCILLATORS, get_model
 
 #: Tolerances tighter than this cannot be met in double precision.
 RTOL_MIN = 1e-14
@@ -263,7 +265,7 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
                              "no reduced model: through_contacts=False has nothing to run")
         S = None
     if S is not None and (m is None or _full_start(m, S, values)):
-        return _simulate_full(S, m, opts, contact, t_eval, values)
+        return simulate_full(S, m, opts, contact, _times(name, t_eval, opts), values)
     starts = _starts(m, values)
     full, positions = split_values(m, {k: (val[0] if k in starts else val)
                                        for k, val in values.items()})
@@ -328,7 +330,7 @@ def _model_of(model, values):
             n for c in model.coordinates if c.rate is not None for n in (c.name, c.rate.name)}
         if set(values) - reduced:
             try:
-                if set(values) & hybrid.full_names(hybrid_mechanics(model)) - reduced:
+                if set(values) & hybrid.full_names(mechanics_of(model)) - reduced:
                     return model, None
             except ValueError:
                 pass
@@ -336,19 +338,16 @@ def _model_of(model, values):
             return model, model.model
         except ValueError as err:
             try:
-                hybrid_mechanics(model)
+                mechanics_of(model)
             except ValueError:
                 raise err from None
             return model, None
+    if isinstance(model, str) and model in OSCILLATORS:
+        from phasemap.systems import oscillators
+
+        return _model_of(oscillators.OSCILLATORS[model], values)
     m = get_model(model)
     return hybrid.declaration_of(m), m
-
-
-def hybrid_mechanics(S):
-    """The full-coordinate mechanics of a declaration (or a loaded model's lazy one)."""
-    from phasemap.declare.full import mechanics
-
-    return mechanics(hybrid.system_of(S))
 
 
 def _full_start(m: Model, S, values) -> bool:
@@ -359,76 +358,10 @@ def _full_start(m: Model, S, values) -> bool:
     if not extra:
         return False
     try:
-        mech = hybrid_mechanics(S)
+        mech = mechanics_of(S)
     except ValueError:
         return False
     return bool(extra & hybrid.full_names(mech))
-
-
-def _full_attrs(S, m, opts: Options, contact: dict, values) -> dict:
-    if m is not None:
-        attrs = cf_header(m, "trajectory", "phasemap.simulate")
-    else:
-        from phasemap._version import __version__
-        from phasemap.atlas.dataset import CONVENTIONS
-
-        attrs = {"Conventions": CONVENTIONS,
-                 "title": f"phasemap trajectory: {S.title}",
-                 "source": f"phasemap {__version__}", "references": S.citation,
-                 "phasemap_kind": "trajectory", "phasemap_model": S.name,
-                 "phasemap_version": __version__}
-    for k, value in opts.as_dict().items():
-        attrs[f"phasemap_{k}"] = value
-    for k, value in contact.items():
-        attrs[f"phasemap_{k}"] = value
-    for k, value in values.items():
-        attrs[f"phasemap_initial_{k}"] = float(value)
-    return attrs
-
-
-def _simulate_full(S, m, opts: Options, contact: dict, t_eval, values) -> xr.Dataset:
-    """A motion that starts in the full coordinates of the declaration ``S``."""
-    mech = hybrid_mechanics(S)
-    if any(np.ndim(x) for x in values.values()):
-        raise ValueError(f"{mech.name}: a start in full coordinates takes one number per "
-                         "variable (the batch form runs on the reduced model only)")
-    te = _times(mech.name, t_eval, opts)
-    q, u, p = hybrid.start_values(mech, values)
-    settings = _run_settings(opts, mech.n if te is None else 0)
-    rec = hybrid.run_full(mech, p, q, u, t_eval=te, **settings, **contact)
-    ds = hybrid.dataset(mech, rec, _full_attrs(S, m, opts, contact, values), p=p)
-    _say_full_memory(ds, opts, settings)
-    return ds
-
-
-#: Bytes a saved point of a motion in full coordinates takes while it is integrated (a
-#: Python list entry: its state array, its modes, its time), per coordinate and fixed.
-FULL_POINT_BYTES = (48, 400)
-
-
-def _run_settings(opts: Options, n: int = 0) -> dict:
-    """The settings of a motion in full coordinates of ``n`` coordinates: ``max_steps``
-    lowered, as the reduced integrator's (:func:`_memory_cap`), to what its saved points
-    can hold in the memory available."""
-    steps = opts.max_steps
-    avail = available_memory()
-    if avail is not None and n:
-        per_point = FULL_POINT_BYTES[0] * n + FULL_POINT_BYTES[1]
-        steps = int(min(steps, max(MEMORY_SHARE * avail / (MEMORY_COPIES * per_point), 16)))
-    return {"t_end": opts.t_end, "rtol": opts.rtol, "atol": opts.atol,
-            "max_step": opts.max_step, "max_steps": steps, "max_events": opts.max_events}
-
-
-def _say_full_memory(ds: xr.Dataset, opts: Options, settings: dict) -> None:
-    """A motion in full coordinates cut by :func:`_run_settings`' memory cap says so."""
-    if ds.attrs["end_reason"] == "max_steps" and settings["max_steps"] < opts.max_steps:
-        message = (f"stopped after {settings['max_steps']:,} steps of the "
-                   f"{opts.max_steps:,} allowed: saving more would not fit in the memory "
-                   f"available ({human_bytes(available_memory() or 0)}); pass t_eval= to "
-                   "save the state at chosen times only, or a shorter t_end")
-        ds.attrs["end_message"] = message
-        warnings.warn(f"{ds.attrs.get('phasemap_model', '')}: {message}", RuntimeWarning,
-                      stacklevel=3)
 
 
 def _times(name, t_eval, opts: Options):
@@ -451,7 +384,7 @@ def _continued(S, m: Model, opts: Options, contact: dict, names, full, positions
     from phasemap.declare.full import closure
 
     try:
-        mech = hybrid_mechanics(S)
+        mech = mechanics_of(S)
     except ValueError:
         return None
     S = hybrid.system_of(S)
@@ -468,16 +401,16 @@ def _continued(S, m: Model, opts: Options, contact: dict, names, full, positions
     q0, u0 = np.split(full_of(y_stop), 2)
     p = np.array([float(full[k]) for k in mech.parameters])
     rest = None if te is None else te[te > t_stop]
-    settings = _run_settings(opts, mech.n if rest is None else 0)
+    settings = run_settings(opts, mech.n if rest is None else 0)
     rec = hybrid.run_full(mech, p, q0, u0, t0=t_stop, t_eval=rest, first=-1,
                           **settings, **contact)
     prefix = (np.asarray(ts, float), py, ms, np.asarray(ev_t[:-1], float),
               np.asarray(ev_kind[:-1]), pey)
-    attrs = _full_attrs(S, m, opts, contact, {**full, **positions})
+    attrs = full_attrs(S, m, opts, contact, {**full, **positions})
     rec.n_steps += n_steps
     ds = hybrid.dataset(mech, rec, attrs, prefix, p=p)
     ds.attrs["phasemap_reduced_end"] = ev.Event(int(events[-1, 1])).name.lower()
-    _say_full_memory(ds, opts, settings)
+    say_full_memory(ds, opts, settings)
     return ds
 
 
@@ -552,7 +485,7 @@ def _impact_without_collision(m: Model, names, y, full):
         return None
     values = {**full, **dict(zip(names, (float(x) for x in y)))}
     try:
-        mech = hybrid_mechanics(S)
+        mech = mechanics_of(S)
         q, qd = closure(S)(values)
     except (ValueError, KeyError):
         return None     # a contact that cannot take an impulse, or a value missing

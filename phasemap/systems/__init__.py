@@ -8,6 +8,9 @@ disk) the first time it is asked for.  What runs, by name:
   :mod:`phasemap.systems.rod_on_step`) and ``ladder``, ``wheel``
   (:mod:`phasemap.systems.seeds`, two of the four systems of Lapshin 2021):
   declared, so that their maps count a body leaving a contact;
+* ``belt``, ``stribeck_belt``, ``den_hartog``: friction oscillators
+  (:mod:`phasemap.systems.oscillators`), which :func:`phasemap.simulate` runs by name
+  in full coordinates; they are not in ``MODELS`` (no maps yet);
 * ``elliptic_pendulum``, ``hinge_pendulum``: written by hand
   (:mod:`phasemap.systems.elliptic_pendulum`,
   :mod:`phasemap.systems.hinge_pendulum`, each defining a
@@ -38,6 +41,11 @@ from phasemap.systems import elliptic_pendulum, hinge_pendulum
 DECLARED = {"ladder": "phasemap.systems.seeds.ladder", "wheel": "phasemap.systems.seeds.wheel",
             "painleve_rod": "phasemap.systems.painleve_rod",
             "rod_on_step": "phasemap.systems.rod_on_step"}
+
+
+#: The friction oscillators (:mod:`phasemap.systems.oscillators`): declared, they run in
+#: :func:`phasemap.simulate` by name, in full coordinates; they have no maps yet.
+OSCILLATORS = ("belt", "stribeck_belt", "den_hartog")
 
 
 #: The order in which the built-in systems are listed (the paper's, then the rods).
@@ -103,6 +111,11 @@ def get_model(model: str | Model) -> Model:
         return _declared.load(model)
     if isinstance(model, str) and model in MODELS:
         return MODELS[model]
+    if isinstance(model, str) and model in OSCILLATORS:
+        from phasemap.declare.validation import reduced_limits
+        from phasemap.systems.oscillators import OSCILLATORS as systems
+
+        reduced_limits(systems[model])     # (raises: they have no maps yet)
     raise ValueError(_args.unknown("model", model, MODELS, listing=(
         f"available models: {', '.join(MODELS)}, or the path of a declaration file, "
         "path/to/system.py")))

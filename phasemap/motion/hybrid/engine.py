@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from phasemap.core import events as ev
+from phasemap.motion.impact import tangential_impact  # noqa: F401 - the package's name
 
 OPEN, SMOOTH, STICK, SLIP_POS, SLIP_NEG = 0, 1, 2, 3, 4
 MODE_NAMES = ("open", "smooth", "stick", "slip_pos", "slip_neg")
@@ -79,15 +80,40 @@ class Motion:
         self.one_sided = np.array([c.one_sided for c in mech.contacts], dtype=bool)
         self.bounds = mech.bounds(self.p)
         self.zeno_until = -math.inf
+        #: a system that depends on the time, or whose surfaces move, does not stop at
+        #: a momentary rest
+        self.rests = mech.can_rest
+
+    def surf(self, t):
+        """Each contact surface's tangential velocity at ``t``."""
+        return self.mech.surface(self.p, t)[0]
+
+    def relative(self, J, u, t):
+        """The contacts' velocities ``(k, 2)``: normal, and tangential relative to the
+        surface (a belt's own velocity taken off)."""
+        v = J @ u
+        if not self.mech.plain:
+            v = v.copy()
+            v[:, 1] -= self.mech.surface(self.p, t)[0]
+        return v
 
     # -- the accelerations of a phase ---------------------------------------------
 
-    def solve(self, q, u, modes, rho=None):
-        """``(u', N, F, a, pieces)`` of the phase ``modes`` at ``(q, u)``: accelerations,
-        reactions and the contacts' accelerations ``a`` (k, 2); None where the phase's
-        linear system is singular.  ``rho``: the sign of N each two-sided contact's
-        friction assumes (+1 for the one-sided)."""
-        M, h, g, J, b, mu = P = self.mech.pieces(q, u, self.p)
+    def solve(self, q, u, modes, rho=None, t=0.0, start=()):
+        """``(u', N, F, a, pieces)`` of the phase ``modes`` at ``(q, u)`` and time ``t``:
+        accelerations, reactions and the contacts' accelerations ``a`` (k, 2, relative to
+        the surfaces); None where the phase's linear system is singular.  ``rho``: the
+        sign of N each two-sided contact's friction assumes (+1 for the one-sided).
+        A slipping contact slips with its kinetic coefficient at its sliding speed; those
+        in ``start`` (a slip starting from relative rest) are tested against the static
+        one."""
+        M, h, g, J, b, mu = P = self.mech.pieces(q, u, self.p, t)
+        sd = None
+        if not self.mech.plain:
+            sd = self.mech.surface(self.p, t)[1]
+            speed = np.abs(self.relative(J, u, t)[:, 1])
+            kin = self.mech.kinetic(q, u, self.p, t, speed, mu)
+            mu = np.array([mu[c] if c in start else kin[c] for c in range(self.k)])
         cols, rows, rhs = [], [], []
         owner = []
         for c, m in enumerate(modes):
@@ -102,7 +128,7 @@ class Motion:
             if m == STICK:
                 cols.append(J[c, 1])
                 rows.append(J[c, 1])
-                rhs.append(-b[c, 1])
+                rhs.append(-b[c, 1] if sd is None else sd[c] - b[c, 1])
                 owner.append((c, 1))
         N, F = np.zeros(self.k), np.zeros(self.k)
         if not cols:
@@ -131,6 +157,8 @@ class Motion:
                     r = 1.0 if rho is None else rho[c]
                     F[c] = -(1.0 if m == SLIP_POS else -1.0) * r * mu[c] * N[c]
         a = J @ ud + b
+        if sd is not None:
+            a[:, 1] -= sd
         return ud, N, F, a, P
 
     def _member(self, A, r, owner, modes, rho, P):
@@ -183,10 +211,10 @@ class Motion:
         return (max(vel, math.sqrt(acc * length), 1e-300), max(force, 1e-300),
                 max(acc, 1e-300), length)
 
-    def candidates(self, q, u, P, sc):
+    def candidates(self, q, u, P, sc, t=0.0):
         """Per contact, the modes it may take at ``(q, u)``."""
         M, h, g, J, b, mu = P
-        v = J @ u
+        v = self.relative(J, u, t)
         vs, _, _, L = sc
         out = []
         for c in range(self.k):
@@ -204,21 +232,27 @@ class Motion:
             out.append(ms)
         return out
 
-    def admissible(self, q, u, modes, sc, prefer=None):
+    def admissible(self, q, u, modes, sc, prefer=None, t=0.0):
         """``(u', N, F, a, rho)`` of the phase ``modes`` if it is admissible at
-        ``(q, u)``, else None (a two-sided contact's friction tries each sign of N)."""
+        ``(q, u)``, else None (a two-sided contact's friction tries each sign of N).
+        A slip that starts from relative rest is tested with the static coefficient."""
         vs, fs, acs, L = sc
         two = [c for c, m in enumerate(modes) if m != OPEN and not self.one_sided[c]]
+        start = ()
+        if not self.mech.plain:
+            v = self.relative(self.mech.pieces(q, u, self.p, t)[3], u, t)
+            start = tuple(c for c, m in enumerate(modes)
+                          if m in (SLIP_POS, SLIP_NEG) and abs(v[c, 1]) <= TOL * vs)
         for signs in np.ndindex(*(2,) * len(two)):
             rho = np.ones(self.k)
             for c, s in zip(two, signs):
                 rho[c] = 1.0 - 2.0 * s
-            sol = self.solve(q, u, modes, rho)
+            sol = self.solve(q, u, modes, rho, t, start)
             if sol is None:
                 continue
             ud, N, F, a, P = sol
             M, h, g, J, b, mu = P
-            v = J @ u
+            v = self.relative(J, u, t)
             ok = True
             for c, m in enumerate(modes):
                 if m == OPEN:
@@ -239,18 +273,18 @@ class Motion:
                 return ud, N, F, a, rho
         return None
 
-    def enumerate(self, q, u, prefer=None):
+    def enumerate(self, q, u, prefer=None, t=0.0):
         """Every admissible phase at ``(q, u)``, grouped by their accelerations (phases
         that move the body alike, such as slip with N = 0 and open with g'' = 0, are one
         motion): a list of groups, each a list of ``(modes, solution)``.  ``prefer``:
         ``{contact: mode}`` orders each group (the mode an event points to first)."""
-        P = self.mech.pieces(q, u, self.p)
+        P = self.mech.pieces(q, u, self.p, t)
         sc = self.scales(q, u, P)
         groups = []
-        cand = self.candidates(q, u, P, sc)
+        cand = self.candidates(q, u, P, sc, t)
         for pick in np.ndindex(*[len(m) for m in cand]):
             modes = tuple(cand[c][i] for c, i in enumerate(pick))
-            sol = self.admissible(q, u, modes, sc, prefer)
+            sol = self.admissible(q, u, modes, sc, prefer, t)
             if sol is None:
                 continue
             for grp in groups:
@@ -271,11 +305,11 @@ class Motion:
         for g in groups:
             g = sorted(g, key=rank)
             if len(g) > 1:   # a tie: the next derivative decides (kept stable: sorted)
-                g = sorted(g, key=lambda item: not self._holds(q, u, item, touching, sc))
+                g = sorted(g, key=lambda item: not self._holds(q, u, item, touching, sc, t))
             out.append(g)
         return out
 
-    def _holds(self, q, u, item, touching, sc) -> bool:
+    def _holds(self, q, u, item, touching, sc, t=0.0) -> bool:
         """Whether the phase ``item`` (modes and solution) still holds a moment later
         along its own motion: the tie between phases that move the body alike at an
         event (slip with N = 0 and open with g'' = 0; stick at the friction limit and a
@@ -286,7 +320,7 @@ class Motion:
         dt = 1e-6 * math.sqrt(sc[3] / sc[2])
         q1 = q + dt * u + 0.5 * dt * dt * ud
         u1 = u + dt * ud
-        sol = self.solve(q1, u1, modes, rho)
+        sol = self.solve(q1, u1, modes, rho, t + dt)
         if sol is None:
             return False
         ud1, N1, F1, a1, P1 = sol
@@ -302,25 +336,25 @@ class Motion:
                 return False
             elif m in (SLIP_POS, SLIP_NEG):
                 s = 1.0 if m == SLIP_POS else -1.0
-                if s * (P1[3][c, 1] @ u1) < 0.0:
+                if s * (P1[3][c, 1] @ u1 - self.surf(t + dt)[c]) < 0.0:
                     return False
         return True
 
     # -- projections ------------------------------------------------------------------
 
-    def project(self, q, u, closed, held=(), fixed=(), moving=None):
+    def project(self, q, u, closed, held=(), fixed=(), moving=None, t=0.0):
         """The state put on the contacts ``closed`` in the mass metric: positions on their
         gaps' zero, velocities on ``J_n u = 0`` for the closed contacts (or for those in
         ``moving``, where given: a contact that closes with an impact keeps its approach)
-        and ``J_t u = 0`` for those in ``held``: the smallest change in kinetic-energy
-        norm.  ``fixed``: coordinates held where they are."""
+        and ``J_t u`` on the surface's velocity for those in ``held``: the smallest change
+        in kinetic-energy norm.  ``fixed``: coordinates held where they are."""
         closed = list(closed)
         moving = closed if moving is None else list(moving)
         if not closed:
             return q, u
         q0, q = q, q.copy()
         for _ in range(20):
-            M, h, g, J, b, mu = self.mech.pieces(q, u, self.p)
+            M, h, g, J, b, mu = self.mech.pieces(q, u, self.p, t)
             r = g[closed]
             if np.abs(r).max() <= 4e-16 * (1.0 + np.abs(q).max()):
                 break
@@ -334,23 +368,27 @@ class Motion:
                 q[j] = q0[j]
         if not moving and not held:
             return q, u
-        M, h, g, J, b, mu = self.mech.pieces(q, u, self.p)
+        M, h, g, J, b, mu = self.mech.pieces(q, u, self.p, t)
         A = np.array([J[c, 0] for c in moving] + [J[c, 1] for c in held])
         X = np.linalg.solve(M, A.T)
-        u = u - X @ np.linalg.lstsq(A @ X, A @ u, rcond=None)[0]
+        target = A @ u
+        if held and not self.mech.plain:
+            target[len(moving):] -= self.mech.surface(self.p, t)[0][list(held)]
+        u = u - X @ np.linalg.lstsq(A @ X, target, rcond=None)[0]
         return q, u
 
     # -- the events of a phase ----------------------------------------------------------
 
-    def watch(self, q, u, modes, rho, sc):
+    def watch(self, q, u, modes, rho, sc, t=0.0):
         """The event functions of a phase at ``(q, u)``, each >= 0 while it goes on:
         per contact two (open: its gap; closed: its N; slipping: its slip velocity;
         stuck: its friction slack), then each coordinate's bounds and the declared
         domain conditions."""
         out = np.ones(self.k * 2 + 2 * self.n + self.mech.n_domain)
-        ud, N, F, a, P = self.solve(q, u, modes, rho)
+        ud, N, F, a, P = self.solve(q, u, modes, rho, t)
         M, h, g, J, b, mu = P
         vs, fs, acs, L = sc
+        surf = self.surf(t)
         for c, m in enumerate(modes):
             if m == OPEN:
                 if self.one_sided[c]:
@@ -363,7 +401,7 @@ class Motion:
             if m == STICK:
                 out[2 * c + 1] = mu[c] * rho[c] * N[c] - abs(F[c])
             elif m in (SLIP_POS, SLIP_NEG):
-                out[2 * c + 1] = (1.0 if m == SLIP_POS else -1.0) * (J[c, 1] @ u)
+                out[2 * c + 1] = (1.0 if m == SLIP_POS else -1.0) * (J[c, 1] @ u - surf[c])
         i = 2 * self.k
         out[i:i + self.n] = q - self.bounds[:, 0]
         out[i + self.n:i + 2 * self.n] = self.bounds[:, 1] - q
@@ -371,9 +409,9 @@ class Motion:
             out[i + 2 * self.n:] = self.mech.domain(*q, *self.p)
         return out
 
-    def gap_rate(self, q, u, c):
+    def gap_rate(self, q, u, c, t=0.0):
         """``g'`` of contact ``c``."""
-        M, h, g, J, b, mu = self.mech.pieces(q, u, self.p)
+        M, h, g, J, b, mu = self.mech.pieces(q, u, self.p, t)
         return float(J[c, 0] @ u)
 
     # -- the motion -------------------------------------------------------------------------
@@ -390,7 +428,7 @@ class Motion:
         self.t_eval = np.asarray(t_eval, dtype=float) if t_eval is not None else None
         self.i_eval = 0
         q, u = np.array(q, dtype=float), np.array(u, dtype=float)
-        P = self.mech.pieces(q, u, self.p)
+        P = self.mech.pieces(q, u, self.p, t0)
         sc = self.scales(q, u, P)
         g = P[2]
         for c in range(self.k):
@@ -424,10 +462,10 @@ class Motion:
             if rec.ev_t and len(rec.ev_t) >= o.max_events:
                 self._end(t, q, u, modes, ev.MAX_EVENTS)
                 break
-            sc = self.scales(q, u, self.mech.pieces(q, u, self.p))
+            sc = self.scales(q, u, self.mech.pieces(q, u, self.p, t))
 
-            def f(_, y, modes=modes, rho=rho):
-                return np.concatenate([y[n:], self.solve(y[:n], y[n:], modes, rho)[0]])
+            def f(s, y, modes=modes, rho=rho):
+                return np.concatenate([y[n:], self.solve(y[:n], y[n:], modes, rho, s)[0]])
 
             t_stop = o.t_end
             if self.zeno_until > t:
@@ -436,7 +474,7 @@ class Motion:
                             max_step=o.max_step)
             # a function the event's projection left a rounding error below zero starts
             # at zero (a gap just closed or opened, a slip velocity just zero)
-            w0 = self.watch(q, u, modes, rho, sc)
+            w0 = self.watch(q, u, modes, rho, sc, t)
             w0[(w0 < 0.0) & (w0 >= -TOL * self._scale_of(sc))] = 0.0
             step = None
             while True:
@@ -450,7 +488,7 @@ class Motion:
                     self._end(t_old, solver.y[:n], solver.y[n:], modes, ev.STEP_FAILURE)
                     break
                 y1 = solver.y
-                w1 = self.watch(y1[:n], y1[n:], modes, rho, sc)
+                w1 = self.watch(y1[:n], y1[n:], modes, rho, sc, solver.t)
                 dense = solver.dense_output()
                 hit = self._first_event(dense, t_old, solver.t, w0, w1, modes, rho, sc)
                 t_hit = hit[0] if hit else solver.t
@@ -500,7 +538,7 @@ class Motion:
             if t <= t0:
                 return w0[i]
             y = dense(t)
-            return self.watch(y[:n], y[n:], modes, rho, sc)[i]
+            return self.watch(y[:n], y[n:], modes, rho, sc, t)[i]
 
         xtol = 4.0 * np.finfo(float).eps * max(abs(t0), abs(t1), 1e-300)
         best = None
@@ -522,9 +560,10 @@ class Motion:
             if m != OPEN or not self.one_sided[c] or w1[2 * c] < 0.0 or w0[2 * c] <= 0.0:
                 continue   # (a gap that starts at zero has just opened: rounding, not a dip)
             y0, y1 = dense(t0), dense(t1)
-            r0, r1 = self.gap_rate(y0[:n], y0[n:], c), self.gap_rate(y1[:n], y1[n:], c)
+            r0 = self.gap_rate(y0[:n], y0[n:], c, t0)
+            r1 = self.gap_rate(y1[:n], y1[n:], c, t1)
             if r0 < 0.0 < r1:
-                tm = brentq(lambda t: self.gap_rate(dense(t)[:n], dense(t)[n:], c), t0, t1,
+                tm = brentq(lambda t: self.gap_rate(dense(t)[:n], dense(t)[n:], c, t), t0, t1,
                             xtol=xtol)
                 if at(tm, 2 * c) < 0.0:
                     r = brentq(lambda t: at(t, 2 * c), t0, tm, xtol=xtol)
@@ -546,7 +585,7 @@ class Motion:
 
     def _end(self, t, q, u, modes, fate, contact=-1, fixed=()):
         q, u = self.project(q, u, [c for c, m in enumerate(modes) if m != OPEN],
-                            [c for c, m in enumerate(modes) if m == STICK], fixed)
+                            [c for c, m in enumerate(modes) if m == STICK], fixed, t=t)
         if self.t_eval is None and (not self.rec.t or self.rec.t[-1] != t):
             self.rec.point(t, np.concatenate([q, u]), modes)
         self.rec.event(t, fate, contact, np.concatenate([q, u]), modes)
@@ -568,14 +607,14 @@ class Motion:
         if modes[c] == OPEN:            # a gap closes
             return self._closing(t, q, u, modes, c)
         if which == 0:                  # a normal reaction reaches zero
-            q, u = self.project(q, u, closed)
+            q, u = self.project(q, u, closed, t=t)
             return self._decide(t, q, u, modes, ev.LIFTOFF, c, {c: OPEN})
         if modes[c] == STICK:           # a stuck contact reaches its friction limit
-            F = self.solve(q, u, modes, rho)[2][c]
-            q, u = self.project(q, u, closed)
+            F = self.solve(q, u, modes, rho, t)[2][c]
+            q, u = self.project(q, u, closed, t=t)
             return self._decide(t, q, u, modes, ev.SLIP, c,
                                 {c: SLIP_POS if F < 0.0 else SLIP_NEG})
-        q, u = self.project(q, u, closed, held=(c,))   # a slip velocity reaches zero
+        q, u = self.project(q, u, closed, held=(c,), t=t)   # a slip velocity reaches zero
         return self._decide(t, q, u, modes, ev.STICK, c, {c: STICK})
 
     def _closing(self, t, q, u, modes, c):
@@ -583,13 +622,14 @@ class Motion:
         from phasemap.motion.impact import impact, simultaneous
 
         closed = [d for d, m in enumerate(modes) if m != OPEN]
-        q, u = self.project(q, u, closed + [c], moving=closed)
-        M, h, g, J, b, mu = self.mech.pieces(q, u, self.p)
-        v = J @ u
+        q, u = self.project(q, u, closed + [c], moving=closed, t=t)
+        M, h, g, J, b, mu = self.mech.pieces(q, u, self.p, t)
+        v = self.relative(J, u, t)
+        mu = self.mech.kinetic(q, u, self.p, t, np.abs(v[:, 1]), mu)
         sc = self.scales(q, u, (M, h, g, J, b, mu))
         y = np.concatenate([q, u])
         if v[c, 0] >= -TOL * sc[0]:    # touching without approaching: no impulse
-            q, u = self.project(q, u, closed + [c])
+            q, u = self.project(q, u, closed + [c], t=t)
             return self._decide(t, q, u, modes, ev.RECONTACT, c, {})
         o = self.o
         if not closed:
@@ -599,15 +639,15 @@ class Motion:
             u = u + np.linalg.solve(M, J[c].T @ Pc)
             self.rec.event(t, ev.IMPACT, c, y, modes, (r.P_n, r.P_t, r.dKE))
             if r.v_n > TOL * sc[0]:     # a rebound
-                a_n = self.solve(q, u, modes, None)[3][c, 0]
+                a_n = self.solve(q, u, modes, None, t)[3][c, 0]
                 if a_n < 0.0 and r.v_n < o.zeno_speed and o.restitution < 1.0:
                     from phasemap.motion.impact import zeno_time
 
                     self.zeno_until = zeno_time(t, r.v_n, a_n, o.restitution)
                     self.zeno_contact = c
-                    q, u = self.project(q, u, [c])
+                    q, u = self.project(q, u, [c], t=t)
                 return self._decide(t, q, u, modes, QUIET, c, {})
-            q, u = self.project(q, u, [c])
+            q, u = self.project(q, u, [c], t=t)
             return self._decide(t, q, u, modes, QUIET, c, {})
         K = closed + [c]
         JK = np.concatenate([J[d] for d in K])
@@ -624,9 +664,10 @@ class Motion:
         self.rec.event(t, ev.IMPACT, c, y, modes, (s.P[j], s.P[j + 1], s.dKE))
         rebound = s.v[j] > TOL * sc[0]
         now = [d for d, mode in zip(K, s.modes) if mode != "open" and not (d == c and rebound)]
-        q, u = self.project(q, u, now)
+        q, u = self.project(q, u, now, t=t)
         if rebound and 0.0 < o.restitution < 1.0 and s.v[j] < o.zeno_speed:
-            free = self.solve(q, u, [m if d in now else OPEN for d, m in enumerate(modes)])
+            free = self.solve(q, u, [m if d in now else OPEN for d, m in enumerate(modes)],
+                              None, t)
             if free is not None and free[3][c, 0] < 0.0:
                 # it bounces on the contacts that hold: the impacts accumulate
                 from phasemap.motion.impact import zeno_time
@@ -639,7 +680,7 @@ class Motion:
         """The impacts accumulate at ``t``: the contact is closed, a ``zeno`` event."""
         c = self.zeno_contact
         closed = [d for d, m in enumerate(modes) if m != OPEN]
-        q, u = self.project(q, u, sorted(set(closed) | {c}))
+        q, u = self.project(q, u, sorted(set(closed) | {c}), t=t)
         self.rec.event(t, ev.ZENO, c, np.concatenate([q, u]), modes)
         self.zeno_until = -math.inf
         return self._decide(t, q, u, modes, QUIET, c, {})
@@ -648,7 +689,7 @@ class Motion:
         """The phase that follows at ``(t, q, u)``; records the event (``kind``, or the one
         the change of modes names where ``kind`` is -1) and returns ``(t, q, u, modes,
         rho)``, or None where the motion ends."""
-        groups = self.enumerate(q, u, prefer)
+        groups = self.enumerate(q, u, prefer, t)
         if len(groups) != 1:
             if not groups or self.o.painleve == "iwc":
                 jump = self._iwc(t, q, u, old) if depth < 4 else None
@@ -667,10 +708,10 @@ class Motion:
                 return None
         modes, (ud, N, F, a, rho) = groups[0][0]
         held = [c for c, m in enumerate(modes) if m == STICK]
-        q, u = self.project(q, u, [c for c, m in enumerate(modes) if m != OPEN], held)
+        q, u = self.project(q, u, [c for c, m in enumerate(modes) if m != OPEN], held, t=t)
         y = np.concatenate([q, u])
-        sc = self.scales(q, u, self.mech.pieces(q, u, self.p))
-        if (np.abs(u).max() <= TOL * sc[0]
+        sc = self.scales(q, u, self.mech.pieces(q, u, self.p, t))
+        if (self.rests and np.abs(u).max() <= TOL * sc[0]
                 and np.abs(ud).max() <= TOL * sc[2] / max(sc[3], 1.0)):
             if self.zeno_until > t:
                 te = self.zeno_until
@@ -698,9 +739,10 @@ class Motion:
     def _iwc(self, t, q, u, modes):
         """An impact without collision at the one closed contact that slips into the
         obstacle: the state after it, or None."""
-        M, h, g, J, b, mu = self.mech.pieces(q, u, self.p)
+        M, h, g, J, b, mu = self.mech.pieces(q, u, self.p, t)
         sc = self.scales(q, u, (M, h, g, J, b, mu))
-        v = J @ u
+        v = self.relative(J, u, t)
+        mu = self.mech.kinetic(q, u, self.p, t, np.abs(v[:, 1]), mu)
         touching = [c for c in range(self.k) if self.one_sided[c] and g[c] <= TOL * sc[3]
                     and abs(v[c, 0]) <= TOL * sc[0]]
         jumps = []
@@ -708,7 +750,8 @@ class Motion:
             if abs(v[c, 1]) <= TOL * sc[0] or len(touching) != 1:
                 continue
             try:
-                after, r = tangential_impact(M, J[c], u, float(mu[c]))
+                after, r = tangential_impact(M, J[c], u, float(mu[c]),
+                                              None if self.mech.plain else v[c, 1])
             except ValueError:
                 continue
             if r.P_n <= 0.0:
@@ -718,21 +761,7 @@ class Motion:
             return None
         c, after, r = jumps[0]
         self.rec.event(t, ev.IWC, c, np.concatenate([q, u]), modes, (r.P_n, r.P_t, r.dKE))
-        return self.project(q, after, [c])
-
-
-def tangential_impact(M, Jc, u, mu):
-    """The impact without collision at one contact (Genot and Brogliato 1999): at zero
-    normal velocity, the slip ``Jc[1] @ u`` forced into the obstacle, the impulse
-    integrated until the slip stops (:func:`phasemap.motion.impact.impact`, e = 0).
-    ``M`` the mass matrix, ``Jc`` the contact's normal and tangential rows.  Returns the
-    rates after it and the :class:`phasemap.motion.impact.Impact`; ValueError where the
-    impact is refused (the slip does not force the contact in).  The reduced model's
-    impacts without collision (:func:`phasemap.simulate`) and this engine's take it."""
-    from phasemap.motion.impact import delassus, impact
-
-    r = impact(delassus(M, Jc), (0.0, float(Jc[1] @ u)), mu=mu, e=0.0)
-    return u + np.linalg.solve(M, Jc.T @ np.array([r.P_n, r.P_t])), r
+        return self.project(q, after, [c], t=t)
 
 
 def _kind_of(old, new, contact):

@@ -80,7 +80,7 @@ def run_full(mech, p, q, u, *, t_end, rtol, atol, max_step, max_steps, max_event
     return Motion(mech, p, opts).run(q, u, t0=t0, t_eval=t_eval, first=first)
 
 
-def _geometry(mech, p, ys, modes) -> dict:
+def _geometry(mech, p, ys, modes, ts) -> dict:
     """Where the bodies and contacts are, and the contact reactions, at each saved state:
     what a figure of the motion draws (``phasemap.plot``'s outline strip)."""
     n, k = mech.n, len(mech.contacts)
@@ -92,7 +92,7 @@ def _geometry(mech, p, ys, modes) -> dict:
     for i, y in enumerate(ys):
         cen[i], pts[i] = mech.points(y[:n], p)
         if modes[i].min() >= 0 and all(c.one_sided for c in mech.contacts):
-            sol = motion.solve(y[:n], y[n:], tuple(int(m) for m in modes[i]))
+            sol = motion.solve(y[:n], y[n:], tuple(int(m) for m in modes[i]), None, ts[i])
             if sol is not None:
                 N[i], F[i] = sol[1], sol[2]
     data = {}
@@ -176,7 +176,7 @@ def dataset(mech, rec: Record, attrs: dict, prefix=None, p=None):
         data[f"event_{name}"] = ("event", ev_y[:, j], {"long_name": f"{long_name} at the event",
                                                        "units": units})
     if p is not None:
-        data.update(_geometry(mech, p, ys, modes))
+        data.update(_geometry(mech, p, ys, modes, ts))
         surf = mech.surfaces(p)
         for c in mech.contacts:
             if np.all(np.isfinite(surf[c.index])):
