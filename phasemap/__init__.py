@@ -45,7 +45,9 @@ _compiletime.install()
 def __getattr__(name: str):
     """``phasemap.plot`` is imported (with matplotlib, half a second) on first use: a
     script that maps, integrates or writes atlases does not pay for it; so are
-    ``phasemap.boundaries`` and ``phasemap.threshold`` (:mod:`phasemap.bifurcation`)."""
+    ``phasemap.boundaries`` and ``phasemap.threshold`` (:mod:`phasemap.bifurcation`), and
+    ``phasemap.periodic_orbit`` and ``phasemap.continue_orbit``
+    (:mod:`phasemap.motion.periodic`)."""
     if name == "plot":
         import importlib
 
@@ -54,6 +56,10 @@ def __getattr__(name: str):
         from phasemap import bifurcation
 
         return getattr(bifurcation, name)
+    if name in ("periodic_orbit", "continue_orbit"):    # (scipy's optimisers)
+        from phasemap.motion import periodic
+
+        return getattr(periodic, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
@@ -78,6 +84,8 @@ __all__ = [
     "get_model",
     "layers_for",
     "open_atlas",
+    "continue_orbit",
+    "periodic_orbit",
     "phase_curve",
     "plot",
     "simulate",

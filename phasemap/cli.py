@@ -12,6 +12,7 @@ import textwrap
 from phasemap.core import args as _args
 from phasemap._version import __version__
 from phasemap.bifurcation import command as _bif
+from phasemap.motion.periodic import command as _orbits
 
 #: Examples per subcommand; ``phasemap --help`` shows them all, each
 #: subcommand's help only its own.
@@ -56,6 +57,7 @@ EXAMPLES = {
     ],
 }
 EXAMPLES |= _bif.EXAMPLES  # phasemap boundaries, phasemap threshold
+EXAMPLES |= _orbits.EXAMPLES  # phasemap orbit
 
 
 def examples(*commands: str) -> str:
@@ -248,6 +250,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
     p.add_argument("--jobs", type=int, default=None, metavar="N",
                    help="calls at once, one process each (default: one per core)")
     subs |= _bif.add_parsers(sub, _sub, models)
+    subs |= _orbits.add_parsers(sub, _sub)
     return parser, subs
 
 
@@ -356,6 +359,10 @@ def _run(args) -> int:
         print(_warm(args.models, args.jobs))
     elif args.command in ("boundaries", "threshold"):
         print(_bif.run(args, _parse_values))
+    elif args.command == "orbit":
+        from phasemap.maps.blocks import check_output
+
+        print(_orbits.run(args, _parse_values, check_output))
     return 0
 
 
@@ -499,12 +506,18 @@ def _simulate(args) -> str:
     from phasemap.maps.blocks import check_output
     from phasemap.core.events import Event
     from phasemap.motion.simulate import integrated_variables, simulate
-    from phasemap.systems import get_model
+    from phasemap.systems import OSCILLATORS, get_model
 
-    model = get_model(args.model)
+    if args.model in OSCILLATORS:       # declared, without maps: full coordinates only
+        from phasemap.systems.oscillators import OSCILLATORS as systems
+
+        model = systems[args.model]
+        values = _parse_values(args.values)
+    else:
+        model = get_model(args.model)
+        values = _parse_values(args.values, model=model)
     if args.output:
         destination(args.output)
-    values = _parse_values(args.values, model=model)
     out = check_output(args.output, overwrite=args.overwrite) if args.output else None
     with progress.activity(f"{model.name}: integrating to t = {args.t_end:g} s"):
         ds = simulate(model, args.t_end, rtol=args.rtol, method=args.method,

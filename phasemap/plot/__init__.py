@@ -181,7 +181,8 @@ def plot(ds: xr.Dataset, layer: str | Sequence[str] | None = None, *, ax=None,
     categorical layer); for a fate dataset, ``fate`` (the default) draws
     :func:`fate_figure`, any other layer a plain :func:`map_figure` (a
     1-D fate dataset is drawn as a profile); for a trajectory, the states
-    to draw.  Phase curves take no layer.  Other
+    to draw; for a periodic orbit, the two variables of its plane; for an orbit branch,
+    the quantity drawn against the parameter.  Phase curves take no layer.  Other
     keywords go to the figure function.
     """
     kind = atlas_kind(ds)
@@ -203,4 +204,13 @@ def plot(ds: xr.Dataset, layer: str | Sequence[str] | None = None, *, ax=None,
         if layer is not None:
             raise ValueError(f"a {kind} file has no layers to choose; got layer={_describe(layer)}")
         return curves_figure(ds, ax=ax, size=size, **kw)
+    if kind == "periodic_orbit":        # layer: the plane's two variables, or none
+        from phasemap.plot.orbits import orbit_figure
+
+        x, y = (None, None) if layer is None else tuple(layer)
+        return orbit_figure(ds, x, y, ax=ax, size=size, **kw)
+    if kind == "orbit_branch":          # layer: the quantity drawn against the parameter
+        from phasemap.plot.orbits import branch_figure
+
+        return branch_figure(ds, layer, ax=ax, size=size, **kw)
     return trajectory_figure(ds, states=layer, ax=ax, size=size, **kw)

@@ -1,0 +1,144 @@
+"""The linearised return map of a hybrid periodic orbit: variational equations along each
+segment, a saltation matrix at every event, the product restricted to the contacts'
+manifold (see :mod:`phasemap.motion.periodic`).
+
+The state of a segment is ``X = (q, u, t)`` (the time joins the state, so that a forced
+system's segments are autonomous).  Along a segment of fixed contact modes,
+``X' = F(X) = (u, u'(q, u, t), 1)`` and ``dX' = A dX`` with ``A = dF/dX`` (its
+acceleration rows by central differences of the phase's accelerations, which are smooth
+inside a segment).  At the event ``h(X) = 0`` that ends the segment, where the jump
+``X+ = J(X-)`` (the projection onto the next phase's closed contacts) follows, the
+perturbation maps by the saltation matrix
+
+    S = DJ + (F+ - DJ F-) grad h^T / (grad h . F-)
+
+(Aizerman and Gantmacher 1958; Leine and Nijmeijer 2004, section 7.2): ``F-`` and ``F+``
+the vector fields before and after.  The velocity part of ``DJ`` is the projector of the
+velocity projection, exact, so a stick segment's collapse (the relative velocity set to
+the surface's) is an exact zero row, and its Floquet multiplier an exact 0.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Relative step of the central differences of the phase's accelerations.
+STEP = 1e-6
+
+
+def field(motion, X, modes, rho):
+    """``F(X) = (u, u', 1)`` of the phase ``modes``."""
+    n = motion.n
+    ud = motion.solve(X[:n], X[n:2 * n], modes, rho, X[2 * n])[0]
+    return np.concatenate([X[n:2 * n], ud, [1.0]])
+
+
+def difference(fn, x, j):
+    """The central difference of ``fn`` (of an array) along ``x[j]``, its step relative
+    (:data:`STEP`) and exact in floating point."""
+    h = STEP * (1.0 + abs(x[j]))
+    xp, xm = x.copy(), x.copy()
+    xp[j] += h
+    xm[j] -= h
+    return (np.asarray(fn(xp)) - np.asarray(fn(xm))) / (xp[j] - xm[j])
+
+
+def jacobian(motion, X, modes, rho):
+    """``A = dF/dX`` at ``X`` (central differences of the accelerations)."""
+    n = motion.n
+    m = 2 * n + 1
+    A = np.zeros((m, m))
+    A[:n, n:2 * n] = np.eye(n)
+
+    def acc(Y):
+        return motion.solve(Y[:n], Y[n:2 * n], modes, rho, Y[2 * n])[0]
+    for j in range(m):
+        A[n:2 * n, j] = difference(acc, X, j)
+    return A
+
+
+def event_gradient(motion, X, modes, rho, index, sc):
+    """``grad h`` of the event function ``index`` of the phase (central differences)."""
+    n = motion.n
+
+    def w(Y):
+        return motion.watch(Y[:n], Y[n:2 * n], modes, rho, sc, Y[2 * n])[index]
+    return np.array([difference(w, X, j) for j in range(2 * n + 1)])
+
+
+def jump_derivative(motion, X, closed, held):
+    """``DJ`` of the projection onto the contacts ``closed`` (velocities on ``J_n u = 0``)
+    and ``held`` (``J_t u`` on the surface's velocity) at a state on them: the velocity
+    block is the exact projector; the positions' blocks are the tangent projector and the
+    projector's change with the positions (central differences)."""
+    n = motion.n
+    m = 2 * n + 1
+    D = np.eye(m)
+    if not closed and not held:
+        return D
+    q, u, t = X[:n], X[n:2 * n], X[2 * n]
+    D[:n, :n] = _position_projector(motion, q, u, t, closed)
+    D[n:2 * n, n:2 * n] = _velocity_projector(motion, q, u, t, closed, held)
+    for j in range(n):        # d(projected u)/dq
+        D[n:2 * n, j] = difference(
+            lambda r: _project_velocity(motion, r, u, t, closed, held), q, j)
+    if held:                  # the surface's velocity moves with the time
+        D[n:2 * n, 2 * n] = difference(
+            lambda s: _project_velocity(motion, q, u, s[0], closed, held), np.array([t]), 0)
+    return D
+
+
+def _rows(motion, q, u, t, closed, held):
+    M, h, g, J, b, mu = motion.mech.pieces(q, u, motion.p, t)
+    A = np.array([J[c, 0] for c in closed] + [J[c, 1] for c in held])
+    return M, A
+
+
+def _velocity_projector(motion, q, u, t, closed, held):
+    M, A = _rows(motion, q, u, t, closed, held)
+    X = np.linalg.solve(M, A.T)
+    return np.eye(motion.n) - X @ np.linalg.solve(A @ X, A)
+
+
+def _project_velocity(motion, q, u, t, closed, held):
+    M, A = _rows(motion, q, u, t, closed, held)
+    X = np.linalg.solve(M, A.T)
+    target = A @ u
+    if held:
+        target[len(closed):] -= motion.surf(t)[list(held)]
+    return u - X @ np.linalg.solve(A @ X, target)
+
+
+def _position_projector(motion, q, u, t, closed):
+    n = motion.n
+    if not closed:
+        return np.eye(n)
+    M, A = _rows(motion, q, u, t, closed, ())
+    X = np.linalg.solve(M, A.T)
+    return np.eye(n) - X @ np.linalg.solve(A @ X, A)
+
+
+def saltation(DJ, F_minus, F_plus, grad):
+    """The saltation matrix of an event (module docstring)."""
+    return DJ + np.outer(F_plus - DJ @ F_minus, grad) / float(grad @ F_minus)
+
+
+def tangent_basis(motion, X, closed):
+    """An orthonormal basis (columns) of the state directions ``(dq, du)`` that keep the
+    contacts ``closed`` closed: ``J_n dq = 0`` and ``d(J_n u) = 0``."""
+    n = motion.n
+    if not closed:
+        return np.eye(2 * n)
+    q, u, t = X[:n], X[n:2 * n], X[2 * n]
+    J = motion.mech.pieces(q, u, motion.p, t)[3]
+    rows = []
+    for c in closed:
+        Jn = J[c, 0]
+        dJu = np.array([difference(lambda r: motion.mech.pieces(r, u, motion.p, t)[3][c, 0]
+                                   @ u, q, j) for j in range(n)])
+        rows.append(np.concatenate([Jn, np.zeros(n)]))
+        rows.append(np.concatenate([dJu, Jn]))
+    C = np.array(rows)
+    _, s, Vt = np.linalg.svd(C)
+    rank = int(np.sum(s > 1e-12 * max(s.max(), 1.0)))
+    return Vt[rank:].T

@@ -1,0 +1,123 @@
+"""Figures of periodic orbits: an orbit in its phase plane with its segments by contact
+mode (:func:`orbit_figure`), and a branch followed in a parameter with its stability and
+special points (:func:`branch_figure`); what ``ds.phasemap.plot()`` draws of a
+:func:`phasemap.periodic_orbit` or :func:`phasemap.continue_orbit` Dataset."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+
+from phasemap.plot.layout import _axes, legend_above, width_of
+from phasemap.plot.style import OKABE_ITO as _OI
+from phasemap.plot.style import style
+
+#: The look of each contact mode along an orbit (stick thick: where the block rides).
+_MODES = {"stick": (_OI["vermillion"], 2.6), "slip_pos": (_OI["blue"], 1.2),
+          "slip_neg": (_OI["bluish_green"], 1.2), "smooth": (_OI["black"], 1.2),
+          "open": (_OI["orange"], 1.2)}
+#: Special points of a branch: marker and colour by kind.
+_KINDS = {"crossing_sliding": ("o", _OI["vermillion"]), "grazing_sliding": ("D", _OI["blue"]),
+          "sequence_change": ("^", _OI["reddish_purple"]),
+          "period_doubling": ("s", _OI["orange"]), "fold": ("P", _OI["black"]),
+          "end": ("|", _OI["black"])}
+
+
+def orbit_figure(ds: xr.Dataset, x: str | None = None, y: str | None = None, *, ax=None,
+                 size: str | float = "one_column") -> Figure:
+    """The orbit in the plane ``(x, y)`` (default: the first coordinate that moves and its
+    rate), each segment drawn in its contact mode's colour (a stick segment thick), the
+    events that end the segments marked."""
+    contacts = [str(v)[len("segment_mode_"):] for v in ds.data_vars
+                if str(v).startswith("segment_mode_")]
+    if x is None or y is None:
+        moving = [str(v) for v in ds.data_vars if ds[v].dims == ("t",)
+                  and str(v) in _state_names(ds) and np.ptp(ds[v].values) > 0]
+        if len(moving) < 2:
+            raise ValueError("the orbit has fewer than two moving variables to draw")
+        x, y = (x or moving[0]), (y or moving[len(moving) // 2])
+    names = ds[f"mode_{contacts[0]}"].attrs["flag_meanings"].split()
+    width = width_of(size)
+    with style():
+        (a,) = _axes(ax, 1, (width, width * 0.8), "orbit_figure")
+        modes = ds[f"mode_{contacts[0]}"].values
+        xs, ys = ds[x].values, ds[y].values
+        start = 0
+        seen = {}
+        for i in range(1, len(modes) + 1):
+            if i == len(modes) or modes[i] != modes[start]:
+                name = names[int(modes[start]) + 1]
+                colour, lw = _MODES.get(name, (_OI["black"], 1.2))
+                stop = min(i + 1, len(modes))
+                line, = a.plot(xs[start:stop], ys[start:stop], color=colour, lw=lw,
+                               solid_capstyle="butt",
+                               label=f"{contacts[0]} {name.replace('_', ' ')}")
+                seen.setdefault(name, line)
+                start = i
+        a.plot(ds[f"event_{x}"].values, ds[f"event_{y}"].values, "o", ms=3.5,
+               mfc="white", mec=_OI["black"], mew=0.8, zorder=3)
+        a.set_xlabel(_label(ds, x))
+        a.set_ylabel(_label(ds, y))
+        handles = list(seen.values()) + [Line2D([], [], ls="none", marker="o", ms=3.5,
+                                                mfc="white", mec=_OI["black"],
+                                                label="event ending a segment")]
+        legend_above(a, handles, title=f"period {float(ds.period):.6g} s")
+    return a.figure
+
+
+def _state_names(ds):
+    """The orbit's coordinates and rates (those with a start per segment)."""
+    return [str(v)[len("segment_"):] for v in ds.data_vars
+            if str(v).startswith("segment_") and ds[v].dims == ("segment",)
+            and not str(v).startswith(("segment_mode_", "segment_duration", "segment_start",
+                                       "segment_end", "segment_event_index"))]
+
+
+def _label(ds, name):
+    units = ds[name].attrs.get("units", "")
+    return f"{name} ({units})" if units and units != "1" else name
+
+
+def branch_figure(ds: xr.Dataset, y: str | None = None, *, ax=None,
+                  size: str | float = "one_column") -> Figure:
+    """The branch: ``y`` (default the first amplitude) against the parameter, stable
+    solid, unstable dashed, special points marked and labelled by kind."""
+    param = str(ds.attrs["phasemap_parameter"])
+    if y is None:
+        y = next((str(v) for v in ds.data_vars if str(v).startswith("amplitude_")), "period")
+    if y not in ds.data_vars or ds[y].dims != ("vertex",):
+        raise ValueError(f"{y!r} is not a quantity of the branch; choose one of "
+                         + ", ".join(str(v) for v in ds.data_vars if ds[v].dims == ("vertex",)))
+    width = width_of(size)
+    p, v, stable = ds[param].values, ds[y].values, ds.stable.values
+    with style():
+        (a,) = _axes(ax, 1, (width, width * 0.7), "branch_figure")
+        # one line per run of stable (solid) or unstable (dashed) points
+        edges = [i for i in range(1, len(p)) if bool(stable[i]) != bool(stable[i - 1])]
+        kinds = set()
+        for lo, hi in zip([0, *edges], [*edges, len(p)]):
+            ls = "-" if stable[lo] else "--"
+            kinds.add(ls)
+            a.plot(p[max(lo - 1, 0):hi], v[max(lo - 1, 0):hi], color=_OI["black"], lw=1.3,
+                   ls=ls)
+        handles = [Line2D([], [], color=_OI["black"], lw=1.3, ls=ls, label=label)
+                   for ls, label in (("-", "stable"), ("--", "unstable")) if ls in kinds]
+        done = set()
+        for i in range(ds.sizes["point"]):
+            kind = str(ds.point_kind.values[i])
+            if kind == "end":
+                continue
+            at = float(ds[f"point_{param}"][i])
+            val = float(np.interp(at, p, v))
+            marker, colour = _KINDS.get(kind, ("X", _OI["reddish_purple"]))
+            a.plot([at], [val], marker=marker, color=colour, ms=6, ls="none", zorder=3)
+            if kind not in done:
+                handles.append(Line2D([], [], ls="none", marker=marker, color=colour, ms=6,
+                                      label=kind.replace("_", "-")))
+                done.add(kind)
+        a.set_xlabel(_label(ds, param))
+        a.set_ylabel(_label(ds, y))
+        legend_above(a, handles)
+    return a.figure

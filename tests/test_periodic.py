@@ -1,0 +1,276 @@
+"""Periodic orbits of friction oscillators (issue 39): found on the exact hybrid flow,
+their Floquet multipliers, and their continuation through nonsmooth bifurcations, each
+against a closed form or an independent computation of the test's own."""
+
+import math
+
+import numpy as np
+import pytest
+
+import phasemap
+from phasemap.core import events as ev
+from phasemap.declare import PointContact
+from phasemap.declare.full import mechanics
+from phasemap.motion import hybrid
+from phasemap.systems.oscillators import DEN_HARTOG
+from test_oscillators import _block, _den_hartog_amplitude, fk, fs, x, y
+
+
+# -- periodic orbits ----------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def belt_orbit():
+    return phasemap.periodic_orbit("belt", start={"x": 0.0, "xdot": 0.2})
+
+
+def test_belt_orbit_period_stick_segment_and_multipliers(belt_orbit):
+    """The belt's stick-slip orbit from periodic_orbit: T = 2 delta/v + pi + 2 arctan(v /
+    delta) = 8.902605407815, a stick segment of exactly 5, x_min = -0.038516480713, and
+    the Floquet multipliers 1 (along the flow) and exactly 0 (the stick segment collapses
+    every start onto the belt's speed)."""
+    o = belt_orbit
+    T = 1.0 / 0.2 + math.pi + 2 * math.atan(0.2 / 0.5)
+    assert abs(float(o.period) - T) < 1e-9
+    names = o.segment_mode_belt.attrs["flag_meanings"].split()
+    modes = [names[m] for m in o.segment_mode_belt.values]
+    assert sorted(modes) == ["slip_neg", "stick"]
+    stick = modes.index("stick")
+    assert abs(float(o.segment_duration[stick]) - 5.0) < 1e-9
+    assert abs(float(o.segment_duration.sum()) - float(o.period)) < 1e-12
+    lam = np.sort(np.abs(o.floquet.values))
+    assert lam[0] <= 1e-12
+    assert abs(lam[1] - 1.0) < 1e-6
+    assert int(o.stable) == 1 and float(o.residual) < 1e-10
+    # x_min: the slip segment's lowest point, pi/2 + arctan... after its start, from the
+    # orbit's own start state, against the closed form
+    slip = modes.index("slip_neg")
+    t0 = float(o.segment_start[slip])
+    i0 = int(np.argmin(np.abs(o.t.values - t0)))
+    state = {"x": float(o.x[i0]), "xdot": float(o.xdot[i0]), "y": 0.0, "y_dot": 0.0}
+    assert abs(state["x"] - 1.0) < 1e-9 and abs(state["xdot"] - 0.2) < 1e-9
+    dt = math.pi + math.atan(0.2 / 0.5)
+    low = phasemap.simulate("belt", dt, rtol=1e-12, t_eval=[dt], **state)
+    assert abs(float(low.x[-1]) - (0.5 - math.hypot(0.5, 0.2))) < 1e-9
+    assert abs(0.5 - math.hypot(0.5, 0.2) - (-0.038516480713)) < 1e-11
+
+
+def test_orbit_dataset_is_self_describing(belt_orbit):
+    o = belt_orbit
+    assert o.attrs["phasemap_kind"] == "periodic_orbit"
+    for name in ("period", "floquet", "residual", "stable", "segment_duration",
+                 "segment_end", "segment_mode_belt", "x", "xdot"):
+        assert "long_name" in o[name].attrs, name
+    assert o.floquet.dims == ("multiplier",) and np.iscomplexobj(o.floquet.values)
+    assert o.segment_duration.dims == ("segment",)
+    # the saved orbit closes on itself
+    assert abs(float(o.x[0]) - float(o.x[-1])) < 1e-9
+    assert abs(float(o.t[-1]) - float(o.t[0]) - float(o.period)) < 1e-9
+
+
+@pytest.mark.parametrize("Om, r", [(0.8, 0.2), (1.5, 0.3)])
+def test_den_hartog_orbit_against_its_amplitude(Om, r):
+    """periodic_orbit on Den Hartog's oscillator: the orbit's turning points (its
+    reversals) are at +-X0 of the closed form, half a period apart; the period is the
+    forcing's."""
+    o = phasemap.periodic_orbit("den_hartog", start={"Omega": Om, "f": r})
+    X0 = _den_hartog_amplitude(Om, r)
+    turns = o.event_x.values[o.event_kind.values == ev.REVERSAL]
+    assert turns.size == 2
+    assert np.allclose(np.sort(turns), [-X0, X0], rtol=0, atol=1e-9)
+    assert abs(float(o.period) - 2 * math.pi / Om) < 1e-12
+    t_turn = o.event_t.values[o.event_kind.values == ev.REVERSAL]
+    assert abs(abs(t_turn[1] - t_turn[0]) - math.pi / Om) < 1e-9
+    assert int(o.stable) == 1 and np.all(np.abs(o.floquet.values) < 1)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_saltation_monodromy_agrees_with_differences_of_the_return_map(seed):
+    """On random Den Hartog orbits (the forcing frequency and friction drawn), the
+    multipliers of the monodromy built from saltation matrices agree with those of the
+    return map differentiated by central differences (the test's own computation)."""
+    rng = np.random.default_rng(seed)
+    Om, r = rng.uniform(0.4, 0.7), rng.uniform(0.05, 0.3)
+    o = phasemap.periodic_orbit("den_hartog", start={"Omega": Om, "f": r})
+    mech = mechanics(DEN_HARTOG)
+    p = np.array([1.0, 1.0, 1.0, 1.0, Om, r])
+    t_a, T = float(o.t[0]), float(o.period)
+    z0 = np.array([float(o.x[0]), 0.0, float(o.xdot[0]), 0.0])
+
+    def ret(z):
+        rec = hybrid.run_full(mech, p, z[:2], z[2:], t_end=t_a + T, rtol=1e-13, atol=1e-13,
+                              max_step=math.inf, max_steps=10**6, max_events=10**4, t0=t_a,
+                              t_eval=[t_a + T])
+        return np.array([rec.y[-1][0], rec.y[-1][2]])
+
+    h = 1e-6
+    D = np.zeros((2, 2))
+    for j, i in enumerate((0, 2)):
+        zp, zm = z0.copy(), z0.copy()
+        zp[i] += h
+        zm[i] -= h
+        D[:, j] = (ret(zp) - ret(zm)) / (2 * h)
+    fd = np.sort_complex(np.linalg.eigvals(D))
+    got = np.sort_complex(o.floquet.values)
+    assert np.allclose(got, fd, atol=1e-6), (got, fd)
+
+
+def test_a_period_guess_reads_one_period_without_settling():
+    o = phasemap.periodic_orbit("belt", start={"x": 0.0, "xdot": 0.2}, period=9.0)
+    assert abs(float(o.period) - (5.0 + math.pi + 2 * math.atan(0.4))) < 1e-9
+
+
+def test_periodic_orbit_errors_are_one_line():
+    S = _block("block", PointContact("floor", point=(x, y), friction=fk, static_friction=fs))
+    with pytest.raises(ValueError, match="ends with rest"):
+        phasemap.periodic_orbit(S, start={"x": 1.2})
+    with pytest.raises(ValueError, match="rtol must be in"):
+        phasemap.periodic_orbit("belt", rtol=0.5)
+    with pytest.raises(ValueError, match="written by hand"):
+        phasemap.periodic_orbit("elliptic_pendulum")
+    with pytest.raises(ValueError, match="unknown variable"):
+        phasemap.periodic_orbit("belt", start={"z": 1.0})
+
+
+# -- continuation -------------------------------------------------------------------------
+
+def _den_hartog_stop_threshold(Om):
+    """The friction r* at which Den Hartog's non-stop orbit first sticks at its reversals,
+    computed here from the slip's closed form x = -r + V cos(Om t) + A cos t + B sin t
+    (x'' + x = cos(Om t) - r): the symmetric half orbit from x = -X0 at rest to X0 at rest
+    (four equations in A, B, t0, X0), and the stick condition at the reversal,
+    |cos(Om t1) - X0| <= r, tight at r*."""
+    from scipy.optimize import brentq, fsolve
+
+    V = 1 / (1 - Om**2)
+
+    def eqs(z, r):
+        A, B, t0, X0 = z
+        t1 = t0 + math.pi / Om
+
+        def x(t):
+            return -r + V * math.cos(Om * t) + A * math.cos(t) + B * math.sin(t)
+
+        def v(t):
+            return -V * Om * math.sin(Om * t) - A * math.sin(t) + B * math.cos(t)
+        return [x(t0) + X0, v(t0), x(t1) - X0, v(t1)]
+
+    z = None
+    for t0 in np.linspace(0, 2 * math.pi / Om, 32, endpoint=False):
+        zz, info, ok, _ = fsolve(eqs, [0.0, 0.0, t0, _den_hartog_amplitude(Om, 0.2)],
+                                 args=(0.2,), full_output=True, xtol=1e-14)
+        if ok == 1 and zz[3] > 0 and np.max(np.abs(info["fvec"])) < 1e-12:
+            z = zz
+            break
+    sols = {0.2: z}
+    for r in np.arange(0.25, 0.9, 0.05):
+        z = fsolve(eqs, z, args=(r,), xtol=1e-14)
+        sols[float(r)] = z
+
+    def margin(r):
+        near = sols[min(sols, key=lambda k: abs(k - r))]
+        A, B, t0, X0 = fsolve(eqs, near, args=(r,), xtol=1e-15)
+        return abs(math.cos(Om * (t0 + math.pi / Om)) - X0) - r
+
+    return brentq(margin, 0.5, 0.85, xtol=1e-15)
+
+
+@pytest.mark.filterwarnings("ignore:xtol=")
+def test_continuation_locates_the_stops_of_den_hartog_orbit():
+    """Den Hartog's orbit (Omega = 0.8) followed in the friction: its reversals turn into
+    stops (a crossing-sliding bifurcation) at r*, located by the continuation to 1e-8 of
+    the threshold computed here from the closed form; beyond, the orbit has its two stick
+    segments and the continuation goes on along it."""
+    r_star = _den_hartog_stop_threshold(0.8)
+    assert abs(r_star - 0.8174063857) < 1e-9
+    o = phasemap.periodic_orbit("den_hartog", start={"f": 0.78})
+    b = phasemap.continue_orbit(o, "f", (0.78, 0.83), steps=2)
+    kinds = [str(k) for k in b.point_kind.values]
+    assert kinds[0] == "crossing_sliding"
+    assert abs(float(b.point_f[0]) - r_star) < 1e-8
+    before, after = b.f.values < r_star, b.f.values > r_star
+    assert set(b.n_segments.values[before]) == {3}      # slip, slip, slip (period cut)
+    assert set(b.n_segments.values[after]) == {5}       # two stick segments more
+    assert np.allclose(b.period.values, 2 * math.pi / 0.8, atol=1e-12)
+    assert kinds[-1] == "end" and abs(float(b.point_f[-1]) - 0.83) < 1e-12
+
+
+def test_continuation_of_the_belt_orbit_in_the_belt_speed():
+    """The belt's stick-slip orbit followed in v: no change of its sequence, and its
+    period T(v) = 2 delta / v + pi + 2 arctan(v / delta) at every point."""
+    o = phasemap.periodic_orbit("belt", start={"x": 0.0, "xdot": 0.2})
+    b = phasemap.continue_orbit(o, "v", (0.2, 0.5), steps=3)
+    v = b.v.values
+    T = 2 * 0.5 / v + math.pi + 2 * np.arctan(v / 0.5)
+    assert v.size == 4
+    assert np.allclose(b.period.values, T, rtol=0, atol=1e-9)
+    assert [str(k) for k in b.point_kind.values] == ["end"]
+    assert np.all(b.stable.values == 1)
+    # the slip swings about x = f_k = 0.5 with the amplitude sqrt(delta^2 + v^2) (it
+    # starts at x = 1 moving up at v), past both ends of the stick
+    assert np.allclose(b.amplitude_x.values, np.hypot(0.5, v), rtol=0, atol=1e-9)
+
+
+def test_continuation_checks_its_arguments():
+    o = phasemap.periodic_orbit("belt", start={"x": 0.0, "xdot": 0.2})
+    with pytest.raises(ValueError, match="unknown parameter 'w'"):
+        phasemap.continue_orbit(o, "w", (0.1, 0.3))
+    with pytest.raises(ValueError, match="outside the span"):
+        phasemap.continue_orbit(o, "v", (0.3, 0.5))
+    with pytest.raises(ValueError, match="lo < hi"):
+        phasemap.continue_orbit(o, "v", (0.5, 0.1))
+
+
+def test_cli_orbit_prints_and_writes_a_cf_file(capsys, tmp_path):
+    import xarray as xr
+
+    from phasemap.cli import main
+
+    out = tmp_path / "belt.nc"
+    code = main(["orbit", "belt", "x=0", "xdot=0.2", "-o", str(out)])
+    text = capsys.readouterr().out
+    assert code == 0
+    assert "period 8.9026054078" in text and "stick" in text and "slip_neg" in text
+    assert "Floquet multipliers" in text and f"wrote {out}" in text
+    with xr.open_dataset(out) as ds:
+        assert abs(float(ds.period) - 8.902605407815) < 1e-9
+        assert ds.floquet_real.dims == ("multiplier",)
+        assert ds.attrs["phasemap_kind"] == "periodic_orbit"
+    from phasemap.atlas.cfcheck import cfcheck
+
+    report, passed = cfcheck(out)
+    assert passed, report
+
+
+def test_cli_simulates_an_oscillator_by_name(capsys):
+    from phasemap.cli import main
+
+    code = main(["simulate", "belt", "x=0", "xdot=0.2", "--t-end", "10", "--rtol", "1e-10"])
+    text = capsys.readouterr().out
+    assert code == 0 and "slip" in text and "stick" in text and "belt" in text
+
+
+def test_orbit_and_branch_figures_pass_the_review(tmp_path):
+    """ds.phasemap.plot() of an orbit (its phase plane, segments by mode) and of a branch
+    (stable solid, special points by kind), checked as the tour's figures are."""
+    import matplotlib.pyplot as plt
+
+    import figure_review as fr
+
+    o = phasemap.periodic_orbit("belt", start={"x": 0.0, "xdot": 0.2})
+    fig = o.phasemap.plot()
+    a = fig.axes[0]
+    assert a.get_xlabel() == "x (m)" and a.get_ylabel() == "xdot (m s-1)"
+    labels = [t.get_text() for t in a.get_legend().get_texts()]
+    assert "belt stick" in labels and "belt slip neg" in labels
+    stick = [ln for ln in a.get_lines() if ln.get_label() == "belt stick"][0]
+    assert np.allclose(stick.get_ydata(), 0.2, atol=1e-9)      # riding with the belt
+    for check in (fr.layout_problems, fr.unit_problems, fr.greyscale_problems,
+                  fr.legend_drawn_problems):
+        assert check(fig) == [], check.__name__
+    plt.close(fig)
+    b = phasemap.continue_orbit(o, "v", (0.2, 0.3), steps=1)
+    fig = b.phasemap.plot()
+    assert fig.axes[0].get_xlabel() == "v (m s-1)"
+    for check in (fr.layout_problems, fr.legend_drawn_problems):
+        assert check(fig) == [], check.__name__
+    plt.close(fig)
