@@ -121,7 +121,7 @@ def test_friction_that_falls_with_the_speed_matches_an_independent_integration()
     # the slip after the first stick starts where k x = f_s (static friction: x = 1) and
     # slips back against the belt, f_s / (1 + delta |v_rel|) forward, until it rides again
     start = slips[0]
-    assert abs(dict((kind, xx) for _, kind, xx in evs)["slip"] - 1.0) < 1e-9
+    assert all(abs(xx - 1.0) < 1e-9 for _, kind, xx in evs if kind == "slip")
     end = next(t for t in sticks if t > start)
     ref2 = solve_ivp(lambda t, z: [z[1], -z[0] + 1.0 / (1 + 3.0 * abs(z[1] - 0.2))],
                      (start, end), [1.0, 0.2], rtol=1e-12, atol=1e-13, dense_output=True)
@@ -138,6 +138,7 @@ def _den_hartog_amplitude(Om, r):
     return math.sqrt(V**2 - r**2 * U**2)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("Om, r, X0", [(0.8, 0.2, 2.711415255438), (1.5, 0.3, 0.721110255093)])
 def test_den_hartog_non_stop_orbit_has_its_closed_form_amplitude(Om, r, X0):
     """Den Hartog's x'' + x = cos(Omega t) - r sgn x': the symmetric non-stop orbit turns
@@ -169,10 +170,12 @@ def test_den_hartog_non_stop_orbit_has_its_closed_form_amplitude(Om, r, X0):
 
 
 def test_den_hartog_runs_by_name_and_never_stops_at_a_momentary_rest():
-    ds = phasemap.simulate("den_hartog", 30.0, rtol=1e-10, x=0.0, xdot=0.0)
-    assert ds.attrs["end_reason"] == "horizon" and float(ds.t[-1]) == 30.0
-    kinds = {name for _, name, _ in _events(ds)}
-    assert "rest" not in kinds and "reversal" in kinds
+    """With f = 0.9 the forced block stops (sticks) and starts again: a motion that stops
+    under a force that changes in time is not at rest for good."""
+    ds = phasemap.simulate("den_hartog", 60.0, rtol=1e-10, x=0.0, xdot=0.0, f=0.9)
+    assert ds.attrs["end_reason"] == "horizon" and float(ds.t[-1]) == 60.0
+    kinds = [name for _, name, _ in _events(ds)]
+    assert "rest" not in kinds and kinds.count("stick") >= 3 and kinds.count("slip") >= 3
     # the applied force is the declared cos(Omega t): x'' = -x + cos(0.8 t) - 0.2 sgn x'
     te = np.linspace(0.5, 2.0, 4)                   # slipping forward from the start
     got = phasemap.simulate("den_hartog", 2.0, rtol=1e-12, x=0.0, xdot=0.0, t_eval=te)
@@ -205,9 +208,13 @@ def test_rayleigh_dissipation_is_viscous_damping_in_every_path():
 
 def test_new_fields_leave_the_keys_of_declarations_before_them():
     """An atlas records its declaration's key: a declaration that uses none of the new
-    fields keeps the key it had (the fields are in it only where set)."""
+    fields keeps the key it had (the fields are in it only where set).  The rod's key is
+    the one it had before them (commit 0a251c1)."""
+    from phasemap.declare.build import declaration_sha256
     from phasemap.systems.painleve_rod import SYSTEM
 
+    assert declaration_sha256(SYSTEM) == ("5d0b8ed72cbe51e8e88ccaec64e50a181aaac14f19c8a5405e"
+                                          "71158592e0f598")
     text = canonical(SYSTEM)
     assert "static_friction" not in text and "surface_velocity" not in text
     assert "dissipation" not in text and "period" not in text
@@ -215,8 +222,9 @@ def test_new_fields_leave_the_keys_of_declarations_before_them():
 
 
 def _fails(S, match):
-    with pytest.raises(ValueError, match=match):
+    with pytest.raises(ValueError, match=match) as err:
         S.model
+    assert "\n" not in str(err.value)
 
 
 @pytest.mark.parametrize("make, match", [
@@ -235,6 +243,8 @@ def _fails(S, match):
      r"'t' \(TIME\) may appear only in forces= and surface_velocity="),
     (lambda: _block("b", EdgeContact("edge", (x, y), friction=fk, surface_velocity=1.0)),
      "has no surface to move"),
+    (lambda: _block("b", PointContact("floor", (x, y), friction=fk, surface_velocity=x.rate)),
+     "depends on 'xdot'"),
     (lambda: System("b", "b", "t", coordinates=(Coordinate("t", "m", "position",
                                                            rate=Rate("v", "m s-1", "v")), y),
                     parameters=(m, g), bodies=(Body(m, (x, y)),),

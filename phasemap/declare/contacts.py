@@ -107,14 +107,18 @@ class PointContact(ContactLaw):
         if self.sided not in ("one", "two"):
             fail(f"sided must be 'one' or 'two', got {self.sided!r}")
 
-    def validate(self, fail, expr) -> None:
+    def validate(self, fail, expr, state_names=frozenset()) -> None:
         from phasemap.declare.api import TIME
 
         super().validate(fail, expr)
         part = f"contact {self.name!r}"
         if self.static_friction is not None:
             expr(f"{part} static_friction", self.static_friction)
-        expr(f"{part} surface_velocity", self.surface_velocity, allow=(TIME.name,))
+        v = expr(f"{part} surface_velocity", self.surface_velocity, allow=(TIME.name,))
+        state = sorted(x.name for x in v.free_symbols if x.name in state_names)
+        if state:
+            fail(f"{part} surface_velocity", f"depends on {state[0]!r}: a surface's velocity "
+                 "is an expression of the parameters and the time t only")
         if sym(self.surface_velocity) != 0 and hasattr(self, "corner"):
             fail(f"{part} surface_velocity", "an edge contact's obstacle is a fixed corner: "
                  "it has no surface to move")

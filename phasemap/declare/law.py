@@ -316,8 +316,10 @@ class ContactLaw(abc.ABC):
         """The mode of this contact in a branch name."""
         return f"{self.name}_{mode.word()}" if self.name else mode.word()
 
-    def validate(self, fail, expr) -> None:
-        """Check the fields: ``fail(part, why)`` raises, ``expr(part, e)`` checks an expression."""
+    def validate(self, fail, expr, state_names=frozenset()) -> None:
+        """Check the fields: ``fail(part, why)`` raises, ``expr(part, e)`` checks an
+        expression; ``state_names``: the coordinates and rates (for a field that may not
+        depend on them)."""
         part = f"contact {self.name!r}"
         law = self.friction_field
         if self.friction_law is None:

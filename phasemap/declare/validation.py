@@ -244,13 +244,15 @@ def _mass_domain(S, i, mass) -> None:
 
 def _check_contacts(S, expr, at) -> None:
     seen = set()
+    state = frozenset(n for c in S.coordinates for n in (c.name, *([c.rate.name] if c.rate
+                                                                   else [])))
     for c in S.contacts:
         if not isinstance(c, ContactLaw):
             fail(S, "contacts", f"{c!r} is not a PointContact, RollingContact or Joint")
         if not IDENT.match(c.name) or c.name in seen:
             fail(S, f"contact {c.name!r}", "a contact needs a unique identifier as its name")
         seen.add(c.name)
-        c.validate(lambda part, why: fail(S, part, why), expr)
+        c.validate(lambda part, why: fail(S, part, why), expr, state)
         kinetic = c.law_expr().xreplace({sym(SLIP_SPEED): 0})
         x = at(kinetic)
         if x is not None and x < 0:

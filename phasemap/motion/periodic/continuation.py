@@ -30,15 +30,21 @@ def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
     sequence changes between the two steps: the parameter where it changes is located by
     bisection to ``locate`` (relative to the span), the point is named, the new sequence
     is read from the motion just beyond it, and the continuation goes on with it, without
-    the user's help.  A real Floquet multiplier through -1 is a period doubling, located
-    the same way.  Where Newton's method stops converging the branch ends there (a fold:
-    natural-parameter continuation does not turn round it).
+    the user's help (the motion beyond may settle on an orbit of another period: the
+    branch goes on along it).  A real Floquet multiplier through -1 is marked as a period
+    doubling at the step where it is seen (to within a step; not located).  Where Newton's
+    method stops converging, even in shorter steps, the branch ends there, marked
+    ``fold``: a fold, or any other end of the branch's convergence (natural-parameter
+    continuation does not turn round a fold).
 
     Kinds of special points: ``crossing_sliding`` (a stick segment is born at, or shrinks
     into, a reversal of the slip: the crossing point reaches the edge of the sticking
     region), ``grazing_sliding`` (a stick segment appears where the orbit had no event),
-    ``sequence_change`` (another change of the mode sequence), ``period_doubling``,
-    ``fold`` (no convergence beyond) and ``end`` (the end of the span).
+    ``sequence_change`` (another change of the mode sequence, among them a stuck
+    contact's friction limit reached tangentially inside its stick segment),
+    ``period_doubling``, ``fold`` (no convergence beyond) and ``end`` (the end of the
+    span).  ``grazing_sliding`` is named from the sequences alone (a stick segment more
+    and no reversal less): it is not checked further.
 
     Parameters
     ----------
@@ -109,10 +115,11 @@ def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
     segs, w, t_a = _from_dataset(mech, orbit, p0, rtol)
     h = (hi - lo) / steps
     ctx = _Context(name, mech, p0, i_par, rtol, tol, locate * (hi - lo), t_a)
-    points, marks = [ctx.point(lam0, segs, w)], []
+    points, marks = [ctx.point(lam0, segs, w, float(orbit.residual))], []
     for d, end in ((1.0, hi), (-1.0, lo)):
         if abs(end - lam0) <= 1e-12 * (hi - lo):
             continue
+        ctx.t_a, ctx.jac = t_a, []      # each direction from the orbit's own start
         got, special = ctx.follow(lam0, segs, w, d * h, end)
         points += got
         marks += special
@@ -142,14 +149,14 @@ class _Context:
         per = self.mech.period
         return None if per is None else float(per(*self.params(lam)))
 
-    def shoot(self, lam, segs, w):
+    def shoot(self, lam, segs, w, max_iter=30):
         motion = self.motion(lam)
         n = self.mech.n
         z = w[:2 * n]
         sc = motion.scales(z[:n], z[n:], self.mech.pieces(z[:n], z[n:], motion.p, self.t_a))
         segs = [Segment(s.modes, s.rho, s.index, s.kind) for s in segs]
         w, res = _orbit._shoot(self.name, motion, segs, w, self.t_a, self.forcing(lam),
-                               self.rtol, self.tol, sc, 30, self.jac)
+                               self.rtol, self.tol, sc, max_iter, self.jac)
         return w, res
 
     def point(self, lam, segs, w, res=0.0):
@@ -166,13 +173,17 @@ class _Context:
                 "residual": res}
 
     def admissible(self, lam, segs, w) -> bool:
-        """Whether the motion itself runs through the orbit's mode sequence."""
+        """Whether every segment's phase holds all along it (its conditions, such as a
+        stuck contact's friction slack, never dip below zero inside it, minima between
+        samples located), and the motion itself runs through the orbit's mode
+        sequence."""
         n2 = 2 * self.mech.n
         K = len(segs)
         if np.any(w[K * n2:] <= 0.0):
             return False
-        return _same(_sequence(self, lam, segs, w), [s.modes for s in segs],
-                     self.forcing(lam) is not None)
+        if _dips(self.motion(lam), segs, w, self.t_a, self.rtol):
+            return False
+        return _same(_sequence(self, lam, segs, w), [s.modes for s in segs])
 
     def follow(self, lam0, segs, w, h, end):
         """The branch from ``lam0`` towards ``end`` in steps ``h``: its points and its
@@ -202,13 +213,15 @@ class _Context:
                 prev, lam, w = (lam, w), new, w_new
                 continue
             # the sequence changes between lam and new: bisection on the old sequence
+            # (where its orbit stops existing, Newton's method failing, counts as beyond)
             a, wa, b, wb = lam, w, new, w_new
             while abs(b - a) > self.locate:
                 mid = 0.5 * (a + b)
+                guess = wa if wb is None else wa + (wb - wa) * ((mid - a) / (b - a))
                 try:
-                    wm, _ = self.shoot(mid, segs, 0.5 * (wa + wb))
+                    wm, _ = self.shoot(mid, segs, guess, max_iter=8)
                 except ValueError:
-                    b = mid
+                    b, wb = mid, None
                     continue
                 if self.admissible(mid, segs, wm):
                     a, wa = mid, wm
@@ -250,7 +263,7 @@ class _Context:
                                                forcing, sc)
         except ValueError:
             return "sequence_change", None, None
-        self.t_a = t_a
+        self.t_a, self.jac = _orbit.phase_time(t_a, forcing), []
         return _kind(segs, new_segs), new_segs, w_new
 
     def mark(self, lam, segs, w, kind, res):
@@ -296,6 +309,53 @@ def _extrema(motion, segs, w, t_a, rtol):
     return low, high
 
 
+#: Samples per segment where its conditions are checked for a dip below zero.
+DIP_SAMPLES = 24
+
+
+def _dips(motion, segs, w, t_a, rtol) -> bool:
+    """Whether a condition of a segment's phase (its event functions but the one that
+    ends it) goes below zero inside the segment: sampled, and each sampled minimum near
+    zero refined on the dense output (a tangency between samples is found)."""
+    from scipy.optimize import minimize_scalar
+
+    n = motion.n
+    n2 = 2 * n
+    K = len(segs)
+    zs, taus = _orbit._unpack(w, K, n2)
+    t = t_a
+    z0 = zs[0]
+    sc = motion.scales(z0[:n], z0[n:], motion.mech.pieces(z0[:n], z0[n:], motion.p, t_a))
+    scale = max(sc)
+    for j, seg in enumerate(segs):
+        sol = _orbit._flow(motion, zs[j], t, taus[j], seg, rtol, dense=True).sol
+
+        def watch(s, seg=seg, sol=sol):
+            y = sol(s)
+            out = motion.watch(y[:n], y[n:], seg.modes, seg.rho, sc, s)[:2 * motion.k]
+            if seg.index is not None and seg.index < out.size:
+                out = np.delete(out, seg.index)
+            return out
+
+        ts = np.linspace(t, t + taus[j], DIP_SAMPLES)[1:-1]
+        vals = np.array([watch(s) for s in ts])
+        if vals.size and np.min(vals) < -1e-9 * scale:
+            return True
+        for i in range(vals.shape[1] if vals.size else 0):
+            k = int(np.argmin(vals[:, i]))
+            if vals[k, i] > 1e-3 * scale:
+                continue
+            lo, hi = ts[max(k - 1, 0)], ts[min(k + 1, len(ts) - 1)]
+            if hi <= lo:
+                continue
+            best = minimize_scalar(lambda s, i=i: watch(s)[i], bounds=(lo, hi),
+                                   method="bounded", options={"xatol": 1e-13 * (1 + hi)})
+            if best.fun < -1e-9 * scale:
+                return True
+        t += taus[j]
+    return False
+
+
 def _sequence(ctx, lam, segs, w):
     """The modes the hybrid motion from the orbit's start goes through in one period."""
     n2 = 2 * ctx.mech.n
@@ -328,7 +388,7 @@ def _merged(seq, cyclic):
     return out
 
 
-def _same(seq, modes, forced) -> bool:
+def _same(seq, modes) -> bool:
     if seq is None:
         return False
     return _merged(seq, True) == _merged(modes, True)

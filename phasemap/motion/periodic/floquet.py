@@ -26,11 +26,21 @@ import numpy as np
 STEP = 1e-6
 
 
+def accelerations(motion, X, modes, rho):
+    """The phase's accelerations at ``X``; a one-line ValueError where its linear system is
+    singular."""
+    n = motion.n
+    sol = motion.solve(X[:n], X[n:2 * n], modes, rho, X[2 * n])
+    if sol is None:
+        raise ValueError(f"{motion.mech.name}: the phase has no accelerations at "
+                         f"t = {X[2 * n]:.6g} (its linear system is singular there)")
+    return sol[0]
+
+
 def field(motion, X, modes, rho):
     """``F(X) = (u, u', 1)`` of the phase ``modes``."""
     n = motion.n
-    ud = motion.solve(X[:n], X[n:2 * n], modes, rho, X[2 * n])[0]
-    return np.concatenate([X[n:2 * n], ud, [1.0]])
+    return np.concatenate([X[n:2 * n], accelerations(motion, X, modes, rho), [1.0]])
 
 
 def difference(fn, x, j):
@@ -50,10 +60,8 @@ def jacobian(motion, X, modes, rho):
     A = np.zeros((m, m))
     A[:n, n:2 * n] = np.eye(n)
 
-    def acc(Y):
-        return motion.solve(Y[:n], Y[n:2 * n], modes, rho, Y[2 * n])[0]
     for j in range(m):
-        A[n:2 * n, j] = difference(acc, X, j)
+        A[n:2 * n, j] = difference(lambda Y: accelerations(motion, Y, modes, rho), X, j)
     return A
 
 
@@ -119,8 +127,13 @@ def _position_projector(motion, q, u, t, closed):
 
 
 def saltation(DJ, F_minus, F_plus, grad):
-    """The saltation matrix of an event (module docstring)."""
-    return DJ + np.outer(F_plus - DJ @ F_minus, grad) / float(grad @ F_minus)
+    """The saltation matrix of an event (module docstring); NaN where the flow meets the
+    event tangentially (``grad h . F- = 0``: a grazing orbit, at a bifurcation, where the
+    linearised map is not defined)."""
+    across = float(grad @ F_minus)
+    if not abs(across) > 1e-12 * float(np.abs(grad).max() * np.abs(F_minus).max()):
+        return np.full_like(DJ, np.nan)
+    return DJ + np.outer(F_plus - DJ @ F_minus, grad) / across
 
 
 def tangent_basis(motion, X, closed):

@@ -62,8 +62,8 @@ def periodic_orbit(model, start=None, period=None, *, settle=None, rtol=1e-12, t
     """The periodic orbit the motion from ``start`` settles on, solved on the exact hybrid
     flow.
 
-    The motion (:func:`phasemap.simulate`'s, in full coordinates) runs for ``settle``
-    seconds; its last cycle is found (a forced system: the stroboscopic points one or more
+    The motion (:func:`phasemap.simulate`'s, in full coordinates) runs in chunks, at most
+    ``settle`` seconds in all, until a chunk holds a cycle (a forced system: the stroboscopic points one or more
     forcing periods apart that agree; an autonomous one: two events of the same kind at
     states that agree).  Its mode sequence is read from the events: one *segment* per
     phase, each ended by the event that ended it.  The orbit is then solved by multiple
@@ -160,14 +160,21 @@ def periodic_orbit(model, start=None, period=None, *, settle=None, rtol=1e-12, t
         rec, (t_a, t_b, z0) = _settled(name, mech, p, q, u, settle, rtol, forcing, sc,
                                        scale_t)
     segs, w = _segments(name, motion, rec, t_a, t_b, z0, forcing, sc)
+    t_a = phase_time(t_a, forcing)
     w, res = _shoot(name, motion, segs, w, t_a, forcing, rtol, tol, sc, max_iter)
     return _orbit_dataset(S, mech, motion, segs, w, t_a, forcing, res, samples, rtol, start)
+
+
+def phase_time(t, forcing):
+    """A forced orbit's start time as its phase of the forcing, in [0, period): the
+    forcing repeats, and a continuation in the forcing period keeps that phase."""
+    return t if forcing is None else t - forcing * math.floor(t / forcing)
 
 
 def _settled(name, mech, p, q, u, settle, rtol, forcing, sc, scale_t):
     """The motion run in chunks (10 forcing periods, or 50 time scales) until a cycle is
     found in a chunk, at most ``settle`` in all: ``(record of that chunk, cycle)``."""
-    chunk = 10 * forcing if forcing is not None else 50 * scale_t
+    chunk = (MAX_MULTIPLE + 4) * forcing if forcing is not None else 50 * scale_t
     t, z = 0.0, np.concatenate([q, u])
     n = mech.n
     while True:
@@ -184,7 +191,7 @@ def _settled(name, mech, p, q, u, settle, rtol, forcing, sc, scale_t):
 def _run(mech, p, q, u, t0, t1, rtol, forcing) -> Record:
     te = None
     if forcing is not None:
-        k = int(round((t1 - t0) / forcing))
+        k = int(math.floor((t1 - t0) / forcing * (1 + 1e-12)))
         te = t0 + forcing * np.arange(k + 1)
         te[-1] = min(te[-1], t1)
     m = Motion(mech, p, Options(t1, rtol=rtol, max_events=1_000_000))
@@ -244,7 +251,6 @@ def _guessed_cycle(name, rec: Record, period):
 def _segments(name, motion, rec: Record, t_a, t_b, z0, forcing, sc):
     """The segments of one period of ``rec`` (which runs from ``t_a`` to ``t_b``) and the
     first guess of the unknowns: each segment's initial state, then the durations."""
-    n = motion.n
     kinds = [k for k in rec.ev_kind]
     inside = [i for i, t in enumerate(rec.ev_t) if t_a < t <= t_b and kinds[i] not in
               (ev.START, ev.HORIZON)]
@@ -275,15 +281,29 @@ def _segments(name, motion, rec: Record, t_a, t_b, z0, forcing, sc):
         if not at_end:
             i_ev = inside[j]
             kind = kinds[i_ev]
-            zz = np.asarray(rec.ev_y[i_ev])
-            w = motion.watch(zz[:n], zz[n:], modes, rho, sc, t_end)
-            index = int(np.argmin(np.abs(w)))
+            index = _event_index(motion, rec, i_ev, modes, rho, sc, t_end)
         segs.append(Segment(tuple(int(m) for m in modes), rho, index, int(kind)))
         zs.append(np.asarray(z, dtype=float))
         taus.append(float(t_end - t))
     if any(tau <= 0 for tau in taus):
         raise ValueError(f"{name}: a segment of the cycle has no length")
     return segs, np.concatenate(zs + [np.array(taus)])
+
+
+#: Which of a contact's two event functions (Motion.watch: 2c its gap or N, 2c + 1 its
+#: slip velocity or friction slack) each kind of event is.
+_WHICH = {ev.LIFTOFF: 0, ev.RECONTACT: 0, ev.STICK: 1, ev.SLIP: 1, ev.REVERSAL: 1}
+
+
+def _event_index(motion, rec, i, modes, rho, sc, t):
+    """The index of the event function that ended a segment: from the event's kind and
+    contact, or, for another kind, the function nearest zero at the event."""
+    kind, c = rec.ev_kind[i], rec.ev_contact[i]
+    if kind in _WHICH and c >= 0:
+        return 2 * int(c) + _WHICH[kind]
+    n = motion.n
+    z = np.asarray(rec.ev_y[i])
+    return int(np.argmin(np.abs(motion.watch(z[:n], z[n:], modes, rho, sc, t))))
 
 
 def _rho(motion, z, modes, t, sc):
@@ -300,12 +320,25 @@ def _flow(motion, z, t, tau, seg, rtol, dense=False):
     n = motion.n
 
     def f(s, y):
-        return np.concatenate([y[n:], motion.solve(y[:n], y[n:], seg.modes, seg.rho, s)[0]])
+        sol = motion.solve(y[:n], y[n:], seg.modes, seg.rho, s)
+        if sol is None:
+            raise ValueError(f"{motion.mech.name}: the phase {_modes_text(motion, seg)} has "
+                             f"no accelerations at t = {s:.6g} (its linear system is "
+                             "singular there)")
+        return np.concatenate([y[n:], sol[0]])
 
     scale = 1.0 + float(np.max(np.abs(z)))
     sol = solve_ivp(f, (t, t + tau), z, method="DOP853", rtol=rtol, atol=rtol * scale,
                     dense_output=dense)
+    if not sol.success:
+        raise ValueError(f"{motion.mech.name}: a segment ({_modes_text(motion, seg)}) could "
+                         f"not be integrated from t = {t:.6g}: {sol.message}")
     return sol
+
+
+def _modes_text(motion, seg) -> str:
+    return ", ".join(f"{c.name} {MODE_NAMES[m]}" for c, m in zip(motion.mech.contacts,
+                                                                  seg.modes))
 
 
 def _jump(motion, z, t, nxt: Segment):
@@ -396,14 +429,15 @@ def _shoot(name, motion, segs, w, t_a, forcing, rtol, tol, sc, max_iter, cache=N
             cols = list(range(n2)) + ["tau"] + (["t"] if forcing is not None and j else [])
             for col in cols:
                 z, t, tau = zs[j].copy(), starts[j], taus[j]
+                step = 0.1 * math.sqrt(rtol)      # 1e-7 at rtol 1e-12
                 if col == "tau":
-                    h = 1e-7 * max(tau, 1e-3)
+                    h = step * max(tau, 1e-3)
                     tau = tau + h
                 elif col == "t":
-                    h = 1e-7 * max(1.0, abs(t))
+                    h = step * max(1.0, abs(t))
                     t = t + h
                 else:
-                    h = 1e-7 * (1.0 + abs(z[col]))
+                    h = step * (1.0 + abs(z[col]))
                     z[col] += h
                 d = (_flat(_end(motion, segs, j, z, t, tau, rtol, sc), scale, sc) - base) / h
                 if col == "tau":
