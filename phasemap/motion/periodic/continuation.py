@@ -230,7 +230,7 @@ class _Context:
             # the new sequence, read a little beyond (where its new segment has a length
             # the motion resolves), then followed from there
             past = b + math.copysign(max(10 * self.locate, 1e-6 * abs(h)), h)
-            kind, new_segs, w_next = self.beyond(past, segs, wb)
+            kind, new_segs, w_next = self.beyond(past, segs, wa if wb is None else wb)
             marks.append(self.mark(a, segs, wa, kind, 0.0))
             if new_segs is None:
                 return points, marks
