@@ -244,6 +244,10 @@ def test_cli_orbit_prints_and_writes_a_cf_file(capsys, tmp_path):
 
     report, passed = cfcheck(out)
     assert passed, report
+    assert main(["info", str(out)]) == 0
+    summary = capsys.readouterr().out
+    assert "phasemap periodic orbit" in summary and "period    8.9026054078" in summary
+    assert "stick" in summary and "Floquet multipliers" in summary
 
 
 def test_cli_simulates_an_oscillator_by_name(capsys):

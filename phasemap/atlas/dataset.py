@@ -46,6 +46,7 @@ __all__ = [
     "Vocabulary",
     "assemble",
     "cf_header",
+    "created",
     "dataset_kind",
     "declaration_hash",
     "recorded_model",
@@ -79,6 +80,11 @@ _TITLES = {"atlas": "atlas", "trajectory": "trajectory", "phase_curve": "phase c
 
 #: (whole seconds since the epoch, their ISO 8601 time stamp): the last one made
 _STAMP = [None, ""]
+
+
+def created() -> str:
+    """The time stamp a Dataset made now records as ``date_created`` (UTC, ISO 8601)."""
+    return _now()
 
 
 def _now() -> str:

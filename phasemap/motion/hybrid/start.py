@@ -29,13 +29,13 @@ def full_attrs(S, m, opts, contact: dict, values) -> dict:
         attrs = cf_header(m, "trajectory", "phasemap.simulate")
     else:
         from phasemap._version import __version__
-        from phasemap.atlas.dataset import CONVENTIONS
+        from phasemap.atlas.dataset import CONVENTIONS, created
 
         attrs = {"Conventions": CONVENTIONS,
                  "title": f"phasemap trajectory: {S.title}",
                  "source": f"phasemap {__version__}", "references": S.citation,
                  "phasemap_kind": "trajectory", "phasemap_model": S.name,
-                 "phasemap_version": __version__}
+                 "phasemap_version": __version__, "date_created": created()}
     for k, value in opts.as_dict().items():
         attrs[f"phasemap_{k}"] = value
     for k, value in contact.items():

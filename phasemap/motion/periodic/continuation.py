@@ -441,7 +441,7 @@ def _branch_dataset(S, mech, param, points, marks, span):
     import xarray as xr
 
     from phasemap._version import __version__
-    from phasemap.atlas.dataset import CONVENTIONS
+    from phasemap.atlas.dataset import CONVENTIONS, created
 
     n = mech.n
     par = next(q for q in S.parameters if q.name == param)
@@ -476,6 +476,7 @@ def _branch_dataset(S, mech, param, points, marks, span):
                                        "units": u})
     attrs = {"Conventions": CONVENTIONS, "title": f"phasemap orbit branch: {S.title}",
              "source": f"phasemap {__version__}", "references": S.citation,
+             "phasemap_version": __version__, "date_created": created(),
              "phasemap_kind": "orbit_branch", "phasemap_model": S.name,
              "phasemap_parameter": param, "phasemap_span": np.array(span, dtype=float),
              "phasemap_modes": " ".join(MODE_NAMES)}
