@@ -124,6 +124,7 @@ def test_a_period_guess_reads_one_period_without_settling():
     ("belt", {"rtol": 0.5}, "rtol must be in"),
     ("elliptic_pendulum", {}, "written by hand"),
     ("belt", {"start": {"z": 1.0}}, "unknown variable"),
+    ("belt", {"start": [0.0, 0.2]}, "start must be a dict"),
 ])
 def test_periodic_orbit_errors_are_one_line(model, kw, match):
     if model == "block":

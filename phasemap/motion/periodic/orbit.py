@@ -5,6 +5,7 @@ its Floquet multipliers (see :mod:`phasemap.motion.periodic`)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -131,9 +132,10 @@ def periodic_orbit(model, start=None, period=None, *, settle=None, rtol=1e-12, t
 
     mech = mechanics(S)
     name = mech.name
+    if start is not None and not isinstance(start, Mapping):
+        raise ValueError(f"{name}: start must be a dict of values by name, got "
+                         f"{_args.describe(start)}")
     start = {} if start is None else dict(start)
-    if not isinstance(start, dict):
-        raise ValueError(f"{name}: start must be a dict of values by name")
     rtol = _args.finite("rtol", rtol, name)
     if not 1e-14 <= rtol <= 1e-6:
         raise ValueError(f"{name}: rtol must be in [1e-14, 1e-6], got {rtol!r}")
@@ -172,8 +174,9 @@ def phase_time(t, forcing):
 
 
 def _settled(name, mech, p, q, u, settle, rtol, forcing, sc, scale_t):
-    """The motion run in chunks (10 forcing periods, or 50 time scales) until a cycle is
-    found in a chunk, at most ``settle`` in all: ``(record of that chunk, cycle)``."""
+    """The motion run in chunks (MAX_MULTIPLE + 4 forcing periods, or 50 time scales)
+    until a chunk holds a cycle, at most ``settle`` in all: ``(that chunk's record,
+    cycle)``."""
     chunk = (MAX_MULTIPLE + 4) * forcing if forcing is not None else 50 * scale_t
     t, z = 0.0, np.concatenate([q, u])
     n = mech.n
