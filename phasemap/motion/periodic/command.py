@@ -74,7 +74,9 @@ def run(args, parse_values, check_output) -> str:
                                     model=model if not isinstance(model, str) else None)
         lines += _branch(result, param)
     if out is not None:
-        writable(result).to_netcdf(out, engine="netcdf4")
+        from phasemap.atlas.write import write_atlas
+
+        write_atlas(writable(result), out, overwrite=args.overwrite)
         lines.append(f"wrote {out}")
     return "\n".join(lines)
 
