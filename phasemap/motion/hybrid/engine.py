@@ -94,7 +94,7 @@ class Motion:
         v = J @ u
         if not self.mech.plain:
             v = v.copy()
-            v[:, 1] -= self.mech.surface(self.p, t)[0]
+            v[:, 1] -= self.surf(t)
         return v
 
     # -- the accelerations of a phase ---------------------------------------------
@@ -373,7 +373,7 @@ class Motion:
         X = np.linalg.solve(M, A.T)
         target = A @ u
         if held and not self.mech.plain:
-            target[len(moving):] -= self.mech.surface(self.p, t)[0][list(held)]
+            target[len(moving):] -= self.surf(t)[list(held)]
         u = u - X @ np.linalg.lstsq(A @ X, target, rcond=None)[0]
         return q, u
 
