@@ -3,6 +3,7 @@ their Floquet multipliers, and their continuation through nonsmooth bifurcations
 against a closed form or an independent computation of the test's own."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -13,7 +14,7 @@ from phasemap.declare import PointContact
 from phasemap.declare.full import mechanics
 from phasemap.motion import hybrid
 from phasemap.systems.oscillators import DEN_HARTOG
-from test_oscillators import _block, _den_hartog_amplitude, fk, fs, x, y
+from test_oscillators import _block, _den_hartog_amplitude, c, fk, fs, g, m, x, y
 
 
 # -- periodic orbits ----------------------------------------------------------------------
@@ -235,8 +236,11 @@ def test_cli_orbit_prints_and_writes_a_cf_file(capsys, tmp_path):
     code = main(["orbit", "belt", "x=0", "xdot=0.2", "-o", str(out)])
     text = capsys.readouterr().out
     assert code == 0
-    assert "period 8.9026054078" in text and "stick" in text and "slip_neg" in text
-    assert "Floquet multipliers" in text and f"wrote {out}" in text
+    assert "period    8.9026054078" in text and f"wrote {out}" in text
+    # the segments' table: the slip ends with the stick, the stick with the slip
+    assert re.search(r"^ +0 +3\.9026054078\d* +slip_neg +stick$", text, re.M), text
+    assert re.search(r"^ +1 +5 +stick +slip$", text, re.M), text
+    assert "Floquet multipliers" in text
     with xr.open_dataset(out) as ds:
         assert abs(float(ds.period) - 8.902605407815) < 1e-9
         assert ds.floquet_real.dims == ("multiplier",)
@@ -296,3 +300,95 @@ def test_continuation_in_the_forcing_frequency():
     exact = [_den_hartog_amplitude(float(w), 0.2) for w in b.Omega.values]
     assert np.allclose(b.amplitude_x.values, exact, rtol=0, atol=1e-8)
     assert np.allclose(b.period.values, 2 * math.pi / b.Omega.values, rtol=0, atol=1e-9)
+
+
+def _forced(name, defaults):
+    """The references' forced oscillator (tests/references/duffing_fold.py), declared:
+    x'' + c x' + k1 x + beta x^3 = F cos(Omega t) - r sgn x' (m = g = 1)."""
+    import sympy as sp
+
+    from phasemap.declare import TIME, Parameter
+
+    P = {nm: Parameter(nm, "1", nm, default=defaults[nm], lower=0.0)
+         for nm in ("F", "r", "k1", "beta", "c")}
+    Om = Parameter("Omega", "rad s-1", "forcing frequency", default=defaults["Omega"],
+                   lower=0.0, lower_open=True)
+    return _block(name, PointContact("floor", point=(x, y), friction=P["r"]),
+                  (*P.values(), Om), potential=P["k1"] * x**2 / 2 + P["beta"] * x**4 / 4
+                  + m * g * y, dissipation=P["c"] * x.rate**2 / 2,
+                  forces={x: P["F"] * sp.cos(Om * TIME)}, period=2 * sp.pi / Om)
+
+
+@pytest.mark.slow
+def test_pseudo_arclength_goes_round_the_fold_of_a_hardening_oscillator():
+    """A forced hardening oscillator with dry and viscous friction: its large orbit,
+    followed in Omega, turns back at the fold of its resonance curve.  The continuation
+    goes round it onto the unstable orbit, locates the fold (Omega as an extremum along
+    the branch) to 1e-9 of scipy's own fold (tests/references/duffing_fold.py: det(DP -
+    I) = 0 on the return map), and the stability changes there."""
+    from references import duffing_fold as ref
+
+    S = _forced("duffing", {**ref.FOLD, "Omega": 1.55})
+    o = phasemap.periodic_orbit(S, start={"x": 0.19, "xdot": 1.96})
+    b = phasemap.continue_orbit(o, "Omega", (1.55, 1.6), model=S, steps=2)
+    kinds = [str(kd) for kd in b.point_kind.values]
+    assert kinds == ["fold", "end"]
+    assert abs(float(b.point_Omega[0]) - ref.OMEGA_UPPER) < 1e-9
+    om = b.Omega.values
+    top = int(np.argmax(om))
+    assert om.max() <= ref.OMEGA_UPPER + 1e-9 < 1.6     # it never passes the fold
+    assert np.all(np.diff(om[:top + 1]) > 0) and np.all(np.diff(om[top:]) < 0)
+    # back at Omega = 1.55 on the other orbit: the unstable one, of smaller amplitude
+    assert om[0] == pytest.approx(1.55, abs=1e-12) and om[-1] == pytest.approx(1.55, abs=1e-12)
+    assert b.stable.values[0] == 1 and b.stable.values[-1] == 0
+    assert float(b.amplitude_x[-1]) < float(b.amplitude_x[0]) - 0.05
+    assert np.all(b.residual.values < 1e-9)
+    # the fold is a point of the branch, where the largest multiplier is 1: below 1 on
+    # the stable side, above it beyond
+    assert om[top] == float(b.point_Omega[0])
+    assert float(b.point_amplitude_x[0]) == float(b.amplitude_x[top])
+    fm, st = b.floquet_max.values, b.stable.values.astype(bool)
+    assert abs(fm[top] - 1.0) < 1e-6
+    others = np.arange(om.size) != top
+    assert np.all(fm[st & others] < 1.0) and np.all(fm[~st & others] > 1.0)
+    # the stable orbit's multipliers are those of the reference's return map there
+    from scipy.optimize import root
+
+    at = {**ref.FOLD, "Omega": 1.55}
+    z = root(lambda z: ref.return_map(z, **at) - z, [0.19, 1.96], tol=1e-13).x
+    assert abs(fm[0] - np.abs(np.linalg.eigvals(ref.derivative(z, **at))).max()) < 1e-6
+
+
+@pytest.mark.slow
+def test_a_period_doubling_is_located_where_a_multiplier_passes_minus_one():
+    """Ueda's oscillator with dry friction (tests/references/duffing_fold.py): its
+    period-one orbit, unstable at F = 8 with a multiplier below -1, followed in F regains
+    its stability through -1 (a period doubling, on one mode sequence).  The point is
+    located to 2e-8 of scipy's own (det(DP + I) = 0 on the return map; its two steps of
+    differences agree to 5e-9), and it is a point of the branch with the multiplier -1."""
+    from references import duffing_fold as ref
+
+    S = _forced("ueda", {**ref.DOUBLING, "F": 8.0})
+    o = phasemap.periodic_orbit(S, start={"x": 2.37959359, "xdot": -0.31001823},
+                                period=2 * math.pi)
+    assert int(o.stable) == 0 and float(np.abs(o.floquet).max()) > 1.0
+    b = phasemap.continue_orbit(o, "F", (8.0, 8.05), model=S, steps=2)
+    assert [str(kd) for kd in b.point_kind.values] == ["period_doubling", "end"]
+    f_pd = float(b.point_F[0])
+    assert abs(f_pd - ref.F_DOUBLING) < 2e-8
+    i = int(np.flatnonzero(b.F.values == f_pd)[0])
+    assert abs(float(b.floquet_max[i]) - 1.0) < 1e-8
+    assert set(b.stable.values[:i]) == {0} and set(b.stable.values[i + 1:]) == {1}
+    assert set(b.n_segments.values) == {3}      # one mode sequence all along
+
+
+def test_a_symbol_that_is_not_the_declared_one_is_refused():
+    """sympy tells Symbol('xdot') from the declared rate (real=True) by its assumptions,
+    so a dissipation written with it would silently be zero: it is a one-line error."""
+    import sympy as sp
+
+    S = _block("damped", PointContact("floor", point=(x, y), friction=0), (c,),
+               dissipation=c * sp.Symbol("xdot")**2 / 2)
+    with pytest.raises(ValueError, match=r"^damped: dissipation: the symbol 'xdot' is not "
+                                         r"the declared one[^\n]*$"):
+        phasemap.simulate(S, 1.0, x=1.0)

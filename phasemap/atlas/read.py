@@ -146,39 +146,53 @@ def _describe(ds: xr.Dataset, where: str) -> str:
 
 
 def _describe_orbit(ds: xr.Dataset, where: str, kind: str) -> str:
-    """A periodic orbit (its period, stability, segments, multipliers) or a branch of them
-    (its parameter's range and special points)."""
+    """A periodic orbit or a branch of them, headed by where it is and what made it."""
     a = ds.attrs
     lines = [f"phasemap {kind.replace('_', ' ')} {where}", f"  title     {a.get('title', '')}",
              f"  model     {a.get('phasemap_model', '?')}", _made_by(a)]
-    if kind == "periodic_orbit":
-        lines.append(f"  period    {float(ds.period):.12g} s, "
-                     f"{'stable' if int(ds.stable) else 'unstable'}, shooting residual "
-                     f"{float(ds.residual):.1e}")
-        contacts = [str(v)[len("segment_mode_"):] for v in ds.data_vars
-                    if str(v).startswith("segment_mode_")]
-        names = ds[f"segment_mode_{contacts[0]}"].attrs["flag_meanings"].split()
-        rows = [("segment", "duration (s)", *contacts)]
-        for j in range(ds.sizes["segment"]):
-            rows.append((str(j), f"{float(ds.segment_duration[j]):.12g}",
-                         *(names[int(ds[f"segment_mode_{c}"][j])] for c in contacts)))
-        lines += ["segments", *("  " + r for r in _table(rows, right=(1,)))]
-        if "floquet_real" in ds:
-            mult = ds.floquet_real.values + 1j * ds.floquet_imag.values
-        else:
-            mult = ds.floquet.values
-        lines.append("Floquet multipliers  " + ", ".join(f"{complex(x):.6g}" for x in mult))
-        return "\n".join(lines)
-    param = str(a["phasemap_parameter"])
+    body = orbit_lines(ds) if kind == "periodic_orbit" else branch_lines(ds)
+    return "\n".join(lines + body)
+
+
+def orbit_lines(ds: xr.Dataset) -> list[str]:
+    """A periodic orbit (:func:`phasemap.periodic_orbit`, in memory or read back) as lines:
+    its period and stability, a table of its segments (duration, each contact's mode, the
+    event that ends it) and its Floquet multipliers."""
+    lines = [f"  period    {float(ds.period):.12g} s, "
+             f"{'stable' if int(ds.stable) else 'unstable'}, shooting residual "
+             f"{float(ds.residual):.1e}"]
+    contacts = [str(v)[len("segment_mode_"):] for v in ds.data_vars
+                if str(v).startswith("segment_mode_")]
+    names = ds[f"segment_mode_{contacts[0]}"].attrs["flag_meanings"].split()
+    ends = dict(zip(np.asarray(ds.segment_end.attrs["flag_values"]).tolist(),
+                    ds.segment_end.attrs["flag_meanings"].split()))
+    rows = [("segment", "duration (s)", *contacts, "ends with")]
+    for j in range(ds.sizes["segment"]):
+        rows.append((str(j), f"{float(ds.segment_duration[j]):.12g}",
+                     *(names[int(ds[f"segment_mode_{c}"][j])] for c in contacts),
+                     ends.get(int(ds.segment_end[j]), str(int(ds.segment_end[j])))))
+    lines += ["segments", *("  " + r for r in _table(rows, right=(1,)))]
+    if "floquet_real" in ds:
+        mult = ds.floquet_real.values + 1j * ds.floquet_imag.values
+    else:
+        mult = ds.floquet.values
+    lines.append("Floquet multipliers  " + ", ".join(f"{complex(x):.6g}" for x in mult))
+    return lines
+
+
+def branch_lines(ds: xr.Dataset) -> list[str]:
+    """A branch of periodic orbits (:func:`phasemap.continue_orbit`) as lines: its
+    parameter's range, how many of its points are stable, and a table of its special
+    points."""
+    param = str(ds.attrs["phasemap_parameter"])
     p = ds[param].values
-    lines.append(f"  branch    {ds.sizes['vertex']} point(s), {param} from {p.min():.6g} to "
-                 f"{p.max():.6g}; {int(ds.stable.sum())} stable")
+    lines = [f"  branch    {ds.sizes['vertex']} point(s), {param} from {p.min():.6g} to "
+             f"{p.max():.6g}; {int(ds.stable.sum())} stable"]
     rows = [("point", param, "period (s)")]
     for i in range(ds.sizes["point"]):
         rows.append((str(ds.point_kind.values[i]), f"{float(ds[f'point_{param}'][i]):.12g}",
                      f"{float(ds.point_period[i]):.9g}"))
-    lines += ["special points", *("  " + r for r in _table(rows, right=(1, 2)))]
-    return "\n".join(lines)
+    return lines + ["special points", *("  " + r for r in _table(rows, right=(1, 2)))]
 
 
 def _made_by(a) -> str:

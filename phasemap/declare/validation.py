@@ -206,6 +206,11 @@ def _expression_check(S, known):
                 fail(S, part, f"{unknown[0]!r} ({const}) may appear only in "
                      f"{where[unknown[0]]}")
             fail(S, part, f"unknown name {unknown[0]!r} (declared: {', '.join(sorted(known))})")
+        stray = sorted(str(s) for s in x.free_symbols if s != sp.Symbol(str(s), real=True))
+        if stray:       # sympy tells symbols apart by their assumptions, not their names
+            fail(S, part, f"the symbol {stray[0]!r} is not the declared one (its sympy "
+                 "assumptions differ): use the declared quantity itself (a Parameter, a "
+                 "Coordinate, its .rate, TIME) rather than a new sp.Symbol")
         return x
 
     return expr

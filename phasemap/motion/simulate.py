@@ -406,7 +406,7 @@ def _continued(S, m: Model, opts: Options, contact: dict, names, full, positions
                           **settings, **contact)
     prefix = (np.asarray(ts, float), py, ms, np.asarray(ev_t[:-1], float),
               np.asarray(ev_kind[:-1]), pey)
-    attrs = full_attrs(S, m, opts, contact, {**full, **positions})
+    attrs = full_attrs(S, m, opts.as_dict(), contact, {**full, **positions})
     rec.n_steps += n_steps
     ds = hybrid.dataset(mech, rec, attrs, prefix, p=p)
     ds.attrs["phasemap_reduced_end"] = ev.Event(int(events[-1, 1])).name.lower()

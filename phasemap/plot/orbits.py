@@ -21,7 +21,9 @@ _MODES = {"stick": (_OI["vermillion"], 2.6), "slip_pos": (_OI["blue"], 1.2),
 #: Special points of a branch: marker and colour by kind.
 _KINDS = {"crossing_sliding": ("o", _OI["vermillion"]), "grazing_sliding": ("D", _OI["blue"]),
           "sequence_change": ("^", _OI["reddish_purple"]),
-          "period_doubling": ("s", _OI["orange"]), "fold": ("P", _OI["black"]),
+          "period_doubling": ("s", _OI["orange"]), "torus": ("*", _OI["orange"]),
+          "fold": ("P", _OI["black"]),
+          "no_convergence": ("x", _OI["black"]), "max_points": ("x", _OI["sky_blue"]),
           "end": ("|", _OI["black"])}
 
 
@@ -110,7 +112,7 @@ def branch_figure(ds: xr.Dataset, y: str | None = None, *, ax=None,
             if kind == "end":
                 continue
             at = float(ds[f"point_{param}"][i])
-            val = float(np.interp(at, p, v))
+            val = _at_point(ds, i, y, at, p, v)
             marker, colour = _KINDS.get(kind, ("X", _OI["reddish_purple"]))
             a.plot([at], [val], marker=marker, color=colour, ms=6, ls="none", zorder=3)
             if kind not in done:
@@ -121,3 +123,16 @@ def branch_figure(ds: xr.Dataset, y: str | None = None, *, ax=None,
         a.set_ylabel(_label(ds, y))
         legend_above(a, handles)
     return a.figure
+
+
+def _at_point(ds, i, y, at, p, v) -> float:
+    """The value of ``y`` at the special point ``i`` (parameter ``at``): its own where the
+    branch Dataset stores it (``point_<y>``), else interpolated on the first piece of the
+    branch whose ends hold ``at`` (the branch may turn, so it is not a function of the
+    parameter), else the nearest point's."""
+    if f"point_{y}" in ds:
+        return float(ds[f"point_{y}"][i])
+    for k in range(len(p) - 1):
+        if (p[k] - at) * (p[k + 1] - at) <= 0 and p[k] != p[k + 1]:
+            return float(v[k] + (v[k + 1] - v[k]) * (at - p[k]) / (p[k + 1] - p[k]))
+    return float(v[int(np.argmin(np.abs(p - at)))])

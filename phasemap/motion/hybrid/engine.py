@@ -366,16 +366,21 @@ class Motion:
             q = q - X @ np.linalg.solve(G @ X, r)
             for j in fixed:
                 q[j] = q0[j]
+        return q, self.project_velocity(q, u, moving, held, t)
+
+    def project_velocity(self, q, u, moving, held=(), t=0.0):
+        """The velocities put on ``J_n u = 0`` for the contacts ``moving`` and ``J_t u``
+        on the surface's velocity for those in ``held``, at the positions ``q``: the
+        smallest change in kinetic-energy norm."""
         if not moving and not held:
-            return q, u
+            return u
         M, h, g, J, b, mu = self.mech.pieces(q, u, self.p, t)
         A = np.array([J[c, 0] for c in moving] + [J[c, 1] for c in held])
         X = np.linalg.solve(M, A.T)
         target = A @ u
         if held and not self.mech.plain:
             target[len(moving):] -= self.surf(t)[list(held)]
-        u = u - X @ np.linalg.lstsq(A @ X, target, rcond=None)[0]
-        return q, u
+        return u - X @ np.linalg.lstsq(A @ X, target, rcond=None)[0]
 
     # -- the events of a phase ----------------------------------------------------------
 

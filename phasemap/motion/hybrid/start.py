@@ -20,9 +20,10 @@ def mechanics_of(S):
     return mechanics(system_of(S))
 
 
-def full_attrs(S, m, opts, contact: dict, values) -> dict:
+def full_attrs(S, m, settings: dict, contact: dict, values) -> dict:
     """The attributes of a motion in full coordinates: the model's CF header (or the
-    declaration's, where it has no reduced model), the settings and the start."""
+    declaration's, where it has no reduced model), the settings (``Options.as_dict()``)
+    and the start."""
     if m is not None:
         from phasemap.atlas.dataset import cf_header
 
@@ -36,7 +37,7 @@ def full_attrs(S, m, opts, contact: dict, values) -> dict:
                  "source": f"phasemap {__version__}", "references": S.citation,
                  "phasemap_kind": "trajectory", "phasemap_model": S.name,
                  "phasemap_version": __version__, "date_created": created()}
-    for k, value in opts.as_dict().items():
+    for k, value in settings.items():
         attrs[f"phasemap_{k}"] = value
     for k, value in contact.items():
         attrs[f"phasemap_{k}"] = value
@@ -55,7 +56,7 @@ def simulate_full(S, m, opts, contact: dict, te, values, t0: float = 0.0):
     q, u, p = start_values(mech, values)
     settings = run_settings(opts, mech.n if te is None else 0)
     rec = run_full(mech, p, q, u, t0=t0, t_eval=te, **settings, **contact)
-    ds = dataset(mech, rec, full_attrs(S, m, opts, contact, values), p=p)
+    ds = dataset(mech, rec, full_attrs(S, m, opts.as_dict(), contact, values), p=p)
     say_full_memory(ds, opts, settings)
     return ds
 

@@ -53,6 +53,7 @@ def run(args, parse_values, check_output) -> str:
     checks before any work that OUT.nc can be written (the CLI's own).  Returns what to
     print."""
     from phasemap.atlas.atomic import destination
+    from phasemap.atlas.read import branch_lines, orbit_lines
     from phasemap.core import progress
     from phasemap.motion.periodic import continue_orbit, periodic_orbit
 
@@ -65,14 +66,14 @@ def run(args, parse_values, check_output) -> str:
     with progress.activity(f"{args.model}: settling on a cycle and solving it"):
         orbit = periodic_orbit(model, start=values, period=args.period, settle=args.settle,
                                rtol=args.rtol)
-    lines = _describe(orbit)
+    lines = orbit_lines(orbit)
     result = orbit
     if follow is not None:
         param, lo, hi = follow
         with progress.activity(f"{args.model}: following the orbit in {param}"):
             result = continue_orbit(orbit, param, (lo, hi), steps=args.steps,
                                     model=model if not isinstance(model, str) else None)
-        lines += _branch(result, param)
+        lines += branch_lines(result)
     if out is not None:
         from phasemap.atlas.write import write_atlas
 
@@ -98,36 +99,6 @@ def _span(text: str):
     if not sep or not sep2 or not name:
         raise ValueError(f"--continue takes PARAM=LO:HI, got {text!r}")
     return name, _args.parse_real(lo, name, ""), _args.parse_real(hi, name, "")
-
-
-def _describe(o) -> list[str]:
-    names = o[next(v for v in o.data_vars if str(v).startswith("segment_mode_"))].attrs[
-        "flag_meanings"].split()
-    from phasemap.core.events import EVENT_MEANINGS
-
-    kinds = ["period_end", *EVENT_MEANINGS.split()]
-    values = [-1, *(int(x) for x in o.segment_end.attrs["flag_values"][1:])]
-    lines = [f"period {float(o.period):.12g} s, {o.sizes['segment']} segment(s), "
-             f"{'stable' if int(o.stable) else 'unstable'} "
-             f"(shooting residual {float(o.residual):.1e})"]
-    contacts = [str(v)[len("segment_mode_"):] for v in o.data_vars
-                if str(v).startswith("segment_mode_")]
-    for j in range(o.sizes["segment"]):
-        modes = ", ".join(f"{c} {names[int(o[f'segment_mode_{c}'][j])]}" for c in contacts)
-        end = kinds[values.index(int(o.segment_end[j]))]
-        lines.append(f"  {float(o.segment_duration[j]):.12g} s  {modes}  -> {end}")
-    mult = ", ".join(f"{complex(x):.6g}" for x in o.floquet.values)
-    lines.append(f"Floquet multipliers: {mult}")
-    return lines
-
-
-def _branch(b, param) -> list[str]:
-    lines = [f"branch: {b.sizes['vertex']} point(s) in {param}"]
-    for i in range(b.sizes["point"]):
-        lines.append(f"  {str(b.point_kind.values[i]):<18} {param} = "
-                     f"{float(b[f'point_{param}'][i]):.12g}  period "
-                     f"{float(b.point_period[i]):.9g}")
-    return lines
 
 
 def writable(ds):

@@ -18,33 +18,44 @@ SAMPLES = 200
 
 
 def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
-                   rtol: float | None = None, tol: float = 1e-10, locate: float = 1e-10):
+                   rtol: float | None = None, tol: float = 1e-10, locate: float = 1e-10,
+                   max_points: int | None = None):
     """Follow the periodic orbit ``orbit`` (a :func:`phasemap.periodic_orbit` Dataset) in
     the parameter ``param`` across ``span = (lo, hi)``.
 
-    The orbit is continued in ``steps`` equal steps of the parameter (a secant predictor,
-    the multiple-shooting Newton corrector of :func:`phasemap.periodic_orbit`).  After
-    every step the orbit is checked against the motion itself: the hybrid motion from the
-    orbit's start, run for one period, must go through the same mode sequence (no event
-    inside a segment, each phase admissible all along).  Where it does not, the mode
+    The orbit is continued by pseudo-arclength: a first step of ``(hi - lo) / steps`` in
+    the parameter, then steps along the secant of the last two points, each corrected by
+    Newton's method on the multiple-shooting equations of :func:`phasemap.periodic_orbit`
+    with the parameter an unknown, on the hyperplane normal to the secant.  The
+    arclength measures the parameter in units of the first step and the orbit's unknowns
+    in units of their change over it, so that a branch that does not turn takes about
+    ``steps`` steps; a step grows (to twice that) where Newton's method converges at once
+    and shrinks where it fails.  Where the parameter turns, the branch goes round the
+    fold, which is located as the parameter's extremum along the branch and marked
+    ``fold``.  After every step the orbit is checked against the motion itself: the hybrid
+    motion from the orbit's start, run for one period, must go through the same mode
+    sequence (no event inside a segment, each phase admissible all along).  Where it does not, the mode
     sequence changes between the two steps: the parameter where it changes is located by
     bisection to ``locate`` (relative to the span), the point is named, the new sequence
     is read from the motion just beyond it, and the continuation goes on with it, without
     the user's help (the motion beyond may settle on an orbit of another period: the
-    branch goes on along it).  A real Floquet multiplier through -1 is marked as a period
-    doubling at the step where it is seen (to within a step; not located).  Where Newton's
-    method stops converging, even in shorter steps, the branch ends there, marked
-    ``fold``: a fold, or any other end of the branch's convergence (natural-parameter
-    continuation does not turn round a fold).
+    branch goes on along it).  Where a real Floquet multiplier passes -1 between two
+    points of one sequence, the period doubling is located (Brent's method on the
+    multipliers along the branch) and is a point of the branch too; a complex pair
+    through the unit circle is located the same way and marked ``torus``.  Where
+    Newton's method stops converging, even in steps 4^8 times shorter, the branch ends
+    there, marked ``no_convergence``.
 
     Kinds of special points: ``crossing_sliding`` (a stick segment is born at, or shrinks
     into, a reversal of the slip: the crossing point reaches the edge of the sticking
     region), ``grazing_sliding`` (a stick segment appears where the orbit had no event),
     ``sequence_change`` (another change of the mode sequence, among them a stuck
     contact's friction limit reached tangentially inside its stick segment),
-    ``period_doubling``, ``fold`` (no convergence beyond) and ``end`` (the end of the
-    span).  ``grazing_sliding`` is named from the sequences alone (a stick segment more
-    and no reversal less): it is not checked further.
+    ``period_doubling``, ``torus``, ``fold`` (the parameter turns), ``no_convergence``,
+    ``max_points`` (the branch has ``max_points`` points: a closed branch, an isola,
+    goes round for ever) and ``end`` (the end of the span).  ``grazing_sliding`` is
+    named from the sequences alone (a stick segment more and no reversal less): it is
+    not checked further.
 
     Parameters
     ----------
@@ -62,12 +73,14 @@ def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
         the integration's and the shooting's tolerances (default: the orbit's rtol).
     locate : float
         how closely a special point is located, relative to the span.
+    max_points : int, optional
+        the most points in each direction from the orbit (default ``10 * steps + 10``).
 
     Returns
     -------
     xarray.Dataset
         shaped like that of :func:`phasemap.threshold` with ``along=``: on ``vertex``
-        the branch (``<param>``, ``period``, ``amplitude_<coordinate>``, ``stable``,
+        the branch in its order along the arc (from its end nearer ``lo``) (``<param>``, ``period``, ``amplitude_<coordinate>``, ``stable``,
         ``floquet_max``: the largest nontrivial multiplier's modulus, ``n_segments``,
         ``residual``), on ``point`` the special points (``point_<param>``,
         ``point_kind``, ``point_period``, ``point_residual``).
@@ -114,28 +127,39 @@ def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
                          f"({lo:g}, {hi:g})")
     segs, w, t_a = _from_dataset(mech, orbit, p0, rtol)
     h = (hi - lo) / steps
-    ctx = _Context(name, mech, p0, i_par, rtol, tol, locate * (hi - lo), t_a)
+    max_points = 10 * steps + 10 if max_points is None else _args.count(
+        "max_points", max_points, name)
+    ctx = _Context(name, mech, p0, i_par, rtol, tol, locate * (hi - lo), t_a, (lo, hi),
+                   max_points)
     points, marks = [ctx.point(lam0, segs, w, float(orbit.residual))], []
-    for d, end in ((1.0, hi), (-1.0, lo)):
+    for d, end in ((-1.0, lo), (1.0, hi)):
         if abs(end - lam0) <= 1e-12 * (hi - lo):
             continue
-        ctx.t_a, ctx.jac = t_a, []      # each direction from the orbit's own start
+        ctx.start(t_a)      # each direction from the orbit's own start
         got, special = ctx.follow(lam0, segs, w, d * h, end)
-        points += got
-        marks += special
-    order = sorted(range(len(points)), key=lambda i: points[i]["lam"])
-    points = [points[i] for i in order]
-    marks.sort(key=lambda m: m["lam"])
+        if d < 0:           # the branch in its order along the arc, from the lo side
+            points, marks = got[::-1] + points, special[::-1] + marks
+        else:
+            points, marks = points + got, marks + special
     return _branch_dataset(S, mech, param, points, marks, (lo, hi))
 
 
 class _Context:
     """What one continuation keeps: the system, the parameters, the tolerances."""
 
-    def __init__(self, name, mech, p0, i_par, rtol, tol, locate, t_a):
+    def __init__(self, name, mech, p0, i_par, rtol, tol, locate, t_a, span, max_points):
         self.name, self.mech, self.p0, self.i = name, mech, p0, i_par
         self.rtol, self.tol, self.locate, self.t_a = rtol, tol, locate, t_a
+        self.lo, self.hi = span
+        self.max_points = max_points
+        self.start(t_a)
+
+    def start(self, t_a):
+        """A fresh start of the branch from the orbit (each direction its own)."""
+        self.t_a = t_a
         self.jac = []       # the last shooting Jacobian (the chord method's)
+        self.w_scale = self.ds = None       # the arclength's metric and step
+        self.ds_max = math.inf
 
     def params(self, lam):
         p = self.p0.copy()
@@ -185,63 +209,296 @@ class _Context:
             return False
         return _same(_sequence(self, lam, segs, w), [s.modes for s in segs])
 
-    def follow(self, lam0, segs, w, h, end):
-        """The branch from ``lam0`` towards ``end`` in steps ``h``: its points and its
-        special points."""
-        points, marks = [], []
-        lam, prev = lam0, None
-        while (end - lam) * h > 1e-12 * abs(h):
-            step = h if abs(end - lam) > abs(h) else end - lam
-            for _ in range(8):          # shorter steps where Newton's method fails
-                new = lam + step
-                guess = w if prev is None else w + (w - prev[1]) * (step / (lam - prev[0]))
-                try:
-                    w_new, res = self.shoot(new, segs, guess)
-                    break
-                except ValueError:
-                    step /= 4
+    def scale_of(self, lam, w):
+        """The residual's scales at the orbit ``w`` (held through one corrector)."""
+        n = self.mech.n
+        z = w[:2 * n]
+        motion = self.motion(lam)
+        return motion.scales(z[:n], z[n:], self.mech.pieces(z[:n], z[n:], motion.p, self.t_a))
+
+    def residual(self, lam, segs, w, sc):
+        """The shooting equations at ``(w, lam)``, with the pieces of their Jacobian."""
+        motion = self.motion(lam)
+        ends, starts = _orbit._ends(motion, segs, w, self.t_a, self.rtol, sc)
+        r = _orbit._residual(motion, segs, w, ends, self.forcing(lam), sc)
+        return r, (motion, ends, starts)
+
+    def jacobian(self, lam, segs, w, sc, r, pieces):
+        """The shooting equations' Jacobian in ``(w, lam)``: the orbit's columns as in
+        :func:`phasemap.motion.periodic.orbit.jacobian`, the parameter's by a difference."""
+        motion, ends, starts = pieces
+        J = _orbit.jacobian(motion, segs, w, ends, starts, self.forcing(lam), self.rtol, sc)
+        h = 0.1 * math.sqrt(self.rtol) * max(1.0, abs(lam))
+        return np.column_stack([J, (self.residual(lam + h, segs, w, sc)[0] - r) / h])
+
+    def correct(self, segs, X_pred, t, D, max_iter=12):
+        """Newton's method on the shooting equations and the pseudo-arclength condition
+        (the orbit on the hyperplane through ``X_pred`` normal to ``t`` in the metric
+        ``D``): ``(X, residual, iterations)``; ValueError where it does not converge."""
+        K = len(segs)
+        N = X_pred.size - 1
+        X = X_pred.copy()
+        sc = self.scale_of(X[-1], X[:N])
+        r, pieces = self.residual(X[-1], segs, X[:N], sc)
+        res = float(np.max(np.abs(r)))
+        M, fresh = None, False
+        for it in range(max_iter):
+            if res <= 0.1 * self.tol:
+                return X, res, it
+            if M is None:
+                M = np.vstack([self.jacobian(X[-1], segs, X[:N], sc, r, pieces), t * D])
+                fresh = True
+            rhs = np.concatenate([r, [float(t * D @ (X - X_pred))]])
+            step = np.linalg.lstsq(M, rhs, rcond=None)[0]
+            for _ in range(8):
+                trial = X - step
+                if np.all(trial[N - K:N] > 0):
+                    r_t, pieces_t = self.residual(trial[-1], segs, trial[:N], sc)
+                    res_t = float(np.max(np.abs(r_t)))
+                    if res_t < res:
+                        break
+                step = step / 2
             else:
-                marks.append(self.mark(lam, segs, w, "fold", 0.0))
-                return points, marks
-            if self.admissible(new, segs, w_new):
-                point = self.point(new, segs, w_new, res)
-                doubling = _crossed_minus_one(points[-1]["mult"] if points else None,
-                                              point["mult"])
-                if doubling:
-                    marks.append(self.mark(new, segs, w_new, "period_doubling", res))
-                points.append(point)
-                prev, lam, w = (lam, w), new, w_new
+                if fresh:
+                    break
+                M = None            # the chord went stale: a fresh Jacobian
                 continue
-            # the sequence changes between lam and new: bisection on the old sequence
-            # (where its orbit stops existing, Newton's method failing, counts as beyond)
-            a, wa, b, wb = lam, w, new, w_new
-            while abs(b - a) > self.locate:
-                mid = 0.5 * (a + b)
-                guess = wa if wb is None else wa + (wb - wa) * ((mid - a) / (b - a))
-                try:
-                    wm, _ = self.shoot(mid, segs, guess, max_iter=8)
-                except ValueError:
-                    b, wb = mid, None
-                    continue
-                if self.admissible(mid, segs, wm):
-                    a, wa = mid, wm
-                else:
-                    b, wb = mid, wm
-            # the new sequence, read a little beyond (where its new segment has a length
-            # the motion resolves), then followed from there
-            past = b + math.copysign(max(10 * self.locate, 1e-6 * abs(h)), h)
-            kind, new_segs, w_next = self.beyond(past, segs, wa if wb is None else wb)
-            marks.append(self.mark(a, segs, wa, kind, 0.0))
-            if new_segs is None:
+            contraction = res_t / res
+            X, r, pieces, res = trial, r_t, pieces_t, res_t
+            if contraction > 0.1:
+                M, fresh = None, False
+            else:
+                fresh = False
+        if res <= max(self.tol, 10 * self.rtol):
+            return X, res, max_iter
+        raise ValueError(f"{self.name}: the pseudo-arclength corrector did not converge "
+                         f"(residual {res:.2g})")
+
+    def follow(self, lam0, segs, w, h, end):
+        """The branch from ``lam0`` in the direction of ``h`` until the parameter leaves
+        the span at ``end`` (or at the span's other end, after a fold), by steps of
+        pseudo-arclength: its points and its special points."""
+        lo, hi = sorted((self.lo, self.hi))
+        points, marks = [], []
+        lam = lam0
+        # a first step in the parameter, then secants along the branch
+        first = self.natural(lam, segs, w, h, end)
+        if first is None:
+            marks.append(self.mark(lam, segs, w, "no_convergence", 0.0))
+            return points, marks
+        new, w_new, res = first
+        last = {"mult": self.multipliers(lam, segs, w)}       # the point at lam
+        while True:
+            if not self.admissible(new, segs, w_new):
+                got = self.change(lam, segs, w, new, w_new, h)
+                marks.append(got[0])
+                if got[1] is None:
+                    return points, marks
+                point, segs = got[1], got[1]["segs"]
+                points.append(point)
+                last = point
+                lam, w = point["lam"], point["w"]
+                h = math.copysign(abs(h), got[2])
+                first = self.natural(lam, segs, w, h, hi if h > 0 else lo)
+                if first is None:
+                    marks.append(self.mark(lam, segs, w, "no_convergence", 0.0))
+                    return points, marks
+                new, w_new, res = first
+                continue
+            point = self.point(new, segs, w_new, res)
+            if (_doubling_test(last["mult"]) > 0) != (_doubling_test(point["mult"]) > 0):
+                got = self.doubling(lam, w, new, w_new, segs, h)
+                if got is not None:
+                    marks.append(got[0])
+                    points.append(got[1])
+            points.append(point)
+            last = point
+            if not lo + 1e-12 * (hi - lo) < new < hi - 1e-12 * (hi - lo):
+                marks.append(self.mark(new, segs, w_new, "end", 0.0))
                 return points, marks
+            if len(points) >= self.max_points:
+                marks.append(self.mark(new, segs, w_new, "max_points", 0.0))
+                return points, marks
+            step = self.arc(lam, w, new, w_new, segs, h, lo, hi)
+            if step is None:
+                marks.append(self.mark(new, segs, w_new, "no_convergence", 0.0))
+                return points, marks
+            X, res, fold = step
+            if fold is not None:        # the fold itself, a point of the branch too
+                marks.append(fold[0])
+                points.insert(len(points) - fold[2], fold[1])
+            lam, w, new, w_new = new, w_new, float(X[-1]), X[:-1]
+
+    def natural(self, lam, segs, w, h, end):
+        """One step in the parameter (shorter where Newton's method fails): ``(lam, w,
+        residual)`` or None."""
+        step = h if abs(end - lam) > abs(h) else end - lam
+        for _ in range(8):
             try:
-                w_next, res = self.shoot(past, new_segs, w_next)
+                w_new, res = self.shoot(lam + step, segs, w)
+                return lam + step, w_new, res
             except ValueError:
-                return points, marks
-            points.append(self.point(past, new_segs, w_next, res))
-            prev, lam, w, segs = None, past, w_next, new_segs
-        marks.append(self.mark(lam, segs, w, "end", 0.0))
-        return points, marks
+                step /= 4
+        return None
+
+    def arc(self, lam_a, w_a, lam_b, w_b, segs, h, lo, hi):
+        """The next point along the secant from ``a`` through ``b``, a pseudo-arclength
+        step as long as the last (longer where it converged at once, shorter where it
+        failed), the parameter cut at the span's ends: ``(X, residual, fold)`` (``fold``:
+        :meth:`fold`'s, where the parameter turned), or None where it does not converge."""
+        Xa, Xb = np.append(w_a, lam_a), np.append(w_b, lam_b)
+        D = self.metric(Xa, Xb, h)
+        d = Xb - Xa
+        ds = self.ds if self.ds else math.sqrt(float(d * D @ d))
+        t = d / math.sqrt(float(d * D @ d))
+        for _ in range(8):
+            X_pred = Xb + ds * t
+            over = (X_pred[-1] - hi) if X_pred[-1] > hi else (lo - X_pred[-1]) if (
+                X_pred[-1] < lo) else 0.0
+            if over > 0 and abs(t[-1]) > 0:     # the span's end: land on it
+                ds = ds * (1 - over / abs(ds * t[-1]))
+                X_pred = Xb + ds * t
+            try:
+                X, res, iters = self.correct(segs, X_pred, t, D)
+            except ValueError:
+                ds /= 4
+                continue
+            if over > 0 or not lo <= X[-1] <= hi:      # on the span's end exactly
+                X[-1] = hi if X[-1] > 0.5 * (lo + hi) else lo
+                try:
+                    X[:-1], res = self.shoot(float(X[-1]), segs, X[:-1])
+                except ValueError:
+                    ds /= 4
+                    continue
+            self.ds = min(ds * (1.5 if iters <= 3 else 1.0), self.ds_max)
+            fold = None
+            if (X[-1] - lam_b) * (lam_b - lam_a) < 0:
+                fold = self.fold(Xa, Xb, X, segs, D)
+            return X, res, fold
+        return None
+
+    def metric(self, Xa, Xb, h):
+        """The arclength's metric: the parameter in units of the nominal step ``h``, the
+        orbit's unknowns in units of their change over the branch's first step."""
+        if self.w_scale is None:
+            dw = np.abs(Xb[:-1] - Xa[:-1])
+            self.w_scale = max(float(np.sqrt(np.mean(dw * dw))),
+                               1e-6 * (1.0 + float(np.abs(Xb[:-1]).max())))
+            self.ds_max = 2.0 * math.sqrt(2.0)
+        N = Xa.size - 1
+        return np.append(np.full(N, 1.0 / (N * self.w_scale**2)), 1.0 / h**2)
+
+    def fold(self, Xa, Xb, Xc, segs, D):
+        """The fold between the points ``a`` and ``c`` (the parameter turns at ``b``):
+        the greatest (or least) parameter along the branch, on the hyperplanes normal to
+        the chord from ``a`` to ``c``: ``(mark, point, 1 where it lies before b else 0)``,
+        or None."""
+        from scipy.optimize import minimize_scalar
+
+        d = Xc - Xa
+        L = math.sqrt(float(d * D @ d))
+        t = d / L
+        sign = 1.0 if Xb[-1] > Xa[-1] else -1.0
+        found = {}
+
+        def minus(sig):
+            try:
+                X, res, _ = self.correct(segs, Xa + sig * L * t, t, D)
+            except ValueError:
+                return math.inf
+            found[sig] = (X, res)
+            return -sign * X[-1]
+
+        s_b = float(t * D @ (Xb - Xa)) / L
+        best = minimize_scalar(minus, bracket=(0.0, s_b, 1.0), options={"xtol": 1e-7})
+        if best.x not in found:
+            return None
+        X, res = found[best.x]
+        lam = float(X[-1])
+        return (self.mark(lam, segs, X[:-1], "fold", res),
+                self.point(lam, segs, X[:-1], res), int(best.x < s_b))
+
+    def multipliers(self, lam, segs, w):
+        """The orbit's Floquet multipliers but the trivial one."""
+        mult, trivial, _, _ = _orbit.linearised(self.motion(lam), segs, w, self.t_a,
+                                                self.forcing(lam), self.rtol)
+        return np.delete(mult, trivial) if trivial >= 0 else mult
+
+    def doubling(self, lam, w, new, w_new, segs, h):
+        """The period doubling between the orbits at ``lam`` and ``new``: where a real
+        multiplier passes -1, the root (Brent's method) of :func:`_doubling_test` along
+        the branch, on the hyperplanes normal to the chord between them: ``(mark,
+        point)``.  Where the root is a complex pair on the unit circle instead, the mark
+        is a ``torus`` (Neimark-Sacker) point; None where there is neither (the test
+        jumps where a pair of multipliers outside the circle meets on the positive real
+        axis)."""
+        from scipy.optimize import brentq
+
+        Xa, Xb = np.append(w, lam), np.append(w_new, new)
+        D = self.metric(Xa, Xb, h)
+        d = Xb - Xa
+        L = math.sqrt(float(d * D @ d))
+        t = d / L
+        found = {}
+
+        def test(sig):
+            X, res = (Xa, 0.0) if sig == 0.0 else (Xb, 0.0) if sig == 1.0 else \
+                self.correct(segs, Xa + sig * L * t, t, D)[:2]
+            found[sig] = (X, res)
+            return _doubling_test(self.multipliers(float(X[-1]), segs, X[:-1]))
+
+        try:
+            xtol = max(1e-13, 0.1 * self.locate / max(abs(new - lam), 1e-300))
+            sig = brentq(test, 0.0, 1.0, xtol=xtol, rtol=4 * np.finfo(float).eps)
+        except ValueError:          # the corrector failed inside, or no change of sign
+            return None
+        X, res = found[sig]
+        at = float(X[-1])
+        point = self.point(at, segs, X[:-1], res)
+        real = [m for m in point["mult"] if abs(m.imag) <= 1e-6]
+        if any(abs(m + 1.0) <= 1e-6 for m in real):
+            kind = "period_doubling"
+        elif any(abs(abs(m) - 1.0) <= 1e-6 for m in point["mult"] if abs(m.imag) > 1e-6):
+            kind = "torus"
+        else:
+            return None
+        return self.mark(at, segs, X[:-1], kind, res), point
+
+    def change(self, lam, segs, w, new, w_new, h):
+        """The change of the mode sequence between the admissible orbit at ``lam`` and
+        the inadmissible one at ``new``, located by bisection along the chord between them
+        (where the old sequence's orbit stops existing, the corrector failing, counts as
+        beyond); the new sequence read just beyond it: ``(mark, first point on the new
+        sequence or None, direction of the parameter)``."""
+        Xa, Xb = np.append(w, lam), np.append(w_new, new)
+        D = self.metric(Xa, Xb, h)
+        d = Xb - Xa
+        t = d / math.sqrt(float(d * D @ d))
+        L = float(t * D @ d)
+        a, wa, b, wb, s_a, s_b = lam, w, new, w_new, 0.0, 1.0
+        while abs(b - a) > self.locate and s_b - s_a > 1e-12:
+            mid = 0.5 * (s_a + s_b)
+            try:
+                X, _, _ = self.correct(segs, Xa + mid * L * t, t, D, max_iter=8)
+            except ValueError:
+                b, wb, s_b = float((Xa + mid * L * t)[-1]), None, mid
+                continue
+            if self.admissible(float(X[-1]), segs, X[:-1]):
+                a, wa, s_a = float(X[-1]), X[:-1], mid
+            else:
+                b, wb, s_b = float(X[-1]), X[:-1], mid
+        direction = math.copysign(1.0, new - lam) if new != lam else math.copysign(1.0, h)
+        past = b + math.copysign(max(10 * self.locate, 1e-6 * abs(h)), direction)
+        kind, new_segs, w_next = self.beyond(past, segs, wa if wb is None else wb)
+        mark = self.mark(a, segs, wa, kind, 0.0)
+        if new_segs is None:
+            return mark, None, direction
+        try:
+            w_next, res = self.shoot(past, new_segs, w_next)
+        except ValueError:
+            return mark, None, direction
+        self.w_scale, self.ds = None, None      # a new sequence: a new metric
+        return mark, self.point(past, new_segs, w_next, res), direction
 
     def beyond(self, lam, segs, w):
         """The kind of the sequence change and the new segments, from the motion just
@@ -268,8 +525,9 @@ class _Context:
 
     def mark(self, lam, segs, w, kind, res):
         n2 = 2 * self.mech.n
+        low, high = _extrema(self.motion(lam), segs, w, self.t_a, self.rtol)
         return {"lam": lam, "kind": kind, "period": float(np.sum(w[len(segs) * n2:])),
-                "residual": res}
+                "amplitude": (high - low) / 2, "residual": res}
 
 
 def _settle_forced(ctx, lam, z, T, sc):
@@ -409,12 +667,13 @@ def _kind(old, new) -> str:
     return "sequence_change"
 
 
-def _crossed_minus_one(before, after) -> bool:
-    if before is None or after is None:
-        return False
-    real_b = [x.real for x in before if abs(x.imag) <= 1e-9]
-    real_a = [x.real for x in after if abs(x.imag) <= 1e-9]
-    return bool(real_b and real_a and min(real_b) > -1.0 >= min(real_a))
+def _doubling_test(mult) -> float:
+    """Positive while no multiplier is beyond -1, zero where a real one is at -1: the
+    least of ``1 + m`` over the real multipliers and ``1 - |m|`` over the complex ones
+    (continuous where a complex pair meets on the negative real axis)."""
+    vals = [1.0 + m.real if abs(m.imag) <= 1e-9 * max(1.0, abs(m)) else 1.0 - abs(m)
+            for m in mult]
+    return min(vals) if vals else 1.0
 
 
 def _from_dataset(mech, orbit, p0, rtol):
@@ -474,6 +733,10 @@ def _branch_dataset(S, mech, param, points, marks, span):
             data[f"amplitude_{c}"] = ("vertex", np.array([p["amplitude"][j] for p in points]),
                                       {"long_name": f"half the range of {c} over the orbit",
                                        "units": u})
+            data[f"point_amplitude_{c}"] = (
+                "point", np.array([m["amplitude"][j] for m in marks]),
+                {"long_name": f"half the range of {c} over the orbit at the special point",
+                 "units": u})
     attrs = {"Conventions": CONVENTIONS, "title": f"phasemap orbit branch: {S.title}",
              "source": f"phasemap {__version__}", "references": S.citation,
              "phasemap_version": __version__, "date_created": created(),

@@ -89,10 +89,10 @@ def jump_derivative(motion, X, closed, held):
     D[n:2 * n, n:2 * n] = _velocity_projector(motion, q, u, t, closed, held)
     for j in range(n):        # d(projected u)/dq
         D[n:2 * n, j] = difference(
-            lambda r: _project_velocity(motion, r, u, t, closed, held), q, j)
+            lambda r: motion.project_velocity(r, u, closed, held, t), q, j)
     if held:                  # the surface's velocity moves with the time
         D[n:2 * n, 2 * n] = difference(
-            lambda s: _project_velocity(motion, q, u, s[0], closed, held), np.array([t]), 0)
+            lambda s: motion.project_velocity(q, u, closed, held, s[0]), np.array([t]), 0)
     return D
 
 
@@ -106,15 +106,6 @@ def _velocity_projector(motion, q, u, t, closed, held):
     M, A = _rows(motion, q, u, t, closed, held)
     X = np.linalg.solve(M, A.T)
     return np.eye(motion.n) - X @ np.linalg.solve(A @ X, A)
-
-
-def _project_velocity(motion, q, u, t, closed, held):
-    M, A = _rows(motion, q, u, t, closed, held)
-    X = np.linalg.solve(M, A.T)
-    target = A @ u
-    if held:
-        target[len(closed):] -= motion.surf(t)[list(held)]
-    return u - X @ np.linalg.solve(A @ X, target)
 
 
 def _position_projector(motion, q, u, t, closed):

@@ -396,17 +396,10 @@ def _residual(motion, segs, w, ends, forcing, sc):
 
 
 def _shoot(name, motion, segs, w, t_a, forcing, rtol, tol, sc, max_iter, cache=None):
-    """Newton's method on the multiple-shooting equations.  Their Jacobian is sparse: a
-    segment's equations depend on its own start and duration (by differences, one
-    segment integrated per column), on the next start (the identity) and, in a forced
-    system, on the time it starts (the durations before it).  ``cache``: a list holding
+    """Newton's method on the multiple-shooting equations (their Jacobian:
+    :func:`jacobian`).  ``cache``: a list holding
     a Jacobian from a nearby orbit (a continuation's), used first (the chord method) and
     replaced by a fresh one where it stops reducing the residual."""
-    n2 = 2 * motion.n
-    K = len(segs)
-    scale = max(sc[0], sc[3])
-    rows = [n2 + (s.index is not None) for s in segs]
-    offs = np.concatenate([[0], np.cumsum(rows)])
     ends, starts = _ends(motion, segs, w, t_a, rtol, sc)
     r = _residual(motion, segs, w, ends, forcing, sc)
     res = float(np.max(np.abs(r)))
@@ -423,34 +416,7 @@ def _shoot(name, motion, segs, w, t_a, forcing, rtol, tol, sc, max_iter, cache=N
                 res = float(np.max(np.abs(r)))
                 continue
         chords = 3
-        Jac = np.zeros((r.size, w.size))
-        zs, taus = _unpack(w, K, n2)
-        for j in range(K):
-            o = offs[j]
-            Jac[o:o + n2, ((j + 1) % K) * n2:((j + 1) % K + 1) * n2] += np.eye(n2) / scale
-            base = _flat(ends[j], scale, sc)
-            cols = list(range(n2)) + ["tau"] + (["t"] if forcing is not None and j else [])
-            for col in cols:
-                z, t, tau = zs[j].copy(), starts[j], taus[j]
-                step = 0.1 * math.sqrt(rtol)      # 1e-7 at rtol 1e-12
-                if col == "tau":
-                    h = step * max(tau, 1e-3)
-                    tau = tau + h
-                elif col == "t":
-                    h = step * max(1.0, abs(t))
-                    t = t + h
-                else:
-                    h = step * (1.0 + abs(z[col]))
-                    z[col] += h
-                d = (_flat(_end(motion, segs, j, z, t, tau, rtol, sc), scale, sc) - base) / h
-                if col == "tau":
-                    Jac[o:o + rows[j], K * n2 + j] = d
-                elif col == "t":
-                    Jac[o:o + rows[j], K * n2:K * n2 + j] = d[:, None]
-                else:
-                    Jac[o:o + rows[j], j * n2 + col] = d
-        if forcing is not None:
-            Jac[-1, K * n2:] = 1.0 / forcing
+        Jac = jacobian(motion, segs, w, ends, starts, forcing, rtol, sc)
         if cache is not None:
             cache[:] = [Jac]
         step = np.linalg.lstsq(Jac, r, rcond=None)[0]
@@ -465,6 +431,47 @@ def _shoot(name, motion, segs, w, t_a, forcing, rtol, tol, sc, max_iter, cache=N
                          f"{tol:g}): give a start nearer the orbit, a longer settle, or a "
                          "looser tol")
     return w, res
+
+
+def jacobian(motion, segs, w, ends, starts, forcing, rtol, sc):
+    """The shooting equations' Jacobian in the unknowns ``w``, by differences: a
+    segment's equations depend on its own start and duration (one segment integrated per
+    column), on the next start (the identity) and, in a forced system, on the time it
+    starts (the durations before it).  ``ends, starts``: :func:`_ends` at ``w``."""
+    n2 = 2 * motion.n
+    K = len(segs)
+    scale = max(sc[0], sc[3])
+    rows = [n2 + (s.index is not None) for s in segs]
+    offs = np.concatenate([[0], np.cumsum(rows)])
+    Jac = np.zeros((int(offs[-1]) + (forcing is not None), w.size))
+    zs, taus = _unpack(w, K, n2)
+    for j in range(K):
+        o = offs[j]
+        Jac[o:o + n2, ((j + 1) % K) * n2:((j + 1) % K + 1) * n2] += np.eye(n2) / scale
+        base = _flat(ends[j], scale, sc)
+        cols = list(range(n2)) + ["tau"] + (["t"] if forcing is not None and j else [])
+        for col in cols:
+            z, t, tau = zs[j].copy(), starts[j], taus[j]
+            step = 0.1 * math.sqrt(rtol)      # 1e-7 at rtol 1e-12
+            if col == "tau":
+                h = step * max(tau, 1e-3)
+                tau = tau + h
+            elif col == "t":
+                h = step * max(1.0, abs(t))
+                t = t + h
+            else:
+                h = step * (1.0 + abs(z[col]))
+                z[col] += h
+            d = (_flat(_end(motion, segs, j, z, t, tau, rtol, sc), scale, sc) - base) / h
+            if col == "tau":
+                Jac[o:o + rows[j], K * n2 + j] = d
+            elif col == "t":
+                Jac[o:o + rows[j], K * n2:K * n2 + j] = d[:, None]
+            else:
+                Jac[o:o + rows[j], j * n2 + col] = d
+    if forcing is not None:
+        Jac[-1, K * n2:] = 1.0 / forcing
+    return Jac
 
 
 def _better(motion, segs, w, step, t_a, forcing, rtol, sc, res, halvings):
@@ -551,7 +558,7 @@ def _orbit_dataset(S, mech, motion, segs, w, t_a, forcing, res, samples, rtol, s
     lam, trivial, stable, rec = linearised(motion, segs, w, t_a, forcing, rtol, samples)
     from phasemap.motion.hybrid.start import full_attrs
 
-    attrs = full_attrs(S, None, _Opts(t_a + period, rtol), {}, start)
+    attrs = full_attrs(S, None, {"t_end": t_a + period, "rtol": rtol}, {}, start)
     attrs.update({"phasemap_kind": "periodic_orbit",
                   "title": f"phasemap periodic orbit: {S.title}"})
     ds = dataset(mech, rec, attrs, p=motion.p)
@@ -621,12 +628,3 @@ def _transition(motion, X0, tau, seg, rtol):
     sol = solve_ivp(f, (X0[-1], X0[-1] + tau), Y0, method="DOP853", rtol=max(rtol, 1e-11),
                     atol=max(rtol, 1e-11) * scale)
     return sol.y[m:, -1].reshape(m, m)
-
-
-@dataclass(frozen=True)
-class _Opts:
-    t_end: float
-    rtol: float
-
-    def as_dict(self):
-        return {"t_end": self.t_end, "rtol": self.rtol}
