@@ -11,6 +11,10 @@
 * **A continuation** of Den Hartog's orbit in the friction from 0.78 to 0.83 in two steps,
   through its crossing-sliding point (r* = 0.8174063857108825, from the closed form of the
   slip: tests/test_periodic.py).
+* **Round a fold:** ``duffing``'s large orbit from Omega = 1.55, over the fold of its
+  resonance curve and back to 1.55 on the unstable orbit; and **a period doubling** of
+  Ueda's oscillator (``duffing`` with k = 0) in F0 (references: tests/references/
+  duffing_fold.py).
 
 CPU time (``time.process_time``) of the public call, medians.  Writes the section
 "Friction oscillators" of ../BENCHMARKS.md.
@@ -31,6 +35,9 @@ import phasemap
 
 T_BELT = 1.0 / 0.2 + math.pi + 2 * math.atan(0.2 / 0.5)
 R_STAR = 0.8174063857108825
+#: tests/references/duffing_fold.py (scipy alone)
+OMEGA_FOLD = 1.5726928315498
+F0_DOUBLING = 8.0115330045
 
 
 def cpu(fn, repeat):
@@ -88,9 +95,25 @@ def main() -> None:
     rows.append(f"| Den Hartog continued in f, 0.78 to 0.83, 2 steps (`continue_orbit`) | "
                 f"{sec:.1f} s | {b.point_kind.values[0]} at f = {at:.12f} | "
                 f"{abs(at - R_STAR):.1e} |")
+    fold = phasemap.periodic_orbit("duffing", start={"Omega": 1.55, "x": 0.19, "xdot": 1.96})
+    sec, b = cpu(lambda: phasemap.continue_orbit(fold, "Omega", (1.55, 1.6), steps=2), 1)
+    at = float(b.point_Omega[0])
+    rows.append(f"| `duffing` continued in Omega, 1.55 to 1.6 and back round the fold "
+                f"({b.sizes['vertex']} points) | {sec:.1f} s | {b.point_kind.values[0]} at "
+                f"Omega = {at:.12f} | {abs(at - OMEGA_FOLD):.1e} |")
+    ueda = {"k": 0.0, "c": 0.05, "f": 0.01, "Omega": 1.0, "F0": 8.0}
+    pd = phasemap.periodic_orbit("duffing", start={**ueda, "x": 2.37959359,
+                                                   "xdot": -0.31001823}, period=2 * math.pi)
+    sec, b = cpu(lambda: phasemap.continue_orbit(pd, "F0", (8.0, 8.05), steps=2), 1)
+    at = float(b.point_F0[0])
+    rows.append(f"| `duffing` with k = 0 (Ueda) continued in F0, 8 to 8.05 | {sec:.1f} s | "
+                f"{b.point_kind.values[0]} at F0 = {at:.12f} | {abs(at - F0_DOUBLING):.1e} |")
     lines = ["## Friction oscillators (`benchmarks/oscillators.py`)", "",
              f"Machine: {_report.machine()}; load {_report.load()}. CPU time of the public "
-             f"call, medians of {r} runs (the continuation: one run).", "", *rows, "",
+             f"call, medians of {r} runs (the continuations: one run each). The fold and "
+             "the period doubling are checked against scipy's own "
+             "(tests/references/duffing_fold.py: 5e-9 between its two steps of "
+             "differences at the period doubling).", "", *rows, "",
              "The orbits run on the full-coordinate motion, which is Python (scipy's DOP853 "
              "and NumPy, about 0.1 ms per right-hand side), not on compiled kernels. The "
              "issue's targets (a belt orbit to 1e-10 in 10 ms, a continuation of 200 points "

@@ -256,7 +256,7 @@ def test_bad_oscillator_declarations_say_what_is_wrong(make, match):
 
 
 def test_oscillators_say_why_they_have_no_map():
-    for name in ("belt", "stribeck_belt", "den_hartog"):
+    for name in phasemap.systems.OSCILLATORS:
         with pytest.raises(ValueError, match="phasemap.simulate runs its motion"):
             phasemap.classify(name)
     with pytest.raises(ValueError, match="forcing in time"):

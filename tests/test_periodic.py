@@ -302,21 +302,11 @@ def test_continuation_in_the_forcing_frequency():
     assert np.allclose(b.period.values, 2 * math.pi / b.Omega.values, rtol=0, atol=1e-9)
 
 
-def _forced(name, defaults):
-    """The references' forced oscillator (tests/references/duffing_fold.py), declared:
-    x'' + c x' + k1 x + beta x^3 = F cos(Omega t) - r sgn x' (m = g = 1)."""
-    import sympy as sp
-
-    from phasemap.declare import TIME, Parameter
-
-    P = {nm: Parameter(nm, "1", nm, default=defaults[nm], lower=0.0)
-         for nm in ("F", "r", "k1", "beta", "c")}
-    Om = Parameter("Omega", "rad s-1", "forcing frequency", default=defaults["Omega"],
-                   lower=0.0, lower_open=True)
-    return _block(name, PointContact("floor", point=(x, y), friction=P["r"]),
-                  (*P.values(), Om), potential=P["k1"] * x**2 / 2 + P["beta"] * x**4 / 4
-                  + m * g * y, dissipation=P["c"] * x.rate**2 / 2,
-                  forces={x: P["F"] * sp.cos(Om * TIME)}, period=2 * sp.pi / Om)
+def _duffing(ref_values):
+    """The built-in ``duffing`` at a reference's values (tests/references/duffing_fold.py
+    names them F, r, k1 for F0, f, k)."""
+    names = {"F": "F0", "r": "f", "k1": "k"}
+    return {names.get(nm, nm): v for nm, v in ref_values.items()}
 
 
 @pytest.mark.slow
@@ -328,9 +318,9 @@ def test_pseudo_arclength_goes_round_the_fold_of_a_hardening_oscillator():
     I) = 0 on the return map), and the stability changes there."""
     from references import duffing_fold as ref
 
-    S = _forced("duffing", {**ref.FOLD, "Omega": 1.55})
-    o = phasemap.periodic_orbit(S, start={"x": 0.19, "xdot": 1.96})
-    b = phasemap.continue_orbit(o, "Omega", (1.55, 1.6), model=S, steps=2)
+    o = phasemap.periodic_orbit("duffing", start={**_duffing(ref.FOLD), "Omega": 1.55,
+                                                  "x": 0.19, "xdot": 1.96})
+    b = phasemap.continue_orbit(o, "Omega", (1.55, 1.6), steps=2)
     kinds = [str(kd) for kd in b.point_kind.values]
     assert kinds == ["fold", "end"]
     assert abs(float(b.point_Omega[0]) - ref.OMEGA_UPPER) < 1e-9
@@ -368,15 +358,15 @@ def test_a_period_doubling_is_located_where_a_multiplier_passes_minus_one():
     differences agree to 5e-9), and it is a point of the branch with the multiplier -1."""
     from references import duffing_fold as ref
 
-    S = _forced("ueda", {**ref.DOUBLING, "F": 8.0})
-    o = phasemap.periodic_orbit(S, start={"x": 2.37959359, "xdot": -0.31001823},
+    o = phasemap.periodic_orbit("duffing", start={**_duffing(ref.DOUBLING), "F0": 8.0,
+                                                  "x": 2.37959359, "xdot": -0.31001823},
                                 period=2 * math.pi)
     assert int(o.stable) == 0 and float(np.abs(o.floquet).max()) > 1.0
-    b = phasemap.continue_orbit(o, "F", (8.0, 8.05), model=S, steps=2)
+    b = phasemap.continue_orbit(o, "F0", (8.0, 8.05), steps=2)
     assert [str(kd) for kd in b.point_kind.values] == ["period_doubling", "end"]
-    f_pd = float(b.point_F[0])
+    f_pd = float(b.point_F0[0])
     assert abs(f_pd - ref.F_DOUBLING) < 2e-8
-    i = int(np.flatnonzero(b.F.values == f_pd)[0])
+    i = int(np.flatnonzero(b.F0.values == f_pd)[0])
     assert abs(float(b.floquet_max[i]) - 1.0) < 1e-8
     assert set(b.stable.values[:i]) == {0} and set(b.stable.values[i + 1:]) == {1}
     assert set(b.n_segments.values) == {3}      # one mode sequence all along

@@ -8,7 +8,7 @@ disk) the first time it is asked for.  What runs, by name:
   :mod:`phasemap.systems.rod_on_step`) and ``ladder``, ``wheel``
   (:mod:`phasemap.systems.seeds`, two of the four systems of Lapshin 2021):
   declared, so that their maps count a body leaving a contact;
-* ``belt``, ``stribeck_belt``, ``den_hartog``: friction oscillators
+* ``belt``, ``stribeck_belt``, ``den_hartog``, ``duffing``: friction oscillators
   (:mod:`phasemap.systems.oscillators`), which :func:`phasemap.simulate` runs by name
   in full coordinates; they are not in ``MODELS`` (no maps yet);
 * ``elliptic_pendulum``, ``hinge_pendulum``: written by hand
@@ -45,7 +45,7 @@ DECLARED = {"ladder": "phasemap.systems.seeds.ladder", "wheel": "phasemap.system
 
 #: The friction oscillators (:mod:`phasemap.systems.oscillators`): declared, they run in
 #: :func:`phasemap.simulate` by name, in full coordinates; they have no maps yet.
-OSCILLATORS = ("belt", "stribeck_belt", "den_hartog")
+OSCILLATORS = ("belt", "stribeck_belt", "den_hartog", "duffing")
 
 
 #: The order in which the built-in systems are listed (the paper's, then the rods).

@@ -17,6 +17,11 @@ the Lagrangian L = m (x'^2 + y'^2)/2 - k x^2/2 - m g y and the contact's law.
 * :data:`DEN_HARTOG`: a floor at rest, the block forced by F0 cos(Omega t): Den Hartog's
   (1931) oscillator with Coulomb damping, x'' + x = cos(Omega t) - r sgn x' with
   m = k = F0 = g = 1 and r = f.
+* :data:`DUFFING`: the same forced block on a hardening spring (potential
+  k x^2/2 + beta x^4/4) with viscous damping c as well, m x'' + c x' + k x + beta x^3 =
+  F0 cos(Omega t) - f m g sgn x'.  Its resonance curve bends to the right and folds (the
+  defaults: a large and a small stable orbit coexist for Omega in (1.406, 1.573)); with
+  k = 0 it is Ueda's oscillator, whose period-one orbit doubles its period.
 
 These run in full coordinates (:func:`phasemap.simulate`: a moving surface, static
 friction above kinetic, friction that depends on the speed and forcing in time are not
@@ -90,5 +95,26 @@ DEN_HARTOG = _block(
                  long_name="the block on the floor"),
     forces={x: _F0 * sp.cos(_Omega * TIME)}, period=2 * sp.pi / _Omega)
 
+_k0 = Parameter("k", "N m-1", "linear stiffness of the spring", default=1.0, lower=0.0)
+_beta = Parameter("beta", "N m-3", "cubic stiffness of the spring (hardening)", default=1.0,
+                  lower=0.0)
+_c = Parameter("c", "kg s-1", "viscous damping", default=0.2, lower=0.0)
+_F0d = Parameter("F0", "N", "amplitude of the applied force", default=0.5)
+_Omegad = Parameter("Omega", "rad s-1", "angular frequency of the applied force",
+                    default=1.3, lower=0.0, lower_open=True)
+_fd = Parameter("f", "1", "friction coefficient of the floor", default=0.05, lower=0.0)
+
+#: A forced oscillator with a hardening spring, viscous damping and Coulomb friction.
+DUFFING = System(
+    "duffing", "A forced hardening (Duffing) oscillator with viscous damping and Coulomb "
+    "friction", "Duffing G. (1918), Erzwungene Schwingungen bei veraenderlicher "
+    "Eigenfrequenz, Vieweg; with k = 0, Ueda Y. (1979), J. Stat. Phys. 20, 181-196",
+    coordinates=(x, y), parameters=(m, _k0, g, _beta, _c, _F0d, _Omegad, _fd),
+    bodies=(Body(m, (x, y)),), potential=_k0 * x**2 / 2 + _beta * x**4 / 4 + m * g * y,
+    dissipation=_c * x.rate**2 / 2,
+    contacts=(PointContact("floor", point=(x, y), normal=(0, 1), friction=_fd,
+                           long_name="the block on the floor"),),
+    forces={x: _F0d * sp.cos(_Omegad * TIME)}, period=2 * sp.pi / _Omegad)
+
 #: The friction oscillators by name (they run in :func:`phasemap.simulate` by name).
-OSCILLATORS = {s.name: s for s in (BELT, STRIBECK_BELT, DEN_HARTOG)}
+OSCILLATORS = {s.name: s for s in (BELT, STRIBECK_BELT, DEN_HARTOG, DUFFING)}

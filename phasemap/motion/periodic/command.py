@@ -27,8 +27,8 @@ def add_parsers(sub, make) -> dict:
              "with --continue, follows it in a parameter through the changes of its mode "
              "sequence (phasemap.continue_orbit).")
     p.add_argument("model", metavar="MODEL", help="a friction oscillator (belt, "
-                   "stribeck_belt, den_hartog), a declared built-in model or a declaration "
-                   "file (path/to/system.py)")
+                   "stribeck_belt, den_hartog, duffing), a declared built-in model or a "
+                   "declaration file (path/to/system.py)")
     p.add_argument("values", nargs="*", metavar="NAME=VALUE",
                    help="the start and the parameters (the defaults elsewhere)")
     p.add_argument("--period", type=float, default=None, metavar="T",

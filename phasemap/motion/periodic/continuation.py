@@ -158,6 +158,7 @@ class _Context:
         """A fresh start of the branch from the orbit (each direction its own)."""
         self.t_a = t_a
         self.jac = []       # the last shooting Jacobian (the chord method's)
+        self.arc_jac = None     # the same with the parameter's column (the corrector's)
         self.w_scale = self.ds = None       # the arclength's metric and step
         self.ds_max = math.inf
 
@@ -242,11 +243,14 @@ class _Context:
         r, pieces = self.residual(X[-1], segs, X[:N], sc)
         res = float(np.max(np.abs(r)))
         M, fresh = None, False
+        if self.arc_jac is not None and self.arc_jac.shape == (r.size, N + 1):
+            M = np.vstack([self.arc_jac, t * D])        # the last one first (a chord)
         for it in range(max_iter):
             if res <= 0.1 * self.tol:
                 return X, res, it
             if M is None:
-                M = np.vstack([self.jacobian(X[-1], segs, X[:N], sc, r, pieces), t * D])
+                self.arc_jac = self.jacobian(X[-1], segs, X[:N], sc, r, pieces)
+                M = np.vstack([self.arc_jac, t * D])
                 fresh = True
             rhs = np.concatenate([r, [float(t * D @ (X - X_pred))]])
             step = np.linalg.lstsq(M, rhs, rcond=None)[0]
@@ -475,13 +479,22 @@ class _Context:
         d = Xb - Xa
         t = d / math.sqrt(float(d * D @ d))
         L = float(t * D @ d)
+        # in the parameter where the chord runs mostly along it (the shooting alone, as
+        # cheap as a step of natural-parameter continuation), else along the chord
+        along = d[-1] ** 2 * D[-1] >= 0.25 * float(d * D @ d)
         a, wa, b, wb, s_a, s_b = lam, w, new, w_new, 0.0, 1.0
         while abs(b - a) > self.locate and s_b - s_a > 1e-12:
             mid = 0.5 * (s_a + s_b)
+            pred = Xa + mid * L * t
             try:
-                X, _, _ = self.correct(segs, Xa + mid * L * t, t, D, max_iter=8)
+                if along:
+                    guess = wa if wb is None else wa + (wb - wa) * ((pred[-1] - a) / (b - a))
+                    X = np.append(self.shoot(float(pred[-1]), segs, guess, max_iter=8)[0],
+                                  pred[-1])
+                else:
+                    X = self.correct(segs, pred, t, D, max_iter=8)[0]
             except ValueError:
-                b, wb, s_b = float((Xa + mid * L * t)[-1]), None, mid
+                b, wb, s_b = float(pred[-1]), None, mid
                 continue
             if self.admissible(float(X[-1]), segs, X[:-1]):
                 a, wa, s_a = float(X[-1]), X[:-1], mid
@@ -497,7 +510,7 @@ class _Context:
             w_next, res = self.shoot(past, new_segs, w_next)
         except ValueError:
             return mark, None, direction
-        self.w_scale, self.ds = None, None      # a new sequence: a new metric
+        self.w_scale, self.ds, self.arc_jac = None, None, None     # a new sequence
         return mark, self.point(past, new_segs, w_next, res), direction
 
     def beyond(self, lam, segs, w):

@@ -78,8 +78,8 @@ def periodic_orbit(model, start=None, period=None, *, settle=None, rtol=1e-12, t
     Parameters
     ----------
     model : str or System
-        a friction oscillator's name (``"belt"``, ``"stribeck_belt"``, ``"den_hartog"``),
-        a declared model's name or a :class:`phasemap.declare.System`.
+        a friction oscillator's name (``"belt"``, ``"stribeck_belt"``, ``"den_hartog"``,
+        ``"duffing"``), a declared model's name or a :class:`phasemap.declare.System`.
     start : dict, optional
         the start (coordinates, rates, parameters by name; the defaults elsewhere).
     period : float, optional
