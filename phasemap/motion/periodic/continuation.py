@@ -12,10 +12,7 @@ from phasemap.core import events as ev
 from phasemap.motion.hybrid import MODE_NAMES, STICK, Motion, Options
 from phasemap.motion.periodic import orbit as _orbit
 from phasemap.motion.periodic.orbit import Segment
-
-#: Points of the orbit sampled per branch point for its amplitudes.
-SAMPLES = 200
-
+from phasemap.motion.periodic.sampling import dips, extrema
 
 def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
                    rtol: float | None = None, tol: float = 1e-10, locate: float = 1e-10,
@@ -43,7 +40,7 @@ def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
     points of one sequence, the period doubling is located (Brent's method on the
     multipliers along the branch) and is a point of the branch too; a complex pair
     through the unit circle is located the same way and marked ``torus``.  Where
-    Newton's method stops converging, even in steps 4^8 times shorter, the branch ends
+    Newton's method stops converging, even in steps 4^7 times shorter, the branch ends
     there, marked ``no_convergence``.
 
     Kinds of special points: ``crossing_sliding`` (a stick segment is born at, or shrinks
@@ -80,7 +77,8 @@ def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
     -------
     xarray.Dataset
         shaped like that of :func:`phasemap.threshold` with ``along=``: on ``vertex``
-        the branch in its order along the arc (from its end nearer ``lo``) (``<param>``, ``period``, ``amplitude_<coordinate>``, ``stable``,
+        the branch in its order along the arc (first the part followed towards ``lo``,
+        reversed) (``<param>``, ``period``, ``amplitude_<coordinate>``, ``stable``,
         ``floquet_max``: the largest nontrivial multiplier's modulus, ``n_segments``,
         ``residual``), on ``point`` the special points (``point_<param>``,
         ``point_kind``, ``point_period``, ``point_residual``).
@@ -188,7 +186,7 @@ class _Context:
         motion = self.motion(lam)
         mult, trivial, stable, _ = _orbit.linearised(motion, segs, w, self.t_a,
                                                      self.forcing(lam), self.rtol)
-        low, high = _extrema(motion, segs, w, self.t_a, self.rtol)
+        low, high = extrema(motion, segs, w, self.t_a, self.rtol)
         others = np.delete(mult, trivial) if trivial >= 0 else mult
         n2 = 2 * self.mech.n
         return {"lam": lam, "w": w, "segs": segs, "period": float(np.sum(w[len(segs) * n2:])),
@@ -206,7 +204,7 @@ class _Context:
         K = len(segs)
         if np.any(w[K * n2:] <= 0.0):
             return False
-        if _dips(self.motion(lam), segs, w, self.t_a, self.rtol):
+        if dips(self.motion(lam), segs, w, self.t_a, self.rtol):
             return False
         return _same(_sequence(self, lam, segs, w), [s.modes for s in segs])
 
@@ -308,13 +306,17 @@ class _Context:
                     marks.append(self.mark(lam, segs, w, "no_convergence", 0.0))
                     return points, marks
                 new, w_new, res = first
+                if len(points) >= self.max_points:
+                    marks.append(self.mark(lam, segs, w, "max_points", 0.0))
+                    return points, marks
                 continue
             point = self.point(new, segs, w_new, res)
-            if (_doubling_test(last["mult"]) > 0) != (_doubling_test(point["mult"]) > 0):
-                got = self.doubling(lam, w, new, w_new, segs, h)
-                if got is not None:
-                    marks.append(got[0])
-                    points.append(got[1])
+            for test in (_doubling_test, _torus_test):
+                if (test(last["mult"]) > 0) != (test(point["mult"]) > 0):
+                    got = self.doubling(lam, w, new, w_new, segs, h, test)
+                    if got is not None:
+                        marks.append(got[0])
+                        points.append(got[1])
             points.append(point)
             last = point
             if not lo + 1e-12 * (hi - lo) < new < hi - 1e-12 * (hi - lo):
@@ -328,9 +330,13 @@ class _Context:
                 marks.append(self.mark(new, segs, w_new, "no_convergence", 0.0))
                 return points, marks
             X, res, fold = step
-            if fold is not None:        # the fold itself, a point of the branch too
+            # the fold itself, a point of the branch too, where its orbit is admissible
+            # (else the sequence changes before it, which the next step locates)
+            if fold is not None and (fold[1] is None or self.admissible(
+                    fold[1]["lam"], segs, fold[1]["w"])):
                 marks.append(fold[0])
-                points.insert(len(points) - fold[2], fold[1])
+                if fold[1] is not None:
+                    points.insert(len(points) - fold[2], fold[1])
             lam, w, new, w_new = new, w_new, float(X[-1]), X[:-1]
 
     def natural(self, lam, segs, w, h, end):
@@ -367,7 +373,8 @@ class _Context:
             except ValueError:
                 ds /= 4
                 continue
-            if over > 0 or not lo <= X[-1] <= hi:      # on the span's end exactly
+            turned = (X[-1] - lam_b) * (lam_b - lam_a) < 0
+            if not turned and (over > 0 or not lo <= X[-1] <= hi):  # the span's end exactly
                 X[-1] = hi if X[-1] > 0.5 * (lo + hi) else lo
                 try:
                     X[:-1], res = self.shoot(float(X[-1]), segs, X[:-1])
@@ -384,10 +391,11 @@ class _Context:
     def metric(self, Xa, Xb, h):
         """The arclength's metric: the parameter in units of the nominal step ``h``, the
         orbit's unknowns in units of their change over the branch's first step."""
-        if self.w_scale is None:
+        if self.w_scale is None:        # the orbit's change per nominal step
             dw = np.abs(Xb[:-1] - Xa[:-1])
-            self.w_scale = max(float(np.sqrt(np.mean(dw * dw))),
-                               1e-6 * (1.0 + float(np.abs(Xb[:-1]).max())))
+            per = min(abs(h / (Xb[-1] - Xa[-1])), 1e3) if Xb[-1] != Xa[-1] else 1.0
+            self.w_scale = max(float(np.sqrt(np.mean(dw * dw))) * per,
+                               1e-3 * (1.0 + float(np.abs(Xb[:-1]).max())))
             self.ds_max = 2.0 * math.sqrt(2.0)
         N = Xa.size - 1
         return np.append(np.full(N, 1.0 / (N * self.w_scale**2)), 1.0 / h**2)
@@ -395,8 +403,8 @@ class _Context:
     def fold(self, Xa, Xb, Xc, segs, D):
         """The fold between the points ``a`` and ``c`` (the parameter turns at ``b``):
         the greatest (or least) parameter along the branch, on the hyperplanes normal to
-        the chord from ``a`` to ``c``: ``(mark, point, 1 where it lies before b else 0)``,
-        or None."""
+        the chord from ``a`` to ``c``: ``(mark, point, 1 where it lies before b else
+        0)``; the point is None where the fold is b itself (already a point)."""
         from scipy.optimize import minimize_scalar
 
         d = Xc - Xa
@@ -414,13 +422,23 @@ class _Context:
             return -sign * X[-1]
 
         s_b = float(t * D @ (Xb - Xa)) / L
-        best = minimize_scalar(minus, bracket=(0.0, s_b, 1.0), options={"xtol": 1e-7})
-        if best.x not in found:
-            return None
-        X, res = found[best.x]
+        known = {0.0: Xa, s_b: Xb, 1.0: Xc}      # b is on its own hyperplane
+        for sig, X in known.items():
+            found[sig] = (X, 0.0)
+
+        def value(sig):
+            return -sign * known[sig][-1] if sig in known else minus(sig)
+
+        try:
+            best = minimize_scalar(value, bracket=(0.0, s_b, 1.0), options={"xtol": 1e-7})
+            X, res = found[best.x]
+            at_b = best.x == s_b
+        except (ValueError, KeyError):      # no bracket after all: b, the turning point
+            X, res, at_b = Xb, 0.0, True
         lam = float(X[-1])
-        return (self.mark(lam, segs, X[:-1], "fold", res),
-                self.point(lam, segs, X[:-1], res), int(best.x < s_b))
+        point = None if at_b else self.point(lam, segs, X[:-1], res)   # b is a vertex
+        return (self.mark(lam, segs, X[:-1], "fold", res), point,
+                int(not at_b and best.x < s_b))
 
     def multipliers(self, lam, segs, w):
         """The orbit's Floquet multipliers but the trivial one."""
@@ -428,7 +446,7 @@ class _Context:
                                                 self.forcing(lam), self.rtol)
         return np.delete(mult, trivial) if trivial >= 0 else mult
 
-    def doubling(self, lam, w, new, w_new, segs, h):
+    def doubling(self, lam, w, new, w_new, segs, h, test=None):
         """The period doubling between the orbits at ``lam`` and ``new``: where a real
         multiplier passes -1, the root (Brent's method) of :func:`_doubling_test` along
         the branch, on the hyperplanes normal to the chord between them: ``(mark,
@@ -445,15 +463,17 @@ class _Context:
         t = d / L
         found = {}
 
-        def test(sig):
+        test = test or _doubling_test
+
+        def g(sig):
             X, res = (Xa, 0.0) if sig == 0.0 else (Xb, 0.0) if sig == 1.0 else \
                 self.correct(segs, Xa + sig * L * t, t, D)[:2]
             found[sig] = (X, res)
-            return _doubling_test(self.multipliers(float(X[-1]), segs, X[:-1]))
+            return test(self.multipliers(float(X[-1]), segs, X[:-1]))
 
         try:
-            xtol = max(1e-13, 0.1 * self.locate / max(abs(new - lam), 1e-300))
-            sig = brentq(test, 0.0, 1.0, xtol=xtol, rtol=4 * np.finfo(float).eps)
+            xtol = max(1e-13, min(1e-6, 0.1 * self.locate / max(abs(new - lam), 1e-300)))
+            sig = brentq(g, 0.0, 1.0, xtol=xtol, rtol=4 * np.finfo(float).eps)
         except ValueError:          # the corrector failed inside, or no change of sign
             return None
         X, res = found[sig]
@@ -502,14 +522,19 @@ class _Context:
                 b, wb, s_b = float(X[-1]), X[:-1], mid
         direction = math.copysign(1.0, new - lam) if new != lam else math.copysign(1.0, h)
         past = b + math.copysign(max(10 * self.locate, 1e-6 * abs(h)), direction)
+        mark = self.mark(a, segs, wa, "sequence_change", 0.0)     # at the old phase
+        if not min(self.lo, self.hi) <= past <= max(self.lo, self.hi):
+            return mark, None, direction        # the change is at the span's end
         kind, new_segs, w_next = self.beyond(past, segs, wa if wb is None else wb)
-        mark = self.mark(a, segs, wa, kind, 0.0)
+        mark["kind"] = kind
         if new_segs is None:
             return mark, None, direction
         try:
             w_next, res = self.shoot(past, new_segs, w_next)
         except ValueError:
             return mark, None, direction
+        if not self.admissible(past, new_segs, w_next):
+            return mark, None, direction        # the motion beyond settles elsewhere
         self.w_scale, self.ds, self.arc_jac = None, None, None     # a new sequence
         return mark, self.point(past, new_segs, w_next, res), direction
 
@@ -538,7 +563,7 @@ class _Context:
 
     def mark(self, lam, segs, w, kind, res):
         n2 = 2 * self.mech.n
-        low, high = _extrema(self.motion(lam), segs, w, self.t_a, self.rtol)
+        low, high = extrema(self.motion(lam), segs, w, self.t_a, self.rtol)
         return {"lam": lam, "kind": kind, "period": float(np.sum(w[len(segs) * n2:])),
                 "amplitude": (high - low) / 2, "residual": res}
 
@@ -550,81 +575,6 @@ def _settle_forced(ctx, lam, z, T, sc):
     rec = _orbit._run(ctx.mech, ctx.params(lam), z[:n], z[n:], ctx.t_a,
                       ctx.t_a + 40 * mult * forcing, ctx.rtol, forcing)
     return rec, _orbit._cycle(ctx.name, rec, forcing, sc)
-
-
-def _extrema(motion, segs, w, t_a, rtol):
-    """Each coordinate's least and greatest value over the orbit: at the segments' ends,
-    or where its rate vanishes inside one (located on the segment's dense output)."""
-    from scipy.optimize import brentq
-
-    n = motion.n
-    n2 = 2 * n
-    K = len(segs)
-    zs, taus = _orbit._unpack(w, K, n2)
-    low, high = np.full(n, np.inf), np.full(n, -np.inf)
-    t = t_a
-    for j, seg in enumerate(segs):
-        sol = _orbit._flow(motion, zs[j], t, taus[j], seg, rtol, dense=True).sol
-        ts = np.linspace(t, t + taus[j], SAMPLES // K + 2)
-        ys = sol(ts)
-        found = [ys[:n, 0], ys[:n, -1]]
-        for i in range(n):
-            rate = ys[n + i]
-            for k in np.flatnonzero(np.sign(rate[:-1]) * np.sign(rate[1:]) < 0):
-                tk = brentq(lambda s: sol(s)[n + i], ts[k], ts[k + 1], xtol=1e-14)
-                found.append(np.where(np.arange(n) == i, sol(tk)[:n], np.nan))
-        vals = np.array(found)
-        low = np.fmin(low, np.nanmin(vals, axis=0))
-        high = np.fmax(high, np.nanmax(vals, axis=0))
-        t += taus[j]
-    return low, high
-
-
-#: Samples per segment where its conditions are checked for a dip below zero.
-DIP_SAMPLES = 24
-
-
-def _dips(motion, segs, w, t_a, rtol) -> bool:
-    """Whether a condition of a segment's phase (its event functions but the one that
-    ends it) goes below zero inside the segment: sampled, and each sampled minimum near
-    zero refined on the dense output (a tangency between samples is found)."""
-    from scipy.optimize import minimize_scalar
-
-    n = motion.n
-    n2 = 2 * n
-    K = len(segs)
-    zs, taus = _orbit._unpack(w, K, n2)
-    t = t_a
-    z0 = zs[0]
-    sc = motion.scales(z0[:n], z0[n:], motion.mech.pieces(z0[:n], z0[n:], motion.p, t_a))
-    scale = max(sc)
-    for j, seg in enumerate(segs):
-        sol = _orbit._flow(motion, zs[j], t, taus[j], seg, rtol, dense=True).sol
-
-        def watch(s, seg=seg, sol=sol):
-            y = sol(s)
-            out = motion.watch(y[:n], y[n:], seg.modes, seg.rho, sc, s)[:2 * motion.k]
-            if seg.index is not None and seg.index < out.size:
-                out = np.delete(out, seg.index)
-            return out
-
-        ts = np.linspace(t, t + taus[j], DIP_SAMPLES)[1:-1]
-        vals = np.array([watch(s) for s in ts])
-        if vals.size and np.min(vals) < -1e-9 * scale:
-            return True
-        for i in range(vals.shape[1] if vals.size else 0):
-            k = int(np.argmin(vals[:, i]))
-            if vals[k, i] > 1e-3 * scale:
-                continue
-            lo, hi = ts[max(k - 1, 0)], ts[min(k + 1, len(ts) - 1)]
-            if hi <= lo:
-                continue
-            best = minimize_scalar(lambda s, i=i: watch(s)[i], bounds=(lo, hi),
-                                   method="bounded", options={"xatol": 1e-13 * (1 + hi)})
-            if best.fun < -1e-9 * scale:
-                return True
-        t += taus[j]
-    return False
 
 
 def _sequence(ctx, lam, segs, w):
@@ -681,12 +631,20 @@ def _kind(old, new) -> str:
 
 
 def _doubling_test(mult) -> float:
-    """Positive while no multiplier is beyond -1, zero where a real one is at -1: the
-    least of ``1 + m`` over the real multipliers and ``1 - |m|`` over the complex ones
-    (continuous where a complex pair meets on the negative real axis)."""
-    vals = [1.0 + m.real if abs(m.imag) <= 1e-9 * max(1.0, abs(m)) else 1.0 - abs(m)
-            for m in mult]
-    return min(vals) if vals else 1.0
+    """The period doubling's test function, the product of ``1 + m`` over the nontrivial
+    multipliers (det(I + M) on them): real, continuous, and of another sign exactly where
+    a real multiplier has passed -1 (a complex pair adds |1 + m|^2 > 0)."""
+    return float(np.real(np.prod(1.0 + np.asarray(mult, dtype=complex))))
+
+
+def _torus_test(mult) -> float:
+    """The torus (Neimark-Sacker) point's test function, the product of ``m_i m_j - 1``
+    over the pairs of nontrivial multipliers: of another sign where a complex pair has
+    passed the unit circle (|m|^2 - 1), and also where two real ones pass m_i m_j = 1 (a
+    neutral saddle, not a bifurcation: :meth:`_Context.doubling` checks the point)."""
+    m = np.asarray(mult, dtype=complex)
+    pairs = [m[i] * m[j] - 1.0 for i in range(m.size) for j in range(i + 1, m.size)]
+    return float(np.real(np.prod(pairs))) if pairs else 1.0
 
 
 def _from_dataset(mech, orbit, p0, rtol):
