@@ -199,8 +199,12 @@ def _good(**change):
                                 Parameter("m", "kg", "mass", 0.0, 0.0))),
      "bad_rod: body 0 mass: is 0 at the defaults"),
     (dict(potential=lambda v: v["m"] * v["g"] * v["y"]
-          + v["m"] * v["l"] ** 2 * sp.Symbol("omega") ** 2),
+          + v["m"] * v["l"] ** 2 * v["th"].rate ** 2),
      "bad_rod: potential: depends on the rate 'omega'"),
+    # sp.Symbol("omega") is not the declared rate (real=True): it would be a constant
+    (dict(potential=lambda v: v["m"] * v["g"] * v["y"]
+          + v["m"] * v["l"] ** 2 * sp.Symbol("omega") ** 2),
+     "bad_rod: potential: the symbol 'omega' is not the declared one"),
     (dict(bodies=lambda v: (Body(-v["m"], (v["x"], v["y"]), inertia=v["m"] * v["l"] ** 2 / 3,
                                  angle=v["th"]),)), "bad_rod: body 0 mass: is -1 at the defaults"),
     (dict(bodies=lambda v: (Body(v["m"], (v["x"], v["y"]), inertia=-v["m"] * v["l"] ** 2 / 3,
