@@ -14,6 +14,12 @@ from phasemap.motion.periodic import orbit as _orbit
 from phasemap.motion.periodic.orbit import Segment
 from phasemap.motion.periodic.sampling import dips, extrema
 
+#: The longest step along a branch, in the arclength's metric: two nominal steps (a
+#: nominal step, a change of the parameter by (hi - lo) / steps with the orbit's change
+#: over it, is sqrt(2) long).
+DS_MAX = 2.0 * math.sqrt(2.0)
+
+
 def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
                    rtol: float | None = None, tol: float = 1e-10, locate: float = 1e-10,
                    max_points: int | None = None):
@@ -24,15 +30,15 @@ def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
     the parameter, then steps along the secant of the last two points, each corrected by
     Newton's method on the multiple-shooting equations of :func:`phasemap.periodic_orbit`
     with the parameter an unknown, on the hyperplane normal to the secant.  The
-    arclength measures the parameter in units of the first step and the orbit's unknowns
-    in units of their change over it, so that a branch that does not turn takes about
-    ``steps`` steps; a step grows (to twice that) where Newton's method converges at once
-    and shrinks where it fails.  Where the parameter turns, the branch goes round the
+    arclength measures the parameter in units of that first step and the orbit's
+    unknowns in units of their change per such step (read off the first one), so that a
+    branch that does not turn takes about ``steps`` steps; a step grows (to twice that)
+    where Newton's method converges at once and shrinks where it fails.  Where the parameter turns, the branch goes round the
     fold, which is located as the parameter's extremum along the branch and marked
     ``fold``.  After every step the orbit is checked against the motion itself: the hybrid
     motion from the orbit's start, run for one period, must go through the same mode
-    sequence (no event inside a segment, each phase admissible all along).  Where it does not, the mode
-    sequence changes between the two steps: the parameter where it changes is located by
+    sequence (no event inside a segment, each phase admissible all along).  Where it does
+    not, the mode sequence changes between the two steps: the parameter where it changes is located by
     bisection to ``locate`` (relative to the span), the point is named, the new sequence
     is read from the motion just beyond it, and the continuation goes on with it, without
     the user's help (the motion beyond may settle on an orbit of another period: the
@@ -158,7 +164,6 @@ class _Context:
         self.jac = []       # the last shooting Jacobian (the chord method's)
         self.arc_jac = None     # the same with the parameter's column (the corrector's)
         self.w_scale = self.ds = None       # the arclength's metric and step
-        self.ds_max = math.inf
 
     def params(self, lam):
         p = self.p0.copy()
@@ -174,9 +179,7 @@ class _Context:
 
     def shoot(self, lam, segs, w, max_iter=30):
         motion = self.motion(lam)
-        n = self.mech.n
-        z = w[:2 * n]
-        sc = motion.scales(z[:n], z[n:], self.mech.pieces(z[:n], z[n:], motion.p, self.t_a))
+        sc = self.scale_of(motion, w)
         segs = [Segment(s.modes, s.rho, s.index, s.kind) for s in segs]
         w, res = _orbit._shoot(self.name, motion, segs, w, self.t_a, self.forcing(lam),
                                self.rtol, self.tol, sc, max_iter, self.jac)
@@ -208,11 +211,10 @@ class _Context:
             return False
         return _same(_sequence(self, lam, segs, w), [s.modes for s in segs])
 
-    def scale_of(self, lam, w):
-        """The residual's scales at the orbit ``w`` (held through one corrector)."""
+    def scale_of(self, motion, w):
+        """The scales of the orbit ``w``'s start (held through one solve)."""
         n = self.mech.n
         z = w[:2 * n]
-        motion = self.motion(lam)
         return motion.scales(z[:n], z[n:], self.mech.pieces(z[:n], z[n:], motion.p, self.t_a))
 
     def residual(self, lam, segs, w, sc):
@@ -237,7 +239,7 @@ class _Context:
         K = len(segs)
         N = X_pred.size - 1
         X = X_pred.copy()
-        sc = self.scale_of(X[-1], X[:N])
+        sc = self.scale_of(self.motion(X[-1]), X[:N])
         r, pieces = self.residual(X[-1], segs, X[:N], sc)
         res = float(np.max(np.abs(r)))
         M, fresh = None, False
@@ -358,9 +360,8 @@ class _Context:
         :meth:`fold`'s, where the parameter turned), or None where it does not converge."""
         Xa, Xb = np.append(w_a, lam_a), np.append(w_b, lam_b)
         D = self.metric(Xa, Xb, h)
-        d = Xb - Xa
-        ds = self.ds if self.ds else math.sqrt(float(d * D @ d))
-        t = d / math.sqrt(float(d * D @ d))
+        t, L = _unit(Xb - Xa, D)
+        ds = self.ds if self.ds else L
         for _ in range(8):
             X_pred = Xb + ds * t
             over = (X_pred[-1] - hi) if X_pred[-1] > hi else (lo - X_pred[-1]) if (
@@ -381,7 +382,7 @@ class _Context:
                 except ValueError:
                     ds /= 4
                     continue
-            self.ds = min(ds * (1.5 if iters <= 3 else 1.0), self.ds_max)
+            self.ds = min(ds * (1.5 if iters <= 3 else 1.0), DS_MAX)
             fold = None
             if (X[-1] - lam_b) * (lam_b - lam_a) < 0:
                 fold = self.fold(Xa, Xb, X, segs, D)
@@ -390,13 +391,13 @@ class _Context:
 
     def metric(self, Xa, Xb, h):
         """The arclength's metric: the parameter in units of the nominal step ``h``, the
-        orbit's unknowns in units of their change over the branch's first step."""
+        orbit's unknowns in units of their change per nominal step, read off the first
+        step of the branch (or of its sequence) from ``a`` to ``b``."""
         if self.w_scale is None:        # the orbit's change per nominal step
             dw = np.abs(Xb[:-1] - Xa[:-1])
             per = min(abs(h / (Xb[-1] - Xa[-1])), 1e3) if Xb[-1] != Xa[-1] else 1.0
             self.w_scale = max(float(np.sqrt(np.mean(dw * dw))) * per,
                                1e-3 * (1.0 + float(np.abs(Xb[:-1]).max())))
-            self.ds_max = 2.0 * math.sqrt(2.0)
         N = Xa.size - 1
         return np.append(np.full(N, 1.0 / (N * self.w_scale**2)), 1.0 / h**2)
 
@@ -407,9 +408,7 @@ class _Context:
         0)``; the point is None where the fold is b itself (already a point)."""
         from scipy.optimize import minimize_scalar
 
-        d = Xc - Xa
-        L = math.sqrt(float(d * D @ d))
-        t = d / L
+        t, L = _unit(Xc - Xa, D)
         sign = 1.0 if Xb[-1] > Xa[-1] else -1.0
         found = {}
 
@@ -437,7 +436,7 @@ class _Context:
             X, res, at_b = Xb, 0.0, True
         lam = float(X[-1])
         point = None if at_b else self.point(lam, segs, X[:-1], res)   # b is a vertex
-        return (self.mark(lam, segs, X[:-1], "fold", res), point,
+        return (self.mark(lam, segs, X[:-1], "fold", res, point), point,
                 int(not at_b and best.x < s_b))
 
     def multipliers(self, lam, segs, w):
@@ -447,22 +446,18 @@ class _Context:
         return np.delete(mult, trivial) if trivial >= 0 else mult
 
     def doubling(self, lam, w, new, w_new, segs, h, test=None):
-        """The period doubling between the orbits at ``lam`` and ``new``: where a real
-        multiplier passes -1, the root (Brent's method) of :func:`_doubling_test` along
-        the branch, on the hyperplanes normal to the chord between them: ``(mark,
-        point)``.  Where the root is a complex pair on the unit circle instead, the mark
-        is a ``torus`` (Neimark-Sacker) point; None where there is neither (the test
-        jumps where a pair of multipliers outside the circle meets on the positive real
-        axis)."""
+        """The period doubling or torus point between the orbits at ``lam`` and ``new``:
+        the root (Brent's method) of ``test`` (:func:`_doubling_test`, the default, or
+        :func:`_torus_test`) along the branch, on the hyperplanes normal to the chord
+        between them: ``(mark, point)``, its kind read from the multipliers there (a real
+        one at -1, or a complex pair on the unit circle); None where there is neither
+        (the corrector failed, or the root is not a bifurcation)."""
         from scipy.optimize import brentq
 
         Xa, Xb = np.append(w, lam), np.append(w_new, new)
         D = self.metric(Xa, Xb, h)
-        d = Xb - Xa
-        L = math.sqrt(float(d * D @ d))
-        t = d / L
+        t, L = _unit(Xb - Xa, D)
         found = {}
-
         test = test or _doubling_test
 
         def g(sig):
@@ -486,7 +481,7 @@ class _Context:
             kind = "torus"
         else:
             return None
-        return self.mark(at, segs, X[:-1], kind, res), point
+        return self.mark(at, segs, X[:-1], kind, res, point), point
 
     def change(self, lam, segs, w, new, w_new, h):
         """The change of the mode sequence between the admissible orbit at ``lam`` and
@@ -496,12 +491,11 @@ class _Context:
         sequence or None, direction of the parameter)``."""
         Xa, Xb = np.append(w, lam), np.append(w_new, new)
         D = self.metric(Xa, Xb, h)
-        d = Xb - Xa
-        t = d / math.sqrt(float(d * D @ d))
-        L = float(t * D @ d)
-        # in the parameter where the chord runs mostly along it (the shooting alone, as
-        # cheap as a step of natural-parameter continuation), else along the chord
-        along = d[-1] ** 2 * D[-1] >= 0.25 * float(d * D @ d)
+        t, L = _unit(Xb - Xa, D)
+        # in the parameter where at least a quarter of the chord's squared length is
+        # along it (the shooting alone, as cheap as a step of natural-parameter
+        # continuation), else along the chord
+        along = t[-1] ** 2 * D[-1] >= 0.25
         a, wa, b, wb, s_a, s_b = lam, w, new, w_new, 0.0, 1.0
         while abs(b - a) > self.locate and s_b - s_a > 1e-12:
             mid = 0.5 * (s_a + s_b)
@@ -545,7 +539,7 @@ class _Context:
         p = self.params(lam)
         motion = self.motion(lam)
         z = w[:2 * n]
-        sc = motion.scales(z[:n], z[n:], self.mech.pieces(z[:n], z[n:], p, self.t_a))
+        sc = self.scale_of(motion, w)
         forcing = self.forcing(lam)
         scale_t = math.sqrt(sc[3] / sc[2])
         T = float(np.sum(w[len(segs) * 2 * n:]))
@@ -561,11 +555,17 @@ class _Context:
         self.t_a, self.jac = _orbit.phase_time(t_a, forcing), []
         return _kind(segs, new_segs), new_segs, w_new
 
-    def mark(self, lam, segs, w, kind, res):
+    def mark(self, lam, segs, w, kind, res, point=None):
+        """A special point (of the orbit ``w``; its amplitude from ``point``, the same
+        orbit's branch point, where there is one)."""
         n2 = 2 * self.mech.n
-        low, high = extrema(self.motion(lam), segs, w, self.t_a, self.rtol)
+        if point is None:
+            low, high = extrema(self.motion(lam), segs, w, self.t_a, self.rtol)
+            amplitude = (high - low) / 2
+        else:
+            amplitude = point["amplitude"]
         return {"lam": lam, "kind": kind, "period": float(np.sum(w[len(segs) * n2:])),
-                "amplitude": (high - low) / 2, "residual": res}
+                "amplitude": amplitude, "residual": res}
 
 
 def _settle_forced(ctx, lam, z, T, sc):
@@ -628,6 +628,12 @@ def _kind(old, new) -> str:
     if sticks(new) < sticks(old):
         return "crossing_sliding" if reversals(new) > reversals(old) else "sequence_change"
     return "sequence_change"
+
+
+def _unit(d, D):
+    """The chord ``d`` as a unit vector in the metric ``D``, and its length."""
+    L = math.sqrt(float(d * D @ d))
+    return d / L, L
 
 
 def _doubling_test(mult) -> float:
