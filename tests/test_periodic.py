@@ -10,11 +10,11 @@ import pytest
 
 import phasemap
 from phasemap.core import events as ev
-from phasemap.declare import PointContact
+from phasemap.declare import Parameter, PointContact
 from phasemap.declare.full import mechanics
 from phasemap.motion import hybrid
 from phasemap.systems.oscillators import DEN_HARTOG
-from test_oscillators import _block, _den_hartog_amplitude, c, fk, fs, g, m, x, y
+from test_oscillators import _block, _den_hartog_amplitude, c, fk, fs, x, y
 
 
 # -- periodic orbits ----------------------------------------------------------------------
@@ -118,6 +118,94 @@ def test_saltation_monodromy_agrees_with_differences_of_the_return_map(seed):
 def test_a_period_guess_reads_one_period_without_settling():
     o = phasemap.periodic_orbit("belt", start={"x": 0.0, "xdot": 0.2}, period=9.0)
     assert abs(float(o.period) - (5.0 + math.pi + 2 * math.atan(0.4))) < 1e-9
+
+
+# -- orbits that meet no event ---------------------------------------------------------
+
+_mu = Parameter("mu", "s-1", "van der Pol's coefficient", default=1.0, lower=0.0)
+_v = Parameter("v", "m s-1", "speed of the belt", default=10.0)
+
+
+def _van_der_pol_on_a_belt():
+    """A block on a belt ten times faster than it ever moves (it slips backwards all the
+    time: x'' = -x + f_k + F), with van der Pol's force F = mu (1 - (x - f_k)^2) x':
+    about x = f_k, the van der Pol oscillator, whose limit cycle meets no event."""
+    return _block("vdp_belt", PointContact("belt", point=(x, y), friction=fk,
+                                           surface_velocity=_v),
+                  parameters=(_v, fk, _mu),
+                  forces={x: _mu * (1 - (x - fk) ** 2) * x.rate})
+
+
+def _van_der_pol_reference(mu):
+    """The period of van der Pol's limit cycle and its nontrivial Floquet multiplier
+    exp(integral of the divergence mu (1 - xi^2) over a period) (Liouville), from scipy
+    alone: the motion settled, then timed between two maxima of xi."""
+    from scipy.integrate import solve_ivp
+
+    def f(t, y):
+        return [y[1], mu * (1 - y[0] ** 2) * y[1] - y[0], mu * (1 - y[0] ** 2)]
+
+    def top(t, y):
+        return y[1]
+    top.direction = -1
+    settled = solve_ivp(f, (0, 60), [1.0, 0.0, 0.0], rtol=1e-12, atol=1e-13).y[:, -1]
+    sol = solve_ivp(f, (0, 20), [settled[0], settled[1], 0.0], events=top, rtol=1e-12,
+                    atol=1e-13)
+    (t1, t2), (y1, y2) = sol.t_events[0][:2], sol.y_events[0][:2]
+    return t2 - t1, math.exp(y2[2] - y1[2])
+
+
+def test_a_limit_cycle_without_events_is_solved_on_a_section():
+    """The van der Pol limit cycle (mu = 1) on the belt: no event, so the orbit is one
+    segment ended by a Poincare section through its start; its period and its
+    nontrivial multiplier agree with scipy's to 1e-9 and 1e-7; it is isolated and
+    stable, and continue_orbit follows it (the section rebuilt from the Dataset)."""
+    S = _van_der_pol_on_a_belt()
+    T, mult = _van_der_pol_reference(1.0)
+    o = phasemap.periodic_orbit(S, start={"x": 1.0, "xdot": 0.0})
+    assert abs(float(o.period) - T) < 1e-9 and abs(T - 6.66328685932) < 1e-9
+    assert o.segment_end.values.tolist() == [-2]
+    assert o.segment_end.attrs["flag_meanings"].split()[0] == "section"
+    lam = np.sort(np.abs(o.floquet.values))
+    assert abs(lam[0] - mult) < 1e-7 and abs(lam[1] - 1.0) < 1e-7
+    assert int(o.stable) == 1 and int(o.continuum) == 0
+    # followed in mu, its section rebuilt from the Dataset
+    b = phasemap.continue_orbit(o, "mu", (1.0, 1.1), steps=1, model=S)
+    assert b.point_kind.values.tolist() == ["end"]
+    assert abs(float(b.period[-1]) - _van_der_pol_reference(1.1)[0]) < 1e-8
+
+
+def test_a_centre_of_slip_orbits_is_reported_as_a_continuum():
+    """With f_s = f_k the belt's block slips backwards for ever on any swing below the
+    belt's speed: x'' = -x + f_k, a centre, every orbit periodic with period 2 pi.  The
+    orbit is the one through the start (amplitude 0.1 from x = 0.6), both multipliers are
+    1, and it is reported as one of a continuum (the friction analogue of
+    n_solutions = 3), which continue_orbit refuses in one line."""
+    start = {"x": 0.6, "xdot": 0.0, "f_s": 0.5, "f_k": 0.5}
+    for kw in ({}, {"period": 6.0}):
+        o = phasemap.periodic_orbit("belt", start=start, **kw)
+        assert abs(float(o.period) - 2 * math.pi) < 1e-9
+        assert int(o.continuum) == 1 and int(o.stable) == 0
+        assert np.allclose(np.abs(o.floquet.values), 1.0, atol=1e-7)
+        radius = math.hypot(float(o.segment_x[0]) - 0.5, float(o.segment_xdot[0]))
+        assert abs(radius - 0.1) < 1e-9
+    with pytest.raises(ValueError, match="one of a continuum") as err:
+        phasemap.continue_orbit(o, "v", (0.2, 0.3))
+    assert "\n" not in str(err.value)
+    from phasemap.atlas.read import orbit_lines
+    assert "one of a continuum" in orbit_lines(o)[0]
+
+
+def test_a_motion_without_events_that_does_not_return_says_so():
+    """Viscous damping on the same centre: the swing decays, the motion meets no event
+    and never comes back to a state, and periodic_orbit says so in one line."""
+    block = _block("damped", PointContact("belt", point=(x, y), friction=fk,
+                                          static_friction=fs, surface_velocity=_v),
+                   parameters=(_v, fs, fk, c), dissipation=c * x.rate ** 2 / 2)
+    with pytest.raises(ValueError, match="meets no event and does not come back") as err:
+        phasemap.periodic_orbit(block, start={"x": 0.6, "xdot": 0.0, "f_s": 0.5,
+                                              "v": 0.2}, settle=60.0)
+    assert "\n" not in str(err.value)
 
 
 @pytest.mark.parametrize("model, kw, match", [

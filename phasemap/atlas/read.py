@@ -158,8 +158,9 @@ def orbit_lines(ds: xr.Dataset) -> list[str]:
     """A periodic orbit (:func:`phasemap.periodic_orbit`, in memory or read back) as lines:
     its period and stability, a table of its segments (duration, each contact's mode, the
     event that ends it) and its Floquet multipliers."""
-    lines = [f"  period    {float(ds.period):.12g} s, "
-             f"{'stable' if int(ds.stable) else 'unstable'}, shooting residual "
+    state = ("one of a continuum of orbits" if int(ds.get("continuum", 0)) else
+             "stable" if int(ds.stable) else "unstable")
+    lines = [f"  period    {float(ds.period):.12g} s, {state}, shooting residual "
              f"{float(ds.residual):.1e}"]
     contacts = [str(v)[len("segment_mode_"):] for v in ds.data_vars
                 if str(v).startswith("segment_mode_")]

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -10,6 +11,7 @@ import numpy as np
 from phasemap.core import args as _args
 from phasemap.core import events as ev
 from phasemap.motion.hybrid import MODE_NAMES, STICK, Motion, Options
+from phasemap.motion.periodic import floquet as fq
 from phasemap.motion.periodic import orbit as _orbit
 from phasemap.motion.periodic.orbit import Segment
 from phasemap.motion.periodic.sampling import dips, extrema
@@ -93,7 +95,8 @@ def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
     ------
     ValueError
         one line: an unknown parameter, a span that is not a finite pair with lo < hi or
-        does not hold the orbit's value, a model that cannot be resolved.
+        does not hold the orbit's value, a model that cannot be resolved, an orbit that
+        is one of a continuum (``orbit.continuum``).
 
     Examples
     --------
@@ -129,6 +132,10 @@ def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
     if not lo - 1e-12 * (hi - lo) <= lam0 <= hi + 1e-12 * (hi - lo):
         raise ValueError(f"{name}: the orbit's {param} = {lam0:g} is outside the span "
                          f"({lo:g}, {hi:g})")
+    if int(orbit.get("continuum", 0)):
+        raise ValueError(f"{name}: the orbit is one of a continuum (a family of periodic "
+                         "orbits through the nearby states: a multiplier 1 besides the "
+                         "flow's), so it has no branch of its own to follow")
     segs, w, t_a = _from_dataset(mech, orbit, p0, rtol)
     h = (hi - lo) / steps
     max_points = 10 * steps + 10 if max_points is None else _args.count(
@@ -180,15 +187,15 @@ class _Context:
     def shoot(self, lam, segs, w, max_iter=30):
         motion = self.motion(lam)
         sc = self.scale_of(motion, w)
-        segs = [Segment(s.modes, s.rho, s.index, s.kind) for s in segs]
+        segs = [dataclasses.replace(s) for s in segs]
         w, res = _orbit._shoot(self.name, motion, segs, w, self.t_a, self.forcing(lam),
                                self.rtol, self.tol, sc, max_iter, self.jac)
         return w, res
 
     def point(self, lam, segs, w, res=0.0):
         motion = self.motion(lam)
-        mult, trivial, stable, _ = _orbit.linearised(motion, segs, w, self.t_a,
-                                                     self.forcing(lam), self.rtol)
+        mult, trivial, stable, _, _ = _orbit.linearised(motion, segs, w, self.t_a,
+                                                        self.forcing(lam), self.rtol)
         low, high = extrema(motion, segs, w, self.t_a, self.rtol)
         others = np.delete(mult, trivial) if trivial >= 0 else mult
         n2 = 2 * self.mech.n
@@ -441,7 +448,7 @@ class _Context:
 
     def multipliers(self, lam, segs, w):
         """The orbit's Floquet multipliers but the trivial one."""
-        mult, trivial, _, _ = _orbit.linearised(self.motion(lam), segs, w, self.t_a,
+        mult, trivial, _, _, _ = _orbit.linearised(self.motion(lam), segs, w, self.t_a,
                                                 self.forcing(lam), self.rtol)
         return np.delete(mult, trivial) if trivial >= 0 else mult
 
@@ -666,9 +673,14 @@ def _from_dataset(mech, orbit, p0, rtol):
     for j in range(K):
         modes = tuple(int(orbit[f"segment_mode_{c.name}"][j]) for c in mech.contacts)
         index = int(orbit.segment_event_index[j])
-        rho = _orbit._rho(motion, zs[j], modes, float(orbit.segment_start[j]), sc)
+        t_j = float(orbit.segment_start[j])
+        rho = _orbit._rho(motion, zs[j], modes, t_j, sc)
+        section = None
+        if index == _orbit.SECTION_END:     # through the segment's start, normal to the flow
+            field = fq.field(motion, np.append(zs[j], t_j), modes, rho)[:-1]
+            section = _orbit.Section(zs[j].copy(), field / float(np.linalg.norm(field)))
         segs.append(Segment(modes, rho, None if index < 0 else index,
-                            int(orbit.segment_end[j])))
+                            int(orbit.segment_end[j]), section))
     w = np.concatenate(zs + [orbit.segment_duration.values.astype(float)])
     return segs, w, t_a
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -23,18 +24,53 @@ MAX_MULTIPLE = 16
 #: How near (relative to the state's scale) a settled motion returns to a state to count
 #: as a cycle: the shooting's first guess, which Newton's method then solves.
 SETTLED = 1e-4
+#: ``segment_end`` of a segment ended by a Poincare section (an orbit that meets no event)
+#: and of one ended by the forcing period.
+SECTION_END, PERIOD_END = -2, -1
+#: How near 1 (absolutely) a nontrivial Floquet multiplier (an autonomous orbit's, of its
+#: Poincare map) must be for the orbit to count as one of a continuum.
+CONTINUUM = 1e-6
+
+
+class Section(NamedTuple):
+    """The hyperplane through ``point`` normal to the unit vector ``normal`` (in the state
+    ``(q, u)``), crossed in the direction of ``normal``."""
+
+    point: np.ndarray
+    normal: np.ndarray
 
 
 @dataclass
 class Segment:
     """One phase of the orbit: its contact modes, the sign of N each two-sided contact's
     friction assumes, and the event function that ends it (None: the end of the period,
-    in a forced system)."""
+    in a forced system, or the Poincare ``section`` of an autonomous orbit that meets no
+    event)."""
 
     modes: tuple
     rho: np.ndarray
     index: int | None
     kind: int
+    section: Section | None = None
+
+    @property
+    def ended(self) -> bool:
+        """Whether a condition (an event function or the section) ends the segment, so
+        that the shooting has an equation for it."""
+        return self.index is not None or self.section is not None
+
+
+class Linearised(NamedTuple):
+    """The Floquet multipliers of an orbit (largest first), the index of the trivial one
+    (-1: none, a forced orbit), whether every other lies inside the unit circle, the
+    orbit sampled into a Record, and whether it is one of a continuum (a nontrivial
+    multiplier of its return map at 1, :data:`CONTINUUM`)."""
+
+    multipliers: np.ndarray
+    trivial: int
+    stable: bool
+    record: Record
+    continuum: bool
 
 
 def system_of(model):
@@ -66,7 +102,8 @@ def periodic_orbit(model, start=None, period=None, *, settle=None, rtol=1e-12, t
     The motion (:func:`phasemap.simulate`'s, in full coordinates) runs in chunks, at most
     ``settle`` seconds in all, until a chunk holds a cycle (a forced system: the stroboscopic points one or more
     forcing periods apart that agree; an autonomous one: two events of the same kind at
-    states that agree).  Its mode sequence is read from the events: one *segment* per
+    states that agree, or, where the motion meets no event, its return to a Poincare
+    section at the state it left).  Its mode sequence is read from the events: one *segment* per
     phase, each ended by the event that ended it.  The orbit is then solved by multiple
     shooting: the unknowns are each segment's initial state and duration, the equations
     the continuity across each event (through the projection onto the next phase's
@@ -101,8 +138,12 @@ def periodic_orbit(model, start=None, period=None, *, settle=None, rtol=1e-12, t
     xarray.Dataset
         the orbit's state on ``t`` (as :func:`phasemap.simulate` gives a motion in full
         coordinates), its segments on ``segment`` (``segment_mode_<contact>``,
-        ``segment_duration``, ``segment_end``: the event that ends it), ``period``,
-        ``floquet`` (complex, on ``multiplier``), ``residual`` and ``stable``.
+        ``segment_duration``, ``segment_end``: the event that ends it, or -2 for the
+        Poincare section that ends an autonomous orbit without events), ``period``,
+        ``floquet`` (complex, on ``multiplier``), ``residual``, ``stable`` and
+        ``continuum`` (1: a nontrivial multiplier at 1, the orbit one of a family of
+        periodic orbits, such as a centre's; on a continuum the orbit returned is the
+        one through the settled motion's state).
 
     Raises
     ------
@@ -163,7 +204,12 @@ def periodic_orbit(model, start=None, period=None, *, settle=None, rtol=1e-12, t
                                        scale_t)
     segs, w = _segments(name, motion, rec, t_a, t_b, z0, forcing, sc)
     t_a = phase_time(t_a, forcing)
-    w, res = _shoot(name, motion, segs, w, t_a, forcing, rtol, tol, sc, max_iter)
+    # a motion without events on one of a continuum of orbits (its return map's
+    # multiplier 1 already at the first guess): the orbit through its own start
+    pinned = segs[0].section is not None and linearised(motion, segs, w, t_a, forcing,
+                                                        rtol).continuum
+    w, res = _shoot(name, motion, segs, w, t_a, forcing, rtol, tol, sc, max_iter,
+                    pinned=pinned)
     return _orbit_dataset(S, mech, motion, segs, w, t_a, forcing, res, samples, rtol, start)
 
 
@@ -219,6 +265,8 @@ def _cycle(name, rec: Record, forcing, sc):
                          "points still differ): give a longer settle or a start nearer the "
                          "orbit")
     kinds = rec.ev_kind
+    if all(k in (ev.START, ev.HORIZON) for k in kinds):
+        return _section_cycle(name, rec, scale)
     last = len(kinds) - 1
     while last > 0 and kinds[last] in (ev.HORIZON, ev.START):
         last -= 1
@@ -233,14 +281,60 @@ def _cycle(name, rec: Record, forcing, sc):
                      "nearer the orbit")
 
 
+def _section_cycle(name, rec: Record, scale):
+    """``(t_a, t_b, state)`` of a motion that meets no event: its last return to the
+    hyperplane through its end (normal to its direction there) that comes back to the
+    end's state, the end, and the end's state (the motion's own, not interpolated: an
+    autonomous orbit may start anywhere on it, and one of a continuum is the orbit
+    through that state)."""
+    ys = np.array(rec.y)
+    if len(ys) >= 4:
+        ref, normal = ys[-1], _unit(ys[-1] - ys[-2])
+        for t, z in reversed(_returns(rec, ref, normal)[:-1]):
+            if np.max(np.abs(z - ref)) <= SETTLED * scale:
+                return t, float(rec.t[-1]), ref
+    raise ValueError(f"{name}: the motion meets no event and does not come back to a state "
+                     "it was in within settle= (it may be approaching a rest or an "
+                     "equilibrium): give a longer settle or a start nearer an orbit")
+
+
+def _returns(rec: Record, ref, normal):
+    """The motion's crossings of the hyperplane through ``ref`` normal to ``normal``, in
+    the direction of ``normal``: ``(t, state)`` each, the time by linear interpolation of
+    the saved steps, the state by quadratic interpolation through three of them."""
+    ts, ys = np.array(rec.t), np.array(rec.y)
+    s = (ys - ref) @ normal
+    out = []
+    for i in np.flatnonzero((s[:-1] < 0.0) & (s[1:] >= 0.0)) + 1:
+        t = ts[i - 1] + (ts[i] - ts[i - 1]) * (-s[i - 1]) / (s[i] - s[i - 1])
+        j = min(max(int(i), 2), len(ts) - 1)
+        nodes, vals = ts[j - 2:j + 1], ys[j - 2:j + 1]
+        z = sum(vals[a] * np.prod([(t - nodes[b]) / (nodes[a] - nodes[b])
+                                   for b in range(3) if b != a]) for a in range(3))
+        out.append((float(t), np.asarray(z, dtype=float)))
+    return out
+
+
+def _unit(d):
+    return np.asarray(d, dtype=float) / float(np.linalg.norm(d))
+
+
 def _guessed_cycle(name, rec: Record, period):
     """``(t_a, t_b, state at t_a)``: from the first event of an autonomous motion to the
-    event of the same kind nearest one ``period`` later."""
+    event of the same kind nearest one ``period`` later (a motion that meets no event:
+    to its return to the hyperplane through its start nearest one ``period`` later)."""
     kinds = rec.ev_kind
     first = next((i for i, k in enumerate(kinds) if k not in (ev.START, ev.HORIZON)), None)
     if first is None:
-        raise ValueError(f"{name}: the motion from the start meets no event within 2.5 "
-                         "periods: it is not near a hybrid periodic orbit")
+        ys = np.array(rec.y)
+        back = [(t, z) for t, z in _returns(rec, ys[0], _unit(ys[1] - ys[0]))
+                if t > rec.t[0] + 0.5 * period] if len(ys) >= 4 else []
+        if not back:
+            raise ValueError(f"{name}: the motion from the start meets no event and does "
+                             "not come back to its section within 2.5 periods: it is not "
+                             "near a periodic orbit of that period")
+        t_b = min(back, key=lambda b: abs(b[0] - rec.t[0] - period))[0]
+        return float(rec.t[0]), t_b, ys[0]
     same = [j for j in range(first + 1, len(kinds)) if kinds[j] == kinds[first]
             and rec.ev_contact[j] == rec.ev_contact[first]
             and rec.ev_modes[j] == rec.ev_modes[first]]
@@ -273,8 +367,12 @@ def _segments(name, motion, rec: Record, t_a, t_b, z0, forcing, sc):
     starts = [(t_a, z0, modes0)] + [(rec.ev_t[i], rec.ev_y[i], tuple(rec.ev_modes[i]))
                                     for i in later]
     ends_t = [rec.ev_t[i] for i in inside] + ([t_b] if forcing is not None else [])
-    if forcing is None and not inside:
-        raise ValueError(f"{name}: the cycle has no event")
+    if forcing is None and not inside:      # a smooth orbit: ended by a Poincare section
+        rho = _rho(motion, z0, modes0, t_a, sc)
+        field = fq.field(motion, np.append(z0, t_a), modes0, rho)[:-1]
+        section = Section(np.array(z0, dtype=float), _unit(field))
+        return ([Segment(tuple(int(m) for m in modes0), rho, None, SECTION_END, section)],
+                np.append(np.asarray(z0, dtype=float), t_b - t_a))
     segs, zs, taus = [], [], []
     for j, (t, z, modes) in enumerate(starts):
         t_end = ends_t[j]
@@ -370,6 +468,9 @@ def _end(motion, segs, j, z, t, tau, rtol, sc):
     n = motion.n
     seg, nxt = segs[j], segs[(j + 1) % len(segs)]
     end = _flow(motion, z, t, tau, seg, rtol).y[:, -1]
+    if seg.section is not None:     # in the event functions' units, as _residual reads it
+        w = float(seg.section.normal @ (end - seg.section.point)) * max(sc) / max(sc[0], sc[3])
+        return _jump(motion, end, t + tau, nxt), w
     if seg.index is None:
         return end, None
     w = motion.watch(end[:n], end[n:], seg.modes, seg.rho, sc, t + tau)[seg.index]
@@ -395,21 +496,28 @@ def _residual(motion, segs, w, ends, forcing, sc):
     return np.concatenate([np.atleast_1d(np.asarray(x, dtype=float)) for x in out])
 
 
-def _shoot(name, motion, segs, w, t_a, forcing, rtol, tol, sc, max_iter, cache=None):
+def _shoot(name, motion, segs, w, t_a, forcing, rtol, tol, sc, max_iter, cache=None,
+           pinned=False):
     """Newton's method on the multiple-shooting equations (their Jacobian:
     :func:`jacobian`).  ``cache``: a list holding
     a Jacobian from a nearby orbit (a continuation's), used first (the chord method) and
-    replaced by a fresh one where it stops reducing the residual."""
+    replaced by a fresh one where it stops reducing the residual.  ``pinned``: the
+    segments' starts are held and only the durations solved for (Gauss-Newton), the orbit
+    through the start of a continuum, on which Newton's method in every unknown would
+    slide along the family."""
     ends, starts = _ends(motion, segs, w, t_a, rtol, sc)
     r = _residual(motion, segs, w, ends, forcing, sc)
     res = float(np.max(np.abs(r)))
+    free = np.ones(w.size, dtype=bool)
+    if pinned:
+        free[:len(segs) * 2 * motion.n] = False
     chords = 0
     for _ in range(max_iter):
         if res <= 0.1 * tol:
             break
         if cache and cache[0].shape == (r.size, w.size) and chords < 3:
             chords += 1
-            step = np.linalg.lstsq(cache[0], r, rcond=None)[0]
+            step = _step(cache[0], r, free)
             better = _better(motion, segs, w, step, t_a, forcing, rtol, sc, res, 1)
             if better is not None and float(np.max(np.abs(better[3]))) < 0.1 * res:
                 w, ends, starts, r = better
@@ -419,7 +527,7 @@ def _shoot(name, motion, segs, w, t_a, forcing, rtol, tol, sc, max_iter, cache=N
         Jac = jacobian(motion, segs, w, ends, starts, forcing, rtol, sc)
         if cache is not None:
             cache[:] = [Jac]
-        step = np.linalg.lstsq(Jac, r, rcond=None)[0]
+        step = _step(Jac, r, free)
         better = _better(motion, segs, w, step, t_a, forcing, rtol, sc, res, 12)
         if better is None:
             break
@@ -433,6 +541,13 @@ def _shoot(name, motion, segs, w, t_a, forcing, rtol, tol, sc, max_iter, cache=N
     return w, res
 
 
+def _step(Jac, r, free):
+    """The least-squares Newton step in the unknowns ``free`` (the others held)."""
+    step = np.zeros(free.size)
+    step[free] = np.linalg.lstsq(Jac[:, free], r, rcond=None)[0]
+    return step
+
+
 def jacobian(motion, segs, w, ends, starts, forcing, rtol, sc):
     """The shooting equations' Jacobian in the unknowns ``w``, by differences: a
     segment's equations depend on its own start and duration (one segment integrated per
@@ -441,7 +556,7 @@ def jacobian(motion, segs, w, ends, starts, forcing, rtol, sc):
     n2 = 2 * motion.n
     K = len(segs)
     scale = max(sc[0], sc[3])
-    rows = [n2 + (s.index is not None) for s in segs]
+    rows = [n2 + s.ended for s in segs]
     offs = np.concatenate([[0], np.cumsum(rows)])
     Jac = np.zeros((int(offs[-1]) + (forcing is not None), w.size))
     zs, taus = _unpack(w, K, n2)
@@ -467,8 +582,8 @@ def jacobian(motion, segs, w, ends, starts, forcing, rtol, sc):
                 Jac[o:o + rows[j], K * n2 + j] = d
             elif col == "t":
                 Jac[o:o + rows[j], K * n2:K * n2 + j] = d[:, None]
-            else:
-                Jac[o:o + rows[j], j * n2 + col] = d
+            else:       # added: with one segment, its start is also the next one's
+                Jac[o:o + rows[j], j * n2 + col] += d
     if forcing is not None:
         Jac[-1, K * n2:] = 1.0 / forcing
     return Jac
@@ -495,10 +610,10 @@ def _flat(end, scale, sc):
     return np.concatenate([-after / scale, [] if wv is None else [wv / max(sc)]])
 
 
-def linearised(motion, segs, w, t_a, forcing, rtol, samples=0):
-    """``(multipliers, index of the trivial one or -1, stable, record)``: the Floquet
-    multipliers of the orbit ``w`` (largest first) from the variational equations and the
-    saltation matrices, and, with ``samples``, the orbit sampled into a Record."""
+def linearised(motion, segs, w, t_a, forcing, rtol, samples=0) -> Linearised:
+    """The Floquet multipliers of the orbit ``w`` from the variational equations and the
+    saltation matrices, and, with ``samples``, the orbit sampled into a Record (see
+    :class:`Linearised`)."""
     n2 = 2 * motion.n
     n = motion.n
     K = len(segs)
@@ -521,18 +636,20 @@ def linearised(motion, segs, w, t_a, forcing, rtol, samples=0):
         Phi = _transition(motion, np.concatenate([zs[j], [t]]), taus[j], seg, rtol)
         Xm = np.concatenate([end, [t_end]])
         nxt = segs[(j + 1) % K]
-        if seg.index is None:           # the end of the forcing period: time fixed
+        if not seg.ended:           # the end of the forcing period: time fixed
             grad = np.zeros(n2 + 1)
             grad[-1] = 1.0
             DJ = np.eye(n2 + 1)
             after = end
         else:
-            grad = fq.event_gradient(motion, Xm, seg.modes, seg.rho, seg.index, sc)
+            grad = (np.append(seg.section.normal, 0.0) if seg.section is not None else
+                    fq.event_gradient(motion, Xm, seg.modes, seg.rho, seg.index, sc))
             closed = [c for c, m in enumerate(nxt.modes) if m != OPEN]
             held = tuple(c for c, m in enumerate(nxt.modes) if MODE_NAMES[m] == "stick")
             DJ = fq.jump_derivative(motion, Xm, closed, held)
             after = _jump(motion, end, t_end, nxt)
-            rec.event(t_end, seg.kind, _contact_of(seg, motion), after, nxt.modes)
+            if seg.section is None:     # a section is no event of the motion
+                rec.event(t_end, seg.kind, _contact_of(seg, motion), after, nxt.modes)
         Fm = fq.field(motion, Xm, seg.modes, seg.rho)
         Fp = fq.field(motion, np.concatenate([after, [t_end]]), nxt.modes, nxt.rho)
         mono = fq.saltation(DJ, Fm, Fp, grad) @ Phi @ mono
@@ -546,7 +663,24 @@ def linearised(motion, segs, w, t_a, forcing, rtol, samples=0):
     if forcing is None and lam.size:
         trivial = int(np.argmin(np.abs(lam - 1.0)))
     others = np.delete(np.abs(lam), trivial) if trivial >= 0 else np.abs(lam)
-    return lam, trivial, bool(np.all(others < 1.0 - 1e-9)), rec
+    return Linearised(lam, trivial, bool(np.all(others < 1.0 - 1e-9)), rec,
+                      _continuum(reduced, B.T @ fq.field(motion, np.concatenate(
+                          [zs[0], [t_a]]), segs[0].modes, segs[0].rho)[:n2], forcing))
+
+
+def _continuum(reduced, flow, forcing) -> bool:
+    """Whether a nontrivial multiplier is 1 (to :data:`CONTINUUM`): of the monodromy
+    ``reduced`` in a forced system, of the Poincare map (the monodromy followed by the
+    projection along the ``flow`` at the start onto the hyperplane normal to it, whose
+    multiplier of the flow's direction is 0) in an autonomous one.  The Poincare map keeps
+    a family's multiplier a simple 1 where the monodromy holds it in a Jordan block with the
+    flow's (a centre whose period changes with the amplitude), whose computed eigenvalues
+    stray from 1 by the square root of the rounding."""
+    M = reduced
+    if forcing is None:
+        f = flow / float(np.linalg.norm(flow))
+        M = (np.eye(f.size) - np.outer(f, f)) @ reduced
+    return bool(np.any(np.abs(np.linalg.eigvals(M) - 1.0) < CONTINUUM))
 
 
 def _orbit_dataset(S, mech, motion, segs, w, t_a, forcing, res, samples, rtol, start):
@@ -555,7 +689,8 @@ def _orbit_dataset(S, mech, motion, segs, w, t_a, forcing, res, samples, rtol, s
     K = len(segs)
     zs, taus = _unpack(w, K, n2)
     period = float(np.sum(taus))
-    lam, trivial, stable, rec = linearised(motion, segs, w, t_a, forcing, rtol, samples)
+    lam, trivial, stable, rec, continuum = linearised(motion, segs, w, t_a, forcing, rtol,
+                                                      samples)
     from phasemap.motion.hybrid.start import full_attrs
 
     attrs = full_attrs(S, None, {"t_end": t_a + period, "rtol": rtol}, {}, start)
@@ -570,9 +705,11 @@ def _orbit_dataset(S, mech, motion, segs, w, t_a, forcing, res, samples, rtol, s
         "segment_start": ("segment", t_a + np.concatenate([[0.0], np.cumsum(taus)[:-1]]), {
             "long_name": "time at which the segment starts", "units": "s"}),
         "segment_end": ("segment", np.array([s.kind for s in segs], dtype=np.int8), {
-            "long_name": "event that ends the segment (-1: the end of the forcing period)",
-            "flag_values": np.array([-1, *ev.EVENT_VALUES], dtype=np.int8),
-            "flag_meanings": "period_end " + ev.EVENT_MEANINGS}),
+            "long_name": "event that ends the segment (-1: the end of the forcing period; "
+                         "-2: the return to a Poincare section, an orbit without events)",
+            "flag_values": np.array([SECTION_END, PERIOD_END, *ev.EVENT_VALUES],
+                                    dtype=np.int8),
+            "flag_meanings": "section period_end " + ev.EVENT_MEANINGS}),
         "period": ((), period, {"long_name": "period of the orbit", "units": "s"}),
         "floquet": ("multiplier", lam, {
             "long_name": "Floquet multipliers (eigenvalues of the linearised return map on "
@@ -582,11 +719,18 @@ def _orbit_dataset(S, mech, motion, segs, w, t_a, forcing, res, samples, rtol, s
         "stable": ((), np.int8(stable), {
             "long_name": "orbit stability", "flag_values": np.array([0, 1], dtype=np.int8),
             "flag_meanings": "unstable stable"}),
+        "continuum": ((), np.int8(continuum), {
+            "long_name": "whether the orbit is one of a continuum (a family of periodic "
+                         "orbits: a nontrivial multiplier 1)",
+            "flag_values": np.array([0, 1], dtype=np.int8),
+            "flag_meanings": "isolated continuum"}),
     }
     data["segment_event_index"] = ("segment", np.array(
-        [-1 if sg.index is None else sg.index for sg in segs], dtype=np.int32), {
+        [(SECTION_END if sg.section is not None else PERIOD_END) if sg.index is None
+         else sg.index for sg in segs], dtype=np.int32), {
         "long_name": "index of the event function that ends the segment (-1: the end of "
-                     "the forcing period; phasemap.motion.hybrid.Motion.watch)"})
+                     "the forcing period; -2: a Poincare section through the segment's "
+                     "start, normal to the flow there; phasemap.motion.hybrid.Motion.watch)"})
     names = list(mech.coordinates) + list(mech.rates)
     units = [*mech.units, *(f"{u} s-1" for u in mech.units)]
     for i, (nm, un) in enumerate(zip(names, units)):
