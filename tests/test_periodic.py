@@ -351,6 +351,21 @@ def test_cli_simulates_an_oscillator_by_name(capsys):
     assert code == 0 and "slip" in text and "stick" in text and "belt" in text
 
 
+def test_a_special_point_is_drawn_on_its_own_arm_of_a_turning_branch():
+    """A branch that turns (p = 1, 2, 3, 2, 1) stored without the points' own values (an
+    older file): a period doubling at a vertex of the second arm, p = 2, is drawn at that
+    vertex (matched by its period), not on the first arm where p = 2 too."""
+    import xarray as xr
+
+    from phasemap.plot.orbits import _at_point
+
+    ds = xr.Dataset({"period": ("vertex", [6.0, 6.1, 6.2, 6.3, 6.4]),
+                     "point_period": ("point", [6.3])})
+    p, v = np.array([1.0, 2.0, 3.0, 2.0, 1.0]), np.array([0.0, 1.0, 2.0, 3.0, 4.0])
+    assert _at_point(ds, 0, "amplitude_x", 2.0, p, v) == 3.0
+    assert _at_point(ds, 0, "amplitude_x", 2.5, p, v) == 1.5     # interpolated, first arm
+
+
 def test_orbit_and_branch_figures_pass_the_review(tmp_path):
     """ds.phasemap.plot() of an orbit (its phase plane, segments by mode) and of a branch
     (stable solid, special points by kind), checked as the tour's figures are."""

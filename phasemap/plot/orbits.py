@@ -127,11 +127,19 @@ def branch_figure(ds: xr.Dataset, y: str | None = None, *, ax=None,
 
 def _at_point(ds, i, y, at, p, v) -> float:
     """The value of ``y`` at the special point ``i`` (parameter ``at``): its own where the
-    branch Dataset stores it (``point_<y>``), else interpolated on the first piece of the
-    branch whose ends hold ``at`` (the branch may turn, so it is not a function of the
-    parameter), else the nearest point's."""
+    branch Dataset stores it (``point_<y>``), else a vertex's at exactly ``at`` (a fold,
+    a period doubling and a torus point are vertices of the branch), else interpolated on
+    the first piece of the branch whose ends hold ``at`` (the branch may turn, so it is not
+    a function of the parameter), else the nearest point's.  Where the branch passes
+    ``at`` at several vertices, the one whose period is the point's."""
     if f"point_{y}" in ds:
         return float(ds[f"point_{y}"][i])
+    exact = np.flatnonzero(p == at)
+    if exact.size > 1 and "point_period" in ds:     # on which arm: the point's own period
+        exact = exact[np.argsort(np.abs(ds.period.values[exact]
+                                        - float(ds.point_period[i])), kind="stable")]
+    if exact.size:
+        return float(v[exact[0]])
     for k in range(len(p) - 1):
         if (p[k] - at) * (p[k + 1] - at) <= 0 and p[k] != p[k + 1]:
             return float(v[k] + (v[k + 1] - v[k]) * (at - p[k]) / (p[k + 1] - p[k]))
