@@ -90,6 +90,22 @@ def _deterministic_hypothesis() -> None:
 _deterministic_hypothesis()
 
 
+def pytest_configure(config):
+    """Under pytest-xdist, the groups run in the order :func:`pytest_collection_modifyitems`
+    gives them: pytest-xdist 3.6+ reorders them by their number of tests instead
+    (``--loadscope-reorder``, on by default), which put a one-test group of five minutes
+    last, one worker running it alone (a CI replay)."""
+    if hasattr(config.option, "loadscopereorder"):
+        config.option.loadscopereorder = False
+
+
+#: Each test's seconds (setup, call and teardown, from a fresh clone, compilation
+#: included) in a CI replay, for the tests of 2 s or more: the weights by which the
+#: groups are scheduled.  Regenerate it from a run with ``-v --durations=0`` (only the
+#: order of the groups depends on it).
+DURATIONS = pathlib.Path(__file__).with_name("durations.json")
+
+
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     """Under pytest-xdist (``-n``, ``--dist loadgroup``), run each test module on one
@@ -100,8 +116,13 @@ def pytest_collection_modifyitems(config, items):
     compiles the same kernels as another names that module's group in ``XDIST_GROUP``
     (e.g. ``"tests/test_phase_curve.py"``, or ``"studies"``): on two workers at once the
     same kernel would be compiled twice, each worker missing the other's numba cache.
-    One test (a parametrized case) names its group with ``@pytest.mark.kernels_with(group)``."""
-    studies = set()
+    One test (a parametrized case) names its group with ``@pytest.mark.kernels_with(group)``.
+
+    The groups are scheduled longest first (:data:`DURATIONS`; a test not listed counts
+    0.4 s, about the mean of those under 2 s; ``@pytest.mark.early`` puts a group before
+    the others), the greedy order that leaves the least time with one worker idle at the
+    end."""
+    groups = {}
     for item in items:
         module = item.nodeid.split("::")[0]
         group = "studies" if pathlib.Path(module).name.startswith("test_study_") else module
@@ -109,16 +130,24 @@ def pytest_collection_modifyitems(config, items):
         marked = item.get_closest_marker("kernels_with")
         group = marked.args[0] if marked else group
         if getattr(getattr(item, "module", None), "XDIST_SPREAD", False):
+            groups[item.nodeid] = item.nodeid       # a unit of its own
             continue
         item.add_marker(pytest.mark.xdist_group(group))
-        if group == "studies":
-            studies.add(item.nodeid)
-    # the studies are the longest group: scheduled first, one worker runs them while the
-    # other takes the rest, instead of one worker running them alone at the end; then the
-    # long tests of a group of their own (@pytest.mark.early): last, one of them kept a
-    # worker busy for four minutes after the other had finished (a CI replay)
-    items.sort(key=lambda item: 0 if item.nodeid in studies else
-               1 if item.get_closest_marker("early") else 2)
+        groups[item.nodeid] = group
+    try:
+        known = json.loads(DURATIONS.read_text())
+    except (OSError, ValueError):
+        known = {}
+    weight, first = {}, {}
+    for i, item in enumerate(items):
+        g = groups[item.nodeid]
+        weight[g] = weight.get(g, 0.0) + float(known.get(item.nodeid, 0.4))
+        first.setdefault(g, i)
+        if item.get_closest_marker("early"):
+            weight[g] = weight.get(g, 0.0) + 1e6
+    order = {item.nodeid: i for i, item in enumerate(items)}
+    items.sort(key=lambda item: (-weight[groups[item.nodeid]], first[groups[item.nodeid]],
+                                 order[item.nodeid]))
 
 
 def _compile_log(folder: str):
