@@ -40,7 +40,7 @@ def test_belt_orbit_period_stick_segment_and_multipliers(belt_orbit):
     lam = np.sort(np.abs(o.floquet.values))
     assert lam[0] <= 1e-12
     assert abs(lam[1] - 1.0) < 1e-6
-    assert int(o.stable) == 1 and float(o.residual) < 1e-10
+    assert int(o.stable) == 1 and float(o.residual) < 1e-10 and int(o.continuum) == 0
     # x_min: the slip segment's lowest point, pi/2 + arctan... after its start, from the
     # orbit's own start state, against the closed form
     slip = modes.index("slip_neg")
@@ -81,6 +81,7 @@ def test_den_hartog_orbit_against_its_amplitude(Om, r):
     t_turn = o.event_t.values[o.event_kind.values == ev.REVERSAL]
     assert abs(abs(t_turn[1] - t_turn[0]) - math.pi / Om) < 1e-9
     assert int(o.stable) == 1 and np.all(np.abs(o.floquet.values) < 1)
+    assert int(o.continuum) == 0
 
 
 @pytest.mark.slow
@@ -148,7 +149,7 @@ def _van_der_pol_reference(mu):
     def top(t, y):
         return y[1]
     top.direction = -1
-    settled = solve_ivp(f, (0, 60), [1.0, 0.0, 0.0], rtol=1e-12, atol=1e-13).y[:, -1]
+    settled = solve_ivp(f, (0, 300), [1.0, 0.0, 0.0], rtol=1e-12, atol=1e-13).y[:, -1]
     sol = solve_ivp(f, (0, 20), [settled[0], settled[1], 0.0], events=top, rtol=1e-12,
                     atol=1e-13)
     (t1, t2), (y1, y2) = sol.t_events[0][:2], sol.y_events[0][:2]
@@ -165,7 +166,8 @@ def test_a_limit_cycle_without_events_is_solved_on_a_section():
     o = phasemap.periodic_orbit(S, start={"x": 1.0, "xdot": 0.0})
     assert abs(float(o.period) - T) < 1e-9 and abs(T - 6.66328685932) < 1e-9
     assert o.segment_end.values.tolist() == [-2]
-    assert o.segment_end.attrs["flag_meanings"].split()[0] == "section"
+    from phasemap.atlas.read import orbit_lines
+    assert orbit_lines(o)[3].split()[-1] == "section"     # the table's "ends with"
     lam = np.sort(np.abs(o.floquet.values))
     assert abs(lam[0] - mult) < 1e-7 and abs(lam[1] - 1.0) < 1e-7
     assert int(o.stable) == 1 and int(o.continuum) == 0
@@ -196,16 +198,64 @@ def test_a_centre_of_slip_orbits_is_reported_as_a_continuum():
     assert "one of a continuum" in orbit_lines(o)[0]
 
 
-def test_a_motion_without_events_that_does_not_return_says_so():
+@pytest.mark.parametrize("damping, settle", [(0.1, 60.0), (1.0, None)])
+def test_a_motion_without_events_that_does_not_return_says_so(damping, settle):
     """Viscous damping on the same centre: the swing decays, the motion meets no event
-    and never comes back to a state, and periodic_orbit says so in one line."""
+    and never comes back to a state, and periodic_orbit says so in one line; also where
+    it has decayed to the rounding (c = 1 over the default settle), whose returns are all
+    at the equilibrium."""
     block = _block("damped", PointContact("belt", point=(x, y), friction=fk,
                                           static_friction=fs, surface_velocity=_v),
                    parameters=(_v, fs, fk, c), dissipation=c * x.rate ** 2 / 2)
     with pytest.raises(ValueError, match="meets no event and does not come back") as err:
         phasemap.periodic_orbit(block, start={"x": 0.6, "xdot": 0.0, "f_s": 0.5,
-                                              "v": 0.2}, settle=60.0)
+                                              "v": 0.2, "c": damping}, settle=settle)
     assert "\n" not in str(err.value)
+
+
+def test_a_forced_orbit_of_one_segment_against_its_closed_form():
+    """A forced block slipping backwards on a fast belt all the time, x'' + x = f_k +
+    F0 cos(Omega t): one segment, ended by the forcing period, no event.  Its orbit is
+    x = f_k + F0 cos(Omega t) / (1 - Omega^2); its multipliers, an undamped oscillator's
+    over 2 pi / Omega, exp(+-2 pi i / Omega) (+-i at Omega = 0.8), so it is isolated."""
+    import sympy as sp
+
+    from phasemap.declare import TIME
+
+    F0 = Parameter("F0", "N", "amplitude of the applied force", default=0.3)
+    Om = Parameter("Omega", "rad s-1", "forcing frequency", default=0.8, lower=0.0,
+                   lower_open=True)
+    block = _block("forced_belt", PointContact("belt", point=(x, y), friction=fk,
+                                               surface_velocity=_v),
+                   parameters=(_v, fk, F0, Om), forces={x: F0 * sp.cos(Om * TIME)},
+                   period=2 * sp.pi / Om)
+    X = 0.3 / (1 - 0.64)
+    o = phasemap.periodic_orbit(block, start={"x": 0.5 + X, "xdot": 0.0})
+    assert o.segment_end.values.tolist() == [-1]
+    assert abs(float(o.period) - 2 * math.pi / 0.8) < 1e-12
+    t0 = float(o.segment_start[0])
+    assert abs(float(o.segment_x[0]) - (0.5 + X * math.cos(0.8 * t0))) < 1e-9
+    assert abs(float(o.segment_xdot[0]) + 0.8 * X * math.sin(0.8 * t0)) < 1e-9
+    assert np.allclose(np.sort_complex(o.floquet.values), [-1j, 1j], atol=1e-7)
+    assert int(o.continuum) == 0
+    # the shooting's Jacobian of its one segment (whose start is also the next one's)
+    # against central differences of the residual
+    from phasemap.motion.periodic import continuation, orbit
+
+    mech = mechanics(block)
+    p = np.array([float(o.attrs[f"phasemap_parameter_{nm}"]) for nm in mech.parameters])
+    segs, w, t_a = continuation._from_dataset(mech, o, p, 1e-12)
+    motion = hybrid.Motion(mech, p, hybrid.Options(1.0, rtol=1e-12))
+    sc = motion.scales(w[:2], w[2:4], mech.pieces(w[:2], w[2:4], p, t_a))
+
+    def residual(v):
+        ends, _ = orbit._ends(motion, segs, v, t_a, 1e-12, sc)
+        return orbit._residual(motion, segs, v, ends, 2 * math.pi / 0.8, sc)
+    ends, starts = orbit._ends(motion, segs, w, t_a, 1e-12, sc)
+    J = orbit.jacobian(motion, segs, w, ends, starts, 2 * math.pi / 0.8, 1e-12, sc)
+    D = np.column_stack([(residual(w + e) - residual(w - e)) / 2e-6
+                         for e in 1e-6 * np.eye(w.size)])
+    assert np.allclose(J, D, atol=1e-5), (J, D)
 
 
 @pytest.mark.parametrize("model, kw, match", [

@@ -22,7 +22,7 @@ _MODES = {"stick": (_OI["vermillion"], 2.6), "slip_pos": (_OI["blue"], 1.2),
 _KINDS = {"crossing_sliding": ("o", _OI["vermillion"]), "grazing_sliding": ("D", _OI["blue"]),
           "sequence_change": ("^", _OI["reddish_purple"]),
           "period_doubling": ("s", _OI["orange"]), "torus": ("*", _OI["orange"]),
-          "fold": ("P", _OI["black"]),
+          "fold": ("P", _OI["black"]), "continuum": ("h", _OI["bluish_green"]),
           "no_convergence": ("x", _OI["black"]), "max_points": ("x", _OI["sky_blue"]),
           "end": ("|", _OI["black"])}
 

@@ -56,7 +56,9 @@ def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
     region), ``grazing_sliding`` (a stick segment appears where the orbit had no event),
     ``sequence_change`` (another change of the mode sequence, among them a stuck
     contact's friction limit reached tangentially inside its stick segment),
-    ``period_doubling``, ``torus``, ``fold`` (the parameter turns), ``no_convergence``,
+    ``period_doubling``, ``torus``, ``fold`` (the parameter turns), ``continuum``
+    (beyond a change of the sequence the orbits form a continuum, a family through the
+    nearby states: the branch ends there), ``no_convergence``,
     ``max_points`` (the branch has ``max_points`` points: a closed branch, an isola,
     goes round for ever) and ``end`` (the end of the span).  ``grazing_sliding`` is
     named from the sequences alone (a stick segment more and no reversal less): it is
@@ -194,8 +196,8 @@ class _Context:
 
     def point(self, lam, segs, w, res=0.0):
         motion = self.motion(lam)
-        mult, trivial, stable, _, _ = _orbit.linearised(motion, segs, w, self.t_a,
-                                                        self.forcing(lam), self.rtol)
+        mult, trivial, stable, _, continuum = _orbit.linearised(
+            motion, segs, w, self.t_a, self.forcing(lam), self.rtol)
         low, high = extrema(motion, segs, w, self.t_a, self.rtol)
         others = np.delete(mult, trivial) if trivial >= 0 else mult
         n2 = 2 * self.mech.n
@@ -203,7 +205,7 @@ class _Context:
                 "amplitude": (high - low) / 2,
                 "stable": stable, "mult": others,
                 "floquet_max": float(np.abs(others).max()) if others.size else 0.0,
-                "residual": res}
+                "residual": res, "continuum": continuum}
 
     def admissible(self, lam, segs, w) -> bool:
         """Whether every segment's phase holds all along it (its conditions, such as a
@@ -536,8 +538,12 @@ class _Context:
             return mark, None, direction
         if not self.admissible(past, new_segs, w_next):
             return mark, None, direction        # the motion beyond settles elsewhere
+        point = self.point(past, new_segs, w_next, res)
+        if point["continuum"]:      # no branch of one orbit beyond: it ends here
+            mark["kind"] = "continuum"
+            return mark, None, direction
         self.w_scale, self.ds, self.arc_jac = None, None, None     # a new sequence
-        return mark, self.point(past, new_segs, w_next, res), direction
+        return mark, point, direction
 
     def beyond(self, lam, segs, w):
         """The kind of the sequence change and the new segments, from the motion just
