@@ -355,6 +355,45 @@ def test_continuation_of_the_belt_orbit_in_the_belt_speed():
     assert np.allclose(b.amplitude_x.values, np.hypot(0.5, v), rtol=0, atol=1e-9)
 
 
+@pytest.mark.parametrize("old, new, kind", [
+    # a reversal gains a stick at each end of a symmetric swing (a forced orbit, whose
+    # period ends inside a slip: merged)
+    ([("+", 2.0), ("-", 3.1), ("+", 1.1)], [("+", 3.1), ("s", 1e-6), ("-", 3.1), ("s", 1e-6)],
+     "crossing_sliding"),
+    ([("s", 5.0), ("-", 3.9)], [("s", 5.0), ("-", 2.0), ("s", 1e-4), ("-", 1.9)],
+     "grazing_sliding"),
+    ([("s", 5.0), ("-", 3.9)], [("s", 5.0), ("-", 1e-5), ("s", 2e-5), ("-", 3.9)],
+     "adding_sliding"),
+    ([("s", 5.0), ("-", 3.9)], [("s", 5.0), ("+", 1e-5), ("-", 3.9)], "switching_sliding"),
+    # the same sequence with one segment more but none short, or another order
+    ([("s", 5.0), ("-", 3.9)], [("s", 5.0), ("-", 2.0), ("s", 1.0), ("-", 1.9)],
+     "sequence_change"),
+    ([("s", 5.0), ("-", 3.9)], [("+", 5.0), ("s", 1e-5), ("-", 3.9)], "sequence_change"),
+])
+def test_sliding_bifurcations_are_named_from_the_short_segments(old, new, kind):
+    """The names of sliding bifurcations from the sequences and their durations, either
+    way round (a segment born, or shrinking into the orbit)."""
+    from phasemap.motion.periodic.orbit import Segment
+    from phasemap.motion.periodic.sliding import kind as name
+
+    modes = {"+": hybrid.SLIP_POS, "-": hybrid.SLIP_NEG, "s": hybrid.STICK}
+
+    def segs(runs):
+        return ([Segment((modes[m],), np.ones(1), 1, -1) for m, _ in runs],
+                np.array([d for _, d in runs]))
+    assert name(*segs(old), *segs(new)) == kind
+    assert name(*segs(new), *segs(old)) == kind
+    # with a second contact closed all the time, the same; with it changing too, not named
+    two = [((hybrid.STICK, modes[m]), d) for m, d in new]
+    segs2 = ([Segment(m, np.ones(2), 1, -1) for m, _ in two], np.array([d for _, d in two]))
+    old2 = ([Segment((hybrid.STICK, modes[m]), np.ones(2), 1, -1) for m, _ in old],
+            np.array([d for _, d in old]))
+    assert name(*old2, *segs2) == kind
+    mixed = ([Segment((hybrid.SLIP_POS if i == 0 else hybrid.STICK, modes[m]), np.ones(2), 1,
+                      -1) for i, (m, _) in enumerate(new)], segs2[1])
+    assert name(*old2, *mixed) == "sequence_change"
+
+
 def test_continuation_checks_its_arguments():
     o = phasemap.periodic_orbit("belt", start={"x": 0.0, "xdot": 0.2})
     with pytest.raises(ValueError, match="unknown parameter 'w'"):

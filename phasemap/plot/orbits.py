@@ -20,6 +20,7 @@ _MODES = {"stick": (_OI["vermillion"], 2.6), "slip_pos": (_OI["blue"], 1.2),
           "open": (_OI["orange"], 1.2)}
 #: Special points of a branch: marker and colour by kind.
 _KINDS = {"crossing_sliding": ("o", _OI["vermillion"]), "grazing_sliding": ("D", _OI["blue"]),
+          "adding_sliding": ("v", _OI["blue"]), "switching_sliding": ("<", _OI["vermillion"]),
           "sequence_change": ("^", _OI["reddish_purple"]),
           "period_doubling": ("s", _OI["orange"]), "torus": ("*", _OI["orange"]),
           "fold": ("P", _OI["black"]), "continuum": ("h", _OI["bluish_green"]),

@@ -10,9 +10,10 @@ import numpy as np
 
 from phasemap.core import args as _args
 from phasemap.core import events as ev
-from phasemap.motion.hybrid import MODE_NAMES, STICK, Motion, Options
+from phasemap.motion.hybrid import MODE_NAMES, Motion, Options
 from phasemap.motion.periodic import floquet as fq
 from phasemap.motion.periodic import orbit as _orbit
+from phasemap.motion.periodic import sliding
 from phasemap.motion.periodic.orbit import Segment
 from phasemap.motion.periodic.sampling import dips, extrema
 
@@ -51,18 +52,21 @@ def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
     Newton's method stops converging, even in steps 4^7 times shorter, the branch ends
     there, marked ``no_convergence``.
 
-    Kinds of special points: ``crossing_sliding`` (a stick segment is born at, or shrinks
-    into, a reversal of the slip: the crossing point reaches the edge of the sticking
-    region), ``grazing_sliding`` (a stick segment appears where the orbit had no event),
-    ``sequence_change`` (another change of the mode sequence, among them a stuck
-    contact's friction limit reached tangentially inside its stick segment),
-    ``period_doubling``, ``torus``, ``fold`` (the parameter turns), ``continuum``
-    (beyond a change of the sequence the orbits form a continuum, a family through the
-    nearby states: the branch ends there), ``no_convergence``,
+    Kinds of special points: the sliding bifurcations, where segments of zero length
+    appear in the orbit or shrink into it (:mod:`phasemap.motion.periodic.sliding`
+    names them from the two sequences and their segments' durations):
+    ``crossing_sliding`` (a stick between opposite slips: a reversal reaches the edge of
+    the sticking region), ``grazing_sliding`` (a stick inside a slip), ``adding_sliding``
+    (a slip and a stick after a stick), ``switching_sliding`` (a slip the other way
+    between a stick and a slip); ``sequence_change`` (another change of the mode
+    sequence, among them a stuck contact's friction limit reached tangentially inside
+    its stick segment), ``period_doubling``, ``torus``, ``fold`` (the parameter turns),
+    ``continuum`` (beyond a change of the sequence the orbits form a continuum, a family
+    through the nearby states: the branch ends there), ``no_convergence``,
     ``max_points`` (the branch has ``max_points`` points: a closed branch, an isola,
-    goes round for ever) and ``end`` (the end of the span).  ``grazing_sliding`` is
-    named from the sequences alone (a stick segment more and no reversal less): it is
-    not checked further.
+    goes round for ever) and ``end`` (the end of the span).  Crossing-sliding is checked
+    against an independent computation (Den Hartog's stops); the other three are named
+    by the same rule but no test meets them in a physical system yet.
 
     Parameters
     ----------
@@ -528,10 +532,12 @@ class _Context:
         mark = self.mark(a, segs, wa, "sequence_change", 0.0)     # at the old phase
         if not min(self.lo, self.hi) <= past <= max(self.lo, self.hi):
             return mark, None, direction        # the change is at the span's end
-        kind, new_segs, w_next = self.beyond(past, segs, wa if wb is None else wb)
-        mark["kind"] = kind
+        new_segs, w_next = self.beyond(past, segs, wa if wb is None else wb)
         if new_segs is None:
             return mark, None, direction
+        n2 = 2 * self.mech.n
+        mark["kind"] = sliding.kind(segs, wa[len(segs) * n2:], new_segs,
+                                    w_next[len(new_segs) * n2:])
         try:
             w_next, res = self.shoot(past, new_segs, w_next)
         except ValueError:
@@ -546,8 +552,9 @@ class _Context:
         return mark, point, direction
 
     def beyond(self, lam, segs, w):
-        """The kind of the sequence change and the new segments, from the motion just
-        beyond ``lam`` (it settles on the new orbit near the old one)."""
+        """The new segments and the first guess of their orbit, from the motion just
+        beyond ``lam`` (it settles on the new orbit near the old one); ``(None, None)``
+        where it settles on none."""
         n = self.mech.n
         p = self.params(lam)
         motion = self.motion(lam)
@@ -564,9 +571,9 @@ class _Context:
             new_segs, w_new = _orbit._segments(self.name, motion, rec, t_a, t_b, z0,
                                                forcing, sc)
         except ValueError:
-            return "sequence_change", None, None
+            return None, None
         self.t_a, self.jac = _orbit.phase_time(t_a, forcing), []
-        return _kind(segs, new_segs), new_segs, w_new
+        return new_segs, w_new
 
     def mark(self, lam, segs, w, kind, res, point=None):
         """A special point (of the orbit ``w``; its amplitude from ``point``, the same
@@ -626,21 +633,6 @@ def _same(seq, modes) -> bool:
     if seq is None:
         return False
     return _merged(seq, True) == _merged(modes, True)
-
-
-def _kind(old, new) -> str:
-    """The name of a change of the mode sequence from ``old`` to ``new`` segments."""
-    def sticks(segs):
-        return sum(any(m == STICK for m in s.modes) for s in segs)
-
-    def reversals(segs):
-        return sum(s.kind == ev.REVERSAL for s in segs)
-
-    if sticks(new) > sticks(old):
-        return "crossing_sliding" if reversals(old) > reversals(new) else "grazing_sliding"
-    if sticks(new) < sticks(old):
-        return "crossing_sliding" if reversals(new) > reversals(old) else "sequence_change"
-    return "sequence_change"
 
 
 def _unit(d, D):
