@@ -44,8 +44,10 @@ def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
     not, the mode sequence changes between the two steps: the parameter where it changes is located by
     bisection to ``locate`` (relative to the span), the point is named, the new sequence
     is read from the motion just beyond it, and the continuation goes on with it, without
-    the user's help (the motion beyond may settle on an orbit of another period: the
-    branch goes on along it).  Where a real Floquet multiplier passes -1 between two
+    the user's help: first from one period of the motion started on the old orbit (it
+    goes through the new sequence near the old orbit, stable or not), else from the
+    motion settled (which may be on an orbit of another period: the branch goes on along
+    it).  Where a real Floquet multiplier passes -1 between two
     points of one sequence, the period doubling is located (Brent's method on the
     multipliers along the branch) and is a point of the branch too; a complex pair
     through the unit circle is located the same way and marked ``torus``.  Where
@@ -532,18 +534,24 @@ class _Context:
         mark = self.mark(a, segs, wa, "sequence_change", 0.0)     # at the old phase
         if not min(self.lo, self.hi) <= past <= max(self.lo, self.hi):
             return mark, None, direction        # the change is at the span's end
-        new_segs, w_next = self.beyond(past, segs, wa if wb is None else wb)
-        if new_segs is None:
-            return mark, None, direction
-        n2 = 2 * self.mech.n
-        mark["kind"] = sliding.kind(segs, wa[len(segs) * n2:], new_segs,
-                                    w_next[len(new_segs) * n2:])
-        try:
-            w_next, res = self.shoot(past, new_segs, w_next)
-        except ValueError:
-            return mark, None, direction
-        if not self.admissible(past, new_segs, w_next):
-            return mark, None, direction        # the motion beyond settles elsewhere
+        t_a = self.t_a
+        for settle in (False, True):        # the orbit's own continuation, else settled
+            self.t_a = t_a
+            new_segs, w_next = self.beyond(past, segs, wa if wb is None else wb, settle)
+            if new_segs is None:
+                continue
+            n2 = 2 * self.mech.n
+            mark["kind"] = sliding.kind(segs, wa[len(segs) * n2:], new_segs,
+                                        w_next[len(new_segs) * n2:])
+            try:
+                w_next, res = self.shoot(past, new_segs, w_next)
+            except ValueError:
+                continue
+            if self.admissible(past, new_segs, w_next):
+                break
+        else:
+            self.t_a = t_a
+            return mark, None, direction        # the motion beyond settles on none
         point = self.point(past, new_segs, w_next, res)
         if point["continuum"]:      # no branch of one orbit beyond: it ends here
             mark["kind"] = "continuum"
@@ -551,10 +559,12 @@ class _Context:
         self.w_scale, self.ds, self.arc_jac = None, None, None     # a new sequence
         return mark, point, direction
 
-    def beyond(self, lam, segs, w):
+    def beyond(self, lam, segs, w, settle=False):
         """The new segments and the first guess of their orbit, from the motion just
-        beyond ``lam`` (it settles on the new orbit near the old one); ``(None, None)``
-        where it settles on none."""
+        beyond ``lam``, from the old orbit's start: run for about a period, it goes
+        through the new sequence near the old orbit, stable or not; with ``settle``, run
+        until it settles (on an orbit that may be another).  ``(None, None)`` where it
+        closes on none."""
         n = self.mech.n
         p = self.params(lam)
         motion = self.motion(lam)
@@ -564,10 +574,16 @@ class _Context:
         scale_t = math.sqrt(sc[3] / sc[2])
         T = float(np.sum(w[len(segs) * 2 * n:]))
         try:
-            rec, (t_a, t_b, z0) = _orbit._settled(
-                self.name, self.mech, p, z[:n], z[n:], self.t_a + 50 * T, self.rtol,
-                forcing, sc, scale_t) if forcing is None else _settle_forced(
-                self, lam, z, T, sc)
+            if not settle:
+                span = 2.2 * T if forcing is None else forcing * max(1, round(T / forcing))
+                rec = _orbit._run(self.mech, p, z[:n], z[n:], self.t_a, self.t_a + span,
+                                  self.rtol, forcing)
+                t_a, t_b, z0 = _orbit._cycle(self.name, rec, forcing, sc)
+            else:
+                rec, (t_a, t_b, z0) = _orbit._settled(
+                    self.name, self.mech, p, z[:n], z[n:], self.t_a + 50 * T, self.rtol,
+                    forcing, sc, scale_t) if forcing is None else _settle_forced(
+                    self, lam, z, T, sc)
             new_segs, w_new = _orbit._segments(self.name, motion, rec, t_a, t_b, z0,
                                                forcing, sc)
         except ValueError:
