@@ -10,7 +10,7 @@ import pytest
 
 import phasemap
 from phasemap.core import events as ev
-from phasemap.declare import Parameter, PointContact
+from phasemap.declare import SLIP_SPEED, Parameter, PointContact
 from phasemap.declare.full import mechanics
 from phasemap.motion import hybrid
 from phasemap.systems.oscillators import DEN_HARTOG
@@ -175,6 +175,59 @@ def test_a_limit_cycle_without_events_is_solved_on_a_section():
     b = phasemap.continue_orbit(o, "mu", (1.0, 1.1), steps=1, model=S)
     assert b.point_kind.values.tolist() == ["end"]
     assert abs(float(b.period[-1]) - _van_der_pol_reference(1.1)[0]) < 1e-8
+
+
+def _unstable_stribeck_cycle(c, v=0.5, delta=3.0):
+    """Half the range of x on the unstable slip cycle of a block on
+    a spring (m = k = g = 1), damped by c, on a belt at v with the slip coefficient
+    1 / (1 + delta (v - x')), from scipy alone: the fixed point of the return map from
+    one maximum of x to the next, by Brent's method (an unstable cycle is as good a root
+    as any), its lowest point refined on the dense output."""
+    from scipy.integrate import solve_ivp
+    from scipy.optimize import brentq, minimize_scalar
+
+    def f(t, y):
+        return [y[1], -y[0] - c * y[1] + 1 / (1 + delta * (v - y[1]))]
+
+    def top(t, y):
+        return y[1]
+    top.direction = -1
+
+    def ret(x0):
+        first = solve_ivp(f, (0, 1.0), [x0, 0.0], rtol=1e-12, atol=1e-13).y[:, -1]
+        return solve_ivp(f, (1.0, 20.0), first, events=top, rtol=1e-12, atol=1e-13,
+                         dense_output=True)
+    xeq = 1 / (1 + delta * v)
+    x0 = brentq(lambda x0: ret(x0).y_events[0][0][0] - x0, xeq + 0.5, xeq + 0.56,
+                xtol=1e-14)
+    sol = ret(x0)
+    ts = np.linspace(1.0, sol.t_events[0][0], 4001)
+    k = int(np.argmin(sol.sol(ts)[0]))
+    low = minimize_scalar(lambda t: sol.sol(t)[0], bounds=(ts[k - 1], ts[k + 1]),
+                          method="bounded", options={"xatol": 1e-12}).fun
+    return (x0 - low) / 2
+
+
+def test_an_unstable_orbit_without_events_is_followed_on_its_own_crossing():
+    """A block on a belt with a falling (Stribeck) friction law and viscous damping c:
+    the steady slip is stable, and an unstable slip cycle (a subcritical Hopf) surrounds
+    it.  Followed in c from 0.5 to 0.6 it grows (its multiplier above 1); its amplitude at
+    0.6 agrees with scipy's to 1e-8.  The section's equation holds where the orbit
+    crosses it either way: the shooting once converged on another orbit's crossing the
+    other way, which the continuation took for a grazing-sliding at c = 0.55."""
+    delta = Parameter("delta", "s m-1", "decay of the slip coefficient with the speed",
+                      default=3.0, lower=0.0)
+    v = Parameter("v", "m s-1", "speed of the belt", default=0.5)
+    S = _block("damped_stribeck", PointContact(
+        "belt", point=(x, y), friction=fs / (1 + delta * SLIP_SPEED), static_friction=fs,
+        surface_velocity=v), parameters=(v, fs, delta, c), dissipation=c * x.rate ** 2 / 2)
+    o = phasemap.periodic_orbit(S, start={"x": 0.4 + 0.196, "xdot": 0.0, "c": 0.5},
+                                period=2 * math.pi)
+    assert int(o.stable) == 0 and np.max(np.abs(o.floquet.values)) > 1.1
+    b = phasemap.continue_orbit(o, "c", (0.5, 0.6), steps=2, model=S)
+    assert b.point_kind.values.tolist() == ["end"] and np.all(b.n_segments.values == 1)
+    assert np.all(b.stable.values == 0)
+    assert abs(float(b.amplitude_x[-1]) - _unstable_stribeck_cycle(0.6)) < 1e-8
 
 
 def test_a_centre_of_slip_orbits_is_reported_as_a_continuum():

@@ -16,6 +16,7 @@ from phasemap.motion.periodic import orbit as _orbit
 from phasemap.motion.periodic import sliding
 from phasemap.motion.periodic.orbit import Segment
 from phasemap.motion.periodic.sampling import dips, extrema
+from phasemap.motion.periodic.section import Section, unit
 
 #: The longest step along a branch, in the arclength's metric: two nominal steps (a
 #: nominal step, a change of the parameter by (hi - lo) / steps with the orbit's change
@@ -692,7 +693,7 @@ def _from_dataset(mech, orbit, p0, rtol):
         section = None
         if index == _orbit.SECTION_END:     # through the segment's start, normal to the flow
             field = fq.field(motion, np.append(zs[j], t_j), modes, rho)[:-1]
-            section = _orbit.Section(zs[j].copy(), field / float(np.linalg.norm(field)))
+            section = Section(zs[j].copy(), unit(field))
         segs.append(Segment(modes, rho, None if index < 0 else index,
                             int(orbit.segment_end[j]), section))
     w = np.concatenate(zs + [orbit.segment_duration.values.astype(float)])

@@ -16,6 +16,7 @@ from phasemap.core import events as ev
 from phasemap.motion.hybrid import MODE_NAMES, OPEN, Motion, Options, Record, dataset
 from phasemap.motion.hybrid.results import start_values
 from phasemap.motion.periodic import floquet as fq
+from phasemap.motion.periodic.section import Section, returns, section_cycle, unit
 
 #: Events across which the state jumps by an impulse: not in the orbits solved here yet.
 IMPULSIVE = (ev.IMPACT, ev.IWC, ev.ZENO)
@@ -30,14 +31,6 @@ SECTION_END, PERIOD_END = -2, -1
 #: How near 1 (absolutely) a nontrivial Floquet multiplier (an autonomous orbit's, of its
 #: Poincare map) must be for the orbit to count as one of a continuum.
 CONTINUUM = 1e-6
-
-
-class Section(NamedTuple):
-    """The hyperplane through ``point`` normal to the unit vector ``normal`` (in the state
-    ``(q, u)``), crossed in the direction of ``normal``."""
-
-    point: np.ndarray
-    normal: np.ndarray
 
 
 @dataclass
@@ -271,7 +264,7 @@ def _cycle(name, rec: Record, forcing, sc):
                          "orbit")
     kinds = rec.ev_kind
     if all(k in (ev.START, ev.HORIZON) for k in kinds):
-        return _section_cycle(name, rec, scale)
+        return section_cycle(name, rec, scale, SETTLED)
     last = len(kinds) - 1
     while last > 0 and kinds[last] in (ev.HORIZON, ev.START):
         last -= 1
@@ -286,57 +279,6 @@ def _cycle(name, rec: Record, forcing, sc):
                      "nearer the orbit")
 
 
-def _section_cycle(name, rec: Record, scale):
-    """``(t_a, t_b, state)`` of a motion that meets no event: its last return to the
-    hyperplane through its end (normal to its direction there) that comes back to the
-    end's state, the end, and the end's state (the motion's own, not interpolated: an
-    autonomous orbit may start anywhere on it, and one of a continuum is the orbit
-    through that state).  A return counts where it misses the end's state by at most
-    :data:`SETTLED` of the state's scale and of the cycle's own extent, so that a motion
-    spiralling into an equilibrium, whose returns are all near it, is no cycle."""
-    ys, ts = np.array(rec.y), np.array(rec.t)
-    if len(ys) >= 5 and np.any(ys[-1] != ys[-2]):
-        ref, normal = ys[-1], _unit(ys[-1] - ys[-2])
-        for t, z in reversed(_returns(rec, ref, normal)[:-1]):
-            cycle = ys[ts >= t]
-            extent = float(np.max(cycle.max(axis=0) - cycle.min(axis=0)))
-            if np.max(np.abs(z - ref)) <= SETTLED * min(scale, extent):
-                return t, float(ts[-1]), ref
-    raise ValueError(f"{name}: the motion meets no event and does not come back to a state "
-                     "it was in within settle= (it may be approaching a rest or an "
-                     "equilibrium): give a longer settle or a start nearer an orbit")
-
-
-def _returns(rec: Record, ref, normal):
-    """The motion's crossings of the hyperplane through ``ref`` normal to ``normal``, in
-    the direction of ``normal``: ``(t, state)`` each, on the cubic through the four saved
-    steps around the crossing (the time its root between the two that bracket it; about
-    1e-5 of the state's scale at the integrator's steps, against 1e-4 by straight
-    lines, which took a cycle of twice the period for the period)."""
-    from scipy.optimize import brentq
-
-    ts, ys = np.array(rec.t), np.array(rec.y)
-    s = (ys - ref) @ normal
-    out = []
-    for i in np.flatnonzero((s[:-1] < 0.0) & (s[1:] >= 0.0)) + 1:
-        j = min(max(int(i) - 2, 0), len(ts) - 4)
-        nodes = ts[j:j + 4]
-
-        def at(t, vals, nodes=nodes):
-            return sum(vals[a] * np.prod([(t - nodes[b]) / (nodes[a] - nodes[b])
-                                          for b in range(4) if b != a]) for a in range(4))
-        if s[i] == 0.0:
-            t = float(ts[i])
-        else:
-            t = brentq(lambda t: at(t, s[j:j + 4]), ts[i - 1], ts[i], xtol=1e-15)
-        out.append((float(t), np.asarray(at(t, ys[j:j + 4]), dtype=float)))
-    return out
-
-
-def _unit(d):
-    return np.asarray(d, dtype=float) / float(np.linalg.norm(d))
-
-
 def _guessed_cycle(name, rec: Record, period):
     """``(t_a, t_b, state at t_a)``: from the first event of an autonomous motion to the
     event of the same kind nearest one ``period`` later (a motion that meets no event:
@@ -345,7 +287,7 @@ def _guessed_cycle(name, rec: Record, period):
     first = next((i for i, k in enumerate(kinds) if k not in (ev.START, ev.HORIZON)), None)
     if first is None:
         ys = np.array(rec.y)
-        back = [(t, z) for t, z in _returns(rec, ys[0], _unit(ys[1] - ys[0]))
+        back = [(t, z) for t, z in returns(rec, ys[0], unit(ys[1] - ys[0]))
                 if t > rec.t[0] + 0.5 * period] if len(ys) >= 5 and np.any(
                     ys[1] != ys[0]) else []
         if not back:
@@ -391,7 +333,7 @@ def _segments(name, motion, rec: Record, t_a, t_b, z0, forcing, sc):
         field = fq.field(motion, np.append(z0, t_a), modes0, rho)[:-1]
         if not np.max(np.abs(field)) > 1e-12 * max(sc[0], sc[3]):
             raise ValueError(f"{name}: the motion is at an equilibrium, not on an orbit")
-        section = Section(np.array(z0, dtype=float), _unit(field))
+        section = Section(np.array(z0, dtype=float), unit(field))
         return ([Segment(tuple(int(m) for m in modes0), rho, None, SECTION_END, section)],
                 np.append(np.asarray(z0, dtype=float), t_b - t_a))
     segs, zs, taus = [], [], []
@@ -559,7 +501,23 @@ def _shoot(name, motion, segs, w, t_a, forcing, rtol, tol, sc, max_iter, cache=N
         raise ValueError(f"{name}: the shooting did not converge (residual {res:.2g} > tol "
                          f"{tol:g}): give a start nearer the orbit, a longer settle, or a "
                          "looser tol")
+    _crossed(name, motion, segs, w, t_a)
     return w, res
+
+
+def _crossed(name, motion, segs, w, t_a) -> None:
+    """A ValueError where a segment ended by a section starts on it crossing the wrong
+    way: the section's equation holds at both crossings of a hyperplane by a closed
+    orbit, and only the one in the normal's direction is the return it stands for (the
+    other is a solution of another orbit, which Newton's method may reach from afar)."""
+    n2 = 2 * motion.n
+    zs, taus = _unpack(w, len(segs), n2)
+    starts = t_a + np.concatenate([[0.0], np.cumsum(taus)[:-1]])
+    for seg, z, t in zip(segs, zs, starts):
+        if seg.section is not None and not float(seg.section.normal @ fq.field(
+                motion, np.append(z, t), seg.modes, seg.rho)[:-1]) > 0.0:
+            raise ValueError(f"{name}: the shooting converged on an orbit that crosses its "
+                             "Poincare section the other way: give a start nearer the orbit")
 
 
 def _step(Jac, r, free):
