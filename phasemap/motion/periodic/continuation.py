@@ -11,12 +11,10 @@ import numpy as np
 from phasemap.core import args as _args
 from phasemap.core import events as ev
 from phasemap.motion.hybrid import MODE_NAMES, Motion, Options
-from phasemap.motion.periodic import floquet as fq
 from phasemap.motion.periodic import orbit as _orbit
 from phasemap.motion.periodic import sliding
 from phasemap.motion.periodic.orbit import Segment
 from phasemap.motion.periodic.sampling import dips, extrema
-from phasemap.motion.periodic.section import Section, unit
 
 #: The longest step along a branch, in the arclength's metric: two nominal steps (a
 #: nominal step, a change of the parameter by (hi - lo) / steps with the orbit's change
@@ -535,13 +533,12 @@ class _Context:
         mark = self.mark(a, segs, wa, "sequence_change", 0.0)     # at the old phase
         if not min(self.lo, self.hi) <= past <= max(self.lo, self.hi):
             return mark, None, direction        # the change is at the span's end
-        t_a = self.t_a
+        t_a, n2 = self.t_a, 2 * self.mech.n
         for settle in (False, True):        # the orbit's own continuation, else settled
             self.t_a = t_a
             new_segs, w_next = self.beyond(past, segs, wa if wb is None else wb, settle)
             if new_segs is None:
                 continue
-            n2 = 2 * self.mech.n
             mark["kind"] = sliding.kind(segs, wa[len(segs) * n2:], new_segs,
                                         w_next[len(new_segs) * n2:])
             try:
@@ -636,20 +633,14 @@ def _sequence(ctx, lam, segs, w):
     return seq
 
 
-def _merged(seq, cyclic):
-    out = []
-    for m in seq:
-        if not out or out[-1] != tuple(m):
-            out.append(tuple(m))
-    if cyclic and len(out) > 1 and out[0] == out[-1]:
-        out.pop()
-    return out
-
-
 def _same(seq, modes) -> bool:
+    """Whether the mode sequences ``seq`` and ``modes`` are the same, cyclically merged."""
     if seq is None:
         return False
-    return _merged(seq, True) == _merged(modes, True)
+
+    def runs(x):
+        return [m for m, _ in sliding.merged([(tuple(m), 0.0) for m in x])]
+    return runs(seq) == runs(modes)
 
 
 def _unit(d, D):
@@ -691,9 +682,8 @@ def _from_dataset(mech, orbit, p0, rtol):
         t_j = float(orbit.segment_start[j])
         rho = _orbit._rho(motion, zs[j], modes, t_j, sc)
         section = None
-        if index == _orbit.SECTION_END:     # through the segment's start, normal to the flow
-            field = fq.field(motion, np.append(zs[j], t_j), modes, rho)[:-1]
-            section = Section(zs[j].copy(), unit(field))
+        if index == _orbit.SECTION_END:
+            section = _orbit.section_at(motion, zs[j], t_j, modes, rho, sc)
         segs.append(Segment(modes, rho, None if index < 0 else index,
                             int(orbit.segment_end[j]), section))
     w = np.concatenate(zs + [orbit.segment_duration.values.astype(float)])

@@ -330,10 +330,9 @@ def _segments(name, motion, rec: Record, t_a, t_b, z0, forcing, sc):
     ends_t = [rec.ev_t[i] for i in inside] + ([t_b] if forcing is not None else [])
     if forcing is None and not inside:      # a smooth orbit: ended by a Poincare section
         rho = _rho(motion, z0, modes0, t_a, sc)
-        field = fq.field(motion, np.append(z0, t_a), modes0, rho)[:-1]
-        if not np.max(np.abs(field)) > 1e-12 * max(sc[0], sc[3]):
+        section = section_at(motion, z0, t_a, modes0, rho, sc)
+        if section is None:
             raise ValueError(f"{name}: the motion is at an equilibrium, not on an orbit")
-        section = Section(np.array(z0, dtype=float), unit(field))
         return ([Segment(tuple(int(m) for m in modes0), rho, None, SECTION_END, section)],
                 np.append(np.asarray(z0, dtype=float), t_b - t_a))
     segs, zs, taus = [], [], []
@@ -357,6 +356,16 @@ def _segments(name, motion, rec: Record, t_a, t_b, z0, forcing, sc):
 #: Which of a contact's two event functions (Motion.watch: 2c its gap or N, 2c + 1 its
 #: slip velocity or friction slack) each kind of event is.
 _WHICH = {ev.LIFTOFF: 0, ev.RECONTACT: 0, ev.STICK: 1, ev.SLIP: 1, ev.REVERSAL: 1}
+
+
+def section_at(motion, z, t, modes, rho, sc) -> Section | None:
+    """The Poincare section of an orbit without events that starts at ``z`` (time ``t``,
+    its phase ``modes``): through ``z``, normal to the flow there; None at an equilibrium
+    (a flow below 1e-12 of the state's scale)."""
+    field = fq.field(motion, np.append(z, t), modes, rho)[:-1]
+    if not np.max(np.abs(field)) > 1e-12 * max(sc[0], sc[3]):
+        return None
+    return Section(np.array(z, dtype=float), unit(field))
 
 
 def _event_index(motion, rec, i, modes, rho, sc, t):
@@ -501,18 +510,17 @@ def _shoot(name, motion, segs, w, t_a, forcing, rtol, tol, sc, max_iter, cache=N
         raise ValueError(f"{name}: the shooting did not converge (residual {res:.2g} > tol "
                          f"{tol:g}): give a start nearer the orbit, a longer settle, or a "
                          "looser tol")
-    _crossed(name, motion, segs, w, t_a)
+    _crossed(name, motion, segs, w, starts)
     return w, res
 
 
-def _crossed(name, motion, segs, w, t_a) -> None:
+def _crossed(name, motion, segs, w, starts) -> None:
     """A ValueError where a segment ended by a section starts on it crossing the wrong
     way: the section's equation holds at both crossings of a hyperplane by a closed
     orbit, and only the one in the normal's direction is the return it stands for (the
-    other is a solution of another orbit, which Newton's method may reach from afar)."""
-    n2 = 2 * motion.n
-    zs, taus = _unpack(w, len(segs), n2)
-    starts = t_a + np.concatenate([[0.0], np.cumsum(taus)[:-1]])
+    other is a solution of another orbit, which Newton's method may reach from afar).
+    ``starts``: the segments' start times (:func:`_ends`')."""
+    zs, _ = _unpack(w, len(segs), 2 * motion.n)
     for seg, z, t in zip(segs, zs, starts):
         if seg.section is not None and not float(seg.section.normal @ fq.field(
                 motion, np.append(z, t), seg.modes, seg.rho)[:-1]) > 0.0:

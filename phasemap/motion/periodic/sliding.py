@@ -39,20 +39,20 @@ def kind(old, old_tau, new, new_tau) -> str:
     """The name of the change from the segments ``old`` (durations ``old_tau``) to
     ``new`` (``new_tau``): one of the module's kinds, or ``sequence_change``."""
     a, b = _runs(old, old_tau), _runs(new, new_tau)
-    changing = {c for runs in (a, b) for m, _ in runs for c in range(len(m))
-                if len({r[0][c] for r in runs}) > 1}
+    changing = {c for runs in (a, b) for c in range(len(runs[0][0]))
+                if len({m[c] for m, _ in runs}) > 1}
     if len(a) == len(b) or len(changing) != 1:
         return "sequence_change"
     c = changing.pop()
     more, fewer = (b, a) if len(b) > len(a) else (a, b)
-    more = _merged([(m[c], d) for m, d in more])
-    fewer = _merged([(m[c], d) for m, d in fewer])
+    more = merged([(m[c], d) for m, d in more])
+    fewer = merged([(m[c], d) for m, d in fewer])
     if len(more) <= len(fewer):
         return "sequence_change"
     period = sum(d for _, d in more)
     floor = min(d for _, d in more)
     short = [d < math.sqrt(max(floor, 0.0) * period) for _, d in more]
-    kept = _merged([r for r, s in zip(more, short) if not s])
+    kept = merged([r for r, s in zip(more, short) if not s])
     if not any(short) or all(short) or not _cyclic_equal([m for m, _ in kept],
                                                           [m for m, _ in fewer]):
         return "sequence_change"
@@ -63,10 +63,12 @@ def kind(old, old_tau, new, new_tau) -> str:
 def _runs(segs, taus):
     """The segments' contact modes and durations, neighbours of the same modes merged
     (cyclically: a forced orbit's period may end inside a phase)."""
-    return _merged([(tuple(s.modes), float(t)) for s, t in zip(segs, np.asarray(taus))])
+    return merged([(tuple(s.modes), float(t)) for s, t in zip(segs, np.asarray(taus))])
 
 
-def _merged(runs):
+def merged(runs):
+    """``(modes, duration)`` runs with neighbours of the same modes merged, cyclically
+    (the last into the first), their durations summed."""
     out = []
     for m, d in runs:
         if out and out[-1][0] == m:
