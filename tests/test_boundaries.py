@@ -432,7 +432,7 @@ def test_full_buffers_are_grown_and_the_trace_is_the_same(monkeypatch):
     sizes = tracing._Buffers.__init__.__defaults__
     monkeypatch.setattr(tracing._Buffers.__init__, "__defaults__", (16, 1))
     got = tracing.trace(sl, "n_solutions", 1e-10)
-    assert got.buf.vf.shape[0] > 16 and want.buf.vf.shape[0] == sizes[0]
+    assert got.buf.verts.shape[0] > 16 and want.buf.verts.shape[0] == sizes[0]
     for field in ("pv", "pp", "pieces", "points_f", "points_i", "classes"):
         assert np.array_equal(getattr(got, field), getattr(want, field)), field
 

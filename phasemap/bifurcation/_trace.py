@@ -22,31 +22,35 @@ vertex are fractions of the slice.  ``geo = (x_lo, x_span, y_lo, y_span)``
 and the input slots ``ix``, ``iy`` place a point of the square in the input
 vector ``v`` of the model (the fixed values already in it).
 
-Vertex buffers
---------------
-``vf[n] = (u, w, residual, error)`` and
-``vi[n] = (curve, kind, condition, other, left, right, owned)``: what a vertex
-is (:data:`REGULAR`, :data:`CROSSING`...), the condition it lies on, the other
-condition or axis that defines a special point, the layer's class on each
-side (-1 where a side is not sampled: at a crossing or an end), and whether
-the stretch is this condition's (0 where a condition that ranks first vanishes
-there too).
-``curves[c] = (condition, first, stop, closed)``; ``counts = (vertices,
-curves, overflow)``.
+Records
+-------
+The vertices are records (:data:`VERTEX`): ``u, w, residual, error`` and ``curve, kind,
+condition, other, left, right, owned``: what a vertex is (:data:`REGULAR`,
+:data:`CROSSING`...), the condition it lies on, the other condition or axis that
+defines a special point, the layer's class on each side (-1 where a side is not
+sampled: at a crossing or an end), and whether the stretch is this condition's (0
+where a condition that ranks first vanishes there too).  ``curves[c] = (condition,
+first, stop, closed)``; ``counts = (vertices, curves, overflow)``.
+
+A march (:func:`_march`) reads its slice from a :data:`Slice`, writes to a
+:data:`Store`, keeps the special points of a step as :data:`SPECIAL` records, and the
+state it goes back to as an :data:`At`.
 """
 
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
+import numba
 import numpy as np
 from numba import njit, types
-from numba.core import cgutils
 from numba.extending import intrinsic
 
 from phasemap.core.memo import Memo
 from phasemap.core import numerics as nx
-from phasemap.core.codegen import CELLS_SIGNATURE
+from phasemap.core import calls
+from phasemap.core.codegen import call_cells
 from phasemap.core.types import B1, B2, F1, F2, I1, I2, S3
 
 # vertex kinds
@@ -87,6 +91,35 @@ MAX_LENGTH = 1000.0
 
 # -- helpers without model globals ---------------------------------------------------
 
+#: A traced vertex (see the module's docstring).
+VERTEX = np.dtype([("u", np.float64), ("w", np.float64), ("residual", np.float64),
+                   ("error", np.float64), ("curve", np.int64), ("kind", np.int64),
+                   ("condition", np.int64), ("other", np.int64), ("left", np.int64),
+                   ("right", np.int64), ("owned", np.int64)])
+#: A special point found on one step of a march: where along the step (s), where, how
+#: well (residual, error), what (kind) and the other condition or axis that defines it.
+SPECIAL = np.dtype([("s", np.float64), ("u", np.float64), ("w", np.float64),
+                    ("residual", np.float64), ("error", np.float64), ("kind", np.int64),
+                    ("other", np.int64)])
+#: What a march reads, and its scratch: the model's functions (:data:`ADDRESSES`); each
+#: condition's group and rank, and which are traced; the input vector, the slice's input
+#: slots and placement; gradient and Hessian scratch; the layer's outputs and index; the
+#: conditions' tie scales; side-sample scratch; the tolerances in u and w.
+Slice = namedtuple("Slice", ["F", "grp", "active", "v", "ix", "iy", "geo", "g", "H", "out",
+                             "layer", "cs", "scr", "tol_u", "tol_w"])
+#: Where a trace writes: the vertices (:data:`VERTEX`), the counts (vertices, curves,
+#: overflow) and each condition's raster of traced cells.
+Store = namedtuple("Store", ["verts", "counts", "mark"])
+#: A march's state at a vertex, which it goes back to: the vertex and its tangent, the
+#: next step's length; the vertex's own step length, tie scale and gradient norm (for
+#: its side samples); the length travelled, the steps (-1 where the loop closed), the
+#: classes on its left and right, whether its stretch is this condition's, the steps
+#: taken in all (going back counts again), whether a loop is still looked for, and the
+#: number of vertices written.
+At = namedtuple("At", ["u", "w", "tu", "tw", "h", "hq", "us", "un", "travelled", "steps",
+                       "la", "ra", "owned", "done", "closing", "n"])
+
+
 @njit(cache=True, error_model="numpy")
 def _solve2(a, b, c, d, r0, r1):
     """The solution of [[a, b], [c, d]] z = (r0, r1); NaN when singular."""
@@ -97,17 +130,26 @@ def _solve2(a, b, c, d, r0, r1):
 
 
 @njit(cache=True, error_model="numpy")
-def _push(vf, vi, counts, u, w, res, err, curve, kind, cond, other, left, right, owned=1):
+def _push(verts, counts, u, w, res, err, curve, kind, cond, other, left, right, owned=1):
     """Append one vertex; set the overflow flag when the buffer is full."""
     n = counts[0]
-    if n >= vf.shape[0]:
+    if n >= verts.shape[0]:
         counts[2] = 1
         return
-    vf[n, 0], vf[n, 1], vf[n, 2], vf[n, 3] = u, w, res, err
-    vi[n, 0], vi[n, 1], vi[n, 2], vi[n, 3], vi[n, 4], vi[n, 5] = (curve, kind, cond, other,
-                                                                  left, right)
-    vi[n, 6] = owned
+    q = verts[n]
+    q.u, q.w, q.residual, q.error = u, w, res, err
+    q.curve, q.kind, q.condition, q.other = curve, kind, cond, other
+    q.left, q.right, q.owned = left, right, owned
     counts[0] = n + 1
+
+
+@njit(cache=True, error_model="numpy")
+def _swap(records, a, b):
+    """Swap records a and b of a record array."""
+    if a != b:
+        tmp = records[a:a + 1].copy()
+        records[a] = records[b]
+        records[b] = tmp[0]
 
 
 @njit(cache=True, error_model="numpy")
@@ -156,10 +198,12 @@ def _seen(mark, k, u, w):
 
 
 @njit(cache=True, error_model="numpy")
-def _note(spf, spi, n, s, u, w, kind, other, res, err):
-    """Record special point n of a step: where along it (s), where, what, how well."""
-    spf[n, 0], spf[n, 1], spf[n, 2], spf[n, 3], spf[n, 4] = s, u, w, res, err
-    spi[n, 0], spi[n, 1] = kind, other
+def _note(sp, n, s, u, w, kind, other, res, err):
+    """Record special point n of a step (:data:`SPECIAL`): where along it (s), where,
+    what, how well; the next n."""
+    p = sp[n]
+    p.s, p.u, p.w, p.residual, p.error = s, u, w, res, err
+    p.kind, p.other = kind, other
     return n + 1
 
 
@@ -671,119 +715,349 @@ def _jump(F, k, v, ix, iy, geo, g, H, u, w, tu, tw):
 
 
 @njit(cache=True, error_model="numpy")
-def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, scr,
-           su, sw, tu0, tw0, h0, closing, curve, vf, vi, counts, mark, tol_u, tol_w):
-    """Follow condition ``k`` from the curve point (su, sw) along (tu0, tw0).
+def _sides_of(sl, k, u, w, tu, tw, eps, cvp):
+    """:func:`_sides_with` in a march's :data:`Slice`."""
+    return _sides_with(sl.F, k, sl.grp, sl.active, sl.v, sl.g, sl.out, sl.layer, sl.ix, sl.iy,
+                       sl.geo, u, w, tu, tw, eps, cvp, sl.scr)
+
+
+@njit(cache=True, error_model="numpy")
+def _step_length(kappa):
+    """The step that keeps the chord within :data:`CHORD` and the turn within
+    :data:`ANGLE` at the curvature ``kappa``, at most :data:`H_MAX`."""
+    h = H_MAX
+    if kappa > 0.0:
+        h = min(h, math.sqrt(8.0 * CHORD / kappa), ANGLE / kappa)
+    return h
+
+
+@njit(cache=True, error_model="numpy")
+def _curvature(F, k, v, ix, iy, geo, g, H, u, w, tu, tw, n):
+    """The curvature of the zero set of condition k at (u, w), whose unit tangent is
+    (tu, tw) and gradient norm n."""
+    c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, u, w, g, H)
+    return abs(tu * tu * huu + 2.0 * tu * tw * huw + tw * tw * hww) / n
+
+
+@njit(cache=True, error_model="numpy")
+def _predict(sl, k, u, w, tu, tw, h, finish):
+    """A march's next vertex: the point h along the tangent (pu, pw), corrected onto the
+    curve (ok, qu, qw, residual), its tangent oriented along the march (qtu, qtw), its
+    gradient norm and tie scale; whether the curve leaves the slice within the step, and
+    a point beyond the edge where it does (xu, xw).
+
+    Where the curve turns back in an axis between two vertices inside the slice and that
+    fold lies beyond an edge, the curve leaves the slice there and comes back (a loop
+    that the edge cuts by less than a step).  With ``finish`` nothing is corrected.
+    """
+    F, v, ix, iy, geo, g = sl.F, sl.v, sl.ix, sl.iy, sl.geo, sl.g
+    pu = u + h * tu
+    pw = w + h * tw
+    ok, qu, qw, res, st, qs, qcu, qcw = False, pu, pw, np.inf, np.inf, 0.0, 0.0, 0.0
+    if not finish:
+        ok, qu, qw, res, st, qs, qcu, qcw = _correct(F, k, v, ix, iy, geo, g, pu, pw, tu, tw)
+    leaves = (ok and not _inside(qu, qw, 0.0)) or (not ok and not _inside(pu, pw, 0.0))
+    xu, xw = (qu, qw) if ok else (pu, pw)
+    qtu, qtw, qn, qs = _orient(qs, qcu, qcw, tu, tw)
+    if ok and not leaves and not finish and (tu * qtu < 0.0 or tw * qtw < 0.0):
+        for axis in range(2):
+            a0 = tu if axis == 0 else tw
+            a1 = qtu if axis == 0 else qtw
+            if a0 * a1 < 0.0:
+                okf, fu, fw, resf, errf = _fold_on_step(F, axis, k, v, ix, iy, geo, g, sl.H,
+                                                        u, w, qu, qw, a0, a1, sl.tol_u,
+                                                        sl.tol_w)
+                # beyond the edge by more than the tolerance (a fold on it, to the
+                # tolerance, is a loop that touches the edge)
+                if okf and not _inside(fu, fw, max(sl.tol_u, sl.tol_w)) \
+                        and math.hypot(fu - u, fw - w) <= 2.0 * h:
+                    leaves = True
+                    xu, xw = fu, fw
+    return ok, pu, pw, qu, qw, res, qtu, qtw, qn, qs, leaves, xu, xw
+
+
+@njit(cache=True, error_model="numpy")
+def _leave(sl, k, u, w, tu, tw, h, xu, xw):
+    """Where the curve, which leaves the slice within the step from (u, w) (xu, xw beyond
+    the edge), crosses the edge: (ok, u, w, residual, error), and whether the march ends
+    there.  From a point on an edge along a tangent into the slice (a region thinner
+    than the step, that the edge cuts), the step is shortened, not ended on that edge."""
+    inward = (u <= 1e-12 and tu > 0.0) or (u >= 1.0 - 1e-12 and tu < 0.0) \
+        or (w <= 1e-12 and tw > 0.0) or (w >= 1.0 - 1e-12 and tw < 0.0)
+    if inward and h > H_MIN:
+        return False, u, w, np.inf, np.inf, False
+    ok, eu, ew, res, err = _exit(sl.F, k, sl.v, sl.ix, sl.iy, sl.geo, sl.g, u, w, xu, xw,
+                                 sl.tol_u, sl.tol_w)
+    ok = ok and math.hypot(eu - u, ew - w) <= 2.0 * h
+    return ok, eu, ew, res, err, ok or h <= H_MIN
+
+
+@njit(cache=True, error_model="numpy")
+def _confirm(sl, st, k, u, w, tu, tw, eps, cv, la, ra):
+    """Sample the sides of the last vertex appended, (u, w), not sampled yet: True where
+    they are the classes (la, ra) of the last sampled vertex (written to the vertex),
+    False where the classes changed in between (the march goes back)."""
+    lc, rc = _sides_of(sl, k, u, w, tu, tw, eps, cv)
+    if lc == la and rc == ra and lc >= 0 and rc >= 0:
+        q = st.counts[0] - 1
+        st.verts[q].left = lc
+        st.verts[q].right = rc
+        return True
+    return False
+
+
+@njit(cache=True, error_model="numpy")
+def _step_over(sl, st, k, curve, u, w, tu, tw, la, ra, cv0):
+    """Past a singular point near (u, w), where two branches of the zero set cross
+    (:func:`_jump`): the crossing and the first vertex beyond it are appended, and cv0
+    is left at that vertex.  Returns (ok, u, w, tu, tw, tie scale, gradient norm, left,
+    right, owned) of that vertex; where no branch goes on, a stall is appended at
+    (u, w) and ok is False."""
+    F, v, ix, iy, geo, g = sl.F, sl.v, sl.ix, sl.iy, sl.geo, sl.g
+    ok, pu, pw, rj, qu, qw = _jump(F, k, v, ix, iy, geo, g, sl.H, u, w, tu, tw)
+    if not ok:
+        _push(st.verts, st.counts, u, w, 0.0, 0.0, curve, STALL, k, -1, la, ra)
+        return False, u, w, tu, tw, 0.0, 0.0, la, ra, -1
+    _mark(st.mark, k, u, w, qu, qw)
+    _push(st.verts, st.counts, pu, pw, rj, 0.0, curve, CROSSING, k, k, -1, -1)
+    qtu, qtw, qn, qs = _tangent(F, k, v, ix, iy, geo, g, qu, qw, tu, tw)
+    lb, rb = _sides(F, k, sl.grp, sl.active, v, g, sl.out, sl.layer, ix, iy, geo, qu, qw,
+                    qtu, qtw, _side_eps(qs, qn, 1e-4), sl.scr)
+    c, s, cu, cw = _grad(F, k, v, ix, iy, geo, qu, qw, g)
+    _values(F, v, cv0, sl.cs)
+    owned = _owned(k, sl.grp, sl.active, cv0, sl.cs, st.mark, u, w, qu, qw)
+    _push(st.verts, st.counts, qu, qw, abs(c) / s, 0.0, curve, REGULAR, k, -1, lb, rb, owned)
+    v[ix] = geo[0] + qu * geo[1]
+    v[iy] = geo[2] + qw * geo[3]
+    _values(F, v, cv0, sl.cs)
+    return True, qu, qw, qtu, qtw, qs, qn, lb, rb, owned
+
+
+@njit(cache=True, error_model="numpy")
+def _closes(su, sw, tu0, tw0, u, w, qu, qw, h):
+    """The step from (u, w) to (qu, qw) passes the loop's start (su, sw) in the start's
+    direction (tu0, tw0)."""
+    du, dw = qu - u, qw - w
+    length2 = du * du + dw * dw
+    t = ((su - u) * du + (sw - w) * dw) / length2
+    if 0.0 <= t <= 1.0:
+        dist = math.hypot(u + t * du - su, w + t * dw - sw)
+        return dist <= max(0.1 * h, 1e-9) and du * tu0 + dw * tw0 > 0.0
+    return False
+
+
+@njit(cache=True, error_model="numpy")
+def _happens(sl, k, tu, tw, qtu, qtw, cv0, cv1):
+    """Something happens on a step whose ends' condition values are cv0 and cv1: the
+    curve turns back in an axis, or another condition (not of k's group) changes sign or
+    starts or stops vanishing with this one."""
+    event = tu * qtu < 0.0 or tw * qtw < 0.0
+    grp, active, cs = sl.grp, sl.active, sl.cs
+    for j in range(active.shape[0]):
+        if active[j] and grp[j, 0] != grp[k, 0]:
+            z0 = abs(cv0[j]) <= COVANISH * cs[j]
+            z1 = abs(cv1[j]) <= COVANISH * cs[j]
+            event = event or z0 != z1 or (not z0 and cv0[j] * cv1[j] < 0.0)
+    return event
+
+
+@njit(cache=True, error_model="numpy")
+def _specials(sl, k, u, w, qu, qw, tu, tw, qtu, qtw, cv0, cv1, sp):
+    """The special points on the step from (u, w) to (qu, qw) into ``sp``
+    (:data:`SPECIAL`), and their number: where another condition changes sign (a
+    crossing, by Newton; by bisection on the curve where Newton goes elsewhere), and
+    where the curve turns back in an axis (a fold)."""
+    F, grp, active, v, ix, iy, geo, g, H = (sl.F, sl.grp, sl.active, sl.v, sl.ix, sl.iy,
+                                           sl.geo, sl.g, sl.H)
+    cs, tol_u, tol_w = sl.cs, sl.tol_u, sl.tol_w
+    du, dw = qu - u, qw - w
+    length2 = du * du + dw * dw
+    nsp = 0
+    for j in range(active.shape[0]):
+        if (not active[j]) or grp[j, 0] == grp[k, 0]:
+            continue
+        if abs(cv0[j]) <= COVANISH * cs[j] or abs(cv1[j]) <= COVANISH * cs[j]:
+            continue  # j vanishes with this curve here: no crossing
+        if cv0[j] * cv1[j] < 0.0:
+            a = cv0[j] / (cv0[j] - cv1[j])
+            ok2, xu, xw, res2, err2 = _solve(F, 0, k, j, v, ix, iy, geo, g, H, u + a * du,
+                                             w + a * dw, tol_u, tol_w)
+            t = ((xu - u) * du + (xw - w) * dw) / length2
+            if not (ok2 and -0.25 <= t <= 1.25):
+                # Newton went elsewhere: bisect c_j on the curve between the vertices
+                lo, hi = 0.0, 1.0
+                ln = math.sqrt(length2)
+                for it in range(60):
+                    mid = 0.5 * (lo + hi)
+                    okc, mu, mw, r3, s3, sc, ac, bc = _correct(
+                        F, k, v, ix, iy, geo, g, u + mid * du, w + mid * dw, du / ln,
+                        dw / ln)
+                    cj, sj, aj, bj = _grad(F, j, v, ix, iy, geo, mu, mw, g)
+                    if (cj < 0.0) == (cv0[j] < 0.0):
+                        lo = mid
+                    else:
+                        hi = mid
+                    if (hi - lo) * ln < 1e-3 * min(tol_u, tol_w):
+                        break
+                ok2, xu, xw, res2, err2 = _solve(F, 0, k, j, v, ix, iy, geo, g, H, mu, mw,
+                                                 tol_u, tol_w)
+                t = ((xu - u) * du + (xw - w) * dw) / length2
+                if not (ok2 and -0.25 <= t <= 1.25):
+                    xu, xw, t = mu, mw, 0.5 * (lo + hi)
+            nsp = _note(sp, nsp, t, xu, xw, CROSSING, j, res2, err2)
+    for axis in range(2):
+        a0 = tu if axis == 0 else tw
+        a1 = qtu if axis == 0 else qtw
+        if a0 * a1 < 0.0:
+            okf, fu, fw, resf, errf = _fold_on_step(F, axis, k, v, ix, iy, geo, g, H, u, w,
+                                                    qu, qw, a0, a1, tol_u, tol_w)
+            t = ((fu - u) * du + (fw - w) * dw) / length2
+            if okf and -0.25 <= t <= 1.25 and _inside(fu, fw, 1e-12):
+                fu = min(max(fu, 0.0), 1.0)
+                fw = min(max(fw, 0.0), 1.0)
+                nsp = _note(sp, nsp, t, fu, fw, FOLD_X if axis == 0 else FOLD_Y, axis, resf,
+                            errf)
+    return nsp
+
+
+@njit(cache=True, error_model="numpy")
+def _unexplained(sl, k, u, w, qu, qw, la, ra, h, cv1, sp, nsp):
+    """A change of the side classes from (la, ra) on the step from (u, w) to (qu, qw)
+    that no crossing explains: located by bisection on the curve (:func:`_bisect`) and
+    noted in ``sp`` as the crossing of the condition that vanishes there
+    (:func:`_explain`), else as a change (CHANGE).  cv1 is left at (qu, qw).  Returns
+    the number of special points."""
+    F, grp, active, v, ix, iy, geo, g = (sl.F, sl.grp, sl.active, sl.v, sl.ix, sl.iy,
+                                        sl.geo, sl.g)
+    du, dw = qu - u, qw - w
+    length2 = du * du + dw * dw
+    xu, xw = _bisect(F, k, grp, active, v, ix, iy, geo, g, sl.out, sl.layer, u, w, qu, qw,
+                     la, ra, h, sl.scr)
+    j, okx, xu2, xw2, resx, errx = _explain(F, k, grp, active, v, ix, iy, geo, g, sl.H, cv1,
+                                            sl.cs, xu, xw, sl.tol_u, sl.tol_w)
+    t = ((xu - u) * du + (xw - w) * dw) / length2
+    if j >= 0 and okx:
+        nsp = _note(sp, nsp, t, xu2, xw2, CROSSING, j, resx, errx)
+    else:
+        nsp = _note(sp, nsp, t, xu, xw, CHANGE, -1, np.nan, np.nan)
+    v[ix] = geo[0] + qu * geo[1]
+    v[iy] = geo[2] + qw * geo[3]
+    _values(F, v, cv1, sl.cs)
+    return nsp
+
+
+@njit(cache=True, error_model="numpy")
+def _crossings(sp, nsp):
+    """How many of a step's special points are crossings."""
+    n = 0
+    for i in range(nsp):
+        if sp[i].kind == CROSSING:
+            n += 1
+    return n
+
+
+@njit(cache=True, error_model="numpy")
+def _append_specials(sl, st, k, curve, sp, nsp, tu, tw, h):
+    """Append a step's special points in their order along it; a fold with its sides."""
+    for a in range(nsp):
+        best = a
+        for b in range(a + 1, nsp):
+            if sp[b].s < sp[best].s:
+                best = b
+        _swap(sp, a, best)
+        p = sp[a]
+        left, right = -1, -1
+        if p.kind == FOLD_X or p.kind == FOLD_Y:
+            ftu, ftw, fn, fs = _tangent(sl.F, k, sl.v, sl.ix, sl.iy, sl.geo, sl.g, p.u, p.w,
+                                        tu, tw)
+            left, right = _sides(sl.F, k, sl.grp, sl.active, sl.v, sl.g, sl.out, sl.layer,
+                                 sl.ix, sl.iy, sl.geo, p.u, p.w, ftu, ftw,
+                                 _side_eps(fs, fn, h), sl.scr)
+        _push(st.verts, st.counts, p.u, p.w, p.residual, p.error, curve, p.kind, k, p.other,
+              left, right)
+
+
+@njit(cache=True, error_model="numpy")
+def _march(sl, st, k, curve, su, sw, tu0, tw0, h0, closing, cv0, cv1):
+    """Follow condition ``k`` from the curve point (su, sw) along (tu0, tw0), in the slice
+    ``sl`` (:data:`Slice`), appending to ``st`` (:data:`Store`) as curve ``curve``; cv0 and
+    cv1 are scratch for the conditions' values at a step's ends.
 
     Appends the vertices after the start (the start itself is not appended)
     and returns 1 if the curve came back to its start (a loop, only looked for
     when ``closing``), 0 at an edge of the slice, -1 where it stalled.
 
+    A step: the next vertex (:func:`_predict`); its end on an edge where the curve leaves
+    the slice (:func:`_leave`); a shorter step where the corrector fails or the curve
+    turns too far, and past a singular point at the shortest (:func:`_step_over`); the
+    loop's end (:func:`_closes`); the special points on the step (:func:`_specials`,
+    :func:`_unexplained`, appended in order by :func:`_append_specials`); the vertex; the
+    next step's length from the curvature there (:func:`_step_length`).
+
     The classes on either side (two classifications) are sampled at every
     :data:`SIDE_EVERY`-th vertex, and at every vertex of a step where anything
-    happens: another condition changes sign or starts or stops vanishing with
-    this one, the curve turns back in an axis, the loop closes, the curve ends.
-    The vertex before such a step is sampled too.  Where a sample disagrees
-    with the classes of the last sampled vertex and vertices in between were
-    not sampled, the march goes back to that vertex and steps again sampling
-    every vertex: what it finds is what sampling every vertex finds, except a
-    change of class that reverts within :data:`SIDE_EVERY` steps while no
-    condition changes sign at the vertices (a side sample that grazes another
-    zero set; assemble forgets such a sample, see _forget_isolated).
+    happens (:func:`_happens`): another condition changes sign or starts or stops
+    vanishing with this one, the curve turns back in an axis, the loop closes, the
+    curve ends.  The vertex before such a step is sampled too (:func:`_confirm`).
+    Where a sample disagrees with the classes of the last sampled vertex and vertices
+    in between were not sampled, the march goes back to that vertex (its :data:`At`)
+    and steps again sampling every vertex: what it finds is what sampling every vertex
+    finds, except a change of class that reverts within :data:`SIDE_EVERY` steps while
+    no condition changes sign at the vertices (a side sample that grazes another zero
+    set; assemble forgets such a sample, see _forget_isolated).
     """
+    F, v, ix, iy, geo = sl.F, sl.v, sl.ix, sl.iy, sl.geo
+    verts, counts, mark = st.verts, st.counts, st.mark
     u, w = su, sw
     tu, tw = tu0, tw0
     h = h0
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
-    _values(F, v, cv0, cs)
-    c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
+    _values(F, v, cv0, sl.cs)
+    c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, sl.g)
     n0 = math.hypot(cu, cw)
-    la, ra = _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw,
-                         _side_eps(s, n0, h), cv0, scr)
+    la, ra = _sides_of(sl, k, u, w, tu, tw, _side_eps(s, n0, h), cv0)
     travelled = 0.0
     steps = 0
-    # special points found on one step: (s along the step, u, w, residual, error), (kind, other)
-    nc = active.shape[0]
-    spf = np.empty((nc + 4, 5))
-    spi = np.empty((nc + 4, 2), dtype=np.int64)
+    sp = np.empty(sl.active.shape[0] + 4, dtype=SPECIAL)  # a step's special points
     # the current vertex: its step length, tie scale and gradient norm (for its side samples)
     hq, us, un = h, s, n0
     owned_prev = -1
     pending = 0  # vertices since the last whose sides were sampled
     done = 0  # steps taken
     dense_until = -1  # sample every vertex while done <= dense_until (after going back)
-    # the state at the last sampled vertex, to go back to
-    back_cv = np.empty(nc)
-    back_n = counts[0]
-    back_f = np.empty(9)
-    back_i = np.empty(6, dtype=np.int64)
+    # the last sampled vertex, to go back to
+    back = At(u, w, tu, tw, h, hq, us, un, travelled, steps, la, ra, owned_prev, done,
+              closing, counts[0])
+    back_cv = np.empty(sl.active.shape[0])
     go_back = False
     while True:
         if go_back:
-            counts[0] = back_n
-            u, w, tu, tw, h = back_f[0], back_f[1], back_f[2], back_f[3], back_f[4]
-            hq, us, un, travelled = back_f[5], back_f[6], back_f[7], back_f[8]
-            steps, la, ra, owned_prev, done = back_i[0], back_i[1], back_i[2], back_i[3], back_i[4]
-            closing = back_i[5] == 1
+            (u, w, tu, tw, h, hq, us, un, travelled, steps, la, ra, owned_prev, done,
+             closing, n_back) = back
+            counts[0] = n_back
             cv0[:] = back_cv
             pending = 0
             go_back = False
         if counts[2]:
             return -1
         if pending == 0:
-            back_n = counts[0]
-            back_f[0], back_f[1], back_f[2], back_f[3], back_f[4] = u, w, tu, tw, h
-            back_f[5], back_f[6], back_f[7], back_f[8] = hq, us, un, travelled
-            back_i[0], back_i[1], back_i[2], back_i[3], back_i[4] = steps, la, ra, owned_prev, done
-            back_i[5] = 1 if closing else 0
+            back = At(u, w, tu, tw, h, hq, us, un, travelled, steps, la, ra, owned_prev, done,
+                      closing, counts[0])
             back_cv[:] = cv0
         finish = travelled > MAX_LENGTH
-        pu = u + h * tu
-        pw = w + h * tw
-        ok, qu, qw, res, st, qs, qcu, qcw = False, pu, pw, np.inf, np.inf, 0.0, 0.0, 0.0
-        if not finish:
-            ok, qu, qw, res, st, qs, qcu, qcw = _correct(F, k, v, ix, iy, geo, g, pu, pw, tu, tw)
-        leaves = (ok and not _inside(qu, qw, 0.0)) or (not ok and not _inside(pu, pw, 0.0))
-        xu, xw = (qu, qw) if ok else (pu, pw)  # a point beyond the edge, where it leaves
-        qtu, qtw, qn, qs = _orient(qs, qcu, qcw, tu, tw)
-        if ok and not leaves and not finish and (tu * qtu < 0.0 or tw * qtw < 0.0):
-            # the curve turns back in an axis between two vertices inside the slice: where
-            # that fold lies beyond an edge, the curve leaves the slice there and comes back
-            # (a loop that the edge cuts by less than a step)
-            for axis in range(2):
-                a0 = tu if axis == 0 else tw
-                a1 = qtu if axis == 0 else qtw
-                if a0 * a1 < 0.0:
-                    okf, fu, fw, resf, errf = _fold_on_step(F, axis, k, v, ix, iy, geo, g, H, u,
-                                                            w, qu, qw, a0, a1, tol_u, tol_w)
-                    # beyond the edge by more than the tolerance (a fold on it, to the
-                    # tolerance, is a loop that touches the edge)
-                    if okf and not _inside(fu, fw, max(tol_u, tol_w)) \
-                            and math.hypot(fu - u, fw - w) <= 2.0 * h:
-                        leaves = True
-                        xu, xw = fu, fw
+        ok, pu, pw, qu, qw, res, qtu, qtw, qn, qs, leaves, xu, xw = _predict(sl, k, u, w, tu,
+                                                                             tw, h, finish)
         ex_ok, ex_u, ex_w, ex_res, ex_err = False, u, w, np.inf, np.inf
-        # from a point on an edge, along a tangent into the slice (a region thinner than
-        # the step, that the edge cuts), the step is shortened, not ended on that edge
-        inward = (u <= 1e-12 and tu > 0.0) or (u >= 1.0 - 1e-12 and tu < 0.0) \
-            or (w <= 1e-12 and tw > 0.0) or (w >= 1.0 - 1e-12 and tw < 0.0)
-        if leaves and not finish and not (inward and h > H_MIN):
-            # the curve leaves the slice within this step: end on the edge it crosses
-            ex_ok, ex_u, ex_w, ex_res, ex_err = _exit(F, k, v, ix, iy, geo, g, u, w, xu, xw,
-                                                      tol_u, tol_w)
-            ex_ok = ex_ok and math.hypot(ex_u - u, ex_w - w) <= 2.0 * h
-            finish = ex_ok or h <= H_MIN
+        if leaves and not finish:
+            ex_ok, ex_u, ex_w, ex_res, ex_err, finish = _leave(sl, k, u, w, tu, tw, h, xu, xw)
         turn = qtu * tu + qtw * tw
         jump = math.hypot(qu - pu, qw - pw)
-        stuck = not leaves and not finish and h <= H_MIN and (
-            not ok or qn == 0.0 or turn < math.cos(2.0 * ANGLE) or jump > 0.25 * h)
+        rough = not ok or qn == 0.0 or turn < math.cos(2.0 * ANGLE) or jump > 0.25 * h
+        stuck = not leaves and not finish and h <= H_MIN and rough
         if (finish or stuck) and pending > 0:
             # the curve ends, stalls or jumps here: the vertex before is sampled first
-            lc, rc = _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu,
-                                 tw, _side_eps(us, un, hq), cv0, scr)
-            if lc == la and rc == ra and lc >= 0 and rc >= 0:
-                vi[counts[0] - 1, 4], vi[counts[0] - 1, 5] = lc, rc
+            if _confirm(sl, st, k, u, w, tu, tw, _side_eps(us, un, hq), cv0, la, ra):
                 pending = 0
             else:
                 go_back = True
@@ -792,197 +1066,87 @@ def _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, sc
         if finish:
             if ex_ok:
                 _mark(mark, k, u, w, ex_u, ex_w)
-                _push(vf, vi, counts, ex_u, ex_w, ex_res, ex_err, curve, END, k, -1, -1, -1)
+                _push(verts, counts, ex_u, ex_w, ex_res, ex_err, curve, END, k, -1, -1, -1)
                 return 0
-            _push(vf, vi, counts, u, w, 0.0, 0.0, curve, STALL, k, -1, la, ra)
+            _push(verts, counts, u, w, 0.0, 0.0, curve, STALL, k, -1, la, ra)
             return -1
         if leaves:
             h *= 0.5
             continue
-        if not ok or qn == 0.0 or turn < math.cos(2.0 * ANGLE) or jump > 0.25 * h:
+        if rough:
             if h > H_MIN:
                 h *= 0.5
                 continue
             # a singular point (two branches of the zero set cross): step over it
-            okj, pu, pw, rj, qu, qw = _jump(F, k, v, ix, iy, geo, g, H, u, w, tu, tw)
-            if not okj:
-                _push(vf, vi, counts, u, w, 0.0, 0.0, curve, STALL, k, -1, la, ra)
+            ok, u, w, tu, tw, us, un, lb, rb, owned_prev = _step_over(sl, st, k, curve, u, w,
+                                                                      tu, tw, la, ra, cv0)
+            if not ok:
                 return -1
-            _mark(mark, k, u, w, qu, qw)
-            _push(vf, vi, counts, pu, pw, rj, 0.0, curve, CROSSING, k, k, -1, -1)
-            qtu, qtw, qn, qs = _tangent(F, k, v, ix, iy, geo, g, qu, qw, tu, tw)
-            lb, rb = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, qu, qw, qtu, qtw,
-                            _side_eps(qs, qn, 1e-4), scr)
-            c, s, cu, cw = _grad(F, k, v, ix, iy, geo, qu, qw, g)
-            _values(F, v, cv0, cs)
-            owned_prev = _owned(k, grp, active, cv0, cs, mark, u, w, qu, qw)
-            _push(vf, vi, counts, qu, qw, abs(c) / s, 0.0, curve, REGULAR, k, -1, lb, rb,
-                  owned_prev)
-            u, w, tu, tw = qu, qw, qtu, qtw
-            hq, us, un = 1e-4, qs, qn
+            hq = 1e-4
             if lb >= 0 and rb >= 0:
                 la, ra = lb, rb
             h = 1e-4
             done += 1
-            v[ix] = geo[0] + u * geo[1]
-            v[iy] = geo[2] + w * geo[3]
-            _values(F, v, cv0, cs)
             continue
         # a loop: the step passes its start again
-        if closing and steps >= 3 and travelled > 2.0 * h:
-            du, dw = qu - u, qw - w
-            length2 = du * du + dw * dw
-            t = ((su - u) * du + (sw - w) * dw) / length2
-            if 0.0 <= t <= 1.0:
-                dist = math.hypot(u + t * du - su, w + t * dw - sw)
-                if dist <= max(0.1 * h, 1e-9) and du * tu0 + dw * tw0 > 0.0:
-                    qu, qw = su, sw
-                    qtu, qtw = tu0, tw0
-                    closing = False
-                    steps = -1  # marks the loop's end
+        if closing and steps >= 3 and travelled > 2.0 * h \
+                and _closes(su, sw, tu0, tw0, u, w, qu, qw, h):
+            qu, qw = su, sw
+            qtu, qtw = tu0, tw0
+            closing = False
+            steps = -1  # marks the loop's end
         v[ix] = geo[0] + qu * geo[1]
         v[iy] = geo[2] + qw * geo[3]
-        _values(F, v, cv1, cs)
-        du, dw = qu - u, qw - w
-        length2 = du * du + dw * dw
-        owned = _owned(k, grp, active, cv1, cs, mark, u, w, qu, qw)
-        # does anything happen on this step?
-        event = owned != owned_prev or steps < 0 or tu * qtu < 0.0 or tw * qtw < 0.0
-        for j in range(nc):
-            if active[j] and grp[j, 0] != grp[k, 0]:
-                z0 = abs(cv0[j]) <= COVANISH * cs[j]
-                z1 = abs(cv1[j]) <= COVANISH * cs[j]
-                event = event or z0 != z1 or (not z0 and cv0[j] * cv1[j] < 0.0)
+        _values(F, v, cv1, sl.cs)
+        owned = _owned(k, sl.grp, sl.active, cv1, sl.cs, mark, u, w, qu, qw)
+        event = owned != owned_prev or steps < 0 or _happens(sl, k, tu, tw, qtu, qtw, cv0,
+                                                              cv1)
         if event and pending > 0:
-            lc, rc = _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w,
-                                 tu, tw, _side_eps(us, un, hq), cv0, scr)
-            if lc == la and rc == ra and lc >= 0 and rc >= 0:
-                vi[counts[0] - 1, 4], vi[counts[0] - 1, 5] = lc, rc
+            if _confirm(sl, st, k, u, w, tu, tw, _side_eps(us, un, hq), cv0, la, ra):
                 pending = 0
             else:
                 go_back = True
                 dense_until = done
                 continue
-        # special points between (u, w) and (q): crossings, folds
-        nsp = 0
-        for j in range(nc):
-            if (not active[j]) or grp[j, 0] == grp[k, 0]:
-                continue
-            if abs(cv0[j]) <= COVANISH * cs[j] or abs(cv1[j]) <= COVANISH * cs[j]:
-                continue  # j vanishes with this curve here: no crossing
-            if cv0[j] * cv1[j] < 0.0:
-                a = cv0[j] / (cv0[j] - cv1[j])
-                ok2, xu, xw, res2, err2 = _solve(F, 0, k, j, v, ix, iy, geo, g, H, u + a * du,
-                                                 w + a * dw, tol_u, tol_w)
-                t = ((xu - u) * du + (xw - w) * dw) / length2
-                if not (ok2 and -0.25 <= t <= 1.25):
-                    # Newton went elsewhere: bisect c_j on the curve between the vertices
-                    lo, hi = 0.0, 1.0
-                    ln = math.sqrt(length2)
-                    for it in range(60):
-                        mid = 0.5 * (lo + hi)
-                        okc, mu, mw, r3, s3, sc, ac, bc = _correct(
-                            F, k, v, ix, iy, geo, g, u + mid * du, w + mid * dw, du / ln,
-                            dw / ln)
-                        cj, sj, aj, bj = _grad(F, j, v, ix, iy, geo, mu, mw, g)
-                        if (cj < 0.0) == (cv0[j] < 0.0):
-                            lo = mid
-                        else:
-                            hi = mid
-                        if (hi - lo) * ln < 1e-3 * min(tol_u, tol_w):
-                            break
-                    ok2, xu, xw, res2, err2 = _solve(F, 0, k, j, v, ix, iy, geo, g, H, mu, mw,
-                                                     tol_u, tol_w)
-                    t = ((xu - u) * du + (xw - w) * dw) / length2
-                    if not (ok2 and -0.25 <= t <= 1.25):
-                        xu, xw, t = mu, mw, 0.5 * (lo + hi)
-                nsp = _note(spf, spi, nsp, t, xu, xw, CROSSING, j, res2, err2)
-        for axis in range(2):
-            a0 = tu if axis == 0 else tw
-            a1 = qtu if axis == 0 else qtw
-            if a0 * a1 < 0.0:
-                okf, fu, fw, resf, errf = _fold_on_step(F, axis, k, v, ix, iy, geo, g, H, u, w,
-                                                        qu, qw, a0, a1, tol_u, tol_w)
-                t = ((fu - u) * du + (fw - w) * dw) / length2
-                if okf and -0.25 <= t <= 1.25 and _inside(fu, fw, 1e-12):
-                    fu = min(max(fu, 0.0), 1.0)
-                    fw = min(max(fw, 0.0), 1.0)
-                    nsp = _note(spf, spi, nsp, t, fu, fw, FOLD_X if axis == 0 else FOLD_Y, axis,
-                                resf, errf)
+        nsp = _specials(sl, k, u, w, qu, qw, tu, tw, qtu, qtw, cv0, cv1, sp)
         # the new vertex's sides (when sampled); a change that no crossing explains is located
         lb, rb = -1, -1
         sampled = event or done <= dense_until or pending + 1 >= SIDE_EVERY
         if sampled:
-            lb, rb = _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, qu, qw, qtu,
-                                 qtw, _side_eps(qs, qn, h), cv1, scr)
+            lb, rb = _sides_of(sl, k, qu, qw, qtu, qtw, _side_eps(qs, qn, h), cv1)
             if pending > 0 and not (lb == la and rb == ra and lb >= 0 and rb >= 0):
                 # a change since the last sampled vertex: step there again, sampling all
                 go_back = True
                 dense_until = done
                 continue
-        crossings = 0
-        for i in range(nsp):
-            if spi[i, 0] == CROSSING:
-                crossings += 1
         known = lb >= 0 and rb >= 0
-        if known and la >= 0 and ra >= 0 and (lb != la or rb != ra) and crossings == 0:
-            xu, xw = _bisect(F, k, grp, active, v, ix, iy, geo, g, out, layer, u, w, qu, qw, la,
-                             ra, h, scr)
-            j, okx, xu2, xw2, resx, errx = _explain(F, k, grp, active, v, ix, iy, geo, g, H, cv1,
-                                                    cs, xu, xw, tol_u, tol_w)
-            t = ((xu - u) * du + (xw - w) * dw) / length2
-            if j >= 0 and okx:
-                nsp = _note(spf, spi, nsp, t, xu2, xw2, CROSSING, j, resx, errx)
-            else:
-                nsp = _note(spf, spi, nsp, t, xu, xw, CHANGE, -1, np.nan, np.nan)
-            v[ix] = geo[0] + qu * geo[1]
-            v[iy] = geo[2] + qw * geo[3]
-            _values(F, v, cv1, cs)
-        # append the special points in order along the step, then the new vertex
-        for a in range(nsp):
-            best = a
-            for b in range(a + 1, nsp):
-                if spf[b, 0] < spf[best, 0]:
-                    best = b
-            for q in range(5):
-                spf[a, q], spf[best, q] = spf[best, q], spf[a, q]
-            for q in range(2):
-                spi[a, q], spi[best, q] = spi[best, q], spi[a, q]
-            kind = spi[a, 0]
-            left, right = -1, -1
-            if kind == FOLD_X or kind == FOLD_Y:
-                ftu, ftw, fn, fs = _tangent(F, k, v, ix, iy, geo, g, spf[a, 1], spf[a, 2], tu, tw)
-                left, right = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, spf[a, 1],
-                                     spf[a, 2], ftu, ftw, _side_eps(fs, fn, h), scr)
-            _push(vf, vi, counts, spf[a, 1], spf[a, 2], spf[a, 3], spf[a, 4], curve, kind, k,
-                  spi[a, 1], left, right)
+        if known and la >= 0 and ra >= 0 and (lb != la or rb != ra) \
+                and _crossings(sp, nsp) == 0:
+            nsp = _unexplained(sl, k, u, w, qu, qw, la, ra, h, cv1, sp, nsp)
+        _append_specials(sl, st, k, curve, sp, nsp, tu, tw, h)
         _mark(mark, k, u, w, qu, qw)
         if steps < 0:  # the loop closed: its last vertex is its first
-            _push(vf, vi, counts, qu, qw, res, 0.0, curve, REGULAR, k, -1, -1, -1)
+            _push(verts, counts, qu, qw, res, 0.0, curve, REGULAR, k, -1, -1, -1)
             return 1
-        _push(vf, vi, counts, qu, qw, res, 0.0, curve, REGULAR, k, -1, lb, rb, owned)
+        _push(verts, counts, qu, qw, res, 0.0, curve, REGULAR, k, -1, lb, rb, owned)
         pending = 0 if sampled else pending + 1
         owned_prev = owned
         hq, us, un = h, qs, qn
         done += 1
-        travelled += math.sqrt(length2)
+        du, dw = qu - u, qw - w
+        travelled += math.sqrt(du * du + dw * dw)
         steps += 1
         # the next step from the curvature here
-        c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, qu, qw, g, H)
-        kappa = abs(qtu * qtu * huu + 2.0 * qtu * qtw * huw + qtw * qtw * hww) / qn
-        hn = H_MAX
-        if kappa > 0.0:
-            hn = min(hn, math.sqrt(8.0 * CHORD / kappa), ANGLE / kappa)
-        h = max(min(hn, 2.0 * h), H_MIN)
+        kappa = _curvature(F, k, v, ix, iy, geo, sl.g, sl.H, qu, qw, qtu, qtw, qn)
+        h = max(min(_step_length(kappa), 2.0 * h), H_MIN)
         u, w, tu, tw = qu, qw, qtu, qtw
         if known:
             la, ra = lb, rb
-        for j in range(nc):
-            cv0[j] = cv1[j]
+        cv0[:] = cv1
 
 
 @njit(cache=True, error_model="numpy")
-def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
+def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, verts, counts, curves, mark,
                near, tol_u, tol_w, require_sides):
     """Trace a curve from each seed ``(k, u, w)`` not on a curve already traced.
 
@@ -1002,6 +1166,8 @@ def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
     cv1 = np.empty(nc)
     cs = np.empty(nc)
     scr = np.empty((3, nc))
+    sl = Slice(F, grp, active, v, ix, iy, geo, g, H, out, layer, cs, scr, tol_u, tol_w)
+    st = Store(verts, counts, mark)
     n = mark.shape[1]
     traced = 0
     # with require_sides, seeds in rank order: a stretch where several conditions vanish
@@ -1035,11 +1201,7 @@ def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
         tu, tw, gn, s = _tangent(F, k, v, ix, iy, geo, g, u, w, 1.0, 0.0)
         if gn == 0.0 or tu == 0.0 and tw == 0.0:
             continue
-        c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, u, w, g, H)
-        kappa = abs(tu * tu * huu + 2.0 * tu * tw * huw + tw * tw * hww) / gn
-        h = H_MAX
-        if kappa > 0.0:
-            h = min(h, math.sqrt(8.0 * CHORD / kappa), ANGLE / kappa)
+        h = _step_length(_curvature(F, k, v, ix, iy, geo, g, H, u, w, tu, tw, gn))
         left, right = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw,
                             _side_eps(s, gn, h), scr)
         if require_sides and left == right:
@@ -1050,32 +1212,28 @@ def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
         curve = counts[1]
         counts[1] += 1
         first = counts[0]
-        back = _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, scr, u, w,
-                     -tu, -tw, h, True, curve, vf, vi, counts, mark, tol_u, tol_w)
+        back = _march(sl, st, k, curve, u, w, -tu, -tw, h, True, cv0, cv1)
         # the backward half, reversed: its special points keep their meaning, and the
         # sides swap with the direction of travel
         a = first
         b = counts[0] - 1
         while a < b:
-            for q in range(4):
-                vf[a, q], vf[b, q] = vf[b, q], vf[a, q]
-            for q in range(7):
-                vi[a, q], vi[b, q] = vi[b, q], vi[a, q]
+            _swap(verts, a, b)
             a += 1
             b -= 1
         for q in range(first, counts[0]):
-            vi[q, 4], vi[q, 5] = vi[q, 5], vi[q, 4]
+            left_q = verts[q].left
+            verts[q].left = verts[q].right
+            verts[q].right = left_q
         c0, s0, cu0, cw0 = _grad(F, k, v, ix, iy, geo, u, w, g)
         _values(F, v, cv0, cs)
-        _push(vf, vi, counts, u, w, abs(c0) / s0, 0.0, curve, REGULAR, k, -1, left, right,
+        _push(verts, counts, u, w, abs(c0) / s0, 0.0, curve, REGULAR, k, -1, left, right,
               _owned(k, grp, active, cv0, cs, mark, u, w, u, w))
         closed = 0
         if back == 1:
             closed = 1
         else:
-            _march(F, k, grp, active, v, ix, iy, geo, g, H, out, layer, cv0, cv1, cs, scr, u, w, tu,
-                  tw,
-                  h, False, curve, vf, vi, counts, mark, tol_u, tol_w)
+            _march(sl, st, k, curve, u, w, tu, tw, h, False, cv0, cv1)
         curves[curve, 0] = k
         curves[curve, 1] = first
         curves[curve, 2] = counts[0]
@@ -1087,7 +1245,7 @@ def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts
         rows = curves[first_curve:counts[1]].copy()
         for c in range(by_seed.shape[0]):
             curves[first_curve + c] = rows[by_seed[c]]
-            vi[curves[first_curve + c, 1]:curves[first_curve + c, 2], 0] = first_curve + c
+            verts.curve[curves[first_curve + c, 1]:curves[first_curve + c, 2]] = first_curve + c
     return traced
 
 
@@ -1464,7 +1622,7 @@ def _raster_all(cells_at, v, ix, xs, xslot, xderiv, ys, yderiv, flags, fields):
         v[ix] = xs[i]
         for k in range(xslot.shape[0]):
             v[xslot[k]] = xderiv[k, i]
-        _cells(cells_at, v, i * ny, 0, ny, ys, yderiv, flags, fields)
+        call_cells(cells_at, v, i * ny, 0, ny, ys, yderiv, flags, fields)
 
 
 @njit(cache=True, error_model="numpy")
@@ -1500,7 +1658,7 @@ def _applicable_all(F, v, out, ix, iy, geo, applicable, active):
 
 @njit(cache=True, error_model="numpy")
 def _seed_trace_all(F, pts, vs, applicable, raster, radius, active, rank, v, out, ix, iy, geo,
-                    layer, n, vf, vi, counts, curves, mark, tol_u, tol_w):
+                    layer, n, verts, counts, curves, mark, tol_u, tol_w):
     """One call for a whole trace (a call from Python and the parallel driver of a
     raster cost about 30 us).  The conditions that can bound a class, into ``active``
     (:func:`_applicable_all` with the arguments ``applicable``: the probes, each
@@ -1536,9 +1694,9 @@ def _seed_trace_all(F, pts, vs, applicable, raster, radius, active, rank, v, out
     changes = class_changes(classes)
     near = near_changes(classes.shape, changes, radius)
     seeds = _seeds_all(F, active, v, ix, iy, geo, n, near)
-    _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, vf, vi, counts, curves, mark,
+    _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, verts, counts, curves, mark,
                near, tol_u, tol_w, True)
-    pv, pp, pq, pieces, pf, pi = assemble(vf, vi, curves, 0 if counts[2] else counts[1])
+    pv, pp, pq, pieces, pf, pi = assemble(verts, curves, 0 if counts[2] else counts[1])
     bad = _uncovered(classes.shape[0], changes, pv, pp)
     return classes, near, seeds, group, grp, changes, pv, pp, pq, pieces, pf, pi, bad
 
@@ -1546,46 +1704,47 @@ def _seed_trace_all(F, pts, vs, applicable, raster, radius, active, rank, v, out
 # -- pieces and the completeness check (no model globals) ---------------------------------
 
 @njit(cache=True, error_model="numpy")
-def _known(vi, q):
+def _known(verts, q):
     """The side classes at vertex q, (-1, -1) where they were not sampled, (-2, -2) on
     a stretch that another condition traces."""
-    kind = vi[q, 1]
-    if kind == REGULAR and vi[q, 6] == 0:
+    p = verts[q]
+    kind = p.kind
+    if kind == REGULAR and p.owned == 0:
         return -2, -2
     if (kind == REGULAR or kind == FOLD_X or kind == FOLD_Y or kind == TANGENCY) \
-            and vi[q, 4] >= 0 and vi[q, 5] >= 0:
-        return vi[q, 4], vi[q, 5]
+            and p.left >= 0 and p.right >= 0:
+        return p.left, p.right
     return -1, -1
 
 
 @njit(cache=True, error_model="numpy")
-def _forget_isolated(vi, a, b):
+def _forget_isolated(verts, a, b):
     """Forget the sides of a vertex whose classes differ from those of the vertices
     with sampled sides before and after it, where those two agree: a class pair seen
     at one vertex only is a sample that straddles another condition (at a tangency),
     not a stretch of boundary."""
     prev = -1
     for q in range(a, b):
-        if _known(vi, q)[0] < 0:
+        if _known(verts, q)[0] < 0:
             continue
         nxt = -1
         for r in range(q + 1, b):
-            if _known(vi, r)[0] >= 0:
+            if _known(verts, r)[0] >= 0:
                 nxt = r
                 break
-        if prev >= 0 and nxt >= 0 and _known(vi, q)[0] >= 0:
-            p0, p1 = _known(vi, prev)
-            n0, n1 = _known(vi, nxt)
-            q0, q1 = _known(vi, q)
+        if prev >= 0 and nxt >= 0 and _known(verts, q)[0] >= 0:
+            p0, p1 = _known(verts, prev)
+            n0, n1 = _known(verts, nxt)
+            q0, q1 = _known(verts, q)
             if p0 == n0 and p1 == n1 and (q0 != p0 or q1 != p1):
-                vi[q, 4] = -1
-                vi[q, 5] = -1
+                verts[q].left = -1
+                verts[q].right = -1
                 continue
         prev = q
 
 
 @njit(cache=True, error_model="numpy")
-def assemble(vf, vi, curves, ncurves):
+def assemble(verts, curves, ncurves):
     """Split traced curves into pieces: stretches with one class on each side, and
     different classes.  Returns
 
@@ -1613,12 +1772,13 @@ def assemble(vf, vi, curves, ncurves):
         k, a, b, closed = curves[c, 0], curves[c, 1], curves[c, 2], curves[c, 3]
         if b - a < 2:
             continue
-        _forget_isolated(vi, a, b)
+        _forget_isolated(verts, a, b)
         # break points: a crossing (or an unexplained change) where the sides change
         nb = 0
         for q in range(a, b):
-            kind = vi[q, 1]
-            if kind == REGULAR and q > a and vi[q - 1, 1] == REGULAR and vi[q, 6] != vi[q - 1, 6]:
+            kind = verts[q].kind
+            if kind == REGULAR and q > a and verts[q - 1].kind == REGULAR \
+                    and verts[q].owned != verts[q - 1].owned:
                 breaks[nb] = q  # the stretch passes to or from another condition
                 nb += 1
                 continue
@@ -1631,7 +1791,7 @@ def assemble(vf, vi, curves, ncurves):
                     if not closed:
                         break
                     p += b - a - 1
-                before = _known(vi, p)
+                before = _known(verts, p)
                 if before[0] >= 0:
                     break
             after = (-1, -1)
@@ -1641,7 +1801,7 @@ def assemble(vf, vi, curves, ncurves):
                     if not closed:
                         break
                     p -= b - a - 1
-                after = _known(vi, p)
+                after = _known(verts, p)
                 if after[0] >= 0:
                     break
             if before[0] != after[0] or before[1] != after[1]:
@@ -1662,7 +1822,7 @@ def assemble(vf, vi, curves, ncurves):
             left, right = -1, -1
             for q in range(first, last + 1):
                 qq = q if q < b else q - (b - 1 - a)
-                left, right = _known(vi, qq)
+                left, right = _known(verts, qq)
                 if left >= 0:
                     break
             if left < 0 or left == right:
@@ -1676,25 +1836,25 @@ def assemble(vf, vi, curves, ncurves):
             pieces[piece, 4] = 1 if (closed and nb == 0) else 0
             for q in range(first, last + 1):
                 qq = q if q < b else q - (b - 1 - a)
-                pv[m, 0] = vf[qq, 0]
-                pv[m, 1] = vf[qq, 1]
+                pv[m, 0] = verts[qq].u
+                pv[m, 1] = verts[qq].w
                 pp[m] = piece
                 pq[m] = qq
                 m += 1
-                kind = vi[qq, 1]
+                kind = verts[qq].kind
                 point = kind == FOLD_X or kind == FOLD_Y or kind == TANGENCY or kind == END \
                     or kind == STALL
                 if kind == CROSSING or kind == CHANGE:
                     for z in range(nb):
                         point = point or breaks[z] == qq
                 if point:
-                    points_f[npoints, 0] = vf[qq, 0]
-                    points_f[npoints, 1] = vf[qq, 1]
-                    points_f[npoints, 2] = vf[qq, 2]
-                    points_f[npoints, 3] = vf[qq, 3]
+                    points_f[npoints, 0] = verts[qq].u
+                    points_f[npoints, 1] = verts[qq].w
+                    points_f[npoints, 2] = verts[qq].residual
+                    points_f[npoints, 3] = verts[qq].error
                     points_i[npoints, 0] = kind
                     points_i[npoints, 1] = k
-                    points_i[npoints, 2] = vi[qq, 3]
+                    points_i[npoints, 2] = verts[qq].other
                     npoints += 1
     return pv[:m], pp[:m], pq[:m], pieces[:npieces], points_f[:npoints], points_i[:npoints]
 
@@ -1747,6 +1907,8 @@ def _hit_around(hit, i, j):
 # -- the compiled tracer: entry points with the model's functions as arguments --------------
 
 _C2 = types.Array(types.int8, 2, "C")
+#: The vertex buffer (:data:`VERTEX` records).
+VERTS = types.Array(numba.from_dtype(VERTEX), 1, "C")
 #: A check raster's arguments (:func:`_raster_all`): the grid kernel's address; x's
 #: values, derived slots and derived values; y's values and derived values.
 RASTER = types.Tuple((types.intp, F1, I1, F2, F1, F2))
@@ -1768,42 +1930,10 @@ CLASS_SIG = types.int64(F1, F2, types.int64)
 ADDRESSES = types.UniTuple(types.intp, 4)
 
 
-def _call_at(context, builder, i, fsig, addresses, args):
-    """Call function ``i`` of :data:`ADDRESSES` (signature ``fsig``) at its address."""
-    return _call_address(context, builder, builder.extract_value(addresses, i), fsig, args)
-
-
-def _call_address(context, builder, address, fsig, args):
-    """Call the compiled function at ``address`` (signature ``fsig``) as numba calls a
-    compiled function, propagating its exception status."""
-    fnty = context.call_conv.get_function_type(fsig.return_type, fsig.args).as_pointer()
-    fn = builder.inttoptr(address, fnty)
-    status, res = context.call_conv.call_function(builder, fn, fsig.return_type, fsig.args,
-                                                  args)
-    with cgutils.if_unlikely(builder, status.is_error):
-        context.call_conv.return_status_propagate(builder, status)
-    return res
-
-
 def _typer(i, fsig, addresses, args):
-    """The signature and code of a call of function ``i`` of :data:`ADDRESSES` with the
-    argument types ``args``, or None where they are not ``fsig``'s.
-
-    numba's first-class functions, the tracer's way of taking the model's before,
-    lower every call with a second path that asks Python for the address where it
-    is missing.  That path (a few hundred instructions at every call) kept LLVM from
-    inlining the small helpers that call the model (``_grad``, ``_side``...), and each
-    of them then counted references to its array arguments on entry and exit with
-    atomic instructions.
-    """
-    if addresses != ADDRESSES or tuple(args) != tuple(fsig.args):
-        return None
-
-    def codegen(context, builder, sig, llargs):
-        res = _call_at(context, builder, i, fsig, llargs[0], llargs[1:])
-        return context.get_dummy_value() if fsig.return_type == types.none else res
-
-    return fsig.return_type(addresses, *args), codegen
+    """An intrinsic's signature and code: a call of function ``i`` of :data:`ADDRESSES`
+    (:func:`phasemap.core.calls.typer`)."""
+    return calls.typer(fsig, addresses, args, index=i, table=ADDRESSES)
 
 
 @intrinsic
@@ -1830,22 +1960,6 @@ def _classify(typingctx, addresses, v, out, layer):
     return _typer(3, CLASS_SIG, addresses, (v, out, layer))
 
 
-@intrinsic
-def _cells(typingctx, address, v, first, lo, hi, inner_values, inner_deriv, flags, fields):
-    """A scene's generated grid kernel ``cells`` (:data:`phasemap.core.codegen.CELLS_SIGNATURE`)
-    at its compiled ``address``: cells lo..hi of the inner axis at the outer state v."""
-    args = (v, first, lo, hi, inner_values, inner_deriv, flags, fields)
-    if types.unliteral(address) != types.intp or \
-            tuple(types.unliteral(a) for a in args) != tuple(CELLS_SIGNATURE.args):
-        return None
-
-    def codegen(context, builder, sig, llargs):
-        _call_address(context, builder, llargs[0], CELLS_SIGNATURE, llargs[1:])
-        return context.get_dummy_value()
-
-    return types.void(types.intp, *CELLS_SIGNATURE.args), codegen
-
-
 _ENTRIES: dict = {}
 
 
@@ -1864,14 +1978,14 @@ def entries() -> dict:
     """
     if not _ENTRIES:
         sig_trace = types.int64(ADDRESSES, F2, I2, B1, F1, F2, types.int64, types.int64,
-                                F1, types.int64, F2, I2, I1, I2, S3, B2, types.float64,
+                                F1, types.int64, VERTS, I1, I2, S3, B2, types.float64,
                                 types.float64, types.boolean)
         sig_seeds = F2(ADDRESSES, B1, F1, types.int64, types.int64, F1, types.int64, B2)
         sig_survey = types.void(ADDRESSES, F1, types.int64, types.int64, F1, F2, F2)
         sig_seed_trace = types.Tuple((_C2, B2, F2, I1, I2, I2, F2, I1, I1, I2, F2,
                                       I2, I2))(
             ADDRESSES, F2, F1, APPLICABLE, RASTER, types.int64, B1, I1, F1,
-            F2, types.int64, types.int64, F1, types.int64, types.int64, F2, I2, I1, I2,
+            F2, types.int64, types.int64, F1, types.int64, types.int64, VERTS, I1, I2,
             S3, types.float64, types.float64)
         sig_thin = F2(ADDRESSES, B1, F1, types.int64, types.int64, F1, types.int64)
         sig_applicable = types.void(ADDRESSES, F1, F2, types.int64, types.int64, F1,
@@ -1913,14 +2027,6 @@ def classifier(model):
     return _CLASSIFIERS.get((model,), (), make)
 
 
-def compiled_address(dispatcher, args) -> int:
-    """The address of the code of ``dispatcher``'s overload for the argument types
-    ``args``, as :func:`_call_address` calls it (numba's calling convention).  The
-    overload stays loaded while its dispatcher lives: keep the dispatcher."""
-    cres = dispatcher.overloads[tuple(args)]
-    return cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name)
-
-
 _FUNCTIONS = Memo("trace.functions")
 
 
@@ -1957,9 +2063,8 @@ def functions(model, conds) -> tuple:
         fns = []
         for fn, sig in ((conds.values, VALUES_SIG), (gradient, GRADIENT_SIG),
                         (hessian, HESSIAN_SIG), (classifier(model), CLASS_SIG)):
-            if tuple(sig.args) not in fn.overloads:
-                fn.compile(sig)  # the hessian, compiled (or loaded) when first needed
-            fns.append(compiled_address(fn, sig.args))
+            # the hessian is compiled (or loaded) when first needed
+            fns.append(calls.address(fn, sig.args))
         return tuple(fns)
 
     return _FUNCTIONS.get((model, mod if mod is not None else conds.values), (), make)

@@ -191,7 +191,7 @@ def _plane(spec: Spec, conditions) -> Threshold | None:
         tr = trace(sl, "n_solutions", spec.tol, only=only)
         n = int(tr.buf.counts[0])
         rows = np.arange(n)
-        rows = rows[np.isin(tr.buf.vi[:n, 2], np.flatnonzero(only))]
+        rows = rows[np.isin(tr.buf.verts["condition"][:n], np.flatnonzero(only))]
         return _best(sl, spec, tr, rows, edge=None, bound=math.nan)
     tr = trace(sl, spec.layer, spec.tol)
     result = _plane_best(sl, spec, tr)
@@ -231,7 +231,7 @@ def _best(sl: Slice, spec: Spec, tr: Traced, rows: np.ndarray, edge, bound) -> T
     """The least (greatest) parameter among the candidate vertices ``rows`` and, where
     the region reaches the parameter's own edge (cells ``edge`` along the other
     axis), that edge."""
-    vf, vi = tr.buf.vf, tr.buf.vi
+    verts = tr.buf.verts
     lo, hi = spec.ranges[spec.param]
     olo, ohi = spec.ranges[spec.others[0]]
     sign = spec.sign
@@ -242,22 +242,22 @@ def _best(sl: Slice, spec: Spec, tr: Traced, rows: np.ndarray, edge, bound) -> T
         return None
     best = None
     if len(rows):
-        pvals = lo + vf[rows, 1] * (hi - lo)
+        pvals = lo + verts["w"][rows] * (hi - lo)
         extreme = np.min(sign * pvals)
         near = rows[sign * pvals <= extreme + spec.tol]
-        q = min(near, key=lambda r: (_PREFERENCE[int(vi[r, 1])], sign * vf[r, 1]))
+        q = min(near, key=lambda r: (_PREFERENCE[int(verts["kind"][r])], sign * verts["w"][r]))
         best = sign * extreme
     edge_value = lo if spec.side == "min" else hi
     if edge is not None and (best is None or sign * edge_value <= sign * best + spec.tol):
         # the region reaches the parameter's own edge: a piece's end there, if any
-        at_edge = [] if not len(rows) else rows[(vi[rows, 1] == T.END)
-                                                & (np.abs(vf[rows, 1] - (0.0 if sign > 0 else 1.0))
+        at_edge = [] if not len(rows) else rows[(verts["kind"][rows] == T.END)
+                                                & (np.abs(verts["w"][rows] - (0.0 if sign > 0 else 1.0))
                                                    <= 1e-15)]
         if len(at_edge):
             q = at_edge[0]
-            other_value = olo + vf[q, 0] * (ohi - olo)
-            cond = condition_name(sl, tr, int(vi[q, 2]))
-            res = float(vf[q, 2])
+            other_value = olo + verts["u"][q] * (ohi - olo)
+            cond = condition_name(sl, tr, int(verts["condition"][q]))
+            res = float(verts["residual"][q])
         else:
             other_value = olo + float(edge[0]) * (ohi - olo)
             cond, res = "", 0.0
@@ -265,10 +265,10 @@ def _best(sl: Slice, spec: Spec, tr: Traced, rows: np.ndarray, edge, bound) -> T
                                                     spec.param: edge_value}, cond, "edge",
                            res, 0.0, bound, spec.side)
     else:
-        kind = int(vi[q, 1])
-        names = [condition_name(sl, tr, int(vi[q, 2]))]
-        if kind in (T.CROSSING, T.TANGENCY) and vi[q, 3] >= 0:
-            names.append(condition_name(sl, tr, int(vi[q, 3])))
+        kind = int(verts["kind"][q])
+        names = [condition_name(sl, tr, int(verts["condition"][q]))]
+        if kind in (T.CROSSING, T.TANGENCY) and verts["other"][q] >= 0:
+            names.append(condition_name(sl, tr, int(verts["other"][q])))
         if kind == T.FOLD_Y:
             kname = f"fold_{spec.param}"
         elif kind == T.FOLD_X:
@@ -276,10 +276,10 @@ def _best(sl: Slice, spec: Spec, tr: Traced, rows: np.ndarray, edge, bound) -> T
         else:
             kname = {T.CROSSING: "crossing", T.END: "end", T.TANGENCY: "tangency",
                      T.REGULAR: "flat", T.STALL: "stall", T.CHANGE: "change"}[kind]
-        pv = lo + vf[q, 1] * (hi - lo)
-        result = Threshold(spec.param, float(pv), {spec.others[0]: olo + vf[q, 0] * (ohi - olo),
+        pv = lo + verts["w"][q] * (hi - lo)
+        result = Threshold(spec.param, float(pv), {spec.others[0]: olo + verts["u"][q] * (ohi - olo),
                                                    spec.param: float(pv)},
-                           " ".join(names), kname, float(vf[q, 2]), float(vf[q, 3]) * spec.tol,
+                           " ".join(names), kname, float(verts["residual"][q]), float(verts["error"][q]) * spec.tol,
                            bound, spec.side)
     if math.isfinite(bound) and sign * result.value > sign * bound + spec.tol:
         raise ValueError(f"{sl.model.name}: the exact threshold {result.value!r} lies beyond "

@@ -12,6 +12,7 @@ from typing import Mapping
 import numpy as np
 import xarray as xr
 
+from phasemap.core import calls
 from phasemap.core.memo import Memo
 from phasemap.core import args as _args
 from phasemap.atlas.dataset import cf_header
@@ -263,13 +264,12 @@ class _Buffers:
     """The growing vertex buffers of a trace."""
 
     def __init__(self, nc: int, vertices: int = 1 << 14, curves: int = 1 << 10):
-        self.vf = np.empty((vertices, 4))
-        self.vi = np.empty((vertices, 7), dtype=np.int64)
+        self.verts = np.empty(vertices, dtype=T.VERTEX)
         self.curves = np.empty((curves, 4), dtype=np.int64)
         self.counts = np.zeros(3, dtype=np.int64)
 
     def grown(self) -> "_Buffers":
-        bigger = _Buffers(0, 4 * self.vf.shape[0], 4 * self.curves.shape[0])
+        bigger = _Buffers(0, 4 * self.verts.shape[0], 4 * self.curves.shape[0])
         return bigger
 
 
@@ -303,8 +303,8 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
         active = np.empty(nc, dtype=bool)
         classes, near, seeds, group, grp, changes, *assembled, bad = run["seed_trace"](
             fns, _SURVEY, sl.base.copy(), _applicable_args(sl), _raster_args(sl, layer, axes),
-            NEAR, active, _rank(sl.conds), v, out, ix, iy, geo, code, seed_nodes, buf.vf,
-            buf.vi, buf.counts, buf.curves, mark, tol_u, tol_w)
+            NEAR, active, _rank(sl.conds), v, out, ix, iy, geo, code, seed_nodes, buf.verts,
+            buf.counts, buf.curves, mark, tol_u, tol_w)
     else:
         active, group = _active(sl)
         if only is not None:
@@ -312,7 +312,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
         grp = _ranked(sl.conds, group)
         near = np.ones((1, 1), dtype=bool)
         seeds = run["seeds"](fns, active, v, ix, iy, geo, seed_nodes, near)
-        run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
+        run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.verts,
                      buf.counts, buf.curves, mark, near, tol_u, tol_w, only is None)
     thin = run["thin"](fns, active, v, ix, iy, geo, seed_nodes)
     extra = thin[thin[:, 3] == 0.0]
@@ -323,15 +323,15 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
             cell = np.clip((extra[:, 1:3] * n).astype(np.int64), 0, n - 1)
             near[cell[:, 0], cell[:, 1]] = True
         if not buf.counts[2]:
-            more = run["trace"](fns, extra, grp, active, v, out, ix, iy, geo, code, buf.vf,
-                                buf.vi, buf.counts, buf.curves, mark, near, tol_u, tol_w,
+            more = run["trace"](fns, extra, grp, active, v, out, ix, iy, geo, code, buf.verts,
+                                buf.counts, buf.curves, mark, near, tol_u, tol_w,
                                 only is None)
         seeds = np.concatenate((seeds, extra))
     full = bool(buf.counts[2])
     while buf.counts[2]:  # the buffers were full: again with larger ones
         buf = buf.grown()
         mark[:] = 0
-        run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
+        run["trace"](fns, seeds, grp, active, v, out, ix, iy, geo, code, buf.verts,
                      buf.counts, buf.curves, mark, near, tol_u, tol_w, only is None)
     if check_cells and not full and not more:
         traced = Traced(*assembled, group, active, buf)
@@ -351,10 +351,10 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
                     for q in range(len(sel) - 1):
                         T._mark(fine, int(traced.pieces[p, 1]), sel[q, 0], sel[q, 1],
                                 sel[q + 1, 0], sel[q + 1, 1])
-                run["trace"](fns, rescue, grp, active, v, out, ix, iy, geo, code, buf.vf, buf.vi,
+                run["trace"](fns, rescue, grp, active, v, out, ix, iy, geo, code, buf.verts,
                              buf.counts, buf.curves, fine, near, tol_u, tol_w, True)
                 if buf.counts[2]:
-                    raise RuntimeError(f"{m.name}: more than {buf.vf.shape[0]} vertices")
+                    raise RuntimeError(f"{m.name}: more than {buf.verts.shape[0]} vertices")
                 traced = _assembled(buf, group, active)
                 traced.classes, traced.unresolved = classes, _unresolved(thin, mark)
                 bad = T._uncovered(check_cells, changes, traced.pv, traced.pp)
@@ -395,7 +395,7 @@ def _ranked(conds: Conditions, group: np.ndarray) -> np.ndarray:
 
 
 def _assembled(buf: _Buffers, group, active) -> Traced:
-    pv, pp, pq, pieces, pf, pi = T.assemble(buf.vf, buf.vi, buf.curves, int(buf.counts[1]))
+    pv, pp, pq, pieces, pf, pi = T.assemble(buf.verts, buf.curves, int(buf.counts[1]))
     return Traced(pv, pp, pq, pieces, pf, pi, group, active, buf)
 
 
@@ -449,7 +449,7 @@ def _raster_kernel(m: Model, x: str, y: str, layer: str) -> tuple:
         slot = {n: i for i, n in enumerate(m.inputs)}
         cells = grid_kernel(m, (layers_for(m)[layer],), y)
         # the kernel is kept with its address, so that the code stays loaded
-        return (cells, T.compiled_address(cells, CELLS_SIGNATURE.args),
+        return (cells, calls.address(cells, CELLS_SIGNATURE.args),
                 from_x, [d for d in m.derived if d.source == y],
                 np.array([slot[d.name] for d in from_x], dtype=np.int64))
 

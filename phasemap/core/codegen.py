@@ -39,6 +39,7 @@ import numba.extending
 import numpy as np
 from numba import prange
 
+from phasemap.core import calls
 from phasemap.core.memo import Memo
 from phasemap.core import numerics as nx
 from phasemap._version import __version__
@@ -443,6 +444,15 @@ CHUNK = 4096
 CELLS_SIGNATURE = numba.void(F1, numba.int64, numba.int64, numba.int64, F1, F2, S2, F2)
 
 
+@numba.extending.intrinsic
+def call_cells(typingctx, at, v, first, lo, hi, inner_values, inner_deriv, flags, fields):
+    """A generated ``cells`` (:data:`CELLS_SIGNATURE`) at its compiled address ``at``
+    (:func:`phasemap.core.calls.address`): cells lo..hi of the inner axis at the outer
+    state v."""
+    return calls.typer(CELLS_SIGNATURE, at,
+                       (v, first, lo, hi, inner_values, inner_deriv, flags, fields))
+
+
 @numba.njit(inline="always")
 def set_cell(v, cell, shape, axis_slot, axis_values, deriv_slot, deriv_values):
     """Put the axis values of grid cell ``cell`` (C order) and their derived inputs into ``v``."""
@@ -461,10 +471,10 @@ def set_cell(v, cell, shape, axis_slot, axis_values, deriv_slot, deriv_values):
 TASKS_PER_THREAD = 4
 
 
-def _drive(cells, ntasks, base, outer_shape, outer_slot, outer_values, outer_dslot,
+def _drive(cells_at, ntasks, base, outer_shape, outer_slot, outer_values, outer_dslot,
            outer_dvalues, inner_values, inner_deriv, flags, fields):
-    """Run ``cells`` over every outer cell (and chunk of the inner axis), in parallel
-    as ``ntasks`` tasks (fewer if there are fewer items)."""
+    """Run the ``cells`` at the address ``cells_at`` over every outer cell (and chunk of
+    the inner axis), in parallel as ``ntasks`` tasks (fewer if there are fewer items)."""
     nod = outer_shape.shape[0]
     nouter = 1
     for d in range(nod):
@@ -479,8 +489,8 @@ def _drive(cells, ntasks, base, outer_shape, outer_slot, outer_values, outer_dsl
             o = item // nchunks
             lo = (item % nchunks) * CHUNK
             set_cell(v, o, outer_shape, outer_slot, outer_values, outer_dslot, outer_dvalues)
-            cells(v, o * ninner, lo, min(lo + CHUNK, ninner), inner_values, inner_deriv, flags,
-                  fields)
+            call_cells(cells_at, v, o * ninner, lo, min(lo + CHUNK, ninner), inner_values,
+                       inner_deriv, flags, fields)
 
 
 _DRIVER = []
@@ -489,36 +499,21 @@ _DRIVER = []
 def driver():
     """The one parallel driver of every grid kernel (compiled once, cached on disk).
 
-    It takes the scene's generated ``cells`` as a first-class function, so
-    numba's parfor machinery (a few seconds of compile time, mostly spent
-    re-optimising the loop body it inlines) runs once, not once per scene shape.
-    It releases the GIL: a worker thread takes it to find the address of a
-    ``cells`` passed by address (:func:`run_grid`), and with the calling thread
-    holding it a 2-thread map waited 20-30 ms for it.
+    It takes the scene's generated ``cells`` by the address of its machine code
+    (:mod:`phasemap.core.calls`), so numba's parfor machinery (a few seconds of compile
+    time, mostly spent re-optimising the loop body it inlines) runs once, not once per
+    scene shape.  It releases the GIL, so that a map in a thread of its own does not
+    wait for the caller's.
     """
     if not _DRIVER:
-        sig = numba.void(numba.types.FunctionType(CELLS_SIGNATURE), numba.int64, F1, I1, I1,
-                         F2, I2, F3, F1, F2, S2, F2)
+        sig = numba.void(numba.intp, numba.int64, F1, I1, I1, F2, I2, F3, F1, F2, S2, F2)
         _DRIVER.append(numba.njit(sig, parallel=True, nogil=True, cache=True,
                                   error_model="numpy")(_drive))
     return _DRIVER[0]
 
 
-class _FirstClass(numba.types.CompileResultWAP):
-    """A generated ``cells`` as the driver takes it: its compiled address, and its
-    numba type made once (numba would build a new type at every call)."""
-
-    def __init__(self, cells):
-        super().__init__(cells.overloads[CELLS_SIGNATURE.args])
-        self.numba_type = numba.types.FunctionType(self.signature())
-
-
-@numba.extending.typeof_impl.register(_FirstClass)
-def _typeof_first_class(value, context):
-    return value.numba_type
-
-
-_FIRST_CLASS = Memo("codegen.first_class")
+#: a generated ``cells`` -> the address of its machine code (the key keeps it alive)
+_ADDRESSES = Memo("codegen.cells_addresses")
 
 
 def run_grid(cells, base, outer_shape, outer_slot, outer_values, outer_dslot, outer_dvalues,
@@ -529,8 +524,8 @@ def run_grid(cells, base, outer_shape, outer_slot, outer_values, outer_dslot, ou
     function, numba would type it again at every call (0.1 to 0.3 ms, more
     than a small map's cells).
     """
-    first_class = _FIRST_CLASS.get((cells,), (), lambda: _FirstClass(cells))
-    driver()(first_class, TASKS_PER_THREAD * numba.get_num_threads(), base, outer_shape,
+    at = _ADDRESSES.get((cells,), (), lambda: calls.address(cells, CELLS_SIGNATURE.args))
+    driver()(at, TASKS_PER_THREAD * numba.get_num_threads(), base, outer_shape,
              outer_slot, outer_values, outer_dslot, outer_dvalues, inner_values, inner_deriv,
              flags, fields)
 

@@ -427,21 +427,21 @@ def _through_impacts(m: Model, integrate, v, y0, run, names, full):
     A motion that meets no such state is the integrator's own, bit for bit."""
     t_end, rtol, atol, h_max, max_steps, max_events, save, te = run
     res = integrate(v, y0, *run, NO_STOP)
-    if int(res[0]) != ev.NO_SOLUTION or getattr(m, "declaration", None) is None:
+    if int(res.fate) != ev.NO_SOLUTION or getattr(m, "declaration", None) is None:
         return (*res, [])
     parts, impacts, t0 = [res], [], 0.0
-    while int(res[0]) == ev.NO_SOLUTION and len(impacts) < MAX_IMPACTS:
-        jump = _impact_without_collision(m, names, res[2], full)
+    while int(res.fate) == ev.NO_SOLUTION and len(impacts) < MAX_IMPACTS:
+        jump = _impact_without_collision(m, names, res.y, full)
         if jump is None:
             break
         y0, kick = jump
-        t0 += float(res[1])
+        t0 += float(res.t)
         impacts.append((t0, *kick))
-        steps = max_steps - sum(int(r[4]) for r in parts)
-        events = max_events - sum(len(r[6]) - 1 for r in parts)
+        steps = max_steps - sum(int(r.n_steps) for r in parts)
+        events = max_events - sum(len(r.events) - 1 for r in parts)
         if steps <= 0 or events <= 1 or t0 >= t_end:
             break
-        done = sum(len(r[7]) for r in parts)
+        done = sum(len(r.y_eval) for r in parts)
         res = integrate(v, y0, t_end - t0, rtol, atol, h_max, steps, events, save,
                         te[done:] - t0, NO_STOP)
         parts.append(res)
@@ -457,7 +457,7 @@ def _joined(parts, starts):
     offsets = [0.0, *starts[:len(parts) - 1]]
     points, events, evals = [], [], []
     for k, (r, t0) in enumerate(zip(parts, offsets)):
-        pts, evs = r[5].copy(), r[6].copy()
+        pts, evs = r.points.copy(), r.events.copy()
         pts[:, 0] += t0
         evs[:, 0] += t0
         if k:
@@ -466,10 +466,10 @@ def _joined(parts, starts):
             evs = evs[:-1]
         points.append(pts)
         events.append(evs)
-        evals.append(r[7])
+        evals.append(r.y_eval)
     last = parts[-1]
-    return (last[0], float(last[1]) + offsets[-1], last[2],
-            sum(int(r[3]) for r in parts), sum(int(r[4]) for r in parts),
+    return (last.fate, float(last.t) + offsets[-1], last.y,
+            sum(int(r.n_reversals) for r in parts), sum(int(r.n_steps) for r in parts),
             np.concatenate(points), np.concatenate(events), np.concatenate(evals))
 
 

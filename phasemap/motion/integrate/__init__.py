@@ -66,7 +66,9 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 from numba import types as nb_types
+from numba.extending import intrinsic
 
+from phasemap.core import calls
 from phasemap.core.memo import Memo
 from phasemap.motion.integrate import dop853 as _dop853
 from phasemap.motion.integrate import dopri5 as _dopri5
@@ -94,7 +96,7 @@ def unpack(points, events):
             events[:, 3:], events[:, 2])
 
 
-def _fate_drive(integrate, y_slot, base, shape, axis_slot, axis_values, deriv_slot,
+def _fate_drive(integrate_at, y_slot, base, shape, axis_slot, axis_values, deriv_slot,
                 deriv_values, y0_fixed, t_end, rtol, atol, h_max, max_steps, max_events,
                 pos_col, fate, n_rev, t_final, pos_rest, stop):
     """Integrate from every cell of a grid of initial conditions; record how each ends.
@@ -102,8 +104,8 @@ def _fate_drive(integrate, y_slot, base, shape, axis_slot, axis_values, deriv_sl
     ``stop`` (one int64), set nonzero by another thread, ends the work within a step
     (:func:`run_stoppable`); the cells not done are left as they were.
 
-    ``integrate`` is a model's integrator, taken as a first-class function, so
-    that this parallel driver compiles once for every model and method (and
+    ``integrate_at`` is the address of a model's integrator (:mod:`phasemap.core.calls`),
+    so that this parallel driver compiles once for every model and method (and
     numba's parfor lowering does not re-optimise the integrator inside it).
     Work units interleave over the grid (unit u takes cells u, u + U, ...), so
     that both threads see the same mix of quick and slow cells.
@@ -130,13 +132,13 @@ def _fate_drive(integrate, y_slot, base, shape, axis_slot, axis_values, deriv_sl
             for i in range(y_slot.shape[0]):
                 if y_slot[i] >= 0:
                     y0[i] = v[y_slot[i]]
-            res = integrate(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, False,
-                            no_eval, stop)
-            fate[cell] = res[0]
-            n_rev[cell] = res[3]
-            t_final[cell] = res[1]
+            res = call_integrate(integrate_at, v, y0, t_end, rtol, atol, h_max, max_steps,
+                                 max_events, False, no_eval, stop)
+            fate[cell] = res.fate
+            n_rev[cell] = res.n_reversals
+            t_final[cell] = res.t
             for j in range(pos_col.shape[0]):
-                pos_rest[j, cell] = res[2][pos_col[j]] if res[0] == ev.REST else np.nan
+                pos_rest[j, cell] = res.y[pos_col[j]] if res.fate == ev.REST else np.nan
 
 
 #: The argument types of every integrator (see templates._integrate_template).
@@ -145,15 +147,29 @@ INTEGRATE_ARGS = (F1, F1, nb_types.float64, nb_types.float64, nb_types.float64,
 #: The ``stop`` of a motion nothing stops (simulate's: a Ctrl-C there ends the call between
 #: its compiled pieces).
 NO_STOP = np.zeros(1, dtype=np.int64)
-_FATE_DRIVERS = Memo("integrate.fate_drivers")
+#: What every integrator returns (a :data:`phasemap.motion.integrate.templates.Motion`).
+MOTION = nb_types.NamedTuple((nb_types.int64, nb_types.float64, F1, nb_types.int64,
+                              nb_types.int64, F2, F2, F2), tp.Motion)
+#: Every integrator's signature.
+INTEGRATE_SIGNATURE = MOTION(*INTEGRATE_ARGS)
 
 
-def _fate_driver(integrate):
-    """The parallel fate driver for integrators of ``integrate``'s signature (compiled once)."""
-    sig = integrate.nopython_signatures[0]
+@intrinsic
+def call_integrate(typingctx, at, v, y0, t_end, rtol, atol, h_max, max_steps, max_events,
+                   save, t_eval, stop):
+    """A model's integrator (:data:`INTEGRATE_SIGNATURE`) at its compiled address ``at``."""
+    return calls.typer(INTEGRATE_SIGNATURE, at, (v, y0, t_end, rtol, atol, h_max, max_steps,
+                                                 max_events, save, t_eval, stop))
+
+
+_DRIVERS = Memo("integrate.drivers")
+
+
+def _fate_driver():
+    """The parallel fate driver of every integrator (compiled once, cached on disk)."""
 
     def make():
-        fsig = nb_types.void(nb_types.FunctionType(sig), I1, F1, I1, I1, F2, I2, F3, F1,
+        fsig = nb_types.void(nb_types.intp, I1, F1, I1, I1, F2, I2, F3, F1,
                              nb_types.float64, nb_types.float64, nb_types.float64,
                              nb_types.float64, nb_types.int64, nb_types.int64, I1,
                              nb_types.Array(nb_types.int8, 1, "C"),
@@ -162,10 +178,10 @@ def _fate_driver(integrate):
         return njit(fsig, parallel=True, nogil=True, cache=True,
                     error_model="numpy")(_fate_drive)
 
-    return _FATE_DRIVERS.get((), (sig,), make)
+    return _DRIVERS.get((), ("fate",), make)
 
 
-def _batch_drive(integrate, y_slot, v, y0s, t_end, rtol, atol, h_max, max_steps, max_events,
+def _batch_drive(integrate_at, y_slot, v, y0s, t_end, rtol, atol, h_max, max_steps, max_events,
                  save, t_eval, stop):
     """Integrate from every row of ``y0s`` (one compiled call for a sweep of starts).
 
@@ -189,13 +205,13 @@ def _batch_drive(integrate, y_slot, v, y0s, t_end, rtol, atol, h_max, max_steps,
         for j in range(y_slot.shape[0]):
             if y_slot[j] >= 0:
                 v[y_slot[j]] = y0[j]
-        res = integrate(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, save, t_eval,
-                        stop)
-        head[i, 0] = res[0]
-        head[i, 1] = res[1]
-        head[i, 2] = res[3]
-        head[i, 3] = res[4]
-        p, e, ye = res[5], res[6], res[7]
+        res = call_integrate(integrate_at, v, y0, t_end, rtol, atol, h_max, max_steps,
+                             max_events, save, t_eval, stop)
+        head[i, 0] = res.fate
+        head[i, 1] = res.t
+        head[i, 2] = res.n_reversals
+        head[i, 3] = res.n_steps
+        p, e, ye = res.points, res.events, res.y_eval
         pts = grow(pts, n_pts + p.shape[0])
         pts[n_pts:n_pts + p.shape[0]] = p
         n_pts += p.shape[0]
@@ -211,18 +227,14 @@ def _batch_drive(integrate, y_slot, v, y0s, t_end, rtol, atol, h_max, max_steps,
     return head, pts[:n_pts], point_end, evs[:n_evs], event_end, yev[:n_yev], eval_end
 
 
-_BATCH_DRIVERS = Memo("integrate.batch_drivers")
-
-
-def _batch_driver(integrate):
-    """The batch driver for integrators of ``integrate``'s signature (compiled once)."""
-    sig = integrate.nopython_signatures[0]
+def _batch_driver():
+    """The batch driver of every integrator (compiled once, cached on disk)."""
 
     def make():
-        args = (nb_types.FunctionType(sig), I1, F1, F2, *INTEGRATE_ARGS[2:])
+        args = (nb_types.intp, I1, F1, F2, *INTEGRATE_ARGS[2:])
         return njit(args, cache=True, error_model="numpy")(_batch_drive)
 
-    return _BATCH_DRIVERS.get((), (sig,), make)
+    return _DRIVERS.get((), ("batch",), make)
 
 
 def run_batch(model: Model, method: str, v: np.ndarray, y0s: np.ndarray, *args):
@@ -230,7 +242,8 @@ def run_batch(model: Model, method: str, v: np.ndarray, y0s: np.ndarray, *args):
     ``args`` are the integrator's from ``t_end`` on."""
     integrate, _ = kernels(model, method)
     y_slot = stage_kernels(model).constants["Y_SLOT"]
-    return _batch_driver(integrate)(integrate, y_slot, v, y0s, *args, NO_STOP)
+    return _batch_driver()(calls.address(integrate, INTEGRATE_ARGS), y_slot, v, y0s, *args,
+                           NO_STOP)
 
 
 def check_method(method, model_name: str) -> str:
@@ -296,14 +309,17 @@ def _kernels(model: Model, method: str):
         consts[name] = specialize(template, model, f"{name.lower()}_{tag}", inline=inline,
                                   **consts)
     integrate = consts["INTEGRATE"]
-    integrate.compile(INTEGRATE_ARGS)
+    at = calls.address(integrate, INTEGRATE_ARGS)
+    if integrate.nopython_signatures[0] != INTEGRATE_SIGNATURE:  # a template's change
+        raise TypeError(f"{model.name}: the integrator's signature is "
+                        f"{integrate.nopython_signatures[0]}, not {INTEGRATE_SIGNATURE}")
     y_slot = consts["Y_SLOT"]
 
-    driver = _fate_driver(integrate)  # compiled here, not in the thread that runs it
+    driver = _fate_driver()  # compiled here, not in the thread that runs it
 
     def fate_map(*args):
         """Run the shared parallel fate driver with this model's integrator."""
-        return driver(integrate, y_slot, *args)
+        return driver(at, y_slot, *args)
 
     return integrate, fate_map
 

@@ -179,9 +179,10 @@ def _job(p: Problem, ref: Reference, method: str, tol: float):
         go = kernel_run(p, tol, PHASEMAP_METHODS[method])
 
         def measure(r):
-            return dict(_time_errors(ref, p.t_save[:len(r[7])], r[7], r[2]),
-                        fate=ev.Event(int(r[0])).name.lower(),
-                        n_reversals=int(r[3]), n_steps=int(r[4]), nfev=math.nan)
+            return dict(_time_errors(ref, p.t_save[:len(r.y_eval)], r.y_eval, r.y),
+                        fate=ev.Event(int(r.fate)).name.lower(),
+                        n_reversals=int(r.n_reversals), n_steps=int(r.n_steps),
+                        nfev=math.nan)
     elif method == "simulate":
         values = dict(p.values)
 
