@@ -12,7 +12,9 @@ and the median of the paired ratios B/A.  The calls:
   of the wheel (the integrator, DOPRI5 and DOP853);
 * a 64^2 fate map of the hinge pendulum (the fate driver);
 * ``phase_curve`` of the hinge pendulum (the phase tracer);
-* ``boundaries`` of the rod's first-paradox slice (the bifurcation tracer).
+* ``boundaries`` of the rod's first-paradox slice (the bifurcation tracer), and the trace
+  alone (``tracing.trace``: seeding, marching, the check raster) of the five slices of
+  ``benchmarks/boundaries.py``, 20 times each: a boundaries call is mostly Python.
 
     python benchmarks/tree_ab.py --a ../before --b . [--repeat 5] [--no-write]
 
@@ -59,6 +61,17 @@ CALLS = {
                          "delta=0.01) for _ in range(5)]",
     "boundaries rod": "phasemap.boundaries('painleve_rod', {'theta': (0.2, 1.5), 'f': (0, 3)}, "
                       "fixed={'xdot': -1.0, 'omega': 0.0})",
+    "trace 5 slices x 20": "[tracing.trace(tracing.make_slice(m, a, f), ly, 1e-10) for m, a, f, ly in "
+                           "[('painleve_rod', {'theta': (0.2, 1.5), 'f': (0.0, 3.0)}, "
+                           "{'xdot': -1.0, 'omega': 0.0}, 'n_solutions'), "
+                           "('elliptic_pendulum', {'phi': (-3.14159, 3.14159), 'f': (0.0, 6.0)}, "
+                           "{'xdot': 1.0, 'omega': 0.0}, 'n_solutions'), "
+                           "('ladder', {'phi': (0.05, 1.5), 'f': (0.05, 3.0)}, {'omega': 0.0}, "
+                           "'stagnation'), "
+                           "('hinge_pendulum', {'phi': (-3.0, 3.0), 'delta': (0.05, 1.4)}, "
+                           "{'omega': 0.0}, 'stagnation'), "
+                           "('wheel', {'phi': (-3.14159, 3.14159), 'delta': (0.0, 1.0)}, "
+                           "{'omega': 0.0}, 'stagnation')] for _ in range(20)]",
 }
 
 CHILD = """
@@ -66,6 +79,7 @@ import json, sys, time, warnings
 import numba, numpy as np
 numba.set_num_threads(1)
 import phasemap
+from phasemap.bifurcation import tracing
 warnings.simplefilter("ignore")
 call = compile(sys.argv[1], "call", "eval")
 eval(call)  # compiles (or loads) what the call needs

@@ -44,9 +44,10 @@ PARTS = ("core", "declare", "systems", "atlas", "motion", "maps", "bifurcation",
 MAX_LINES = 800
 #: Files allowed over MAX_LINES because they hold one concept each.
 LONG: dict[str, str] = {
-    "phasemap/bifurcation/_trace.py": "the compiled boundary tracer: its kernels share one "
-    "set of numba intrinsics and vertex records (splitting _march into named steps is "
-    "issue 43 item 4)",
+    "phasemap/bifurcation/_trace.py": "the compiled boundary tracer, one concept: its "
+    "entry points, the march's named steps and the curve geometry they call are one "
+    "cached compilation, and numba keys a cached function on its own file alone (a "
+    "helper edited in another file would leave the entry points stale in the cache)",
     "phasemap/motion/phase/tracer.py": "the numba pieces of one phase-curve stage and of a "
     "curve, which compile together",
 }

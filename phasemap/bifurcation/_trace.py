@@ -715,13 +715,6 @@ def _jump(F, k, v, ix, iy, geo, g, H, u, w, tu, tw):
 
 
 @njit(cache=True, error_model="numpy")
-def _sides_of(sl, k, u, w, tu, tw, eps, cvp):
-    """:func:`_sides_with` in a march's :data:`Slice`."""
-    return _sides_with(sl.F, k, sl.grp, sl.active, sl.v, sl.g, sl.out, sl.layer, sl.ix, sl.iy,
-                       sl.geo, u, w, tu, tw, eps, cvp, sl.scr)
-
-
-@njit(cache=True, error_model="numpy")
 def _step_length(kappa):
     """The step that keeps the chord within :data:`CHORD` and the turn within
     :data:`ANGLE` at the curvature ``kappa``, at most :data:`H_MAX`."""
@@ -732,48 +725,33 @@ def _step_length(kappa):
 
 
 @njit(cache=True, error_model="numpy")
-def _curvature(F, k, v, ix, iy, geo, g, H, u, w, tu, tw, n):
-    """The curvature of the zero set of condition k at (u, w), whose unit tangent is
-    (tu, tw) and gradient norm n."""
-    c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, u, w, g, H)
+def _kappa(tu, tw, huu, huw, hww, n):
+    """The curvature of a zero set whose unit tangent is (tu, tw), from the Hessian
+    (huu, huw, hww) of its condition and the gradient's norm n."""
     return abs(tu * tu * huu + 2.0 * tu * tw * huw + tw * tw * hww) / n
 
 
 @njit(cache=True, error_model="numpy")
-def _predict(sl, k, u, w, tu, tw, h, finish):
-    """A march's next vertex: the point h along the tangent (pu, pw), corrected onto the
-    curve (ok, qu, qw, residual), its tangent oriented along the march (qtu, qtw), its
-    gradient norm and tie scale; whether the curve leaves the slice within the step, and
-    a point beyond the edge where it does (xu, xw).
-
-    Where the curve turns back in an axis between two vertices inside the slice and that
-    fold lies beyond an edge, the curve leaves the slice there and comes back (a loop
-    that the edge cuts by less than a step).  With ``finish`` nothing is corrected.
-    """
-    F, v, ix, iy, geo, g = sl.F, sl.v, sl.ix, sl.iy, sl.geo, sl.g
-    pu = u + h * tu
-    pw = w + h * tw
-    ok, qu, qw, res, st, qs, qcu, qcw = False, pu, pw, np.inf, np.inf, 0.0, 0.0, 0.0
-    if not finish:
-        ok, qu, qw, res, st, qs, qcu, qcw = _correct(F, k, v, ix, iy, geo, g, pu, pw, tu, tw)
-    leaves = (ok and not _inside(qu, qw, 0.0)) or (not ok and not _inside(pu, pw, 0.0))
-    xu, xw = (qu, qw) if ok else (pu, pw)
-    qtu, qtw, qn, qs = _orient(qs, qcu, qcw, tu, tw)
-    if ok and not leaves and not finish and (tu * qtu < 0.0 or tw * qtw < 0.0):
-        for axis in range(2):
-            a0 = tu if axis == 0 else tw
-            a1 = qtu if axis == 0 else qtw
-            if a0 * a1 < 0.0:
-                okf, fu, fw, resf, errf = _fold_on_step(F, axis, k, v, ix, iy, geo, g, sl.H,
-                                                        u, w, qu, qw, a0, a1, sl.tol_u,
-                                                        sl.tol_w)
-                # beyond the edge by more than the tolerance (a fold on it, to the
-                # tolerance, is a loop that touches the edge)
-                if okf and not _inside(fu, fw, max(sl.tol_u, sl.tol_w)) \
-                        and math.hypot(fu - u, fw - w) <= 2.0 * h:
-                    leaves = True
-                    xu, xw = fu, fw
-    return ok, pu, pw, qu, qw, res, qtu, qtw, qn, qs, leaves, xu, xw
+def _fold_beyond_edge(sl, k, u, w, qu, qw, tu, tw, qtu, qtw, h, xu, xw):
+    """The curve turns back in an axis between the vertices (u, w) and (qu, qw), both in
+    the slice: where that fold lies beyond an edge by more than the tolerance, the curve
+    leaves the slice there and comes back (a loop that the edge cuts by less than a
+    step).  Returns (leaves, a point beyond the edge: the fold; else (xu, xw))."""
+    leaves = False
+    for axis in range(2):
+        a0 = tu if axis == 0 else tw
+        a1 = qtu if axis == 0 else qtw
+        if a0 * a1 < 0.0:
+            okf, fu, fw, resf, errf = _fold_on_step(sl.F, axis, k, sl.v, sl.ix, sl.iy, sl.geo,
+                                                    sl.g, sl.H, u, w, qu, qw, a0, a1, sl.tol_u,
+                                                    sl.tol_w)
+            # beyond the edge by more than the tolerance (a fold on it, to the
+            # tolerance, is a loop that touches the edge)
+            if okf and not _inside(fu, fw, max(sl.tol_u, sl.tol_w)) \
+                    and math.hypot(fu - u, fw - w) <= 2.0 * h:
+                leaves = True
+                xu, xw = fu, fw
+    return leaves, xu, xw
 
 
 @njit(cache=True, error_model="numpy")
@@ -793,15 +771,14 @@ def _leave(sl, k, u, w, tu, tw, h, xu, xw):
 
 
 @njit(cache=True, error_model="numpy")
-def _confirm(sl, st, k, u, w, tu, tw, eps, cv, la, ra):
-    """Sample the sides of the last vertex appended, (u, w), not sampled yet: True where
-    they are the classes (la, ra) of the last sampled vertex (written to the vertex),
-    False where the classes changed in between (the march goes back)."""
-    lc, rc = _sides_of(sl, k, u, w, tu, tw, eps, cv)
+def _confirmed(verts, counts, lc, rc, la, ra):
+    """The side classes (lc, rc) sampled at the last vertex appended, not sampled before:
+    True where they are the classes (la, ra) of the last sampled vertex (written to the
+    vertex), False where the classes changed in between (the march goes back)."""
     if lc == la and rc == ra and lc >= 0 and rc >= 0:
-        q = st.counts[0] - 1
-        st.verts[q].left = lc
-        st.verts[q].right = rc
+        q = counts[0] - 1
+        verts[q].left = lc
+        verts[q].right = rc
         return True
     return False
 
@@ -847,77 +824,54 @@ def _closes(su, sw, tu0, tw0, u, w, qu, qw, h):
 
 
 @njit(cache=True, error_model="numpy")
-def _happens(sl, k, tu, tw, qtu, qtw, cv0, cv1):
-    """Something happens on a step whose ends' condition values are cv0 and cv1: the
-    curve turns back in an axis, or another condition (not of k's group) changes sign or
-    starts or stops vanishing with this one."""
-    event = tu * qtu < 0.0 or tw * qtw < 0.0
-    grp, active, cs = sl.grp, sl.active, sl.cs
-    for j in range(active.shape[0]):
-        if active[j] and grp[j, 0] != grp[k, 0]:
-            z0 = abs(cv0[j]) <= COVANISH * cs[j]
-            z1 = abs(cv1[j]) <= COVANISH * cs[j]
-            event = event or z0 != z1 or (not z0 and cv0[j] * cv1[j] < 0.0)
-    return event
+def _crossing(sl, k, j, u, w, qu, qw, c0, c1):
+    """Where condition j, whose values at the curve points (u, w) and (qu, qw) are c0 and
+    c1 of opposite signs, crosses the curve of k between them: Newton from the chord's
+    zero; where Newton goes elsewhere, bisection of c_j on the curve first.  Returns
+    (where along the step, u, w, residual, error)."""
+    F, v, ix, iy, geo, g, H = sl.F, sl.v, sl.ix, sl.iy, sl.geo, sl.g, sl.H
+    tol_u, tol_w = sl.tol_u, sl.tol_w
+    du, dw = qu - u, qw - w
+    length2 = du * du + dw * dw
+    a = c0 / (c0 - c1)
+    ok, xu, xw, res, err = _solve(F, 0, k, j, v, ix, iy, geo, g, H, u + a * du, w + a * dw,
+                                  tol_u, tol_w)
+    t = ((xu - u) * du + (xw - w) * dw) / length2
+    if not (ok and -0.25 <= t <= 1.25):
+        lo, hi = 0.0, 1.0
+        ln = math.sqrt(length2)
+        for it in range(60):
+            mid = 0.5 * (lo + hi)
+            okc, mu, mw, r3, s3, sc, ac, bc = _correct(F, k, v, ix, iy, geo, g, u + mid * du,
+                                                       w + mid * dw, du / ln, dw / ln)
+            cj, sj, aj, bj = _grad(F, j, v, ix, iy, geo, mu, mw, g)
+            if (cj < 0.0) == (c0 < 0.0):
+                lo = mid
+            else:
+                hi = mid
+            if (hi - lo) * ln < 1e-3 * min(tol_u, tol_w):
+                break
+        ok, xu, xw, res, err = _solve(F, 0, k, j, v, ix, iy, geo, g, H, mu, mw, tol_u, tol_w)
+        t = ((xu - u) * du + (xw - w) * dw) / length2
+        if not (ok and -0.25 <= t <= 1.25):
+            xu, xw, t = mu, mw, 0.5 * (lo + hi)
+    return t, xu, xw, res, err
 
 
 @njit(cache=True, error_model="numpy")
-def _specials(sl, k, u, w, qu, qw, tu, tw, qtu, qtw, cv0, cv1, sp):
-    """The special points on the step from (u, w) to (qu, qw) into ``sp``
-    (:data:`SPECIAL`), and their number: where another condition changes sign (a
-    crossing, by Newton; by bisection on the curve where Newton goes elsewhere), and
-    where the curve turns back in an axis (a fold)."""
-    F, grp, active, v, ix, iy, geo, g, H = (sl.F, sl.grp, sl.active, sl.v, sl.ix, sl.iy,
-                                           sl.geo, sl.g, sl.H)
-    cs, tol_u, tol_w = sl.cs, sl.tol_u, sl.tol_w
+def _fold(sl, k, axis, u, w, qu, qw, a0, a1):
+    """Where the curve of k turns back in ``axis`` between the curve points (u, w) and
+    (qu, qw) (its tangent's component there goes from a0 to a1): (found, where along
+    the step, u, w, residual, error), found where it lies on the step and in the slice
+    (to 1e-12: then put on the edge)."""
     du, dw = qu - u, qw - w
     length2 = du * du + dw * dw
-    nsp = 0
-    for j in range(active.shape[0]):
-        if (not active[j]) or grp[j, 0] == grp[k, 0]:
-            continue
-        if abs(cv0[j]) <= COVANISH * cs[j] or abs(cv1[j]) <= COVANISH * cs[j]:
-            continue  # j vanishes with this curve here: no crossing
-        if cv0[j] * cv1[j] < 0.0:
-            a = cv0[j] / (cv0[j] - cv1[j])
-            ok2, xu, xw, res2, err2 = _solve(F, 0, k, j, v, ix, iy, geo, g, H, u + a * du,
-                                             w + a * dw, tol_u, tol_w)
-            t = ((xu - u) * du + (xw - w) * dw) / length2
-            if not (ok2 and -0.25 <= t <= 1.25):
-                # Newton went elsewhere: bisect c_j on the curve between the vertices
-                lo, hi = 0.0, 1.0
-                ln = math.sqrt(length2)
-                for it in range(60):
-                    mid = 0.5 * (lo + hi)
-                    okc, mu, mw, r3, s3, sc, ac, bc = _correct(
-                        F, k, v, ix, iy, geo, g, u + mid * du, w + mid * dw, du / ln,
-                        dw / ln)
-                    cj, sj, aj, bj = _grad(F, j, v, ix, iy, geo, mu, mw, g)
-                    if (cj < 0.0) == (cv0[j] < 0.0):
-                        lo = mid
-                    else:
-                        hi = mid
-                    if (hi - lo) * ln < 1e-3 * min(tol_u, tol_w):
-                        break
-                ok2, xu, xw, res2, err2 = _solve(F, 0, k, j, v, ix, iy, geo, g, H, mu, mw,
-                                                 tol_u, tol_w)
-                t = ((xu - u) * du + (xw - w) * dw) / length2
-                if not (ok2 and -0.25 <= t <= 1.25):
-                    xu, xw, t = mu, mw, 0.5 * (lo + hi)
-            nsp = _note(sp, nsp, t, xu, xw, CROSSING, j, res2, err2)
-    for axis in range(2):
-        a0 = tu if axis == 0 else tw
-        a1 = qtu if axis == 0 else qtw
-        if a0 * a1 < 0.0:
-            okf, fu, fw, resf, errf = _fold_on_step(F, axis, k, v, ix, iy, geo, g, H, u, w,
-                                                    qu, qw, a0, a1, tol_u, tol_w)
-            t = ((fu - u) * du + (fw - w) * dw) / length2
-            if okf and -0.25 <= t <= 1.25 and _inside(fu, fw, 1e-12):
-                fu = min(max(fu, 0.0), 1.0)
-                fw = min(max(fw, 0.0), 1.0)
-                nsp = _note(sp, nsp, t, fu, fw, FOLD_X if axis == 0 else FOLD_Y, axis, resf,
-                            errf)
-    return nsp
+    okf, fu, fw, resf, errf = _fold_on_step(sl.F, axis, k, sl.v, sl.ix, sl.iy, sl.geo, sl.g,
+                                            sl.H, u, w, qu, qw, a0, a1, sl.tol_u, sl.tol_w)
+    t = ((fu - u) * du + (fw - w) * dw) / length2
+    if okf and -0.25 <= t <= 1.25 and _inside(fu, fw, 1e-12):
+        return True, t, min(max(fu, 0.0), 1.0), min(max(fw, 0.0), 1.0), resf, errf
+    return False, t, fu, fw, resf, errf
 
 
 @njit(cache=True, error_model="numpy")
@@ -987,39 +941,49 @@ def _march(sl, st, k, curve, su, sw, tu0, tw0, h0, closing, cv0, cv1):
     and returns 1 if the curve came back to its start (a loop, only looked for
     when ``closing``), 0 at an edge of the slice, -1 where it stalled.
 
-    A step: the next vertex (:func:`_predict`); its end on an edge where the curve leaves
-    the slice (:func:`_leave`); a shorter step where the corrector fails or the curve
+    A step: the predictor along the tangent and the corrector (:func:`_correct`); where
+    the curve leaves the slice within the step (:func:`_fold_beyond_edge` too), its end
+    on the edge (:func:`_leave`); a shorter step where the corrector fails or the curve
     turns too far, and past a singular point at the shortest (:func:`_step_over`); the
-    loop's end (:func:`_closes`); the special points on the step (:func:`_specials`,
-    :func:`_unexplained`, appended in order by :func:`_append_specials`); the vertex; the
-    next step's length from the curvature there (:func:`_step_length`).
+    loop's end (:func:`_closes`); the special points on the step, crossings
+    (:func:`_crossing`), folds (:func:`_fold`) and a change of class no crossing
+    explains (:func:`_unexplained`), appended in their order (:func:`_append_specials`);
+    the vertex; the next step's length from the curvature there (:func:`_step_length`).
 
     The classes on either side (two classifications) are sampled at every
     :data:`SIDE_EVERY`-th vertex, and at every vertex of a step where anything
-    happens (:func:`_happens`): another condition changes sign or starts or stops
-    vanishing with this one, the curve turns back in an axis, the loop closes, the
-    curve ends.  The vertex before such a step is sampled too (:func:`_confirm`).
-    Where a sample disagrees with the classes of the last sampled vertex and vertices
-    in between were not sampled, the march goes back to that vertex (its :data:`At`)
-    and steps again sampling every vertex: what it finds is what sampling every vertex
-    finds, except a change of class that reverts within :data:`SIDE_EVERY` steps while
-    no condition changes sign at the vertices (a side sample that grazes another zero
-    set; assemble forgets such a sample, see _forget_isolated).
+    happens: another condition changes sign or starts or stops vanishing with this
+    one, the curve turns back in an axis, the loop closes, the curve ends.  The vertex
+    before such a step is sampled too (:func:`_confirmed`).  Where a sample disagrees
+    with the classes of the last sampled vertex and vertices in between were not
+    sampled, the march goes back to that vertex (its :data:`At`) and steps again
+    sampling every vertex: what it finds is what sampling every vertex finds, except a
+    change of class that reverts within :data:`SIDE_EVERY` steps while no condition
+    changes sign at the vertices (a side sample that grazes another zero set; assemble
+    forgets such a sample, see _forget_isolated).
+
+    What runs at every step is written here, and the steps that run where something
+    happens are functions of their own.  numba counts a reference at every array a
+    function takes and at every array read from a tuple (two atomic operations each):
+    the step written as functions that took the slice's arrays cost the march a fifth
+    to two fifths of its time.
     """
-    F, v, ix, iy, geo = sl.F, sl.v, sl.ix, sl.iy, sl.geo
-    verts, counts, mark = st.verts, st.counts, st.mark
+    F, grp, active, v, ix, iy, geo, g, H, out, layer, cs, scr, tol_u, tol_w = sl
+    verts, counts, mark = st
     u, w = su, sw
     tu, tw = tu0, tw0
     h = h0
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
-    _values(F, v, cv0, sl.cs)
-    c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, sl.g)
+    _values(F, v, cv0, cs)
+    c, s, cu, cw = _grad(F, k, v, ix, iy, geo, u, w, g)
     n0 = math.hypot(cu, cw)
-    la, ra = _sides_of(sl, k, u, w, tu, tw, _side_eps(s, n0, h), cv0)
+    la, ra = _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw,
+                         _side_eps(s, n0, h), cv0, scr)
     travelled = 0.0
     steps = 0
-    sp = np.empty(sl.active.shape[0] + 4, dtype=SPECIAL)  # a step's special points
+    nc = active.shape[0]
+    sp = np.empty(nc + 4, dtype=SPECIAL)  # a step's special points
     # the current vertex: its step length, tie scale and gradient norm (for its side samples)
     hq, us, un = h, s, n0
     owned_prev = -1
@@ -1029,7 +993,7 @@ def _march(sl, st, k, curve, su, sw, tu0, tw0, h0, closing, cv0, cv1):
     # the last sampled vertex, to go back to
     back = At(u, w, tu, tw, h, hq, us, un, travelled, steps, la, ra, owned_prev, done,
               closing, counts[0])
-    back_cv = np.empty(sl.active.shape[0])
+    back_cv = np.empty(nc)
     go_back = False
     while True:
         if go_back:
@@ -1046,8 +1010,19 @@ def _march(sl, st, k, curve, su, sw, tu0, tw0, h0, closing, cv0, cv1):
                       closing, counts[0])
             back_cv[:] = cv0
         finish = travelled > MAX_LENGTH
-        ok, pu, pw, qu, qw, res, qtu, qtw, qn, qs, leaves, xu, xw = _predict(sl, k, u, w, tu,
-                                                                             tw, h, finish)
+        # the next vertex: predictor, corrector, and the tangent there along the march
+        pu = u + h * tu
+        pw = w + h * tw
+        ok, qu, qw, res, sr, qs, qcu, qcw = False, pu, pw, np.inf, np.inf, 0.0, 0.0, 0.0
+        if not finish:
+            ok, qu, qw, res, sr, qs, qcu, qcw = _correct(F, k, v, ix, iy, geo, g, pu, pw, tu,
+                                                         tw)
+        leaves = (ok and not _inside(qu, qw, 0.0)) or (not ok and not _inside(pu, pw, 0.0))
+        xu, xw = (qu, qw) if ok else (pu, pw)  # a point beyond the edge, where it leaves
+        qtu, qtw, qn, qs = _orient(qs, qcu, qcw, tu, tw)
+        if ok and not leaves and not finish and (tu * qtu < 0.0 or tw * qtw < 0.0):
+            leaves, xu, xw = _fold_beyond_edge(sl, k, u, w, qu, qw, tu, tw, qtu, qtw, h, xu,
+                                               xw)
         ex_ok, ex_u, ex_w, ex_res, ex_err = False, u, w, np.inf, np.inf
         if leaves and not finish:
             ex_ok, ex_u, ex_w, ex_res, ex_err, finish = _leave(sl, k, u, w, tu, tw, h, xu, xw)
@@ -1057,7 +1032,9 @@ def _march(sl, st, k, curve, su, sw, tu0, tw0, h0, closing, cv0, cv1):
         stuck = not leaves and not finish and h <= H_MIN and rough
         if (finish or stuck) and pending > 0:
             # the curve ends, stalls or jumps here: the vertex before is sampled first
-            if _confirm(sl, st, k, u, w, tu, tw, _side_eps(us, un, hq), cv0, la, ra):
+            lc, rc = _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu,
+                                 tw, _side_eps(us, un, hq), cv0, scr)
+            if _confirmed(verts, counts, lc, rc, la, ra):
                 pending = 0
             else:
                 go_back = True
@@ -1097,23 +1074,50 @@ def _march(sl, st, k, curve, su, sw, tu0, tw0, h0, closing, cv0, cv1):
             steps = -1  # marks the loop's end
         v[ix] = geo[0] + qu * geo[1]
         v[iy] = geo[2] + qw * geo[3]
-        _values(F, v, cv1, sl.cs)
-        owned = _owned(k, sl.grp, sl.active, cv1, sl.cs, mark, u, w, qu, qw)
-        event = owned != owned_prev or steps < 0 or _happens(sl, k, tu, tw, qtu, qtw, cv0,
-                                                              cv1)
+        _values(F, v, cv1, cs)
+        du, dw = qu - u, qw - w
+        length2 = du * du + dw * dw
+        owned = _owned(k, grp, active, cv1, cs, mark, u, w, qu, qw)
+        # does anything happen on this step?
+        event = owned != owned_prev or steps < 0 or tu * qtu < 0.0 or tw * qtw < 0.0
+        for j in range(nc):
+            if active[j] and grp[j, 0] != grp[k, 0]:
+                z0 = abs(cv0[j]) <= COVANISH * cs[j]
+                z1 = abs(cv1[j]) <= COVANISH * cs[j]
+                event = event or z0 != z1 or (not z0 and cv0[j] * cv1[j] < 0.0)
         if event and pending > 0:
-            if _confirm(sl, st, k, u, w, tu, tw, _side_eps(us, un, hq), cv0, la, ra):
+            lc, rc = _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu,
+                                 tw, _side_eps(us, un, hq), cv0, scr)
+            if _confirmed(verts, counts, lc, rc, la, ra):
                 pending = 0
             else:
                 go_back = True
                 dense_until = done
                 continue
-        nsp = _specials(sl, k, u, w, qu, qw, tu, tw, qtu, qtw, cv0, cv1, sp)
+        # special points between (u, w) and (q): crossings, folds
+        nsp = 0
+        for j in range(nc):
+            if (not active[j]) or grp[j, 0] == grp[k, 0]:
+                continue
+            if abs(cv0[j]) <= COVANISH * cs[j] or abs(cv1[j]) <= COVANISH * cs[j]:
+                continue  # j vanishes with this curve here: no crossing
+            if cv0[j] * cv1[j] < 0.0:
+                t, xu, xw, res2, err2 = _crossing(sl, k, j, u, w, qu, qw, cv0[j], cv1[j])
+                nsp = _note(sp, nsp, t, xu, xw, CROSSING, j, res2, err2)
+        for axis in range(2):
+            a0 = tu if axis == 0 else tw
+            a1 = qtu if axis == 0 else qtw
+            if a0 * a1 < 0.0:
+                okf, t, fu, fw, resf, errf = _fold(sl, k, axis, u, w, qu, qw, a0, a1)
+                if okf:
+                    nsp = _note(sp, nsp, t, fu, fw, FOLD_X if axis == 0 else FOLD_Y, axis,
+                                resf, errf)
         # the new vertex's sides (when sampled); a change that no crossing explains is located
         lb, rb = -1, -1
         sampled = event or done <= dense_until or pending + 1 >= SIDE_EVERY
         if sampled:
-            lb, rb = _sides_of(sl, k, qu, qw, qtu, qtw, _side_eps(qs, qn, h), cv1)
+            lb, rb = _sides_with(F, k, grp, active, v, g, out, layer, ix, iy, geo, qu, qw, qtu,
+                                 qtw, _side_eps(qs, qn, h), cv1, scr)
             if pending > 0 and not (lb == la and rb == ra and lb >= 0 and rb >= 0):
                 # a change since the last sampled vertex: step there again, sampling all
                 go_back = True
@@ -1123,7 +1127,9 @@ def _march(sl, st, k, curve, su, sw, tu0, tw0, h0, closing, cv0, cv1):
         if known and la >= 0 and ra >= 0 and (lb != la or rb != ra) \
                 and _crossings(sp, nsp) == 0:
             nsp = _unexplained(sl, k, u, w, qu, qw, la, ra, h, cv1, sp, nsp)
-        _append_specials(sl, st, k, curve, sp, nsp, tu, tw, h)
+        # the special points in order along the step, then the new vertex
+        if nsp > 0:
+            _append_specials(sl, st, k, curve, sp, nsp, tu, tw, h)
         _mark(mark, k, u, w, qu, qw)
         if steps < 0:  # the loop closed: its last vertex is its first
             _push(verts, counts, qu, qw, res, 0.0, curve, REGULAR, k, -1, -1, -1)
@@ -1133,16 +1139,16 @@ def _march(sl, st, k, curve, su, sw, tu0, tw0, h0, closing, cv0, cv1):
         owned_prev = owned
         hq, us, un = h, qs, qn
         done += 1
-        du, dw = qu - u, qw - w
-        travelled += math.sqrt(du * du + dw * dw)
+        travelled += math.sqrt(length2)
         steps += 1
         # the next step from the curvature here
-        kappa = _curvature(F, k, v, ix, iy, geo, sl.g, sl.H, qu, qw, qtu, qtw, qn)
-        h = max(min(_step_length(kappa), 2.0 * h), H_MIN)
+        c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, qu, qw, g, H)
+        h = max(min(_step_length(_kappa(qtu, qtw, huu, huw, hww, qn)), 2.0 * h), H_MIN)
         u, w, tu, tw = qu, qw, qtu, qtw
         if known:
             la, ra = lb, rb
-        cv0[:] = cv1
+        for j in range(nc):
+            cv0[j] = cv1[j]
 
 
 @njit(cache=True, error_model="numpy")
@@ -1201,7 +1207,8 @@ def _trace_all(F, seeds, grp, active, v, out, ix, iy, geo, layer, verts, counts,
         tu, tw, gn, s = _tangent(F, k, v, ix, iy, geo, g, u, w, 1.0, 0.0)
         if gn == 0.0 or tu == 0.0 and tw == 0.0:
             continue
-        h = _step_length(_curvature(F, k, v, ix, iy, geo, g, H, u, w, tu, tw, gn))
+        c, s, cu, cw, huu, huw, hww = _hess(F, k, v, ix, iy, geo, u, w, g, H)
+        h = _step_length(_kappa(tu, tw, huu, huw, hww, gn))
         left, right = _sides(F, k, grp, active, v, g, out, layer, ix, iy, geo, u, w, tu, tw,
                             _side_eps(s, gn, h), scr)
         if require_sides and left == right:
