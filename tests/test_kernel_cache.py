@@ -446,6 +446,52 @@ def test_a_flipped_bit_in_compiled_code_is_found_and_compiled_again_with_one_lin
     assert child(load(), root).stderr == ""   # compiled, saved and hashed again
 
 
+def test_compiled_code_saved_against_other_shared_code_is_compiled_again(warm, tmp_path):
+    """numba checks a cached function against its own file alone: saved before an edit of
+    the shared compiled code it compiled in (core/calls.py, say), its machine code would
+    be loaded stale.  The hash file records that code's hash, and a function saved
+    against another is compiled again, with one line."""
+    root = copy_of(warm, tmp_path)
+    (index,) = (root / "__pycache__").glob(f"{STEM}.cells-*.nbi")
+    hashes = index.with_suffix(".nbh")
+    text = hashes.read_text().splitlines(keepends=True)
+    assert text[-1].endswith("  phasemap's shared compiled code\n")
+    hashes.write_text("".join(text[:-1]) + "0" * 64 + "  phasemap's shared compiled code\n")
+    r = child(load(), root)
+    loaded(r)
+    assert len(lines(r)) == 1 and "is out of date (phasemap's shared compiled code has " \
+        "changed since they were saved)" in r.stderr, r.stderr
+    assert hashes.read_text().splitlines(keepends=True)[-1] == text[-1]
+    assert child(load(), root).stderr == ""   # compiled, saved and hashed again
+
+
+def test_every_module_of_core_with_compiled_code_is_shared():
+    """Every module of core/ that compiles code (an njit function or an intrinsic) is in
+    cache.SHARED, whose hash every cached function's hash file records."""
+    import ast
+
+    from phasemap.core import cache
+
+    def compiles(tree) -> bool:
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Call):
+                f = node.func
+                name = f.attr if isinstance(f, ast.Attribute) else getattr(f, "id", "")
+                if name in ("njit", "intrinsic", "jit"):
+                    return True
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                for d in node.decorator_list:
+                    d = d.func if isinstance(d, ast.Call) else d
+                    name = d.attr if isinstance(d, ast.Attribute) else getattr(d, "id", "")
+                    if name in ("njit", "intrinsic", "jit"):
+                        return True
+        return False
+
+    core = pathlib.Path(cache.__file__).parent
+    found = {p.stem for p in core.glob("*.py") if compiles(ast.parse(p.read_text()))}
+    assert found and found <= set(cache.SHARED), sorted(found - set(cache.SHARED))
+
+
 @pytest.mark.parametrize("which", ["index", "hash file", "folder"])
 def test_numba_files_another_user_owns_are_never_unpickled(warm, tmp_path, which, other_user):
     """A pickle planted as numba's index (where anyone can compute the name, in a shared

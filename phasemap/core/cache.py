@@ -397,8 +397,32 @@ def _first_distrust(files, owner_only: bool = False) -> str | None:
     return next(filter(None, (_distrust(f, owner_only=owner_only) for f in files)), None)
 
 
+#: The modules of ``core/`` whose compiled code (njit functions, intrinsics) the cached
+#: functions of other files compile in: the calls by address, the grid driver's pieces,
+#: ``grow``, the events and the numerics.  numba checks a cached function against its
+#: own file alone, so an edit of one of these would leave the functions that compiled it
+#: in stale; their hash goes into every hash file, and a change makes a miss
+#: (tests/test_kernel_cache.py checks that every module of ``core/`` with compiled code
+#: is here).
+SHARED = ("calls", "codegen", "compile", "events", "numerics")
+
+
+@functools.lru_cache(maxsize=1)
+def _shared() -> str:
+    """The hash file's last line: the SHA-256 of the sources of :data:`SHARED`."""
+    h = hashlib.sha256()
+    for name in SHARED:
+        h.update((_PACKAGE / "core" / f"{name}.py").read_bytes())
+    return f"{h.hexdigest()}  phasemap's shared compiled code\n"
+
+
 def _digests(files: list[pathlib.Path]) -> str:
-    """The hash file's text: one ``<sha256>  <name>`` line per numba file."""
+    """The hash file's text: one ``<sha256>  <name>`` line per numba file, then the hash
+    of phasemap's shared compiled code (:data:`SHARED`)."""
+    return _file_digests(files) + _shared()
+
+
+def _file_digests(files: list[pathlib.Path]) -> str:
     lines = []
     for f in files:
         with contextlib.suppress(FileNotFoundError):
@@ -408,6 +432,8 @@ def _digests(files: list[pathlib.Path]) -> str:
 
 #: Why numba's files without a hash file of phasemap's are not loaded.
 UNHASHED = "saved without phasemap's hash: by an older phasemap, or not by phasemap"
+#: Why numba's files saved before phasemap's shared compiled code changed are not loaded.
+STALE = "phasemap's shared compiled code has changed since they were saved"
 
 
 def _unverified(files: list[pathlib.Path]) -> str | None:
@@ -420,6 +446,9 @@ def _unverified(files: list[pathlib.Path]) -> str | None:
     except (OSError, UnicodeDecodeError) as err:
         return f"its hash file cannot be read ({type(err).__name__})"
     if _digests(data) != recorded:
+        saved = _file_digests(data)
+        if recorded.startswith(saved) and "\n" not in recorded[len(saved):].rstrip("\n"):
+            return STALE  # the files are what phasemap saved, against other shared code
         return "they do not match the hashes phasemap saved"
     return None
 
@@ -496,8 +525,9 @@ def _guard_numba() -> None:
             problem = _first_distrust(files) or _unverified(files)
             if problem is not None:  # ours, but others could have written it, or damaged
                 _owner_only([files[0].parent])
-                damaged(self, files, problem, "is not loaded" if problem == UNHASHED
-                        else "was damaged")
+                damaged(self, files, problem, {UNHASHED: "is not loaded",
+                                               STALE: "is out of date"}.get(problem,
+                                                                            "was damaged"))
                 return None
             try:
                 data = _load_without_refresh(self, sig, target_context, load)

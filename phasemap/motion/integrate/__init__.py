@@ -321,6 +321,8 @@ def _kernels(model: Model, method: str):
         """Run the shared parallel fate driver with this model's integrator."""
         return driver(at, y_slot, *args)
 
+    fate_map.integrate = integrate  # the machine code at ``at`` lives while it does
+
     return integrate, fate_map
 
 
