@@ -1,5 +1,4 @@
 """Systems phasemap has never seen, declared with the public API (issue 23)."""
-import math
 import sympy as sp
 from phasemap.declare import (Body, Coordinate, EdgeContact, Parameter, PointContact, Rate,
                               RollingContact, System)

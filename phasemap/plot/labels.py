@@ -9,7 +9,6 @@ declared system is labelled as a built-in one is: ``$\theta$ (rad)``.
 from __future__ import annotations
 
 import functools
-import json
 import re
 from typing import Sequence
 
