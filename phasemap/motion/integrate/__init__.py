@@ -147,11 +147,12 @@ INTEGRATE_ARGS = (F1, F1, nb_types.float64, nb_types.float64, nb_types.float64,
 #: The ``stop`` of a motion nothing stops (simulate's: a Ctrl-C there ends the call between
 #: its compiled pieces).
 NO_STOP = np.zeros(1, dtype=np.int64)
-#: What every integrator returns (a :data:`phasemap.motion.integrate.templates.Motion`).
-MOTION = nb_types.NamedTuple((nb_types.int64, nb_types.float64, F1, nb_types.int64,
-                              nb_types.int64, F2, F2, F2), tp.Motion)
+#: What every integrator returns (a :data:`phasemap.motion.integrate.templates.Integrated`;
+#: ``motion.hybrid.Motion`` is the engine of a motion through contact changes).
+INTEGRATED = nb_types.NamedTuple((nb_types.int64, nb_types.float64, F1, nb_types.int64,
+                              nb_types.int64, F2, F2, F2), tp.Integrated)
 #: Every integrator's signature.
-INTEGRATE_SIGNATURE = MOTION(*INTEGRATE_ARGS)
+INTEGRATE_SIGNATURE = INTEGRATED(*INTEGRATE_ARGS)
 
 
 @intrinsic

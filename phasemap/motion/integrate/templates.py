@@ -42,8 +42,8 @@ SOURCES = (_dopri5, _dop853)
 #: time and state it ends at, the reversals and steps counted, the saved points (rows
 #: t, branch, y...), the events (rows t, kind, branch after, y...) and the states at
 #: the requested times (:func:`phasemap.motion.integrate.unpack` names the columns).
-Motion = namedtuple("Motion", ["fate", "t", "y", "n_reversals", "n_steps", "points",
-                               "events", "y_eval"])
+Integrated = namedtuple("Integrated", ["fate", "t", "y", "n_reversals", "n_steps",
+                                       "points", "events", "y_eval"])
 
 SAFETY, FAC_MIN, FAC_MAX = 0.9, 0.2, 10.0
 EPS = np.finfo(np.float64).eps
@@ -573,7 +573,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
     int64) is read at every step: set nonzero by another thread (a Ctrl-C while
     a fate map runs), the motion ends there, as at ``max_steps``.
 
-    Returns a :data:`Motion` ``(fate, t, y, n_reversals, n_steps, points, events,
+    Returns an :data:`Integrated` ``(fate, t, y, n_reversals, n_steps, points, events,
     y_eval)``:
     ``points`` has one row (t, branch, y...) per saved point, ``events`` one row
     (t, kind, branch after, y...) per event (:func:`phasemap.motion.integrate.unpack`
@@ -710,7 +710,7 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         while n_eval < t_eval.shape[0] and t_eval[n_eval] <= t_end:
             y_eval[n_eval] = y
             n_eval += 1
-    return Motion(fate, t, y, n_rev, n_steps, pts[:n_saved], evs[:n_ev], y_eval[:n_eval])
+    return Integrated(fate, t, y, n_rev, n_steps, pts[:n_saved], evs[:n_ev], y_eval[:n_eval])
 
 
 #: The pieces of the integrator that do not depend on the method: (name, template,
