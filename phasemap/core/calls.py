@@ -10,8 +10,8 @@ What is particular to a model reaches them as the address of its compiled code, 
 the function's signature (:func:`typer`), in numba's own calling convention, and an
 exception the function raises propagates as from any compiled call.
 
-numba's first-class functions (``types.FunctionType``) did this job before, for the grid
-and fate drivers. They cost three things:
+numba's first-class functions (``types.FunctionType``) did this job before, for the grid,
+fate and batch drivers. They cost three things:
 - the dispatcher typed them again at every call (0.1 to 0.3 ms);
 - each call was lowered with a second path that asks Python for the address where it is
   missing, a few hundred instructions;
@@ -32,12 +32,22 @@ from __future__ import annotations
 from numba import types
 from numba.core import cgutils
 
+from phasemap.core.memo import Memo
+
+#: (a compiled function; argument types) -> the address of its machine code; the entry
+#: holds the function, so that the code stays loaded while its address is known
+_ADDRESSES = Memo("calls.addresses")
+
 
 def address(dispatcher, args) -> int:
     """The address of the machine code of ``dispatcher``'s overload for the argument
     types ``args`` (compiled or loaded from the cache first where it is missing), as
-    :func:`call` calls it."""
+    :func:`call` calls it; found once per process (a look-up after)."""
     args = tuple(args)
+    return _ADDRESSES.get((dispatcher,), args, lambda: _address(dispatcher, args))
+
+
+def _address(dispatcher, args: tuple) -> int:
     if args not in dispatcher.overloads:
         dispatcher.compile(args)
     cres = dispatcher.overloads[args]

@@ -512,10 +512,6 @@ def driver():
     return _DRIVER[0]
 
 
-#: a generated ``cells`` -> the address of its machine code (the key keeps it alive)
-_ADDRESSES = Memo("codegen.cells_addresses")
-
-
 def run_grid(cells, base, outer_shape, outer_slot, outer_values, outer_dslot, outer_dvalues,
              inner_values, inner_deriv, flags, fields) -> None:
     """Run the generated ``cells`` (:func:`grid_kernel`) over a grid with :func:`driver`.
@@ -524,8 +520,7 @@ def run_grid(cells, base, outer_shape, outer_slot, outer_values, outer_dslot, ou
     function, numba would type it again at every call (0.1 to 0.3 ms, more
     than a small map's cells).
     """
-    at = _ADDRESSES.get((cells,), (), lambda: calls.address(cells, CELLS_SIGNATURE.args))
-    driver()(at, TASKS_PER_THREAD * numba.get_num_threads(), base, outer_shape,
+    driver()(calls.address(cells, CELLS_SIGNATURE.args), TASKS_PER_THREAD * numba.get_num_threads(), base, outer_shape,
              outer_slot, outer_values, outer_dslot, outer_dvalues, inner_values, inner_deriv,
              flags, fields)
 
