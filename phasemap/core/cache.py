@@ -276,13 +276,14 @@ def _import(stem: str, path: pathlib.Path):
     body = _verified(path)
     # numba's disk cache re-imports a function's module by name when it loads
     # the function in a new process: register it under that name.  The code is
-    # compiled from the verified text, never from a .pyc beside it.
+    # compiled from the verified text, never from a .pyc beside it, one line down
+    # for the hash line, so that tracebacks and ``inspect.getsource`` see the file's lines.
     name = f"phasemap_kernel_{stem}"
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
     try:
-        exec(compile(body, str(path), "exec"), module.__dict__)
+        exec(compile("\n" + body, str(path), "exec"), module.__dict__)
     except Exception as err:
         sys.modules.pop(name, None)
         first = (str(err).strip().splitlines() or [""])[0]
