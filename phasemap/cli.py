@@ -226,7 +226,11 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
     p.add_argument("path")
     p = subs["classify"] = _sub(sub, "classify", "classify one state: phasemap classify "
                                 "MODEL name=value ...", "Counts the solutions of the motion "
-                                "equations for the senior derivatives at one state.")
+                                "equations for the senior derivatives at one state.  Where "
+                                "the model's point function is not compiled yet, its "
+                                "interpreted twin answers, with the same bits, while numba "
+                                "compiles it in the background (PHASEMAP_JIT=background, "
+                                "eager or off).")
     # MODEL optional to argparse, required by _run: argparse would name NAME=VALUE as
     # required too when nothing is given
     p.add_argument("model", nargs="?", metavar="MODEL", help=models)

@@ -103,14 +103,16 @@ def warm_one(model: str, kind: str) -> Warmed:
     import numpy as np
 
     import phasemap
-    from phasemap.core import compiletime
+    from phasemap.core import compiletime, tiers
 
     from phasemap.workers import ended_by_signal
 
     m = phasemap.get_model(model)
     t0, c0 = time.perf_counter(), compiletime.seconds()
     axes = {n: np.linspace(lo, hi, 3) for n, (lo, hi, _) in m.default_axes.items()}
-    with progress.enable(False), ended_by_signal(), warnings.catch_warnings():
+    # machine code, compiled here: never the interpreted twin (phasemap.core.tiers)
+    with progress.enable(False), ended_by_signal(), warnings.catch_warnings(), \
+            tiers.forced("eager"):
         warnings.simplefilter("ignore")  # (an unexplained class change of the small slice)
         if kind == "classify":
             phasemap.classify(m)

@@ -76,6 +76,18 @@ def _fast_machine_code() -> None:
 _fast_machine_code()
 
 
+def _eager_compiles() -> None:
+    """The suite runs machine code: ``PHASEMAP_JIT=eager`` (unless you set it), so that a
+    test's first call compiles in its own process, as before the interpreter tier, and no
+    background compile competes for the two cores at a moment no test chose.  The
+    interpreted tier and the background compile are tested by ``tests/test_tiers.py``, which
+    sets the mode per test; child processes inherit this setting."""
+    os.environ.setdefault("PHASEMAP_JIT", "eager")
+
+
+_eager_compiles()
+
+
 def _deterministic_hypothesis() -> None:
     """Property tests draw the same examples on every run (``derandomize``): a fresh clone
     keeps no example database, so a random draw would make CI pass or fail by luck.  Set

@@ -13,8 +13,9 @@ import numpy as np
 
 from phasemap.core import args as _args
 from phasemap.core import numerics as nx
+from phasemap.core import tiers
 from phasemap.core.model import BranchStatus, Model, Solvability
-from phasemap.systems import get_model
+from phasemap.systems import get_model, reference
 
 
 @dataclass(frozen=True)
@@ -166,8 +167,12 @@ def classify(model: str | Model, **values: float) -> Classification:
     full = m.complete(values)
     v = m.input_vector(full)
     out = np.full((len(m.branches), m.n_fields), np.nan)
-    m.point(v, out)
-    n, stagnation, lost, singular = nx.summarize(out, m.stick_branch)
+    # machine code where it is compiled; else, at once, its interpreted twin while a
+    # background process compiles it (phasemap.core.tiers; $PHASEMAP_JIT)
+    warm = (classify, (reference(m),), full)
+    tiers.runner(m.point, (v, out), warm)(v, out)
+    n, stagnation, lost, singular = tiers.runner(nx.summarize, (out, m.stick_branch),
+                                                 warm)(out, m.stick_branch)
     candidates = tuple(_branch(m, b, out[b]) for b in range(len(m.branches))
                        if out[b, nx.STATUS] != nx.ABSENT)
     return Classification(

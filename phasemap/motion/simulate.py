@@ -20,15 +20,16 @@ from phasemap.core.resources import MEMORY_COPIES, MEMORY_SHARE, available_memor
 from phasemap.core.memo import Memo
 from phasemap.core import args as _args
 from phasemap.core import events as ev
+from phasemap.core import tiers
 from phasemap.core.compile import remember
 from phasemap.atlas.dataset import assemble, cf_header, variable_attrs
 from phasemap.motion import hybrid
 from phasemap.motion.hybrid.start import (full_attrs, mechanics_of, run_settings,
                                           say_full_memory, simulate_full)
-from phasemap.motion.integrate import (DEFAULT_METHOD, METHODS, NO_STOP, check_method, kernels,
-                                       run_batch, unpack)
+from phasemap.motion.integrate import (DEFAULT_METHOD, METHODS, NO_STOP, check_method,
+                                       compile_integrator, integrator, run_batch, unpack)
 from phasemap.core.model import Model, Variable
-from phasemap.systems import OSCILLATORS, get_model
+from phasemap.systems import OSCILLATORS, get_model, reference
 
 #: Tolerances tighter than this cannot be met in double precision.
 RTOL_MIN = 1e-14
@@ -292,7 +293,10 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
                           "hold in memory; pass t_eval= to save the state at chosen times "
                           "only", RuntimeWarning, stacklevel=2)
         return ds
-    integrate, _ = kernels(m, opts.method)
+    # machine code where it is compiled; else, at once, its interpreted twin while a
+    # background process compiles it (phasemap.core.tiers; $PHASEMAP_JIT)
+    integrate = tiers.runner(integrator(m, opts.method), (v, y0, *run, NO_STOP),
+                             (compile_integrator, (reference(m), opts.method), {}))
     fate, t, y, n_rev, n_steps, points, events, y_eval, impacts = _through_impacts(
         m, integrate, v, y0, run, names, full)
     if S is not None and int(fate) in GOES_ON and float(t) < opts.t_end and not impacts:

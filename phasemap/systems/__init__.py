@@ -121,6 +121,13 @@ def get_model(model: str | Model) -> Model:
         "path/to/system.py")))
 
 
+def reference(model: Model) -> str | Model:
+    """``model`` as another process gets it (a background compile): its name where the
+    registry holds this very model, else the model itself (a declared one pickles as its
+    declaration)."""
+    return model.name if MODELS._models.get(model.name) is model else model
+
+
 def builtin_model(name) -> Model:
     """The built-in model registered as ``name``: never a file, never a module named by
     the caller.  What a name read from a data file's metadata resolves to.

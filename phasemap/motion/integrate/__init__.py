@@ -68,7 +68,7 @@ from numba import njit, prange
 from numba import types as nb_types
 from numba.extending import intrinsic
 
-from phasemap.core import calls
+from phasemap.core import calls, tiers
 from phasemap.core.memo import Memo
 from phasemap.motion.integrate import dop853 as _dop853
 from phasemap.motion.integrate import dopri5 as _dopri5
@@ -299,7 +299,16 @@ def kernels(model: Model, method: str = DEFAULT_METHOD):
     return remember(("integrate", model.name, method), model, lambda: _kernels(model, method))
 
 
-def _kernels(model: Model, method: str):
+def integrator(model: Model, method: str = DEFAULT_METHOD):
+    """The model's integrator for ``method`` (:data:`INTEGRATE_SIGNATURE`), jitted but not
+    compiled yet: what :func:`phasemap.simulate` runs, as machine code or, before numba has
+    compiled it, as its interpreted twin (:mod:`phasemap.core.tiers`)."""
+    check_method(method, model.name)
+    return remember(("integrator", model.name, method), model,
+                    lambda: _integrator(model, method))
+
+
+def _integrator(model: Model, method: str):
     spec = METHODS[method]
     consts = dict(stage_kernels(model).constants)
     consts.update(N_STAGES=spec.N_STAGES, FSAL=spec.FSAL, N_DENSE=spec.N_DENSE,
@@ -309,12 +318,26 @@ def _kernels(model: Model, method: str):
                                    ("DENSE", spec.dense_template, True), *tp.METHOD_PIECES):
         consts[name] = specialize(template, model, f"{name.lower()}_{tag}", inline=inline,
                                   **consts)
-    integrate = consts["INTEGRATE"]
+    return consts["INTEGRATE"]
+
+
+def compile_integrator(model, method: str = DEFAULT_METHOD) -> None:
+    """Compile the integrator of ``model`` (a registered name or a :class:`Model`) into the
+    kernel cache: the background compile a first :func:`phasemap.simulate` starts."""
+    from phasemap.systems import get_model
+
+    calls.address(integrator(get_model(model), method), INTEGRATE_ARGS)
+
+
+def _kernels(model: Model, method: str):
+    integrate = integrator(model, method)
+    # a first simulate's background compile of it under way: its result, not a second one
+    tiers.wait_for(integrate, INTEGRATE_ARGS)
     at = calls.address(integrate, INTEGRATE_ARGS)
     if integrate.nopython_signatures[0] != INTEGRATE_SIGNATURE:  # a template's change
         raise TypeError(f"{model.name}: the integrator's signature is "
                         f"{integrate.nopython_signatures[0]}, not {INTEGRATE_SIGNATURE}")
-    y_slot = consts["Y_SLOT"]
+    y_slot = stage_kernels(model).constants["Y_SLOT"]
 
     driver = _fate_driver()  # compiled here, not in the thread that runs it
 

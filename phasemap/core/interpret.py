@@ -1,0 +1,409 @@
+"""The interpreter tier: a compiled function's own Python, run at once, with numba's numbers.
+
+numba compiles a model's point function in seconds to minutes (the declared ladder's
+``point``: about 10 s of CPU); a single :func:`phasemap.classify` needs a few hundred
+microseconds of arithmetic.  :func:`interpreted` gives the plain-Python twin of a jitted
+function, to run while the compiled one is built (:mod:`phasemap.core.tiers` chooses).
+
+The twin is the function's own source, with three changes that make CPython compute
+what numba's machine code computes, bit for bit:
+
+* **IEEE arithmetic.**  Under ``error_model="numpy"`` numba divides by zero to
+  ``inf``/``nan``, where Python raises: ``/``, ``//`` and ``%`` become calls that do
+  what the compiled code does (a function compiled with numba's default ``"python"``
+  error model raises ``ZeroDivisionError`` in both tiers).
+* **Powers as numba takes them.**  ``x ** n`` with an integer ``n`` is numba's repeated
+  squaring (``x ** 3`` is ``x * (x * x)``, not the C library's ``pow``); a float exponent is
+  ``pow`` itself.
+* **The C library's elementary functions, without exceptions.**  ``math.sqrt(-1.0)`` is
+  ``nan`` in compiled code and an exception in Python; the twin's ``math`` and ``np`` give
+  the compiled values (``np.sin`` of a number is the C library's ``sin``, as in numba).
+
+Every other name keeps its value, and a jitted function the code calls is replaced by its
+own twin.  A function the twin cannot reproduce (an intrinsic, ``objmode``, generated
+overloads) raises :class:`Unsupported`, and the caller compiles instead.
+
+>>> import math
+>>> from numba import njit
+>>> from phasemap.core.interpret import interpreted
+>>> @njit(error_model="numpy")
+... def f(x, y):
+...     return math.sqrt(x) / y ** 3
+>>> math.isnan(interpreted(f)(-1.0, 2.0)), interpreted(f)(4.0, 0.0)   # as compiled
+(True, inf)
+"""
+
+from __future__ import annotations
+
+import ast
+import builtins
+import dis
+import inspect
+import math
+import textwrap
+import threading
+import types
+
+import numpy as np
+
+__all__ = ["Unsupported", "interpreted"]
+
+
+class Unsupported(TypeError):
+    """The function uses something the interpreter tier cannot reproduce exactly."""
+
+
+# --------------------------------------------------------------------------- numbers
+
+def _ieee(a, b, op, np_op):
+    try:
+        return op(a, b)
+    except ZeroDivisionError:
+        with np.errstate(all="ignore"):
+            r = np_op(np.float64(a), np.float64(b))
+        return float(r)
+
+
+def _div(a, b):
+    """``a / b`` as compiled under ``error_model="numpy"``: IEEE, never an exception."""
+    try:
+        return a / b
+    except ZeroDivisionError:
+        with np.errstate(all="ignore"):
+            return float(np.true_divide(np.float64(a), np.float64(b)))
+
+
+def _floordiv(a, b):
+    if _integer(a) and _integer(b):
+        return a // b if b != 0 else 0  # numba's integer division by zero under "numpy"
+    return _ieee(a, b, lambda x, y: x // y, np.floor_divide)
+
+
+def _mod(a, b):
+    if _integer(a) and _integer(b):
+        return a % b if b != 0 else 0
+    return _ieee(a, b, lambda x, y: x % y, np.remainder)
+
+
+def _integer(x) -> bool:
+    return isinstance(x, (int, np.integer)) and not isinstance(x, (bool, np.bool_))
+
+
+def _pow(a, b, ieee: bool = True):
+    """``a ** b`` as numba computes it: an integer exponent by repeated squaring
+    (numba's ``static_power_impl`` and ``int_power_impl``), a float one by ``pow``.
+
+    Zero to a negative integer power raises ``ZeroDivisionError`` for a float (numba's
+    inversion is compiled with Python's error model) and, for an integer, gives
+    ``-2**63`` under ``error_model="numpy"``."""
+    if _integer(b):
+        b = int(b)
+        if _integer(a):
+            a = int(a)
+            if b >= 0:
+                return a ** b
+            if a == 0:
+                if ieee:
+                    return -(1 << 63)
+                raise ZeroDivisionError("0 cannot be raised to a negative power")
+            return a ** -b if a in (1, -1) else 0
+        a = float(a)
+        invert, n, r = b < 0, abs(b), 1.0
+        if n > 0x10000:
+            r = _POW(a, float(n))
+        else:
+            while n:
+                if n & 1:
+                    r *= a
+                n >>= 1
+                a *= a
+        return 1.0 / r if invert else r
+    return _POW(float(a), float(b))
+
+
+def _pow_python(a, b):
+    return _pow(a, b, ieee=False)
+
+
+def _safe(name: str, exact, fallback):
+    """The C library's ``exact`` where it returns, ``fallback`` (numpy's IEEE value) where
+    CPython raises instead of returning ``nan`` or ``inf``."""
+
+    def f(*args):
+        try:
+            return exact(*args)
+        except (ValueError, OverflowError):
+            with np.errstate(all="ignore"):
+                return float(fallback(*args))
+        except TypeError:
+            if any(isinstance(a, np.ndarray) for a in args):
+                return _elementwise(f, args)
+            raise
+
+    f.__name__ = f.__qualname__ = name
+    return f
+
+
+def _elementwise(f, args):
+    arrays = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in args))
+    out = np.empty(arrays[0].shape)
+    for i in np.ndindex(out.shape):
+        out[i] = f(*(float(a[i]) for a in arrays))
+    return out
+
+
+#: The elementary functions: ``math`` name -> (numpy's name, for the IEEE fallback).
+_ELEMENTARY = {
+    "sqrt": "sqrt", "sin": "sin", "cos": "cos", "tan": "tan", "asin": "arcsin",
+    "acos": "arccos", "atan": "arctan", "atan2": "arctan2", "exp": "exp", "expm1": "expm1",
+    "log": "log", "log1p": "log1p", "log10": "log10", "log2": "log2", "pow": "power",
+    "sinh": "sinh", "cosh": "cosh", "tanh": "tanh", "asinh": "arcsinh", "acosh": "arccosh",
+    "atanh": "arctanh", "hypot": "hypot", "fmod": "fmod",
+}
+#: ``math`` names that return what numba returns as they are.
+_EXACT_MATH = {"fabs", "copysign", "isnan", "isinf", "isfinite", "pi", "e", "tau", "inf",
+               "nan", "degrees", "radians"}
+#: numpy names the code may use as they are (numpy's scalar and array results are numba's).
+_EXACT_NUMPY = {"inf", "nan", "pi", "e", "isfinite", "isnan", "isinf", "abs", "absolute",
+                "fabs", "sign", "copysign", "empty", "zeros", "ones", "full", "empty_like",
+                "zeros_like", "ones_like", "full_like", "float64", "int64", "intp", "bool_",
+                "int32", "uint8", "array", "asarray", "arange", "minimum", "maximum",
+                "fmin", "fmax", "floor", "ceil", "trunc", "rint", "signbit", "radians",
+                "degrees", "newaxis", "nextafter", "spacing", "finfo"}
+
+_MATH = {name: _safe(name, getattr(math, name), getattr(np, np_name))
+         for name, np_name in _ELEMENTARY.items()}
+_POW = _MATH["pow"]
+_NUMPY = {np_name: _safe(np_name, getattr(math, name), getattr(np, np_name))
+          for name, np_name in _ELEMENTARY.items() if name not in ("pow", "fmod")}
+
+
+class _Namespace(types.SimpleNamespace):
+    """A module's stand-in: the names the twin may use, and a clear error for the rest."""
+
+    def __init__(self, label: str, names: dict):
+        super().__init__(**names)
+        self._label = label
+
+    def __getattr__(self, name):
+        if name.startswith("__"):
+            raise AttributeError(name)
+        raise Unsupported(f"{self._label}.{name} is not reproduced by the interpreter tier")
+
+
+MATH = _Namespace("math", {**{n: getattr(math, n) for n in _EXACT_MATH}, **_MATH})
+NUMPY = _Namespace("numpy", {**{n: getattr(np, n) for n in _EXACT_NUMPY}, **_NUMPY})
+
+
+# --------------------------------------------------------------------------- source
+
+_CALLS = {ast.Pow: "_pm_pow"}
+_IEEE_CALLS = {ast.Div: "_pm_div", ast.FloorDiv: "_pm_floordiv", ast.Mod: "_pm_mod"}
+
+
+def _rewrite(tree, ieee: bool) -> None:
+    """In place: ``/``, ``//``, ``%`` (under the numpy error model) and ``**`` become calls
+    of the IEEE helpers, and decorators go.  One pass over the tree (a model's point
+    function has tens of thousands of nodes)."""
+    calls = {**_CALLS, **(_IEEE_CALLS if ieee else {})}
+    stack = [tree]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, ast.FunctionDef):
+            node.decorator_list = []
+        for field in node._fields:
+            value = getattr(node, field, None)
+            if isinstance(value, list):
+                for i, child in enumerate(value):
+                    if isinstance(child, ast.AST):
+                        value[i] = _call(child, calls)
+                        stack.append(value[i])
+            elif isinstance(value, ast.AST):
+                new = _call(value, calls)
+                if new is not value:
+                    setattr(node, field, new)
+                stack.append(new)
+
+
+def _call(node, calls):
+    """``node`` as a helper call if it is an operation the helpers take."""
+    if isinstance(node, ast.BinOp):
+        name = calls.get(type(node.op))
+        if name is not None:
+            return _located(ast.Call(_located(ast.Name(name, ast.Load()), node),
+                                     [node.left, node.right], []), node)
+    elif isinstance(node, ast.AugAssign):
+        name = calls.get(type(node.op))
+        if name is not None:
+            load = _located(ast.parse(ast.unparse(node.target), mode="eval").body, node)
+            for sub in ast.walk(load):
+                _located(sub, node)
+            value = _located(ast.Call(_located(ast.Name(name, ast.Load()), node),
+                                      [load, node.value], []), node)
+            return _located(ast.Assign([node.target], value), node)
+    return node
+
+
+def _located(new, old):
+    new.lineno, new.col_offset = old.lineno, old.col_offset
+    new.end_lineno, new.end_col_offset = old.end_lineno, old.end_col_offset
+    return new
+
+
+def _dispatcher(obj) -> bool:
+    from numba.core.dispatcher import Dispatcher
+
+    return isinstance(obj, Dispatcher)
+
+
+_LOCK = threading.RLock()
+_TWINS: dict = {}
+
+
+def interpreted(dispatcher):
+    """The plain-Python twin of the jitted ``dispatcher``: the same values, uncompiled.
+
+    Raises :class:`Unsupported` where the twin could differ from the compiled function.
+    Twins are made once per process and function.
+    """
+    if not _dispatcher(dispatcher):
+        raise Unsupported(f"{dispatcher!r} is not a numba-jitted function")
+    key = id(dispatcher)
+    with _LOCK:
+        twin = _TWINS.get(key)
+        if twin is None:
+            twin = _TWINS[key] = (dispatcher, _twin(dispatcher))
+        return twin[1]
+
+
+def _twin(dispatcher):
+    return _twin_of(dispatcher.py_func, getattr(dispatcher, "targetoptions", {}))
+
+
+def _python_twin(function, error_model: str):
+    """The twin of one of phasemap's plain Python functions that jitted code calls (one
+    with a numba ``overload``, such as the stages of a Runge-Kutta step, whose Python is
+    its reference), under the error model of its caller."""
+    key = (id(function), error_model)
+    with _LOCK:
+        twin = _TWINS.get(key)
+        if twin is None:
+            twin = _TWINS[key] = (function, _twin_of(function, {"error_model": error_model}))
+        return twin[1]
+
+
+def _twin_of(py, options):
+    if options.get("parallel") or options.get("forceobj") or options.get("fastmath"):
+        raise Unsupported(f"{py.__qualname__} is compiled with options the interpreter "
+                          "tier does not reproduce")
+    if py.__closure__:
+        raise Unsupported(f"{py.__qualname__} is a closure")
+    try:
+        source = textwrap.dedent(inspect.getsource(py))
+        filename = inspect.getsourcefile(py) or "<phasemap-interpreted>"
+    except (OSError, TypeError) as err:
+        raise Unsupported(f"the source of {py.__qualname__} is not available") from err
+    # padded so that the twin's line numbers are the file's (tracebacks point there)
+    tree = ast.parse("\n" * (py.__code__.co_firstlineno - 1) + source)
+    if len(tree.body) != 1 or not isinstance(tree.body[0], ast.FunctionDef):
+        raise Unsupported(f"{py.__qualname__} is not a plain function definition")
+    ieee = options.get("error_model", "python") == "numpy"
+    _rewrite(tree, ieee)
+    code = compile(tree, filename, "exec")
+    namespace = {"__builtins__": builtins, "__name__": py.__module__,
+                 "_pm_div": _div, "_pm_floordiv": _floordiv, "_pm_mod": _mod,
+                 "_pm_pow": _pow if ieee else _pow_python}
+    own = tree.body[0].name
+    for name in _names(code):
+        if name not in namespace and name != own and name in py.__globals__:
+            try:
+                namespace[name] = _global(py.__qualname__, name, py.__globals__[name],
+                                      options.get("error_model", "python"))
+            except Unsupported:
+                if _looks_up(code, name):  # not only an attribute's name (np.sqrt)
+                    raise
+    exec(code, namespace)  # noqa: S102 - the function's own source
+    twin = namespace[tree.body[0].name]
+    namespace[tree.body[0].name] = twin  # recursion calls the twin
+    twin.__qualname__ = py.__qualname__
+    twin.__doc__ = py.__doc__
+    return twin
+
+
+def _looks_up(code, name: str) -> bool:
+    """Whether ``code`` (or code nested in it) loads the global ``name``."""
+    if any(i.opname == "LOAD_GLOBAL" and i.argval == name for i in dis.get_instructions(code)):
+        return True
+    return any(_looks_up(c, name) for c in code.co_consts if isinstance(c, types.CodeType))
+
+
+def _names(code) -> set[str]:
+    """The names ``code`` and the code nested in it look up (attribute names included)."""
+    names = set(code.co_names)
+    for const in code.co_consts:
+        if isinstance(const, types.CodeType):
+            names |= _names(const)
+    return names
+
+
+def _global(owner: str, name: str, value, error_model: str = "numpy"):
+    """The twin's value of a global name of the function ``owner``."""
+    if _dispatcher(value):
+        return interpreted(value)
+    if value is math:
+        return MATH
+    if value is np:
+        return NUMPY
+    if isinstance(value, types.ModuleType):
+        if value.__name__.split(".")[0] in ("phasemap",) or value.__name__.startswith(
+                "phasemap_kernel_"):
+            return _Module(owner, value, error_model)
+        raise Unsupported(f"{owner} uses the module {value.__name__}, which the interpreter "
+                          "tier does not reproduce")
+    twin = _BY_IDENTITY.get(id(value))
+    if twin is not None:
+        return twin
+    if isinstance(value, type) or not callable(value):
+        return value  # a number, an array, a tuple, a class (a named tuple's)
+    if isinstance(value, types.FunctionType) and value.__module__.split(".")[0] == "phasemap":
+        return _python_twin(value, error_model)
+    raise Unsupported(f"{owner} calls {name} ({value!r}), which the interpreter tier does "
+                      "not reproduce (only jitted code and the C library's functions)")
+
+
+class _Module:
+    """One of phasemap's modules as a twin sees it: each name taken as :func:`_global` takes
+    a global (jitted functions as their twins), when first used."""
+
+    def __init__(self, owner: str, module, error_model: str):
+        self._owner, self._module, self._errors = owner, module, error_model
+
+    def __getattr__(self, name):
+        if name.startswith("__"):
+            raise AttributeError(name)
+        value = _global(self._owner, f"{self._module.__name__}.{name}",
+                        getattr(self._module, name), self._errors)
+        setattr(self, name, value)
+        return value
+
+
+def _identities() -> dict:
+    """Functions a twin may call, by identity: the C library's through the safe versions,
+    the exact ones as they are, numba's ``prange`` as ``range``."""
+    import numba
+
+    table = {id(getattr(math, n)): getattr(MATH, n) for n in _ELEMENTARY}
+    table.update({id(getattr(np, n)): f for n, f in _NUMPY.items()})
+    for n in _EXACT_MATH:
+        value = getattr(math, n)
+        if callable(value):
+            table[id(value)] = value
+    for n in _EXACT_NUMPY:
+        value = getattr(np, n, None)
+        if callable(value) and not isinstance(value, type):
+            table[id(value)] = value
+    table[id(numba.prange)] = range
+    return table
+
+
+_BY_IDENTITY = _identities()
