@@ -1,0 +1,160 @@
+"""A first classify and simulate from empty caches: machine code first, or the interpreter tier.
+
+For each built-in model, and the README's own declared rod, a fresh process with an
+empty kernel cache (``PHASEMAP_CACHE_DIR``) and an empty numba cache (``NUMBA_CACHE_DIR``)
+of its own, at numba's default optimisation, runs
+
+    import phasemap
+    phasemap.classify(MODEL)          # at the model's defaults
+    phasemap.simulate(MODEL, 5.0)
+
+under ``PHASEMAP_JIT=eager`` (numba compiles the point function first, as before issue 40)
+and under ``PHASEMAP_JIT=background`` (the default: the interpreted twin answers, and a
+separate low-priority process compiles into the cache).  Reported: the process's wall time
+and CPU time (user + system; a background compile runs in a session of its own, so it is
+not counted), each call alone, how long numba compiled in the process, and, for
+``background``, how long the background compiles took to leave machine code in the cache
+and what a second process's calls then cost.  Rows run one at a time, and each waits
+for its background compile to end, so none competes with the next.
+
+    python benchmarks/first_answers.py [--only NAME ...]
+
+Writes the section "First answers from empty caches" of ../BENCHMARKS.md.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import pathlib
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+
+from _report import load, machine, parser, publish
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+MODELS = ("ladder", "wheel", "elliptic_pendulum", "hinge_pendulum", "painleve_rod",
+          "rod_on_step", "README rod")
+TARGET = 1.5
+SIMULATE_TARGET = 5.0
+
+CHILD = r'''
+import json, sys, time
+t0 = time.perf_counter()
+import phasemap
+from phasemap.core import compiletime
+model = {model!r}
+if model == "README rod":
+    model = phasemap.get_model({readme!r})
+t1 = time.perf_counter()
+c = phasemap.classify(model)
+t2 = time.perf_counter()
+k = compiletime.seconds()
+ds = phasemap.simulate(model, 5.0)
+t3 = time.perf_counter()
+m = phasemap.get_model(model)
+print("RESULT " + json.dumps(dict(classify=t2 - t1, compile=k, simulate=t3 - t2,
+                                  simulate_compile=compiletime.seconds() - k,
+                                  machine=bool(m.point.signatures), n=c.n_solutions,
+                                  points=ds.sizes["t"], end=ds.attrs["end_reason"])))
+'''
+
+
+def child(model: str, jit: str, env: dict) -> dict:
+    code = CHILD.format(model=model, readme=str(ROOT / "docs" / "examples" / "own_system.py"))
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t = time.perf_counter()
+    out = subprocess.run([sys.executable, "-c", code], env={**env, "PHASEMAP_JIT": jit},
+                         capture_output=True, text=True)
+    wall = time.perf_counter() - t
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    for line in out.stdout.splitlines():
+        if line.startswith("RESULT "):
+            got = json.loads(line[7:])
+            got.update(wall=wall, cpu=(after.ru_utime - before.ru_utime)
+                       + (after.ru_stime - before.ru_stime))
+            return got
+    raise RuntimeError(f"{model} ({jit}): the child failed:\n{out.stderr[-3000:]}")
+
+
+def quiet(folder: pathlib.Path, limit: float = 900.0) -> float:
+    """Wait until no background compile is running in ``folder``; seconds waited."""
+    t = time.perf_counter()
+    markers = folder / "compiling"
+    while markers.exists() and any(markers.iterdir()) and time.perf_counter() - t < limit:
+        time.sleep(0.25)
+    return time.perf_counter() - t
+
+
+def row(model: str) -> dict:
+    result = {}
+    for jit in ("eager", "background"):
+        with tempfile.TemporaryDirectory() as tmp:
+            env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_OPT",)}
+            kernels = pathlib.Path(tmp) / "kernels"
+            env.update(PHASEMAP_CACHE_DIR=str(kernels), NUMBA_CACHE_DIR=str(pathlib.Path(tmp)
+                                                                          / "numba"))
+            result[jit] = child(model, jit, env)
+            if jit == "background":
+                result["built"] = quiet(kernels)
+                result["second"] = child(model, jit, env)
+    return result
+
+
+def main() -> None:
+    ap = parser(__doc__)
+    ap.add_argument("--only", nargs="*", choices=list(MODELS), default=list(MODELS))
+    args = ap.parse_args()
+    before = load()
+    results = {}
+    for name in args.only:
+        results[name] = row(name)
+        print(name, json.dumps(results[name]), file=sys.stderr, flush=True)
+    lines = [
+        "## First answers from empty caches (`benchmarks/first_answers.py`)",
+        "",
+        f"Machine: {machine()}; load average {before} before, {load()} after.  ",
+        "Command: `python benchmarks/first_answers.py`",
+        "",
+        "A fresh process per row with empty kernel and numba caches of its own, at numba's "
+        "default optimisation: `import phasemap`, one `phasemap.classify` and one "
+        "`phasemap.simulate(model, 5.0)` at the model's defaults.  *eager*: numba compiles "
+        "first (`PHASEMAP_JIT=eager`, what every first call did before).  *background* "
+        "(the default): the interpreted twins answer at once, with the same bits, while "
+        "separate low-priority processes compile into the cache (their CPU is not in the "
+        "process's).  *built after*: seconds from the end of that process until the "
+        "background compiles had left the machine code in the cache; *then*: a second "
+        "process's calls, which load it.  Wall and CPU of the whole process, and each call "
+        "alone (s).  The classify of a declared model includes its derivation with sympy "
+        "(nothing is cached).  Targets (issue 40): a built-in model's first classify "
+        f"<= {TARGET} s of CPU in all, its first simulate <= {SIMULATE_TARGET} s.",
+        "",
+        "| model | eager: process wall | CPU | classify | simulate | compiling "
+        "| background: process wall | CPU | classify | simulate | compiling | built after "
+        "| then: classify | simulate | targets: process CPU | simulate |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|",
+    ]
+    for name, r in results.items():
+        e, b, s = r["eager"], r["background"], r["second"]
+        builtin = name != "README rod"
+        verdicts = [("met" if ok else "**missed**") if builtin else "-"
+                    for ok in (b["cpu"] <= TARGET, b["simulate"] <= SIMULATE_TARGET)]
+        lines.append(
+            f"| {name} | {e['wall']:.2f} | {e['cpu']:.2f} | {e['classify']:.2f} | "
+            f"{e['simulate']:.2f} | {e['compile'] + e['simulate_compile']:.1f} | "
+            f"{b['wall']:.2f} | {b['cpu']:.2f} | {b['classify']:.3f} | {b['simulate']:.3f} | "
+            f"{b['compile'] + b['simulate_compile']:.1f} | {r['built']:.1f} | "
+            f"{s['classify']:.3f} | {s['simulate']:.3f} | {verdicts[0]} | {verdicts[1]} |")
+    agree = all(r["eager"]["n"] == r["background"]["n"] == r["second"]["n"] and
+                r["eager"]["points"] == r["background"]["points"] == r["second"]["points"]
+                for r in results.values())
+    lines += ["", "Same n_solutions, and motions with the same number of saved points and "
+              f"the same end, in every process of a row: {agree}."]
+    publish(lines, "## First answers from empty caches", not args.no_write)
+
+
+if __name__ == "__main__":
+    main()
