@@ -8,6 +8,7 @@ import json
 import math
 import operator
 import os
+import pathlib
 import random
 import subprocess
 import sys
@@ -42,25 +43,56 @@ def same_bits(a, b) -> bool:
 def _arithmetic(x, y):
     """Every operation the twin rewrites, and the elementary functions it wraps."""
     return (x / y, x // y, x % y, x ** 2, x ** 3, x ** 7, x ** -3, y ** 0.5, x ** y,
+            x ** 2.0, x ** -1.0, x ** 1.0, x ** 0.0, y ** 1.5, math.pow(x, 3),
             math.sqrt(x), math.log(x), math.exp(x), math.sin(x), math.cos(y),
             math.atan2(x, y), math.hypot(x, y), math.pow(x, y), abs(x), max(x, y),
-            min(x, y), np.sin(y), np.sqrt(y), np.isfinite(x))
+            min(x, y), np.sin(y), np.sqrt(y), np.isfinite(x), ~(x > y))
+
+
+def _pairs():
+    """The awkward numbers against each other, and random doubles of every magnitude
+    (a last-bit difference, such as CPython's own hypot against the C library's, shows
+    only there)."""
+    rng = np.random.default_rng(40)
+    mags = 10.0 ** rng.uniform(-8, 8, size=(3000, 2))
+    randoms = rng.choice([-1.0, 1.0], size=(3000, 2)) * rng.uniform(0.5, 1.0, (3000, 2)) * mags
+    return [(x, y) for x in EDGES for y in EDGES] + [tuple(map(float, p)) for p in randoms]
 
 
 def test_the_twin_computes_numbas_numbers_on_every_awkward_pair():
     twin = interpret.interpreted(_arithmetic)
     with np.errstate(all="ignore"):
-        for x in EDGES:
-            for y in EDGES:
-                try:
-                    want = _arithmetic(x, y)
-                except ZeroDivisionError:  # numba's 0.0 ** -3, as Python's
-                    with pytest.raises(ZeroDivisionError):
-                        twin(x, y)
-                    continue
-                got = twin(x, y)
-                for k, (g, w) in enumerate(zip(got, want)):
-                    assert same_bits(g, w), (x, y, k, g, w)
+        for x, y in _pairs():
+            try:
+                want = _arithmetic(x, y)
+            except ZeroDivisionError:  # numba's 0.0 ** -3, as Python's
+                with pytest.raises(ZeroDivisionError):
+                    twin(x, y)
+                continue
+            got = twin(x, y)
+            for k, (g, w) in enumerate(zip(got, want)):
+                assert same_bits(g, w), (x, y, k, g, w)
+
+
+@njit(cache=True, error_model="numpy")
+def _in_place(a, x):
+    a /= x
+    a[0] **= 3
+    return a
+
+
+@njit(cache=True, error_model="numpy")
+def _floor(x):
+    return math.floor(x)
+
+
+def test_in_place_arithmetic_changes_the_callers_array_and_the_unreproduced_is_refused():
+    a, b = np.array([3.0, -2.0, 0.5]), np.array([3.0, -2.0, 0.5])
+    _in_place(a, 0.0)
+    interpret.interpreted(_in_place)(b, 0.0)
+    assert same_bits(a, b) and np.isinf(b[1])
+    with pytest.raises(interpret.Unsupported, match="math.floor"):
+        interpret.interpreted(_floor)      # when the twin is made, not in a call
 
 
 @njit(cache=True)
@@ -137,6 +169,10 @@ def test_both_tiers_give_the_same_bits_on_every_model_and_layer(name):
     m = get_model(name)
     point = interpret.interpreted(m.point)
     summarize = interpret.interpreted(nx.summarize)
+    with tiers.forced("off"):  # and it is what classify runs under PHASEMAP_JIT=off
+        v = m.input_vector(m.complete({}))
+        out = np.empty((len(m.branches), m.n_fields))
+        assert tiers.is_twin(tiers.runner(m.point, (v, out)))
     rng = random.Random(f"tiers {name}")
     checked = 0
     while checked < 300:
@@ -187,7 +223,8 @@ _CLASSIFY = textwrap.dedent("""
     from phasemap.systems import get_model
     start = time.perf_counter()
     c = phasemap.classify("hinge_pendulum", phi=0.05, omega=0.0)
-    result = {"n": c.n_solutions, "stagnation": c.stagnation,
+    from phasemap.core import tiers as _tiers
+    result = {"n": c.n_solutions, "stagnation": c.stagnation, "jobs": len(_tiers._JOBS),
               "rows": [[b.name, b.accelerations, b.reactions] for b in c.candidates],
               "compiles": compiletime.count(),
               "machine": bool(get_model("hinge_pendulum").point.signatures)}
@@ -209,6 +246,7 @@ def test_off_never_compiles_and_background_compiles_elsewhere(tmp_path):
     assert not (tmp_path / "kernels" / "compiling").exists()   # nothing in the background
     first = _child(tmp_path, "background", "WAIT = True\n" + _CLASSIFY)
     assert first["compiles"] == 0 and not first["machine"]     # answered by the twin
+    assert off["jobs"] == 0 and first["jobs"] == 1   # one child for point and summarize
     assert first["waited"] and first["compiles_after"] == 0    # then loaded, not compiled
     markers = tmp_path / "kernels" / "compiling"
     deadline = time.monotonic() + 300
@@ -287,7 +325,10 @@ def test_a_failed_background_compile_falls_back_to_compiling_here(tmp_path, monk
     assert f is square and not square.signatures
     assert not tiers.wait_for(square, (square.typeof_pyval(2.0),))  # nothing came of it
     assert f(3.0) == 9.0                                           # compiled here
-    assert "the background compile of square failed (exit 1)" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "the background compile of square failed (exit 1; its output is in " in err
+    assert "ZeroDivisionError" in pathlib.Path(err.split("its output is in ")[1].split(")")[0]
+                                               ).read_text()
 
 
 def _without_dates(ds):
@@ -304,7 +345,10 @@ def test_simulate_gives_the_same_motion_in_both_tiers(name):
     compiles nothing."""
     from phasemap.core import compiletime
 
+    from phasemap.motion.integrate import integrator
+
     m = get_model(name)
+    assert interpret.interpreted(integrator(m))   # a twin is made: off runs it
     rng = random.Random(f"simulate {name}")
     checked = tries = longest = 0
     while checked < 3 and tries < 50:
@@ -329,10 +373,46 @@ def test_simulate_gives_the_same_motion_in_both_tiers(name):
     assert checked == 3 and longest >= 8    # and not only starts that end at once
 
 
-def test_the_background_compile_of_simulate_leaves_the_integrator_in_the_cache():
-    from phasemap.motion.integrate import INTEGRATE_ARGS, compile_integrator, integrator
+def test_a_long_motion_goes_on_to_the_machine_code_after_the_twins_budget(monkeypatch):
+    """A motion the twin has not finished within its budget runs again on the machine
+    code (the background compile's, or compiled here): the same Dataset either way."""
+    from phasemap.motion import simulate as sim
 
-    compile_integrator("hinge_pendulum")   # what the background process runs
-    integrate = integrator(get_model("hinge_pendulum"))
-    assert tuple(INTEGRATE_ARGS) in integrate.overloads
-    assert tiers._load(integrate, tuple(INTEGRATE_ARGS))
+    values = dict(phi=2.5, omega=0.0, delta=0.0)
+    with tiers.forced("eager"):
+        machine = _without_dates(phasemap.simulate("hinge_pendulum", 50.0, **values))
+    waited = []
+    real_wait = tiers.wait_for
+    monkeypatch.setattr(tiers, "wait_for", lambda *a, **k: waited.append(1) or real_wait(*a))
+    monkeypatch.setattr(tiers, "runner", lambda d, args, warm=None, owner=None:
+                        tiers._Twin(interpret.interpreted(d)))
+    for budget, went_on in ((1e-4, True), (600.0, False)):
+        monkeypatch.setattr(sim, "TWIN_BUDGET", budget)
+        waited.clear()
+        with tiers.forced("background"):
+            ds = _without_dates(phasemap.simulate("hinge_pendulum", 50.0, **values))
+        assert bool(waited) is went_on and ds.identical(machine)
+
+
+def test_a_map_after_a_first_classify_loads_what_the_background_compiled(tmp_path):
+    """The map's kernel calls the branch rows the background compile of classify builds:
+    it waits for that compile and loads them, instead of compiling them again beside it
+    (the ladder's take seconds: without the wait, the map compiled every mode_k)."""
+    got = _child(tmp_path, "background", """
+        import json
+        import numpy as np
+        import phasemap
+        from numba.core import event
+        from phasemap.core import tiers
+        phasemap.classify("ladder")
+        with event.install_recorder("numba:compile") as rec:
+            phasemap.Scene("ladder", axes={"phi": np.linspace(0.1, 1.4, 8),
+                                           "omega": np.linspace(-1, 1, 8)}).compute()
+        names = sorted({e.data["dispatcher"].py_func.__name__ for _, e in rec.buffer
+                        if e.is_start})
+        print(json.dumps({"names": names, "jobs": len(tiers._JOBS),
+                          "done": all(j.done() for j in tiers._JOBS.values())}))
+    """)
+    assert got["jobs"] == 1 and got["done"]
+    assert "cells" in got["names"]                            # the map's own kernel
+    assert not [n for n in got["names"] if n.startswith("mode_")], got["names"]

@@ -60,6 +60,7 @@ import contextlib
 import functools
 import hashlib
 import importlib.util
+import linecache
 import math
 import os
 import pathlib
@@ -282,6 +283,10 @@ def _import(stem: str, path: pathlib.Path):
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
+    # what tracebacks and inspect.getsource read (the interpreter tier): the verified text,
+    # not the file again (mtime None: linecache keeps it)
+    linecache.cache[str(path)] = (len(body) + 1, None, ("\n" + body).splitlines(True),
+                                  str(path))
     try:
         exec(compile("\n" + body, str(path), "exec"), module.__dict__)
     except Exception as err:

@@ -20,8 +20,17 @@ what numba's machine code computes, bit for bit:
   the compiled values (``np.sin`` of a number is the C library's ``sin``, as in numba).
 
 Every other name keeps its value, and a jitted function the code calls is replaced by its
-own twin.  A function the twin cannot reproduce (an intrinsic, ``objmode``, generated
-overloads) raises :class:`Unsupported`, and the caller compiles instead.
+own twin (``~`` of a boolean is numba's logical not; ``a /= x`` on an array is in place).
+A function the twin cannot reproduce (an intrinsic, ``objmode``, ``parallel=True``, an
+elementary function without a C-library twin such as ``math.floor``, a plain Python
+function from outside phasemap) raises :class:`Unsupported` when its twin is made, and
+the caller compiles instead.
+
+What the twin does not reproduce, and phasemap's compiled code does not do: integer
+overflow (numba's 64-bit integers wrap, Python's grow), a variable that holds an integer
+on one path and a float on another (numba unifies it to a float; the twin's ``**``, ``//``
+and ``%`` take the value's own type), and ``int()`` of a NaN.  The tests compare both tiers
+bit for bit on every model's rows and motions.
 
 >>> import math
 >>> from numba import njit
@@ -108,17 +117,63 @@ def _pow(a, b, ieee: bool = True):
                 raise ZeroDivisionError("0 cannot be raised to a negative power")
             return a ** -b if a in (1, -1) else 0
         a = float(a)
+        if abs(b) > 0x10000:  # numba's cutoff: the C library's pow itself
+            return _POW(a, float(b))
         invert, n, r = b < 0, abs(b), 1.0
-        if n > 0x10000:
-            r = _POW(a, float(n))
-        else:
-            while n:
-                if n & 1:
-                    r *= a
-                n >>= 1
-                a *= a
+        while n:
+            if n & 1:
+                r *= a
+            n >>= 1
+            a *= a
         return 1.0 / r if invert else r
     return _POW(float(a), float(b))
+
+
+def _pow_constant(a, b):
+    """``a ** c`` for a float literal ``c``: what LLVM makes of ``pow(a, c)`` for the
+    constants it rewrites without fast-math (``x * x``, ``1 / x``, ``sqrt``), else
+    :func:`_pow`."""
+    if not _integer(a):
+        a = float(a)
+        if b == 2.0:
+            return a * a
+        if b == 1.0:
+            return a
+        if b == 0.0:
+            return 1.0
+        if b == -1.0:
+            return _div(1.0, a)
+        if b == 0.5:
+            return math.inf if a == -math.inf else abs(_MATH["sqrt"](a))
+    return _pow(a, b)
+
+
+def _div_python(a, b):
+    """``a / b`` under numba's default error model: a zero divisor raises, whatever the
+    types (numpy's float64 would return inf)."""
+    if b == 0:
+        raise ZeroDivisionError("division by zero")
+    return a / b
+
+
+def _invert(a):
+    """``~a``: numba's logical not of a boolean, the bitwise one of an integer."""
+    if isinstance(a, (bool, np.bool_)):
+        return not a
+    return ~a
+
+
+def _in_place(helper):
+    """``t op= v`` with ``helper`` for op: in place where ``t`` is an array, as numba
+    does (the caller's array changes), elementwise with numba's scalar arithmetic."""
+
+    def f(t, v):
+        if isinstance(t, np.ndarray):
+            t[...] = _elementwise(helper, (t, v))
+            return t
+        return helper(t, v)
+
+    return f
 
 
 def _pow_python(a, b):
@@ -173,9 +228,12 @@ _EXACT_NUMPY = {"inf", "nan", "pi", "e", "isfinite", "isnan", "isinf", "abs", "a
 
 _MATH = {name: _safe(name, getattr(math, name), getattr(np, np_name))
          for name, np_name in _ELEMENTARY.items()}
-_POW = _MATH["pow"]
+_POW = _MATH["pow"]   # the C library's pow, IEEE where CPython raises
+_MATH["pow"] = lambda a, b: _pow(a, b)   # numba lowers math.pow as a ** b
+# CPython's math.hypot is its own algorithm, not the C library's that numba calls
+_MATH["hypot"] = lambda a, b: float(np.hypot(float(a), float(b)))
 _NUMPY = {np_name: _safe(np_name, getattr(math, name), getattr(np, np_name))
-          for name, np_name in _ELEMENTARY.items() if name not in ("pow", "fmod")}
+          for name, np_name in _ELEMENTARY.items() if name not in ("pow", "fmod", "hypot")}
 
 
 class _Namespace(types.SimpleNamespace):
@@ -199,18 +257,31 @@ NUMPY = _Namespace("numpy", {**{n: getattr(np, n) for n in _EXACT_NUMPY}, **_NUM
 
 _CALLS = {ast.Pow: "_pm_pow"}
 _IEEE_CALLS = {ast.Div: "_pm_div", ast.FloorDiv: "_pm_floordiv", ast.Mod: "_pm_mod"}
+_PYTHON_CALLS = {ast.Div: "_pm_div_python"}
+
+
+def _helpers(ieee: bool) -> dict:
+    """The names the rewritten code calls, for a function under the numpy error model
+    (``ieee``) or numba's default (division by zero raises)."""
+    plain = {"_pm_div": _div, "_pm_floordiv": _floordiv, "_pm_mod": _mod,
+             "_pm_pow": _pow if ieee else _pow_python, "_pm_div_python": _div_python}
+    return {**plain, **{"_pm_i" + k[4:]: _in_place(f) for k, f in plain.items()},
+            "_pm_pow_constant": _pow_constant, "_pm_invert": _invert}
 
 
 def _rewrite(tree, ieee: bool) -> None:
     """In place: ``/``, ``//``, ``%`` (under the numpy error model) and ``**`` become calls
-    of the IEEE helpers, and decorators go.  One pass over the tree (a model's point
-    function has tens of thousands of nodes)."""
-    calls = {**_CALLS, **(_IEEE_CALLS if ieee else {})}
+    of the IEEE helpers, ``~`` numba's, and decorators go.  One pass over the tree (a
+    model's point function has tens of thousands of nodes)."""
+    calls = {**_CALLS, **(_IEEE_CALLS if ieee else _PYTHON_CALLS)}
+    attributes = set()
     stack = [tree]
     while stack:
         node = stack.pop()
         if isinstance(node, ast.FunctionDef):
             node.decorator_list = []
+        elif isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name):
+            attributes.add((node.value.id, node.attr))
         for field in node._fields:
             value = getattr(node, field, None)
             if isinstance(value, list):
@@ -223,25 +294,41 @@ def _rewrite(tree, ieee: bool) -> None:
                 if new is not value:
                     setattr(node, field, new)
                 stack.append(new)
+    return attributes
 
 
 def _call(node, calls):
     """``node`` as a helper call if it is an operation the helpers take."""
     if isinstance(node, ast.BinOp):
         name = calls.get(type(node.op))
+        if name == "_pm_pow" and _float_literal(node.right) is not None:
+            name = "_pm_pow_constant"  # (LLVM rewrites pow by some constants)
         if name is not None:
             return _located(ast.Call(_located(ast.Name(name, ast.Load()), node),
                                      [node.left, node.right], []), node)
+    elif isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.Invert):
+        return _located(ast.Call(_located(ast.Name("_pm_invert", ast.Load()), node),
+                                 [node.operand], []), node)
     elif isinstance(node, ast.AugAssign):
         name = calls.get(type(node.op))
-        if name is not None:
+        if name is not None:  # in place for an array, as numba does
             load = _located(ast.parse(ast.unparse(node.target), mode="eval").body, node)
             for sub in ast.walk(load):
                 _located(sub, node)
-            value = _located(ast.Call(_located(ast.Name(name, ast.Load()), node),
-                                      [load, node.value], []), node)
+            value = _located(ast.Call(_located(ast.Name("_pm_i" + name[4:], ast.Load()),
+                                               node), [load, node.value], []), node)
             return _located(ast.Assign([node.target], value), node)
     return node
+
+
+def _float_literal(node):
+    """The value of a float literal (or its negation), else None."""
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+        value = _float_literal(node.operand)
+        return None if value is None else -value
+    if isinstance(node, ast.Constant) and type(node.value) is float:
+        return node.value
+    return None
 
 
 def _located(new, old):
@@ -258,6 +345,7 @@ def _dispatcher(obj) -> bool:
 
 _LOCK = threading.RLock()
 _TWINS: dict = {}
+_MAKING: set = set()
 
 
 def interpreted(dispatcher):
@@ -268,12 +356,24 @@ def interpreted(dispatcher):
     """
     if not _dispatcher(dispatcher):
         raise Unsupported(f"{dispatcher!r} is not a numba-jitted function")
-    key = id(dispatcher)
     with _LOCK:
-        twin = _TWINS.get(key)
-        if twin is None:
-            twin = _TWINS[key] = (dispatcher, _twin(dispatcher))
-        return twin[1]
+        return _made(id(dispatcher), dispatcher, lambda: _twin(dispatcher))
+
+
+def _made(key, owner, make):
+    """The twin under ``key`` (made once; ``owner`` held with it).  A function that calls
+    itself back through another (mutual recursion) is refused, not made forever."""
+    twin = _TWINS.get(key)
+    if twin is None:
+        if key in _MAKING:
+            raise Unsupported(f"{getattr(owner, '__qualname__', owner)!s} is mutually "
+                              "recursive")
+        _MAKING.add(key)
+        try:
+            twin = _TWINS[key] = (owner, make())
+        finally:
+            _MAKING.discard(key)
+    return twin[1]
 
 
 def _twin(dispatcher):
@@ -284,12 +384,9 @@ def _python_twin(function, error_model: str):
     """The twin of one of phasemap's plain Python functions that jitted code calls (one
     with a numba ``overload``, such as the stages of a Runge-Kutta step, whose Python is
     its reference), under the error model of its caller."""
-    key = (id(function), error_model)
     with _LOCK:
-        twin = _TWINS.get(key)
-        if twin is None:
-            twin = _TWINS[key] = (function, _twin_of(function, {"error_model": error_model}))
-        return twin[1]
+        return _made((id(function), error_model), function,
+                     lambda: _twin_of(function, {"error_model": error_model}))
 
 
 def _twin_of(py, options):
@@ -308,11 +405,9 @@ def _twin_of(py, options):
     if len(tree.body) != 1 or not isinstance(tree.body[0], ast.FunctionDef):
         raise Unsupported(f"{py.__qualname__} is not a plain function definition")
     ieee = options.get("error_model", "python") == "numpy"
-    _rewrite(tree, ieee)
+    attributes = _rewrite(tree, ieee)
     code = compile(tree, filename, "exec")
-    namespace = {"__builtins__": builtins, "__name__": py.__module__,
-                 "_pm_div": _div, "_pm_floordiv": _floordiv, "_pm_mod": _mod,
-                 "_pm_pow": _pow if ieee else _pow_python}
+    namespace = {"__builtins__": builtins, "__name__": py.__module__, **_helpers(ieee)}
     own = tree.body[0].name
     for name in _names(code):
         if name not in namespace and name != own and name in py.__globals__:
@@ -322,6 +417,11 @@ def _twin_of(py, options):
             except Unsupported:
                 if _looks_up(code, name):  # not only an attribute's name (np.sqrt)
                     raise
+    # math.floor, np.linalg, a module's name the twin cannot take: refused now, not in
+    # the middle of a call
+    for name, attr in attributes:
+        if isinstance(namespace.get(name), (_Namespace, _Module)):
+            getattr(namespace[name], attr)
     exec(code, namespace)  # noqa: S102 - the function's own source
     twin = namespace[tree.body[0].name]
     namespace[tree.body[0].name] = twin  # recursion calls the twin

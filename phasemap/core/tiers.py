@@ -13,14 +13,18 @@ is neither in this process nor in the kernel cache is answered:
   compiler is done.
 * ``eager``: compile in this process before answering (numba's own way; what the test
   suite's compiled-kernel tests and ``phasemap warm`` use).
-* ``off``: always the twin, never machine code (to debug, or where nothing may be
-  compiled; slow for many calls).
+* ``off``: always the twin (to debug, or where nothing should be compiled; slow for many
+  calls); a function the twin cannot reproduce is still compiled.
 
 Machine code already in the process or in the cache always runs, except under ``off``.
 Two processes never compile the same function at once in the background: the first
 leaves a marker in the cache folder (``compiling/``), the other waits for its result.
-If the background compile fails, the process compiles for itself (and shows numba's error
-if that fails too).
+One call compiles in one child whatever it needs (classify's point function and
+summary), and a process runs at most :data:`MAX_JOBS` at once.  If a background compile
+fails, the process compiles for itself, with one line on stderr naming the child's log
+(and shows numba's error if that fails too).  A motion the twin has not finished within
+a few seconds goes on to the machine code (:func:`phasemap.simulate`).  Not on Windows,
+where every first call compiles (as ``eager``).
 
 >>> import os
 >>> from phasemap.core import tiers
@@ -44,7 +48,7 @@ import numpy as np
 
 from phasemap.core import interpret
 
-__all__ = ["MODES", "forced", "mode", "runner", "wait_for"]
+__all__ = ["MODES", "forced", "is_twin", "mode", "runner", "settle", "wait_for"]
 
 #: The values of ``$PHASEMAP_JIT``, the default first.
 MODES = ("background", "eager", "off")
@@ -53,9 +57,16 @@ MODES = ("background", "eager", "off")
 POLL = 0.5
 #: A marker older than this (seconds), or whose process is gone, is abandoned.
 STALE = 1800.0
+#: The longest :func:`wait_for` waits for a background compile (seconds), then compiles.
+WAIT = 900.0
+#: Background compiles of one process at once, niced (a call beyond them runs its twin
+#: and starts its compile at a later call, once one has ended).
+MAX_JOBS = max(2, os.cpu_count() or 2)
 
 _LOCK = threading.RLock()
 _STATE: dict = {}
+#: the pickled warm call -> its background compile (one per call, whatever it compiles)
+_JOBS: dict = {}
 
 
 _FORCED: contextvars.ContextVar = contextvars.ContextVar("phasemap_jit", default=None)
@@ -103,7 +114,7 @@ class _Twin:
             return self.function(*args)
 
 
-def runner(dispatcher, args: tuple, warm=None):
+def runner(dispatcher, args: tuple, warm=None, owner: str | None = None):
     """What to call with ``args`` instead of the jitted ``dispatcher``: the dispatcher itself
     where its machine code is here or in the cache (or ``$PHASEMAP_JIT`` is ``eager``),
     else its interpreted twin.
@@ -111,7 +122,8 @@ def runner(dispatcher, args: tuple, warm=None):
     ``warm`` is ``(function, args, kwargs)``, picklable: a call that compiles the
     dispatcher's machine code for ``args`` into the cache when run in a fresh process
     under ``PHASEMAP_JIT=eager``.  Without it, or where the cache is this process's own,
-    machine code is compiled here (as ``eager``).
+    machine code is compiled here (as ``eager``).  ``owner`` names the model whose code it
+    compiles, for :func:`settle`.
     """
     how = mode()
     if how == "eager":
@@ -123,11 +135,11 @@ def runner(dispatcher, args: tuple, warm=None):
     with _LOCK:
         state = _STATE.get(key)
         if state is None:
-            state = _STATE[key] = {"dispatcher": dispatcher, "twin": None, "process": None,
-                                   "look": 0.0, "marker": None}
+            state = _STATE[key] = {"dispatcher": dispatcher, "twin": None, "job": None,
+                                   "look": 0.0, "failed": False, "owner": owner}
             try:
                 state["twin"] = _Twin(interpret.interpreted(dispatcher))
-            except interpret.Unsupported:
+            except Exception:  # noqa: BLE001 - no twin (Unsupported, or its source): compile
                 state["twin"] = None
         if state["twin"] is None:
             return dispatcher  # no twin: numba compiles, as before
@@ -140,75 +152,131 @@ def runner(dispatcher, args: tuple, warm=None):
         return state["twin"]
 
 
-def wait_for(dispatcher, sig) -> bool:
+def is_twin(function) -> bool:
+    """Whether ``function`` (what :func:`runner` chose) is an interpreted twin."""
+    return isinstance(function, _Twin)
+
+
+class _Job:
+    """A background compile: this process's child, or another process's (its marker)."""
+
+    __slots__ = ("process", "marker", "log", "users")
+
+    def __init__(self, process, marker, log=None):
+        self.process, self.marker, self.log, self.users = process, marker, log, 0
+
+    def done(self) -> bool:
+        if self.process is not None:
+            return self.process.poll() is not None
+        return not _alive(self.marker)
+
+    def failure(self) -> str:
+        """Why it left no machine code, in a few words."""
+        if self.process is None:
+            return "in another process ended without machine code this process can load"
+        code = self.process.returncode
+        where = f"; its output is in {self.log}" if self.log else ""
+        return (f"failed (exit {code}{where})" if code else
+                "left no machine code in the kernel cache")
+
+    def wait(self, timeout: float) -> None:
+        deadline = time.monotonic() + timeout
+        if self.process is not None:
+            try:
+                self.process.wait(timeout)
+            except subprocess.TimeoutExpired:
+                pass
+            return
+        while not self.done() and time.monotonic() < deadline:
+            time.sleep(POLL)
+
+
+def wait_for(dispatcher, sig, timeout: float = WAIT) -> bool:
     """Where this process started (or waits for) a background compile of ``dispatcher``
-    for the argument types ``sig``, wait for it to end and load its machine code, rather
-    than compile the same function a second time (a fate map after a first simulate);
-    True where the machine code is then loaded."""
+    for the argument types ``sig``, wait for it to end (at most ``timeout`` seconds) and
+    load its machine code, rather than compile the same function a second time (a fate
+    map after a first simulate); True where the machine code is then loaded."""
     sig = tuple(sig)
     if sig in dispatcher.overloads:
         return True
     with _LOCK:
         state = _STATE.get((id(dispatcher), sig))
-        process = None if state is None else state["process"]
-        marker = None if state is None else state["marker"]
-    if state is None:
+        job = None if state is None else state["job"]
+    if job is None:
         return False
-    if process is not None:
-        process.wait()
-    elif marker is not None:
-        deadline = time.monotonic() + STALE
-        while marker.exists() and _alive(marker) and time.monotonic() < deadline:
-            time.sleep(POLL)
+    job.wait(timeout)
     with _LOCK:
         return _load(dispatcher, sig)
+
+
+def settle(owner: str, timeout: float = WAIT) -> None:
+    """Wait (at most ``timeout`` seconds in all) for the background compiles of ``owner``'s
+    code that this process started or waits for: a map, a fate map or a phase curve of the
+    model compiles functions they compile too (its branch rows), and loads them from the
+    cache once they are there instead of compiling them a second time, on the same cores."""
+    with _LOCK:
+        jobs = {id(st["job"]): st["job"] for st in _STATE.values()
+                if st["owner"] == owner and st["job"] is not None}
+    deadline = time.monotonic() + timeout
+    for job in jobs.values():
+        if not job.done():
+            job.wait(max(0.0, deadline - time.monotonic()))
 
 
 def _ready(state, sig) -> bool:
     """Whether the machine code is (now) loaded from the cache."""
     now = time.monotonic()
-    process = state["process"]
-    done = process is not None and process.poll() is not None
+    job = state["job"]
+    done = job is not None and job.done()
     if not done and now < state["look"]:
         return False
     state["look"] = now + POLL
     if _load(state["dispatcher"], sig):
         return True
     if done:
-        why = (f"failed (exit {process.returncode})" if process.returncode else
-               "left no machine code in the kernel cache")
-        _say(f"the background compile of {_name(state['dispatcher'])} {why}; compiling it "
-             "in this process")
-        state["process"] = None
+        _say(f"the background compile of {_name(state['dispatcher'])} {job.failure()}; "
+             "compiling it in this process")
+        state["job"] = None
         state["failed"] = True
     return False
 
 
 def _background(state, sig, warm) -> bool:
-    """Start (once) the process that compiles into the cache; False where the caller
-    must compile for itself."""
+    """Start (once) the process that compiles into the cache, or wait for one; False where
+    the caller must compile for itself."""
     from phasemap.core import cache
 
-    if warm is None or state.get("failed") or not _cached(state["dispatcher"]):
-        return False
-    if state["process"] is not None or state["marker"] is not None:
+    if state["job"] is not None:
         return True
+    if warm is None or state["failed"] or not _cached(state["dispatcher"]) or \
+            os.name == "nt":  # (no os.kill(pid, 0) to see whether a marker's process lives)
+        return False
     try:
         folder = cache.folder()
     except cache.CacheError:
         return False
     if folder in getattr(cache, "_PRIVATE", ()):  # another process could not load it
         return False
+    try:
+        payload = pickle.dumps(warm)
+    except Exception:  # noqa: BLE001 - a call another process cannot make: compile here
+        return False
+    job = _JOBS.get(payload)
+    if job is not None and not job.done():  # the same call compiles it already
+        state["job"] = job
+        return True
+    if sum(not j.done() for j in _JOBS.values()) >= MAX_JOBS:
+        return True  # the twin meanwhile; the next call tries again
     marker = folder / "compiling" / _key(state["dispatcher"], sig)
     if not _claim(marker):
-        state["marker"] = marker  # another process compiles it: wait for its result
+        state["job"] = _Job(None, marker)  # another process compiles it: its result
         return True
     try:
-        state["process"] = _spawn(warm, marker)
-    except (OSError, pickle.PicklingError, TypeError, AttributeError):
+        job = _spawn(payload, marker)
+    except OSError:
         _release(marker)
         return False
-    state["marker"] = marker
+    state["job"] = _JOBS[payload] = job
     return True
 
 
@@ -221,8 +289,13 @@ def _cached(dispatcher) -> bool:
 
 
 def _key(dispatcher, sig) -> str:
+    """The marker's name: the function, its argument types, and what decides whether
+    another process's machine code is this one's (numba, Python, numba's cache folder)."""
+    import numba
+
     py = dispatcher.py_func
-    text = f"{py.__module__}.{py.__qualname__}{sig}"
+    text = (f"{py.__module__}.{py.__qualname__}{sig} {numba.__version__} {sys.executable} "
+            f"{os.environ.get('NUMBA_CACHE_DIR', '')}")
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
@@ -249,12 +322,20 @@ def _claim(marker) -> bool:
 
 
 def _alive(marker) -> bool:
+    """Whether ``marker``'s process still compiles (a marker just made, its pid not yet
+    written, counts as alive)."""
     try:
         age = time.time() - marker.stat().st_mtime
-        pid = int(marker.read_text().strip() or "0")
-    except (OSError, ValueError):
+        text = marker.read_text().strip()
+    except OSError:
         return False
-    if age > STALE or pid <= 0:
+    if age > STALE:
+        return False
+    try:
+        pid = int(text)
+    except ValueError:
+        return age < 10.0
+    if pid <= 0:
         return False
     try:
         os.kill(pid, 0)
@@ -272,21 +353,26 @@ def _release(marker) -> None:
         pass
 
 
-def _spawn(warm, marker) -> subprocess.Popen:
-    payload = pickle.dumps((warm, str(marker)))
-    env = dict(os.environ, PHASEMAP_JIT="eager")
-    process = subprocess.Popen(
-        [sys.executable, "-m", "phasemap.core.tiers"], stdin=subprocess.PIPE,
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env,
-        start_new_session=True, close_fds=True)
+def _spawn(payload: bytes, marker) -> _Job:
+    """The child that runs the pickled call; it writes its pid into the marker, and its
+    output goes to ``<marker>.log`` (kept where it fails)."""
+    log = marker.with_suffix(".log")
+    # the child imports what the call needs as this process does (a declaration beside
+    # the user's script, not only beside the working folder)
+    path = os.pathsep.join([p for p in sys.path if p] +
+                           [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])
+    env = dict(os.environ, PHASEMAP_JIT="eager", PYTHONPATH=path)
+    with open(log, "wb") as out:
+        process = subprocess.Popen(
+            [sys.executable, "-m", "phasemap.core.tiers", str(marker)], stdin=subprocess.PIPE,
+            stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True,
+            close_fds=True)
     try:
         process.stdin.write(payload)
         process.stdin.close()
     except OSError:
         pass
-    with open(marker, "w") as fh:  # the child's pid: it removes the marker when done
-        fh.write(str(process.pid))
-    return process
+    return _Job(process, marker, log)
 
 
 def _load(dispatcher, sig) -> bool:
@@ -323,18 +409,36 @@ def _say(message: str) -> None:
 
 
 def _main() -> int:
-    """The background compile: run the pickled call on stdin, then remove the marker."""
+    """The background compile: run the pickled call on stdin, then remove the marker (and
+    the log, where the call succeeded)."""
+    import pathlib
+
+    marker = pathlib.Path(sys.argv[1])
+    log = marker.with_suffix(".log")
     try:
-        os.nice(10)
-    except OSError:
-        pass
-    warm, marker = pickle.loads(sys.stdin.buffer.read())
-    try:
-        function, args, kwargs = warm
+        tmp = marker.with_suffix(f".{os.getpid()}")
+        tmp.write_text(str(os.getpid()))
+        os.replace(tmp, marker)             # atomically: never an empty marker
+        if hasattr(os, "nice"):
+            os.nice(10)
+        function, args, kwargs = pickle.loads(sys.stdin.buffer.read())
         function(*args, **kwargs)
     finally:
         _release(marker)
+    _release(log)
     return 0
+
+
+def _forget() -> None:
+    """In a forked child: the parent's background compiles are not this process's."""
+    global _LOCK
+    _LOCK = threading.RLock()
+    _STATE.clear()
+    _JOBS.clear()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget)
 
 
 if __name__ == "__main__":

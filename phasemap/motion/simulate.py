@@ -8,6 +8,7 @@ returns a self-describing :class:`xarray.Dataset`.
 from __future__ import annotations
 
 import math
+import threading
 import warnings
 from dataclasses import dataclass
 from typing import Mapping, NamedTuple, Sequence
@@ -15,6 +16,7 @@ from typing import Mapping, NamedTuple, Sequence
 import numpy as np
 import xarray as xr
 
+from phasemap.core import progress
 from phasemap.core.progress import human_bytes
 from phasemap.core.resources import MEMORY_COPIES, MEMORY_SHARE, available_memory
 from phasemap.core.memo import Memo
@@ -295,8 +297,11 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
         return ds
     # machine code where it is compiled; else, at once, its interpreted twin while a
     # background process compiles it (phasemap.core.tiers; $PHASEMAP_JIT)
-    integrate = tiers.runner(integrator(m, opts.method), (v, y0, *run, NO_STOP),
-                             (compile_integrator, (reference(m), opts.method), {}))
+    machine = integrator(m, opts.method)
+    integrate = tiers.runner(machine, (v, y0, *run, NO_STOP),
+                             (compile_integrator, (reference(m), opts.method), {}), m.name)
+    if tiers.is_twin(integrate) and tiers.mode() != "off":
+        integrate = _budgeted(integrate, machine, m.name)
     fate, t, y, n_rev, n_steps, points, events, y_eval, impacts = _through_impacts(
         m, integrate, v, y0, run, names, full)
     if S is not None and int(fate) in GOES_ON and float(t) < opts.t_end and not impacts:
@@ -420,6 +425,34 @@ def _continued(S, m: Model, opts: Options, contact: dict, names, full, positions
 
 #: The most impacts without collision one motion goes through (each ends a stage).
 MAX_IMPACTS = 10_000
+
+
+#: Seconds of a motion the interpreted integrator runs before the machine code takes over
+#: (the twin takes about a millisecond a step: a long motion waits for the compiler).
+TWIN_BUDGET = 3.0
+
+
+def _budgeted(twin, machine, name: str):
+    """The integrator's twin, stopped after :data:`TWIN_BUDGET` seconds: a motion that
+    long runs again, from its start, on the machine code (the background compile's, once
+    it has ended, or compiled here), so that a twin never takes longer than compiling."""
+
+    def integrate(*args):
+        stop = np.zeros(1, dtype=np.int64)
+        timer = threading.Timer(TWIN_BUDGET, stop.__setitem__, (0, 1))
+        timer.daemon = True
+        timer.start()
+        try:
+            res = twin(*args[:-1], stop)
+        finally:
+            timer.cancel()
+        if not stop[0] or int(res.fate) != ev.MAX_STEPS:
+            return res  # (ended before its budget did)
+        with progress.activity(f"{name}: compiling the integrator"):
+            tiers.wait_for(machine, tuple(machine.typeof_pyval(a) for a in args))
+            return machine(*args)
+
+    return integrate
 
 
 def _through_impacts(m: Model, integrate, v, y0, run, names, full):
