@@ -384,7 +384,7 @@ def test_a_long_motion_goes_on_to_the_machine_code_after_the_twins_budget(monkey
     waited = []
     real_wait = tiers.wait_for
     monkeypatch.setattr(tiers, "wait_for", lambda *a, **k: waited.append(1) or real_wait(*a))
-    monkeypatch.setattr(tiers, "runner", lambda d, args, warm=None, owner=None:
+    monkeypatch.setattr(tiers, "runner", lambda d, args, warm=None:
                         tiers._Twin(interpret.interpreted(d)))
     for budget, went_on in ((1e-4, True), (600.0, False)):
         monkeypatch.setattr(sim, "TWIN_BUDGET", budget)
@@ -392,27 +392,3 @@ def test_a_long_motion_goes_on_to_the_machine_code_after_the_twins_budget(monkey
         with tiers.forced("background"):
             ds = _without_dates(phasemap.simulate("hinge_pendulum", 50.0, **values))
         assert bool(waited) is went_on and ds.identical(machine)
-
-
-def test_a_map_after_a_first_classify_loads_what_the_background_compiled(tmp_path):
-    """The map's kernel calls the branch rows the background compile of classify builds:
-    it waits for that compile and loads them, instead of compiling them again beside it
-    (the ladder's take seconds: without the wait, the map compiled every mode_k)."""
-    got = _child(tmp_path, "background", """
-        import json
-        import numpy as np
-        import phasemap
-        from numba.core import event
-        from phasemap.core import tiers
-        phasemap.classify("ladder")
-        with event.install_recorder("numba:compile") as rec:
-            phasemap.Scene("ladder", axes={"phi": np.linspace(0.1, 1.4, 8),
-                                           "omega": np.linspace(-1, 1, 8)}).compute()
-        names = sorted({e.data["dispatcher"].py_func.__name__ for _, e in rec.buffer
-                        if e.is_start})
-        print(json.dumps({"names": names, "jobs": len(tiers._JOBS),
-                          "done": all(j.done() for j in tiers._JOBS.values())}))
-    """)
-    assert got["jobs"] == 1 and got["done"]
-    assert "cells" in got["names"]                            # the map's own kernel
-    assert not [n for n in got["names"] if n.startswith("mode_")], got["names"]

@@ -12,7 +12,7 @@ from typing import Mapping
 import numpy as np
 import xarray as xr
 
-from phasemap.core import calls, tiers
+from phasemap.core import calls
 from phasemap.core.memo import Memo
 from phasemap.core import args as _args
 from phasemap.atlas.dataset import cf_header
@@ -447,7 +447,6 @@ def _raster_kernel(m: Model, x: str, y: str, layer: str) -> tuple:
     def make():
         from_x = [d for d in m.derived if d.source == x]
         slot = {n: i for i, n in enumerate(m.inputs)}
-        tiers.settle(m.name)  # a first classify's background compile: its branch rows
         cells = grid_kernel(m, (layers_for(m)[layer],), y)
         # the kernel is kept with its address, so that the code stays loaded
         return (cells, calls.address(cells, CELLS_SIGNATURE.args),

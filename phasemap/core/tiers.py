@@ -48,7 +48,7 @@ import numpy as np
 
 from phasemap.core import interpret
 
-__all__ = ["MODES", "forced", "is_twin", "mode", "runner", "settle", "wait_for"]
+__all__ = ["MODES", "forced", "is_twin", "mode", "runner", "wait_for"]
 
 #: The values of ``$PHASEMAP_JIT``, the default first.
 MODES = ("background", "eager", "off")
@@ -114,7 +114,7 @@ class _Twin:
             return self.function(*args)
 
 
-def runner(dispatcher, args: tuple, warm=None, owner: str | None = None):
+def runner(dispatcher, args: tuple, warm=None):
     """What to call with ``args`` instead of the jitted ``dispatcher``: the dispatcher itself
     where its machine code is here or in the cache (or ``$PHASEMAP_JIT`` is ``eager``),
     else its interpreted twin.
@@ -122,8 +122,7 @@ def runner(dispatcher, args: tuple, warm=None, owner: str | None = None):
     ``warm`` is ``(function, args, kwargs)``, picklable: a call that compiles the
     dispatcher's machine code for ``args`` into the cache when run in a fresh process
     under ``PHASEMAP_JIT=eager``.  Without it, or where the cache is this process's own,
-    machine code is compiled here (as ``eager``).  ``owner`` names the model whose code it
-    compiles, for :func:`settle`.
+    machine code is compiled here (as ``eager``).
     """
     how = mode()
     if how == "eager":
@@ -136,7 +135,7 @@ def runner(dispatcher, args: tuple, warm=None, owner: str | None = None):
         state = _STATE.get(key)
         if state is None:
             state = _STATE[key] = {"dispatcher": dispatcher, "twin": None, "job": None,
-                                   "look": 0.0, "failed": False, "owner": owner}
+                                   "look": 0.0, "failed": False}
             try:
                 state["twin"] = _Twin(interpret.interpreted(dispatcher))
             except Exception:  # noqa: BLE001 - no twin (Unsupported, or its source): compile
@@ -207,20 +206,6 @@ def wait_for(dispatcher, sig, timeout: float = WAIT) -> bool:
     job.wait(timeout)
     with _LOCK:
         return _load(dispatcher, sig)
-
-
-def settle(owner: str, timeout: float = WAIT) -> None:
-    """Wait (at most ``timeout`` seconds in all) for the background compiles of ``owner``'s
-    code that this process started or waits for: a map, a fate map or a phase curve of the
-    model compiles functions they compile too (its branch rows), and loads them from the
-    cache once they are there instead of compiling them a second time, on the same cores."""
-    with _LOCK:
-        jobs = {id(st["job"]): st["job"] for st in _STATE.values()
-                if st["owner"] == owner and st["job"] is not None}
-    deadline = time.monotonic() + timeout
-    for job in jobs.values():
-        if not job.done():
-            job.wait(max(0.0, deadline - time.monotonic()))
 
 
 def _ready(state, sig) -> bool:

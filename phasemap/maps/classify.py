@@ -170,9 +170,9 @@ def classify(model: str | Model, **values: float) -> Classification:
     # machine code where it is compiled; else, at once, its interpreted twin while a
     # background process compiles it (phasemap.core.tiers; $PHASEMAP_JIT)
     warm = (classify, (reference(m),), full)
-    tiers.runner(m.point, (v, out), warm, m.name)(v, out)
+    tiers.runner(m.point, (v, out), warm)(v, out)
     n, stagnation, lost, singular = tiers.runner(nx.summarize, (out, m.stick_branch),
-                                                 warm, m.name)(out, m.stick_branch)
+                                                 warm)(out, m.stick_branch)
     candidates = tuple(_branch(m, b, out[b]) for b in range(len(m.branches))
                        if out[b, nx.STATUS] != nx.ABSENT)
     return Classification(

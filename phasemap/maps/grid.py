@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from phasemap.core import tiers
 from phasemap.core.codegen import grid_kernel, pack_axes, run_grid
 from phasemap.maps.layers import Layer, layers_for
 from phasemap.core.model import Model
@@ -59,7 +58,6 @@ def evaluate(model: Model, axes: dict[str, np.ndarray], fixed: dict[str, float],
     field_layers = [l for l in wanted if not l.is_summary]
     flags = np.empty((len(flag_layers), ncells), dtype=np.int8)
     fields = np.empty((len(field_layers), ncells))
-    tiers.settle(model.name)  # a first classify's background compile: its branch rows
     cells = grid_kernel(model, tuple(flag_layers + field_layers), inner)
     run_grid(cells, base, shape, axis_slot, axis_values, deriv_slot, deriv_values, inner_values,
              inner_deriv, flags, fields)

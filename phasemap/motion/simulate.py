@@ -299,7 +299,7 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     # background process compiles it (phasemap.core.tiers; $PHASEMAP_JIT)
     machine = integrator(m, opts.method)
     integrate = tiers.runner(machine, (v, y0, *run, NO_STOP),
-                             (compile_integrator, (reference(m), opts.method), {}), m.name)
+                             (compile_integrator, (reference(m), opts.method), {}))
     if tiers.is_twin(integrate) and tiers.mode() != "off":
         integrate = _budgeted(integrate, machine, m.name)
     fate, t, y, n_rev, n_steps, points, events, y_eval, impacts = _through_impacts(

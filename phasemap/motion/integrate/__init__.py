@@ -331,9 +331,8 @@ def compile_integrator(model, method: str = DEFAULT_METHOD) -> None:
 
 def _kernels(model: Model, method: str):
     integrate = integrator(model, method)
-    # a first classify's or simulate's background compile under way: its result (the
-    # integrator, the model's branch rows), not a second compile of the same on these cores
-    tiers.settle(model.name)
+    # a first simulate's background compile of it under way: its result, not a second
+    # compile of the same function
     tiers.wait_for(integrate, INTEGRATE_ARGS)
     at = calls.address(integrate, INTEGRATE_ARGS)
     if integrate.nopython_signatures[0] != INTEGRATE_SIGNATURE:  # a template's change
