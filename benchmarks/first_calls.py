@@ -154,7 +154,10 @@ def main() -> None:
         "declaration; exact gradients in the slice's axes of the conditions that can bound "
         "a class in it, and the Hessian by differences), the drivers every model shares (compiled once per machine), "
         "and the model's own functions.  A second declaration pays its own functions "
-        "and its conditions, not the shared drivers.",
+        "and its conditions, not the shared drivers.  Under `PHASEMAP_JIT=background` (the "
+        "default) the first classify is the interpreted twin, and a background process "
+        "compiles the point function meanwhile (its CPU is not in the CPU column); the first "
+        "map compiles the branch rows it calls beside it, on the other core.",
         "",
         "| declaration | step | wall | CPU | compile: conditions | shared drivers | own |",
         "|---|---|---:|---:|---:|---:|---:|",
