@@ -38,6 +38,20 @@ def load() -> str:
     return f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores"
 
 
+def background_quiet(cache_folder: pathlib.Path, limit: float = 900.0) -> float:
+    """Wait until no background compile (``phasemap.core.tiers``) of the kernel cache
+    ``cache_folder`` runs: its ``compiling/`` folder holds no marker (a failed compile's
+    ``.log`` stays); the seconds waited."""
+    import time
+
+    start = time.perf_counter()
+    markers = cache_folder / "compiling"
+    while (markers.exists() and any(p.suffix != ".log" for p in markers.iterdir())
+           and time.perf_counter() - start < limit):
+        time.sleep(0.25)
+    return time.perf_counter() - start
+
+
 def parser(doc: str) -> argparse.ArgumentParser:
     """A script's argument parser: its docstring's first line, and ``--no-write``."""
     ap = argparse.ArgumentParser(description=doc.split("\n")[0])

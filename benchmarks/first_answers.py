@@ -33,7 +33,7 @@ import sys
 import tempfile
 import time
 
-from _report import load, machine, parser, publish
+from _report import background_quiet, load, machine, parser, publish
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 MODELS = ("ladder", "wheel", "elliptic_pendulum", "hinge_pendulum", "painleve_rod",
@@ -80,15 +80,6 @@ def child(model: str, jit: str, env: dict) -> dict:
     raise RuntimeError(f"{model} ({jit}): the child failed:\n{out.stderr[-3000:]}")
 
 
-def quiet(folder: pathlib.Path, limit: float = 900.0) -> float:
-    """Wait until no background compile is running in ``folder``; seconds waited."""
-    t = time.perf_counter()
-    markers = folder / "compiling"
-    while markers.exists() and any(markers.iterdir()) and time.perf_counter() - t < limit:
-        time.sleep(0.25)
-    return time.perf_counter() - t
-
-
 def row(model: str) -> dict:
     result = {}
     for jit in ("eager", "background"):
@@ -99,7 +90,7 @@ def row(model: str) -> dict:
                                                                           / "numba"))
             result[jit] = child(model, jit, env)
             if jit == "background":
-                result["built"] = quiet(kernels)
+                result["built"] = background_quiet(kernels)
                 result["second"] = child(model, jit, env)
     return result
 

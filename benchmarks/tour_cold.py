@@ -25,7 +25,7 @@ import sys
 import tempfile
 import time
 
-from _report import load, machine, parser, publish
+from _report import background_quiet, load, machine, parser, publish
 
 TARGET_CPU, TARGET_WALL = 150.0, 120.0
 
@@ -45,9 +45,7 @@ def tour(folder: pathlib.Path, env: dict) -> dict:
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if out.returncode != 0:
         raise RuntimeError(f"the tour failed:\n{out.stderr[-3000:]}")
-    markers = pathlib.Path(env["PHASEMAP_CACHE_DIR"]) / "compiling"
-    while markers.exists() and any(p.suffix != ".log" for p in markers.iterdir()):
-        time.sleep(0.5)
+    background_quiet(pathlib.Path(env["PHASEMAP_CACHE_DIR"]))
     compiled = re.search(r"numba compiled kernels for (\d+) s", out.stdout)
     return dict(wall=wall, cpu=(after.ru_utime - before.ru_utime)
                 + (after.ru_stime - before.ru_stime), machine=busy() - b0,

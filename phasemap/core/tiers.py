@@ -179,13 +179,13 @@ class _Job:
                 "left no machine code in the kernel cache")
 
     def wait(self, timeout: float) -> None:
-        deadline = time.monotonic() + timeout
         if self.process is not None:
             try:
                 self.process.wait(timeout)
             except subprocess.TimeoutExpired:
                 pass
             return
+        deadline = time.monotonic() + timeout
         while not self.done() and time.monotonic() < deadline:
             time.sleep(POLL)
 
@@ -398,12 +398,12 @@ def _main() -> int:
     the log, where the call succeeded)."""
     import pathlib
 
+    from phasemap.core.cache import _write_atomic
+
     marker = pathlib.Path(sys.argv[1])
     log = marker.with_suffix(".log")
     try:
-        tmp = marker.with_suffix(f".{os.getpid()}")
-        tmp.write_text(str(os.getpid()))
-        os.replace(tmp, marker)             # atomically: never an empty marker
+        _write_atomic(marker, str(os.getpid()).encode())  # never an empty marker
         if hasattr(os, "nice"):
             os.nice(10)
         function, args, kwargs = pickle.loads(sys.stdin.buffer.read())
