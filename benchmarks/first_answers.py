@@ -52,11 +52,15 @@ if model == "README rod":
 t1 = time.perf_counter()
 c = phasemap.classify(model)
 t2 = time.perf_counter()
+import resource
+r = resource.getrusage(resource.RUSAGE_SELF)
+to_classify = r.ru_utime + r.ru_stime
 k = compiletime.seconds()
 ds = phasemap.simulate(model, 5.0)
 t3 = time.perf_counter()
 m = phasemap.get_model(model)
 print("RESULT " + json.dumps(dict(classify=t2 - t1, compile=k, simulate=t3 - t2,
+                                  to_classify=to_classify,
                                   simulate_compile=compiletime.seconds() - k,
                                   machine=bool(m.point.signatures), n=c.n_solutions,
                                   points=ds.sizes["t"], end=ds.attrs["end_reason"])))
@@ -119,24 +123,30 @@ def main() -> None:
         "process's).  *built after*: seconds from the end of that process until the "
         "background compiles had left the machine code in the cache; *then*: a second "
         "process's calls, which load it.  Wall and CPU of the whole process, and each call "
-        "alone (s).  The classify of a declared model includes its derivation with sympy "
-        "(nothing is cached).  Targets (issue 40): a built-in model's first classify "
-        f"<= {TARGET} s of CPU in all, its first simulate <= {SIMULATE_TARGET} s.",
+        "alone (s).  *to classify*: the process's CPU from its start to the end of the "
+        "classify, `import phasemap` included: what a process that only classifies costs.  "
+        "A declared built-in model (the ladder, the wheel, the rods) is read from its "
+        "derivation shipped in the package (`phasemap/systems/derived`); the README rod's "
+        "classify includes its derivation with sympy.  Targets (issue 40): a built-in "
+        f"model's first classify <= {TARGET} s of CPU in all (*to classify*), its first "
+        f"simulate <= {SIMULATE_TARGET} s.",
         "",
         "| model | eager: process wall | CPU | classify | simulate | compiling "
-        "| background: process wall | CPU | classify | simulate | compiling | built after "
-        "| then: classify | simulate | targets: process CPU | simulate |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|",
+        "| background: process wall | CPU | to classify | classify | simulate | compiling "
+        "| built after "
+        "| then: classify | simulate | targets: to classify | simulate |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|",
     ]
     for name, r in results.items():
         e, b, s = r["eager"], r["background"], r["second"]
         builtin = name != "README rod"
         verdicts = [("met" if ok else "**missed**") if builtin else "-"
-                    for ok in (b["cpu"] <= TARGET, b["simulate"] <= SIMULATE_TARGET)]
+                    for ok in (b["to_classify"] <= TARGET, b["simulate"] <= SIMULATE_TARGET)]
         lines.append(
             f"| {name} | {e['wall']:.2f} | {e['cpu']:.2f} | {e['classify']:.2f} | "
             f"{e['simulate']:.2f} | {e['compile'] + e['simulate_compile']:.1f} | "
-            f"{b['wall']:.2f} | {b['cpu']:.2f} | {b['classify']:.3f} | {b['simulate']:.3f} | "
+            f"{b['wall']:.2f} | {b['cpu']:.2f} | {b['to_classify']:.2f} | "
+            f"{b['classify']:.3f} | {b['simulate']:.3f} | "
             f"{b['compile'] + b['simulate_compile']:.1f} | {r['built']:.1f} | "
             f"{s['classify']:.3f} | {s['simulate']:.3f} | {verdicts[0]} | {verdicts[1]} |")
     agree = all(r["eager"]["n"] == r["background"]["n"] == r["second"]["n"] and

@@ -16,6 +16,7 @@ import pytest
 
 import phasemap
 from phasemap.declare import loader as _declared
+from phasemap.systems import DECLARED
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -102,7 +103,7 @@ def test_a_changed_declaration_is_derived_again_never_loaded_stale(tmp_path):
 def test_a_model_from_the_manifest_is_the_derived_model():
     """Every field but the closures (check) and the declaration round-trips through the
     manifest; the lazy declaration builds the System on use."""
-    source = phasemap.models.DECLARED["wheel"]
+    source = DECLARED["wheel"]
     S = _declared.system(source)
     derived = S.model
     data = json.loads(json.dumps(_declared.manifest(S, derived)))
@@ -124,7 +125,7 @@ def test_a_model_from_the_manifest_is_the_derived_model():
 def test_a_check_defined_in_the_declaration_file_keeps_the_slow_path(tmp_path):
     """A check the manifest cannot name (defined in the declaration file) writes no
     manifest: such a file is built in every process, as before, never half-loaded."""
-    source = phasemap.models.DECLARED["wheel"]
+    source = DECLARED["wheel"]
     S = _declared.system(source)
 
     def local(values):

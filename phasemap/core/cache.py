@@ -74,7 +74,7 @@ from typing import Iterator
 from dataclasses import dataclass
 
 __all__ = ["CacheError", "CacheInfo", "DEFAULT_MAX_MB", "clear", "folder", "info", "limit",
-           "load_module", "prune"]
+           "load_module", "module_text", "prune"]
 
 #: Default bound on the whole cache (MB, 10^6 bytes); ``$PHASEMAP_CACHE_MAX_MB`` overrides it.
 DEFAULT_MAX_MB = 500
@@ -268,6 +268,12 @@ def _verified(path: pathlib.Path) -> str:
     if hashlib.sha256(data).hexdigest().encode() != head[len(HASH_PREFIX):].strip():
         raise _Damaged("its content does not match its hash")
     return data.decode()
+
+
+def module_text(module) -> str:
+    """The text a module of the kernel cache was generated from (its file after the hash
+    line), as :func:`load_module`'s ``text`` would give it again."""
+    return _verified(pathlib.Path(module.__file__))
 
 
 def _import(stem: str, path: pathlib.Path):

@@ -23,6 +23,11 @@ model.  Otherwise every process builds the declaration, as before.
 A model loaded from a manifest carries a :class:`Declaration` that builds the
 System (with sympy) only when something asks for it: re-deriving,
 :func:`phasemap.declare.conditions`, printing its equations.
+
+The built-in declarations (``phasemap.systems.DECLARED``) ship their derivations in the
+package (:data:`SHIPPED`, written by ``python -m phasemap.systems.ship``): with an empty
+kernel cache, their first model is read from there, without sympy, while the shipped key
+(:func:`key_of` without the versions) is the tree's.
 """
 
 from __future__ import annotations
@@ -53,6 +58,10 @@ _PURE = {"__future__", "math", "numpy", "sympy"}
 _DYNAMIC = {"open", "exec", "eval", "compile", "__import__", "import_module", "read_text",
             "read_bytes", "loadtxt", "load", "genfromtxt"}
 _PACKAGE = pathlib.Path(__file__).resolve().parents[1]  # phasemap/
+#: The derivations of the built-in declarations, shipped in the package so that a first
+#: classify does not wait for sympy: one JSON file per declaration module, written by
+#: ``python -m phasemap.systems.ship`` (:mod:`phasemap.systems.ship`).
+SHIPPED = _PACKAGE / "systems" / "derived"
 
 #: a declaration's source (module name or file) -> its Model, and its System
 _MODELS = Memo("loader.models")
@@ -108,6 +117,8 @@ def _load(source: str) -> Model:
     path = _file(source)
     key = key_of(path)
     model = _from_manifest(key, path, source) if key else None
+    if model is None:
+        model = _from_shipped(path, source)
     if model is None:
         S = system(source)
         model = S.model
@@ -206,14 +217,20 @@ def _module_file(name: str) -> pathlib.Path | None:
     return None
 
 
-def key_of(path: pathlib.Path) -> str | None:
-    """The manifest key of a declaration file, or None when it is not eligible."""
+def key_of(path: pathlib.Path, versions: bool = True) -> str | None:
+    """The manifest key of a declaration file, or None when it is not eligible.
+
+    ``versions=False``: the key of a shipped derivation (:data:`SHIPPED`), which holds the
+    declaration and the sources that derive it but not the versions of sympy, numba, numpy
+    and phasemap: a derivation made with one sympy is as right under another (its text is
+    plain Python over ``math``), and numba compiles it for the machine it runs on."""
     try:
         text = path.read_bytes()
         tree = ast.parse(text)
     except (OSError, SyntaxError, ValueError):
         return None
-    h = hashlib.sha256(f"{FORMAT} {numba.__version__} {np.__version__} {__version__}".encode())
+    h = hashlib.sha256((f"{FORMAT} {numba.__version__} {np.__version__} {__version__}"
+                        if versions else f"{FORMAT} shipped").encode())
     h.update(text)
     for node in ast.walk(tree):
         if isinstance(node, ast.Call):
@@ -241,8 +258,9 @@ def key_of(path: pathlib.Path) -> str | None:
     sympy = importlib.util.find_spec("sympy")
     if sympy is None or sympy.origin is None:
         return None
-    release = pathlib.Path(sympy.origin).parent / "release.py"
-    h.update(release.read_bytes() if release.is_file() else b"")
+    if versions:
+        release = pathlib.Path(sympy.origin).parent / "release.py"
+        h.update(release.read_bytes() if release.is_file() else b"")
     for f in declare_sources() + [pathlib.Path(__file__)]:
         h.update(f.read_bytes())
     return h.hexdigest()
@@ -268,12 +286,50 @@ def _from_manifest(key: str, path: pathlib.Path, source: str) -> Model | None:
     return build(data, module, check, Declaration(source, data.get("declaration_sha256")))
 
 
-def _write_manifest(key: str, path: pathlib.Path, S, model: Model) -> None:
+def shipped_file(source: str) -> pathlib.Path | None:
+    """Where the shipped derivation of a built-in declaration (a module of phasemap named
+    by ``source``) lives, or None for any other declaration."""
+    if source.endswith(".py") or not source.startswith("phasemap."):
+        return None
+    return SHIPPED / f"{source}.json"
+
+
+def shipped_key(source: str) -> str | None:
+    """The key a shipped derivation of the declaration module ``source`` must hold to be
+    used: :func:`key_of` its file without the versions."""
+    return key_of(_file(source), versions=False)
+
+
+def _from_shipped(path: pathlib.Path, source: str) -> Model | None:
+    """The model of a built-in declaration from its derivation shipped in the package, when
+    the declaration and the sources that derive it are those it was made from."""
+    file = shipped_file(source)
+    if file is None or not file.is_file():
+        return None
+    try:
+        data = json.loads(file.read_text())
+    except (OSError, ValueError):
+        return None
+    if data.get("format") != FORMAT or data.get("key") != key_of(path, versions=False):
+        return None     # stale: derived again (tests/test_shipped.py says so first)
+    module = _codegen.load_module(data["model"]["module"], lambda: data["source"])
+    check = _resolve(data["model"]["check"]) if data["model"]["check"] else None
+    return build(data["model"], module, check,
+                 Declaration(source, data["model"].get("declaration_sha256")))
+
+
+def described(S, model: Model) -> dict | None:
+    """:func:`manifest` with the declaration's hash (what a manifest stores)."""
     from phasemap.declare.build import declaration_sha256  # S is built: sympy is loaded already
 
     data = manifest(S, model)
     if data is not None:
         data["declaration_sha256"] = declaration_sha256(S)
+    return data
+
+
+def _write_manifest(key: str, path: pathlib.Path, S, model: Model) -> None:
+    data = described(S, model)
     text = (f'"""The model of {path.name}, as phasemap.declare.loader loads it without sympy: '
             'generated, do not edit."""\n\n'
             f"KEY = {key!r}\nMODEL = {None if data is None else json.dumps(data)!r}\n")

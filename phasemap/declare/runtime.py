@@ -17,10 +17,9 @@ from phasemap.core import numerics as nx
 
 _DECLARE = pathlib.Path(__file__).resolve().parent
 #: The modules of phasemap.declare that do not shape a generated module: the
-#: admissibility conditions (the bifurcation tracer's) and the loader (hashed by
-#: :func:`phasemap.declare.loader.key_of` itself).
-#: Not read by the generation of a declared model's module: the tracer's conditions, the
-#: loader, and the full-coordinate numbers of the motion through contact changes.
+#: admissibility conditions (the bifurcation tracer's), the loader (hashed by
+#: :func:`phasemap.declare.loader.key_of` itself) and the full-coordinate numbers of
+#: the motion through contact changes.
 _NOT_SOURCES = ("admissibility.py", "loader.py", "full.py")
 
 

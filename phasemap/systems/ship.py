@@ -1,0 +1,92 @@
+"""The derivations of the built-in declarations, written into the package.
+
+A built-in declared model (``phasemap.systems.DECLARED``: the ladder, the wheel, the
+Painlevé rod, the rod on a step) is derived with sympy the first time a machine uses it:
+about a second to import sympy and up to five to derive.  The package ships each
+derivation instead (``phasemap/systems/derived/<module>.json``: the generated module's
+text and the manifest :func:`phasemap.declare.loader.build` reads), so that a first
+``classify`` answers at once.  :func:`phasemap.declare.loader.load` uses a shipped file
+only while its key (:func:`phasemap.declare.loader.key_of` with ``versions=False``: the
+declaration file, the phasemap modules it imports and the sources that derive it) is
+that of the tree; otherwise it derives the model as before.
+
+After a change to :mod:`phasemap.declare`, the shared numerics or a built-in declaration,
+``tests/test_shipped.py`` fails until the files are written again::
+
+    python -m phasemap.systems.ship            # all of them
+    python -m phasemap.systems.ship --check    # exit 1, naming the stale ones
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import sys
+
+from phasemap.declare import loader
+from phasemap.systems import DECLARED
+
+
+def record(source: str) -> dict:
+    """The shipped record of the built-in declaration module ``source``, derived now with
+    sympy (in a process whose kernel cache may hold it already)."""
+    from phasemap.core.cache import module_text
+
+    S = loader.system(source)
+    model = S.model
+    data = loader.described(S, model)
+    if data is None:
+        raise ValueError(f"{source}: its model cannot be rebuilt without its declaration "
+                         "(an expression as a bound, or a check of its own module)")
+    module = sys.modules["phasemap_kernel_" + data["module"]]
+    import sympy
+
+    return {"format": loader.FORMAT, "key": loader.shipped_key(source),
+            "sympy": sympy.__version__, "model": data, "source": module_text(module)}
+
+
+def stale(sources=None) -> list[str]:
+    """The built-in declarations whose shipped derivation is missing or not the tree's."""
+    out = []
+    for source in sources or DECLARED.values():
+        file = loader.shipped_file(source)
+        try:
+            key = json.loads(file.read_text()).get("key")
+        except (OSError, ValueError):
+            key = None
+        if key != loader.shipped_key(source):
+            out.append(source)
+    return out
+
+
+def write(sources=None) -> list[pathlib.Path]:
+    """Derive and write the shipped record of each built-in declaration (all by default)."""
+    loader.SHIPPED.mkdir(parents=True, exist_ok=True)
+    written = []
+    for source in sources or DECLARED.values():
+        file = loader.shipped_file(source)
+        file.write_text(json.dumps(record(source), indent=1, sort_keys=True) + "\n")
+        written.append(file)
+    return written
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m phasemap.systems.ship",
+                                 description="write the shipped derivations of the built-in "
+                                 "declarations (phasemap/systems/derived/)")
+    ap.add_argument("--check", action="store_true",
+                    help="write nothing; exit 1 naming the stale ones")
+    args = ap.parse_args(argv)
+    if args.check:
+        old = stale()
+        for source in old:
+            print(f"stale: {source} (python -m phasemap.systems.ship)")
+        return 1 if old else 0
+    for file in write():
+        print(f"wrote {file}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,141 @@
+"""The derivations of the built-in declarations shipped in the package (issue 40): a first
+classify without sympy, never a stale derivation, and the text sympy derives today."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import phasemap
+from phasemap.core import tiers
+from phasemap.core.cache import load_module
+from phasemap.declare import loader
+from phasemap.systems import ship
+from phasemap.systems import DECLARED
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_every_built_in_declaration_ships_its_derivation_of_this_tree():
+    """A change to phasemap.declare, the numerics or a declaration makes its file stale:
+    the fix is one command."""
+    assert ship.stale() == [], "run: python -m phasemap.systems.ship"
+    for source in DECLARED.values():
+        assert loader.shipped_file(source).is_file()
+    assert not loader.key_of(ROOT / "phasemap" / "systems" / "painleve_rod.py") \
+        == loader.key_of(ROOT / "phasemap" / "systems" / "painleve_rod.py", versions=False)
+
+
+def test_the_package_data_holds_the_shipped_files():
+    """A wheel carries them (package data), not only a clone."""
+    text = (ROOT / "pyproject.toml").read_text()
+    assert '"phasemap.systems" = ["derived/*.json"]' in text
+
+
+FIRST = """
+import json, sys
+import phasemap
+out = {}
+for name in %r:
+    c = phasemap.classify(name)
+    out[name] = [int(c.n_solutions), "sympy" in sys.modules]
+print(json.dumps(out))
+"""
+
+
+def test_a_first_classify_of_each_declared_built_in_needs_no_sympy(tmp_path):
+    """From an empty kernel cache, under the default tier: the models come from the
+    shipped files, and sympy is never imported."""
+    env = {**os.environ, "PHASEMAP_CACHE_DIR": str(tmp_path / "kernels"),
+           "PHASEMAP_JIT": "off"}
+    run = subprocess.run([sys.executable, "-c", FIRST % (list(DECLARED),)], cwd=ROOT, env=env,
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    got = json.loads(run.stdout.strip().splitlines()[-1])
+    assert set(got) == set(DECLARED)
+    for name, (n, sympy) in got.items():
+        assert n >= 0 and not sympy, (name, n, sympy)
+
+
+def _random_states(model, rng, n):
+    out = []
+    for _ in range(n):
+        values = {}
+        for name, (lo, hi, _) in model.default_axes.items():
+            values[name] = float(rng.uniform(lo, hi))
+        out.append(values)
+    return out
+
+
+@pytest.mark.parametrize("name", sorted(DECLARED))
+def test_the_shipped_derivation_is_what_sympy_derives(name):
+    """Under the sympy it was shipped with, the text is the derivation's, byte for byte.
+    Under another, the two derivations agree on the classes and accelerations of random
+    states (both run as interpreted twins here: the same bits as machine code)."""
+    from phasemap.declare.emit import module_source
+
+    source = DECLARED[name]
+    shipped = json.loads(loader.shipped_file(source).read_text())
+    S = loader.system(source)
+    fresh = module_source(S)
+    import sympy
+
+    if shipped["sympy"] == sympy.__version__:
+        assert fresh == shipped["source"]
+    module = load_module(f"test_shipped_{name}_{abs(hash(fresh)) % 10**12}", lambda: fresh)
+    check = loader._resolve(shipped["model"]["check"]) if shipped["model"]["check"] else None
+    derived = loader.build(shipped["model"], module, check, None)
+    model = phasemap.get_model(name)
+    assert model.declaration.sha256 == shipped["model"]["declaration_sha256"]
+    rng = np.random.default_rng(7)
+    with tiers.forced("off"):
+        for values in _random_states(model, rng, 40):
+            a, b = phasemap.classify(model, **values), phasemap.classify(derived, **values)
+            assert a.n_solutions == b.n_solutions, values
+            assert [x.status for x in a.candidates] == [y.status for y in b.candidates]
+            for x, y in zip(a.candidates, b.candidates):
+                for key in x.accelerations:
+                    np.testing.assert_allclose(x.accelerations[key], y.accelerations[key],
+                                               rtol=1e-9, atol=1e-12)
+
+
+def test_a_stale_shipped_file_is_derived_again(tmp_path, monkeypatch):
+    """A shipped file whose key is not the tree's is never used: the model is derived."""
+    source = DECLARED["painleve_rod"]
+    data = json.loads(loader.shipped_file(source).read_text())
+    data["key"] = "0" * 64
+    data["source"] = data["source"].replace("import math", "import math\nMARKED = True", 1)
+    data["model"]["module"] = f"test_shipped_{tmp_path.name}"   # (not in this process yet)
+    (tmp_path / f"{source}.json").write_text(json.dumps(data))
+    monkeypatch.setattr(loader, "SHIPPED", tmp_path)
+    path = loader._file(source)
+    assert loader._from_shipped(path, source) is None
+    data["key"] = loader.key_of(path, versions=False)
+    (tmp_path / f"{source}.json").write_text(json.dumps(data))
+    model = loader._from_shipped(path, source)
+    assert model is not None
+    assert sys.modules[model.velocity_scale.py_func.__module__].MARKED is True
+    assert ship.stale([source]) == []
+    # a file that is not JSON is no model
+    (tmp_path / f"{source}.json").write_text("{")
+    assert loader._from_shipped(path, source) is None and ship.stale([source]) == [source]
+
+
+def test_only_built_in_modules_have_a_shipped_file():
+    assert loader.shipped_file("/home/me/rod.py") is None
+    assert loader.shipped_file("mypackage.rod") is None
+    assert loader.shipped_file("phasemap.systems.painleve_rod").name == \
+        "phasemap.systems.painleve_rod.json"
+
+
+def test_the_check_command_names_the_stale_files(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(loader, "SHIPPED", tmp_path)
+    assert ship.main(["--check"]) == 1
+    out = capsys.readouterr().out
+    assert all(f"stale: {s}" in out for s in DECLARED.values())
