@@ -139,3 +139,106 @@ def test_the_check_command_names_the_stale_files(tmp_path, monkeypatch, capsys):
     assert ship.main(["--check"]) == 1
     out = capsys.readouterr().out
     assert all(f"stale: {s}" in out for s in DECLARED.values())
+
+
+# ------------------------------------------------------- the full coordinates, as text
+
+MOTION = """
+import hashlib, json, sys
+import numpy as np
+import phasemap
+model = phasemap.get_model(sys.argv[1])
+ds = phasemap.simulate(model, 3.0, **json.loads(sys.argv[2]))
+digest = hashlib.sha256(b"".join(np.ascontiguousarray(ds[v].values).tobytes()
+                                 for v in sorted(ds.variables) if ds[v].dtype.kind == "f"))
+full = "phasemap_reduced_end" in ds.attrs       # the motion went on in full coordinates
+print(json.dumps([ds.attrs["end_reason"], "sympy" in sys.modules, ds.sizes["event"],
+                  digest.hexdigest(), full]))
+"""
+
+
+def _motion(model: str, env: dict, **values) -> list:
+    run = subprocess.run([sys.executable, "-c", MOTION, model, json.dumps(values)], cwd=ROOT,
+                         env=env, capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr
+    return json.loads(run.stdout.strip().splitlines()[-1])
+
+
+def test_a_motion_through_contact_changes_needs_no_sympy_after_its_derivation(tmp_path):
+    """The ladder from an empty cache (shipped), then a declaration of the user's, whose
+    second process reads its full coordinates from the kernel cache: neither imports
+    sympy, and both give the motion of a process that derived everything."""
+    env = {**os.environ, "PHASEMAP_CACHE_DIR": str(tmp_path / "kernels"),
+           "PHASEMAP_JIT": "off"}
+    ladder = dict(phi=0.6, omega=0.0, f=0.0)
+    end, sympy, n_events, first, went_on = _motion("ladder", env, **ladder)
+    assert not sympy and n_events >= 2 and went_on, (end, n_events)
+    own = tmp_path / "rod.py"      # the built-in rod as a user's file: derived, then cached
+    own.write_text((ROOT / "phasemap" / "systems" / "painleve_rod.py").read_text())
+    rod = dict(theta=1.2, omega=-4.0, xdot=1.0, f=0.2)
+    r1 = _motion(str(own), env, **rod)
+    assert r1[1] and r1[4]                   # the first process derived it with sympy
+    r2 = _motion(str(own), env, **rod)
+    assert not r2[1] and r2[0] == r1[0] and r2[3] == r1[3], (r1, r2)
+    # a process that builds the ladder's System and derives its mechanics with sympy
+    env2 = {**env, "PHASEMAP_CACHE_DIR": str(tmp_path / "other")}
+    code = ("import sys; from phasemap.declare import loader, full\n"
+            "sys.modules['phasemap.declare.loader'].shipped_record = lambda s: None\n"
+            "exec(open(sys.argv[3]).read())\n")
+    script = tmp_path / "motion.py"
+    script.write_text(MOTION)
+    run = subprocess.run([sys.executable, "-c", code, "ladder", json.dumps(ladder),
+                          str(script)], cwd=ROOT, env=env2, capture_output=True, text=True,
+                         timeout=900)
+    assert run.returncode == 0, run.stderr
+    derived = json.loads(run.stdout.strip().splitlines()[-1])
+    assert derived[1] and derived[3] == first and derived[0] == end
+
+
+def test_a_declaration_whose_contacts_cannot_open_says_so_from_the_cache():
+    """The wheel rolls: its full coordinates are not built, and the message is the same
+    whether derived now or read from the cache (no second derivation)."""
+    from phasemap.declare import full
+
+    S = loader.system(DECLARED["wheel"])
+    with pytest.raises(ValueError, match="RollingContact"):
+        full.mechanics(S)
+    declaration = phasemap.get_model("wheel").declaration
+    with pytest.raises(ValueError, match="RollingContact"):
+        full.mechanics(declaration)
+    with pytest.raises(ValueError, match="do not fix xa"):
+        full.closure(declaration)
+
+
+def test_the_full_coordinate_text_is_lambdify_s(tmp_path):
+    """Each function of the generated text gives sympy's lambdified numbers at random
+    states, bit for bit (the same printed source over math)."""
+    import sympy as sp
+
+    from phasemap.declare import full
+    from phasemap.declare.equations import FreeEquations
+
+    S = loader.system(DECLARED["rod_on_step"])
+    mech = full.mechanics(S)
+    eqs = FreeEquations(S)
+    rng = np.random.default_rng(3)
+    n = len(eqs.q)
+    M = sp.lambdify([*eqs.q, *eqs.qd, *eqs.params, sp.Symbol("t")], list(eqs.M),
+                    modules="math", cse=True)
+    for _ in range(20):
+        q, u = rng.uniform(0.2, 1.2, n), rng.uniform(-2, 2, n)
+        p = [mech.defaults[k] for k in mech.parameters]
+        got = mech.pieces(q, u, p)[0]
+        assert np.array_equal(got.ravel(), np.array(M(*q, *u, *p, 0.0), dtype=float))
+
+
+def test_a_stale_shipped_full_coordinate_text_is_not_used(monkeypatch):
+    from phasemap.declare import full
+
+    declaration = phasemap.get_model("painleve_rod").declaration
+    key = full.shipped_key(declaration, "mechanics")
+    record = {"mechanics": {"key": key, "text": "MARK = 1\n"}}
+    monkeypatch.setattr(loader, "shipped_record", lambda source: record)
+    assert full._shipped(declaration, "mechanics", key) == "MARK = 1\n"
+    assert full._shipped(declaration, "mechanics", "0" * 64) is None
+    assert full._shipped(loader.system(DECLARED["painleve_rod"]), "mechanics", key) is None

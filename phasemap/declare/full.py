@@ -14,6 +14,7 @@ a state of the reduced model (its contacts closed).
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
 from typing import Callable
@@ -130,7 +131,12 @@ class Mechanics:
 
 
 def mechanics(S) -> Mechanics:
-    """The :class:`Mechanics` of the declaration ``S`` (sympy once per declaration).
+    """The :class:`Mechanics` of the declaration ``S`` (a System, or a loaded model's lazy
+    :class:`phasemap.declare.loader.Declaration`).
+
+    Derived with sympy once per declaration; the functions' text is then read from the
+    kernel cache (or, for a built-in declaration, from its shipped derivation), so that a
+    motion through contact changes in a new process does not import sympy.
 
     Raises ValueError naming the contact where a contact is not a point or edge contact
     (a rolling contact or a joint: their motion through contact changes is not built)."""
@@ -141,12 +147,24 @@ def mechanics(S) -> Mechanics:
 
 
 def _made(S):
-    """:func:`_make`, or the ValueError it raised (kept, so that a declaration whose
-    contacts cannot open is derived once, not at every motion that ends at one)."""
-    try:
-        return _make(S)
-    except ValueError as err:
-        return err
+    """The :class:`Mechanics` of its generated module, or the ValueError its derivation
+    raised (kept, so that a declaration whose contacts cannot open is derived once, not at
+    every motion that ends at one)."""
+    module = generated(S, "mechanics")
+    if module.ERROR is not None:
+        return ValueError(module.ERROR)
+    d = json.loads(module.DATA)
+    k = len(d["contacts"])
+    bounds = module.bounds
+    return Mechanics(
+        d["name"], tuple(d["coordinates"]), tuple(d["rates"]), tuple(d["units"]),
+        tuple(d["long_names"]), tuple(d["parameters"]), d["defaults"],
+        tuple(Contact(*c) for c in d["contacts"]),
+        lambda p: np.array(bounds(*p), dtype=float).reshape(-1, 2), module.domain,
+        d["n_domain"], module.pieces, module.points, _surfaces(module.surfaces, k),
+        d["n_bodies"], getattr(module, "surface", None),
+        tuple(getattr(module, f"kinetic_{i}") for i in range(k)) if d["kinetic"] else None,
+        getattr(module, "period", None))
 
 
 def rate_name(c) -> str:
@@ -154,7 +172,123 @@ def rate_name(c) -> str:
     return c.rate.name if c.rate is not None else f"{c.name}_dot"
 
 
-def _make(S) -> Mechanics:
+#: Bumped when the generated modules' layout changes.
+GENERATED = 1
+
+
+def generated(S, kind: str):
+    """The generated module of ``kind`` (``"mechanics"`` or ``"closure"``) of the
+    declaration ``S``: from the kernel cache, else from a built-in declaration's shipped
+    derivation, else derived with sympy (:func:`text`) and written to the cache.
+
+    Its name holds the declaration's hash (:func:`phasemap.declare.build.declaration_sha256`,
+    which a loaded model's declaration carries, so that no System is built to find it),
+    the sources that derive it and sympy's version."""
+    import hashlib
+
+    from phasemap.core.cache import load_module
+
+    key = shipped_key(S, kind)
+    if key is None:          # a declaration without its hash: build the System to hash it
+        key = shipped_key(_system(S), kind)
+    h = hashlib.sha256(f"{key} {_sympy_release()}".encode()).hexdigest()[:16]
+    # (named by the hash alone: a System and its loaded model's declaration find one file)
+    return load_module(f"{kind}_declared_{h}", lambda: _shipped(S, kind, key) or
+                       text(_system(S), kind))
+
+
+def shipped_key(S, kind: str) -> str | None:
+    """The key of the ``kind`` module of ``S`` without the versions (what a shipped
+    derivation records), or None where ``S`` is a loaded model's declaration that does not
+    carry its hash."""
+    from phasemap.declare.loader import Declaration
+
+    if isinstance(S, Declaration):
+        return None if S.sha256 is None else _key(S.sha256, kind)
+    from phasemap.declare.build import declaration_sha256   # a System: sympy is loaded
+
+    return _key(declaration_sha256(S), kind)
+
+
+def _key(sha: str, kind: str) -> str:
+    import hashlib
+    import pathlib
+
+    from phasemap.declare.runtime import declare_sources
+
+    h = hashlib.sha256(f"{GENERATED} {kind} {sha}".encode())
+    for f in [*declare_sources(), pathlib.Path(__file__)]:
+        h.update(f.read_bytes())
+    return h.hexdigest()
+
+
+def _sympy_release() -> bytes:
+    """sympy's release file (its version), read without importing sympy."""
+    import importlib.util
+    import pathlib
+
+    spec = importlib.util.find_spec("sympy")
+    if spec is None or spec.origin is None:
+        return b""
+    release = pathlib.Path(spec.origin).parent / "release.py"
+    return release.read_bytes() if release.is_file() else b""
+
+
+def _system(S):
+    return getattr(S, "system", S)
+
+
+def _shipped(S, kind: str, key: str) -> str | None:
+    """The text of a built-in declaration's shipped ``kind`` module with this key."""
+    from phasemap.declare.loader import Declaration, shipped_record
+
+    record = shipped_record(S.source) if isinstance(S, Declaration) else None
+    entry = (record or {}).get(kind) or {}
+    return entry.get("text") if entry.get("key") == key else None
+
+
+def text(S, kind: str) -> str:
+    """The generated module of ``kind`` of the System ``S``, derived with sympy."""
+    head = (f'"""Generated by phasemap.declare.full from the declaration of {S.name}: '
+            'do not edit."""\n\nimport json\nimport math\nfrom math import *  # noqa\n\n')
+    try:
+        return head + (_closure_text(S) if kind == "closure" else _mechanics_text(S))
+    except ValueError as err:
+        return head + f"ERROR = {str(err)!r}\n"
+
+
+class _Writer:
+    """Python functions from sympy's lambdify, as text: its printed source, over
+    ``from math import *`` (every name it reads is checked to be that one)."""
+
+    def __init__(self):
+        self.parts = []
+
+    def add(self, name: str, args, exprs, cse: bool = False):
+        import builtins
+        import inspect
+
+        import sympy as sp
+
+        fn = sp.lambdify(args, exprs, modules="math", cse=cse)
+        src = inspect.getsource(fn)
+        if not src.startswith("def _lambdifygenerated("):
+            raise RuntimeError(f"lambdify printed an unexpected function: {src[:80]!r}")
+        for n in fn.__code__.co_names:
+            want = fn.__globals__.get(n, getattr(builtins, n, None))
+            got = getattr(math, n, getattr(builtins, n, None))
+            if want is None or want is not got:
+                raise RuntimeError(f"lambdify's {name} reads {n!r}, which is not math's")
+        self.parts.append(f"def {name}(" + src[len("def _lambdifygenerated("):])
+
+    def text(self, data: dict | None = None) -> str:
+        out = "\n\n".join(self.parts)
+        if data is not None:
+            out += f"\n\nERROR = None\nDATA = {json.dumps(data)!r}\n"
+        return out
+
+
+def _mechanics_text(S) -> str:
     import sympy as sp
 
     from phasemap.declare.api import SLIP_SPEED, TIME, sym
@@ -171,7 +305,7 @@ def _make(S) -> Mechanics:
             fail(S, f"contact {c.name!r}", "motion through contact changes takes point and "
                  f"edge contacts (a normal and a tangent, one gap), not a {type(c).__name__} "
                  "(a rolling contact or a joint cannot open yet)")
-        contacts.append(Contact(c.name, getattr(c, "sided", "one") == "one", len(contacts)))
+        contacts.append([c.name, getattr(c, "sided", "one") == "one", len(contacts)])
         g.append(eqs.gaps[c.name][0])
         J += list(ch["N"][0]) + list(ch["T"][0])
         b += [ch["N"][1], ch["T"][1]]
@@ -189,41 +323,41 @@ def _make(S) -> Mechanics:
     flat = [*eqs.M, *eqs.h, *g, *J, *b, *mu]
     t, speed = sym(TIME), sym(SLIP_SPEED)
     args = [*eqs.q, *eqs.qd, *eqs.params, t]
-    pieces = sp.lambdify(args, flat, modules="math", cse=True)
+    w = _Writer()
+    w.add("pieces", args, flat, cse=True)
     moving = [sym(getattr(c, "surface_velocity", 0)) for c in S.contacts]
-    surface = None
     if any(v != 0 for v in moving):
-        surface = sp.lambdify([*eqs.params, t], moving + [sp.diff(v, t) for v in moving],
-                              modules="math")
-    kinetic = None
-    if any(sp.sympify(c.law_expr()) != m_ for c, m_ in zip(S.contacts, mu)):
-        kinetic = tuple(sp.lambdify([*args, speed], c.law_expr(), modules="math")
-                        for c in S.contacts)
-    period = None if S.period is None else sp.lambdify(eqs.params, sym(S.period),
-                                                        modules="math")
+        w.add("surface", [*eqs.params, t], moving + [sp.diff(v, t) for v in moving])
+    kinetic = any(sp.sympify(c.law_expr()) != m_ for c, m_ in zip(S.contacts, mu))
+    if kinetic:
+        for i, c in enumerate(S.contacts):
+            w.add(f"kinetic_{i}", [*args, speed], c.law_expr())
+    if S.period is not None:
+        w.add("period", eqs.params, sym(S.period))
     qp = [*eqs.q, *eqs.params]
     dom = [e for e, _ in eqs.domain]
-    domain = sp.lambdify(qp, dom or [sp.Integer(1)], modules="math", cse=True)
+    w.add("domain", qp, dom or [sp.Integer(1)], cse=True)
     bounds_e = []
     for c in S.coordinates:
         for side in ("lower", "upper"):
             e = eqs.bound_expr(c, side)
             bounds_e.append(sp.Float(-math.inf if side == "lower" else math.inf)
                             if e is None else e)
-    bounds = sp.lambdify(eqs.params, bounds_e, modules="math")
+    w.add("bounds", eqs.params, bounds_e)
+    w.add("points", qp, pts)
+    w.add("surfaces", eqs.params, surf or [sp.Integer(0)])
     defaults = {p.name: float(p.default) for p in S.parameters}
     defaults.update({c.name: float(c.default) for c in S.coordinates})
     defaults.update({rate_name(c): float(c.rate.default) if c.rate else 0.0
                      for c in S.coordinates})
-    return Mechanics(
-        S.name, tuple(c.name for c in S.coordinates), tuple(rate_name(c) for c in S.coordinates),
-        tuple(c.units for c in S.coordinates), tuple(c.long_name for c in S.coordinates),
-        tuple(p.name for p in S.parameters), defaults, tuple(contacts),
-        lambda p: np.array(bounds(*p), dtype=float).reshape(-1, 2), domain, len(dom), pieces,
-        sp.lambdify(qp, pts, modules="math"),
-        _surfaces(sp.lambdify(eqs.params, surf or [sp.Integer(0)], modules="math"),
-                  len(S.contacts)),
-        len(S.bodies), surface, kinetic, period)
+    return w.text({
+        "name": S.name, "coordinates": [c.name for c in S.coordinates],
+        "rates": [rate_name(c) for c in S.coordinates],
+        "units": [c.units for c in S.coordinates],
+        "long_names": [c.long_name for c in S.coordinates],
+        "parameters": [p.name for p in S.parameters], "defaults": defaults,
+        "contacts": contacts, "n_domain": len(dom), "n_bodies": len(S.bodies),
+        "kinetic": kinetic})
 
 
 def _surfaces(fn, k):
@@ -246,19 +380,32 @@ class Closure:
 
 
 def closure(S) -> Closure:
-    """The :class:`Closure` of a declaration that has a reduced model."""
+    """The :class:`Closure` of a declaration that has a reduced model (a System, or a
+    loaded model's lazy declaration: its text from the kernel cache, as :func:`mechanics`)."""
     return _CLOSURES.get((S,), (), lambda: _closure(S))
 
 
 def _closure(S) -> Closure:
-    import sympy as sp
+    module = generated(S, "closure")
+    if module.ERROR is not None:
+        raise ValueError(module.ERROR)
+    return Closure(tuple(json.loads(module.DATA)["args"]), module.positions, module.rates)
 
+
+def _closure_text(S) -> str:
     from phasemap.declare.equations import Equations
 
     eqs = Equations(S)        # the closed equations only: no mode is solved for this
     free = [i for i, c in enumerate(S.coordinates) if c.rate is not None]
     args = [eqs.q[i] for i in free] + [eqs.qd[i] for i in free] + list(eqs.params)
-    pos = [eqs.on(eqs.q[i]) for i in range(eqs.n)]
+    positions = [eqs.on(eqs.q[i]) for i in range(eqs.n)]
     rates = [eqs.on(eqs.qd[i]) for i in range(eqs.n)]
-    return Closure(tuple(str(a) for a in args), sp.lambdify(args, pos, modules="math"),
-                   sp.lambdify(args, rates, modules="math"))
+    loose = sorted(map(str, set().union(*(e.free_symbols for e in positions + rates))
+                       - set(args)))
+    if loose:
+        raise ValueError(f"{S.name}: the closed contacts do not fix {', '.join(loose)}, so "
+                         "a state of the reduced model has no full coordinates")
+    w = _Writer()
+    w.add("positions", args, positions)
+    w.add("rates", args, rates)
+    return w.text({"args": [str(a) for a in args]})

@@ -66,6 +66,8 @@ SHIPPED = _PACKAGE / "systems" / "derived"
 #: a declaration's source (module name or file) -> its Model, and its System
 _MODELS = Memo("loader.models")
 _SYSTEMS = Memo("loader.systems")
+#: a shipped derivation's file -> its JSON data
+_RECORDS = Memo("loader.records")
 
 
 class _Miss(Exception):
@@ -300,15 +302,31 @@ def shipped_key(source: str) -> str | None:
     return key_of(_file(source), versions=False)
 
 
-def _from_shipped(path: pathlib.Path, source: str) -> Model | None:
-    """The model of a built-in declaration from its derivation shipped in the package, when
-    the declaration and the sources that derive it are those it was made from."""
+def shipped_record(source: str) -> dict | None:
+    """The shipped derivation of the built-in declaration module ``source`` as its JSON
+    data (read once per process), or None: not a built-in, no file, not JSON."""
     file = shipped_file(source)
-    if file is None or not file.is_file():
+    try:
+        st = file.stat()
+    except (AttributeError, OSError):
         return None
+    return _RECORDS.get((), (str(file), st.st_mtime_ns, st.st_size),
+                        lambda: _read_record(file))
+
+
+def _read_record(file: pathlib.Path) -> dict | None:
     try:
         data = json.loads(file.read_text())
     except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+def _from_shipped(path: pathlib.Path, source: str) -> Model | None:
+    """The model of a built-in declaration from its derivation shipped in the package, when
+    the declaration and the sources that derive it are those it was made from."""
+    data = shipped_record(source)
+    if data is None:
         return None
     if data.get("format") != FORMAT or data.get("key") != key_of(path, versions=False):
         return None     # stale: derived again (tests/test_shipped.py says so first)

@@ -396,7 +396,6 @@ def _continued(S, m: Model, opts: Options, contact: dict, names, full, positions
         mech = mechanics_of(S)
     except ValueError:
         return None
-    S = hybrid.system_of(S)
     close = closure(S)
     ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode = _columns(points, events, y_eval, te)
 
@@ -517,12 +516,12 @@ def _impact_without_collision(m: Model, names, y, full):
     contact in: the impact is refused), or the system has other contacts."""
     from phasemap.declare.full import closure
 
-    S = hybrid.system_of(m.declaration)
-    if len(S.contacts) != 1:
-        return None
+    S = m.declaration       # (a loaded model's stays unbuilt: full.py reads the cache)
     values = {**full, **dict(zip(names, (float(x) for x in y)))}
     try:
         mech = mechanics_of(S)
+        if len(mech.contacts) != 1:
+            return None
         q, qd = closure(S)(values)
     except (ValueError, KeyError):
         return None     # a contact that cannot take an impulse, or a value missing

@@ -4,8 +4,9 @@ A built-in declared model (``phasemap.systems.DECLARED``: the ladder, the wheel,
 Painlevé rod, the rod on a step) is derived with sympy the first time a machine uses it:
 about a second to import sympy and up to five to derive.  The package ships each
 derivation instead (``phasemap/systems/derived/<module>.json``: the generated module's
-text and the manifest :func:`phasemap.declare.loader.build` reads), so that a first
-``classify`` answers at once.  :func:`phasemap.declare.loader.load` uses a shipped file
+text and the manifest :func:`phasemap.declare.loader.build` reads, and the full-coordinate
+modules of :mod:`phasemap.declare.full`), so that a first ``classify``, and a first
+motion through contact changes, answer at once.  :func:`phasemap.declare.loader.load` uses a shipped file
 only while its key (:func:`phasemap.declare.loader.key_of` with ``versions=False``: the
 declaration file, the phasemap modules it imports and the sources that derive it) is
 that of the tree; otherwise it derives the model as before.
@@ -24,8 +25,12 @@ import json
 import pathlib
 import sys
 
-from phasemap.declare import loader
+from phasemap.declare import full, loader
 from phasemap.systems import DECLARED
+
+
+#: the generated modules of :mod:`phasemap.declare.full` a record carries beside the model's
+KINDS = ("mechanics", "closure")
 
 
 def record(source: str) -> dict:
@@ -42,20 +47,24 @@ def record(source: str) -> dict:
     module = sys.modules["phasemap_kernel_" + data["module"]]
     import sympy
 
-    return {"format": loader.FORMAT, "key": loader.shipped_key(source),
-            "sympy": sympy.__version__, "model": data, "source": module_text(module)}
+    out = {"format": loader.FORMAT, "key": loader.shipped_key(source),
+           "sympy": sympy.__version__, "model": data, "source": module_text(module)}
+    for kind in KINDS:      # the full coordinates of the motion through contact changes
+        out[kind] = {"key": full.shipped_key(S, kind), "text": full.text(S, kind)}
+    return out
 
 
 def stale(sources=None) -> list[str]:
     """The built-in declarations whose shipped derivation is missing or not the tree's."""
     out = []
     for source in sources or DECLARED.values():
-        file = loader.shipped_file(source)
-        try:
-            key = json.loads(file.read_text()).get("key")
-        except (OSError, ValueError):
-            key = None
-        if key != loader.shipped_key(source):
+        data = loader.shipped_record(source) or {}
+        ok = data.get("key") == loader.shipped_key(source)
+        if ok:      # the same declaration: its full-coordinate modules' keys, from its hash
+            declaration = loader.Declaration(source, data["model"]["declaration_sha256"])
+            ok = all((data.get(kind) or {}).get("key") == full.shipped_key(declaration, kind)
+                     for kind in KINDS)
+        if not ok:
             out.append(source)
     return out
 

@@ -10,14 +10,15 @@ import numpy as np
 
 from phasemap.core.progress import human_bytes
 from phasemap.core.resources import MEMORY_COPIES, MEMORY_SHARE, available_memory
-from phasemap.motion.hybrid.results import dataset, run_full, start_values, system_of
+from phasemap.motion.hybrid.results import dataset, run_full, start_values
 
 
 def mechanics_of(S):
-    """The full-coordinate mechanics of a declaration (or a loaded model's lazy one)."""
+    """The full-coordinate mechanics of a declaration (or a loaded model's lazy one, left
+    unbuilt: its mechanics come from the kernel cache without sympy)."""
     from phasemap.declare.full import mechanics
 
-    return mechanics(system_of(S))
+    return mechanics(S)
 
 
 def full_attrs(S, m, settings: dict, contact: dict, values) -> dict:
