@@ -92,7 +92,15 @@ def test_the_shipped_derivation_is_what_sympy_derives(name):
     check = loader._resolve(shipped["model"]["check"]) if shipped["model"]["check"] else None
     derived = loader.build(shipped["model"], module, check, None)
     model = phasemap.get_model(name)
-    assert model.declaration.sha256 == shipped["model"]["declaration_sha256"]
+    if shipped["sympy"] == sympy.__version__:      # (srepr, and so the hash, is sympy's)
+        from phasemap.declare import full
+        from phasemap.declare.build import declaration_sha256
+
+        assert declaration_sha256(S) == shipped["model"]["declaration_sha256"] \
+            == model.declaration.sha256
+        assert loader.described(S, S.model) == shipped["model"]
+        for kind in ship.KINDS:
+            assert full.text(S, kind) == shipped[kind]["text"], kind
     rng = np.random.default_rng(7)
     with tiers.forced("off"):
         for values in _random_states(model, rng, 40):
@@ -192,7 +200,12 @@ def test_a_motion_through_contact_changes_needs_no_sympy_after_its_derivation(tm
                          timeout=900)
     assert run.returncode == 0, run.stderr
     derived = json.loads(run.stdout.strip().splitlines()[-1])
-    assert derived[1] and derived[3] == first and derived[0] == end
+    assert derived[1] and derived[0] == end and derived[2] == n_events
+    import sympy
+
+    if json.loads(loader.shipped_file(DECLARED["ladder"]).read_text())["sympy"] == \
+            sympy.__version__:      # the same printed functions: the same bits
+        assert derived[3] == first
 
 
 def test_a_declaration_whose_contacts_cannot_open_says_so_from_the_cache():
@@ -210,26 +223,55 @@ def test_a_declaration_whose_contacts_cannot_open_says_so_from_the_cache():
         full.closure(declaration)
 
 
-def test_the_full_coordinate_text_is_lambdify_s(tmp_path):
-    """Each function of the generated text gives sympy's lambdified numbers at random
-    states, bit for bit (the same printed source over math)."""
+@pytest.mark.parametrize("source", [DECLARED["rod_on_step"], DECLARED["ladder"], "belt",
+                                    "stribeck_belt", "den_hartog"])
+def test_the_full_coordinate_text_is_lambdify_s(source, monkeypatch):
+    """Every function of the generated text (forces, gaps and rows, domain, bounds, body
+    points, surfaces, moving belts, Stribeck laws, forcing periods, the closure) gives
+    sympy's lambdified numbers at random arguments, bit for bit."""
     import sympy as sp
 
     from phasemap.declare import full
-    from phasemap.declare.equations import FreeEquations
+    from phasemap.systems.oscillators import OSCILLATORS
 
-    S = loader.system(DECLARED["rod_on_step"])
-    mech = full.mechanics(S)
-    eqs = FreeEquations(S)
-    rng = np.random.default_rng(3)
-    n = len(eqs.q)
-    M = sp.lambdify([*eqs.q, *eqs.qd, *eqs.params, sp.Symbol("t")], list(eqs.M),
-                    modules="math", cse=True)
-    for _ in range(20):
-        q, u = rng.uniform(0.2, 1.2, n), rng.uniform(-2, 2, n)
-        p = [mech.defaults[k] for k in mech.parameters]
-        got = mech.pieces(q, u, p)[0]
-        assert np.array_equal(got.ravel(), np.array(M(*q, *u, *p, 0.0), dtype=float))
+    S = OSCILLATORS[source] if source in OSCILLATORS else loader.system(source)
+    twins = {}
+    add = full._Writer.add
+
+    def recorded(self, name, args, exprs, cse=False):
+        add(self, name, args, exprs, cse)
+        twins[name] = (len(args), sp.lambdify(args, exprs, modules="math", cse=cse))
+
+    monkeypatch.setattr(full._Writer, "add", recorded)
+    rng = np.random.default_rng(11)
+    seen = set()
+    for kind in ship.KINDS:
+        twins.clear()
+        ns = full._namespace()
+        exec(full.text(S, kind), ns)
+        assert (ns["ERROR"] is None) == bool(twins), (kind, ns["ERROR"])
+        for name, (n, fn) in twins.items():
+            seen.add(name)
+            for _ in range(10):
+                a = rng.uniform(0.1, 1.4, n)
+                got = np.array(ns[name](*a), dtype=float)
+                want = np.array(fn(*a), dtype=float)
+                assert np.array_equal(got, want, equal_nan=True), (name, a)
+    assert {"pieces", "domain", "bounds", "points", "surfaces"} <= seen
+
+
+def test_every_kind_of_full_coordinate_function_is_met_above():
+    """The oscillators above bring the optional functions: a moving surface, a Stribeck
+    law per contact and a forcing period."""
+    from phasemap.declare import full
+    from phasemap.systems.oscillators import OSCILLATORS
+
+    names = set()
+    for source in ("belt", "stribeck_belt", "den_hartog"):
+        ns = full._namespace()
+        exec(full.text(OSCILLATORS[source], "mechanics"), ns)
+        names |= {n for n in ns if n in ("surface", "period") or n.startswith("kinetic_")}
+    assert {"surface", "period", "kinetic_0"} <= names
 
 
 def test_a_stale_shipped_full_coordinate_text_is_not_used(monkeypatch):

@@ -47,7 +47,11 @@ def record(source: str) -> dict:
     module = sys.modules["phasemap_kernel_" + data["module"]]
     import sympy
 
-    out = {"format": loader.FORMAT, "key": loader.shipped_key(source),
+    key = loader.shipped_key(source)
+    if key is None:
+        raise ValueError(f"{source}: the declaration file cannot be keyed (it reads what its "
+                         "key does not hold: see phasemap.declare.loader), so it cannot ship")
+    out = {"format": loader.FORMAT, "key": key,
            "sympy": sympy.__version__, "model": data, "source": module_text(module)}
     for kind in KINDS:      # the full coordinates of the motion through contact changes
         out[kind] = {"key": full.shipped_key(S, kind), "text": full.text(S, kind)}
@@ -59,7 +63,8 @@ def stale(sources=None) -> list[str]:
     out = []
     for source in sources or DECLARED.values():
         data = loader.shipped_record(source) or {}
-        ok = data.get("key") == loader.shipped_key(source)
+        key = loader.shipped_key(source)
+        ok = key is not None and data.get("key") == key and "model" in data
         if ok:      # the same declaration: its full-coordinate modules' keys, from its hash
             declaration = loader.Declaration(source, data["model"]["declaration_sha256"])
             ok = all((data.get(kind) or {}).get("key") == full.shipped_key(declaration, kind)
