@@ -10,6 +10,11 @@ the mass matrix ``M``, the generalised forces ``h``, and per contact its gap ``g
 rows ``J`` (normal, tangential: the contact velocities are ``J q'``), their bias
 ``J' q'`` and its friction coefficient.  :func:`closure` gives the full coordinates of
 a state of the reduced model (its contacts closed).
+
+Both are sympy's ``lambdify`` functions, kept as their printed source in a generated
+module of the kernel cache (:func:`generated`), and shipped with the built-in
+declarations' derivations: only a declaration's first motion through contact changes
+imports sympy.
 """
 
 from __future__ import annotations
@@ -192,7 +197,7 @@ def generated(S, kind: str):
     key = shipped_key(S, kind)
     if key is None:          # a declaration without its hash: build the System to hash it
         key = shipped_key(_system(S), kind)
-    h = hashlib.sha256(f"{key} {_sympy_release()}".encode()).hexdigest()[:16]
+    h = hashlib.sha256(key.encode() + b" " + _sympy_release()).hexdigest()[:16]
     # (named by the hash alone: a System and its loaded model's declaration find one file)
     return load_module(f"{kind}_declared_{h}", lambda: _shipped(S, kind, key) or
                        text(_system(S), kind))
