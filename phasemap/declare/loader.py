@@ -284,6 +284,12 @@ def _from_manifest(key: str, path: pathlib.Path, source: str) -> Model | None:
         module = _codegen.load_module(data["module"], _missing)
     except _Miss:  # the generated module was pruned: derive it again
         return None
+    return _rebuilt(data, module, source)
+
+
+def _rebuilt(data: dict, module, source: str) -> Model:
+    """The model of a manifest's ``data`` over its generated ``module``, with its check and
+    its lazy declaration."""
     check = _resolve(data["check"]) if data["check"] else None
     return build(data, module, check, Declaration(source, data.get("declaration_sha256")))
 
@@ -332,9 +338,7 @@ def _from_shipped(path: pathlib.Path, source: str) -> Model | None:
     if data.get("format") != FORMAT or key is None or data.get("key") != key:
         return None     # stale: derived again (tests/test_shipped.py says so first)
     module = _codegen.load_module(data["model"]["module"], lambda: data["source"])
-    check = _resolve(data["model"]["check"]) if data["model"]["check"] else None
-    return build(data["model"], module, check,
-                 Declaration(source, data["model"].get("declaration_sha256")))
+    return _rebuilt(data["model"], module, source)
 
 
 def described(S, model: Model) -> dict | None:

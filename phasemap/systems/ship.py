@@ -6,8 +6,8 @@ about a second to import sympy and up to five to derive.  The package ships each
 derivation instead (``phasemap/systems/derived/<module>.json``: the generated module's
 text and the manifest :func:`phasemap.declare.loader.build` reads, and the full-coordinate
 modules of :mod:`phasemap.declare.full`), so that a first ``classify``, and a first
-motion through contact changes, answer at once.  :func:`phasemap.declare.loader.load` uses a shipped file
-only while its key (:func:`phasemap.declare.loader.key_of` with ``versions=False``: the
+motion through contact changes, answer at once.  :func:`phasemap.declare.loader.load`
+uses a shipped file only while its key (:func:`phasemap.declare.loader.key_of` with ``versions=False``: the
 declaration file, the phasemap modules it imports and the sources that derive it) is
 that of the tree; otherwise it derives the model as before.
 
@@ -44,7 +44,7 @@ def record(source: str) -> dict:
     if data is None:
         raise ValueError(f"{source}: its model cannot be rebuilt without its declaration "
                          "(an expression as a bound, or a check of its own module)")
-    module = sys.modules["phasemap_kernel_" + data["module"]]
+    module = sys.modules[model.velocity_scale.py_func.__module__]  # (as manifest() finds it)
     import sympy
 
     key = loader.shipped_key(source)
