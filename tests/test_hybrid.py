@@ -494,3 +494,150 @@ def test_a_full_coordinate_declaration_is_validated_like_any_other():
         with pytest.raises(ValueError,
                            match="ball_no_law: contact 'floor': has no friction law"):
             call()
+
+
+def _rod_slip_to_its_singular_point(theta, omega, xdot, f, until="B"):
+    """The Painleve rod (m = l = 1) slipping with x_A' < 0, integrated here from the
+    equations derived by hand (not from the declaration): N (1 + 3 c^2 - 3 f s c) = g -
+    s omega^2 (s, c = sin, cos theta), theta'' = 3 N (f s - c), x_G'' = f N.  Stops where
+    B = 1 + 3 c^2 - 3 f s c reaches 1e-10 (``until="N"``: where N reaches 0):
+    ``(t, theta, omega, x_A')``."""
+    from scipy.integrate import solve_ivp
+
+    def rhs(t, y):
+        th, w, xd = y
+        s, c = math.sin(th), math.cos(th)
+        N = (G - s * w * w) / (1.0 + 3.0 * c * c - 3.0 * f * s * c)
+        wd = 3.0 * N * (f * s - c)
+        return [w, wd, f * N + s * wd + c * w * w]           # x_A'' = x_G'' + s w' + c w^2
+
+    def near(t, y):
+        s, c = math.sin(y[0]), math.cos(y[0])
+        if until == "N":
+            return G - s * y[1] * y[1]
+        return 1.0 + 3.0 * c * c - 3.0 * f * s * c - 1e-10
+    near.terminal = True
+    sol = solve_ivp(rhs, (0.0, 1.0), [theta, omega, xdot], method="LSODA", rtol=1e-12,
+                    atol=1e-14, events=near)
+    return (float(sol.t_events[0][0]), *sol.y_events[0][0])
+
+
+@pytest.mark.parametrize("start", [(0.55, 3.6, -4.0), (0.60, 3.9, -4.0), (0.50, 3.0, -6.0)])
+@pytest.mark.parametrize("full", [False, True], ids=["reduced_start", "full_start"])
+def test_dynamic_jam_of_the_rod_stops_its_slip_with_the_sliding_impulse(start, full):
+    """At f = 2 these slips run into the Genot-Brogliato singular point (B -> 0 with the
+    free normal acceleration -> 0; N grows without bound, still slipping): a ``jam``, the
+    impulse at v_n = 0 that stops the slip, P_n = -v_t / (W_tn - s f W_tt), P_t = -s f P_n,
+    then the rod flies off (its spin now lifts it) until it lies flat at theta = pi."""
+    f = 2.0
+    theta0, omega0, xdot0 = start
+    extra = {"y": 0.0, "y_dot": 0.0} if full else {}
+    ds = phasemap.simulate("painleve_rod", 1.0, rtol=1e-10, theta=theta0, omega=omega0,
+                           xdot=xdot0, f=f, **extra)
+    kinds = ds.event_kind.values.tolist()
+    assert kinds == [ev.START, ev.JAM, ev.LEFT_DOMAIN]
+    assert ds.attrs.get("phasemap_reduced_end", "singular") == "singular"
+    t_j, th, w, xd = _rod_slip_to_its_singular_point(theta0, omega0, xdot0, f)
+    assert abs(float(ds.event_t[1]) - t_j) <= 1e-6
+    s, c = math.sin(th), math.cos(th)
+    # the jam's impulse, from the state the event holds (before it), in closed form
+    th1, w1, xd1 = (float(ds[f"event_{k}"][1]) for k in ("theta", "omega", "xdot"))
+    s1, c1 = math.sin(th1), math.cos(th1)
+    B = 1.0 + 3.0 * c1 * c1 - 3.0 * f * s1 * c1
+    assert abs(B) <= 1e-5 and abs(float(ds.event_y_dot[1])) <= 1e-12
+    W_nt, W_tt = -3.0 * s1 * c1, 1.0 + 3.0 * s1 * s1
+    P_n = -xd1 / (W_nt + f * W_tt)                             # s = sgn x_A' = -1
+    assert P_n > 0.0
+    assert abs(float(ds.event_impulse_n[1]) - P_n) <= 1e-9 * P_n
+    assert abs(float(ds.event_impulse_t[1]) - f * P_n) <= 1e-9 * P_n
+    # the state just after it, against the hand-integrated slip and the same impulse
+    P_n = -xd / (-3.0 * s * c + f * (1.0 + 3.0 * s * s))
+    w_after = w + 3.0 * (-c * P_n + s * f * P_n)                # I = 1/3: r x P
+    at = np.flatnonzero(ds.t.values == float(ds.event_t[1]))[-1]
+    assert abs(float(ds.omega[at]) - w_after) <= 1e-6 * abs(w_after)
+    assert abs(float(ds.xdot[at])) <= 1e-9 and abs(float(ds.y_dot[at])) <= 1e-9
+    KE = lambda w_, xd_, yd_: 0.5 * ((xd_ - s1 * w_) ** 2 + (yd_ + c1 * w_) ** 2 + w_ * w_ / 3)
+    dKE = KE(float(ds.omega[at]), 0.0, 0.0) - KE(w1, xd1, 0.0)
+    assert float(ds.event_dKE[1]) < 0.0
+    assert abs(float(ds.event_dKE[1]) - dKE) <= 1e-8 * abs(dKE)
+    # then free flight: the spin is constant until the rod lies flat at theta = pi
+    t_flat = float(ds.event_t[1]) + (math.pi - th1) / float(ds.omega[at])
+    assert abs(float(ds.event_t[2]) - t_flat) <= 1e-9
+    assert float(ds.event_theta[2]) == pytest.approx(math.pi, abs=1e-12)
+
+
+def test_a_slip_phase_singularity_is_b_over_its_scale():
+    """``Motion.singularity`` of the rod's slip is B = W_nn - s f W_nt over |n| |n - s f t|
+    in the inverse mass metric (W of the rod by hand, m = l = 1), so its zero is B's;
+    a phase without a slip is never singular (1)."""
+    from phasemap.systems.painleve_rod import SYSTEM as ROD
+
+    mech = mechanics(ROD)
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        f = rng.uniform(0.0, 3.0)
+        p = np.array([{"f": f, "l": 1.0, "g": G, "m": 1.0}[k] for k in mech.parameters])
+        motion = hybrid.Motion(mech, p, hybrid.Options(t_end=1.0))
+        th = rng.uniform(0.05, math.pi - 0.05)
+        q, u = np.array([th, 0.0, 0.0]), np.array([rng.normal(), rng.normal(), 0.0])
+        s, c = math.sin(th), math.cos(th)
+        W_nn, W_nt, W_tt = 1.0 + 3.0 * c * c, -3.0 * s * c, 1.0 + 3.0 * s * s
+        for mode, sg in ((hybrid.SLIP_POS, 1.0), (hybrid.SLIP_NEG, -1.0)):
+            B = W_nn - sg * f * W_nt
+            scale = math.sqrt(W_nn * (W_nn - 2.0 * sg * f * W_nt + f * f * W_tt))
+            assert abs(motion.singularity(q, u, (mode,)) - B / scale) <= 1e-12
+        assert motion.singularity(q, u, (hybrid.STICK,)) == 1.0
+        assert motion.singularity(q, u, (hybrid.OPEN,)) == 1.0
+
+
+def test_a_slip_that_lifts_off_before_its_singular_point_does_not_jam():
+    """At f = 1.5 the approach to the singular point runs where N changes sign first:
+    the rod lifts off (at the time of N = 0 of the hand-integrated slip), no jam."""
+    ds = phasemap.simulate("painleve_rod", 0.05, rtol=1e-10, theta=0.8, omega=3.3,
+                           xdot=-3.0, f=1.5)
+    assert ev.JAM not in ds.event_kind.values.tolist()
+    assert ds.event_kind.values.tolist()[:2] == [ev.START, ev.LIFTOFF]
+    t_lift = _rod_slip_to_its_singular_point(0.8, 3.3, -3.0, 1.5, until="N")[0]
+    assert abs(float(ds.event_t[1]) - t_lift) <= 1e-9
+
+
+@pytest.mark.parametrize("omega", [-0.3, -1.0, -4.0])
+def test_a_jam_of_two_slipping_contacts_brings_the_rod_on_a_step_to_rest(omega):
+    """The rod on a step (f = 2, edge at a = h / (l sin theta) = 1.25 along the rod) with
+    both contacts slipping, at a zero of the kept-kept coefficient D of its hand
+    derivation (docs/systems/rod_on_step.md, (S3)): the phase's singularity vanishes
+    there, and the jam's impulse (the reaction matrix's null vector, both normal
+    impulses pressing) stops both slips at once, since with both kept the rod has one
+    freedom and both slip velocities are h omega / sin^2 theta times 1 and cos theta:
+    the rod is at rest after it, and all its kinetic energy is gone."""
+    from scipy.optimize import brentq
+
+    from phasemap.systems.rod_on_step import SYSTEM as STEP
+
+    f, l, a, s = 2.0, 1.0, 1.25, -1.0
+
+    def D(th):
+        sn, cs = math.sin(th), math.cos(th)
+        return (3 * a * a - (6 * a - 4) * sn * sn - f * f * (3 * a - 4) * sn * sn
+                + 2 * s * f * (3 * a - 2) * sn * cs - s * f * (3 * a - 4) * sn * cs)
+
+    th = brentq(D, 0.6, 0.8)
+    h = a * l * math.sin(th)
+    mech = mechanics(STEP)
+    p = np.array([{"f": f, "l": l, "h": h, "g": G, "m": 1.0}[k] for k in mech.parameters])
+    q = np.array([th, -h / math.tan(th), 0.0])
+    u = np.array([omega, h * omega / math.sin(th) ** 2, 0.0])
+    motion = hybrid.Motion(mech, p, hybrid.Options(t_end=0.05))
+    slip = (hybrid.SLIP_NEG, hybrid.SLIP_NEG)
+    assert np.all(mech.pieces(q, u, p, 0.0)[3][:, 1] @ u < 0.0)
+    assert abs(motion.singularity(q, u, slip)) <= 1e-12
+    assert abs(motion.singularity(q, u, (hybrid.SLIP_NEG, hybrid.STICK))) > 1e-3
+    rec = hybrid.run_full(mech, p, q, u, t_end=0.05, rtol=1e-12, atol=1e-12,
+                          max_step=math.inf, max_steps=10_000, max_events=100)
+    assert rec.ev_kind == [ev.JAM, ev.REST]
+    P_n, P_t, dKE = rec.ev_impulse[0]
+    assert P_n > 0.0 and abs(P_t - f * P_n) <= 1e-12 * P_n    # slipping with s = -1
+    M = mech.pieces(q, u, p, 0.0)[0]
+    assert abs(dKE + 0.5 * u @ M @ u) <= 1e-9 * (0.5 * u @ M @ u)
+    assert np.abs(rec.y[0][3:]).max() <= 1e-12 * abs(omega)
+    assert rec.modes[0] == (hybrid.STICK, hybrid.STICK)

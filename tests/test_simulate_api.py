@@ -99,6 +99,6 @@ def test_event_codes_are_append_only_and_each_says_whether_it_ends_a_motion():
     assert [e.name.lower() for e in phasemap.Event][:len(stored)] == stored
     assert [int(e) for e in phasemap.Event][:len(stored)] == list(range(len(stored)))
     continuing = {"start", "reversal", "stick", "slip", "switch", "iwc", "liftoff", "impact",
-                  "recontact", "zeno"}
+                  "recontact", "zeno", "jam"}
     assert {e.name.lower() for e in phasemap.Event if not e.terminal} == continuing
     assert events.FATE_VALUES == tuple(sorted(events.FATES))

@@ -24,6 +24,10 @@ Events that continue the motion:
   an impulse or without one, or the impacts of a bouncing contact accumulated: the
   motion through contact changes in a declared system's full coordinates
   (:mod:`phasemap.motion.hybrid`).
+* ``jam``: a dynamic jam: a slip reached the point where the coefficient of its normal
+  acceleration vanishes (the Genot-Brogliato singular point; its normal force grows
+  without bound on the way, its impulse stays bounded), and a tangential impulse at zero
+  normal velocity stopped the slip there (:mod:`phasemap.motion.hybrid`).
 
 Events that end it (the *fate*):
 
@@ -82,6 +86,7 @@ LIFTOFF = 18
 IMPACT = 19
 RECONTACT = 20
 ZENO = 21
+JAM = 22
 
 #: The events that end a motion (its fate), named one by one: event codes are
 #: append-only (atlases and fate maps store them), so a later event that continues a
@@ -91,7 +96,7 @@ FATES = frozenset({REST, CONTACT_LOST, NO_SOLUTION, INDETERMINATE, CONTINUUM, SI
 
 #: ``TERMINAL[code]``: whether the event of that code ends a motion (:data:`FATES`), as
 #: an array the compiled rule :func:`after_event` reads.
-TERMINAL = np.array([code in FATES for code in range(ZENO + 1)])
+TERMINAL = np.array([code in FATES for code in range(JAM + 1)])
 
 #: What follows an event (:func:`after_event`): the running stage goes on (the event
 #: was a rounding flicker), the next stage starts, or the motion ends.
@@ -219,6 +224,8 @@ class Event(nx.Coded):
     RECONTACT = RECONTACT, "a gap closed without approach: the contact closed without an impulse"
     ZENO = (ZENO, "the impacts of a bouncing contact accumulated (Zeno): the contact closed "
                   "at their predicted accumulation time")
+    JAM = (JAM, "a dynamic jam: the slip reached the singular point (the normal force grew "
+                "without bound), and a tangential impulse at zero normal velocity stopped it")
 
     @property
     def terminal(self) -> bool:

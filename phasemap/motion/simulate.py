@@ -324,7 +324,7 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
 
 #: The fates of the reduced integrator from which a declared system's motion goes on in
 #: its full coordinates (:mod:`phasemap.motion.hybrid`).
-GOES_ON = (ev.CONTACT_LOST, ev.NO_SOLUTION, ev.INDETERMINATE)
+GOES_ON = (ev.CONTACT_LOST, ev.NO_SOLUTION, ev.INDETERMINATE, ev.SINGULAR)
 
 
 def _model_of(model, values):

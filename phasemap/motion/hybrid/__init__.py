@@ -29,7 +29,12 @@ rooted on the dense output of DOP853 (scipy's, stepped here) to a few ulps in ti
   Newton law (:func:`phasemap.motion.impact.simultaneous`);
   with ``g' = 0`` the contact **recontacts** without an impulse;
 * a coordinate's bound or a declared domain condition: the motion leaves the model
-  (``left_domain``).
+  (``left_domain``);
+* a slip phase's normalised determinant (:meth:`Motion.singularity`) reaches zero, or the
+  step size collapses there: a **dynamic jam** (the Genot-Brogliato singular point, where
+  the normal force grows without bound but its impulse stays bounded).  The impulse at
+  zero normal velocity that stops the slip is applied (for one contact P_n = -v_t /
+  (W_tn - s mu W_tt), P_t = -s mu P_n), and a ``jam`` event recorded.
 
 After every event the contact modes are enumerated (every combination of the closed
 contacts' modes, solved and kept where admissible, as the acceleration level is counted

@@ -12,19 +12,15 @@ import numpy as np
 from phasemap.core import events as ev
 from phasemap.motion.impact import tangential_impact  # noqa: F401 - the package's name
 
-OPEN, SMOOTH, STICK, SLIP_POS, SLIP_NEG = 0, 1, 2, 3, 4
-MODE_NAMES = ("open", "smooth", "stick", "slip_pos", "slip_neg")
+from phasemap.motion.hybrid import jam
+from phasemap.motion.hybrid.phases import (  # noqa: F401 - the package's names
+    MODE_NAMES, OPEN, QUIET, SLIP_NEG, SLIP_POS, SMOOTH, STICK, TOL, kind_of, normalised_det,
+    system)
 #: The Painleve policies where the accelerations have two or more solutions.
 POLICIES = ("liftoff", "iwc", "stop")
 #: The rebound speed (of the contact's normal velocity, in its units) below which the
 #: impacts of one contact are taken to accumulate (Zeno), by default.
 ZENO_SPEED = 1e-6
-#: The kind passed to ``_decide`` after an event already recorded (an impact).
-QUIET = -2
-#: Relative tolerance of the mode tests (GUIDE section 1: 1e-12 of a quantity's scale
-#: for ties; the integrated state carries the step's error, so 1e-9 here).
-TOL = 1e-9
-
 
 @dataclass
 class Options:
@@ -107,6 +103,19 @@ class Motion:
         A slipping contact slips with its kinetic coefficient at its sliding speed; those
         in ``start`` (a slip starting from relative rest) are tested against the static
         one."""
+        return self._solve(q, u, modes, rho, t, start)[0]
+
+    def singularity(self, q, u, modes, rho=None, t=0.0):
+        """The determinant of the phase's reaction matrix, each row (a held acceleration)
+        and column (a reaction's direction) scaled to unit length in the inverse mass
+        metric: in [-1, 1], and 0 where the phase is singular.  Only a slip makes it so
+        (a phase without one has a positive definite matrix): 1 for such a phase.  For
+        one slipping contact it is B = W_nn - s mu W_nt over its scale, the coefficient of
+        the senior derivative that a dynamic jam drives to zero."""
+        return self._solve(q, u, modes, rho, t, (), True)[1]
+
+    def _solve(self, q, u, modes, rho=None, t=0.0, start=(), singular=False):
+        """``(solve(...), singularity(...))``; the second 1.0 unless ``singular``."""
         M, h, g, J, b, mu = P = self.mech.pieces(q, u, self.p, t)
         sd = None
         if not self.mech.plain:
@@ -114,23 +123,9 @@ class Motion:
             speed = np.abs(self.relative(J, u, t)[:, 1])
             kin = self.mech.kinetic(q, u, self.p, t, speed, mu)
             mu = np.array([mu[c] if c in start else kin[c] for c in range(self.k)])
-        cols, rows, rhs = [], [], []
-        owner = []
-        for c, m in enumerate(modes):
-            if m == OPEN:
-                continue
-            r = 1.0 if rho is None else rho[c]
-            s = 1.0 if m == SLIP_POS else (-1.0 if m == SLIP_NEG else 0.0)
-            cols.append(J[c, 0] - s * r * mu[c] * J[c, 1])
-            rows.append(J[c, 0])
-            rhs.append(-b[c, 0])
-            owner.append((c, 0))
-            if m == STICK:
-                cols.append(J[c, 1])
-                rows.append(J[c, 1])
-                rhs.append(-b[c, 1] if sd is None else sd[c] - b[c, 1])
-                owner.append((c, 1))
+        cols, rows, rhs, owner = system(modes, rho, J, b, mu, sd)
         N, F = np.zeros(self.k), np.zeros(self.k)
+        det = 1.0
         if not cols:
             ud = np.linalg.solve(M, h)
         else:
@@ -138,6 +133,9 @@ class Motion:
             R = np.array(rows)
             X = np.linalg.solve(M, np.column_stack([h, G]))
             A = R @ X[:, 1:]
+            if singular and any(m in (SLIP_POS, SLIP_NEG) and mu[c] != 0.0
+                                for c, m in enumerate(modes)):
+                det = normalised_det(A, R, G, X[:, 1:], M)
             r_ = np.array(rhs) - R @ X[:, 0]
             # redundant contacts (a family of reactions, one member admissible) where the
             # system is near singular: its determinant against Hadamard's bound (the
@@ -148,7 +146,7 @@ class Motion:
             else:
                 lam = self._member(A, r_, owner, modes, rho, P)
             if lam is None or not np.all(np.isfinite(lam)):
-                return None
+                return None, det
             ud = X[:, 0] + X[:, 1:] @ lam
             for (c, j), x in zip(owner, lam):
                 (N if j == 0 else F)[c] = x
@@ -159,7 +157,7 @@ class Motion:
         a = J @ ud + b
         if sd is not None:
             a[:, 1] -= sd
-        return ud, N, F, a, P
+        return (ud, N, F, a, P), det
 
     def _member(self, A, r, owner, modes, rho, P):
         """Of the reactions ``A lam = r`` of redundant contacts (a rod lying flat on
@@ -384,13 +382,16 @@ class Motion:
 
     # -- the events of a phase ----------------------------------------------------------
 
-    def watch(self, q, u, modes, rho, sc, t=0.0):
+    def watch(self, q, u, modes, rho, sc, t=0.0, jam=0.0):
         """The event functions of a phase at ``(q, u)``, each >= 0 while it goes on:
         per contact two (open: its gap; closed: its N; slipping: its slip velocity;
-        stuck: its friction slack), then each coordinate's bounds and the declared
-        domain conditions."""
-        out = np.ones(self.k * 2 + 2 * self.n + self.mech.n_domain)
-        ud, N, F, a, P = self.solve(q, u, modes, rho, t)
+        stuck: its friction slack), then each coordinate's bounds, the declared domain
+        conditions, and last the phase's :meth:`singularity` times ``jam`` (its sign at
+        the phase's start; 0: not watched, the function 1)."""
+        out = np.ones(self.k * 2 + 2 * self.n + self.mech.n_domain + 1)
+        (ud, N, F, a, P), det = self._solve(q, u, modes, rho, t, (), jam != 0.0)
+        if jam != 0.0:
+            out[-1] = jam * det
         M, h, g, J, b, mu = P
         vs, fs, acs, L = sc
         surf = self.surf(t)
@@ -411,7 +412,7 @@ class Motion:
         out[i:i + self.n] = q - self.bounds[:, 0]
         out[i + self.n:i + 2 * self.n] = self.bounds[:, 1] - q
         if self.mech.n_domain:
-            out[i + 2 * self.n:] = self.mech.domain(*q, *self.p)
+            out[i + 2 * self.n:-1] = self.mech.domain(*q, *self.p)
         return out
 
     def gap_rate(self, q, u, c, t=0.0):
@@ -479,7 +480,8 @@ class Motion:
                             max_step=o.max_step)
             # a function the event's projection left a rounding error below zero starts
             # at zero (a gap just closed or opened, a slip velocity just zero)
-            w0 = self.watch(q, u, modes, rho, sc, t)
+            jam_sign = jam.sign(self, q, u, modes, rho, t)
+            w0 = self.watch(q, u, modes, rho, sc, t, jam_sign)
             w0[(w0 < 0.0) & (w0 >= -TOL * self._scale_of(sc))] = 0.0
             step = None
             while True:
@@ -490,12 +492,16 @@ class Motion:
                 solver.step()
                 rec.n_steps += 1
                 if solver.status == "failed":
-                    self._end(t_old, solver.y[:n], solver.y[n:], modes, ev.STEP_FAILURE)
+                    # the step size collapsed: at a slip's singular point, a dynamic jam
+                    y = solver.y
+                    step = jam.at_singular(self, t_old, y[:n], y[n:], modes, rho,
+                                           ev.STEP_FAILURE)
                     break
                 y1 = solver.y
-                w1 = self.watch(y1[:n], y1[n:], modes, rho, sc, solver.t)
+                w1 = self.watch(y1[:n], y1[n:], modes, rho, sc, solver.t, jam_sign)
                 dense = solver.dense_output()
-                hit = self._first_event(dense, t_old, solver.t, w0, w1, modes, rho, sc)
+                hit = self._first_event(dense, t_old, solver.t, w0, w1, modes, rho, sc,
+                                        jam_sign)
                 t_hit = hit[0] if hit else solver.t
                 self._save_eval(dense, t_old, t_hit, modes)
                 if hit is not None:
@@ -531,7 +537,7 @@ class Motion:
                 self.rec.point(te[self.i_eval], dense(te[self.i_eval]), modes)
             self.i_eval += 1
 
-    def _first_event(self, dense, t0, t1, w0, w1, modes, rho, sc):
+    def _first_event(self, dense, t0, t1, w0, w1, modes, rho, sc, jam=0.0):
         """``(t, index)`` of the earliest event function to reach zero in the step, or None.
         A gap whose rate turns from negative to positive inside the step is checked at
         its minimum too (an impact between the step's ends)."""
@@ -543,7 +549,7 @@ class Motion:
             if t <= t0:
                 return w0[i]
             y = dense(t)
-            return self.watch(y[:n], y[n:], modes, rho, sc, t)[i]
+            return self.watch(y[:n], y[n:], modes, rho, sc, t, jam)[i]
 
         xtol = 4.0 * np.finfo(float).eps * max(abs(t0), abs(t1), 1e-300)
         best = None
@@ -598,6 +604,8 @@ class Motion:
 
     def _event(self, t, q, u, modes, rho, i):
         """What follows the event ``i`` of the phase ``modes`` at ``(t, q, u)``."""
+        if i == 2 * self.k + 2 * self.n + self.mech.n_domain:   # the phase's singularity
+            return jam.at_singular(self, t, q, u, modes, rho, ev.SINGULAR)
         if i >= 2 * self.k:
             j = i - 2 * self.k
             fixed = ()
@@ -694,6 +702,10 @@ class Motion:
         """The phase that follows at ``(t, q, u)``; records the event (``kind``, or the one
         the change of modes names where ``kind`` is -1) and returns ``(t, q, u, modes,
         rho)``, or None where the motion ends."""
+        if depth < 4 and kind != QUIET:
+            jump = jam.jam(self, t, q, u, jam.sliding(self, q, u, t))
+            if jump is not None:     # at a slip's singular point: a dynamic jam first
+                return self._decide(t, *jump, old, QUIET, -1, {}, depth + 1)
         groups = self.enumerate(q, u, prefer, t)
         if len(groups) != 1:
             if not groups or self.o.painleve == "iwc":
@@ -726,7 +738,7 @@ class Motion:
             self._end(t, q, u, modes, ev.REST, contact)
             return None
         if kind == -1:
-            kind = _kind_of(old, modes, contact)
+            kind = kind_of(old, modes, contact)
             if contact < 0:
                 changed = [c for c in range(self.k) if (old[c] == OPEN) != (modes[c] == OPEN)]
                 changed = changed or [c for c in range(self.k) if old[c] != modes[c]]
@@ -767,29 +779,3 @@ class Motion:
         c, after, r = jumps[0]
         self.rec.event(t, ev.IWC, c, np.concatenate([q, u]), modes, (r.P_n, r.P_t, r.dKE))
         return self.project(q, after, [c], t=t)
-
-
-def _kind_of(old, new, contact):
-    """The event a change of contact modes from ``old`` to ``new`` is."""
-    if contact >= 0:
-        a, b = old[contact], new[contact]
-        if a != OPEN and b == OPEN:
-            return ev.LIFTOFF
-        if a == OPEN and b != OPEN:
-            return ev.RECONTACT
-    for a, b in zip(old, new):
-        if a != OPEN and b == OPEN:
-            return ev.LIFTOFF
-    for a, b in zip(old, new):
-        if a == OPEN and b != OPEN:
-            return ev.RECONTACT
-    for a, b in zip(old, new):
-        if a in (SLIP_POS, SLIP_NEG) and b == STICK:
-            return ev.STICK
-        if a == STICK and b in (SLIP_POS, SLIP_NEG):
-            return ev.SLIP
-        if {a, b} == {SLIP_POS, SLIP_NEG}:
-            return ev.REVERSAL
-    return ev.SWITCH if tuple(old) != tuple(new) else -1
-
-

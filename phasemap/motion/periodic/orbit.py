@@ -19,7 +19,7 @@ from phasemap.motion.periodic import floquet as fq
 from phasemap.motion.periodic.section import Section, returns, section_cycle, unit
 
 #: Events across which the state jumps by an impulse: not in the orbits solved here yet.
-IMPULSIVE = (ev.IMPACT, ev.IWC, ev.ZENO)
+IMPULSIVE = (ev.IMPACT, ev.IWC, ev.ZENO, ev.JAM)
 #: The longest period, in forcing periods, searched for in a forced system's settled motion.
 MAX_MULTIPLE = 16
 #: How near (relative to the state's scale) a settled motion returns to a state to count

@@ -1,0 +1,119 @@
+"""Dynamic jam: a slip phase that reaches its singular point, where the normal force grows
+without bound but its impulse stays bounded (Genot and Brogliato 1999; Or and Rimon
+2012; GUIDE section 8).  The impulse at zero normal velocity that stops the slip is
+applied there, and a ``jam`` event recorded.  Each function takes the
+:class:`phasemap.motion.hybrid.Motion` as ``self``."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from phasemap.core import events as ev
+from phasemap.motion.hybrid.phases import (JAM_TOL, OPEN, QUIET, SLIP_NEG, SLIP_POS, SMOOTH,
+                                           STICK, TOL, normalised_det, system)
+
+
+def sign(self, q, u, modes, rho, t):
+    """The sign of the phase's :meth:`Motion.singularity` at its start: the factor that makes
+    its event function positive (0, not watched, for a phase without a slip, or one
+    already at its singular point)."""
+    if not any(m in (SLIP_POS, SLIP_NEG) for m in modes):
+        return 0.0
+    det = self.singularity(q, u, modes, rho, t)
+    return 0.0 if abs(det) <= JAM_TOL else math.copysign(1.0, det)
+
+def sliding(self, q, u, t):
+    """The modes of a state's touching contacts as they move now (a contact that
+    slips: that slip; one at relative rest: stick; the others open), or None where a
+    closed contact is two-sided (its friction's sign is not known here)."""
+    P = self.mech.pieces(q, u, self.p, t)
+    sc = self.scales(q, u, P)
+    g, J, mu = P[2], P[3], P[5]
+    v = self.relative(J, u, t)
+    modes = []
+    for c in range(self.k):
+        touching = g[c] <= TOL * sc[3] and abs(v[c, 0]) <= TOL * sc[0]
+        if not touching:
+            modes.append(OPEN)
+        elif not self.one_sided[c]:
+            return None
+        elif mu[c] == 0.0:
+            modes.append(SMOOTH)
+        elif abs(v[c, 1]) > TOL * sc[0]:
+            modes.append(SLIP_POS if v[c, 1] > 0.0 else SLIP_NEG)
+        else:
+            modes.append(STICK)
+    return tuple(modes)
+
+def at_singular(self, t, q, u, modes, rho, fate):
+    """The phase ``modes`` stopped at ``(t, q, u)`` (its singularity reached zero, or
+    the step size collapsed): a dynamic jam where it is one; else the motion ends,
+    with ``singular`` where the phase is at its singular point, or ``fate``."""
+    jump = jam(self, t, q, u, modes)
+    if jump is not None:
+        return self._decide(t, *jump, modes, QUIET, -1, {})
+    if any(m in (SLIP_POS, SLIP_NEG) for m in modes) and abs(
+            self.singularity(q, u, modes, rho, t)) <= JAM_TOL:
+        fate = ev.SINGULAR
+    self._end(t, q, u, modes, fate)
+    return None
+
+def jam(self, t, q, u, modes):
+    """The state after a dynamic jam of the phase ``modes`` at ``(t, q, u)``, or None
+    where it is not at one.
+
+    A slip phase is at its singular point where its reaction matrix ``A`` (the held
+    accelerations against the reactions: the phase's :meth:`Motion.singularity` within
+    :data:`JAM_TOL` of zero) has a null vector ``lam``: reactions along ``lam`` move no
+    held acceleration, so on the way the normal forces grow without bound along it
+    while the normal velocities stay zero.  Their impulse is what stops the slip
+    (Genot and Brogliato 1999; Or and Rimon 2012): the impulse ``p lam`` with ``p``
+    the least that brings a slipping contact to relative rest.  For one contact,
+    ``P_n = -v_t / (W_tn - s mu W_tt)`` and ``P_t = -s mu P_n`` (with ``B = W_nn -
+    s mu W_nt = 0``, the normal velocity does not change).  None also where the
+    normal forces before the jam do not press (the phase was not the motion), or
+    the impulse would pull a contact or stop no slip.  Records the ``jam`` event."""
+    if modes is None or not any(m in (SLIP_POS, SLIP_NEG) for m in modes):
+        return None
+    M, h, g, J, b, mu = P = self.mech.pieces(q, u, self.p, t)
+    v = self.relative(J, u, t)
+    if not self.mech.plain:
+        mu = self.mech.kinetic(q, u, self.p, t, np.abs(v[:, 1]), mu)
+    cols, rows, rhs, owner = system(modes, None, J, b, mu)
+    G, R = np.array(cols).T, np.array(rows)
+    X = np.linalg.solve(M, G)
+    if abs(normalised_det(R @ X, R, G, X, M)) > JAM_TOL:
+        return None
+    # the null vector of A = R X, in the scaled reactions (columns of unit length)
+    dc = 1.0 / np.sqrt(np.maximum((G * X).sum(axis=0), 1e-300))
+    lam = np.linalg.svd((R @ X) * dc)[2][-1] * dc
+    normals = np.array([j == 0 for c, j in owner])
+    if lam[normals].sum() < 0.0:
+        lam = -lam
+    if lam[normals].min() < -1e-9 * np.abs(lam).max():
+        return None
+    # the free accelerations of the held rows, weighted by the jam's reactions, must
+    # not pull away (where they do, the contact opens: no force grows without bound)
+    sc = self.scales(q, u, P)
+    free = R @ np.linalg.solve(M, h) - np.array(rhs)
+    if lam @ free > TOL * sc[2] * np.abs(lam).sum():
+        return None
+    du = X @ lam
+    p, stop = math.inf, -1
+    for c, m in enumerate(modes):
+        if m in (SLIP_POS, SLIP_NEG):
+            rate = float(J[c, 1] @ du)
+            if rate * v[c, 1] < 0.0 and -v[c, 1] / rate < p:
+                p, stop = -v[c, 1] / rate, c
+    if stop < 0:
+        return None
+    u1 = u + p * du
+    Pn = p * lam[owner.index((stop, 0))]
+    s = 1.0 if modes[stop] == SLIP_POS else -1.0
+    dKE = 0.5 * float(u1 @ M @ u1 - u @ M @ u)
+    self.rec.event(t, ev.JAM, stop, np.concatenate([q, u]), modes,
+                   (Pn, -s * mu[stop] * Pn, dKE))
+    held = [c for c, m in enumerate(modes) if m == STICK] + [stop]
+    return self.project(q, u1, [c for c, m in enumerate(modes) if m != OPEN], held, t=t)
