@@ -334,6 +334,34 @@ def test_simulate_goes_on_through_the_rods_impact_without_collision():
     assert 0.5 * vg @ vg + 0.5 / 3 * omega ** 2 == pytest.approx(0.3, abs=1e-12)
 
 
+def test_a_motion_goes_on_in_full_coordinates_after_an_impact_without_collision():
+    """A rod spinning fast at f = 2.17 has no solution at its start: the impact without
+    collision stops its slip and spins it up so that it must leave the floor.  The
+    reduced model alone ends there with ``contact_lost`` (its last event, after the
+    ``iwc``); the motion goes on in full coordinates, keeps the impact's impulses, lifts
+    off from the state after the impact, and flies with a constant spin until the rod
+    lies flat at theta = pi."""
+    import phasemap
+
+    start = dict(theta=0.7168, omega=3.65, xdot=-3.7154, f=2.1736)
+    names = lambda ds: [phasemap.Event(int(k)).name.lower() for k in ds.event_kind.values]
+    reduced = phasemap.simulate("painleve_rod", 2.0, through_contacts=False, **start)
+    assert names(reduced) == ["iwc", "contact_lost"]
+    assert reduced.attrs["end_reason"] == "contact_lost"
+    ds = phasemap.simulate("painleve_rod", 2.0, **start)
+    assert names(ds) == ["iwc", "liftoff", "left_domain"]
+    assert ds.attrs["phasemap_reduced_end"] == "contact_lost"
+    for k in ("impulse_n", "impulse_t", "dKE"):
+        assert float(ds[f"event_{k}"][0]) == float(reduced[f"event_{k}"][0])
+    assert np.isnan(ds.event_impulse_n.values[1:]).all()
+    assert int(ds.event_contact[0]) == 0
+    omega = float(reduced.event_omega[0])          # the reduced event: the state after it
+    assert float(ds.event_omega[1]) == pytest.approx(omega, abs=1e-12)
+    assert float(ds.event_xdot[1]) == pytest.approx(0.0, abs=1e-12)
+    t_flat = (math.pi - start["theta"]) / omega
+    assert float(ds.event_t[2]) == pytest.approx(t_flat, abs=1e-9)
+
+
 def test_motions_without_such_a_state_are_untouched():
     """A hand-written model's no_solution still ends its motion (it has no declaration to
     take the impact from), and a declared motion that meets none has no impulse columns."""

@@ -304,12 +304,10 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
         integrate = _budgeted(integrate, machine, m.name)
     fate, t, y, n_rev, n_steps, points, events, y_eval, impacts = _through_impacts(
         m, integrate, v, y0, run, names, full)
-    if S is not None and int(fate) in GOES_ON and float(t) < opts.t_end and not impacts:
-        # (a motion that went through an impact without collision of the reduced model
-        # keeps its reduced coordinates and its end)
+    if S is not None and int(fate) in GOES_ON and float(t) < opts.t_end:
         ds = _continued(S, m, opts, contact, names, full, positions, points, events,
                         y_eval, te if t_eval is not None else None, float(t), y,
-                        int(n_steps))
+                        int(n_steps), impacts)
         if ds is not None:
             return ds
     ds = _dataset(m, full, positions, opts, names, int(fate), int(n_rev), int(n_steps),
@@ -385,11 +383,13 @@ def _times(name, t_eval, opts: Options):
 
 
 def _continued(S, m: Model, opts: Options, contact: dict, names, full, positions, points,
-               events, y_eval, te, t_stop: float, y_stop, n_steps: int
+               events, y_eval, te, t_stop: float, y_stop, n_steps: int, impacts=()
                ) -> xr.Dataset | None:
     """The reduced motion that ended at ``t_stop`` where a contact opens (or the
-    accelerations have no or two solutions) goes on in full coordinates: the Dataset of
-    both, or None where the declaration's contacts are not the kind that can open."""
+    accelerations have no or two solutions, or a slip reached its singular point) goes
+    on in full coordinates: the Dataset of both, or None where the declaration's contacts
+    are not the kind that can open.  ``impacts``: the reduced motion's impacts without
+    collision (:func:`_through_impacts`), whose impulses its ``iwc`` events keep."""
     from phasemap.declare.full import closure
 
     try:
@@ -412,8 +412,11 @@ def _continued(S, m: Model, opts: Options, contact: dict, names, full, positions
     settings = run_settings(opts, mech.n if rest is None else 0)
     rec = hybrid.run_full(mech, p, q0, u0, t0=t_stop, t_eval=rest, first=-1,
                           **settings, **contact)
-    prefix = (np.asarray(ts, float), py, ms, np.asarray(ev_t[:-1], float),
-              np.asarray(ev_kind[:-1]), pey)
+    kinds = np.asarray(ev_kind[:-1])
+    imp = np.full((kinds.size, 3), np.nan)
+    imp[kinds == ev.IWC] = [i[1:] for i in impacts] if len(impacts) else np.empty((0, 3))
+    prefix = (np.asarray(ts, float), py, ms, np.asarray(ev_t[:-1], float), kinds, pey,
+              imp, np.where(kinds == ev.IWC, 0, -1))   # (one contact: the impacts' own)
     attrs = full_attrs(S, m, opts.as_dict(), contact, {**full, **positions})
     rec.n_steps += n_steps
     ds = hybrid.dataset(mech, rec, attrs, prefix, p=p)
@@ -489,14 +492,18 @@ def _through_impacts(m: Model, integrate, v, y0, run, names, full):
 def _joined(parts, starts):
     """The integrator outputs of consecutive stages of one motion as one: the times of
     each after the first shifted by its start; the terminal event of each but the last
-    dropped, and the start event of each after the first called ``iwc``."""
+    dropped, and the start event of each after the first called ``iwc`` (where a stage
+    ends at once, its only event is its end: an ``iwc`` event is put before it)."""
     offsets = [0.0, *starts[:len(parts) - 1]]
     points, events, evals = [], [], []
     for k, (r, t0) in enumerate(zip(parts, offsets)):
         pts, evs = r.points.copy(), r.events.copy()
         pts[:, 0] += t0
         evs[:, 0] += t0
-        if k:
+        if k and int(evs[0, 1]) == ev.START:
+            evs[0, 1] = ev.IWC
+        elif k:
+            evs = np.concatenate([evs[:1], evs])
             evs[0, 1] = ev.IWC
         if k < len(parts) - 1:
             evs = evs[:-1]

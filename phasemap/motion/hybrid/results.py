@@ -115,7 +115,9 @@ def _geometry(mech, p, ys, modes, ts) -> dict:
 
 def dataset(mech, rec: Record, attrs: dict, prefix=None, p=None):
     """The Dataset of a motion in full coordinates (``prefix``: the reduced motion before
-    it, as ``(ts, ys, branch, ev_t, ev_kind, ev_y)`` with ``ys`` in full coordinates)."""
+    it, as ``(ts, ys, branch, ev_t, ev_kind, ev_y[, impulses, contacts])`` with ``ys`` in
+    full coordinates, and its events' impulses ``(P_n, P_t, dKE)`` and contacts where
+    they had any)."""
     import xarray as xr
 
     n, k = mech.n, len(mech.contacts)
@@ -130,17 +132,19 @@ def dataset(mech, rec: Record, attrs: dict, prefix=None, p=None):
     ev_c = np.array(rec.ev_contact, dtype=np.int8)
     imp = np.array(rec.ev_impulse, dtype=float).reshape(-1, 3)
     if prefix is not None:
-        pt, py, pb, pet, pek, pey = prefix
+        pt, py, pb, pet, pek, pey = prefix[:6]
+        m = pet.size
+        pimp, pc = prefix[6:] if len(prefix) > 6 else (np.full((m, 3), np.nan),
+                                                         np.full(m, -1))
         ts, ys = np.concatenate([pt, ts]), np.concatenate([py, ys])
         branch = np.concatenate([np.asarray(pb, dtype=np.int8), branch])
         modes = np.concatenate([np.full((pt.size, k), -1, np.int8), modes])
-        m = pet.size
         ev_t, ev_kind = np.concatenate([pet, ev_t]), np.concatenate([pek.astype(np.int8),
                                                                       ev_kind])
         ev_y = np.concatenate([pey, ev_y])
         ev_modes = np.concatenate([np.full((m, k), -1, np.int8), ev_modes])
-        ev_c = np.concatenate([np.full(m, -1, np.int8), ev_c])
-        imp = np.concatenate([np.full((m, 3), np.nan), imp])
+        ev_c = np.concatenate([np.asarray(pc, dtype=np.int8), ev_c])
+        imp = np.concatenate([np.asarray(pimp, dtype=float).reshape(m, 3), imp])
     mode_attrs = {"flag_values": np.arange(-1, len(MODE_NAMES), dtype=np.int8),
                   "flag_meanings": "closed_see_branch " + " ".join(MODE_NAMES)}
     kind_attrs = {"long_name": "kind of event",
