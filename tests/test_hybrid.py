@@ -354,6 +354,19 @@ def _random_body():
                   contacts=(PointContact("A", (x, y), friction=f),))
 
 
+def _impacts(rec, mech, p):
+    """Per impact of a motion's record: ``(P_n, dKE, KE before, state before, state
+    after, modes after)``; the state after is the last point saved at the impact's time."""
+    for i, kind in enumerate(rec.ev_kind):
+        if kind != ev.IMPACT:
+            continue
+        P_n, _, dKE = rec.ev_impulse[i]
+        y = rec.ev_y[i]
+        ke = 0.5 * y[3:] @ mech.pieces(y[:3], y[3:], p)[0] @ y[3:]
+        at = [j for j, t in enumerate(rec.t) if t == rec.ev_t[i]][-1]
+        yield P_n, dKE, ke, y, rec.y[at], rec.modes[at]
+
+
 @pytest.mark.parametrize("law", ["stronge", "poisson"])
 def test_random_impacts_never_gain_energy_and_end_complementary(law):
     """Random single-contact impacts of the declared rod and of a random body: under
@@ -376,21 +389,13 @@ def test_random_impacts_never_gain_energy_and_end_complementary(law):
             rec = hybrid.run_full(mech, p, q, u, t_end=0.05, rtol=1e-10, atol=1e-10,
                                   max_step=math.inf, max_steps=5_000, max_events=50,
                                   impact_law=law, restitution=rng.uniform(0.0, 1.0))
-            for i, kind in enumerate(rec.ev_kind):
-                if kind != ev.IMPACT:
-                    continue
+            for P_n, dKE, ke, y, after, modes in _impacts(rec, mech, p):
                 n_impacts += 1
-                P_n, P_t, dKE = rec.ev_impulse[i]
-                y = rec.ev_y[i]
-                ke = 0.5 * y[3:] @ mech.pieces(y[:3], y[3:], p)[0] @ y[3:]
                 assert dKE <= 1e-12 * max(ke, 1.0) and P_n >= 0.0
-                # the state just after: the last point saved at the impact's time
-                at = [j for j, t in enumerate(rec.t) if t == rec.ev_t[i]]
-                after = rec.y[at[-1]]
                 J = mech.pieces(after[:3], after[3:], p)[3][0]
                 v_n = J[0] @ after[3:]
                 assert v_n >= -1e-9 * (1.0 + abs(J[0] @ y[3:]))
-                if rec.modes[at[-1]][0] != hybrid.OPEN:      # closed: it does not move off
+                if modes[0] != hybrid.OPEN:      # closed: it does not move off
                     assert abs(v_n) <= 1e-9 * (1.0 + abs(J[0] @ y[3:]))
     assert n_impacts >= 80
 
@@ -641,3 +646,76 @@ def test_a_jam_of_two_slipping_contacts_brings_the_rod_on_a_step_to_rest(omega):
     assert abs(dKE + 0.5 * u @ M @ u) <= 1e-9 * (0.5 * u @ M @ u)
     assert np.abs(rec.y[0][3:]).max() <= 1e-12 * abs(omega)
     assert rec.modes[0] == (hybrid.STICK, hybrid.STICK)
+
+
+def test_the_wheel_flies_off_and_lands_perfectly_rough():
+    """The wheel (r = 1, l = 0.5, rho = 0.5, no rolling friction) at phi = 2.5591 spinning
+    at omega = 8.2805 must leave the floor at once (the reduced model ends there with
+    ``contact_lost``).  It flies: its centre of mass on a parabola, its spin constant,
+    until the disc's lowest point reaches the floor, at the time a root of that gap,
+    found here by hand.  It lands perfectly rough (it rolls without slip): every impulse
+    acts at the contact point K, so the angular momentum about K is kept, and it rolls
+    after it: omega+ = H_K / (I + m |KC|^2), x_A' = r omega+, y_A' = 0."""
+    from scipy.optimize import brentq
+
+    r, l, rho, m = 1.0, 0.5, 0.5, 1.0
+    phi0, om0 = 2.5591, 8.2805
+    ds = phasemap.simulate("wheel", 3.0, phi=phi0, omega=om0, delta=0.0, rtol=1e-12)
+    kinds = ds.event_kind.values.tolist()
+    assert kinds[:2] == [ev.LIFTOFF, ev.IMPACT] and ds.attrs["phasemap_reduced_end"] == \
+        "contact_lost"
+    C0 = np.array([r * phi0 - l * math.sin(phi0), r - l * math.cos(phi0)])
+    v0 = np.array([r * om0 - l * math.cos(phi0) * om0, l * math.sin(phi0) * om0])
+
+    def gap(t):     # the disc's centre height less r: y_C + l cos phi - r
+        return C0[1] + v0[1] * t - 0.5 * G * t * t + l * math.cos(phi0 + om0 * t) - r
+
+    ts = np.linspace(1e-6, 2.0, 20001)
+    k = int(np.flatnonzero(np.array([gap(t) for t in ts]) < 0.0)[0])
+    t_land = brentq(gap, ts[k - 1], ts[k], xtol=1e-15)
+    assert abs(float(ds.event_t[1]) - t_land) <= 1e-9
+    phi = phi0 + om0 * t_land
+    C = C0 + v0 * t_land + np.array([0.0, -0.5 * G * t_land ** 2])
+    vC = v0 + np.array([0.0, -G * t_land])
+    d = C - np.array([C[0] + l * math.sin(phi), 0.0])            # K to C
+    H_K = m * rho ** 2 * -om0 + m * (d[0] * vC[1] - d[1] * vC[0])  # (the disc turns by -phi)
+    om1 = -H_K / (m * rho ** 2 + m * d @ d)
+    after = np.flatnonzero(ds.t.values == float(ds.event_t[1]))[-1]
+    assert float(ds.omega[after]) == pytest.approx(om1, abs=1e-9)
+    assert float(ds.xa_dot[after]) == pytest.approx(r * om1, abs=1e-9)
+    assert abs(float(ds.ya_dot[after])) <= 1e-9
+    KE = lambda w, v: 0.5 * m * v @ v + 0.5 * m * rho ** 2 * w * w
+    vC1 = om1 * np.array([d[1], -d[0]]) * -1.0                  # rolling about K
+    assert float(ds.event_dKE[1]) == pytest.approx(KE(om1, vC1) - KE(om0, vC), abs=1e-9)
+    assert float(ds.event_dKE[1]) < 0.0
+
+
+def test_random_rough_landings_of_the_wheel_never_gain_energy_and_end_complementary():
+    """The wheel dropped in flight at random (spin, velocity, rolling friction, centre of
+    mass) lands perfectly rough: every impact loses energy, and after it the contact is
+    closed and rolls (v_n = 0, no slip) where it took a normal impulse, or leaves with its
+    slip stopped (v_n >= 0, v_t = 0) where the tangential impulse alone turned it away."""
+    from phasemap.systems.seeds.wheel import SYSTEM as WHEEL
+
+    mech = mechanics(WHEEL)
+    rng = np.random.default_rng(11)
+    seen = 0
+    for _ in range(12):
+        values = {"delta": rng.uniform(0.0, 0.3), "r": 1.0, "l": rng.uniform(0.0, 0.8),
+                  "rho": rng.uniform(0.3, 0.8), "g": G, "m": 1.0}
+        p = np.array([values[k] for k in mech.parameters])
+        q = np.array([rng.uniform(-3, 3), 0.0, 1.0 + rng.uniform(0.01, 0.3)])
+        u = np.array([rng.normal(0, 5), rng.normal(0, 2), rng.normal(0, 1)])
+        rec = hybrid.run_full(mech, p, q, u, t_end=0.6, rtol=1e-10, atol=1e-12,
+                              max_step=math.inf, max_steps=20_000, max_events=50)
+        for P_n, dKE, KE0, y0, y, modes in _impacts(rec, mech, p):
+            seen += 1
+            assert dKE <= 1e-12 * KE0 and P_n >= 0.0
+            J = mech.pieces(y[:3], y[3:], p)[3][0]
+            v_n, v_t = J[0] @ y[3:], J[2] @ y[3:]
+            scale = 1.0 + np.abs(y0[3:]).max()
+            assert abs(v_t) <= 1e-9 * scale
+            assert v_n >= -1e-9 * scale
+            if P_n > 0.0:
+                assert abs(v_n) <= 1e-9 * scale
+    assert seen >= 8

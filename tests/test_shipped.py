@@ -209,18 +209,41 @@ def test_a_motion_through_contact_changes_needs_no_sympy_after_its_derivation(tm
 
 
 def test_a_declaration_whose_contacts_cannot_open_says_so_from_the_cache():
-    """The wheel rolls: its full coordinates are not built, and the message is the same
-    whether derived now or read from the cache (no second derivation)."""
+    """A joint cannot open: the hinge pendulum's declaration has no full coordinates, and
+    the message is the same whether derived now or read from the kernel cache (no second
+    derivation)."""
     from phasemap.declare import full
 
-    S = loader.system(DECLARED["wheel"])
-    with pytest.raises(ValueError, match="RollingContact"):
+    S = loader.system("phasemap.systems.seeds.hinge_pendulum")
+    with pytest.raises(ValueError, match="Joint"):
         full.mechanics(S)
+    full._MECHANICS.clear()
+    with pytest.raises(ValueError, match="Joint"):
+        full.mechanics(S)
+
+
+def test_the_wheel_rolls_in_full_coordinates_with_its_rolling_integrated():
+    """The wheel's rolling contact has full coordinates: it rolls (friction on its spin, its
+    tangent held), and the reduced state's full coordinates integrate the rolling exactly:
+    x_A = r phi, x_A' = r omega, y_A = r, y_A' = 0 (the disc turns by -phi)."""
+    from phasemap.declare import full
+
     declaration = phasemap.get_model("wheel").declaration
-    with pytest.raises(ValueError, match="RollingContact"):
-        full.mechanics(declaration)
-    with pytest.raises(ValueError, match="do not fix xa"):
-        full.closure(declaration)
+    mech = full.mechanics(declaration)
+    assert [c.rolls for c in mech.contacts] == [True]
+    close = full.closure(declaration)
+    rng = np.random.default_rng(2)
+    for _ in range(10):
+        values = {"phi": rng.uniform(-3, 3), "omega": rng.normal(), "delta": 0.05,
+                  "r": rng.uniform(0.5, 2.0), "l": 0.3, "rho": 0.4, "g": 9.81, "m": 1.0}
+        q, u = close(values)
+        assert q.tolist() == [values["phi"], values["r"] * values["phi"], values["r"]]
+        assert u.tolist() == [values["omega"], values["r"] * values["omega"], 0.0]
+        p = np.array([values[k] for k in mech.parameters])
+        M, h, g, J, b, mu = mech.pieces(q, u, p)
+        assert g[0] == 0.0 and mu[0] == 0.05
+        assert abs(J[0, 0] @ u) == 0.0 and abs(J[0, 2] @ u) <= 1e-15 * abs(u).max()
+        assert J[0, 1] @ u == -values["omega"]          # the disc's own spin
 
 
 @pytest.mark.parametrize("source", [DECLARED["rod_on_step"], DECLARED["ladder"], "belt",

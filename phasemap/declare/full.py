@@ -7,7 +7,8 @@ free: the body flies.  :func:`mechanics` turns the free system (every coordinate
 its rate, :class:`phasemap.declare.equations.FreeEquations`: the same Lagrangian and
 contact kinematics) into one numeric function of ``(q, q', parameters)`` that returns
 the mass matrix ``M``, the generalised forces ``h``, and per contact its gap ``g``, its
-rows ``J`` (normal, tangential: the contact velocities are ``J q'``), their bias
+rows ``J`` (the contact velocities are ``J q'``: normal; tangential, or a rolling disc's
+spin, where friction acts; a rolling disc's tangent, held while it rolls), their bias
 ``J' q'`` and its friction coefficient.  :func:`closure` gives the full coordinates of
 a state of the reduced model (its contacts closed).
 
@@ -40,6 +41,9 @@ class Contact:
     name: str
     one_sided: bool
     index: int       # its position in the contacts that have a normal and a tangent
+    #: a rolling disc: friction (rolling resistance) acts on its spin, and its tangent is
+    #: held while it is closed (it rolls without slip)
+    rolls: bool = False
 
 
 @dataclass(frozen=True)
@@ -60,7 +64,7 @@ class Mechanics:
     #: the declared domain conditions (each >= 0) as one function of (q, p)
     domain: Callable
     n_domain: int
-    #: (q, u, p, t) -> the flat list [M (n*n), h (n), g (k), J (2k*n), bias (2k), mu (k)]
+    #: (q, u, p, t) -> the flat list [M (n*n), h (n), g (k), J (3k*n), bias (3k), mu (k)]
     #: (``mu``: the static coefficients, the limits of sticking)
     _pieces: Callable
     #: (q, p) -> [x, y of each body's centre of mass, then of each contact's body point]
@@ -118,8 +122,10 @@ class Mechanics:
 
     def pieces(self, q, u, p, t=0.0):
         """``(M, h, g, J, b, mu)`` at the state ``(q, u)``, parameters ``p`` and time ``t``
-        (arrays; ``J`` is (k, 2, n), ``b`` (k, 2): normal then tangential; ``mu`` the
-        static coefficients)."""
+        (arrays; ``J`` is (k, 3, n), ``b`` (k, 3): per contact the normal, the channel
+        friction acts on (the tangent; a rolling disc's spin), and the channel held while
+        the contact is closed (a rolling disc's tangent; zero for the others); ``mu`` the
+        static coefficients: a rolling disc's is its rolling-friction length)."""
         n, k = self.n, len(self.contacts)
         flat = np.array(self._pieces(*q, *u, *p, t), dtype=float)
         i = 0
@@ -129,10 +135,10 @@ class Mechanics:
         i += n
         g = flat[i:i + k]
         i += k
-        J = flat[i:i + 2 * k * n].reshape(k, 2, n)
-        i += 2 * k * n
-        b = flat[i:i + 2 * k].reshape(k, 2)
-        i += 2 * k
+        J = flat[i:i + 3 * k * n].reshape(k, 3, n)
+        i += 3 * k * n
+        b = flat[i:i + 3 * k].reshape(k, 3)
+        i += 3 * k
         return M, h, g, J, b, flat[i:i + k]
 
 
@@ -144,8 +150,8 @@ def mechanics(S) -> Mechanics:
     kernel cache (or, for a built-in declaration, from its shipped derivation), so that a
     motion through contact changes in a new process does not import sympy.
 
-    Raises ValueError naming the contact where a contact is not a point or edge contact
-    (a rolling contact or a joint: their motion through contact changes is not built)."""
+    Raises ValueError naming the contact where a contact is a joint (its motion through
+    contact changes is not built)."""
     made = _MECHANICS.get((S,), (), lambda: _made(S))
     if isinstance(made, str):
         raise ValueError(made)      # (a new one each time: no traceback kept alive)
@@ -179,7 +185,7 @@ def rate_name(c) -> str:
 
 
 #: Bumped when the generated modules' layout changes.
-GENERATED = 1
+GENERATED = 2
 
 
 def generated(S, kind: str):
@@ -332,14 +338,22 @@ def _mechanics_text(S) -> str:
     contacts, g, J, b, mu = [], [], [], [], []
     for c in S.contacts:
         ch = eqs.channels[c.name]
-        if set(ch) != {"N", "T"} or len(eqs.gaps[c.name]) != 1:
-            fail(S, f"contact {c.name!r}", "motion through contact changes takes point and "
-                 f"edge contacts (a normal and a tangent, one gap), not a {type(c).__name__} "
-                 "(a rolling contact or a joint cannot open yet)")
-        contacts.append([c.name, getattr(c, "sided", "one") == "one", len(contacts)])
+        rolls = set(ch) == {"N", "T", "S"}
+        if (set(ch) != {"N", "T"} and not rolls) or len(eqs.gaps[c.name]) != 1:
+            fail(S, f"contact {c.name!r}", "motion through contact changes takes point, "
+                 "edge and rolling contacts (a normal, a tangent and a spin, one gap), not "
+                 f"a {type(c).__name__} (a joint cannot open yet)")
+        contacts.append([c.name, getattr(c, "sided", "one") == "one", len(contacts), rolls])
         g.append(eqs.gaps[c.name][0])
-        J += list(ch["N"][0]) + list(ch["T"][0])
-        b += [ch["N"][1], ch["T"][1]]
+        # rows: the normal, the channel friction acts on (the tangent; a rolling disc's
+        # spin), the channel held while closed (a rolling disc's tangent: no slip)
+        rows = ("N", "S", "T") if rolls else ("N", "T")
+        for key in rows:
+            J += list(ch[key][0])
+            b.append(ch[key][1])
+        if not rolls:
+            J += [sp.Integer(0)] * len(eqs.q)
+            b.append(sp.Integer(0))
         mu.append(c.static_expr() if hasattr(c, "static_expr") else c.law_expr())
     pts, surf = [], []
     for body in S.bodies:
@@ -348,6 +362,10 @@ def _mechanics_text(S) -> str:
         if hasattr(c, "corner"):          # an edge contact: the body touches at the corner
             pts += [sym(c.corner[0]), sym(c.corner[1])]
             surf += [sp.nan, sp.nan, sp.nan]
+        elif hasattr(c, "radius"):        # a rolling disc: its point nearest the surface
+            nv = _unit_normal(c.normal)
+            pts += [sym(c.centre[j]) - sym(c.radius) * nv[j] for j in range(2)]
+            surf += [*nv, sym(c.offset)]
         else:
             pts += [sym(c.point[0]), sym(c.point[1])]
             surf += [*_unit_normal(c.normal), sym(c.offset)]
@@ -424,6 +442,8 @@ def _closure(S) -> Closure:
 
 
 def _closure_text(S) -> str:
+    import sympy as sp
+
     from phasemap.declare.equations import Equations
 
     eqs = Equations(S)        # the closed equations only: no mode is solved for this
@@ -431,6 +451,18 @@ def _closure_text(S) -> str:
     args = [eqs.q[i] for i in free] + [eqs.qd[i] for i in free] + list(eqs.params)
     positions = [eqs.on(eqs.q[i]) for i in range(eqs.n)]
     rates = [eqs.on(eqs.qd[i]) for i in range(eqs.n)]
+    # a coordinate the contacts fix only through its rate, with constant coefficients of
+    # the free rates (a disc rolling on a flat floor: x' = r phi'), is that sum of the free
+    # coordinates: the constraint integrated exactly, from 0 where they are all 0
+    reduced_q = [eqs.q[i] for i in free]
+    for i, e in enumerate(positions):
+        if e != eqs.q[i] or i in free:
+            continue
+        coeffs = [sp.diff(rates[i], eqs.qd[j]) for j in free]
+        rest = sp.expand(rates[i] - sum(c * eqs.qd[j] for c, j in zip(coeffs, free)))
+        if rest == 0 and not set().union(*(sp.sympify(c).free_symbols for c in coeffs)) & (
+                set(eqs.q) | set(eqs.qd)):
+            positions[i] = sum(c * q for c, q in zip(coeffs, reduced_q))
     loose = sorted(map(str, set().union(*(e.free_symbols for e in positions + rates))
                        - set(args)))
     if loose:

@@ -303,7 +303,8 @@ class Simultaneous:
     continuum: bool = False
 
 
-def simultaneous(W, v_before, mu, *, e=0.0, tol: float = 1e-12) -> list[Simultaneous]:
+def simultaneous(W, v_before, mu, *, e=0.0, tol: float = 1e-12,
+                 held=()) -> list[Simultaneous]:
     """Every impulse-level solution of k contacts closing at once, by Moreau's law
     (inelastic), or with restitution ``e`` by Moreau's generalised Newton law.
 
@@ -326,6 +327,11 @@ def simultaneous(W, v_before, mu, *, e=0.0, tol: float = 1e-12) -> list[Simultan
     for e <= 1; with friction it can, where a slip stops or reverses (as Newton's law
     at one contact): ``dKE`` says so.
 
+    ``held``: contacts that have one more row, appended after the 2k in their order, whose
+    velocity a closed contact brings to zero with whatever impulse it takes (a rolling
+    disc's tangent: it rolls without slip; its friction channel is then its spin, with
+    ``mu`` its rolling-friction length); an open one takes none.
+
     >>> W = np.array([[2.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 1.0],
     ...               [1.0, 0.0, 2.0, 0.0], [0.0, 1.0, 0.0, 1.0]]) + np.eye(4) * 0.5
     >>> [s.modes for s in simultaneous(W, [-1.0, 0.0, -1.0, 0.0], [0.5, 0.5])]
@@ -335,9 +341,12 @@ def simultaneous(W, v_before, mu, *, e=0.0, tol: float = 1e-12) -> list[Simultan
     v0 = np.asarray(v_before, dtype=float).ravel()
     mu = np.atleast_1d(np.asarray(mu, dtype=float))
     k = mu.size
-    if W.shape != (2 * k, 2 * k) or v0.size != 2 * k:
-        raise ValueError(f"simultaneous: W must be {2 * k}x{2 * k} and v_before {2 * k} long "
-                         f"for {k} friction coefficients, got {W.shape} and {v0.size}")
+    held = [int(c) for c in held]
+    size = 2 * k + len(held)
+    if W.shape != (size, size) or v0.size != size or not all(0 <= c < k for c in held):
+        raise ValueError(f"simultaneous: W must be {size}x{size} and v_before {size} long "
+                         f"for {k} friction coefficients and {len(held)} held rows, got "
+                         f"{W.shape} and {v0.size}")
     if not (np.all(np.isfinite(W)) and np.all(np.isfinite(v0)) and np.all(mu >= 0)):
         raise ValueError("simultaneous: W and v_before must be finite and mu >= 0")
     try:
@@ -346,8 +355,8 @@ def simultaneous(W, v_before, mu, *, e=0.0, tol: float = 1e-12) -> list[Simultan
         raise ValueError(f"simultaneous: e must be one number or {k}, got {e!r}") from None
     if not np.all((e >= 0.0) & (e <= 1.0)):
         raise ValueError(f"simultaneous: e must be in [0, 1], got {e.tolist()}")
-    w = np.zeros(2 * k)
-    w[0::2] = -e * np.minimum(v0[0::2], 0.0)   # the normal velocity a closed contact ends at
+    w = np.zeros(size)
+    w[0:2 * k:2] = -e * np.minimum(v0[0:2 * k:2], 0.0)   # a closed contact's normal after
     if not np.allclose(W, W.T) or np.linalg.eigvalsh(W).min() < -1e-12 * np.abs(W).max():
         raise ValueError("simultaneous: W must be symmetric positive semi-definite")
     scale = max(float(np.abs(v0).max()), 1e-300)
@@ -355,8 +364,14 @@ def simultaneous(W, v_before, mu, *, e=0.0, tol: float = 1e-12) -> list[Simultan
     found: list[Simultaneous] = []
     names = ("open", "stick", "slip_pos", "slip_neg")
     for combo in np.ndindex(*(4,) * k):
-        A = np.zeros((2 * k, 2 * k))
-        b = np.zeros(2 * k)
+        A = np.zeros((size, size))
+        b = np.zeros(size)
+        for j, c in enumerate(held):
+            r = 2 * k + j
+            if combo[c] == 0:      # open: no impulse
+                A[r, r] = 1.0
+            else:                  # closed: its velocity zero after
+                A[r], b[r] = W[r], -v0[r]
         for c, mode in enumerate(combo):
             n, t = 2 * c, 2 * c + 1
             if mode == 0:  # open: no impulse
@@ -371,10 +386,12 @@ def simultaneous(W, v_before, mu, *, e=0.0, tol: float = 1e-12) -> list[Simultan
         P, _, rank, _ = np.linalg.lstsq(A, b, rcond=1e-12)
         if np.abs(A @ P - b).max() > 1e-9 * (np.abs(b).max() + pscale):
             continue  # inconsistent: no impulse puts the contacts in these modes
-        continuum = rank < 2 * k
+        continuum = rank < size
         for c, mode in enumerate(combo):
             if mode == 0:
                 P[2 * c] = P[2 * c + 1] = 0.0  # exactly: least squares leaves rounding
+                for j in [j for j, d in enumerate(held) if d == c]:
+                    P[2 * k + j] = 0.0
         v = v0 + W @ P
         ok = True
         for c, mode in enumerate(combo):
@@ -389,7 +406,7 @@ def simultaneous(W, v_before, mu, *, e=0.0, tol: float = 1e-12) -> list[Simultan
                     s = 1.0 if mode == 2 else -1.0
                     ok &= s * v[t] > tol * scale
         if ok and not any(np.allclose(P, f.P, atol=tol * pscale * 10) for f in found):
-            found.append(Simultaneous(tuple(names[m] for m in combo), P, v,
+            found.append(Simultaneous(tuple(names[j] for j in combo), P, v,
                                       float(P @ v0 + 0.5 * P @ W @ P), bool(continuum)))
     return found
 
@@ -436,14 +453,27 @@ def zeno_time(t_k: float, v_k: float, a_n: float, e: float) -> float:
     return t_k + 2.0 * v_k / (abs(a_n) * (1.0 - e))
 
 
-def tangential_impact(M, Jc, u, mu, slip=None):
+def tangential_impact(M, Jc, u, mu, slip=None, held=None):
     """The impact without collision at one contact (Genot and Brogliato 1999): at zero
     normal velocity, the slip ``Jc[1] @ u`` forced into the obstacle, the impulse
     integrated until the slip stops (:func:`phasemap.motion.impact.impact`, e = 0).
     ``M`` the mass matrix, ``Jc`` the contact's normal and tangential rows.  Returns the
     rates after it and the :class:`phasemap.motion.impact.Impact`; ValueError where the
     impact is refused (the slip does not force the contact in).  The reduced model's
-    impacts without collision (:func:`phasemap.simulate`) and this engine's take it."""
+    impacts without collision (:func:`phasemap.simulate`) and this engine's take it.
+
+    ``held``: a row whose velocity stays zero through the impact, with whatever impulse it
+    takes (a rolling disc's tangent, ``Jc`` then its normal and spin, ``mu`` its
+    rolling-friction length): the impact runs on the Delassus matrix of ``Jc`` with that
+    row held, the Schur complement ``W_cc - W_ch W_hh^-1 W_hc``."""
     slip = float(Jc[1] @ u) if slip is None else float(slip)
-    r = impact(delassus(M, Jc), (0.0, slip), mu=mu, e=0.0)
-    return u + np.linalg.solve(M, Jc.T @ np.array([r.P_n, r.P_t])), r
+    if held is None:
+        r = impact(delassus(M, Jc), (0.0, slip), mu=mu, e=0.0)
+        return u + np.linalg.solve(M, Jc.T @ np.array([r.P_n, r.P_t])), r
+    rows = np.vstack([Jc, held])
+    W3 = delassus(M, rows)
+    W = W3[:2, :2] - np.outer(W3[:2, 2], W3[2, :2]) / W3[2, 2]
+    r = impact(0.5 * (W + W.T), (0.0, slip), mu=mu, e=0.0)
+    P = np.array([r.P_n, r.P_t])
+    P_h = -(W3[2, :2] @ P) / W3[2, 2]       # keeps the held row's velocity where it was
+    return u + np.linalg.solve(M, rows.T @ np.append(P, P_h)), r

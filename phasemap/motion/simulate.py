@@ -533,11 +533,12 @@ def _impact_without_collision(m: Model, names, y, full):
     except (ValueError, KeyError):
         return None     # a contact that cannot take an impulse, or a value missing
     M, _, _, J, _, mu = mech.pieces(q, qd, [float(values[k]) for k in mech.parameters])
-    vn, vt = J[0] @ qd
+    vn, vt = J[0, :2] @ qd
     if abs(vn) > 1e-9 * (abs(vt) + 1e-300):
         return None
     try:
-        after, r = hybrid.tangential_impact(M, J[0], qd, float(mu[0]))
+        after, r = hybrid.tangential_impact(M, J[0, :2], qd, float(mu[0]), None,
+                                            J[0, 2] if mech.contacts[0].rolls else None)
     except ValueError:
         return None
     y1 = np.array(y, dtype=float)

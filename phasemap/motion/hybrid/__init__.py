@@ -10,6 +10,9 @@ rate ``(q, u)``; each contact is, in a *phase*, one of
 * ``stick`` (closed, ``g'' = 0`` and the tangential acceleration zero),
 * ``slip_pos`` / ``slip_neg`` (closed, ``F = -s mu N`` with ``s`` the slip's sign).
 
+A rolling disc takes these modes on its spin (rolling friction ``M = -s delta N``; stuck
+with ``|M| <= delta N``), and while closed its tangent is held: it rolls without slip.
+
 A phase's accelerations solve ``M u' = h + sum_c J_c^T (N_c, F_c)`` with the closed
 contacts' accelerations ``J_c u' + J_c' u`` held (:func:`accelerations`: one small linear
 system, from :func:`phasemap.declare.full.mechanics`, the same Lagrangian and contact
@@ -26,7 +29,9 @@ rooted on the dense output of DOP853 (scipy's, stepped here) to a few ulps in ti
   it is an **impact**: one contact's is integrated in its normal impulse
   (:func:`phasemap.motion.impact.impact`, the law chosen), several contacts at once take
   Moreau's impulse-level solution, inelastic or with the restitution by his generalised
-  Newton law (:func:`phasemap.motion.impact.simultaneous`);
+  Newton law (:func:`phasemap.motion.impact.simultaneous`); a rolling disc, perfectly
+  rough, first has its slip stopped by a tangential impulse alone (the limit mu -> oo),
+  then Moreau's solution with its tangent held (:mod:`.landing`);
   with ``g' = 0`` the contact **recontacts** without an impulse;
 * a coordinate's bound or a declared domain condition: the motion leaves the model
   (``left_domain``);

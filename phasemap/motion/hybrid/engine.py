@@ -12,10 +12,12 @@ import numpy as np
 from phasemap.core import events as ev
 from phasemap.motion.impact import tangential_impact  # noqa: F401 - the package's name
 
-from phasemap.motion.hybrid import jam
+from phasemap.motion.hybrid import jam, landing
 from phasemap.motion.hybrid.phases import (  # noqa: F401 - the package's names
     MODE_NAMES, OPEN, QUIET, SLIP_NEG, SLIP_POS, SMOOTH, STICK, TOL, kind_of, normalised_det,
     system)
+#: The events whose state jumps by an impulse (the saved points hold both sides).
+JUMPS = (ev.IMPACT, ev.IWC, ev.JAM)
 #: The Painleve policies where the accelerations have two or more solutions.
 POLICIES = ("liftoff", "iwc", "stop")
 #: The rebound speed (of the contact's normal velocity, in its units) below which the
@@ -74,6 +76,7 @@ class Motion:
         self.mech, self.p, self.o = mech, np.asarray(p, dtype=float), opts
         self.n, self.k = mech.n, len(mech.contacts)
         self.one_sided = np.array([c.one_sided for c in mech.contacts], dtype=bool)
+        self.rolls = np.array([c.rolls for c in mech.contacts], dtype=bool)
         self.bounds = mech.bounds(self.p)
         self.zeno_until = -math.inf
         #: a system that depends on the time, or whose surfaces move, does not stop at
@@ -123,7 +126,7 @@ class Motion:
             speed = np.abs(self.relative(J, u, t)[:, 1])
             kin = self.mech.kinetic(q, u, self.p, t, speed, mu)
             mu = np.array([mu[c] if c in start else kin[c] for c in range(self.k)])
-        cols, rows, rhs, owner = system(modes, rho, J, b, mu, sd)
+        cols, rows, rhs, owner = system(modes, rho, J, b, mu, sd, self.rolls)
         N, F = np.zeros(self.k), np.zeros(self.k)
         det = 1.0
         if not cols:
@@ -149,7 +152,8 @@ class Motion:
                 return None, det
             ud = X[:, 0] + X[:, 1:] @ lam
             for (c, j), x in zip(owner, lam):
-                (N if j == 0 else F)[c] = x
+                if j < 2:           # (a rolling disc's force along the surface: not kept)
+                    (N if j == 0 else F)[c] = x
             for c, m in enumerate(modes):
                 if m in (SLIP_POS, SLIP_NEG):
                     r = 1.0 if rho is None else rho[c]
@@ -216,7 +220,7 @@ class Motion:
         vs, _, _, L = sc
         out = []
         for c in range(self.k):
-            vn, vt = v[c]
+            vn, vt = v[c, :2]
             if self.one_sided[c] and (g[c] > TOL * L or vn > TOL * vs):
                 out.append((OPEN,))
                 continue
@@ -373,11 +377,13 @@ class Motion:
         if not moving and not held:
             return u
         M, h, g, J, b, mu = self.mech.pieces(q, u, self.p, t)
-        A = np.array([J[c, 0] for c in moving] + [J[c, 1] for c in held])
+        rolling = [c for c in moving if self.rolls[c]]     # (a rolling disc does not slip)
+        A = np.array([J[c, 0] for c in moving] + [J[c, 2] for c in rolling]
+                     + [J[c, 1] for c in held])
         X = np.linalg.solve(M, A.T)
         target = A @ u
         if held and not self.mech.plain:
-            target[len(moving):] -= self.surf(t)[list(held)]
+            target[len(moving) + len(rolling):] -= self.surf(t)[list(held)]
         return u - X @ np.linalg.lstsq(A @ X, target, rcond=None)[0]
 
     # -- the events of a phase ----------------------------------------------------------
@@ -445,6 +451,8 @@ class Motion:
         t = t0
         modes = tuple(OPEN if (self.one_sided[c] and g[c] > 1e-9 * sc[3]) else STICK
                       for c in range(self.k))
+        if first == -1:     # going on from the reduced model: the modes it moved in
+            modes = jam.sliding(self, q, u, t) or modes
         v = P[3] @ u
         hit = [c for c in range(self.k) if self.one_sided[c] and g[c] <= 1e-9 * sc[3]
                and v[c, 0] < -TOL * sc[0]]
@@ -453,7 +461,7 @@ class Motion:
                           for c in range(self.k))
             if first == ev.START:
                 self.rec.event(t, ev.START, -1, np.concatenate([q, u]), modes)
-            step = self._closing(t, q, u, modes, hit[0])
+            step = landing.closing(self, t, q, u, modes, hit[0])
         else:
             step = self._decide(t, q, u, modes, first, -1, {})
         atol = o.rtol if o.atol is None else o.atol
@@ -519,7 +527,7 @@ class Motion:
                     if solver.t >= o.t_end:
                         self._end(o.t_end, y[:n], y[n:], modes, ev.HORIZON)
                     else:   # the impacts' accumulation time
-                        step = self._zeno(solver.t, y[:n], y[n:], modes)
+                        step = landing.zeno(self, solver.t, y[:n], y[n:], modes)
                     break
         return rec
 
@@ -597,8 +605,10 @@ class Motion:
     def _end(self, t, q, u, modes, fate, contact=-1, fixed=()):
         q, u = self.project(q, u, [c for c, m in enumerate(modes) if m != OPEN],
                             [c for c, m in enumerate(modes) if m == STICK], fixed, t=t)
-        if self.t_eval is None and (not self.rec.t or self.rec.t[-1] != t):
-            self.rec.point(t, np.concatenate([q, u]), modes)
+        rec = self.rec
+        jumped = bool(rec.ev_t) and rec.ev_t[-1] == t and rec.ev_kind[-1] in JUMPS
+        if self.t_eval is None and (not rec.t or rec.t[-1] != t or jumped):
+            self.rec.point(t, np.concatenate([q, u]), modes)    # (after a jump: its state)
         self.rec.event(t, fate, contact, np.concatenate([q, u]), modes)
         self.rec.fate = fate
 
@@ -618,7 +628,7 @@ class Motion:
         c, which = divmod(i, 2)
         closed = [d for d, m in enumerate(modes) if m != OPEN]
         if modes[c] == OPEN:            # a gap closes
-            return self._closing(t, q, u, modes, c)
+            return landing.closing(self, t, q, u, modes, c)
         if which == 0:                  # a normal reaction reaches zero
             q, u = self.project(q, u, closed, t=t)
             return self._decide(t, q, u, modes, ev.LIFTOFF, c, {c: OPEN})
@@ -629,74 +639,6 @@ class Motion:
                                 {c: SLIP_POS if F < 0.0 else SLIP_NEG})
         q, u = self.project(q, u, closed, held=(c,), t=t)   # a slip velocity reaches zero
         return self._decide(t, q, u, modes, ev.STICK, c, {c: STICK})
-
-    def _closing(self, t, q, u, modes, c):
-        """An open contact's gap reached zero: an impact, or a contact without one."""
-        from phasemap.motion.impact import impact, simultaneous
-
-        closed = [d for d, m in enumerate(modes) if m != OPEN]
-        q, u = self.project(q, u, closed + [c], moving=closed, t=t)
-        M, h, g, J, b, mu = self.mech.pieces(q, u, self.p, t)
-        v = self.relative(J, u, t)
-        mu = self.mech.kinetic(q, u, self.p, t, np.abs(v[:, 1]), mu)
-        sc = self.scales(q, u, (M, h, g, J, b, mu))
-        y = np.concatenate([q, u])
-        if v[c, 0] >= -TOL * sc[0]:    # touching without approaching: no impulse
-            q, u = self.project(q, u, closed + [c], t=t)
-            return self._decide(t, q, u, modes, ev.RECONTACT, c, {})
-        o = self.o
-        if not closed:
-            W = J[c] @ np.linalg.solve(M, J[c].T)
-            r = impact(W, v[c], mu=float(mu[c]), e=o.restitution, law=o.impact_law)
-            Pc = np.array([r.P_n, r.P_t])
-            u = u + np.linalg.solve(M, J[c].T @ Pc)
-            self.rec.event(t, ev.IMPACT, c, y, modes, (r.P_n, r.P_t, r.dKE))
-            if r.v_n > TOL * sc[0]:     # a rebound
-                a_n = self.solve(q, u, modes, None, t)[3][c, 0]
-                if a_n < 0.0 and r.v_n < o.zeno_speed and o.restitution < 1.0:
-                    from phasemap.motion.impact import zeno_time
-
-                    self.zeno_until = zeno_time(t, r.v_n, a_n, o.restitution)
-                    self.zeno_contact = c
-                    q, u = self.project(q, u, [c], t=t)
-                return self._decide(t, q, u, modes, QUIET, c, {})
-            q, u = self.project(q, u, [c], t=t)
-            return self._decide(t, q, u, modes, QUIET, c, {})
-        K = closed + [c]
-        JK = np.concatenate([J[d] for d in K])
-        W = JK @ np.linalg.solve(M, JK.T)
-        # Moreau's generalised Newton law: the landing contact rebounds with e times its
-        # approach; the closed ones (v_n = 0 before) take impulses and stay
-        sols = simultaneous(W, np.concatenate([v[d] for d in K]), mu[K], e=o.restitution)
-        if len(sols) != 1:
-            self._end(t, q, u, modes, ev.INDETERMINATE, c)
-            return None
-        s = sols[0]
-        u = u + np.linalg.solve(M, JK.T @ s.P)
-        j = 2 * K.index(c)
-        self.rec.event(t, ev.IMPACT, c, y, modes, (s.P[j], s.P[j + 1], s.dKE))
-        rebound = s.v[j] > TOL * sc[0]
-        now = [d for d, mode in zip(K, s.modes) if mode != "open" and not (d == c and rebound)]
-        q, u = self.project(q, u, now, t=t)
-        if rebound and 0.0 < o.restitution < 1.0 and s.v[j] < o.zeno_speed:
-            free = self.solve(q, u, [m if d in now else OPEN for d, m in enumerate(modes)],
-                              None, t)
-            if free is not None and free[3][c, 0] < 0.0:
-                # it bounces on the contacts that hold: the impacts accumulate
-                from phasemap.motion.impact import zeno_time
-
-                self.zeno_until = zeno_time(t, s.v[j], free[3][c, 0], o.restitution)
-                self.zeno_contact = c
-        return self._decide(t, q, u, modes, QUIET, c, {})
-
-    def _zeno(self, t, q, u, modes):
-        """The impacts accumulate at ``t``: the contact is closed, a ``zeno`` event."""
-        c = self.zeno_contact
-        closed = [d for d, m in enumerate(modes) if m != OPEN]
-        q, u = self.project(q, u, sorted(set(closed) | {c}), t=t)
-        self.rec.event(t, ev.ZENO, c, np.concatenate([q, u]), modes)
-        self.zeno_until = -math.inf
-        return self._decide(t, q, u, modes, QUIET, c, {})
 
     def _decide(self, t, q, u, old, kind, contact, prefer, depth=0):
         """The phase that follows at ``(t, q, u)``; records the event (``kind``, or the one
@@ -723,6 +665,16 @@ class Motion:
             if len(groups) != 1:
                 self._end(t, q, u, old, ev.INDETERMINATE, contact)
                 return None
+        if kind == ev.LIFTOFF and tuple(groups[0][0][0]) == tuple(old) and not self._holds(
+                q, u, groups[0][0], [contact], self.scales(q, u, self.mech.pieces(
+                    q, u, self.p, t)), t):
+            # N reached zero on its way down and the contact cannot open either: the
+            # accelerations have no solution just after (a Painleve inconsistency)
+            jump = self._iwc(t, q, u, old) if depth < 4 else None
+            if jump is not None:
+                return self._decide(t, *jump, old, QUIET, -1, {}, depth + 1)
+            self._end(t, q, u, old, ev.NO_SOLUTION, contact)
+            return None
         modes, (ud, N, F, a, rho) = groups[0][0]
         held = [c for c, m in enumerate(modes) if m == STICK]
         q, u = self.project(q, u, [c for c, m in enumerate(modes) if m != OPEN], held, t=t)
@@ -767,8 +719,9 @@ class Motion:
             if abs(v[c, 1]) <= TOL * sc[0] or len(touching) != 1:
                 continue
             try:
-                after, r = tangential_impact(M, J[c], u, float(mu[c]),
-                                              None if self.mech.plain else v[c, 1])
+                after, r = tangential_impact(M, J[c, :2], u, float(mu[c]),
+                                              None if self.mech.plain else v[c, 1],
+                                              J[c, 2] if self.rolls[c] else None)
             except ValueError:
                 continue
             if r.P_n <= 0.0:

@@ -81,7 +81,7 @@ def jam(self, t, q, u, modes):
     v = self.relative(J, u, t)
     if not self.mech.plain:
         mu = self.mech.kinetic(q, u, self.p, t, np.abs(v[:, 1]), mu)
-    cols, rows, rhs, owner = system(modes, None, J, b, mu)
+    cols, rows, rhs, owner = system(modes, None, J, b, mu, None, self.rolls)
     G, R = np.array(cols).T, np.array(rows)
     X = np.linalg.solve(M, G)
     if abs(normalised_det(R @ X, R, G, X, M)) > JAM_TOL:

@@ -21,13 +21,15 @@ JAM_TOL = 1e-6
 QUIET = -2
 
 
-def system(modes, rho, J, b, mu, sd=None):
+def system(modes, rho, J, b, mu, sd=None, rolls=()):
     """The linear system of a phase's reactions: ``(cols, rows, rhs, owner)``, a column
     (the reaction's direction in the coordinates) and a row (the held acceleration) per
-    closed contact's normal and per stuck contact's tangent, the held accelerations'
-    right sides, and which ``(contact, 0 normal | 1 tangent)`` each is.  ``rho``: the
-    sign of N each contact's friction assumes (None: +1); ``sd``: the surfaces'
-    tangential accelerations (None: still)."""
+    closed contact's normal, per stuck contact's friction channel (its tangent; a rolling
+    disc's spin) and per closed rolling disc's tangent (it rolls without slip), the held
+    accelerations' right sides, and which ``(contact, 0 normal | 1 friction | 2 held)``
+    each is.  ``rho``: the sign of N each contact's friction assumes (None: +1); ``sd``:
+    the surfaces' tangential accelerations (None: still); ``rolls``: which contacts are
+    rolling discs (none where empty)."""
     cols, rows, rhs, owner = [], [], [], []
     for c, m in enumerate(modes):
         if m == OPEN:
@@ -38,6 +40,11 @@ def system(modes, rho, J, b, mu, sd=None):
         rows.append(J[c, 0])
         rhs.append(-b[c, 0])
         owner.append((c, 0))
+        if len(rolls) and rolls[c]:
+            cols.append(J[c, 2])
+            rows.append(J[c, 2])
+            rhs.append(-b[c, 2])
+            owner.append((c, 2))
         if m == STICK:
             cols.append(J[c, 1])
             rows.append(J[c, 1])

@@ -121,6 +121,7 @@ def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
 
     mech = mechanics(S)
     name = mech.name
+    _orbit.no_rolling(mech)
     if param not in mech.parameters:
         raise ValueError(f"{name}: unknown parameter {param!r}; the parameters are "
                          f"{', '.join(mech.parameters)}")

@@ -166,6 +166,7 @@ def periodic_orbit(model, start=None, period=None, *, settle=None, rtol=1e-12, t
 
     mech = mechanics(S)
     name = mech.name
+    no_rolling(mech)
     if start is not None and not isinstance(start, Mapping):
         raise ValueError(f"{name}: start must be a dict of values by name, got "
                          f"{_args.describe(start)}")
@@ -366,6 +367,16 @@ def section_at(motion, z, t, modes, rho, sc) -> Section | None:
     if not np.max(np.abs(field)) > 1e-12 * max(sc[0], sc[3]):
         return None
     return Section(np.array(z, dtype=float), unit(field))
+
+
+def no_rolling(mech) -> None:
+    """ValueError where a contact is a rolling disc: the periodic orbits here hold a closed
+    contact by its normal and friction rows, not by a rolling disc's no-slip row."""
+    rolling = [c.name for c in mech.contacts if c.rolls]
+    if rolling:
+        raise ValueError(f"{mech.name}: periodic orbits of a rolling contact "
+                         f"({', '.join(rolling)}) are not built; phasemap.simulate runs "
+                         "its motion")
 
 
 def _event_index(motion, rec, i, modes, rho, sc, t):
