@@ -171,7 +171,9 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                    "command lists them)")
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                    help="integrator setting of the fate layers: t_end, rtol, atol, max_step, "
-                   "max_steps, max_events, method (DOPRI5 or DOP853) (repeatable)")
+                   "max_steps, max_events, method (DOPRI5 or DOP853); through_contacts=true "
+                   "follows a declared system's motions through lift-off and impacts (with "
+                   "impact_law, restitution, painleve, zeno_speed; slower) (repeatable)")
     p.add_argument("--chunk-cells", type=int, default=None, metavar="N",
                    help="cells per block (default: each block about a quarter second of "
                    "work, sized as the work goes)")
@@ -411,6 +413,16 @@ def _parse_values(items: list[str], words: tuple[str, ...] = (), model=None) -> 
     return values
 
 
+def _switch(name: str, text: str) -> bool:
+    """``true``/``false`` (or yes/no, 1/0) as a bool; ValueError naming ``name``."""
+    word = text.strip().lower()
+    if word in ("true", "yes", "1"):
+        return True
+    if word in ("false", "no", "0"):
+        return False
+    raise ValueError(f"{name} must be true or false, got {text!r}")
+
+
 def _number(name: str, text: str, model=None) -> float:
     """``text`` as a number for the variable ``name`` of ``model``.
 
@@ -485,7 +497,10 @@ def _atlas(args) -> str:
     if args.chunk_cells is not None:
         _args.count("--chunk-cells", args.chunk_cells)
     layers = [x.strip() for x in args.layers.split(",") if x.strip()] if args.layers else None
-    options = _parse_values(args.option, words=("method",))
+    options = _parse_values(args.option, words=("method", "impact_law", "painleve",
+                                                "through_contacts"))
+    if "through_contacts" in options:
+        options["through_contacts"] = _switch("through_contacts", options["through_contacts"])
     scene = Scene(model, axes=axes, fixed=fixed, layers=layers, options=options)
     # before any work: the destination, the disk, the size
     est = blocks.estimate(scene, args.chunk_cells)

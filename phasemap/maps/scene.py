@@ -31,6 +31,7 @@ from phasemap.core.codegen import content_hash
 from phasemap.atlas.dataset import assemble, cf_header, declaration_hash, read_json, variable_attrs
 from phasemap.maps.grid import evaluate
 from phasemap.motion.integrate import run_fate_map
+from phasemap.maps import through
 from phasemap.maps.layers import Outcome, layers_for
 from phasemap.core.model import Model
 from phasemap.systems import builtin_model, get_model
@@ -70,7 +71,11 @@ class Scene:
         :func:`phasemap.simulate`: ``t_end`` (default 10 s), ``rtol`` (1e-6: enough
         to tell the outcomes apart and place the rest angles to ~1e-6 rad),
         ``atol``, ``max_step``, ``max_steps``, ``max_events``, ``method``
-        (``"DOPRI5"`` or ``"DOP853"``).
+        (``"DOPRI5"`` or ``"DOP853"``).  ``through_contacts=True`` (a declared system)
+        follows the cells whose motion ends where a contact changes on through lift-off,
+        flight and impacts, as :func:`phasemap.simulate` does, with its ``impact_law``,
+        ``restitution``, ``painleve`` and ``zeno_speed`` (:mod:`phasemap.maps.through`:
+        those cells run in Python, 10-50 ms each).
 
     Examples
     --------
@@ -138,8 +143,10 @@ class Scene:
             f"phasemap.layers_for({m.name!r}) lists its {len(registry)} layers; on the "
             f"command line: phasemap models {m.name}")))
         for name in options or {}:
-            _args.check_name("integrator option", name, Options().as_dict(), m.name)
-        self.options = Options(**{"rtol": FATE_RTOL, **dict(options or {})}).checked(m.name)
+            _args.check_name("integrator option", name,
+                             {**Options().as_dict(), **through.DEFAULTS}, m.name)
+        options, self.contact = through.split(m, dict(options or {}))
+        self.options = Options(**{"rtol": FATE_RTOL, **options}).checked(m.name)
 
     # ------------------------------------------------------------------
     @property
@@ -177,7 +184,7 @@ class Scene:
         if declared is not None:
             spec["declaration_sha256"] = declared
         if self.has_fates:
-            spec["options"] = self.options.as_dict()
+            spec["options"] = {**self.options.as_dict(), **through.as_options(self.contact)}
         return spec
 
     @classmethod
@@ -329,6 +336,8 @@ class Scene:
             outcome = Outcome(*run_fate_map(
                 m, dict(axes), self.fixed, y0, o.t_end, o.rtol, o.atol, o.max_step,
                 o.max_steps, o.max_events, o.method))
+            if self.contact is not None:   # the cells that end at a contact change go on
+                outcome = through.go_on(self, dict(axes), outcome)
             result.update({l.name: l.outcome(outcome) for l in fates})
         return result
 
@@ -456,9 +465,9 @@ def _read_spec(spec):
         bad("layers must be a list of names")
     if options is not None and not (
             isinstance(options, Mapping)
-            and all(isinstance(k, str) and (_number(v) or isinstance(v, str) or v is None)
-                    for k, v in options.items())):
-        bad("options must map names to numbers or text")
+            and all(isinstance(k, str) and (_number(v) or isinstance(v, (str, bool))
+                                            or v is None) for k, v in options.items())):
+        bad("options must map names to numbers, text or true/false")
     return name, dict(axes), dict(fixed), layers, options, recorded
 
 
