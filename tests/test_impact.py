@@ -372,3 +372,41 @@ def test_motions_without_such_a_state_are_untouched():
     ok = phasemap.simulate("painleve_rod", 1.0, theta=1.0, omega=0.0, xdot=-1.0, f=0.3)
     assert "event_impulse_n" not in ok and "iwc" not in [
         phasemap.Event(int(k)).name.lower() for k in ok.event_kind.values]
+
+
+def test_an_impact_without_collision_with_a_held_row_keeps_it_and_ends_projected():
+    """``tangential_impact`` with a held row (a rolling disc's tangent: it does not slip)
+    runs on the Schur complement of the Delassus matrix.  On random systems in a Painleve
+    state of that complement, the held row's velocity stays zero, the impulse presses,
+    energy is lost; and where the impact ends stuck at v_n = 0 all three contact
+    velocities are zero, so the rates after are the rates projected in the mass metric
+    onto the three rows: u - M^-1 J^T (J M^-1 J^T)^-1 J u (a closed form)."""
+    from phasemap.motion.impact import tangential_impact
+
+    rng = np.random.default_rng(4)
+    done = stuck = 0
+    for _ in range(400):
+        A = rng.normal(size=(4, 4))
+        M = A @ A.T + 0.5 * np.eye(4)
+        Jc, held = rng.normal(size=(2, 4)), rng.normal(size=4)
+        rows = np.vstack([Jc, held])
+        # a state with v_n = 0 and the held row at 0, slipping on the second row
+        base = np.linalg.svd(rows)[2][3]                       # moves none of the rows
+        W3 = delassus(M, rows)
+        W = W3[:2, :2] - np.outer(W3[:2, 2], W3[2, :2]) / W3[2, 2]
+        u = base + np.linalg.solve(M, rows.T @ np.linalg.solve(W3, [0.0, 1.0, 0.0]))
+        slip = float(Jc[1] @ u)
+        s = math.copysign(1.0, slip)
+        mu = rng.uniform(0.1, 4.0)
+        if W[0, 0] - s * mu * W[0, 1] >= 0.0:
+            continue                                          # not a Painleve state
+        after, r = tangential_impact(M, Jc, u, mu, None, held)
+        done += 1
+        assert r.P_n > 0.0 and r.dKE <= 1e-12 * (u @ M @ u)
+        assert abs(held @ after) <= 1e-12 * (1.0 + abs(u).max())
+        if r.sticks and r.v_n == 0.0:
+            stuck += 1
+            X = np.linalg.solve(M, rows.T)
+            projected = u - X @ np.linalg.solve(rows @ X, rows @ u)
+            assert np.allclose(after, projected, rtol=1e-10, atol=1e-12 * abs(u).max())
+    assert done >= 40 and stuck >= 10
