@@ -103,3 +103,30 @@ def test_the_cli_follows_a_fate_map_through_contact_changes(tmp_path, capsys):
     assert main(["atlas", "painleve_rod", "--axis", "theta=0.3:1.3:5", "--layers", "fate",
                  "--option", "through_contacts=maybe", "-o", str(tmp_path / "x.nc")]) != 0
     assert "through_contacts must be true or false" in capsys.readouterr().err
+
+
+def test_a_cell_that_cannot_be_followed_keeps_its_reduced_end_and_says_so(monkeypatch):
+    """One cell's failure does not lose the map: it keeps the compiled integrator's end,
+    and a warning counts the cells and names the first."""
+    from phasemap.motion import simulate as sim
+
+    real = sim.simulate
+    calls = []
+
+    def flaky(model, t_end, **kw):
+        calls.append(kw)
+        if len(calls) == 2:
+            raise ValueError("no such motion")
+        return real(model, t_end, **kw)
+
+    monkeypatch.setattr(sim, "simulate", flaky)
+    axes = AXES
+    reduced = phasemap.Scene("painleve_rod", axes=axes, fixed=FIXED, layers=["fate"],
+                             options={"t_end": 1.0}).compute()
+    with pytest.warns(RuntimeWarning, match="1 of .* cells could not be followed.*no such"):
+        through = phasemap.Scene("painleve_rod", axes=axes, fixed=FIXED, layers=["fate"],
+                                 options={"t_end": 1.0, "through_contacts": True}).compute()
+    kept = [(i, j) for i, j in zip(*np.nonzero(np.isin(reduced.fate.values, [
+        ev.CONTACT_LOST, ev.NO_SOLUTION, ev.INDETERMINATE, ev.SINGULAR])))][1]
+    assert int(through.fate[kept]) == int(reduced.fate[kept])
+    assert len(calls) >= 3

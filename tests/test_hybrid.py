@@ -626,16 +626,26 @@ def test_a_jam_of_two_slipping_contacts_brings_the_rod_on_a_step_to_rest(omega):
         return (3 * a * a - (6 * a - 4) * sn * sn - f * f * (3 * a - 4) * sn * sn
                 + 2 * s * f * (3 * a - 2) * sn * cs - s * f * (3 * a - 4) * sn * cs)
 
-    th = brentq(D, 0.6, 0.8)
-    h = a * l * math.sin(th)
+    th0 = brentq(D, 0.6, 0.8)
+    h = a * l * math.sin(th0)
     mech = mechanics(STEP)
     p = np.array([{"f": f, "l": l, "h": h, "g": G, "m": 1.0}[k] for k in mech.parameters])
-    q = np.array([th, -h / math.tan(th), 0.0])
-    u = np.array([omega, h * omega / math.sin(th) ** 2, 0.0])
     motion = hybrid.Motion(mech, p, hybrid.Options(t_end=0.05))
     slip = (hybrid.SLIP_NEG, hybrid.SLIP_NEG)
+
+    def state(th):
+        return (np.array([th, -h / math.tan(th), 0.0]),
+                np.array([omega, h * omega / math.sin(th) ** 2, 0.0]))
+
+    assert abs(motion.singularity(*state(th0), slip)) <= 1e-12
+    # 1e-8 rad to one side of it, the slip presses both contacts (N without bound): the
+    # side a slip that is the motion comes from; on the other side both would pull
+    sides = [th0 + e for e in (1e-8, -1e-8)
+             if np.all(motion.solve(*state(th0 + e), slip)[1] > 0.0)]
+    assert len(sides) == 1
+    q, u = state(sides[0])
     assert np.all(mech.pieces(q, u, p, 0.0)[3][:, 1] @ u < 0.0)
-    assert abs(motion.singularity(q, u, slip)) <= 1e-12
+    assert 0.0 < abs(motion.singularity(q, u, slip)) <= 1e-9
     assert abs(motion.singularity(q, u, (hybrid.SLIP_NEG, hybrid.STICK))) > 1e-3
     rec = hybrid.run_full(mech, p, q, u, t_end=0.05, rtol=1e-12, atol=1e-12,
                           max_step=math.inf, max_steps=10_000, max_events=100)
@@ -719,3 +729,22 @@ def test_random_rough_landings_of_the_wheel_never_gain_energy_and_end_complement
             if P_n > 0.0:
                 assert abs(v_n) <= 1e-9 * scale
     assert seen >= 8
+
+
+def test_a_two_sided_contact_whose_reaction_changes_sign_goes_on_with_its_friction_flipped():
+    """The elliptic pendulum's slider on its two-sided guide, declared and moved in full
+    coordinates: where the guide's reaction changes sign, the friction's sign flips and
+    the motion goes on (not a Painleve inconsistency, not a flicker), event for event
+    as the hand-written reduced model moves it."""
+    from phasemap.declare import loader
+
+    mech = mechanics(loader.system("phasemap.systems.seeds.elliptic_pendulum"))
+    p = np.array([{**mech.defaults, "f": 0.3}[k] for k in mech.parameters])
+    rec = hybrid.run_full(mech, p, np.zeros(3), np.array([7.0, 1.0, 0.0]), t_end=2.0,
+                          rtol=1e-10, atol=1e-10, max_step=math.inf, max_steps=20_000,
+                          max_events=100)
+    hand = phasemap.simulate("elliptic_pendulum", 2.0, rtol=1e-10, phi=0.0, omega=7.0,
+                             xdot=1.0, f=0.3)
+    assert rec.ev_kind == hand.event_kind.values.tolist()
+    assert ev.SWITCH in rec.ev_kind and rec.fate == ev.HORIZON
+    assert np.allclose(rec.ev_t, hand.event_t.values, rtol=0, atol=1e-7)

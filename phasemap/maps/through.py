@@ -17,6 +17,8 @@ seconds.  The other cells keep the compiled integrator's values, bit for bit.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from phasemap.core import args as _args
@@ -73,16 +75,26 @@ def go_on(scene, axes: dict, outcome: Outcome) -> Outcome:
     names = list(axes)
     shape = fate.shape
     coords = [c[0] for c in m.dynamics.coordinates]
+    failed = []
     for cell in cells:
         at = np.unravel_index(cell, shape)
         values = {**scene.fixed, **{n: float(axes[n][i]) for n, i in zip(names, at)}}
-        ds = simulate(m, o.t_end, rtol=o.rtol, atol=o.atol, max_step=o.max_step,
-                      max_steps=o.max_steps, max_events=o.max_events, method=o.method,
-                      **scene.contact, **values)
+        try:
+            ds = simulate(m, o.t_end, rtol=o.rtol, atol=o.atol, max_step=o.max_step,
+                          max_steps=o.max_steps, max_events=o.max_events, method=o.method,
+                          **scene.contact, **values)
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as err:
+            failed.append((values, err))     # (the cell keeps the reduced model's end)
+            continue
         fate[at] = int(ev.Event[ds.attrs["end_reason"].upper()])
         kinds = ds.event_kind.values
         n_rev[at] = int(np.count_nonzero(kinds == ev.REVERSAL))
         t_final[at] = float(ds.event_t.values[-1])
         for j, name in enumerate(coords):
             positions[(j, *at)] = float(ds[f"event_{name}"].values[-1])
+    if failed:
+        values, err = failed[0]
+        warnings.warn(f"{m.name}: {len(failed)} of {cells.size} cells could not be followed "
+                      "through their contact change and keep the reduced model's end; the "
+                      f"first, {values}: {err}", RuntimeWarning, stacklevel=3)
     return Outcome(fate, n_rev, t_final, positions)

@@ -45,6 +45,7 @@ it with ``v_n = 0`` where ``W_nn - s mu W_nt < 0``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from dataclasses import dataclass
@@ -465,7 +466,9 @@ def tangential_impact(M, Jc, u, mu, slip=None, held=None):
     ``held``: a row whose velocity stays zero through the impact, with whatever impulse it
     takes (a rolling disc's tangent, ``Jc`` then its normal and spin, ``mu`` its
     rolling-friction length): the impact runs on the Delassus matrix of ``Jc`` with that
-    row held, the Schur complement ``W_cc - W_ch W_hh^-1 W_hc``."""
+    row held, the Schur complement ``W_cc - W_ch W_hh^-1 W_hc``.  The Impact's ``P_t`` is
+    then the held row's impulse (the force along the surface); the spin's (the rolling
+    friction's moment) is ``-s mu P_n`` while it spins."""
     slip = float(Jc[1] @ u) if slip is None else float(slip)
     if held is None:
         r = impact(delassus(M, Jc), (0.0, slip), mu=mu, e=0.0)
@@ -476,4 +479,5 @@ def tangential_impact(M, Jc, u, mu, slip=None, held=None):
     r = impact(0.5 * (W + W.T), (0.0, slip), mu=mu, e=0.0)
     P = np.array([r.P_n, r.P_t])
     P_h = -(W3[2, :2] @ P) / W3[2, 2]       # keeps the held row's velocity where it was
-    return u + np.linalg.solve(M, rows.T @ np.append(P, P_h)), r
+    return (u + np.linalg.solve(M, rows.T @ np.append(P, P_h)),
+            dataclasses.replace(r, P_t=float(P_h)))

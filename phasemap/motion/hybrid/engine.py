@@ -234,7 +234,7 @@ class Motion:
             out.append(ms)
         return out
 
-    def admissible(self, q, u, modes, sc, prefer=None, t=0.0):
+    def admissible(self, q, u, modes, sc, prefer=None, t=0.0, flip=()):
         """``(u', N, F, a, rho)`` of the phase ``modes`` if it is admissible at
         ``(q, u)``, else None (a two-sided contact's friction tries each sign of N).
         A slip that starts from relative rest is tested with the static coefficient."""
@@ -248,7 +248,7 @@ class Motion:
         for signs in np.ndindex(*(2,) * len(two)):
             rho = np.ones(self.k)
             for c, s in zip(two, signs):
-                rho[c] = 1.0 - 2.0 * s
+                rho[c] = (1.0 - 2.0 * s) * (-1.0 if c in flip else 1.0)
             sol = self.solve(q, u, modes, rho, t, start)
             if sol is None:
                 continue
@@ -275,7 +275,7 @@ class Motion:
                 return ud, N, F, a, rho
         return None
 
-    def enumerate(self, q, u, prefer=None, t=0.0):
+    def enumerate(self, q, u, prefer=None, t=0.0, flip=()):
         """Every admissible phase at ``(q, u)``, grouped by their accelerations (phases
         that move the body alike, such as slip with N = 0 and open with g'' = 0, are one
         motion): a list of groups, each a list of ``(modes, solution)``.  ``prefer``:
@@ -286,7 +286,7 @@ class Motion:
         cand = self.candidates(q, u, P, sc, t)
         for pick in np.ndindex(*[len(m) for m in cand]):
             modes = tuple(cand[c][i] for c, i in enumerate(pick))
-            sol = self.admissible(q, u, modes, sc, prefer, t)
+            sol = self.admissible(q, u, modes, sc, prefer, t, flip)
             if sol is None:
                 continue
             for grp in groups:
@@ -606,7 +606,9 @@ class Motion:
         q, u = self.project(q, u, [c for c, m in enumerate(modes) if m != OPEN],
                             [c for c, m in enumerate(modes) if m == STICK], fixed, t=t)
         rec = self.rec
-        jumped = bool(rec.ev_t) and rec.ev_t[-1] == t and rec.ev_kind[-1] in JUMPS
+        y = np.concatenate([q, u])
+        jumped = (bool(rec.ev_t) and rec.ev_t[-1] == t and rec.ev_kind[-1] in JUMPS
+                  and not (rec.y and np.array_equal(rec.y[-1], y)))
         if self.t_eval is None and (not rec.t or rec.t[-1] != t or jumped):
             self.rec.point(t, np.concatenate([q, u]), modes)    # (after a jump: its state)
         self.rec.event(t, fate, contact, np.concatenate([q, u]), modes)
@@ -631,7 +633,9 @@ class Motion:
             return landing.closing(self, t, q, u, modes, c)
         if which == 0:                  # a normal reaction reaches zero
             q, u = self.project(q, u, closed, t=t)
-            return self._decide(t, q, u, modes, ev.LIFTOFF, c, {c: OPEN})
+            # (a two-sided contact's reaction changes sign: its friction's sign flips)
+            flip = () if self.one_sided[c] or rho[c] < 0.0 else (c,)
+            return self._decide(t, q, u, modes, ev.LIFTOFF, c, {c: OPEN}, flip=flip)
         if modes[c] == STICK:           # a stuck contact reaches its friction limit
             F = self.solve(q, u, modes, rho, t)[2][c]
             q, u = self.project(q, u, closed, t=t)
@@ -640,7 +644,7 @@ class Motion:
         q, u = self.project(q, u, closed, held=(c,), t=t)   # a slip velocity reaches zero
         return self._decide(t, q, u, modes, ev.STICK, c, {c: STICK})
 
-    def _decide(self, t, q, u, old, kind, contact, prefer, depth=0):
+    def _decide(self, t, q, u, old, kind, contact, prefer, depth=0, flip=()):
         """The phase that follows at ``(t, q, u)``; records the event (``kind``, or the one
         the change of modes names where ``kind`` is -1) and returns ``(t, q, u, modes,
         rho)``, or None where the motion ends."""
@@ -648,7 +652,7 @@ class Motion:
             jump = jam.jam(self, t, q, u, jam.sliding(self, q, u, t))
             if jump is not None:     # at a slip's singular point: a dynamic jam first
                 return self._decide(t, *jump, old, QUIET, -1, {}, depth + 1)
-        groups = self.enumerate(q, u, prefer, t)
+        groups = self.enumerate(q, u, prefer, t, flip)
         if len(groups) != 1:
             if not groups or self.o.painleve == "iwc":
                 jump = self._iwc(t, q, u, old) if depth < 4 else None
@@ -665,7 +669,8 @@ class Motion:
             if len(groups) != 1:
                 self._end(t, q, u, old, ev.INDETERMINATE, contact)
                 return None
-        if kind == ev.LIFTOFF and tuple(groups[0][0][0]) == tuple(old) and not self._holds(
+        if kind == ev.LIFTOFF and self.one_sided[contact] and tuple(
+                groups[0][0][0]) == tuple(old) and not self._holds(
                 q, u, groups[0][0], [contact], self.scales(q, u, self.mech.pieces(
                     q, u, self.p, t)), t):
             # N reached zero on its way down and the contact cannot open either: the

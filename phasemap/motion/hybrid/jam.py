@@ -51,7 +51,7 @@ def at_singular(self, t, q, u, modes, rho, fate):
     """The phase ``modes`` stopped at ``(t, q, u)`` (its singularity reached zero, or
     the step size collapsed): a dynamic jam where it is one; else the motion ends,
     with ``singular`` where the phase is at its singular point, or ``fate``."""
-    jump = jam(self, t, q, u, modes)
+    jump = jam(self, t, q, u, modes, past=fate == ev.SINGULAR)
     if jump is not None:
         return self._decide(t, *jump, modes, QUIET, -1, {})
     if any(m in (SLIP_POS, SLIP_NEG) for m in modes) and abs(
@@ -60,7 +60,7 @@ def at_singular(self, t, q, u, modes, rho, fate):
     self._end(t, q, u, modes, fate)
     return None
 
-def jam(self, t, q, u, modes):
+def jam(self, t, q, u, modes, past=False):
     """The state after a dynamic jam of the phase ``modes`` at ``(t, q, u)``, or None
     where it is not at one.
 
@@ -74,10 +74,12 @@ def jam(self, t, q, u, modes):
     ``P_n = -v_t / (W_tn - s mu W_tt)`` and ``P_t = -s mu P_n`` (with ``B = W_nn -
     s mu W_nt = 0``, the normal velocity does not change).  None also where the
     normal forces before the jam do not press (the phase was not the motion), or
-    the impulse would pull a contact or stop no slip.  Records the ``jam`` event."""
+    the impulse would pull a contact or stop no slip.  ``past``: the state is just past
+    the singular point (its determinant rooted), where the forces' sign has flipped.
+    Records the ``jam`` event."""
     if modes is None or not any(m in (SLIP_POS, SLIP_NEG) for m in modes):
         return None
-    M, h, g, J, b, mu = P = self.mech.pieces(q, u, self.p, t)
+    M, h, g, J, b, mu = self.mech.pieces(q, u, self.p, t)
     v = self.relative(J, u, t)
     if not self.mech.plain:
         mu = self.mech.kinetic(q, u, self.p, t, np.abs(v[:, 1]), mu)
@@ -94,11 +96,15 @@ def jam(self, t, q, u, modes):
         lam = -lam
     if lam[normals].min() < -1e-9 * np.abs(lam).max():
         return None
-    # the free accelerations of the held rows, weighted by the jam's reactions, must
-    # not pull away (where they do, the contact opens: no force grows without bound)
-    sc = self.scales(q, u, P)
-    free = R @ np.linalg.solve(M, h) - np.array(rhs)
-    if lam @ free > TOL * sc[2] * np.abs(lam).sum():
+    # the reactions grow without bound along +lam only where the phase's normal forces,
+    # on this side of the singular point (``past``: on the far side, just crossed), press:
+    # where they pull, the contact opens first, and the phase was not the motion
+    sol = self.solve(q, u, modes, None, t)
+    if sol is None:
+        return None
+    pressing = sol[1][[c for c, j in owner if j == 0]] * (-1.0 if past else 1.0)
+    weights = lam[normals] / np.abs(lam[normals]).max()
+    if np.any(pressing[weights > 1e-6] < 0.0):
         return None
     du = X @ lam
     p, stop = math.inf, -1
@@ -112,8 +118,9 @@ def jam(self, t, q, u, modes):
     u1 = u + p * du
     Pn = p * lam[owner.index((stop, 0))]
     s = 1.0 if modes[stop] == SLIP_POS else -1.0
+    # the tangential impulse: the friction's, or a rolling disc's force along the surface
+    Pt = p * lam[owner.index((stop, 2))] if self.rolls[stop] else -s * mu[stop] * Pn
     dKE = 0.5 * float(u1 @ M @ u1 - u @ M @ u)
-    self.rec.event(t, ev.JAM, stop, np.concatenate([q, u]), modes,
-                   (Pn, -s * mu[stop] * Pn, dKE))
+    self.rec.event(t, ev.JAM, stop, np.concatenate([q, u]), modes, (Pn, Pt, dKE))
     held = [c for c, m in enumerate(modes) if m == STICK] + [stop]
     return self.project(q, u1, [c for c, m in enumerate(modes) if m != OPEN], held, t=t)

@@ -12,7 +12,7 @@ import numpy as np
 
 from phasemap.core import events as ev
 from phasemap.motion.hybrid.phases import OPEN, QUIET, TOL
-from phasemap.motion.impact import Simultaneous, impact, simultaneous, zeno_time
+from phasemap.motion.impact import impact, simultaneous, zeno_time
 
 
 def closing(self, t, q, u, modes, c):
@@ -57,12 +57,10 @@ def closing(self, t, q, u, modes, c):
         P0[H] = -np.linalg.solve(W[np.ix_(H, H)], v0[H])
     v1 = v0 + W @ P0
     j = 2 * K.index(c)
-    if v1[j] >= -TOL * sc[0]:       # the tangential impulse alone turned it away
-        sols = [Simultaneous(("open",) * len(K), np.zeros(v0.size), v1, 0.0)]
-    else:
-        # Moreau's generalised Newton law: the landing contact rebounds with e times
-        # its approach; the closed ones (v_n = 0 before) take impulses and stay
-        sols = simultaneous(W, v1, mu[K], e=o.restitution, held=rolling)
+    # Moreau's generalised Newton law on what the slip's stop left (where that alone
+    # turned the landing contact away, it stays open): the landing contact rebounds with
+    # e times its approach; the closed ones (v_n = 0 before) take impulses and stay
+    sols = simultaneous(W, v1, mu[K], e=o.restitution, held=rolling)
     if len(sols) != 1:
         self._end(t, q, u, modes, ev.INDETERMINATE if sols else ev.NO_SOLUTION, c)
         return None

@@ -109,6 +109,8 @@ def _geometry(mech, p, ys, modes, ts) -> dict:
             "long_name": f"normal reaction at contact {c.name} (NaN: not computed, where "
                          "the reduced model ran or a contact is two-sided)", "units": "N"})
         data[f"F_{c.name}"] = ("t", F[:, c.index], {
+            "long_name": f"rolling-friction moment at contact {c.name}", "units": "N m"}
+            if c.rolls else {
             "long_name": f"tangential (friction) reaction at contact {c.name}", "units": "N"})
     return data
 
