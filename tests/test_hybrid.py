@@ -748,3 +748,27 @@ def test_a_two_sided_contact_whose_reaction_changes_sign_goes_on_with_its_fricti
     assert rec.ev_kind == hand.event_kind.values.tolist()
     assert ev.SWITCH in rec.ev_kind and rec.fate == ev.HORIZON
     assert np.allclose(rec.ev_t, hand.event_t.values, rtol=0, atol=1e-7)
+
+
+def test_the_strip_draws_a_rolling_disc_by_its_rim(tmp_path):
+    """The hopping wheel's strip draws each outline as the disc's rim (its radius, from
+    the Dataset's ``phasemap_radius_floor``) with a spoke to the centre of mass, and its
+    rolling moment is not drawn as a force along the floor."""
+    import matplotlib.pyplot as plt
+
+    ds = phasemap.simulate("wheel", 0.65, phi=2.5591, omega=8.2805, delta=0.0, rtol=1e-12)
+    assert float(ds.attrs["phasemap_radius_floor"]) == 1.0
+    assert ds.F_floor.attrs["units"] == "N m"
+    times = [0.0, 0.3, 0.6]
+    fig = ds.phasemap.strip(times=times, forces=False)
+    rims = [ln.get_xydata() for ln in fig.axes[0].lines if len(ln.get_xydata()) == 97]
+    assert len(rims) == len(times)
+    for rim, t in zip(rims, times):
+        centre = rim[:-1].mean(axis=0)
+        assert np.allclose(np.hypot(*(rim - centre).T), 1.0, atol=1e-9)
+        # the rim's centre is the disc's: x_A, y_A of the motion at that time
+        i = int(np.argmin(np.abs(ds.t.values - t)))
+        if ds.t.values[i] == t:
+            assert np.allclose(centre, [float(ds.xa[i]), float(ds.ya[i])], atol=1e-9)
+    fig.savefig(tmp_path / "wheel.png")
+    plt.close(fig)

@@ -69,8 +69,10 @@ class Mechanics:
     _pieces: Callable
     #: (q, p) -> [x, y of each body's centre of mass, then of each contact's body point]
     _points: Callable = None
-    #: p -> per contact (nx, ny, offset) of its surface (a point contact) or (nan, nan,
-    #: nan) (an edge contact: the obstacle is the corner, its body point in ``points``)
+    #: p -> per contact (nx, ny, offset, radius) of its surface (a point contact: radius
+    #: nan; a rolling disc: its radius, its body point the disc's point nearest the
+    #: surface) or nans (an edge contact: the obstacle is the corner, its body point in
+    #: ``points``)
     surfaces: Callable = None
     n_bodies: int = 0
     #: (p, t) -> per contact its surface's tangential velocity, then its rate (2k), or
@@ -185,7 +187,7 @@ def rate_name(c) -> str:
 
 
 #: Bumped when the generated modules' layout changes.
-GENERATED = 2
+GENERATED = 3
 
 
 def generated(S, kind: str):
@@ -361,14 +363,14 @@ def _mechanics_text(S) -> str:
     for c in S.contacts:
         if hasattr(c, "corner"):          # an edge contact: the body touches at the corner
             pts += [sym(c.corner[0]), sym(c.corner[1])]
-            surf += [sp.nan, sp.nan, sp.nan]
+            surf += [sp.nan, sp.nan, sp.nan, sp.nan]
         elif hasattr(c, "radius"):        # a rolling disc: its point nearest the surface
             nv = _unit_normal(c.normal)
             pts += [sym(c.centre[j]) - sym(c.radius) * nv[j] for j in range(2)]
-            surf += [*nv, sym(c.offset)]
+            surf += [*nv, sym(c.offset), sym(c.radius)]
         else:
             pts += [sym(c.point[0]), sym(c.point[1])]
-            surf += [*_unit_normal(c.normal), sym(c.offset)]
+            surf += [*_unit_normal(c.normal), sym(c.offset), sp.nan]
     flat = [*eqs.M, *eqs.h, *g, *J, *b, *mu]
     t, speed = sym(TIME), sym(SLIP_SPEED)
     args = [*eqs.q, *eqs.qd, *eqs.params, t]
@@ -410,7 +412,7 @@ def _mechanics_text(S) -> str:
 
 
 def _surfaces(fn, k):
-    return lambda p: np.array(fn(*p), dtype=float)[:3 * k].reshape(k, 3)
+    return lambda p: np.array(fn(*p), dtype=float)[:4 * k].reshape(k, 4)
 
 
 @dataclass(frozen=True)

@@ -402,7 +402,8 @@ def outline_figure(ds: xr.Dataset, *, times: Sequence[float] | None = None, ax=N
     ``forces``, each closed contact's reaction (``N_<c>``, ``F_<c>``) is an arrow at its
     point, and each impact's impulse a vermillion arrow; the surfaces of the point
     contacts (``phasemap_surface_<c>``) are drawn, hatched on the obstacle's side, and an
-    edge contact's corner as a grey wedge.
+    edge contact's corner as a grey wedge.  A rolling disc (``phasemap_radius_<c>``) is
+    drawn as its rim and a spoke to its centre of mass.
     """
     import matplotlib as mpl
 
@@ -443,14 +444,26 @@ def outline_figure(ds: xr.Dataset, *, times: Sequence[float] | None = None, ax=N
         cmap = mpl.colormaps["Greys"]
         span = max(times.max() - times.min(), 1e-300)
         xs_all, ys_all, drawn = [], [], []
+        discs = {k: (float(ds.attrs[f"phasemap_radius_{k}"]),
+                     np.asarray(ds.attrs[f"phasemap_surface_{k}"], float)[:2])
+                 for k in contacts if f"phasemap_radius_{k}" in ds.attrs
+                 and f"phasemap_surface_{k}" in ds.attrs}
+        ring = np.linspace(0.0, 2.0 * np.pi, 97)
         for tt in times:
             c = np.array([at("centre_x", tt), at("centre_y", tt)])
             pts = np.array([[at(f"point_x_{k}", tt), at(f"point_y_{k}", tt)] for k in contacts])
-            hull = _outline(c, pts)
+            hull = _outline(c, np.array([p_ for k, p_ in zip(contacts, pts) if k not in discs]
+                                        ).reshape(-1, 2))
             shade = cmap(0.35 + 0.65 * (tt - times.min()) / span)
             if len(hull) >= 2:
                 a.plot(hull[:, 0], hull[:, 1], color=shade, lw=1.4, solid_capstyle="round",
                        zorder=3)
+            for k, (r, n) in discs.items():     # a rolling disc: its rim, and a spoke to
+                o = pts[contacts.index(k)] + r * n          # its centre of mass
+                rim = o[None, :] + r * np.c_[np.cos(ring), np.sin(ring)]
+                a.plot(rim[:, 0], rim[:, 1], color=shade, lw=1.2, zorder=3)
+                a.plot([o[0], c[0]], [o[1], c[1]], color=shade, lw=1.0, zorder=3)
+                hull = np.vstack([hull.reshape(-1, 2), rim])
             a.plot([c[0]], [c[1]], "o", ms=2.5, color=shade, zorder=4)
             xs_all += list(hull[:, 0]) + [c[0]]
             ys_all += list(hull[:, 1]) + [c[1]]
@@ -506,7 +519,8 @@ def _force_arrows(a, ds, contacts, drawn, at, ext) -> None:
         for j, k in enumerate(contacts):
             if k not in normals or f"N_{k}" not in ds:
                 continue
-            N, F = at(f"N_{k}", tt), at(f"F_{k}", tt)
+            N = at(f"N_{k}", tt)    # (a rolling disc's F is its moment: not an arrow)
+            F = 0.0 if f"phasemap_radius_{k}" in ds.attrs else at(f"F_{k}", tt)
             if np.isfinite(N) and np.isfinite(F) and (N != 0.0 or F != 0.0):
                 n = normals[k]
                 forces.append((pts[j], N * n + F * np.array([n[1], -n[0]])))

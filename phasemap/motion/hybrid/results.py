@@ -185,8 +185,10 @@ def dataset(mech, rec: Record, attrs: dict, prefix=None, p=None):
         data.update(_geometry(mech, p, ys, modes, ts))
         surf = mech.surfaces(p)
         for c in mech.contacts:
-            if np.all(np.isfinite(surf[c.index])):
-                attrs = {**attrs, f"phasemap_surface_{c.name}": surf[c.index]}
+            if np.all(np.isfinite(surf[c.index, :3])):
+                attrs = {**attrs, f"phasemap_surface_{c.name}": surf[c.index, :3]}
+            if np.isfinite(surf[c.index, 3]):       # a rolling disc's radius
+                attrs = {**attrs, f"phasemap_radius_{c.name}": surf[c.index, 3]}
     fate = ev.Event(rec.fate)
     attrs = {**attrs, "end_reason": fate.name.lower(), "end_message": fate.message,
              "n_steps": np.int64(rec.n_steps), "phasemap_coordinates": "full",
