@@ -569,6 +569,7 @@ def test_dynamic_jam_of_the_rod_stops_its_slip_with_the_sliding_impulse(start, f
     t_flat = float(ds.event_t[1]) + (math.pi - th1) / float(ds.omega[at])
     assert abs(float(ds.event_t[2]) - t_flat) <= 1e-9
     assert float(ds.event_theta[2]) == pytest.approx(math.pi, abs=1e-12)
+    assert ds.attrs["end_message"].endswith("theta reached 3.14159 rad")
 
 
 def test_a_slip_phase_singularity_is_b_over_its_scale():

@@ -190,8 +190,22 @@ def dataset(mech, rec: Record, attrs: dict, prefix=None, p=None):
             if np.isfinite(surf[c.index, 3]):       # a rolling disc's radius
                 attrs = {**attrs, f"phasemap_radius_{c.name}": surf[c.index, 3]}
     fate = ev.Event(rec.fate)
-    attrs = {**attrs, "end_reason": fate.name.lower(), "end_message": fate.message,
+    attrs = {**attrs, "end_reason": fate.name.lower(), "end_message": _end_message(
+                 mech, fate, ev_y[-1] if len(ev_y) else None, p),
              "n_steps": np.int64(rec.n_steps), "phasemap_coordinates": "full",
              "phasemap_integrator_full": "DOP853 (scipy), events rooted on its dense output"}
     return xr.Dataset(data, coords={"t": ("t", ts, {"long_name": "time", "units": "s"})},
                       attrs=attrs)
+
+
+def _end_message(mech, fate, y, p) -> str:
+    """The fate's message; at a coordinate's bound, which bound (the reduced model's
+    :func:`phasemap.core.events.end_message` names its edge alike)."""
+    if fate != ev.LEFT_DOMAIN or y is None or p is None:
+        return fate.message
+    bounds = mech.bounds(p)
+    for j, (name, units) in enumerate(zip(mech.coordinates, mech.units)):
+        for side in (0, 1):
+            if np.isfinite(bounds[j, side]) and y[j] == bounds[j, side]:
+                return f"{fate.message}: {name} reached {bounds[j, side]:.6g} {units}"
+    return fate.message
