@@ -20,6 +20,7 @@ import numpy as np
 
 import phasemap
 from phasemap.core import events as ev
+from phasemap.motion.simulate import GOES_ON
 
 sys.path.insert(0, __file__.rsplit("/", 1)[0])
 from _report import load, machine, parser, publish  # noqa: E402
@@ -31,7 +32,6 @@ CASES = {
                                 "xdot": np.linspace(-5.0, -0.2, n)},
                      {"omega": 2.0, "f": 2.0}, 1.0),
 }
-GOES_ON = [ev.CONTACT_LOST, ev.NO_SOLUTION, ev.INDETERMINATE, ev.SINGULAR]
 
 
 def _counts(fate) -> str:

@@ -391,8 +391,9 @@ def simultaneous(W, v_before, mu, *, e=0.0, tol: float = 1e-12,
         for c, mode in enumerate(combo):
             if mode == 0:
                 P[2 * c] = P[2 * c + 1] = 0.0  # exactly: least squares leaves rounding
-                for j in [j for j, d in enumerate(held) if d == c]:
-                    P[2 * k + j] = 0.0
+        for j, c in enumerate(held):
+            if combo[c] == 0:
+                P[2 * k + j] = 0.0
         v = v0 + W @ P
         ok = True
         for c, mode in enumerate(combo):

@@ -610,9 +610,9 @@ class Motion:
         jumped = (bool(rec.ev_t) and rec.ev_t[-1] == t and rec.ev_kind[-1] in JUMPS
                   and not (rec.y and np.array_equal(rec.y[-1], y)))
         if self.t_eval is None and (not rec.t or rec.t[-1] != t or jumped):
-            self.rec.point(t, np.concatenate([q, u]), modes)    # (after a jump: its state)
-        self.rec.event(t, fate, contact, np.concatenate([q, u]), modes)
-        self.rec.fate = fate
+            rec.point(t, y, modes)    # (after a jump: its state)
+        rec.event(t, fate, contact, y, modes)
+        rec.fate = fate
 
     def _event(self, t, q, u, modes, rho, i):
         """What follows the event ``i`` of the phase ``modes`` at ``(t, q, u)``."""
@@ -654,13 +654,12 @@ class Motion:
                 return self._decide(t, *jump, old, QUIET, -1, {}, depth + 1)
         groups = self.enumerate(q, u, prefer, t, flip)
         if len(groups) != 1:
-            if not groups or self.o.painleve == "iwc":
+            if not groups:
+                return self._inconsistent(t, q, u, old, contact, depth)
+            if self.o.painleve == "iwc":
                 jump = self._iwc(t, q, u, old) if depth < 4 else None
                 if jump is not None:
                     return self._decide(t, *jump, old, QUIET, -1, {}, depth + 1)
-                if not groups:
-                    self._end(t, q, u, old, ev.NO_SOLUTION, contact)
-                    return None
             if self.o.painleve == "liftoff":
                 opens = [sum(m == OPEN for m in g[0][0]) for g in groups]
                 best = [i for i, k in enumerate(opens) if k == max(opens)]
@@ -675,11 +674,7 @@ class Motion:
                     q, u, self.p, t)), t):
             # N reached zero on its way down and the contact cannot open either: the
             # accelerations have no solution just after (a Painleve inconsistency)
-            jump = self._iwc(t, q, u, old) if depth < 4 else None
-            if jump is not None:
-                return self._decide(t, *jump, old, QUIET, -1, {}, depth + 1)
-            self._end(t, q, u, old, ev.NO_SOLUTION, contact)
-            return None
+            return self._inconsistent(t, q, u, old, contact, depth)
         modes, (ud, N, F, a, rho) = groups[0][0]
         held = [c for c, m in enumerate(modes) if m == STICK]
         q, u = self.project(q, u, [c for c, m in enumerate(modes) if m != OPEN], held, t=t)
@@ -709,6 +704,15 @@ class Motion:
         elif kind == QUIET and self.t_eval is None:   # the state just after a jump
             self.rec.point(t, y, modes)
         return t, q, u, modes, rho
+
+    def _inconsistent(self, t, q, u, old, contact, depth):
+        """No phase follows at ``(t, q, u)`` (a Painleve inconsistency): an impact without
+        collision where one applies and the motion goes on from it, else ``no_solution``."""
+        jump = self._iwc(t, q, u, old) if depth < 4 else None
+        if jump is not None:
+            return self._decide(t, *jump, old, QUIET, -1, {}, depth + 1)
+        self._end(t, q, u, old, ev.NO_SOLUTION, contact)
+        return None
 
     def _iwc(self, t, q, u, modes):
         """An impact without collision at the one closed contact that slips into the

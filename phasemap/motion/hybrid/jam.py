@@ -12,17 +12,18 @@ import numpy as np
 
 from phasemap.core import events as ev
 from phasemap.motion.hybrid.phases import (JAM_TOL, OPEN, QUIET, SLIP_NEG, SLIP_POS, SMOOTH,
-                                           STICK, TOL, normalised_det, system)
+                                           STICK, TOL, normalised_det, slipping, system)
 
 
 def sign(self, q, u, modes, rho, t):
     """The sign of the phase's :meth:`Motion.singularity` at its start: the factor that makes
     its event function positive (0, not watched, for a phase without a slip, or one
     already at its singular point)."""
-    if not any(m in (SLIP_POS, SLIP_NEG) for m in modes):
+    if not slipping(modes):
         return 0.0
     det = self.singularity(q, u, modes, rho, t)
     return 0.0 if abs(det) <= JAM_TOL else math.copysign(1.0, det)
+
 
 def sliding(self, q, u, t):
     """The modes of a state's touching contacts as they move now (a contact that
@@ -47,6 +48,7 @@ def sliding(self, q, u, t):
             modes.append(STICK)
     return tuple(modes)
 
+
 def at_singular(self, t, q, u, modes, rho, fate):
     """The phase ``modes`` stopped at ``(t, q, u)`` (its singularity reached zero, or
     the step size collapsed): a dynamic jam where it is one; else the motion ends,
@@ -54,11 +56,12 @@ def at_singular(self, t, q, u, modes, rho, fate):
     jump = jam(self, t, q, u, modes, past=fate == ev.SINGULAR)
     if jump is not None:
         return self._decide(t, *jump, modes, QUIET, -1, {})
-    if any(m in (SLIP_POS, SLIP_NEG) for m in modes) and abs(
+    if slipping(modes) and abs(
             self.singularity(q, u, modes, rho, t)) <= JAM_TOL:
         fate = ev.SINGULAR
     self._end(t, q, u, modes, fate)
     return None
+
 
 def jam(self, t, q, u, modes, past=False):
     """The state after a dynamic jam of the phase ``modes`` at ``(t, q, u)``, or None
@@ -77,7 +80,7 @@ def jam(self, t, q, u, modes, past=False):
     the impulse would pull a contact or stop no slip.  ``past``: the state is just past
     the singular point (its determinant rooted), where the forces' sign has flipped.
     Records the ``jam`` event."""
-    if modes is None or not any(m in (SLIP_POS, SLIP_NEG) for m in modes):
+    if modes is None or not slipping(modes):
         return None
     M, h, g, J, b, mu = self.mech.pieces(q, u, self.p, t)
     v = self.relative(J, u, t)

@@ -12,7 +12,7 @@ import numpy as np
 
 from phasemap.core import events as ev
 from phasemap.motion.hybrid.phases import OPEN, QUIET, TOL
-from phasemap.motion.impact import impact, simultaneous, zeno_time
+from phasemap.motion.impact import delassus, impact, simultaneous, zeno_time
 
 
 def closing(self, t, q, u, modes, c):
@@ -29,8 +29,7 @@ def closing(self, t, q, u, modes, c):
         return self._decide(t, q, u, modes, ev.RECONTACT, c, {})
     o = self.o
     if not closed and not self.rolls[c]:
-        W = J[c, :2] @ np.linalg.solve(M, J[c, :2].T)
-        r = impact(W, v[c, :2], mu=float(mu[c]), e=o.restitution, law=o.impact_law)
+        r = impact(delassus(M, J[c, :2]), v[c, :2], mu=float(mu[c]), e=o.restitution, law=o.impact_law)
         Pc = np.array([r.P_n, r.P_t])
         u = u + np.linalg.solve(M, J[c, :2].T @ Pc)
         self.rec.event(t, ev.IMPACT, c, y, modes, (r.P_n, r.P_t, r.dKE))
@@ -46,7 +45,7 @@ def closing(self, t, q, u, modes, c):
     K = closed + [c]
     rolling = [i for i, d in enumerate(K) if self.rolls[d]]   # (rows: no slip after)
     JK = np.concatenate([J[d, :2] for d in K] + [J[K[i], 2:] for i in rolling])
-    W = JK @ np.linalg.solve(M, JK.T)
+    W = delassus(M, JK)
     v0 = np.concatenate([v[d, :2] for d in K] + [v[K[i], 2:] for i in rolling])
     P0 = np.zeros(v0.size)
     if rolling:

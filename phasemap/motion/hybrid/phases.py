@@ -21,6 +21,12 @@ JAM_TOL = 1e-6
 QUIET = -2
 
 
+def slipping(modes) -> bool:
+    """Whether a contact slips in the phase ``modes`` (only a slip can make its reaction
+    matrix singular)."""
+    return any(m in (SLIP_POS, SLIP_NEG) for m in modes)
+
+
 def system(modes, rho, J, b, mu, sd=None, rolls=()):
     """The linear system of a phase's reactions: ``(cols, rows, rhs, owner)``, a column
     (the reaction's direction in the coordinates) and a row (the held acceleration) per
