@@ -16,6 +16,7 @@ import statistics
 import sys
 import time
 
+import numba
 import numpy as np
 
 import phasemap
@@ -81,8 +82,10 @@ def main():
         "`options={\"through_contacts\": True}`, alternating, medians of "
         f"{args.repeat}. *followed*: the cells whose reduced motion ends where a contact "
         "changes (contact_lost, no_solution, indeterminate, singular), each run again by "
-        "`simulate` and followed in full coordinates (Python). *per followed cell*: the "
-        "extra CPU time over the cells followed.",
+        "`simulate` and followed in full coordinates (Python). CPU is the process's, "
+        f"over numba's {numba.get_num_threads()} threads for the compiled cells; the "
+        "followed cells run one at a time in the calling thread, so *per followed cell*, "
+        "the extra CPU time over the cells followed, is one thread's.",
         "",
         "| model | cells | followed | reduced: wall / CPU (s) | through: wall / CPU (s) | "
         "per followed cell (ms) | fates, reduced | fates, through contact changes |",
