@@ -82,7 +82,7 @@ def main():
         "`options={\"through_contacts\": True}`, alternating, medians of "
         f"{args.repeat}. *followed*: the cells whose reduced motion ends where a contact "
         "changes (contact_lost, no_solution, indeterminate, singular), each run again by "
-        "`simulate` and followed in full coordinates (Python). CPU is the process's, "
+        "`simulate` and followed in full coordinates. CPU is the process's, "
         f"over numba's {numba.get_num_threads()} threads for the compiled cells; the "
         "followed cells run one at a time in the calling thread, so *per followed cell*, "
         "the extra CPU time over the cells followed, is one thread's.",
@@ -96,9 +96,11 @@ def main():
           f"{1e3 * r['per_cell']:.1f} | {r['before']} | {r['after']} |" for r in rows],
         "",
         "The followed cells cost what a `simulate` call costs: the reduced motion again, "
-        "then the full-coordinate motion in Python (scipy's DOP853 and NumPy). The "
+        "then the full-coordinate motion, its phases stepped by the compiled flow and "
+        "what follows each event decided in Python (NumPy), and a Dataset per cell. The "
         "issue's target for the wheel's 10^6 cells with the new fates (<= 20 s on 2 "
-        "threads) needs the full-coordinate motion compiled; it is not met this way.",
+        "threads) needs the decisions compiled too and the cells followed in parallel; it "
+        "is not met this way.",
         "",
     ]
     publish(lines, "## Fate maps through contact changes", write=not args.no_write)

@@ -83,6 +83,8 @@ class Mechanics:
     _kinetic: tuple | None = None
     #: p -> the forcing period, or None: the system does not depend on the time
     period: Callable | None = None
+    #: the generated module's file (what :mod:`phasemap.motion.hybrid.flowtext` rewrites)
+    source: str = ""
 
     def points(self, q, p):
         """``(centres, contacts)``: each body's centre of mass (b, 2) and each contact's
@@ -178,7 +180,7 @@ def _made(S):
         d["n_domain"], module.pieces, module.points, _surfaces(module.surfaces, k),
         d["n_bodies"], getattr(module, "surface", None),
         tuple(getattr(module, f"kinetic_{i}") for i in range(k)) if d["kinetic"] else None,
-        getattr(module, "period", None))
+        getattr(module, "period", None), module.__file__)
 
 
 def rate_name(c) -> str:

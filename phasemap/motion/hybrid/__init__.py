@@ -17,7 +17,8 @@ A phase's accelerations solve ``M u' = h + sum_c J_c^T (N_c, F_c)`` with the clo
 contacts' accelerations ``J_c u' + J_c' u`` held (:func:`accelerations`: one small linear
 system, from :func:`phasemap.declare.full.mechanics`, the same Lagrangian and contact
 kinematics as every other computation of the declaration).  A phase ends at an *event*,
-rooted on the dense output of DOP853 (scipy's, stepped here) to a few ulps in time:
+rooted on the dense output of DOP853 (scipy's method in machine code, :mod:`.flow`) to a
+few ulps in time:
 
 * a closed contact's ``N`` reaches 0: **lift-off** where the open mode is the one that
   is admissible (the tie between "slip with N = 0" and "open with g'' = 0" is decided

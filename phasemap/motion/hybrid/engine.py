@@ -12,7 +12,7 @@ import numpy as np
 from phasemap.core import events as ev
 from phasemap.motion.impact import tangential_impact  # noqa: F401 - the package's name
 
-from phasemap.motion.hybrid import jam, landing
+from phasemap.motion.hybrid import flow, jam, landing, stepping
 from phasemap.motion.hybrid.phases import (  # noqa: F401 - the package's names
     MODE_NAMES, OPEN, QUIET, SLIP_NEG, SLIP_POS, SMOOTH, STICK, TOL, kind_of, normalised_det,
     system)
@@ -82,6 +82,8 @@ class Motion:
         #: a system that depends on the time, or whose surfaces move, does not stop at
         #: a momentary rest
         self.rests = mech.can_rest
+        #: the compiled flow: the phases' accelerations, event functions and steps
+        self.flow = flow.Phase(mech, self.p, self.one_sided, self.rolls, (warm, (), {}))
 
     def surf(self, t):
         """Each contact surface's tangential velocity at ``t``."""
@@ -118,7 +120,22 @@ class Motion:
         return self._solve(q, u, modes, rho, t, (), True)[1]
 
     def _solve(self, q, u, modes, rho=None, t=0.0, start=(), singular=False):
-        """``(solve(...), singularity(...))``; the second 1.0 unless ``singular``."""
+        """``(solve(...), singularity(...))``; the second 1.0 unless ``singular``.  On the
+        compiled flow; in Python where the phase's contacts are redundant."""
+        fl = self.flow
+        st, det = fl.solve(np.concatenate([q, u]), t, np.asarray(modes, dtype=np.int64),
+                           np.ones(self.k) if rho is None else np.asarray(rho, dtype=float),
+                           np.array([c in start for c in range(self.k)], dtype=np.bool_),
+                           bool(singular))
+        if st == flow.REDUNDANT:
+            return self._solve_redundant(q, u, modes, rho, t, start, singular)
+        if st != flow.OK:
+            return None, det
+        return (fl.ud.copy(), fl.N.copy(), fl.F.copy(), fl.a.copy(), fl.pieces()), det
+
+    def _solve_redundant(self, q, u, modes, rho=None, t=0.0, start=(), singular=False):
+        """:meth:`_solve` in Python, with an admissible member of a family of reactions
+        (:meth:`_member`)."""
         M, h, g, J, b, mu = P = self.mech.pieces(q, u, self.p, t)
         sd = None
         if not self.mech.plain:
@@ -395,6 +412,12 @@ class Motion:
         conditions, and last the phase's :meth:`singularity` times ``jam`` (its sign at
         the phase's start; 0: not watched, the function 1)."""
         out = np.ones(self.k * 2 + 2 * self.n + self.mech.n_domain + 1)
+        st = self.flow.watch(np.concatenate([q, u]), t, np.asarray(modes, dtype=np.int64),
+                             np.ones(self.k) if rho is None else np.asarray(rho, dtype=float),
+                             jam, out)
+        if st == flow.OK:
+            return out
+        out[:] = 1.0
         (ud, N, F, a, P), det = self._solve(q, u, modes, rho, t, (), jam != 0.0)
         if jam != 0.0:
             out[-1] = jam * det
@@ -432,9 +455,7 @@ class Motion:
         """The motion from ``(q, u)`` at ``t0`` to ``opts.t_end``: a :class:`Record`.
         ``first``: the first event's kind (-1: the one the modes found name, for a motion
         that goes on from the reduced model's end with every contact closed)."""
-        from scipy.integrate import DOP853
-
-        o, n = self.o, self.n
+        o = self.o
         rec = Record()
         self.rec = rec
         self.t_eval = np.asarray(t_eval, dtype=float) if t_eval is not None else None
@@ -478,57 +499,15 @@ class Motion:
                 break
             sc = self.scales(q, u, self.mech.pieces(q, u, self.p, t))
 
-            def f(s, y, modes=modes, rho=rho):
-                return np.concatenate([y[n:], self.solve(y[:n], y[n:], modes, rho, s)[0]])
-
             t_stop = o.t_end
             if self.zeno_until > t:
                 t_stop = min(t_stop, self.zeno_until)
-            solver = DOP853(f, t, np.concatenate([q, u]), t_stop, rtol=o.rtol, atol=atol,
-                            max_step=o.max_step)
             # a function the event's projection left a rounding error below zero starts
             # at zero (a gap just closed or opened, a slip velocity just zero)
             jam_sign = jam.sign(self, q, u, modes, rho, t)
             w0 = self.watch(q, u, modes, rho, sc, t, jam_sign)
             w0[(w0 < 0.0) & (w0 >= -TOL * self._scale_of(sc))] = 0.0
-            step = None
-            while True:
-                if rec.n_steps >= o.max_steps:
-                    self._end(solver.t, solver.y[:n], solver.y[n:], modes, ev.MAX_STEPS)
-                    break
-                t_old = solver.t
-                solver.step()
-                rec.n_steps += 1
-                if solver.status == "failed":
-                    # the step size collapsed: at a slip's singular point, a dynamic jam
-                    y = solver.y
-                    step = jam.at_singular(self, t_old, y[:n], y[n:], modes, rho,
-                                           ev.STEP_FAILURE)
-                    break
-                y1 = solver.y
-                w1 = self.watch(y1[:n], y1[n:], modes, rho, sc, solver.t, jam_sign)
-                dense = solver.dense_output()
-                hit = self._first_event(dense, t_old, solver.t, w0, w1, modes, rho, sc,
-                                        jam_sign)
-                t_hit = hit[0] if hit else solver.t
-                self._save_eval(dense, t_old, t_hit, modes)
-                if hit is not None:
-                    th, i = hit
-                    y = dense(th)
-                    if self.t_eval is None:
-                        rec.point(th, y, modes)
-                    step = self._event(th, y[:n], y[n:], modes, rho, i)
-                    break
-                if self.t_eval is None:
-                    rec.point(solver.t, y1, modes)
-                w0 = w1
-                if solver.status == "finished":
-                    y = solver.y
-                    if solver.t >= o.t_end:
-                        self._end(o.t_end, y[:n], y[n:], modes, ev.HORIZON)
-                    else:   # the impacts' accumulation time
-                        step = landing.zeno(self, solver.t, y[:n], y[n:], modes)
-                    break
+            step = stepping.phase(self, t, q, u, modes, rho, sc, t_stop, jam_sign, w0, atol)
         return rec
 
     @staticmethod
@@ -741,3 +720,17 @@ class Motion:
         c, after, r = jumps[0]
         self.rec.event(t, ev.IWC, c, np.concatenate([q, u]), modes, (r.P_n, r.P_t, r.dKE))
         return self.project(q, after, [c], t=t)
+
+
+def warm():
+    """Compiles the compiled flow's kernels (:mod:`.flow`) into the kernel cache: a
+    background compile's job (:mod:`phasemap.core.tiers`), a flight of the Painleve rod
+    that lands and slides (every kernel, the step's event exit included)."""
+    from phasemap.core import tiers
+    from phasemap.declare.full import mechanics
+    from phasemap.systems.painleve_rod import SYSTEM
+
+    mech = mechanics(SYSTEM)
+    p = [mech.defaults[name] for name in mech.parameters]
+    with tiers.forced("eager"):
+        Motion(mech, p, Options(t_end=0.5)).run([0.7, 0.0, 0.3], [0.0, 0.5, 0.0])

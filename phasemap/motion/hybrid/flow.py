@@ -1,0 +1,711 @@
+"""The compiled flow of a phase in full coordinates: its accelerations, its event functions,
+and DOP853 stepping from event to event, in machine code for every declaration at once.
+
+A phase (each contact open, smooth, stuck or slipping one way) moves by one small
+linear system (:mod:`phasemap.motion.hybrid.phases`): ``M u' = h + sum G lam`` with the
+held accelerations ``R u' = rhs``.  The functions here solve it and step it with
+scipy's DOP853 method (its coefficients and its step-size control, in machine code).
+They are compiled once for every declaration: a declaration's own functions (its
+generated pieces, :mod:`phasemap.motion.hybrid.flowtext`) are numba ``cfunc`` pointers they take
+as arguments, compiled in well under a second.  What follows an event (which phase, an
+impact, a jam) stays in :class:`phasemap.motion.hybrid.Motion`, in Python.
+
+Layout ``lay`` (int64): ``[n, k, n_domain, has_surface, has_kinetic]``.  The workspace
+``W`` (float64, :func:`workspace`) holds the pieces first, at the offsets of
+:meth:`phasemap.declare.full.Mechanics.pieces`, then the surfaces' speeds and rates,
+then the slip coefficients.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import threading
+
+import numpy as np
+from numba import cfunc, njit
+from numba.experimental import function_type
+from scipy.integrate._ivp import dop853_coefficients as _dc
+
+from phasemap.motion.hybrid.phases import OPEN, SLIP_NEG, SLIP_POS, SMOOTH, STICK
+
+#: What :func:`accel` and :func:`advance` return.
+OK, REDUNDANT, SINGULAR = 0, 1, 2
+#: What :func:`advance` stopped at, beyond :data:`REDUNDANT` and :data:`SINGULAR`.
+FINISHED, EVENT, FAILED, MAX_STEPS, FULL = 3, 4, 5, 6, 7
+
+# scipy's DOP853 (scipy/integrate/_ivp/rk.py, dop853_coefficients.py)
+_A = np.ascontiguousarray(_dc.A)
+_C = np.ascontiguousarray(_dc.C)
+_B = np.ascontiguousarray(_dc.B)
+_E3 = np.ascontiguousarray(_dc.E3)
+_E5 = np.ascontiguousarray(_dc.E5)
+_D = np.ascontiguousarray(_dc.D)
+_SAFETY, _MIN_FACTOR, _MAX_FACTOR, _EXPONENT = 0.9, 0.2, 10.0, -1.0 / 8.0
+#: (imported for what it registers: the numba type of a cfunc passed as an argument)
+_CFUNC_TYPES = function_type
+
+
+def sizes(n: int, k: int) -> tuple[int, int]:
+    """``(pieces, workspace)``: the flat pieces' length and the float workspace's."""
+    nf = n * n + n + k + 3 * k * n + 3 * k + k
+    m = 3 * k
+    return nf, (nf + 3 * k + n * n + 2 * (m + 1) * n + (m + 1) + (m + 1) * n
+                + 2 * (m * m + 1) + (n + m + 1) + n + 8)
+
+
+def workspace(n: int, k: int):
+    """``(W, I)``: the float and integer scratch of :func:`accel` and :func:`watch`."""
+    return np.zeros(sizes(n, k)[1]), np.zeros(9 * k + n + 8, dtype=np.int64)
+
+
+# The hot functions index the workspace at offsets, without slices: a slice is an array
+# whose reference count numba raises and lowers (two atomic operations each time), which
+# cost more than the arithmetic of a small phase.
+
+@njit(cache=True, error_model="numpy")
+def _lu(W, o, I, op, m):
+    """LU factors, in place, of the ``m x m`` matrix at ``W[o:]`` (row-major), partial
+    pivoting, the pivots at ``I[op:]``; its determinant."""
+    det = 1.0
+    for j in range(m):
+        p = j
+        big = abs(W[o + j * m + j])
+        for i in range(j + 1, m):
+            if abs(W[o + i * m + j]) > big:
+                big = abs(W[o + i * m + j])
+                p = i
+        I[op + j] = p
+        if p != j:
+            for c in range(m):
+                W[o + j * m + c], W[o + p * m + c] = W[o + p * m + c], W[o + j * m + c]
+            det = -det
+        d = W[o + j * m + j]
+        det *= d
+        if d == 0.0:
+            continue
+        for i in range(j + 1, m):
+            f = W[o + i * m + j] / d
+            W[o + i * m + j] = f
+            for c in range(j + 1, m):
+                W[o + i * m + c] -= f * W[o + j * m + c]
+    return det
+
+
+@njit(cache=True, error_model="numpy")
+def _lu_solve(W, o, I, op, m, x):
+    """``W[x:x+m]`` <- its solution by :func:`_lu`'s factors at ``W[o:]``, ``I[op:]``."""
+    for j in range(m):
+        p = I[op + j]
+        if p != j:
+            W[x + j], W[x + p] = W[x + p], W[x + j]
+    for i in range(m):
+        s = W[x + i]
+        for c in range(i):
+            s -= W[o + i * m + c] * W[x + c]
+        W[x + i] = s
+    for i in range(m - 1, -1, -1):
+        s = W[x + i]
+        for c in range(i + 1, m):
+            s -= W[o + i * m + c] * W[x + c]
+        W[x + i] = s / W[o + i * m + i]
+
+
+@njit(cache=True, error_model="numpy")
+def accel(PC, SF, KN, y, t, p, lay, rolls, modes, rho, start, want_det, W, I, ud, N, F, a):
+    """The accelerations ``ud``, reactions ``N``, ``F`` and contact accelerations ``a`` (k, 3;
+    the tangential relative to the surface) of the phase ``modes`` at ``(t, y)``:
+    ``(status, det)``, with ``det`` the normalised determinant of the phase's reaction
+    matrix where ``want_det`` and a contact slips with friction (else 1).  ``rho``: the
+    sign of N each contact's friction assumes; ``start``: the slips that start from
+    relative rest (their static coefficient).  ``REDUNDANT`` where the reaction matrix is
+    near singular (the caller picks an admissible member), ``SINGULAR`` where the
+    solution is not finite.  The pieces are left at the start of ``W``."""
+    n, k = lay[0], lay[1]
+    nf = n * n + n + k + 3 * k * n + 3 * k + k
+    PC(W[:nf], y, p, t)
+    oh = n * n                     # M at 0, h, g, J (k, 3, n), b (k, 3), mu (static)
+    oJ = oh + n + k
+    ob = oJ + 3 * k * n
+    om0 = ob + 3 * k
+    osd = nf                       # the surfaces' speeds (k) and rates (k)
+    omu = osd + 2 * k              # the slip coefficients
+    mm = 3 * k                     # the most reactions a phase has
+    oLU = omu + k
+    oG = oLU + n * n               # the reactions' directions (m, n)
+    oR = oG + (mm + 1) * n         # the held accelerations' rows (m, n)
+    orhs = oR + (mm + 1) * n
+    oX = orhs + mm + 1             # M^-1 h, then M^-1 of each direction ((m + 1), n)
+    oA = oX + (mm + 1) * n
+    oB = oA + mm * mm + 1
+    ocol = oB + mm * mm + 1
+    otmp = ocol + max(n, mm) + 1
+    oc, oj, op = 0, mm + 1, 2 * mm + 2   # owners (contact, row) of each reaction; pivots
+    if lay[3]:
+        SF(W[osd:osd + 2 * k], y, p, t)
+    else:
+        for c in range(2 * k):
+            W[osd + c] = 0.0
+    if lay[4]:
+        for c in range(k):
+            v = 0.0
+            for i in range(n):
+                v += W[oJ + (3 * c + 1) * n + i] * y[n + i]
+            W[omu + c] = abs(v - W[osd + c])
+        KN(W[omu:omu + k], y, p, t)
+        for c in range(k):
+            if start[c]:
+                W[omu + c] = W[om0 + c]
+    else:
+        for c in range(k):
+            W[omu + c] = W[om0 + c]
+    m = 0
+    slips = False
+    for c in range(k):
+        md = modes[c]
+        if md == OPEN:
+            continue
+        s = 1.0 if md == SLIP_POS else (-1.0 if md == SLIP_NEG else 0.0)
+        mu = W[omu + c]
+        if s != 0.0 and mu != 0.0:
+            slips = True
+        for r in (0, 2, 1):        # the normal, a rolling disc's tangent, a stuck channel
+            if r == 1 and md != STICK:
+                continue
+            if r == 2 and not rolls[c]:
+                continue
+            for i in range(n):
+                jr = W[oJ + (3 * c + r) * n + i]
+                W[oR + m * n + i] = jr
+                W[oG + m * n + i] = jr - s * rho[c] * mu * W[oJ + (3 * c + 1) * n + i] \
+                    if r == 0 else jr
+            if r == 1:
+                W[orhs + m] = (W[osd + k + c] - W[ob + 3 * c + 1]) if lay[3] \
+                    else -W[ob + 3 * c + 1]
+            else:
+                W[orhs + m] = -W[ob + 3 * c + r]
+            I[oc + m] = c
+            I[oj + m] = r
+            m += 1
+    for i in range(n * n):
+        W[oLU + i] = W[i]
+    _lu(W, oLU, I, op, n)
+    for i in range(n):
+        W[oX + i] = W[oh + i]
+    _lu_solve(W, oLU, I, op, n, oX)
+    for j in range(m):
+        for i in range(n):
+            W[oX + (j + 1) * n + i] = W[oG + j * n + i]
+        _lu_solve(W, oLU, I, op, n, oX + (j + 1) * n)
+    for c in range(k):
+        N[c] = 0.0
+        F[c] = 0.0
+    det = 1.0
+    if m == 0:
+        for i in range(n):
+            ud[i] = W[oX + i]
+    else:
+        hadamard = 1.0
+        for r in range(m):
+            s2 = 0.0
+            for j in range(m):
+                v = 0.0
+                for i in range(n):
+                    v += W[oR + r * n + i] * W[oX + (j + 1) * n + i]
+                W[oA + r * m + j] = v
+                s2 += v * v
+            hadamard *= np.sqrt(s2)
+            v = 0.0
+            for i in range(n):
+                v += W[oR + r * n + i] * W[oX + i]
+            W[ocol + r] = W[orhs + r] - v
+        if want_det and slips:
+            # rows and columns at unit length in the inverse mass metric
+            for r in range(m):
+                for i in range(n):
+                    W[otmp + i] = W[oR + r * n + i]
+                _lu_solve(W, oLU, I, op, n, otmp)
+                dr = 0.0
+                for i in range(n):
+                    dr += W[oR + r * n + i] * W[otmp + i]
+                dr = np.sqrt(max(dr, 1e-300))
+                for j in range(m):
+                    dc = 0.0
+                    for i in range(n):
+                        dc += W[oG + j * n + i] * W[oX + (j + 1) * n + i]
+                    W[oB + r * m + j] = W[oA + r * m + j] / dr / np.sqrt(max(dc, 1e-300))
+            det = _lu(W, oB, I, op, m)
+        for i in range(m * m):
+            W[oB + i] = W[oA + i]
+        dA = _lu(W, oB, I, op, m)
+        if not abs(dA) > 1e-12 * hadamard:
+            return REDUNDANT, det
+        _lu_solve(W, oB, I, op, m, ocol)
+        for j in range(m):
+            if not np.isfinite(W[ocol + j]):
+                return SINGULAR, det
+        for i in range(n):
+            v = W[oX + i]
+            for j in range(m):
+                v += W[oX + (j + 1) * n + i] * W[ocol + j]
+            ud[i] = v
+        for j in range(m):
+            if I[oj + j] == 0:
+                N[I[oc + j]] = W[ocol + j]
+            elif I[oj + j] == 1:
+                F[I[oc + j]] = W[ocol + j]
+        for c in range(k):
+            if modes[c] == SLIP_POS or modes[c] == SLIP_NEG:
+                s = 1.0 if modes[c] == SLIP_POS else -1.0
+                F[c] = -s * rho[c] * W[omu + c] * N[c]
+    for c in range(k):
+        for r in range(3):
+            v = W[ob + 3 * c + r]
+            for i in range(n):
+                v += W[oJ + (3 * c + r) * n + i] * ud[i]
+            a[c, r] = v
+        if lay[3]:
+            a[c, 1] -= W[osd + k + c]
+    return OK, det
+
+
+@njit(cache=True, error_model="numpy")
+def watch(PC, SF, KN, DM, y, t, p, lay, one_sided, rolls, modes, rho, none, jam, bounds,
+          W, I, ud, N, F, a, out):
+    """The event functions of the phase at ``(t, y)`` into ``out``, each >= 0 while it goes
+    on (:meth:`phasemap.motion.hybrid.Motion.watch`; ``none``: k falses); the status of
+    :func:`accel`."""
+    n, k, nd = lay[0], lay[1], lay[2]
+    for i in range(out.size):
+        out[i] = 1.0
+    st, det = accel(PC, SF, KN, y, t, p, lay, rolls, modes, rho, none, jam != 0.0, W, I,
+                    ud, N, F, a)
+    if st != OK:
+        return st
+    if jam != 0.0:
+        out[out.size - 1] = jam * det
+    og = n * n + n                 # (the pieces accel left: g, J, ..., mu; the surfaces)
+    oJ = og + k
+    nf = n * n + n + k + 3 * k * n + 3 * k + k
+    for c in range(k):
+        md = modes[c]
+        if md == OPEN:
+            if one_sided[c]:
+                out[2 * c] = W[og + c]
+            continue
+        if one_sided[c]:
+            out[2 * c] = N[c]
+        elif md != SMOOTH:
+            out[2 * c] = rho[c] * N[c]
+        if md == STICK:
+            out[2 * c + 1] = W[nf - k + c] * rho[c] * N[c] - abs(F[c])
+        elif md == SLIP_POS or md == SLIP_NEG:
+            v = 0.0
+            for i in range(n):
+                v += W[oJ + (3 * c + 1) * n + i] * y[n + i]
+            out[2 * c + 1] = (1.0 if md == SLIP_POS else -1.0) * (v - W[nf + c])
+    i0 = 2 * k
+    for i in range(n):
+        out[i0 + i] = y[i] - bounds[i, 0]
+        out[i0 + n + i] = bounds[i, 1] - y[i]
+    if nd:
+        DM(out[i0 + 2 * n:i0 + 2 * n + nd], y, p, t)
+    return OK
+
+
+@njit(cache=True, error_model="numpy")
+def _rhs(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, t, y, out):
+    """``out`` <- ``y'`` of the phase; the status of :func:`accel`."""
+    n = lay[0]
+    st, det = accel(PC, SF, KN, y, t, p, lay, rolls, modes, rho, none, False, W, I, ud, N,
+                    F, a)
+    for i in range(n):
+        out[i] = y[n + i]
+        out[n + i] = ud[i]
+    return st
+
+
+@njit(cache=True, error_model="numpy")
+def _gap_rates(W, lay, y, out):
+    """Each contact's normal velocity ``J_n u`` from the pieces :func:`accel` left in ``W``."""
+    n, k = lay[0], lay[1]
+    o = n * n + n + k
+    for c in range(k):
+        v = 0.0
+        for i in range(n):
+            v += W[o + (3 * c) * n + i] * y[n + i]
+        out[c] = v
+
+
+@njit(cache=True, error_model="numpy")
+def _norm(x, scale):
+    s = 0.0
+    for i in range(x.size):
+        v = x[i] / scale[i]
+        s += v * v
+    return np.sqrt(s / x.size)
+
+
+@njit(cache=True, error_model="numpy")
+def dense_at(Fd, t_old, h, y_old, t, out):
+    """scipy's DOP853 dense output of a step at ``t`` into ``out``."""
+    x = (t - t_old) / h
+    out[:] = 0.0
+    for i in range(Fd.shape[0]):
+        f = Fd[Fd.shape[0] - 1 - i]
+        for j in range(out.size):
+            out[j] += f[j]
+            out[j] *= x if i % 2 == 0 else 1.0 - x
+    for j in range(out.size):
+        out[j] += y_old[j]
+
+
+@njit(cache=True, error_model="numpy")
+def _stages(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K, t, y, h, first,
+            last, yt):
+    """The stages ``first`` to ``last - 1`` of scipy's DOP853 from ``(t, y)`` over ``h``
+    into the rows of ``K``; the worst status of :func:`accel`."""
+    st = OK
+    for s in range(first, last):
+        for i in range(y.size):
+            v = 0.0
+            for j in range(s):
+                v += K[j, i] * _A[s, j]
+            yt[i] = y[i] + v * h
+        st = max(st, _rhs(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a,
+                          t + _C[s] * h, yt, K[s]))
+    return st
+
+
+@njit(cache=True, error_model="numpy")
+def _dense(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K, t_old,
+           y_old, y, f, h, yt, Fd):
+    """The dense output's coefficients ``Fd`` (7, 2n) of the step ``y_old -> y`` (scipy's
+    DOP853 ``_dense_output_impl``); the status of the extra stages."""
+    ny = y.size
+    st = _stages(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K, t_old,
+                 y_old, h, 13, 16, yt)
+    for i in range(ny):
+        dy = y[i] - y_old[i]
+        Fd[0, i] = dy
+        Fd[1, i] = h * K[0, i] - dy
+        Fd[2, i] = 2.0 * dy - h * (f[i] + K[0, i])
+        for r in range(4):
+            v = 0.0
+            for j in range(16):
+                v += _D[r, j] * K[j, i]
+            Fd[3 + r, i] = h * v
+    return st
+
+
+@njit(cache=True, error_model="numpy")
+def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, none,
+            state, y, f, y_old, w0, w1, gr0, gr1, K, Fd, te, t_stop, rtol, atol, max_step,
+            steps_left, out_t, out_y, W, I, ud, N, F, a, yt):
+    """Steps the phase ``modes`` with scipy's DOP853 from ``state = [t, h_abs, t_old,
+    h_prev, i_eval]`` and ``y`` (``f`` its rate; ``h_abs`` <= 0: chosen as scipy does; ``w0``
+    the event functions there) until an event function changes sign in a step or a gap's
+    rate turns from negative to positive (``EVENT``: the step's dense output in ``Fd``,
+    ``w1`` and ``gr1`` at its end), ``t_stop`` (``FINISHED``), a step below scipy's
+    smallest (``FAILED``), ``steps_left`` (``MAX_STEPS``) or ``out_t`` full (``FULL``).
+    Saves each step's end into ``out_t``, ``out_y``, or the state at the times ``te`` from
+    ``state[4]`` on where ``te`` is not empty.  Returns ``(status, saved, steps)``."""
+    n = lay[0]
+    k = lay[1]
+    ny = 2 * n
+    t = state[0]
+    h_abs = state[1]
+    i_eval = int(state[4])
+    saved = 0
+    steps = 0
+    args_ok = OK
+    if h_abs <= 0.0:       # scipy's select_initial_step (order 7)
+        interval = abs(t_stop - t)
+        if interval == 0.0:
+            h_abs = 0.0
+        else:
+            for i in range(ny):
+                yt[i] = atol + abs(y[i]) * rtol
+            d0 = _norm(y, yt)
+            d1 = _norm(f, yt)
+            h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+            h0 = min(h0, interval)
+            y1 = y_old
+            for i in range(ny):
+                y1[i] = y[i] + h0 * f[i]
+            args_ok = _rhs(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a,
+                           t + h0, y1, K[15])
+            d2 = 0.0
+            for i in range(ny):
+                v = (K[15, i] - f[i]) / yt[i]
+                d2 += v * v
+            d2 = np.sqrt(d2 / ny) / h0
+            if d1 <= 1e-15 and d2 <= 1e-15:
+                h1 = max(1e-6, h0 * 1e-3)
+            else:
+                h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
+            h_abs = min(100.0 * h0, h1, interval, max_step)
+    if args_ok != OK:
+        state[1] = h_abs
+        return args_ok, saved, steps
+    while True:
+        if steps >= steps_left:
+            state[0], state[1], state[4] = t, h_abs, i_eval
+            return MAX_STEPS, saved, steps
+        min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+        if h_abs > max_step:
+            ha = max_step
+        elif h_abs < min_step:
+            ha = min_step
+        else:
+            ha = h_abs
+        rejected = False
+        while True:
+            if ha < min_step:
+                state[0], state[1], state[4] = t, h_abs, i_eval
+                return FAILED, saved, steps
+            t_new = t + ha
+            if t_new - t_stop > 0.0:
+                t_new = t_stop
+            h = t_new - t
+            ha = abs(h)
+            for i in range(ny):
+                K[0, i] = f[i]
+            st = _stages(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K,
+                         t, y, h, 1, 12, yt)
+            for i in range(ny):
+                v = 0.0
+                for j in range(12):
+                    v += K[j, i] * _B[j]
+                y_old[i] = y[i] + h * v          # (y_new, kept here for now)
+            st = max(st, _rhs(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a,
+                              t + h, y_old, K[12]))
+            if st != OK:
+                state[0], state[1], state[4] = t, h_abs, i_eval
+                return st, saved, steps
+            e5 = 0.0
+            e3 = 0.0
+            for i in range(ny):
+                sc = atol + max(abs(y[i]), abs(y_old[i])) * rtol
+                v5 = 0.0
+                v3 = 0.0
+                for j in range(13):
+                    v5 += K[j, i] * _E5[j]
+                    v3 += K[j, i] * _E3[j]
+                v5 /= sc
+                v3 /= sc
+                e5 += v5 * v5
+                e3 += v3 * v3
+            if e5 == 0.0 and e3 == 0.0:
+                err = 0.0
+            else:
+                err = abs(h) * e5 / np.sqrt((e5 + 0.01 * e3) * ny)
+            if err < 1.0:
+                factor = _MAX_FACTOR if err == 0.0 else min(
+                    _MAX_FACTOR, _SAFETY * err ** _EXPONENT)
+                if rejected:
+                    factor = min(1.0, factor)
+                ha *= factor
+                break
+            ha *= max(_MIN_FACTOR, _SAFETY * err ** _EXPONENT)
+            rejected = True
+        h_abs = ha
+        steps += 1
+        t_old = t
+        for i in range(ny):
+            v = y_old[i]
+            y_old[i] = y[i]
+            y[i] = v
+            f[i] = K[12, i]
+        t = t_new
+        st = watch(PC, SF, KN, DM, y, t, p, lay, one_sided, rolls, modes, rho, none, jam,
+                   bounds, W, I, ud, N, F, a, w1)
+        _gap_rates(W, lay, y, gr1)
+        state[0], state[1], state[2], state[3] = t, h_abs, t_old, h
+        if st != OK:
+            state[4] = i_eval
+            return st, saved, steps
+        hit = False
+        for i in range(w0.size):
+            if w0[i] >= 0.0 and w1[i] < 0.0:
+                hit = True
+        for c in range(k):
+            if (modes[c] == OPEN and one_sided[c] and w1[2 * c] >= 0.0 and w0[2 * c] > 0.0
+                    and gr0[c] < 0.0 < gr1[c]):
+                hit = True
+        dense = hit or (te.size > 0 and i_eval < te.size and te[i_eval] <= t)
+        if dense:
+            st = _dense(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K,
+                        t_old, y_old, y, f, h, yt, Fd)
+            if st != OK:
+                state[4] = i_eval
+                return st, saved, steps
+        if hit:
+            state[4] = i_eval
+            return EVENT, saved, steps
+        if te.size:
+            while i_eval < te.size and te[i_eval] <= t:
+                if te[i_eval] >= t_old:
+                    dense_at(Fd, t_old, h, y_old, te[i_eval], out_y[saved])
+                    out_t[saved] = te[i_eval]
+                    saved += 1
+                i_eval += 1
+        else:
+            out_t[saved] = t
+            for i in range(ny):
+                out_y[saved, i] = y[i]
+            saved += 1
+        for i in range(w0.size):
+            w0[i] = w1[i]
+        for c in range(k):
+            gr0[c] = gr1[c]
+        state[4] = i_eval
+        if t >= t_stop:
+            return FINISHED, saved, steps
+        if saved + 1 >= out_t.size:
+            return FULL, saved, steps
+
+
+
+_LOCK = threading.Lock()
+_FUNCTIONS: dict = {}
+
+
+class _Pointer:
+    """A compiled ``cfunc`` as a kernel's argument, its numba type and address found once:
+    numba finds a cfunc's type anew at every call (about 9 us), more than a phase's solve
+    costs."""
+
+    __slots__ = ("cfunc", "_numba_type_", "_address")
+
+    def __init__(self, fn):
+        from numba import typeof
+
+        self.cfunc = fn
+        self._numba_type_ = typeof(fn)
+        self._address = fn.address
+
+    def __wrapper_address__(self):
+        return self._address
+
+
+def functions(mech, twin: bool):
+    """The declaration's rewritten functions (:mod:`phasemap.motion.hybrid.flowtext`): numba
+    ``cfunc`` pointers, or their interpreted twins (``twin``), in the order of
+    :data:`phasemap.motion.hybrid.flowtext.NAMES`."""
+    from phasemap.core.cache import load_module
+    from phasemap.core.interpret import interpreted
+    from phasemap.motion.hybrid import flowtext
+
+    key = (mech.source, twin)
+    with _LOCK:
+        if key in _FUNCTIONS:
+            return _FUNCTIONS[key]
+        with open(mech.source, encoding="utf-8") as fh:
+            text = flowtext.text(fh.read(), mech.n, len(mech.contacts), len(mech.parameters))
+        digest = hashlib.sha256(f"{flowtext.LAYOUT}\n{text}".encode()).hexdigest()[:16]
+        module = load_module(f"flow_declared_{digest}", lambda: text)
+        if twin:
+            made = tuple(interpreted(njit(error_model="numpy")(getattr(module, name)))
+                         for name in flowtext.NAMES)
+        else:
+            made = tuple(_Pointer(cfunc(flowtext.SIGNATURE, cache=True, error_model="numpy")(
+                getattr(module, name))) for name in flowtext.NAMES)
+        _FUNCTIONS[key] = made
+        return made
+
+
+#: How many steps' ends one :func:`advance` call saves at most (it returns ``FULL``).
+BUFFER = 4096
+
+
+class Phase:
+    """A declaration's compiled flow at its parameters: what a
+    :class:`phasemap.motion.hybrid.Motion` calls for a phase's accelerations, its event
+    functions and its steps (machine code, or the interpreted twins while numba compiles;
+    :mod:`phasemap.core.tiers`).  ``warm``: the picklable call that compiles the kernels
+    in a background process."""
+
+    def __init__(self, mech, p, one_sided, rolls, warm=None):
+        n, k = mech.n, len(mech.contacts)
+        self.n, self.k = n, k
+        self.p = np.ascontiguousarray(p, dtype=float)
+        self.lay = np.array([n, k, mech.n_domain, mech._surface is not None,
+                             mech._kinetic is not None], dtype=np.int64)
+        self.one_sided = np.ascontiguousarray(one_sided, dtype=np.bool_)
+        self.rolls = np.ascontiguousarray(rolls, dtype=np.bool_)
+        self.bounds = np.ascontiguousarray(mech.bounds(self.p), dtype=float)
+        self.W, self.I = workspace(n, k)
+        self.none = np.zeros(k, dtype=np.bool_)
+        self.ud, self.N, self.F = np.zeros(n), np.zeros(k), np.zeros(k)
+        self.a = np.zeros((k, 3))
+        self.n_watch = 2 * k + 2 * n + mech.n_domain + 1
+        self.mech, self.warm = mech, warm
+        self.twin = True
+        self._tiers()
+
+    def _tiers(self):
+        """Machine code where it is compiled (or ``$PHASEMAP_JIT`` is ``eager``); else the
+        interpreted twins, while a background process compiles it."""
+        from phasemap.core import tiers
+        from phasemap.core.interpret import interpreted
+
+        twin = tiers.mode() == "off"
+        if not twin:
+            fns = functions(self.mech, False)
+            probe = (*fns[:3], np.zeros(2 * self.n), 0.0, self.p, self.lay, self.rolls,
+                     np.zeros(self.k, dtype=np.int64), np.ones(self.k), self.none, False,
+                     self.W, self.I, self.ud, self.N, self.F, self.a)
+            twin = tiers.is_twin(tiers.runner(accel, probe, self.warm))
+        if twin:
+            fns = functions(self.mech, True)
+            kernels = (accel, watch, advance, _rhs, _gap_rates)
+            kernels = tuple(interpreted(k) for k in kernels)
+        else:
+            kernels = (accel, watch, advance, _rhs, _gap_rates)
+        (self.accel, self.watch_fn, self.advance_fn, self.rhs_fn,
+         self.rates_fn) = kernels
+        self.twin, self.fns = twin, fns
+
+    def refresh(self):
+        """Machine code from now on where its background compile has ended (the twins give
+        the same bits: a motion may change tiers between its phases)."""
+        if self.twin:
+            self._tiers()
+
+    def solve(self, y, t, modes, rho, start, want_det):
+        """``(status, det)`` of :func:`accel`; the results in ``ud``, ``N``, ``F``, ``a`` and
+        the pieces in :meth:`pieces`."""
+        PC, SF, KN, _ = self.fns
+        return self.accel(PC, SF, KN, y, float(t), self.p, self.lay, self.rolls, modes, rho,
+                          start, want_det, self.W, self.I, self.ud, self.N, self.F, self.a)
+
+    def pieces(self):
+        """``(M, h, g, J, b, mu)`` the last call left in the workspace (copies)."""
+        n, k = self.n, self.k
+        W = self.W
+        o = n * n
+        M = W[:o].reshape(n, n).copy()
+        h = W[o:o + n].copy()
+        o += n
+        g = W[o:o + k].copy()
+        o += k
+        J = W[o:o + 3 * k * n].reshape(k, 3, n).copy()
+        o += 3 * k * n
+        b = W[o:o + 3 * k].reshape(k, 3).copy()
+        o += 3 * k
+        return M, h, g, J, b, W[o:o + k].copy()
+
+    def rate(self, y, t, modes, rho, out):
+        """``out`` <- the phase's ``y'`` (:func:`_rhs`); its status."""
+        PC, SF, KN, _ = self.fns
+        rhs = self.rhs_fn
+        return rhs(PC, SF, KN, self.p, self.lay, self.rolls, modes, rho, self.none, self.W,
+                   self.I, self.ud, self.N, self.F, self.a, float(t), y, out)
+
+    def watch(self, y, t, modes, rho, jam, out):
+        """:func:`watch` into ``out``; its status."""
+        PC, SF, KN, DM = self.fns
+        return self.watch_fn(PC, SF, KN, DM, y, float(t), self.p, self.lay, self.one_sided,
+                             self.rolls, modes, rho, self.none, float(jam), self.bounds,
+                             self.W, self.I, self.ud, self.N, self.F, self.a, out)
+

@@ -1,0 +1,131 @@
+"""The compiled flow of a phase in full coordinates (phasemap.motion.hybrid.flow): its
+accelerations against an independent NumPy solve of the same phase, its interpreted twin
+against its machine code bit for bit, and the rewritten declaration functions against
+the generated ones."""
+
+import numpy as np
+import pytest
+
+from phasemap.core import tiers
+from phasemap.declare.full import mechanics
+from phasemap.motion import hybrid
+from phasemap.motion.hybrid import flow
+from phasemap.motion.hybrid.phases import OPEN, SLIP_NEG, SLIP_POS, SMOOTH, STICK
+from phasemap.systems.oscillators import BELT, DEN_HARTOG, STRIBECK_BELT
+from phasemap.systems.painleve_rod import SYSTEM as ROD
+from phasemap.systems.rod_on_step import SYSTEM as STEP
+from phasemap.systems.seeds.ladder import SYSTEM as LADDER
+from phasemap.systems.seeds.wheel import SYSTEM as WHEEL
+
+SYSTEMS = {"rod": ROD, "ladder": LADDER, "wheel": WHEEL, "rod_on_step": STEP, "belt": BELT,
+           "stribeck_belt": STRIBECK_BELT, "den_hartog": DEN_HARTOG}
+
+
+def _motion(S, **values):
+    mech = mechanics(S)
+    d = dict(mech.defaults, **values)
+    return hybrid.Motion(mech, [d[p] for p in mech.parameters], hybrid.Options(t_end=1.0))
+
+
+@pytest.mark.parametrize("name", sorted(SYSTEMS))
+def test_phase_accelerations_agree_with_a_numpy_solve(name):
+    """Random states and every mode of every contact: the compiled solve (its own LU)
+    against phasemap's NumPy solve of the same phase (LAPACK), to 1e-9 of the scales, and
+    the same None where a phase has no finite solution.  The slip coefficients of the
+    belts are their kinetic ones at the sliding speed, static where a slip starts."""
+    m = _motion(SYSTEMS[name])
+    rng = np.random.default_rng(7)
+    modes_of = (OPEN, SMOOTH, STICK, SLIP_POS, SLIP_NEG)
+    checked = 0
+    for _ in range(40):
+        q = rng.normal(size=m.n) * 0.5 + np.where(np.isfinite(m.bounds[:, 0]),
+                                                   m.bounds[:, 0] + 0.6, 0.0)
+        q = np.clip(q, m.bounds[:, 0] + 1e-3, m.bounds[:, 1] - 1e-3)
+        u = rng.normal(size=m.n)
+        t = float(rng.uniform(0.0, 3.0))
+        modes = tuple(int(rng.choice(modes_of)) for _ in range(m.k))
+        rho = np.where(rng.random(m.k) < 0.5, 1.0, -1.0)
+        start = tuple(c for c in range(m.k) if rng.random() < 0.5)
+        got, det = m._solve(q, u, modes, rho, t, start, True)
+        want, det_want = m._solve_redundant(q, u, modes, rho, t, start, True)
+        assert (got is None) == (want is None)
+        if got is None:
+            continue
+        for a, b in zip(got[:4], want[:4]):
+            scale = 1.0 + np.abs(b).max()
+            assert np.abs(a - b).max() <= 1e-9 * scale, (modes, a, b)
+        for a, b in zip(got[4], want[4]):
+            assert np.allclose(a, b, rtol=1e-13, atol=1e-13)
+        assert abs(det - det_want) <= 1e-9
+        checked += 1
+    assert checked >= 20
+
+
+@pytest.mark.parametrize("S, start", [
+    (ROD, dict(q=[0.7, 0.0, 0.3], u=[0.0, 0.5, 0.0])),                 # flight, impacts
+    (STRIBECK_BELT, dict(q=[0.5, 0.0], u=[0.0, 0.0])),                   # stick-slip
+])
+def test_the_twin_steps_as_the_machine_code_does(S, start):
+    """A motion through flight, impacts and stick-slip switches on the interpreted twins
+    (``PHASEMAP_JIT=off``) and on the machine code: the same bits in every saved point and
+    event."""
+    mech = mechanics(S)
+    p = [mech.defaults[n] for n in mech.parameters]
+    recs = []
+    for how in ("off", "eager"):
+        with tiers.forced(how):
+            m = hybrid.Motion(mech, p, hybrid.Options(t_end=1.0 if S is ROD else 12.0))
+            assert m.flow.twin == (how == "off")
+            recs.append(m.run(np.array(start["q"]), np.array(start["u"])))
+    a, b = recs
+    assert len(a.ev_kind) >= 3 and a.ev_kind == b.ev_kind
+    assert np.array_equal(np.array(a.t), np.array(b.t))
+    assert np.array_equal(np.array(a.y), np.array(b.y))
+    assert np.array_equal(np.array(a.ev_t), np.array(b.ev_t))
+
+
+@pytest.mark.parametrize("name", sorted(SYSTEMS))
+def test_rewritten_functions_give_the_generated_pieces(name):
+    """pieces_into, domain_into, surface_into and kinetic_into (the twins of the cfuncs)
+    against the generated functions they were rewritten from, at random states."""
+    mech = mechanics(SYSTEMS[name])
+    PC, SF, KN, DM = flow.functions(mech, True)
+    p = np.array([mech.defaults[n] for n in mech.parameters], dtype=float)
+    n, k = mech.n, len(mech.contacts)
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        y = rng.normal(size=2 * n)
+        t = float(rng.uniform(0.0, 5.0))
+        flat = np.zeros(flow.sizes(n, k)[0])
+        PC(flat, y, p, t)
+        want = np.array(mech._pieces(*y, *p, t), dtype=float)
+        assert np.allclose(flat, want, rtol=1e-14, atol=1e-14)
+        if mech.n_domain:
+            dom = np.zeros(mech.n_domain)
+            DM(dom, y, p, t)
+            assert np.allclose(dom, mech.domain(*y[:n], *p), rtol=1e-14, atol=1e-14)
+        s = np.zeros(2 * k)
+        SF(s, y, p, t)
+        assert np.allclose(s, np.concatenate(mech.surface(p, t)), rtol=1e-14, atol=1e-14)
+        speed = np.abs(rng.normal(size=k))
+        kin = speed.copy()
+        KN(kin, y, p, t)
+        if mech._kinetic is not None:
+            want = mech.kinetic(y[:n], y[n:], p, t, speed, None)
+            assert np.allclose(kin, want, rtol=1e-14, atol=1e-14)
+        else:
+            assert np.array_equal(kin, speed)      # left as it is: plain Coulomb
+
+
+def test_a_motion_goes_on_in_machine_code_once_it_is_compiled():
+    """A motion started on the interpreted twins (the machine code not compiled yet, or
+    ``PHASEMAP_JIT=off``) takes the machine code at its next phase once it is there."""
+    mech = mechanics(ROD)
+    p = [mech.defaults[n] for n in mech.parameters]
+    with tiers.forced("off"):
+        m = hybrid.Motion(mech, p, hybrid.Options(t_end=1.0))
+        m.flow.refresh()
+    assert m.flow.twin and m.flow.accel is not flow.accel
+    with tiers.forced("eager"):
+        m.flow.refresh()
+    assert not m.flow.twin and m.flow.accel is flow.accel and m.flow.advance_fn is flow.advance
