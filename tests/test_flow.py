@@ -9,7 +9,7 @@ import pytest
 from phasemap.core import tiers
 from phasemap.declare.full import mechanics
 from phasemap.motion import hybrid
-from phasemap.motion.hybrid import flow
+from phasemap.motion.hybrid import binding, flow
 from phasemap.motion.hybrid.phases import OPEN, SLIP_NEG, SLIP_POS, SMOOTH, STICK
 from phasemap.systems.oscillators import BELT, DEN_HARTOG, STRIBECK_BELT
 from phasemap.systems.painleve_rod import SYSTEM as ROD
@@ -89,7 +89,7 @@ def test_rewritten_functions_give_the_generated_pieces(name):
     """pieces_into, domain_into, surface_into and kinetic_into (the twins of the cfuncs)
     against the generated functions they were rewritten from, at random states."""
     mech = mechanics(SYSTEMS[name])
-    PC, SF, KN, DM = flow.functions(mech, True)
+    PC, SF, KN, DM = binding.functions(mech, True)
     p = np.array([mech.defaults[n] for n in mech.parameters], dtype=float)
     n, k = mech.n, len(mech.contacts)
     rng = np.random.default_rng(3)

@@ -12,7 +12,7 @@ import numpy as np
 from phasemap.core import events as ev
 from phasemap.motion.impact import tangential_impact  # noqa: F401 - the package's name
 
-from phasemap.motion.hybrid import flow, jam, landing, stepping
+from phasemap.motion.hybrid import binding, flow, jam, landing, stepping
 from phasemap.motion.hybrid.phases import (  # noqa: F401 - the package's names
     MODE_NAMES, OPEN, QUIET, SLIP_NEG, SLIP_POS, SMOOTH, STICK, TOL, kind_of, normalised_det,
     system)
@@ -83,7 +83,7 @@ class Motion:
         #: a momentary rest
         self.rests = mech.can_rest
         #: the compiled flow: the phases' accelerations, event functions and steps
-        self.flow = flow.Phase(mech, self.p, self.one_sided, self.rolls, (warm, (), {}))
+        self.flow = binding.Phase(mech, self.p, self.one_sided, self.rolls, (warm, (), {}))
 
     def surf(self, t):
         """Each contact surface's tangential velocity at ``t``."""

@@ -6,9 +6,11 @@ linear system (:mod:`phasemap.motion.hybrid.phases`): ``M u' = h + sum G lam`` w
 held accelerations ``R u' = rhs``.  The functions here solve it and step it with
 scipy's DOP853 method (its coefficients and its step-size control, in machine code).
 They are compiled once for every declaration: a declaration's own functions (its
-generated pieces, :mod:`phasemap.motion.hybrid.flowtext`) are numba ``cfunc`` pointers they take
-as arguments, compiled in well under a second.  What follows an event (which phase, an
-impact, a jam) stays in :class:`phasemap.motion.hybrid.Motion`, in Python.
+generated pieces, rewritten by :mod:`.flowtext`) are numba ``cfunc`` pointers they take as
+arguments, compiled in well under a second (:mod:`.binding`).  Where a step holds an
+event, :func:`locate` finds it.  Every kernel is in this one file: numba's cache renews a
+function whose file changed, not one that calls it from another file.  What follows an event (which phase, an impact, a jam)
+stays in :class:`phasemap.motion.hybrid.Motion`, in Python.
 
 Layout ``lay`` (int64): ``[n, k, n_domain, has_surface, has_kinetic]``.  The workspace
 ``W`` (float64, :func:`workspace`) holds the pieces first, at the offsets of
@@ -18,15 +20,18 @@ then the slip coefficients.
 
 from __future__ import annotations
 
-import hashlib
-import threading
+import warnings
 
 import numpy as np
-from numba import cfunc, njit
-from numba.experimental import function_type
+from numba import njit
+from numba.core.errors import NumbaExperimentalFeatureWarning
 from scipy.integrate._ivp import dop853_coefficients as _dc
 
 from phasemap.motion.hybrid.phases import OPEN, SLIP_NEG, SLIP_POS, SMOOTH, STICK
+
+# numba marks first-class functions (the cfunc arguments) experimental, once per compile
+warnings.filterwarnings("ignore", "First-class function type feature is experimental",
+                        NumbaExperimentalFeatureWarning)
 
 #: What :func:`accel` and :func:`advance` return.
 OK, REDUNDANT, SINGULAR = 0, 1, 2
@@ -41,8 +46,6 @@ _E3 = np.ascontiguousarray(_dc.E3)
 _E5 = np.ascontiguousarray(_dc.E5)
 _D = np.ascontiguousarray(_dc.D)
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR, _EXPONENT = 0.9, 0.2, 10.0, -1.0 / 8.0
-#: (imported for what it registers: the numba type of a cfunc passed as an argument)
-_CFUNC_TYPES = function_type
 
 
 def sizes(n: int, k: int) -> tuple[int, int]:
@@ -565,147 +568,151 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
             return FULL, saved, steps
 
 
+@njit(cache=True, error_model="numpy")
+def _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, bounds,
+                 W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, kind, idx, t):
+    """At ``t`` in the step (its dense output): the event function ``idx`` (``kind`` 0; its
+    value at the step's start for ``t <= t_old``) or contact ``idx``'s gap rate (1)."""
+    n = lay[0]
+    if kind == 0 and t <= t_old:
+        return w0[idx]
+    dense_at(Fd, t_old, h, y_old, t, yt)
+    if kind == 0:
+        watch(PC, SF, KN, DM, yt, t, p, lay, one_sided, rolls, modes, rho, none, jam, bounds,
+              W, I, ud, N, F, a, wt)
+        return wt[idx]
+    nf = n * n + n + lay[1] + 3 * lay[1] * n + 4 * lay[1]
+    PC(W[:nf], yt, p, t)
+    o = n * n + n + lay[1] + 3 * idx * n
+    v = 0.0
+    for i in range(n):
+        v += W[o + i] * yt[n + i]
+    return v
 
-_LOCK = threading.Lock()
-_FUNCTIONS: dict = {}
 
-
-class _Pointer:
-    """A compiled ``cfunc`` as a kernel's argument, its numba type and address found once:
-    numba finds a cfunc's type anew at every call (about 9 us), more than a phase's solve
-    costs."""
-
-    __slots__ = ("cfunc", "_numba_type_", "_address")
-
-    def __init__(self, fn):
-        from numba import typeof
-
-        self.cfunc = fn
-        self._numba_type_ = typeof(fn)
-        self._address = fn.address
-
-    def __wrapper_address__(self):
-        return self._address
-
-
-def functions(mech, twin: bool):
-    """The declaration's rewritten functions (:mod:`phasemap.motion.hybrid.flowtext`): numba
-    ``cfunc`` pointers, or their interpreted twins (``twin``), in the order of
-    :data:`phasemap.motion.hybrid.flowtext.NAMES`."""
-    from phasemap.core.cache import load_module
-    from phasemap.core.interpret import interpreted
-    from phasemap.motion.hybrid import flowtext
-
-    key = (mech.source, twin)
-    with _LOCK:
-        if key in _FUNCTIONS:
-            return _FUNCTIONS[key]
-        with open(mech.source, encoding="utf-8") as fh:
-            text = flowtext.text(fh.read(), mech.n, len(mech.contacts), len(mech.parameters))
-        digest = hashlib.sha256(f"{flowtext.LAYOUT}\n{text}".encode()).hexdigest()[:16]
-        module = load_module(f"flow_declared_{digest}", lambda: text)
-        if twin:
-            made = tuple(interpreted(njit(error_model="numpy")(getattr(module, name)))
-                         for name in flowtext.NAMES)
+@njit(cache=True, error_model="numpy")
+def _brent(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, bounds, W, I, ud,
+           N, F, a, Fd, t_old, h, y_old, w0, wt, yt, kind, idx, xa, xb, xtol, rtol):
+    """scipy's ``brentq`` (its C code, 100 iterations) on :func:`_event_value`."""
+    xpre, xcur = xa, xb
+    xblk, fblk, spre, scur = 0.0, 0.0, 0.0, 0.0
+    fpre = _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
+                        bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, kind, idx,
+                        xpre)
+    fcur = _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
+                        bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, kind, idx,
+                        xcur)
+    if fpre == 0.0:
+        return xpre
+    if fcur == 0.0:
+        return xcur
+    if np.signbit(fpre) == np.signbit(fcur):
+        return np.nan
+    for _ in range(100):
+        if fpre != 0.0 and fcur != 0.0 and np.signbit(fpre) != np.signbit(fcur):
+            xblk, fblk = xpre, fpre
+            spre = scur = xcur - xpre
+        if abs(fblk) < abs(fcur):
+            xpre, xcur, xblk = xcur, xblk, xcur
+            fpre, fcur, fblk = fcur, fblk, fcur
+        delta = (xtol + rtol * abs(xcur)) / 2.0
+        sbis = (xblk - xcur) / 2.0
+        if fcur == 0.0 or abs(sbis) < delta:
+            return xcur
+        if abs(spre) > delta and abs(fcur) < abs(fpre):
+            if xpre == xblk:
+                stry = -fcur * (xcur - xpre) / (fcur - fpre)
+            else:
+                dpre = (fpre - fcur) / (xpre - xcur)
+                dblk = (fblk - fcur) / (xblk - xcur)
+                stry = -fcur * (fblk * dblk - fpre * dpre) / (dblk * dpre * (fblk - fpre))
+            if 2.0 * abs(stry) < min(abs(spre), 3.0 * abs(sbis) - delta):
+                spre, scur = scur, stry
+            else:
+                spre, scur = sbis, sbis
         else:
-            made = tuple(_Pointer(cfunc(flowtext.SIGNATURE, cache=True, error_model="numpy")(
-                getattr(module, name))) for name in flowtext.NAMES)
-        _FUNCTIONS[key] = made
-        return made
-
-
-#: How many steps' ends one :func:`advance` call saves at most (it returns ``FULL``).
-BUFFER = 4096
-
-
-class Phase:
-    """A declaration's compiled flow at its parameters: what a
-    :class:`phasemap.motion.hybrid.Motion` calls for a phase's accelerations, its event
-    functions and its steps (machine code, or the interpreted twins while numba compiles;
-    :mod:`phasemap.core.tiers`).  ``warm``: the picklable call that compiles the kernels
-    in a background process."""
-
-    def __init__(self, mech, p, one_sided, rolls, warm=None):
-        n, k = mech.n, len(mech.contacts)
-        self.n, self.k = n, k
-        self.p = np.ascontiguousarray(p, dtype=float)
-        self.lay = np.array([n, k, mech.n_domain, mech._surface is not None,
-                             mech._kinetic is not None], dtype=np.int64)
-        self.one_sided = np.ascontiguousarray(one_sided, dtype=np.bool_)
-        self.rolls = np.ascontiguousarray(rolls, dtype=np.bool_)
-        self.bounds = np.ascontiguousarray(mech.bounds(self.p), dtype=float)
-        self.W, self.I = workspace(n, k)
-        self.none = np.zeros(k, dtype=np.bool_)
-        self.ud, self.N, self.F = np.zeros(n), np.zeros(k), np.zeros(k)
-        self.a = np.zeros((k, 3))
-        self.n_watch = 2 * k + 2 * n + mech.n_domain + 1
-        self.mech, self.warm = mech, warm
-        self.twin = True
-        self._tiers()
-
-    def _tiers(self):
-        """Machine code where it is compiled (or ``$PHASEMAP_JIT`` is ``eager``); else the
-        interpreted twins, while a background process compiles it."""
-        from phasemap.core import tiers
-        from phasemap.core.interpret import interpreted
-
-        twin = tiers.mode() == "off"
-        if not twin:
-            fns = functions(self.mech, False)
-            probe = (*fns[:3], np.zeros(2 * self.n), 0.0, self.p, self.lay, self.rolls,
-                     np.zeros(self.k, dtype=np.int64), np.ones(self.k), self.none, False,
-                     self.W, self.I, self.ud, self.N, self.F, self.a)
-            twin = tiers.is_twin(tiers.runner(accel, probe, self.warm))
-        if twin:
-            fns = functions(self.mech, True)
-            kernels = (accel, watch, advance, _rhs, _gap_rates)
-            kernels = tuple(interpreted(k) for k in kernels)
+            spre, scur = sbis, sbis
+        xpre, fpre = xcur, fcur
+        if abs(scur) > delta:
+            xcur += scur
         else:
-            kernels = (accel, watch, advance, _rhs, _gap_rates)
-        (self.accel, self.watch_fn, self.advance_fn, self.rhs_fn,
-         self.rates_fn) = kernels
-        self.twin, self.fns = twin, fns
+            xcur += delta if sbis > 0.0 else -delta
+        fcur = _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
+                            bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, kind,
+                            idx, xcur)
+    return xcur
 
-    def refresh(self):
-        """Machine code from now on where its background compile has ended (the twins give
-        the same bits: a motion may change tiers between its phases)."""
-        if self.twin:
-            self._tiers()
 
-    def solve(self, y, t, modes, rho, start, want_det):
-        """``(status, det)`` of :func:`accel`; the results in ``ud``, ``N``, ``F``, ``a`` and
-        the pieces in :meth:`pieces`."""
-        PC, SF, KN, _ = self.fns
-        return self.accel(PC, SF, KN, y, float(t), self.p, self.lay, self.rolls, modes, rho,
-                          start, want_det, self.W, self.I, self.ud, self.N, self.F, self.a)
+@njit(cache=True, error_model="numpy")
+def _onto_root(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, bounds, W, I,
+               ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, i, r, t1):
+    """The root ``r`` moved, by ulps, to where the function is no longer positive
+    (:meth:`phasemap.motion.hybrid.Motion._onto_root`)."""
+    for k in range(64):
+        v = _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
+                         bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 0, i, r)
+        if v <= 0.0 or r >= t1:
+            return min(r, t1)
+        r = np.nextafter(r, np.inf) if k < 8 else r + (t1 - r) * 1e-12 * 2.0 ** (k - 8)
+    return r
 
-    def pieces(self):
-        """``(M, h, g, J, b, mu)`` the last call left in the workspace (copies)."""
-        n, k = self.n, self.k
-        W = self.W
-        o = n * n
-        M = W[:o].reshape(n, n).copy()
-        h = W[o:o + n].copy()
-        o += n
-        g = W[o:o + k].copy()
-        o += k
-        J = W[o:o + 3 * k * n].reshape(k, 3, n).copy()
-        o += 3 * k * n
-        b = W[o:o + 3 * k].reshape(k, 3).copy()
-        o += 3 * k
-        return M, h, g, J, b, W[o:o + k].copy()
 
-    def rate(self, y, t, modes, rho, out):
-        """``out`` <- the phase's ``y'`` (:func:`_rhs`); its status."""
-        PC, SF, KN, _ = self.fns
-        rhs = self.rhs_fn
-        return rhs(PC, SF, KN, self.p, self.lay, self.rolls, modes, rho, self.none, self.W,
-                   self.I, self.ud, self.N, self.F, self.a, float(t), y, out)
-
-    def watch(self, y, t, modes, rho, jam, out):
-        """:func:`watch` into ``out``; its status."""
-        PC, SF, KN, DM = self.fns
-        return self.watch_fn(PC, SF, KN, DM, y, float(t), self.p, self.lay, self.one_sided,
-                             self.rolls, modes, rho, self.none, float(jam), self.bounds,
-                             self.W, self.I, self.ud, self.N, self.F, self.a, out)
-
+@njit(cache=True, error_model="numpy")
+def locate(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, bounds, W, I, ud,
+           N, F, a, Fd, t_old, t1, h, y_old, w0, w1, wt, yt):
+    """``(t, index)`` of the earliest event function to reach zero in the step ``t_old`` to
+    ``t1`` (its dense output ``Fd`` from ``y_old``), or ``(nan, -1)``: the machine-code form
+    of :meth:`phasemap.motion.hybrid.Motion._first_event` (a gap whose rate turns from
+    negative to positive inside the step is checked at its minimum too)."""
+    k = lay[1]
+    eps = np.finfo(np.float64).eps
+    xtol = 4.0 * eps * max(abs(t_old), abs(t1), 1e-300)
+    best_t, best_i = np.inf, -1
+    for i in range(w0.size):
+        if not (w0[i] >= 0.0 and w1[i] < 0.0):
+            continue
+        lo = t_old
+        if w0[i] == 0.0:      # starts at zero (a gap just opened): the root after its rise
+            for kk in range(1, 60):
+                tm = t_old + (t1 - t_old) * 0.5 ** kk
+                if tm <= t_old:
+                    break
+                if _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none,
+                                jam, bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt,
+                                yt, 0, i, tm) > 0.0:
+                    lo = tm
+                    break
+        r = _brent(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, bounds, W,
+                   I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 0, i, lo, t1, xtol,
+                   4.0 * eps)
+        r = _onto_root(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
+                       bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, i, r, t1)
+        if r < best_t:
+            best_t, best_i = r, i
+    for c in range(k):
+        if modes[c] != OPEN or not one_sided[c] or w1[2 * c] < 0.0 or w0[2 * c] <= 0.0:
+            continue     # (a gap that starts at zero has just opened: rounding, not a dip)
+        r0 = _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
+                          bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 1, c,
+                          t_old)
+        r1 = _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
+                          bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 1, c, t1)
+        if not r0 < 0.0 < r1:
+            continue
+        tm = _brent(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, bounds,
+                    W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 1, c, t_old, t1, xtol,
+                    4.0 * eps)
+        if _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
+                        bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 0, 2 * c,
+                        tm) < 0.0:
+            r = _brent(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
+                       bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 0, 2 * c,
+                       t_old, tm, xtol, 4.0 * eps)
+            r = _onto_root(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
+                           bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 2 * c,
+                           r, tm)
+            if r < best_t:
+                best_t, best_i = r, 2 * c
+    if best_i < 0:
+        return np.nan, -1
+    return best_t, best_i

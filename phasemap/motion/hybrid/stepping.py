@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from phasemap.core import events as ev
-from phasemap.motion.hybrid import flow, jam, landing
+from phasemap.motion.hybrid import binding, flow, jam, landing
 
 
 def phase(self, t, q, u, modes, rho, sc, t_stop, jam_sign, w0, atol):
@@ -28,7 +28,7 @@ def phase(self, t, q, u, modes, rho, sc, t_stop, jam_sign, w0, atol):
     gr0, gr1 = np.empty(self.k), np.empty(self.k)
     fl.rates_fn(fl.W, fl.lay, y, gr0)
     te = self.t_eval if self.t_eval is not None else np.empty(0)
-    cap = max(flow.BUFFER, te.size - self.i_eval + 2)
+    cap = max(binding.BUFFER, te.size - self.i_eval + 2)
     out_t, out_y = np.empty(cap), np.empty((cap, ny))
     y_old, w1, yt = np.empty(ny), np.empty(w0.size), np.empty(ny)
     K, Fd = np.zeros((16, ny)), np.zeros((7, ny))
@@ -63,14 +63,10 @@ def phase(self, t, q, u, modes, rho, sc, t_stop, jam_sign, w0, atol):
             F, y0 = Fd.copy(), y_old.copy()
 
             def dense(s, F=F, y0=y0, t_old=t_old, h=h):
-                x = (s - t_old) / h
-                out = np.zeros(ny)
-                for i, fr in enumerate(F[::-1]):
-                    out += fr
-                    out *= x if i % 2 == 0 else 1.0 - x
-                return out + y0
+                return fl.dense(F, t_old, h, y0, s)
 
-            hit, after = _at_event(self, dense, t_old, t1, w0, w1, modes, rho, sc, jam_sign)
+            first = fl.locate(F, t_old, t1, h, y0, w0, w1, modes_a, rho_a, jam_sign)
+            hit, after = _at_event(self, dense, t_old, t1, first, modes, rho)
             state[4] = self.i_eval
             if hit:
                 return after
@@ -83,12 +79,11 @@ def phase(self, t, q, u, modes, rho, sc, t_stop, jam_sign, w0, atol):
         return _finished(self, t1, y, modes)
 
 
-def _at_event(self, dense, t_old, t1, w0, w1, modes, rho, sc, jam_sign):
+def _at_event(self, dense, t_old, t1, hit, modes, rho):
     """``(True, what follows)`` where an event function reaches zero in the step ``t_old``
-    to ``t1`` (its dense output ``dense``), else ``(False, None)``; saves the requested
-    times up to the event or the step's end."""
+    to ``t1`` (its dense output ``dense``; ``hit``: ``(t, index)`` of the first, or None),
+    else ``(False, None)``; saves the requested times up to the event or the step's end."""
     n = self.n
-    hit = self._first_event(dense, t_old, t1, w0, w1, modes, rho, sc, jam_sign)
     self._save_eval(dense, t_old, hit[0] if hit else t1, modes)
     if hit is None:
         return False, None
@@ -130,8 +125,9 @@ def scipy_phase(self, t, y0, modes, rho, sc, t_stop, jam_sign, w0, atol):
             return jam.at_singular(self, t_old, y[:n], y[n:], modes, rho, ev.STEP_FAILURE)
         y1 = solver.y
         w1 = self.watch(y1[:n], y1[n:], modes, rho, sc, solver.t, jam_sign)
-        hit, after = _at_event(self, solver.dense_output(), t_old, solver.t, w0, w1, modes,
-                               rho, sc, jam_sign)
+        dense = solver.dense_output()
+        first = self._first_event(dense, t_old, solver.t, w0, w1, modes, rho, sc, jam_sign)
+        hit, after = _at_event(self, dense, t_old, solver.t, first, modes, rho)
         if hit:
             return after
         if self.t_eval is None:

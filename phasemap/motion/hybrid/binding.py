@@ -1,0 +1,179 @@
+"""A declaration's compiled flow (:mod:`.flow`) bound to its parameters:
+its functions compiled into ``cfunc`` pointers, the workspace, and the choice between the
+machine code and its interpreted twins (:mod:`phasemap.core.tiers`)."""
+
+from __future__ import annotations
+
+import hashlib
+import threading
+
+import numpy as np
+from numba import cfunc, njit
+from numba.experimental import function_type
+
+from phasemap.motion.hybrid.flow import (_gap_rates, _rhs, accel, advance, dense_at, locate,
+                                         watch, workspace)
+
+#: (imported for what it registers: the numba type of a cfunc passed as an argument)
+_CFUNC_TYPES = function_type
+
+
+_LOCK = threading.Lock()
+_FUNCTIONS: dict = {}
+
+
+class _Pointer:
+    """A compiled ``cfunc`` as a kernel's argument, its numba type and address found once:
+    numba finds a cfunc's type anew at every call (about 9 us), more than a phase's solve
+    costs."""
+
+    __slots__ = ("cfunc", "_numba_type_", "_address")
+
+    def __init__(self, fn):
+        from numba import typeof
+
+        self.cfunc = fn
+        self._numba_type_ = typeof(fn)
+        self._address = fn.address
+
+    def __wrapper_address__(self):
+        return self._address
+
+
+def functions(mech, twin: bool):
+    """The declaration's rewritten functions (:mod:`phasemap.motion.hybrid.flowtext`): numba
+    ``cfunc`` pointers, or their interpreted twins (``twin``), in the order of
+    :data:`phasemap.motion.hybrid.flowtext.NAMES`."""
+    from phasemap.core.cache import load_module
+    from phasemap.core.interpret import interpreted
+    from phasemap.motion.hybrid import flowtext
+
+    key = (mech.source, twin)
+    with _LOCK:
+        if key in _FUNCTIONS:
+            return _FUNCTIONS[key]
+        with open(mech.source, encoding="utf-8") as fh:
+            text = flowtext.text(fh.read(), mech.n, len(mech.contacts), len(mech.parameters))
+        digest = hashlib.sha256(f"{flowtext.LAYOUT}\n{text}".encode()).hexdigest()[:16]
+        module = load_module(f"flow_declared_{digest}", lambda: text)
+        if twin:
+            made = tuple(interpreted(njit(error_model="numpy")(getattr(module, name)))
+                         for name in flowtext.NAMES)
+        else:
+            made = tuple(_Pointer(cfunc(flowtext.SIGNATURE, cache=True, error_model="numpy")(
+                getattr(module, name))) for name in flowtext.NAMES)
+        _FUNCTIONS[key] = made
+        return made
+
+
+#: How many steps' ends one :func:`advance` call saves at most (it returns ``FULL``).
+BUFFER = 4096
+
+
+class Phase:
+    """A declaration's compiled flow at its parameters: what a
+    :class:`phasemap.motion.hybrid.Motion` calls for a phase's accelerations, its event
+    functions and its steps (machine code, or the interpreted twins while numba compiles;
+    :mod:`phasemap.core.tiers`).  ``warm``: the picklable call that compiles the kernels
+    in a background process."""
+
+    def __init__(self, mech, p, one_sided, rolls, warm=None):
+        n, k = mech.n, len(mech.contacts)
+        self.n, self.k = n, k
+        self.p = np.ascontiguousarray(p, dtype=float)
+        self.lay = np.array([n, k, mech.n_domain, mech._surface is not None,
+                             mech._kinetic is not None], dtype=np.int64)
+        self.one_sided = np.ascontiguousarray(one_sided, dtype=np.bool_)
+        self.rolls = np.ascontiguousarray(rolls, dtype=np.bool_)
+        self.bounds = np.ascontiguousarray(mech.bounds(self.p), dtype=float)
+        self.W, self.I = workspace(n, k)
+        self.none = np.zeros(k, dtype=np.bool_)
+        self.ud, self.N, self.F = np.zeros(n), np.zeros(k), np.zeros(k)
+        self.a = np.zeros((k, 3))
+        self.n_watch = 2 * k + 2 * n + mech.n_domain + 1
+        self.mech, self.warm = mech, warm
+        self.twin = True
+        self._tiers()
+
+    def _tiers(self):
+        """Machine code where it is compiled (or ``$PHASEMAP_JIT`` is ``eager``); else the
+        interpreted twins, while a background process compiles it."""
+        from phasemap.core import tiers
+        from phasemap.core.interpret import interpreted
+
+        twin = tiers.mode() == "off"
+        if not twin:
+            fns = functions(self.mech, False)
+            probe = (*fns[:3], np.zeros(2 * self.n), 0.0, self.p, self.lay, self.rolls,
+                     np.zeros(self.k, dtype=np.int64), np.ones(self.k), self.none, False,
+                     self.W, self.I, self.ud, self.N, self.F, self.a)
+            twin = tiers.is_twin(tiers.runner(accel, probe, self.warm))
+        if twin:
+            fns = functions(self.mech, True)
+            kernels = (accel, watch, advance, _rhs, _gap_rates, locate, dense_at)
+            kernels = tuple(interpreted(k) for k in kernels)
+        else:
+            kernels = (accel, watch, advance, _rhs, _gap_rates, locate, dense_at)
+        (self.accel, self.watch_fn, self.advance_fn, self.rhs_fn, self.rates_fn,
+         self.locate_fn, self.dense_fn) = kernels
+        self.twin, self.fns = twin, fns
+
+    def refresh(self):
+        """Machine code from now on where its background compile has ended (the twins give
+        the same bits: a motion may change tiers between its phases)."""
+        if self.twin:
+            self._tiers()
+
+    def solve(self, y, t, modes, rho, start, want_det):
+        """``(status, det)`` of :func:`accel`; the results in ``ud``, ``N``, ``F``, ``a`` and
+        the pieces in :meth:`pieces`."""
+        PC, SF, KN, _ = self.fns
+        return self.accel(PC, SF, KN, y, float(t), self.p, self.lay, self.rolls, modes, rho,
+                          start, want_det, self.W, self.I, self.ud, self.N, self.F, self.a)
+
+    def pieces(self):
+        """``(M, h, g, J, b, mu)`` the last call left in the workspace (copies)."""
+        n, k = self.n, self.k
+        W = self.W
+        o = n * n
+        M = W[:o].reshape(n, n).copy()
+        h = W[o:o + n].copy()
+        o += n
+        g = W[o:o + k].copy()
+        o += k
+        J = W[o:o + 3 * k * n].reshape(k, 3, n).copy()
+        o += 3 * k * n
+        b = W[o:o + 3 * k].reshape(k, 3).copy()
+        o += 3 * k
+        return M, h, g, J, b, W[o:o + k].copy()
+
+    def rate(self, y, t, modes, rho, out):
+        """``out`` <- the phase's ``y'`` (:func:`_rhs`); its status."""
+        PC, SF, KN, _ = self.fns
+        rhs = self.rhs_fn
+        return rhs(PC, SF, KN, self.p, self.lay, self.rolls, modes, rho, self.none, self.W,
+                   self.I, self.ud, self.N, self.F, self.a, float(t), y, out)
+
+    def dense(self, Fd, t_old, h, y_old, t):
+        """The state at ``t`` on a step's dense output (:func:`dense_at`)."""
+        out = np.empty(2 * self.n)
+        self.dense_fn(Fd, float(t_old), float(h), y_old, float(t), out)
+        return out
+
+    def locate(self, Fd, t_old, t1, h, y_old, w0, w1, modes, rho, jam):
+        """``(t, index)`` of the step's first event by :func:`locate`, or None."""
+        PC, SF, KN, DM = self.fns
+        wt, yt = np.empty(w0.size), np.empty(2 * self.n)
+        t, i = self.locate_fn(PC, SF, KN, DM, self.p, self.lay, self.one_sided, self.rolls,
+                              modes, rho, self.none, float(jam), self.bounds, self.W, self.I,
+                              self.ud, self.N, self.F, self.a, Fd, float(t_old), float(t1),
+                              float(h), y_old, w0, w1, wt, yt)
+        return None if i < 0 else (float(t), int(i))
+
+    def watch(self, y, t, modes, rho, jam, out):
+        """:func:`watch` into ``out``; its status."""
+        PC, SF, KN, DM = self.fns
+        return self.watch_fn(PC, SF, KN, DM, y, float(t), self.p, self.lay, self.one_sided,
+                             self.rolls, modes, rho, self.none, float(jam), self.bounds,
+                             self.W, self.I, self.ud, self.N, self.F, self.a, out)
+
