@@ -129,3 +129,34 @@ def test_a_motion_goes_on_in_machine_code_once_it_is_compiled():
     with tiers.forced("eager"):
         m.flow.refresh()
     assert not m.flow.twin and m.flow.accel is flow.accel and m.flow.advance_fn is flow.advance
+
+
+@pytest.mark.parametrize("S, q, u, opts", [
+    (ROD, [0.7, 0.0, 0.3], [1.0, 0.5, 0.0], dict(restitution=0.5)),   # flights, bounces
+    (WHEEL, [2.5591, 2.5591, 1.0], [8.2805, 8.2805, 0.0], {}),              # a hop, a landing
+    (STRIBECK_BELT, [0.5, 0.0], [0.0, 0.0], {}),                          # stick-slip
+])
+def test_events_are_located_where_the_python_locator_finds_them(S, q, u, opts):
+    """Every event step of a motion: the compiled locator (flow.locate) against the
+    Python one (Motion._first_event, scipy's brentq over the same dense output and event
+    functions), the same function and the same time to 1e-13 of the step."""
+    mech = mechanics(S)
+    p = [mech.defaults[n] for n in mech.parameters]
+    m = hybrid.Motion(mech, p, hybrid.Options(t_end=2.0 if S is not STRIBECK_BELT else 12.0,
+                                              **opts))
+    compiled, pairs = m.flow.locate, []
+
+    def both(Fd, t_old, t1, h, y_old, w0, w1, modes, rho, jam):
+        got = compiled(Fd, t_old, t1, h, y_old, w0, w1, modes, rho, jam)
+        want = m._first_event(lambda s: m.flow.dense(Fd, t_old, h, y_old, s), t_old, t1,
+                              w0, w1, tuple(int(x) for x in modes), rho, None, jam)
+        pairs.append((got, want, t1 - t_old))
+        return got
+
+    m.flow.locate = both
+    rec = m.run(np.array(q, dtype=float), np.array(u, dtype=float))
+    assert len(rec.ev_kind) >= 3 and len(pairs) >= 2
+    for got, want, h in pairs:
+        assert (got is None) == (want is None)
+        if got is not None:
+            assert got[1] == want[1] and abs(got[0] - want[0]) <= 1e-13 * h
