@@ -10,7 +10,7 @@ settings, and goes on in full coordinates through lift-off, flight, impacts, imp
 without collision, dynamic jams and Zeno (:mod:`phasemap.motion.hybrid`): its fate layers
 are that motion's end.  A cell is exactly the motion ``simulate`` gives from its start.
 
-A followed cell costs a ``simulate`` call, some 3-7 ms (its phases on the compiled flow,
+A followed cell costs a ``simulate`` call, some 3-5 ms (its phases on the compiled flow,
 what follows each event in Python, a Dataset): a map whose cells mostly leave their
 contacts takes about a hundred times the reduced one.  The other cells keep the compiled integrator's values, bit for bit.
 """
