@@ -104,6 +104,7 @@ class Phase:
         twin = tiers.mode() == "off"
         if not twin:
             fns = functions(self.mech, False)
+        if not twin and not accel.overloads:     # (not yet in this process: the cache?)
             probe = (*fns[:3], np.zeros(2 * self.n), 0.0, self.p, self.lay, self.rolls,
                      np.zeros(self.k, dtype=np.int64), np.ones(self.k), self.none, False,
                      self.W, self.I, self.ud, self.N, self.F, self.a)
