@@ -160,3 +160,31 @@ def test_events_are_located_where_the_python_locator_finds_them(S, q, u, opts):
         assert (got is None) == (want is None)
         if got is not None:
             assert got[1] == want[1] and abs(got[0] - want[0]) <= 1e-13 * h
+
+
+@pytest.mark.parametrize("name", ["belt", "den_hartog", "rod", "wheel"])
+def test_the_compiled_jacobian_is_the_loop_of_differences(name):
+    """The field's Jacobian of the variational equations (periodic orbits' Floquet
+    multipliers): the compiled one against floquet's loop of central differences of the
+    phase's accelerations, bit for bit, at random states of every mode."""
+    from phasemap.motion.periodic import floquet
+
+    m = _motion(SYSTEMS[name])
+    rng = np.random.default_rng(11)
+    n = m.n
+    checked = 0
+    for _ in range(20):
+        X = np.concatenate([rng.normal(size=2 * n) * 0.5, [rng.uniform(0.0, 3.0)]])
+        X[:n] = np.clip(X[:n], m.bounds[:, 0] + 0.1, m.bounds[:, 1] - 0.1)
+        modes = tuple(int(rng.choice([OPEN, STICK, SLIP_POS, SLIP_NEG])) for _ in range(m.k))
+        got = m.flow.jacobian(X, modes, np.ones(m.k), floquet.STEP)
+        if got is None:
+            continue
+        want = np.zeros_like(got)
+        want[:n, n:2 * n] = np.eye(n)
+        for j in range(2 * n + 1):
+            want[n:2 * n, j] = floquet.difference(
+                lambda Y: floquet.accelerations(m, Y, modes, np.ones(m.k)), X, j)
+        assert np.array_equal(got, want)
+        checked += 1
+    assert checked >= 10

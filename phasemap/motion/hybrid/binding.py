@@ -11,8 +11,8 @@ import numpy as np
 from numba import cfunc, njit
 from numba.experimental import function_type
 
-from phasemap.motion.hybrid.flow import (_gap_rates, _rhs, accel, advance, dense_at, locate,
-                                         watch, workspace)
+from phasemap.motion.hybrid.flow import (OK, _gap_rates, _rhs, accel, advance, dense_at,
+                                         jacobian, locate, watch, workspace)
 
 #: (imported for what it registers: the numba type of a cfunc passed as an argument)
 _CFUNC_TYPES = function_type
@@ -111,12 +111,12 @@ class Phase:
             twin = tiers.is_twin(tiers.runner(accel, probe, self.warm))
         if twin:
             fns = functions(self.mech, True)
-            kernels = (accel, watch, advance, _rhs, _gap_rates, locate, dense_at)
+            kernels = (accel, watch, advance, _rhs, _gap_rates, locate, dense_at, jacobian)
             kernels = tuple(interpreted(k) for k in kernels)
         else:
-            kernels = (accel, watch, advance, _rhs, _gap_rates, locate, dense_at)
+            kernels = (accel, watch, advance, _rhs, _gap_rates, locate, dense_at, jacobian)
         (self.accel, self.watch_fn, self.advance_fn, self.rhs_fn, self.rates_fn,
-         self.locate_fn, self.dense_fn) = kernels
+         self.locate_fn, self.dense_fn, self.jacobian_fn) = kernels
         self.twin, self.fns = twin, fns
 
     def refresh(self):
@@ -154,6 +154,20 @@ class Phase:
         rhs = self.rhs_fn
         return rhs(PC, SF, KN, self.p, self.lay, self.rolls, modes, rho, self.none, self.W,
                    self.I, self.ud, self.N, self.F, self.a, float(t), y, out)
+
+    def jacobian(self, X, modes, rho, step):
+        """``dF/dX`` of the phase at ``X = (q, u, t)`` by :func:`jacobian`, or None where a
+        solve on the way is not the plain one (redundant contacts, no finite solution)."""
+        PC, SF, KN, _ = self.fns
+        m = 2 * self.n + 1
+        A = np.empty((m, m))
+        st = self.jacobian_fn(PC, SF, KN, self.p, self.lay, self.rolls,
+                              np.asarray(modes, dtype=np.int64),
+                              np.ones(self.k) if rho is None else np.asarray(rho, dtype=float),
+                              self.none, self.W, self.I, self.ud, self.N, self.F, self.a,
+                              np.ascontiguousarray(X, dtype=float), float(step), A,
+                              np.empty(m), np.empty(m), np.empty(self.n))
+        return A if st == OK else None
 
     def dense(self, Fd, t_old, h, y_old, t):
         """The state at ``t`` on a step's dense output (:func:`dense_at`)."""

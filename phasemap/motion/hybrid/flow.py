@@ -716,3 +716,40 @@ def locate(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, boun
     if best_i < 0:
         return np.nan, -1
     return best_t, best_i
+
+
+@njit(cache=True, error_model="numpy")
+def jacobian(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, X, step, A, xp,
+             xm, up):
+    """``A = dF/dX`` of the phase's field ``F(X) = (u, u', 1)`` at ``X = (q, u, t)``: the
+    accelerations' central differences, each step ``step (1 + |X_j|)``, exact in floating
+    point (:func:`phasemap.motion.periodic.floquet.jacobian`, in one call); the status of
+    :func:`accel` (``A`` is valid only where ``OK``)."""
+    n = lay[0]
+    m = 2 * n + 1
+    for r in range(m):
+        for j in range(m):
+            A[r, j] = 0.0
+    for i in range(n):
+        A[i, n + i] = 1.0
+    for j in range(m):
+        h = step * (1.0 + abs(X[j]))
+        for i in range(m):
+            xp[i] = X[i]
+            xm[i] = X[i]
+        xp[j] += h
+        xm[j] -= h
+        st, det = accel(PC, SF, KN, xp[:2 * n], xp[2 * n], p, lay, rolls, modes, rho, none,
+                        False, W, I, ud, N, F, a)
+        if st != OK:
+            return st
+        for i in range(n):
+            up[i] = ud[i]
+        st, det = accel(PC, SF, KN, xm[:2 * n], xm[2 * n], p, lay, rolls, modes, rho, none,
+                        False, W, I, ud, N, F, a)
+        if st != OK:
+            return st
+        d = xp[j] - xm[j]
+        for i in range(n):
+            A[n + i, j] = (up[i] - ud[i]) / d
+    return OK

@@ -54,7 +54,12 @@ def difference(fn, x, j):
 
 
 def jacobian(motion, X, modes, rho):
-    """``A = dF/dX`` at ``X`` (central differences of the accelerations)."""
+    """``A = dF/dX`` at ``X`` (central differences of the accelerations): in one call of
+    the compiled flow, the same bits as the loop below, which serves where a solve on the
+    way is not the plain one (redundant contacts; no solution, its one-line error)."""
+    A = motion.flow.jacobian(X, modes, rho, STEP)
+    if A is not None:
+        return A
     n = motion.n
     m = 2 * n + 1
     A = np.zeros((m, m))
