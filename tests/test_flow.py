@@ -188,3 +188,29 @@ def test_the_compiled_jacobian_is_the_loop_of_differences(name):
         assert np.array_equal(got, want)
         checked += 1
     assert checked >= 10
+
+
+@pytest.mark.parametrize("name, z, modes", [
+    ("belt", [0.3, 0.0, 0.1, 0.0], (SLIP_NEG,)),
+    ("den_hartog", [0.3, 0.0, 0.5, 0.0], (SLIP_POS,)),
+    ("stribeck_belt", [-0.2, 0.0, 0.6, 0.0], (SLIP_POS,)),
+])
+def test_a_segment_ends_where_solve_ivp_ends_it(name, z, modes):
+    """A periodic orbit's segment of known length on the compiled flow (no events) against
+    scipy's solve_ivp with DOP853 at the same tolerances over the same phase (the same
+    method: their step sequences part by rounding, so they agree to the tolerance), and
+    both against a tight solve_ivp."""
+    from types import SimpleNamespace
+
+    from phasemap.motion.periodic import orbit
+
+    m = _motion(SYSTEMS[name])
+    z = np.array(z)
+    seg = SimpleNamespace(modes=modes, rho=np.ones(m.k))
+    scale = 1.0 + np.abs(z).max()
+    got = m.flow.segment(z, 0.3, 2.0, modes, None, 1e-10, 1e-10 * scale)
+    want = orbit._flow(m, z, 0.3, 2.0, seg, 1e-10).y[:, -1]
+    tight = orbit._flow(m, z, 0.3, 2.0, seg, 1e-13).y[:, -1]
+    assert np.abs(got - want).max() <= 1e-9 * scale
+    assert np.abs(got - tight).max() <= 1e-9 * scale
+    assert np.abs(want - tight).max() <= 1e-9 * scale

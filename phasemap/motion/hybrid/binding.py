@@ -11,8 +11,8 @@ import numpy as np
 from numba import cfunc, njit
 from numba.experimental import function_type
 
-from phasemap.motion.hybrid.flow import (OK, _gap_rates, _rhs, accel, advance, dense_at,
-                                         jacobian, locate, watch, workspace)
+from phasemap.motion.hybrid.flow import (FINISHED, OK, _gap_rates, _rhs, accel, advance,
+                                         dense_at, jacobian, locate, watch, workspace)
 
 #: (imported for what it registers: the numba type of a cfunc passed as an argument)
 _CFUNC_TYPES = function_type
@@ -154,6 +154,32 @@ class Phase:
         rhs = self.rhs_fn
         return rhs(PC, SF, KN, self.p, self.lay, self.rolls, modes, rho, self.none, self.W,
                    self.I, self.ud, self.N, self.F, self.a, float(t), y, out)
+
+    def segment(self, z, t, tau, modes, rho, rtol, atol):
+        """The state ``tau`` after ``(t, z)`` in the phase ``modes``, stepped as scipy's
+        ``solve_ivp(method="DOP853")`` steps it (its rtol floor of 100 ulps included), no
+        event watched; None where the kernel cannot (redundant contacts, no finite
+        solution, a step below scipy's smallest)."""
+        n2 = 2 * self.n
+        y = np.array(z, dtype=float)
+        if tau == 0.0:
+            return y
+        modes_a = np.asarray(modes, dtype=np.int64)
+        rho_a = np.ones(self.k) if rho is None else np.asarray(rho, dtype=float)
+        f = np.empty(n2)
+        if self.rate(y, t, modes_a, rho_a, f) != OK:
+            return None
+        PC, SF, KN, DM = self.fns
+        nw = self.n_watch
+        status, _, _ = self.advance_fn(
+            PC, SF, KN, DM, self.p, self.lay, self.one_sided, self.rolls, modes_a, rho_a, 0.0,
+            self.bounds, self.none, np.array([float(t), 0.0, float(t), 0.0, 0.0]), y, f,
+            np.empty(n2), np.zeros(nw), np.zeros(nw), np.zeros(self.k), np.zeros(self.k),
+            np.zeros((16, n2)), np.zeros((7, n2)), np.empty(0), float(t + tau),
+            max(float(rtol), 100 * np.finfo(float).eps), float(atol), np.inf, 1 << 40,
+            np.empty(2), np.empty((2, n2)), self.W, self.I, self.ud, self.N, self.F, self.a,
+            np.empty(n2), True)
+        return y if status == FINISHED else None
 
     def jacobian(self, X, modes, rho, step):
         """``dF/dX`` of the phase at ``X = (q, u, t)`` by :func:`jacobian`, or None where a

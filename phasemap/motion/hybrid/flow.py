@@ -403,7 +403,7 @@ def _dense(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K, t_
 @njit(cache=True, error_model="numpy")
 def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, none,
             state, y, f, y_old, w0, w1, gr0, gr1, K, Fd, te, t_stop, rtol, atol, max_step,
-            steps_left, out_t, out_y, W, I, ud, N, F, a, yt):
+            steps_left, out_t, out_y, W, I, ud, N, F, a, yt, quiet):
     """Steps the phase ``modes`` with scipy's DOP853 from ``state = [t, h_abs, t_old,
     h_prev, i_eval]`` and ``y`` (``f`` its rate; ``h_abs`` <= 0: chosen as scipy does; ``w0``
     the event functions there) until an event function changes sign in a step or a gap's
@@ -411,7 +411,9 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
     ``w1`` and ``gr1`` at its end), ``t_stop`` (``FINISHED``), a step below scipy's
     smallest (``FAILED``), ``steps_left`` (``MAX_STEPS``) or ``out_t`` full (``FULL``).
     Saves each step's end into ``out_t``, ``out_y``, or the state at the times ``te`` from
-    ``state[4]`` on where ``te`` is not empty.  Returns ``(status, saved, steps)``."""
+    ``state[4]`` on where ``te`` is not empty.  ``quiet``: to ``t_stop`` without watching
+    the events or saving (a segment of a periodic orbit).  Returns ``(status, saved,
+    steps)``."""
     n = lay[0]
     k = lay[1]
     ny = 2 * n
@@ -520,6 +522,11 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
             y[i] = v
             f[i] = K[12, i]
         t = t_new
+        if quiet:       # (a segment of known length: no events, nothing saved)
+            state[0], state[1], state[2], state[3] = t, h_abs, t_old, h
+            if t >= t_stop:
+                return FINISHED, saved, steps
+            continue
         st = watch(PC, SF, KN, DM, y, t, p, lay, one_sided, rolls, modes, rho, none, jam,
                    bounds, W, I, ud, N, F, a, w1)
         _gap_rates(W, lay, y, gr1)

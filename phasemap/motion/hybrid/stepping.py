@@ -41,7 +41,7 @@ def phase(self, t, q, u, modes, rho, sc, t_stop, jam_sign, w0, atol):
             float(jam_sign), fl.bounds, fl.none, state, y, f, y_old, w0, w1, gr0, gr1, K, Fd,
             te, float(t_stop), float(o.rtol), float(atol), float(o.max_step),
             int(o.max_steps - rec.n_steps), out_t, out_y, fl.W, fl.I, fl.ud, fl.N, fl.F, fl.a,
-            yt)
+            yt, False)
         rec.n_steps += steps
         for i in range(saved):
             rec.point(out_t[i], out_y[i], modes)

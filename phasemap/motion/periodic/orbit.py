@@ -420,6 +420,14 @@ def _flow(motion, z, t, tau, seg, rtol, dense=False):
     return sol
 
 
+def _segment_end(motion, z, t, tau, seg, rtol):
+    """The end of :func:`_flow`'s integration, on the compiled flow (scipy's DOP853 in
+    machine code); on ``solve_ivp`` where the kernel cannot (and for its errors)."""
+    scale = 1.0 + float(np.max(np.abs(z)))
+    end = motion.flow.segment(z, t, tau, seg.modes, seg.rho, rtol, rtol * scale)
+    return end if end is not None else _flow(motion, z, t, tau, seg, rtol).y[:, -1]
+
+
 def _modes_text(motion, seg) -> str:
     return ", ".join(f"{c.name} {MODE_NAMES[m]}" for c, m in zip(motion.mech.contacts,
                                                                   seg.modes))
@@ -450,7 +458,7 @@ def _ends(motion, segs, w, t_a, rtol, sc):
 def _end(motion, segs, j, z, t, tau, rtol, sc):
     n = motion.n
     seg, nxt = segs[j], segs[(j + 1) % len(segs)]
-    end = _flow(motion, z, t, tau, seg, rtol).y[:, -1]
+    end = _segment_end(motion, z, t, tau, seg, rtol)
     if seg.section is not None:     # in the event functions' units, as _residual reads it
         w = float(seg.section.normal @ (end - seg.section.point)) * max(sc) / max(sc[0], sc[3])
         return _jump(motion, end, t + tau, nxt), w
