@@ -114,15 +114,15 @@ def main() -> None:
              "the period doubling are checked against scipy's own "
              "(tests/references/duffing_fold.py: 5e-9 between its two steps of "
              "differences at the period doubling).", "", *rows, "",
-             "The orbits run on the full-coordinate motion: its settling motion on the "
-             "compiled flow (phasemap.motion.hybrid.flow), its segments and variational "
-             "equations on scipy's `solve_ivp` over the compiled phase solve, called from "
-             "Python (about 12 µs per right-hand side). The issue's targets (a belt orbit to 1e-10 in 10 ms, a continuation of 200 points "
+             "The orbits run on the full-coordinate motion: its settling motion and its "
+             "shooting segments on the compiled flow (phasemap.motion.hybrid.flow), its "
+             "variational equations on scipy's `solve_ivp` over the compiled phase solve "
+             "and Jacobian, called from Python (about 12 µs per call). The issue's targets (a belt orbit to 1e-10 in 10 ms, a continuation of 200 points "
              "in 1 s) are not met: the hand-written computation, which knows the mode "
              "sequence and integrates one segment, shows the floor a compiled hybrid flow "
-             "would start from. Most of `periodic_orbit`'s time is the settling motion and "
-             "the variational equations of the Floquet multipliers (their Jacobian by "
-             "differences of the accelerations)."]
+             "would start from. Most of `periodic_orbit`'s time is now the variational "
+             "equations of the Floquet multipliers on `solve_ivp` and the Dataset of the "
+             "settling motion (its forces at every saved step)."]
     _report.publish(lines, "## Friction oscillators", write=not args.no_write)
 
 
