@@ -214,3 +214,21 @@ def test_a_segment_ends_where_solve_ivp_ends_it(name, z, modes):
     assert np.abs(got - want).max() <= 1e-9 * scale
     assert np.abs(got - tight).max() <= 1e-9 * scale
     assert np.abs(want - tight).max() <= 1e-9 * scale
+
+
+def test_an_event_seen_at_a_steps_end_is_not_lost_to_rounding():
+    """An event function negative at the step's end as the step saw it, but not on the
+    dense output there (an ulp apart): the event falls at the step's end (scipy's brentq
+    would raise; returning no event would leave the function unwatched for the rest of
+    the phase).  And an empty step's dense output is its state, as scipy's."""
+    m = _motion(ROD)
+    q, u = np.array([0.7, 0.0, 0.3]), np.array([0.0, 0.5, 0.0])
+    modes, rho = np.zeros(1, dtype=np.int64), np.ones(1)
+    y = np.concatenate([q, u])
+    Fd = np.zeros((7, 6))                       # a step that does not move: dense(t) = y
+    w0 = m.watch(q, u, modes, rho, None, 0.0, 0.0)
+    w1 = w0.copy()
+    j = int(np.flatnonzero(np.isfinite(w0) & (w0 > 0.0))[0])
+    w1[j] = -1e-300
+    assert m.flow.locate(Fd, 0.0, 0.01, 0.01, y, w0, w1, modes, rho, 0.0) == (0.01, j)
+    assert np.array_equal(m.flow.dense(Fd, 0.5, 0.0, y, 0.5), y)

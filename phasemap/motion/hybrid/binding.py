@@ -12,7 +12,8 @@ from numba import cfunc, njit
 from numba.experimental import function_type
 
 from phasemap.motion.hybrid.flow import (FINISHED, OK, _gap_rates, _rhs, accel, advance,
-                                         dense_at, jacobian, locate, watch, workspace)
+                                         dense_at, jacobian, locate, quiet_numba, watch,
+                                         workspace)
 
 #: (imported for what it registers: the numba type of a cfunc passed as an argument)
 _CFUNC_TYPES = function_type
@@ -101,14 +102,19 @@ class Phase:
         from phasemap.core import tiers
         from phasemap.core.interpret import interpreted
 
+        quiet_numba()
         twin = tiers.mode() == "off"
         if not twin:
             fns = functions(self.mech, False)
-        if not twin and not accel.overloads:     # (not yet in this process: the cache?)
-            probe = (*fns[:3], np.zeros(2 * self.n), 0.0, self.p, self.lay, self.rolls,
-                     np.zeros(self.k, dtype=np.int64), np.ones(self.k), self.none, False,
-                     self.W, self.I, self.ud, self.N, self.F, self.a)
-            twin = tiers.is_twin(tiers.runner(accel, probe, self.warm))
+        if not twin and not jacobian.overloads:     # (not yet in this process: the cache?)
+            # the kernel the background compile (engine.warm) builds last: where it is in
+            # the cache, so are the others, and no call compiles one in the foreground
+            m = 2 * self.n + 1
+            probe = (*fns[:3], self.p, self.lay, self.rolls, np.zeros(self.k, dtype=np.int64),
+                     np.ones(self.k), self.none, self.W, self.I, self.ud, self.N, self.F,
+                     self.a, np.zeros(m), 1e-6, np.zeros((m, m)), np.zeros(m), np.zeros(m),
+                     np.zeros(self.n))
+            twin = tiers.is_twin(tiers.runner(jacobian, probe, self.warm))
         if twin:
             fns = functions(self.mech, True)
             kernels = (accel, watch, advance, _rhs, _gap_rates, locate, dense_at, jacobian)
@@ -160,6 +166,7 @@ class Phase:
         ``solve_ivp(method="DOP853")`` steps it (its rtol floor of 100 ulps included), no
         event watched; None where the kernel cannot (redundant contacts, no finite
         solution, a step below scipy's smallest)."""
+        self.refresh()
         n2 = 2 * self.n
         y = np.array(z, dtype=float)
         if tau == 0.0:
@@ -184,6 +191,7 @@ class Phase:
     def jacobian(self, X, modes, rho, step):
         """``dF/dX`` of the phase at ``X = (q, u, t)`` by :func:`jacobian`, or None where a
         solve on the way is not the plain one (redundant contacts, no finite solution)."""
+        self.refresh()
         PC, SF, KN, _ = self.fns
         m = 2 * self.n + 1
         A = np.empty((m, m))

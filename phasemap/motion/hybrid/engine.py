@@ -725,7 +725,9 @@ class Motion:
 def warm():
     """Compiles the compiled flow's kernels (:mod:`.flow`) into the kernel cache: a
     background compile's job (:mod:`phasemap.core.tiers`), a flight of the Painleve rod
-    that lands and slides (every kernel, the step's event exit included)."""
+    that lands and slides (the step's event exit included), then a segment of known
+    length and the Jacobian of the periodic orbits (compiled last: binding.Phase probes
+    it)."""
     from phasemap.core import tiers
     from phasemap.declare.full import mechanics
     from phasemap.systems.painleve_rod import SYSTEM
@@ -733,4 +735,8 @@ def warm():
     mech = mechanics(SYSTEM)
     p = [mech.defaults[name] for name in mech.parameters]
     with tiers.forced("eager"):
-        Motion(mech, p, Options(t_end=0.5)).run([0.7, 0.0, 0.3], [0.0, 0.5, 0.0])
+        m = Motion(mech, p, Options(t_end=0.5))
+        m.run([0.7, 0.0, 0.3], [0.0, 0.5, 0.0])
+        m.flow.segment(np.array([0.7, 0.0, 0.3, 0.0, 0.5, 0.0]), 0.0, 0.1, (OPEN,), None,
+                       1e-8, 1e-8)
+        m.flow.jacobian(np.array([0.7, 0.0, 0.3, 0.0, 0.5, 0.0, 0.0]), (OPEN,), None, 1e-6)

@@ -29,9 +29,17 @@ from scipy.integrate._ivp import dop853_coefficients as _dc
 
 from phasemap.motion.hybrid.phases import OPEN, SLIP_NEG, SLIP_POS, SMOOTH, STICK
 
-# numba marks first-class functions (the cfunc arguments) experimental, once per compile
-warnings.filterwarnings("ignore", "First-class function type feature is experimental",
-                        NumbaExperimentalFeatureWarning)
+
+
+def quiet_numba():
+    """Silences numba's warning that first-class functions (the cfunc arguments) are
+    experimental, which it gives at every compile of a kernel (called where a motion is
+    set up: a filter set at import does not outlive a ``warnings.catch_warnings`` block)."""
+    warnings.filterwarnings("ignore", "First-class function type feature is experimental",
+                            NumbaExperimentalFeatureWarning)
+
+
+quiet_numba()
 
 #: What :func:`accel` and :func:`advance` return.
 OK, REDUNDANT, SINGULAR = 0, 1, 2
@@ -351,6 +359,10 @@ def _norm(x, scale):
 @njit(cache=True, error_model="numpy")
 def dense_at(Fd, t_old, h, y_old, t, out):
     """scipy's DOP853 dense output of a step at ``t`` into ``out``."""
+    if h == 0.0:            # (an empty step: scipy's constant dense output)
+        for j in range(out.size):
+            out[j] = y_old[j]
+        return
     x = (t - t_old) / h
     out[:] = 0.0
     for i in range(Fd.shape[0]):
@@ -452,6 +464,8 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
     if args_ok != OK:
         state[1] = h_abs
         return args_ok, saved, steps
+    if t >= t_stop:         # (scipy takes no step where the span is empty)
+        return FINISHED, saved, steps
     while True:
         if steps >= steps_left:
             state[0], state[1], state[4] = t, h_abs, i_eval
@@ -465,9 +479,9 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
             ha = h_abs
         rejected = False
         while True:
-            if ha < min_step:
+            if ha < min_step:     # (a failed step counts, as the scipy loop counted it)
                 state[0], state[1], state[4] = t, h_abs, i_eval
-                return FAILED, saved, steps
+                return FAILED, saved, steps + 1
             t_new = t + ha
             if t_new - t_stop > 0.0:
                 t_new = t_stop
@@ -613,8 +627,8 @@ def _brent(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, boun
         return xpre
     if fcur == 0.0:
         return xcur
-    if np.signbit(fpre) == np.signbit(fcur):
-        return np.nan
+    if np.signbit(fpre) == np.signbit(fcur) or np.isnan(fpre) or np.isnan(fcur):
+        return np.nan       # (where scipy's brentq raises)
     for _ in range(100):
         if fpre != 0.0 and fcur != 0.0 and np.signbit(fpre) != np.signbit(fcur):
             xblk, fblk = xpre, fpre
@@ -692,6 +706,8 @@ def locate(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, boun
         r = _brent(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, bounds, W,
                    I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 0, i, lo, t1, xtol,
                    4.0 * eps)
+        if np.isnan(r):   # (the dense output's end is an ulp off the step's end: the end)
+            r = t1
         r = _onto_root(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
                        bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, i, r, t1)
         if r < best_t:
@@ -715,6 +731,8 @@ def locate(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, boun
             r = _brent(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
                        bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 0, 2 * c,
                        t_old, tm, xtol, 4.0 * eps)
+            if np.isnan(r):
+                continue
             r = _onto_root(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
                            bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 2 * c,
                            r, tm)

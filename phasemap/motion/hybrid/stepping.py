@@ -55,9 +55,8 @@ def phase(self, t, q, u, modes, rho, sc, t_stop, jam_sign, w0, atol):
         if status in (flow.FAILED, flow.SINGULAR):
             # the step size collapsed: at a slip's singular point, a dynamic jam
             return jam.at_singular(self, t1, y[:n], y[n:], modes, rho, ev.STEP_FAILURE)
-        if status == flow.REDUNDANT:
-            w = self.watch(y[:n], y[n:], modes, rho, sc, t1, jam_sign)
-            return scipy_phase(self, t1, y, modes, rho, sc, t_stop, jam_sign, w, atol)
+        if status == flow.REDUNDANT:    # (w0: the event functions there, rounding zeroed)
+            return scipy_phase(self, t1, y, modes, rho, sc, t_stop, jam_sign, w0.copy(), atol)
         if status == flow.EVENT:
             t_old, h = state[2], state[3]
             F, y0 = Fd.copy(), y_old.copy()
