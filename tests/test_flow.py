@@ -232,3 +232,23 @@ def test_an_event_seen_at_a_steps_end_is_not_lost_to_rounding():
     w1[j] = -1e-300
     assert m.flow.locate(Fd, 0.0, 0.01, 0.01, y, w0, w1, modes, rho, 0.0) == (0.01, j)
     assert np.array_equal(m.flow.dense(Fd, 0.5, 0.0, y, 0.5), y)
+
+
+def test_the_rod_in_flight_lands_where_its_parabola_says():
+    """The Painleve rod (half-length l = 1) let go at theta = 0.7 with its end 0.3 above
+    the floor and a spin of 1 rad/s: in flight its centre falls freely from its first
+    rate l cos 0.7 upwards and it spins uniformly, so its end reaches the floor where
+    0.3 + l sin 0.7 + l cos 0.7 t - g t^2 / 2 - l sin(0.7 + t) = 0."""
+    import math
+
+    from scipy.optimize import brentq
+
+    mech = mechanics(ROD)
+    d = mech.defaults
+    g, l = d["g"], d["l"]
+    m = hybrid.Motion(mech, [d[n] for n in mech.parameters], hybrid.Options(t_end=0.6))
+    assert not m.flow.twin
+    rec = m.run(np.array([0.7, 0.0, 0.3]), np.array([1.0, 0.0, 0.0]))
+    land = brentq(lambda t: 0.3 + l * math.sin(0.7) + l * math.cos(0.7) * t
+                  - 0.5 * g * t * t - l * math.sin(0.7 + t), 1e-6, 0.6, xtol=1e-15)
+    assert rec.ev_t[1] == pytest.approx(land, abs=1e-9)

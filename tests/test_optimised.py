@@ -15,9 +15,11 @@ produced earlier:
 * the bifurcation tracer and its generated conditions: the Painleve rod's first paradox
   at f = 4/3, theta = arctan 2 (Genot & Brogliato 1999);
 * a declared model's generated point functions: the rod's classification against the
-  closed form of its slip coefficient;
-* the compiled flow of a phase in full coordinates: the Painleve rod's flight, a
-  parabola of its centre and a constant spin, lands when its end reaches the floor.
+  closed form of its slip coefficient.
+
+The compiled flow of the full-coordinate motion (phasemap.motion.hybrid.flow) is not
+here: its kernels take 37 s to build at numba's defaults, which this job's place at the
+end of CI cannot afford (tests/test_flow.py checks it at the suite's optimisation).
 """
 
 from __future__ import annotations
@@ -112,25 +114,3 @@ def test_declared_point_functions():
     none = ds.n_solutions.values == 0
     assert np.array_equal(none[far], (F > fstar)[far])
 
-
-def test_compiled_flow_lands_the_rod_where_its_parabola_says():
-    """The Painleve rod (half-length l = 1) let go at theta = 0.7 with its end 0.3 above
-    the floor and a spin of 1 rad/s: in flight its centre falls freely from its first
-    rate l cos 0.7 upwards and it spins uniformly, so its end reaches the floor where
-    0.3 + l sin 0.7 + l cos 0.7 t - g t^2 / 2 - l sin(0.7 + t) = 0."""
-    from scipy.optimize import brentq
-
-    from phasemap.declare.full import mechanics
-    from phasemap.motion import hybrid
-    from phasemap.systems.painleve_rod import SYSTEM
-
-    mech = mechanics(SYSTEM)
-    d = mech.defaults
-    p = [d[n] for n in mech.parameters]
-    g, l = d["g"], d["l"]
-    m = hybrid.Motion(mech, p, hybrid.Options(t_end=0.6))
-    assert not m.flow.twin
-    rec = m.run(np.array([0.7, 0.0, 0.3]), np.array([1.0, 0.0, 0.0]))
-    land = brentq(lambda t: 0.3 + l * math.sin(0.7) + l * math.cos(0.7) * t
-                  - 0.5 * g * t * t - l * math.sin(0.7 + t), 1e-6, 0.6, xtol=1e-15)
-    assert rec.ev_t[1] == pytest.approx(land, abs=1e-9)
