@@ -46,8 +46,8 @@ def __getattr__(name: str):
     """``phasemap.plot`` is imported (with matplotlib, half a second) on first use: a
     script that maps, integrates or writes atlases does not pay for it; so are
     ``phasemap.boundaries`` and ``phasemap.threshold`` (:mod:`phasemap.bifurcation`), and
-    ``phasemap.periodic_orbit`` and ``phasemap.continue_orbit``
-    (:mod:`phasemap.motion.periodic`)."""
+    ``phasemap.periodic_orbit``, ``phasemap.continue_orbit`` and
+    ``phasemap.orbit_diagram`` (:mod:`phasemap.motion.periodic`)."""
     if name == "plot":
         import importlib
 
@@ -56,7 +56,7 @@ def __getattr__(name: str):
         from phasemap import bifurcation
 
         return getattr(bifurcation, name)
-    if name in ("periodic_orbit", "continue_orbit"):    # (scipy's optimisers)
+    if name in ("periodic_orbit", "continue_orbit", "orbit_diagram"):    # (scipy's optimisers)
         from phasemap.motion import periodic
 
         return getattr(periodic, name)
@@ -84,6 +84,7 @@ __all__ = [
     "get_model",
     "layers_for",
     "open_atlas",
+    "orbit_diagram",
     "continue_orbit",
     "periodic_orbit",
     "phase_curve",

@@ -57,7 +57,7 @@ EXAMPLES = {
     ],
 }
 EXAMPLES |= _bif.EXAMPLES  # phasemap boundaries, phasemap threshold
-EXAMPLES |= _orbits.EXAMPLES  # phasemap orbit
+EXAMPLES |= _orbits.EXAMPLES  # phasemap orbit, phasemap diagram
 
 
 def examples(*commands: str) -> str:
@@ -369,7 +369,24 @@ def _run(args) -> int:
         from phasemap.maps.blocks import check_output
 
         print(_orbits.run(args, _parse_values, check_output))
+    elif args.command == "diagram":
+        from phasemap.maps.blocks import check_output
+
+        print(_orbits.run_diagram(args, _parse_values, check_output, _draw))
     return 0
+
+
+def _draw(ds, stem: str):
+    """``ds.phasemap.plot()`` saved as ``stem.png`` and ``stem.pdf``: their paths."""
+    import matplotlib.pyplot as plt
+
+    from phasemap.plot import save_figure
+
+    fig = ds.phasemap.plot()
+    try:
+        return save_figure(fig, stem)
+    finally:
+        plt.close(fig)
 
 
 def _warm(models: list[str], jobs: int | None) -> str:

@@ -65,7 +65,7 @@ CONVENTIONS = "CF-1.8"
 
 #: What a Dataset can be, as ``ds.phasemap.kind`` names it.
 KINDS = ("map", "profile", "fate", "phase_curve", "trajectory", "boundaries", "threshold",
-         "periodic_orbit", "orbit_branch")
+         "periodic_orbit", "orbit_branch", "orbit_diagram")
 #: The kinds that follow one motion (global attribute ``phasemap_kind``).
 MOTIONS = ("phase_curve", "trajectory")
 #: The kinds of the bifurcation set: pieces of curves on a dimension ``vertex``, special
@@ -75,7 +75,8 @@ CURVES = ("boundaries", "threshold")
 #: The title of each producer's Dataset, by kind (``phasemap_kind``; ``atlas`` for a Scene's).
 _TITLES = {"atlas": "atlas", "trajectory": "trajectory", "phase_curve": "phase curve",
            "boundaries": "boundaries", "threshold": "threshold curve",
-           "periodic_orbit": "periodic orbit", "orbit_branch": "orbit branch"}
+           "periodic_orbit": "periodic orbit", "orbit_branch": "orbit branch",
+           "orbit_diagram": "orbit diagram"}
 
 
 #: (whole seconds since the epoch, their ISO 8601 time stamp): the last one made

@@ -140,7 +140,7 @@ def _describe(ds: xr.Dataset, where: str) -> str:
         return _describe_motion(ds, where, kind)
     if curve_kind(ds) is not None:
         return _describe_curves(ds, where, curve_kind(ds))
-    if ds.attrs.get("phasemap_kind") in ("periodic_orbit", "orbit_branch"):
+    if ds.attrs.get("phasemap_kind") in ("periodic_orbit", "orbit_branch", "orbit_diagram"):
         return _describe_orbit(ds, where, str(ds.attrs["phasemap_kind"]))
     return _describe_grid(ds, where)
 
@@ -150,7 +150,8 @@ def _describe_orbit(ds: xr.Dataset, where: str, kind: str) -> str:
     a = ds.attrs
     lines = [f"phasemap {kind.replace('_', ' ')} {where}", f"  title     {a.get('title', '')}",
              f"  model     {a.get('phasemap_model', '?')}", _made_by(a)]
-    body = orbit_lines(ds) if kind == "periodic_orbit" else branch_lines(ds)
+    body = {"periodic_orbit": orbit_lines, "orbit_branch": branch_lines,
+            "orbit_diagram": diagram_lines}[kind](ds)
     return "\n".join(lines + body)
 
 
@@ -194,6 +195,38 @@ def branch_lines(ds: xr.Dataset) -> list[str]:
         rows.append((str(ds.point_kind.values[i]), f"{float(ds[f'point_{param}'][i]):.12g}",
                      f"{float(ds.point_period[i]):.9g}"))
     return lines + ["special points", *("  " + r for r in _table(rows, right=(1, 2)))]
+
+
+def diagram_lines(ds: xr.Dataset) -> list[str]:
+    """An orbit diagram (:func:`phasemap.orbit_diagram`) as lines: its sweep, and the
+    runs of values whose settled motion has one period (in forcing periods; 0: none found,
+    a motion that is chaotic, quasi-periodic or still settling), with how the motions
+    ended where not all ran through."""
+    import json
+
+    param = str(ds.attrs["phasemap_parameter"])
+    p, mult = ds[param].values, ds.multiple.values
+    spec = json.loads(ds.attrs.get("phasemap_diagram", "{}"))
+    lines = [f"  sweep     {p.size} value(s) of {param} from {p[0]:.6g} to {p[-1]:.6g}; "
+             f"{ds.sizes['cycle']} forcing period(s) kept after {spec.get('settle', '?')}"]
+    rows = [(param, "", "period (forcing periods)")]
+    start = 0
+    for i in range(1, p.size + 1):
+        if i == p.size or mult[i] != mult[start]:
+            m = int(mult[start])
+            rows.append((f"{p[start]:.6g}", f"to {p[i - 1]:.6g}" if i - 1 > start else "",
+                         str(m) if m else "none (chaotic, quasi-periodic or settling)"))
+            start = i
+    lines += ["settled motion", *("  " + r for r in _table(rows))]
+    from phasemap.core.events import HORIZON
+
+    ended = ds.fate.values != HORIZON
+    if ended.any():
+        names = dict(zip(np.asarray(ds.fate.attrs["flag_values"]).tolist(),
+                         ds.fate.attrs["flag_meanings"].split()))
+        kinds = sorted({names.get(int(f), str(int(f))) for f in ds.fate.values[ended]})
+        lines.append(f"  {int(ended.sum())} motion(s) ended early: {', '.join(kinds)}")
+    return lines
 
 
 def _made_by(a) -> str:

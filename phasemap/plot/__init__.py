@@ -20,6 +20,9 @@ kind             how it is recognised                         figure
 ``threshold``    global attribute ``phasemap_kind``           :func:`curves_figure`
 ===============  ===========================================  ============================
 
+Periodic orbits, their branches and orbit diagrams (``phasemap_kind`` ``periodic_orbit``,
+``orbit_branch``, ``orbit_diagram``) are drawn by :mod:`phasemap.plot.orbits`.
+
 :func:`work_precision_figure` draws a benchmark table, and :func:`save_figure`
 writes a figure as vector PDF and 300 dpi PNG.
 
@@ -182,7 +185,8 @@ def plot(ds: xr.Dataset, layer: str | Sequence[str] | None = None, *, ax=None,
     :func:`fate_figure`, any other layer a plain :func:`map_figure` (a
     1-D fate dataset is drawn as a profile); for a trajectory, the states
     to draw; for a periodic orbit, the two variables of its plane; for an orbit branch,
-    the quantity drawn against the parameter.  Phase curves take no layer.  Other
+    the quantity drawn against the parameter; for an orbit diagram, the variable (its
+    continued ``branches=`` overlaid).  Phase curves take no layer.  Other
     keywords go to the figure function.
     """
     kind = atlas_kind(ds)
@@ -213,4 +217,8 @@ def plot(ds: xr.Dataset, layer: str | Sequence[str] | None = None, *, ax=None,
         from phasemap.plot.orbits import branch_figure
 
         return branch_figure(ds, layer, ax=ax, size=size, **kw)
+    if kind == "orbit_diagram":         # layer: the variable drawn against the parameter
+        from phasemap.plot.orbits import diagram_figure
+
+        return diagram_figure(ds, layer, ax=ax, size=size, **kw)
     return trajectory_figure(ds, states=layer, ax=ax, size=size, **kw)

@@ -1,7 +1,9 @@
 """Figures of periodic orbits: an orbit in its phase plane with its segments by contact
-mode (:func:`orbit_figure`), and a branch followed in a parameter with its stability and
-special points (:func:`branch_figure`); what ``ds.phasemap.plot()`` draws of a
-:func:`phasemap.periodic_orbit` or :func:`phasemap.continue_orbit` Dataset."""
+mode (:func:`orbit_figure`), a branch followed in a parameter with its stability and
+special points (:func:`branch_figure`), and the orbit diagram of a sweep by simulation
+with branches overlaid (:func:`diagram_figure`); what ``ds.phasemap.plot()`` draws of a
+:func:`phasemap.periodic_orbit`, :func:`phasemap.continue_orbit` or
+:func:`phasemap.orbit_diagram` Dataset."""
 
 from __future__ import annotations
 
@@ -79,8 +81,12 @@ def _state_names(ds):
 
 
 def _label(ds, name):
+    """``name (units)``; a dimensionless name in math type (``$f$``, ``$f_s$``), as the
+    maps write a variable."""
     units = ds[name].attrs.get("units", "")
-    return f"{name} ({units})" if units and units != "1" else name
+    if units and units != "1":
+        return f"{name} ({units})"
+    return f"${name}$" if units == "1" and name.isidentifier() else name
 
 
 def branch_figure(ds: xr.Dataset, y: str | None = None, *, ax=None,
@@ -145,3 +151,76 @@ def _at_point(ds, i, y, at, p, v) -> float:
         if (p[k] - at) * (p[k + 1] - at) <= 0 and p[k] != p[k + 1]:
             return float(v[k] + (v[k + 1] - v[k]) * (at - p[k]) / (p[k + 1] - p[k]))
     return float(v[int(np.argmin(np.abs(p - at)))])
+
+
+def diagram_figure(ds: xr.Dataset, y: str | None = None, *, branches=(), ax=None,
+                   size: str | float = "one_column") -> Figure:
+    """The orbit diagram: the stroboscopic points of ``y`` (default the first coordinate
+    that moves) against the parameter, one dot each; each of ``branches`` (Datasets of
+    :func:`phasemap.continue_orbit` in the same parameter) overlaid where its orbits cross
+    the forcing's phase 0, stable solid, unstable dashed, its special points marked.
+
+    >>> import phasemap
+    >>> d = phasemap.orbit_diagram("den_hartog", "f", [0.2, 0.4], periods=2, settle=30)
+    >>> len(phasemap.plot.orbits.diagram_figure(d).axes)
+    1
+    """
+    param = str(ds.attrs["phasemap_parameter"])
+    points = [str(v) for v in ds.data_vars if ds[v].dims == (param, "cycle")]
+    if y is None:
+        moving = [v for v in points if np.nanmax(ds[v].values, initial=-np.inf)
+                  > np.nanmin(ds[v].values, initial=np.inf)]
+        y = (moving or points)[0]
+    if y not in points:
+        raise ValueError(f"{y!r} is not a variable of the diagram; choose one of "
+                         + ", ".join(points))
+    if isinstance(branches, xr.Dataset):
+        branches = [branches]
+    for b in branches:
+        if not isinstance(b, xr.Dataset) or b.attrs.get("phasemap_kind") != "orbit_branch" \
+                or b.attrs.get("phasemap_parameter") != param or f"section_{y}" not in b:
+            raise ValueError(f"branches= takes Datasets of phasemap.continue_orbit in {param} "
+                             f"of a forced system (with section_{y})")
+    width = width_of(size)
+    p = ds[param].values
+    v = ds[y].values
+    with style():
+        (a,) = _axes(ax, 1, (width, width * 0.7), "diagram_figure")
+        xs = np.broadcast_to(p[:, None], v.shape)
+        a.plot(xs.ravel(), v.ravel(), ls="none", marker=".", ms=2.0, mew=0,
+               color=_OI["black"], alpha=0.7, rasterized=v.size > 5000, zorder=2.5)
+        handles = [Line2D([], [], ls="none", marker=".", ms=4, color=_OI["black"],
+                          label="settled motion, once per period")]
+        styles = set()
+        for b in branches:
+            bp, stable = b[param].values, b.stable.values.astype(bool)
+            sec = b[f"section_{y}"].values
+            edges = [i for i in range(1, len(bp)) if stable[i] != stable[i - 1]]
+            for lo, hi in zip([0, *edges], [*edges, len(bp)]):
+                ls = "-" if stable[lo] else "--"
+                styles.add(ls)
+                a.plot(bp[max(lo - 1, 0):hi], sec[max(lo - 1, 0):hi], color=_OI["vermillion"],
+                       lw=1.2, ls=ls, zorder=2)
+            for i in range(b.sizes["point"]):
+                kind = str(b.point_kind.values[i])
+                if kind == "end":
+                    continue
+                at = float(b[f"point_{param}"][i])
+                marker, colour = _KINDS.get(kind, ("X", _OI["reddish_purple"]))
+                for col in range(sec.shape[1]):
+                    if np.isnan(sec[:, col]).all():
+                        continue
+                    val = _at_point(b.drop_vars([f"point_{y}"], errors="ignore"), i, y, at,
+                                    bp, sec[:, col])
+                    a.plot([at], [val], marker=marker, color=colour, ms=6, ls="none",
+                           zorder=3)
+                if kind.replace("_", "-") not in {h.get_label() for h in handles}:
+                    handles.append(Line2D([], [], ls="none", marker=marker, color=colour,
+                                          ms=6, label=kind.replace("_", "-")))
+        handles += [Line2D([], [], color=_OI["vermillion"], lw=1.2, ls=ls, label=label)
+                    for ls, label in (("-", "stable orbit"), ("--", "unstable orbit"))
+                    if ls in styles]
+        a.set_xlabel(_label(ds, param))
+        a.set_ylabel(_label(ds, y))
+        legend_above(a, handles)
+    return a.figure

@@ -95,8 +95,10 @@ def continue_orbit(orbit, param: str, span, *, model=None, steps: int = 40,
         the branch in its order along the arc (first the part followed towards ``lo``,
         reversed) (``<param>``, ``period``, ``amplitude_<coordinate>``, ``stable``,
         ``floquet_max``: the largest nontrivial multiplier's modulus, ``n_segments``,
-        ``residual``), on ``point`` the special points (``point_<param>``,
-        ``point_kind``, ``point_period``, ``point_residual``).
+        ``residual``; a forced orbit's states at the forcing's phase 0,
+        ``section_<variable>`` on ``(vertex, section)``, the points
+        :func:`phasemap.orbit_diagram` samples), on ``point`` the special points
+        (``point_<param>``, ``point_kind``, ``point_period``, ``point_residual``).
 
     Raises
     ------
@@ -204,11 +206,11 @@ class _Context:
         motion = self.motion(lam)
         mult, trivial, stable, _, continuum = _orbit.linearised(
             motion, segs, w, self.t_a, self.forcing(lam), self.rtol)
-        low, high = extrema(motion, segs, w, self.t_a, self.rtol)
+        low, high, strobes = extrema(motion, segs, w, self.t_a, self.rtol, self.forcing(lam))
         others = np.delete(mult, trivial) if trivial >= 0 else mult
         n2 = 2 * self.mech.n
         return {"lam": lam, "w": w, "segs": segs, "period": float(np.sum(w[len(segs) * n2:])),
-                "amplitude": (high - low) / 2,
+                "amplitude": (high - low) / 2, "strobes": strobes,
                 "stable": stable, "mult": others,
                 "floquet_max": float(np.abs(others).max()) if others.size else 0.0,
                 "residual": res, "continuum": continuum}
@@ -595,7 +597,7 @@ class _Context:
         orbit's branch point, where there is one)."""
         n2 = 2 * self.mech.n
         if point is None:
-            low, high = extrema(self.motion(lam), segs, w, self.t_a, self.rtol)
+            low, high, _ = extrema(self.motion(lam), segs, w, self.t_a, self.rtol)
             amplitude = (high - low) / 2
         else:
             amplitude = point["amplitude"]
@@ -732,6 +734,18 @@ def _branch_dataset(S, mech, param, points, marks, span):
                 "point", np.array([m["amplitude"][j] for m in marks]),
                 {"long_name": f"half the range of {c} over the orbit at the special point",
                  "units": u})
+    m = max((len(p["strobes"]) for p in points), default=0)
+    if mech.period is not None and m:     # where a forced orbit crosses phase 0
+        names = list(mech.coordinates) + list(mech.rates)
+        units = [*mech.units, *(f"{un} s-1" for un in mech.units)]
+        at = np.full((len(points), m, 2 * n), np.nan)
+        for i, p in enumerate(points):
+            at[i, :len(p["strobes"])] = p["strobes"]
+        for j, (nm, un) in enumerate(zip(names, units)):
+            data[f"section_{nm}"] = (("vertex", "section"), at[:, :, j], {
+                "long_name": f"{nm} where the orbit is at the forcing's phase 0, in order "
+                             "(what phasemap.orbit_diagram samples; NaN past the orbit's "
+                             "period in forcing periods)", "units": un})
     attrs = {"Conventions": CONVENTIONS, "title": f"phasemap orbit branch: {S.title}",
              "source": f"phasemap {__version__}", "references": S.citation,
              "phasemap_version": __version__, "date_created": created(),

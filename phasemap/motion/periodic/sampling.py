@@ -12,9 +12,11 @@ from phasemap.motion.periodic import orbit as _orbit
 SAMPLES = 200
 
 
-def extrema(motion, segs, w, t_a, rtol):
+def extrema(motion, segs, w, t_a, rtol, forcing=None):
     """Each coordinate's least and greatest value over the orbit: at the segments' ends,
-    or where its rate vanishes inside one (located on the segment's dense output)."""
+    or where its rate vanishes inside one (located on the segment's dense output); and,
+    for a forced orbit (``forcing`` its period), its states at the forcing's phase 0 in
+    order (what :func:`phasemap.orbit_diagram` samples; an empty array otherwise)."""
     from scipy.optimize import brentq
 
     n = motion.n
@@ -23,8 +25,17 @@ def extrema(motion, segs, w, t_a, rtol):
     zs, taus = _orbit._unpack(w, K, n2)
     low, high = np.full(n, np.inf), np.full(n, -np.inf)
     t = t_a
+    strobes = []
+    if forcing is not None:
+        period = float(np.sum(taus))
+        first = forcing * np.ceil(t_a / forcing - 1e-12)   # (t_a a rounding past 0)
+        times = first + forcing * np.arange(max(int(round(period / forcing)), 1))
+        starts = t_a + np.concatenate([[0.0], np.cumsum(taus)[:-1]])
+        where = np.clip(np.searchsorted(starts, times, side="right") - 1, 0, K - 1)
     for j, seg in enumerate(segs):
         sol = _orbit._flow(motion, zs[j], t, taus[j], seg, rtol, dense=True).sol
+        if forcing is not None:
+            strobes.extend(sol(s) for s in np.clip(times[where == j], t, t + taus[j]))
         ts = np.linspace(t, t + taus[j], SAMPLES // K + 2)
         ys = sol(ts)
         found = [ys[:n, 0], ys[:n, -1]]
@@ -37,7 +48,7 @@ def extrema(motion, segs, w, t_a, rtol):
         low = np.fmin(low, np.nanmin(vals, axis=0))
         high = np.fmax(high, np.nanmax(vals, axis=0))
         t += taus[j]
-    return low, high
+    return low, high, np.array(strobes, dtype=float).reshape(-1, n2)
 
 
 #: Samples per segment where its conditions are checked for a dip below zero.

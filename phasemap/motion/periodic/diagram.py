@@ -1,0 +1,322 @@
+"""The brute-force orbit diagram of a forced oscillator: the settled motion's stroboscopic
+points (one per forcing period) over a parameter axis, what a sweep by simulation shows
+next to the branches :func:`phasemap.continue_orbit` follows.
+
+Each parameter value's motion (:func:`phasemap.simulate`'s, in full coordinates, through
+every stick-slip transition) runs ``settle`` forcing periods, which are discarded, then
+``periods`` more, whose states at the forcing phase ``phase`` are kept: a period-one orbit
+gives one point per value, a period-two orbit two, a chaotic motion a cloud.  The values
+are independent, so a diagram is chunked with dask over its parameter axis like an atlas.
+
+>>> import numpy as np, phasemap
+>>> d = phasemap.orbit_diagram("den_hartog", "f", [0.2, 0.3], periods=3, settle=40)
+>>> d.x.dims, d.sizes["cycle"], [int(m) for m in d.multiple]   # period-one orbits
+(('f', 'cycle'), 3, [1, 1])
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+
+import numpy as np
+
+from phasemap.core import args as _args
+from phasemap.core import events as ev
+
+#: Default forcing periods run and discarded before the points are kept ...
+SETTLE = 100
+#: ... and the periods whose stroboscopic points are kept.
+PERIODS = 200
+#: The longest period (in forcing periods) ``multiple`` looks for in the kept points.
+MAX_MULTIPLE = 16
+#: How near (relative to the points' scale) two kept points must be to count as one.
+SAME = 1e-6
+
+
+def orbit_diagram(model, param: str, values, *, start=None, periods: int = PERIODS,
+                  settle: int = SETTLE, phase: float = 0.0, rtol: float = 1e-8,
+                  follow: bool = False, chunks: int | None = None,
+                  progress: bool | None = None):
+    """The stroboscopic points of the settled motion of a forced oscillator over the
+    values of one parameter: the classical orbit diagram.
+
+    Parameters
+    ----------
+    model : str or System
+        a forced friction oscillator (``"den_hartog"``, ``"duffing"``) or a declared
+        system with a forcing period (see :class:`phasemap.declare.System`'s ``period``).
+    param : str
+        the parameter on the diagram's axis.
+    values : sequence of float
+        its values, a non-empty 1-D sequence of finite values, strictly increasing or
+        strictly decreasing, inside the parameter's domain.
+    start : dict, optional
+        the start of every value's motion at t = 0 (coordinates, rates and the other
+        parameters by name; their defaults elsewhere).
+    periods : int
+        forcing periods whose points are kept (default 200).
+    settle : int
+        forcing periods run first and discarded (default 100; 0 keeps the transient).
+    phase : float
+        where in the forcing period the points are taken, as a fraction in [0, 1).
+    rtol : float
+        the integration's tolerance (1e-12 to 1e-4; default 1e-8).
+    follow : bool
+        each value's motion starts where the previous value's ended (a sweep that stays
+        on an attractor as far as it exists, so that a sweep up and one down show a
+        hysteresis); the default starts every value at ``start``.  Runs in one process:
+        not with ``chunks``.
+    chunks : int, optional
+        parameter values per dask block: the Dataset is then dask-backed and each block
+        runs when computed (locally or on a ``dask.distributed`` cluster).
+    progress : bool, optional
+        a progress bar over the values (default: in an interactive session).
+
+    Returns
+    -------
+    xarray.Dataset
+        on the dimensions ``(param, cycle)``: each coordinate and rate of the full
+        state at ``t = (settle + cycle - 1 + phase) T`` (T the forcing period; NaN after
+        a motion that ended early); on ``param``: ``fate`` (how the motion ended,
+        ``horizon`` where it ran through, as :class:`phasemap.Event`) and ``multiple``
+        (the settled motion's period in forcing periods, the least m <= 16 with the last
+        points m periods apart the same to 1e-6 of their scale; 0 for none: a
+        quasi-periodic or chaotic motion, or one still settling).  ``ds.phasemap.plot()``
+        draws the diagram (:func:`phasemap.plot.orbits.diagram_figure`, branches of
+        :func:`phasemap.continue_orbit` overlaid with ``branches=``).
+
+    Raises
+    ------
+    ValueError
+        one line: an unknown model or parameter, an autonomous system (no forcing period
+        to sample at: its orbits are followed by :func:`phasemap.continue_orbit`), bad
+        values, counts or tolerance, a value outside the parameter's domain, ``follow``
+        with ``chunks``.
+
+    Examples
+    --------
+    Den Hartog's oscillator (Omega = 0.8) as its friction grows: a non-stop orbit, then
+    stops (the points move with f), one point per value while the orbit is stable:
+
+    >>> import numpy as np, phasemap
+    >>> d = phasemap.orbit_diagram("den_hartog", "f", np.linspace(0.2, 0.6, 3),
+    ...                            periods=2, settle=60)
+    >>> [int(m) for m in d.multiple], d.fate.attrs["flag_meanings"].split()[0]
+    ([1, 1, 1], 'rest')
+    """
+    from phasemap.core.progress import human_bytes
+    from phasemap.core.resources import MEMORY_SHARE, available_memory
+    from phasemap.declare.full import mechanics
+    from phasemap.motion.hybrid.results import start_values
+    from phasemap.motion.periodic.orbit import no_rolling, system_of
+
+    S = system_of(model)
+    mech = mechanics(S)
+    name = mech.name
+    no_rolling(mech)
+    if not isinstance(param, str) or param not in mech.parameters:
+        raise ValueError(f"{name}: unknown parameter {param!r}; the parameters are "
+                         f"{', '.join(mech.parameters)}")
+    if mech.period is None:
+        raise ValueError(f"{name} is autonomous (no forcing period to sample the motion "
+                         "at); follow its periodic orbits with phasemap.continue_orbit")
+    values = _values(name, S, param, values)
+    if start is not None and not isinstance(start, Mapping):
+        raise ValueError(f"{name}: start must be a dict of values by name, got "
+                         f"{_args.describe(start)}")
+    start = dict(start or {})
+    if param in start:
+        raise ValueError(f"{name}: {param!r} is on the diagram's axis, so the start cannot "
+                         "fix it")
+    periods = _args.count("periods", periods, name)
+    settle = _args.count("settle", settle, name, least=0)
+    phase = _args.finite("phase", phase, name)
+    if not 0.0 <= phase < 1.0:
+        raise ValueError(f"{name}: phase is a fraction of the forcing period in [0, 1), "
+                         f"got {phase!r}")
+    rtol = _args.finite("rtol", rtol, name)
+    if not 1e-12 <= rtol <= 1e-4:
+        raise ValueError(f"{name}: rtol must be in [1e-12, 1e-4], got {rtol!r}")
+    if not isinstance(follow, (bool, np.bool_)):
+        raise ValueError(f"{name}: follow must be True or False, got {_args.describe(follow)}")
+    if follow and chunks is not None:
+        raise ValueError(f"{name}: follow=True runs the values one after another, in one "
+                         "process; leave chunks out")
+    q, u, p = start_values(mech, start)
+    need = values.size * periods * 2 * mech.n * 8
+    avail = available_memory()
+    if chunks is None and avail is not None and need > MEMORY_SHARE * avail:
+        raise ValueError(f"{name}: the diagram's points take {human_bytes(need)}, more "
+                         f"than half the memory available ({human_bytes(avail)}); keep "
+                         "fewer periods or values, or pass chunks= and write it block by "
+                         "block (ds.to_netcdf)")
+    spec = {"periods": periods, "settle": settle, "phase": phase, "rtol": rtol,
+            "follow": bool(follow)}
+    if chunks is None:
+        arrays = _eager(S, mech, p, q, u, param, values, spec, progress)
+    else:
+        arrays = _lazy(S, mech, p, q, u, param, values, spec, chunks)
+    return _dataset(S, mech, p, param, values, arrays, spec, start)
+
+
+def _values(name, S, param, values) -> np.ndarray:
+    """The parameter's values checked: 1-D, finite, monotonic, inside its domain."""
+    a = _args.reals(f"values of {param}", values, name)
+    if a.ndim != 1 or a.size == 0:
+        raise ValueError(f"{name}: the values of {param} must be a non-empty 1-D sequence, "
+                         f"got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: the values of {param} must be finite, got "
+                         f"{float(a[~np.isfinite(a)][0])!r}")
+    step = np.diff(a)
+    if a.size > 1 and not (np.all(step > 0) or np.all(step < 0)):
+        what = "repeat a value" if np.any(step == 0) else "go back and forth"
+        raise ValueError(f"{name}: the values of {param} {what}; they must be strictly "
+                         "increasing or strictly decreasing")
+    par = next(x for x in S.parameters if x.name == param)
+    lo, hi = float(par.lower), float(par.upper)
+    for x in (a.min(), a.max()):
+        if x < lo or x > hi or (x == lo and par.lower_open) or (x == hi and par.upper_open):
+            raise ValueError(f"{name}: {param} = {x:g} is outside its domain "
+                             f"{'(' if par.lower_open else '['}{lo:g}, {hi:g}"
+                             f"{')' if par.upper_open else ']'}")
+    return a
+
+
+def _names(mech):
+    return list(mech.coordinates) + list(mech.rates)
+
+
+def strobe(mech, p, q, u, spec):
+    """One value's motion: ``(points, fate, end state)``, the points an array of
+    ``(periods, 2 n)`` (NaN after the motion ended)."""
+    from phasemap.motion.hybrid import Motion, Options
+
+    T = float(mech.period(*p))
+    settle, periods = spec["settle"], spec["periods"]
+    te = T * (np.arange(settle, settle + periods) + spec["phase"])
+    opts = Options(float(te[-1]), rtol=spec["rtol"], max_events=10_000_000,
+                   max_steps=10_000_000)
+    rec = Motion(mech, p, opts).run(q, u, t0=0.0, t_eval=te)
+    out = np.full((periods, 2 * mech.n), np.nan)
+    kept = [i for i, t in enumerate(rec.t) if t >= te[0]]
+    if kept:
+        ts = np.array([rec.t[i] for i in kept])
+        rows = np.searchsorted(te, ts)
+        ok = (rows < periods)
+        ok[ok] &= te[rows[ok]] == ts[ok]
+        out[rows[ok]] = np.array([rec.y[i] for i in kept])[ok]
+    end = np.array(rec.y[-1]) if rec.y else np.concatenate([q, u])
+    return out, int(rec.fate), end
+
+
+def multiple(points) -> int:
+    """The least m <= :data:`MAX_MULTIPLE` for which the last points repeat every m
+    forcing periods (the last ``min(3 m, periods)`` of them agree, to :data:`SAME` of
+    their scale, with the ones m before), else 0."""
+    pts = points[~np.isnan(points).any(axis=1)]
+    if len(pts) < 2:
+        return 0
+    scale = max(float(np.max(np.abs(pts))), 1e-300)
+    for m in range(1, min(MAX_MULTIPLE, len(pts) - 1) + 1):
+        span = min(3 * m, len(pts) - m)
+        a, b = pts[len(pts) - span:], pts[len(pts) - span - m:len(pts) - m]
+        if np.max(np.abs(a - b)) <= SAME * scale:
+            return m
+    return 0
+
+
+def _block(S, p, q, u, i_par, values, spec, tick=None) -> dict:
+    """The diagram over ``values``: its arrays by name (``S`` the declaration, which
+    pickles, so that a block runs in another process too)."""
+    from phasemap.declare.full import mechanics
+
+    mech = mechanics(S)
+    n2 = 2 * mech.n
+    pts = np.full((len(values), spec["periods"], n2), np.nan)
+    fates = np.empty(len(values), dtype=np.int8)
+    mult = np.empty(len(values), dtype=np.int8)
+    q0, u0 = q, u
+    for j, lam in enumerate(values):
+        pj = p.copy()
+        pj[i_par] = lam
+        pts[j], fates[j], end = strobe(mech, pj, q0, u0, spec)
+        mult[j] = multiple(pts[j])
+        if spec["follow"] and fates[j] == ev.HORIZON:
+            q0, u0 = end[:mech.n], end[mech.n:]
+        if tick is not None:
+            tick()
+    out = {nm: pts[:, :, i] for i, nm in enumerate(_names(mech))}
+    out.update({"fate": fates, "multiple": mult})
+    return out
+
+
+def _eager(S, mech, p, q, u, param, values, spec, show):
+    from phasemap.core import progress
+
+    i_par = mech.parameters.index(param)
+    with progress.enable(force=progress.wanted(show)):
+        bar = progress.bar(len(values), f"{mech.name} orbit diagram", unit="value")
+        with bar:
+            return _block(S, p, q, u, i_par, values, spec, tick=lambda: bar.update(1))
+
+
+def _lazy(S, mech, p, q, u, param, values, spec, chunks):
+    """Dask-backed arrays: one task per block of values computes every variable once."""
+    import dask
+    import dask.array as da
+
+    name = mech.name
+    if isinstance(chunks, (bool, np.bool_)) or not isinstance(chunks, (int, np.integer)) \
+            or chunks < 1:
+        raise ValueError(f"{name}: chunks must be a positive whole number of parameter "
+                         f"values per block, got {_args.describe(chunks)}")
+    i_par = mech.parameters.index(param)
+    periods = spec["periods"]
+    parts = {nm: [] for nm in [*_names(mech), "fate", "multiple"]}
+    for lo in range(0, len(values), int(chunks)):
+        vals = values[lo:lo + int(chunks)]
+        block = dask.delayed(_block, pure=True)(S, p, q, u, i_par, vals, spec)
+        for nm in parts:
+            scalar = nm in ("fate", "multiple")
+            shape = (len(vals),) if scalar else (len(vals), periods)
+            parts[nm].append(da.from_delayed(block[nm], shape,
+                                             dtype=np.int8 if scalar else np.float64))
+    return {nm: da.concatenate(a, axis=0) for nm, a in parts.items()}
+
+
+def _dataset(S, mech, p, param, values, arrays, spec, start):
+    import xarray as xr
+
+    from phasemap._version import __version__
+    from phasemap.atlas.dataset import CONVENTIONS, created
+
+    par = next(x for x in S.parameters if x.name == param)
+    units = [*mech.units, *(f"{un} s-1" for un in mech.units)]
+    data = {}
+    for nm, un in zip(_names(mech), units):
+        data[nm] = ((param, "cycle"), arrays[nm], {
+            "long_name": f"{nm} at the forcing phase, once per forcing period", "units": un})
+    data["fate"] = (param, arrays["fate"], {
+        "long_name": "how the motion ended (horizon: it ran through)",
+        "flag_values": np.array(ev.EVENT_VALUES, dtype=np.int8),
+        "flag_meanings": ev.EVENT_MEANINGS})
+    data["multiple"] = (param, arrays["multiple"], {
+        "long_name": "period of the settled motion in forcing periods (0: none up to "
+                     f"{MAX_MULTIPLE})", "units": "1"})
+    coords = {
+        param: (param, values, {"long_name": par.long_name, "units": par.units}),
+        "cycle": ("cycle", np.arange(1, spec["periods"] + 1, dtype=np.int32), {
+            "long_name": "forcing periods after the settling time", "units": "1"}),
+    }
+    attrs = {"Conventions": CONVENTIONS, "title": f"phasemap orbit diagram: {S.title}",
+             "source": f"phasemap {__version__}", "references": S.citation,
+             "phasemap_version": __version__, "date_created": created(),
+             "phasemap_kind": "orbit_diagram", "phasemap_model": S.name,
+             "phasemap_parameter": param, "phasemap_diagram": json.dumps(spec),
+             "phasemap_start": json.dumps({k: float(v) for k, v in start.items()})}
+    attrs.update({f"phasemap_parameter_{nm}": float(v)
+                  for nm, v in zip(mech.parameters, p) if nm != param})
+    return xr.Dataset(data, coords, attrs)
+
