@@ -155,8 +155,27 @@ def test_the_diagram_figure_overlays_a_branch_where_its_orbits_cross_phase_zero(
         den_hartog.phasemap.plot(branches=o)
 
 
+def test_an_autonomous_oscillator_is_sampled_at_its_maxima():
+    """The belt's stick-slip orbit (m = k = g = 1, f_s = 1, f_k = 0.5) reaches up to
+    x_max = f_k + sqrt(delta^2 + v^2), delta = f_s - f_k: the slip starts at the stick's
+    end x = 1 with the belt's speed v and swings about f_k.  Each kept maximum is that,
+    to 5e-7 (the cubic through the saved steps), with x' = 0 there."""
+    v = np.array([0.1, 0.2, 0.4])
+    d = phasemap.orbit_diagram("belt", "v", v, periods=4, settle=10)
+    want = 0.5 + np.sqrt(0.25 + v**2)
+    assert np.abs(d.x.values - want[:, None]).max() < 5e-7
+    assert np.abs(d.xdot.values).max() < 1e-9
+    assert d.multiple.values.tolist() == [1, 1, 1]
+    assert d.x.attrs["long_name"] == "x at each maximum of x"
+    assert d.cycle.attrs["long_name"] == "maxima of x after the settling ones"
+
+
 @pytest.mark.parametrize("model, args, kw, match", [
-    ("belt", ("v", [0.1, 0.2]), {}, r"belt is autonomous \(no forcing period"),
+    ("belt", ("v", [0.1]), {"phase": 0.5}, r"belt is autonomous: its points are the maxima "
+                                           r"of x, at no phase of a forcing; leave phase out"),
+    ("belt", ("v", [0.1]), {"section": "z"}, r"section must name a coordinate whose maxima "
+                                             r"are kept \(x, y\), got 'z'"),
+    ("den_hartog", ("f", [0.3]), {"section": "x"}, r"den_hartog is forced: its points are "),
     ("den_hartog", ("g0", [1.0]), {}, r"unknown parameter 'g0'; the parameters are m, k"),
     ("den_hartog", ("f", [0.3, 0.2, 0.4]), {}, r"the values of f go back and forth"),
     ("den_hartog", ("f", [0.3, 0.3]), {}, r"the values of f repeat a value"),

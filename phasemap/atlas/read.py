@@ -178,8 +178,18 @@ def orbit_lines(ds: xr.Dataset) -> list[str]:
         mult = ds.floquet_real.values + 1j * ds.floquet_imag.values
     else:
         mult = ds.floquet.values
-    lines.append("Floquet multipliers  " + ", ".join(f"{complex(x):.6g}" for x in mult))
+    lines.append("Floquet multipliers  " + ", ".join(f"{_rounded(x):.6g}" for x in mult))
     return lines
+
+
+#: A multiplier's part below this is printed as 0: a stick segment's collapse gives an
+#: exact 0, which the eigenvalue solver returns as a rounding error of either sign.
+ZERO = 1e-12
+
+
+def _rounded(x) -> complex:
+    z = complex(x)
+    return complex(0.0 if abs(z.real) < ZERO else z.real, 0.0 if abs(z.imag) < ZERO else z.imag)
 
 
 def branch_lines(ds: xr.Dataset) -> list[str]:

@@ -7,6 +7,8 @@ with branches overlaid (:func:`diagram_figure`); what ``ds.phasemap.plot()`` dra
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
@@ -156,7 +158,8 @@ def _at_point(ds, i, y, at, p, v) -> float:
 def diagram_figure(ds: xr.Dataset, y: str | None = None, *, branches=(), ax=None,
                    size: str | float = "one_column") -> Figure:
     """The orbit diagram: the stroboscopic points of ``y`` (default the first coordinate
-    that moves) against the parameter, one dot each; each of ``branches`` (Datasets of
+    that moves; an autonomous system's: its points at the maxima of its section) against
+    the parameter, one dot each; each of ``branches`` (Datasets of
     :func:`phasemap.continue_orbit` in the same parameter) overlaid where its orbits cross
     the forcing's phase 0, stable solid, unstable dashed, its special points marked.
 
@@ -187,10 +190,14 @@ def diagram_figure(ds: xr.Dataset, y: str | None = None, *, branches=(), ax=None
     with style():
         (a,) = _axes(ax, 1, (width, width * 0.7), "diagram_figure")
         xs = np.broadcast_to(p[:, None], v.shape)
-        a.plot(xs.ravel(), v.ravel(), ls="none", marker=".", ms=2.0, mew=0,
+        a.plot(xs.ravel(), v.ravel(), ls="none", marker=".", mew=0,
+               ms=2.0 if np.count_nonzero(~np.isnan(v)) > 2000 else 4.0,
                color=_OI["black"], alpha=0.7, rasterized=v.size > 5000, zorder=2.5)
+        spec = json.loads(ds.attrs.get("phasemap_diagram", "{}"))
+        each = ("once per period" if spec.get("section") is None
+                else f"each maximum of {spec['section']}")
         handles = [Line2D([], [], ls="none", marker=".", ms=4, color=_OI["black"],
-                          label="settled motion, once per period")]
+                          label=f"settled motion, {each}")]
         styles = set()
         for b in branches:
             bp, stable = b[param].values, b.stable.values.astype(bool)

@@ -54,11 +54,12 @@ def add_parsers(sub, make) -> dict:
     d = make(sub, "diagram", "sweep a parameter by simulation: the orbit diagram",
              "Runs the motion of a forced oscillator at each value of a parameter, lets it "
              "settle, and keeps its state once per forcing period (the stroboscopic points: "
-             "one per value on a period-one orbit, a cloud where the motion is chaotic); "
+             "one per value on a period-one orbit, a cloud where the motion is chaotic; of "
+             "an autonomous oscillator, its state at each maximum of a coordinate); "
              "prints the period of the settled motion at each value "
              "(phasemap.orbit_diagram).")
-    d.add_argument("model", metavar="MODEL", help="a forced friction oscillator "
-                   "(den_hartog, duffing) or a declaration file with a forcing period")
+    d.add_argument("model", metavar="MODEL", help="a friction oscillator (den_hartog, "
+                   "duffing; belt, stribeck_belt, autonomous) or a declaration file")
     d.add_argument("sweep", metavar="PARAM=LO:HI:N", help="the parameter and its N values "
                    "from LO up to HI")
     d.add_argument("values", nargs="*", metavar="NAME=VALUE",
@@ -69,6 +70,8 @@ def add_parsers(sub, make) -> dict:
                    help="forcing periods run first and discarded (default %(default)s)")
     d.add_argument("--phase", type=float, default=0.0, help="where in the forcing period "
                    "the points are taken, a fraction in [0, 1) (default %(default)s)")
+    d.add_argument("--section", metavar="NAME", default=None, help="an autonomous "
+                   "system's coordinate whose maxima are kept (default its first)")
     d.add_argument("--rtol", type=float, default=1e-8, help="integration tolerance "
                    "(default %(default)s)")
     d.add_argument("--follow", action="store_true", help="start each value where the "
@@ -149,7 +152,7 @@ def run_diagram(args, parse_values, check_output, draw) -> str:
     sweep = np.linspace(lo, hi, count)
     ds = orbit_diagram(model, name, sweep[::-1] if args.down else sweep, start=values,
                        periods=args.periods, settle=args.settle, phase=args.phase,
-                       rtol=args.rtol, follow=args.follow)
+                       rtol=args.rtol, follow=args.follow, section=args.section)
     lines = diagram_lines(ds)
     if out is not None:
         from phasemap.atlas.write import write_atlas

@@ -1,5 +1,6 @@
-"""The brute-force orbit diagram of a forced oscillator: the settled motion's stroboscopic
-points (one per forcing period) over a parameter axis, what a sweep by simulation shows
+"""The brute-force orbit diagram of a friction oscillator: the settled motion's
+stroboscopic points (one per forcing period; of an autonomous oscillator, its state at
+each maximum of a coordinate) over a parameter axis, what a sweep by simulation shows
 next to the branches :func:`phasemap.continue_orbit` follows.
 
 Each parameter value's motion (:func:`phasemap.simulate`'s, in full coordinates, through
@@ -17,6 +18,7 @@ are independent, so a diagram is chunked with dask over its parameter axis like 
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Mapping
 
 import numpy as np
@@ -36,16 +38,17 @@ SAME = 1e-6
 
 def orbit_diagram(model, param: str, values, *, start=None, periods: int = PERIODS,
                   settle: int = SETTLE, phase: float = 0.0, rtol: float = 1e-8,
-                  follow: bool = False, chunks: int | None = None,
-                  progress: bool | None = None):
+                  follow: bool = False, section: str | None = None,
+                  chunks: int | None = None, progress: bool | None = None):
     """The stroboscopic points of the settled motion of a forced oscillator over the
-    values of one parameter: the classical orbit diagram.
+    values of one parameter: the classical orbit diagram (of an autonomous one, the
+    maxima of a coordinate: the points where its rate turns from positive to negative).
 
     Parameters
     ----------
     model : str or System
-        a forced friction oscillator (``"den_hartog"``, ``"duffing"``) or a declared
-        system with a forcing period (see :class:`phasemap.declare.System`'s ``period``).
+        a friction oscillator (``"den_hartog"``, ``"duffing"``, forced; ``"belt"``,
+        ``"stribeck_belt"``, autonomous) or a declared system.
     param : str
         the parameter on the diagram's axis.
     values : sequence of float
@@ -55,11 +58,18 @@ def orbit_diagram(model, param: str, values, *, start=None, periods: int = PERIO
         the start of every value's motion at t = 0 (coordinates, rates and the other
         parameters by name; their defaults elsewhere).
     periods : int
-        forcing periods whose points are kept (default 200).
+        forcing periods whose points are kept (default 200); of an autonomous system,
+        maxima kept.
     settle : int
-        forcing periods run first and discarded (default 100; 0 keeps the transient).
+        forcing periods run first and discarded (default 100; 0 keeps the transient);
+        of an autonomous system, maxima discarded.
     phase : float
         where in the forcing period the points are taken, as a fraction in [0, 1).
+    section : str, optional
+        an autonomous system's coordinate whose maxima are kept (default its first),
+        each on the cubic through the four saved steps around it (about 1e-7 of the
+        coordinate's scale at rtol 1e-8; the time where the rate vanishes is
+        less exact, but the maximum is flat there).
     rtol : float
         the integration's tolerance (1e-12 to 1e-4; default 1e-8).
     follow : bool
@@ -77,8 +87,9 @@ def orbit_diagram(model, param: str, values, *, start=None, periods: int = PERIO
     -------
     xarray.Dataset
         on the dimensions ``(param, cycle)``: each coordinate and rate of the full
-        state at ``t = (settle + cycle - 1 + phase) T`` (T the forcing period; NaN after
-        a motion that ended early); on ``param``: ``fate`` (how the motion ended,
+        state at ``t = (settle + cycle - 1 + phase) T`` (T the forcing period), or at
+        the ``settle + cycle``-th maximum of ``section`` (NaN after a motion that ended
+        early or stopped having maxima); on ``param``: ``fate`` (how the motion ended,
         ``horizon`` where it ran through, as :class:`phasemap.Event`) and ``multiple``
         (the settled motion's period in forcing periods, the least m <= 16 with the last
         points m periods apart the same to 1e-6 of their scale; 0 for none: a
@@ -89,10 +100,9 @@ def orbit_diagram(model, param: str, values, *, start=None, periods: int = PERIO
     Raises
     ------
     ValueError
-        one line: an unknown model or parameter, an autonomous system (no forcing period
-        to sample at: its orbits are followed by :func:`phasemap.continue_orbit`), bad
-        values, counts or tolerance, a value outside the parameter's domain, ``follow``
-        with ``chunks``.
+        one line: an unknown model, parameter or section, bad values, counts or
+        tolerance, a value outside the parameter's domain, ``follow`` with ``chunks``,
+        ``phase`` of an autonomous system or ``section`` of a forced one.
 
     Examples
     --------
@@ -119,8 +129,18 @@ def orbit_diagram(model, param: str, values, *, start=None, periods: int = PERIO
         raise ValueError(f"{name}: unknown parameter {param!r}; the parameters are "
                          f"{', '.join(mech.parameters)}")
     if mech.period is None:
-        raise ValueError(f"{name} is autonomous (no forcing period to sample the motion "
-                         "at); follow its periodic orbits with phasemap.continue_orbit")
+        if section is None:
+            section = mech.coordinates[0]
+        if not isinstance(section, str) or section not in mech.coordinates:
+            raise ValueError(f"{name}: section must name a coordinate whose maxima are "
+                             f"kept ({', '.join(mech.coordinates)}), got "
+                             f"{_args.describe(section)}")
+        if phase != 0.0:
+            raise ValueError(f"{name} is autonomous: its points are the maxima of "
+                             f"{section}, at no phase of a forcing; leave phase out")
+    elif section is not None:
+        raise ValueError(f"{name} is forced: its points are taken once per forcing "
+                         "period (at phase=); section= is for an autonomous system")
     values = _values(name, S, param, values)
     if start is not None and not isinstance(start, Mapping):
         raise ValueError(f"{name}: start must be a dict of values by name, got "
@@ -152,7 +172,7 @@ def orbit_diagram(model, param: str, values, *, start=None, periods: int = PERIO
                          "fewer periods or values, or pass chunks= and write it block by "
                          "block (ds.to_netcdf)")
     spec = {"periods": periods, "settle": settle, "phase": phase, "rtol": rtol,
-            "follow": bool(follow)}
+            "follow": bool(follow), "section": section}
     if chunks is None:
         arrays = _eager(S, mech, p, q, u, param, values, spec, progress)
     else:
@@ -193,6 +213,8 @@ def strobe(mech, p, q, u, spec):
     ``(periods, 2 n)`` (NaN after the motion ended)."""
     from phasemap.motion.hybrid import Motion, Options
 
+    if mech.period is None:
+        return peaks(mech, p, q, u, spec)
     T = float(mech.period(*p))
     settle, periods = spec["settle"], spec["periods"]
     te = T * (np.arange(settle, settle + periods) + spec["phase"])
@@ -209,6 +231,61 @@ def strobe(mech, p, q, u, spec):
         out[rows[ok]] = np.array([rec.y[i] for i in kept])[ok]
     end = np.array(rec.y[-1]) if rec.y else np.concatenate([q, u])
     return out, int(rec.fate), end
+
+
+#: An autonomous motion runs in chunks of this many of its time scales ...
+CHUNK = 50
+#: ... and stops having maxima where a chunk holds none; its steps are at most this many
+#: time scales long, so that the cubic through the saved steps holds each maximum to
+#: about 1e-7 of the coordinate's scale.
+STEP = 0.05
+
+
+def peaks(mech, p, q, u, spec):
+    """An autonomous motion's maxima of the coordinate ``spec["section"]``, as
+    :func:`strobe` returns its points: the motion run in chunks of :data:`CHUNK` time
+    scales until ``settle + periods`` maxima are found, it ends, or a chunk holds none
+    (it has come to rest, or to a steady motion)."""
+    from types import SimpleNamespace
+
+    from phasemap.motion.hybrid import Motion, Options
+    from phasemap.motion.periodic.section import returns
+
+    n = mech.n
+    settle, periods, rtol = spec["settle"], spec["periods"], spec["rtol"]
+    normal = np.zeros(2 * n)
+    normal[n + mech.coordinates.index(spec["section"])] = -1.0    # the rate turning down
+    sc = Motion(mech, p, Options(1.0, rtol=rtol)).scales(q, u, mech.pieces(q, u, p, 0.0))
+    scale_t = math.sqrt(sc[3] / sc[2])
+    chunk = CHUNK * scale_t
+    out = np.full((periods, 2 * n), np.nan)
+    t, z = 0.0, np.concatenate([q, u])
+    ts, ys = [], []             # the last saved steps, for a maximum across two chunks
+    found, fate = 0, ev.HORIZON
+    while found < settle + periods:
+        opts = Options(t + chunk, rtol=rtol, max_step=STEP * scale_t, max_events=10_000_000,
+                       max_steps=10_000_000)
+        rec = Motion(mech, p, opts).run(z[:n], z[n:], t0=t)
+        if not ts:                        # the first chunk: its start too
+            ts, ys = rec.t[:1], rec.y[:1]
+        ts, ys = ts[-3:], ys[-3:]
+        for tk, yk in zip(rec.t[1:], rec.y[1:]):
+            if tk == ts[-1]:              # an event's two states at one time: the after
+                ys[-1] = yk
+            else:
+                ts.append(tk)
+                ys.append(yk)
+        new = [(tk, yk) for tk, yk in returns(SimpleNamespace(t=ts, y=ys), 0.0 * z, normal)
+               if tk > t]
+        for _, yk in new:
+            if settle <= found < settle + periods:
+                out[found - settle] = yk
+            found += 1
+        if rec.fate != ev.HORIZON or not new:
+            fate = rec.fate
+            break
+        t, z = rec.t[-1], np.array(rec.y[-1])
+    return out, int(fate), np.array(rec.y[-1])
 
 
 def multiple(points) -> int:
@@ -295,9 +372,11 @@ def _dataset(S, mech, p, param, values, arrays, spec, start):
     par = next(x for x in S.parameters if x.name == param)
     units = [*mech.units, *(f"{un} s-1" for un in mech.units)]
     data = {}
+    where = ("at the forcing phase, once per forcing period" if spec["section"] is None
+             else f"at each maximum of {spec['section']}")
     for nm, un in zip(_names(mech), units):
-        data[nm] = ((param, "cycle"), arrays[nm], {
-            "long_name": f"{nm} at the forcing phase, once per forcing period", "units": un})
+        data[nm] = ((param, "cycle"), arrays[nm], {"long_name": f"{nm} {where}",
+                                                   "units": un})
     data["fate"] = (param, arrays["fate"], {
         "long_name": "how the motion ended (horizon: it ran through)",
         "flag_values": np.array(ev.EVENT_VALUES, dtype=np.int8),
@@ -308,7 +387,9 @@ def _dataset(S, mech, p, param, values, arrays, spec, start):
     coords = {
         param: (param, values, {"long_name": par.long_name, "units": par.units}),
         "cycle": ("cycle", np.arange(1, spec["periods"] + 1, dtype=np.int32), {
-            "long_name": "forcing periods after the settling time", "units": "1"}),
+            "long_name": "forcing periods after the settling time" if spec["section"] is None
+                         else f"maxima of {spec['section']} after the settling ones",
+            "units": "1"}),
     }
     attrs = {"Conventions": CONVENTIONS, "title": f"phasemap orbit diagram: {S.title}",
              "source": f"phasemap {__version__}", "references": S.citation,
