@@ -34,6 +34,10 @@ PERIODS = 200
 MAX_MULTIPLE = 16
 #: How near (relative to the points' scale) two kept points must be to count as one.
 SAME = 1e-6
+#: What a value's motion keeps in memory per forcing period while it runs: its events
+#: (two or three a period in a stick-slip orbit, each a few arrays in a Python list) and
+#: its kept point (phasemap.motion.hybrid.start.FULL_POINT_BYTES).
+PERIOD_BYTES = 2000
 
 
 def orbit_diagram(model, param: str, values, *, start=None, periods: int = PERIODS,
@@ -164,13 +168,20 @@ def orbit_diagram(model, param: str, values, *, start=None, periods: int = PERIO
         raise ValueError(f"{name}: follow=True runs the values one after another, in one "
                          "process; leave chunks out")
     q, u, p = start_values(mech, start)
-    need = values.size * periods * 2 * mech.n * 8
     avail = available_memory()
-    if chunks is None and avail is not None and need > MEMORY_SHARE * avail:
-        raise ValueError(f"{name}: the diagram's points take {human_bytes(need)}, more "
-                         f"than half the memory available ({human_bytes(avail)}); keep "
-                         "fewer periods or values, or pass chunks= and write it block by "
-                         "block (ds.to_netcdf)")
+    if avail is not None:
+        need = values.size * periods * 2 * mech.n * 8
+        work = (settle + periods) * PERIOD_BYTES
+        if chunks is None and need > MEMORY_SHARE * avail:
+            raise ValueError(f"{name}: the diagram's points take {human_bytes(need)}, more "
+                             f"than half the memory available ({human_bytes(avail)}); keep "
+                             "fewer periods or values, or pass chunks= and write it block "
+                             "by block (ds.to_netcdf)")
+        if work > MEMORY_SHARE * avail:
+            raise ValueError(f"{name}: one value's motion over {settle + periods:,} periods "
+                             f"keeps about {human_bytes(work)} while it runs (its events "
+                             f"and points), more than half the memory available "
+                             f"({human_bytes(avail)}); keep fewer periods")
     spec = {"periods": periods, "settle": settle, "phase": phase, "rtol": rtol,
             "follow": bool(follow), "section": section}
     if chunks is None:
