@@ -4,7 +4,7 @@ An orbit diagram by simulation, with the continued branch on it
 
 Ueda's oscillator with dry friction, x'' + 0.05 x' + x^3 = F0 cos t - 0.01 sgn x',
 swept down in the forcing amplitude F0 by :func:`phasemap.orbit_diagram`: at each value
-the motion (through every stop and reversal, on the exact hybrid flow) settles for 80
+the motion (through every stop and reversal, on the exact hybrid flow) settles for 60
 forcing periods and its state is kept once per period, each value starting where the
 previous one ended. Above F0 = 8.0115 it settles on one point per value, a period-one
 orbit; below, the points spread.
@@ -23,15 +23,15 @@ import phasemap
 from phasemap.plot.style import style
 
 ueda = {"k": 0.0, "beta": 1.0, "c": 0.05, "f": 0.01, "Omega": 1.0}
-sweep = phasemap.orbit_diagram("duffing", "F0", np.linspace(8.3, 7.8, 21),
-                               start={**ueda, "x": 2.4, "xdot": -0.32}, settle=80,
-                               periods=30, follow=True)
+sweep = phasemap.orbit_diagram("duffing", "F0", np.linspace(8.3, 7.8, 16),
+                               start={**ueda, "x": 2.4, "xdot": -0.32}, settle=60,
+                               periods=25, follow=True)
 print("period of the settled motion (forcing periods; 0: none):",
       sweep.multiple.values.tolist())
 
 orbit = phasemap.periodic_orbit("duffing", start={**ueda, "F0": 8.05, "x": 2.39,
                                                   "xdot": -0.315}, period=2 * np.pi)
-branch = phasemap.continue_orbit(orbit, "F0", (7.8, 8.3), steps=10)
+branch = phasemap.continue_orbit(orbit, "F0", (7.8, 8.3), steps=6)
 for kind, at in zip(branch.point_kind.values, branch.point_F0.values):
     print(f"{kind} at F0 = {float(at):.9f}")
 

@@ -8,6 +8,9 @@ import pytest
 import phasemap
 from phasemap.core import events as ev
 
+#: the oscillators' compiled phase functions are test_periodic's: one worker builds them
+XDIST_GROUP = "tests/test_periodic.py"
+
 #: Den Hartog's oscillator x'' + x = cos(0.8 t) - f sgn x' in the reference's names.
 _DEN_HARTOG = {"F": 1.0, "Omega": 0.8, "k1": 1.0, "beta": 0.0, "c": 0.0}
 #: Ueda's oscillator with dry friction (the reference's DOUBLING) in the model's names.

@@ -242,10 +242,12 @@ def random_step_rod(seed: int):
 @pytest.mark.early
 @pytest.mark.kernels_with("tests/test_two_contacts.py::random_step_rod")
 @pytest.mark.parametrize("seed", [2])
-def test_random_step_rods_cell_by_cell_and_traced(seed):
+def test_random_step_rods_cell_by_cell(seed):
     """A random two-contact declaration: a 24^2 raster over (theta, f) cell by cell
-    against the full-coordinate enumeration, then its boundaries on that slice with
-    every class change of the check raster explained."""
+    against the full-coordinate enumeration.  (Its boundaries on that slice, traced here
+    too until CI's replays reached 2277 s of the 1800 allowed, cost 70-140 s of the
+    tracer's compile for this one declaration; the random barrow below traces a random
+    two-contact declaration's boundaries, and the drawer and the peg rod theirs.)"""
     model, v = random_step_rod(seed)
     lo = float(np.arcsin(v["h"] / 2)) + 0.02       # the edge on the rod: h / sin theta <= 2
     ths = np.linspace(lo, 1.5, 24)
@@ -263,9 +265,6 @@ def test_random_step_rods_cell_by_cell_and_traced(seed):
                                                                  want.stagnation):
                 wrong.append((th, f))
     assert n > 500 and not wrong, wrong[:3]
-    b = phasemap.boundaries(model, {"theta": (lo, 1.5), "f": (0.0, 2.0)},
-                            fixed={"omega": v["omega"], "h": v["h"]})
-    assert np.all(b.point_residual.values <= 1e-10)
 
 
 def test_the_peg_rods_boundaries_across_omega_zero(peg_rod):
