@@ -105,14 +105,10 @@ def branch_figure(ds: xr.Dataset, y: str | None = None, *, ax=None,
     p, v, stable = ds[param].values, ds[y].values, ds.stable.values
     with style():
         (a,) = _axes(ax, 1, (width, width * 0.7), "branch_figure")
-        # one line per run of stable (solid) or unstable (dashed) points
-        edges = [i for i in range(1, len(p)) if bool(stable[i]) != bool(stable[i - 1])]
         kinds = set()
-        for lo, hi in zip([0, *edges], [*edges, len(p)]):
-            ls = "-" if stable[lo] else "--"
+        for run, ls in _runs(stable):
             kinds.add(ls)
-            a.plot(p[max(lo - 1, 0):hi], v[max(lo - 1, 0):hi], color=_OI["black"], lw=1.3,
-                   ls=ls)
+            a.plot(p[run], v[run], color=_OI["black"], lw=1.3, ls=ls)
         handles = [Line2D([], [], color=_OI["black"], lw=1.3, ls=ls, label=label)
                    for ls, label in (("-", "stable"), ("--", "unstable")) if ls in kinds]
         done = set()
@@ -132,6 +128,15 @@ def branch_figure(ds: xr.Dataset, y: str | None = None, *, ax=None,
         a.set_ylabel(_label(ds, y))
         legend_above(a, handles)
     return a.figure
+
+
+def _runs(stable):
+    """A branch's runs of stable (``"-"``) or unstable (``"--"``) points, as ``(slice,
+    line style)``: each run from the last point of the one before, so the line goes on."""
+    stable = np.asarray(stable).astype(bool)
+    edges = [i for i in range(1, len(stable)) if stable[i] != stable[i - 1]]
+    return [(slice(max(lo - 1, 0), hi), "-" if stable[lo] else "--")
+            for lo, hi in zip([0, *edges], [*edges, len(stable)])]
 
 
 def _at_point(ds, i, y, at, p, v) -> float:
@@ -200,14 +205,10 @@ def diagram_figure(ds: xr.Dataset, y: str | None = None, *, branches=(), ax=None
                           label=f"settled motion, {each}")]
         styles = set()
         for b in branches:
-            bp, stable = b[param].values, b.stable.values.astype(bool)
-            sec = b[f"section_{y}"].values
-            edges = [i for i in range(1, len(bp)) if stable[i] != stable[i - 1]]
-            for lo, hi in zip([0, *edges], [*edges, len(bp)]):
-                ls = "-" if stable[lo] else "--"
+            bp, sec = b[param].values, b[f"section_{y}"].values
+            for run, ls in _runs(b.stable.values):
                 styles.add(ls)
-                a.plot(bp[max(lo - 1, 0):hi], sec[max(lo - 1, 0):hi], color=_OI["vermillion"],
-                       lw=1.2, ls=ls, zorder=2)
+                a.plot(bp[run], sec[run], color=_OI["vermillion"], lw=1.2, ls=ls, zorder=2)
             for i in range(b.sizes["point"]):
                 kind = str(b.point_kind.values[i])
                 if kind == "end":

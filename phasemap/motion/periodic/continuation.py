@@ -736,12 +736,10 @@ def _branch_dataset(S, mech, param, points, marks, span):
                  "units": u})
     m = max((len(p["strobes"]) for p in points), default=0)
     if mech.period is not None and m:     # where a forced orbit crosses phase 0
-        names = list(mech.coordinates) + list(mech.rates)
-        units = [*mech.units, *(f"{un} s-1" for un in mech.units)]
         at = np.full((len(points), m, 2 * n), np.nan)
         for i, p in enumerate(points):
             at[i, :len(p["strobes"])] = p["strobes"]
-        for j, (nm, un) in enumerate(zip(names, units)):
+        for j, (nm, un) in enumerate(_orbit.state_variables(mech)):
             data[f"section_{nm}"] = (("vertex", "section"), at[:, :, j], {
                 "long_name": f"{nm} where the orbit is at the forcing's phase 0, in order "
                              "(what phasemap.orbit_diagram samples; NaN past the orbit's "

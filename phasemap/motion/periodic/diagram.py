@@ -25,13 +25,14 @@ import numpy as np
 
 from phasemap.core import args as _args
 from phasemap.core import events as ev
+# MAX_MULTIPLE: the longest period ``multiple`` looks for, the one periodic_orbit's
+# settling looks for
+from phasemap.motion.periodic.orbit import MAX_MULTIPLE, state_variables
 
 #: Default forcing periods run and discarded before the points are kept ...
 SETTLE = 100
 #: ... and the periods whose stroboscopic points are kept.
 PERIODS = 200
-#: The longest period (in forcing periods) ``multiple`` looks for in the kept points.
-MAX_MULTIPLE = 16
 #: How near (relative to the points' scale) two kept points must be to count as one.
 SAME = 1e-6
 #: What a value's motion keeps in memory per forcing period while it runs: its events
@@ -215,10 +216,6 @@ def _values(name, S, param, values) -> np.ndarray:
     return a
 
 
-def _names(mech):
-    return list(mech.coordinates) + list(mech.rates)
-
-
 def strobe(mech, p, q, u, spec):
     """One value's motion: ``(points, fate, end state)``, the points an array of
     ``(periods, 2 n)`` (NaN after the motion ended)."""
@@ -335,7 +332,7 @@ def _block(S, p, q, u, i_par, values, spec, tick=None) -> dict:
             q0, u0 = end[:mech.n], end[mech.n:]
         if tick is not None:
             tick()
-    out = {nm: pts[:, :, i] for i, nm in enumerate(_names(mech))}
+    out = {nm: pts[:, :, i] for i, (nm, _) in enumerate(state_variables(mech))}
     out.update({"fate": fates, "multiple": mult})
     return out
 
@@ -362,7 +359,7 @@ def _lazy(S, mech, p, q, u, param, values, spec, chunks):
                          f"values per block, got {_args.describe(chunks)}")
     i_par = mech.parameters.index(param)
     periods = spec["periods"]
-    parts = {nm: [] for nm in [*_names(mech), "fate", "multiple"]}
+    parts = {nm: [] for nm in [*(nm for nm, _ in state_variables(mech)), "fate", "multiple"]}
     for lo in range(0, len(values), int(chunks)):
         vals = values[lo:lo + int(chunks)]
         block = dask.delayed(_block, pure=True)(S, p, q, u, i_par, vals, spec)
@@ -381,11 +378,10 @@ def _dataset(S, mech, p, param, values, arrays, spec, start):
     from phasemap.atlas.dataset import CONVENTIONS, created
 
     par = next(x for x in S.parameters if x.name == param)
-    units = [*mech.units, *(f"{un} s-1" for un in mech.units)]
     data = {}
     where = ("at the forcing phase, once per forcing period" if spec["section"] is None
              else f"at each maximum of {spec['section']}")
-    for nm, un in zip(_names(mech), units):
+    for nm, un in state_variables(mech):
         data[nm] = ((param, "cycle"), arrays[nm], {"long_name": f"{nm} {where}",
                                                    "units": un})
     data["fate"] = (param, arrays["fate"], {

@@ -737,9 +737,7 @@ def _orbit_dataset(S, mech, motion, segs, w, t_a, forcing, res, samples, rtol, s
         "long_name": "index of the event function that ends the segment (-1: the end of "
                      "the forcing period; -2: a Poincare section through the segment's "
                      "start, normal to the flow there; phasemap.motion.hybrid.Motion.watch)"})
-    names = list(mech.coordinates) + list(mech.rates)
-    units = [*mech.units, *(f"{u} s-1" for u in mech.units)]
-    for i, (nm, un) in enumerate(zip(names, units)):
+    for i, (nm, un) in enumerate(state_variables(mech)):
         data[f"segment_{nm}"] = ("segment", np.array([z[i] for z in zs]), {
             "long_name": f"{nm} where the segment starts", "units": un})
     for c in mech.contacts:
@@ -753,6 +751,13 @@ def _orbit_dataset(S, mech, motion, segs, w, t_a, forcing, res, samples, rtol, s
                      "phasemap_forcing_period": forcing if forcing is not None else np.nan})
     del ds.attrs["end_reason"], ds.attrs["end_message"]
     return ds
+
+
+def state_variables(mech) -> list[tuple[str, str]]:
+    """``(name, units)`` of each variable of the full state, in its order: the
+    coordinates, then their rates."""
+    return list(zip([*mech.coordinates, *mech.rates],
+                    [*mech.units, *(f"{u} s-1" for u in mech.units)]))
 
 
 def _contact_of(seg: Segment, motion) -> int:
