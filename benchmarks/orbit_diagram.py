@@ -128,7 +128,10 @@ def main() -> None:
              f"(Omega = 0.8), {VALUES} values of f in [0.15, 0.35], each settled for {SETTLE} "
              f"forcing periods and kept for {PERIODS}, rtol {RTOL:g}; the error is the "
              "largest distance of a value's kept points from the fixed point of the return "
-             f"map (scipy alone), over {SCIPY_VALUES} values.", "", *rows, "",
+             f"map (scipy alone), over {SCIPY_VALUES} values. CPU time is one thread's "
+             "(the public call in this process; scipy's the same); the dask row is wall "
+             "time on two worker processes. Reproduce: `python benchmarks/orbit_diagram.py`.",
+             "", *rows, "",
              "The issue's target, an orbit diagram of 1000 values x 200 forcing periods in "
              "5 s on two threads, is not met: each value's motion is stepped by the "
              "compiled flow, but its decisions at every reversal (the admissible modes, "
