@@ -20,6 +20,7 @@ import pytest
 
 import phasemap
 from phasemap.core import numerics as nx
+from phasemap.core import tiers
 
 import oracles
 import unseen
@@ -236,34 +237,33 @@ def random_step_rod(seed: int):
     return system.model, values
 
 
-# each random declaration compiles kernels of its own (nothing the drawer or the peg rod
-# needs): a group of its own, so that the two workers share the module's long tests
+# each random declaration derives with sympy for seconds and compiles nothing here
 @pytest.mark.slow
-@pytest.mark.early
-@pytest.mark.kernels_with("tests/test_two_contacts.py::random_step_rod")
 @pytest.mark.parametrize("seed", [2])
 def test_random_step_rods_cell_by_cell(seed):
     """A random two-contact declaration: a 24^2 raster over (theta, f) cell by cell
-    against the full-coordinate enumeration.  (Its boundaries on that slice, traced here
-    too until CI's replays reached 2277 s of the 1800 allowed, cost 70-140 s of the
-    tracer's compile for this one declaration; the random barrow below traces a random
-    two-contact declaration's boundaries, and the drawer and the peg rod theirs.)"""
+    against the full-coordinate enumeration, through the generated functions' interpreted
+    twins (the same bits as their machine code, tests/test_tiers.py; compiling them for
+    this one declaration cost 30-40 s).  Its boundaries on that slice cost 70-140 s of
+    the tracer's compile: the drawer and the peg rod trace theirs in every run, the random
+    barrow its own under ``-m deep``."""
     model, v = random_step_rod(seed)
     lo = float(np.arcsin(v["h"] / 2)) + 0.02       # the edge on the rod: h / sin theta <= 2
     ths = np.linspace(lo, 1.5, 24)
     fs = np.linspace(0.0, 2.0, 24)
     wrong, n = [], 0
-    for th in ths:
-        for f in fs:
-            want = oracles.rod_on_step(th, v["omega"], f, 1.0, v["h"], 9.81, 1.0, a=v["a"],
-                                       k=v["k"], push=v["push"])
-            if want.margin < 1e-6:
-                continue
-            got = phasemap.classify(model, theta=th, omega=v["omega"], f=f, h=v["h"])
-            n += 1
-            if (int(got.n_solutions), bool(got.stagnation)) != (want.n_solutions,
-                                                                 want.stagnation):
-                wrong.append((th, f))
+    with tiers.forced("off"):
+        for th in ths:
+            for f in fs:
+                want = oracles.rod_on_step(th, v["omega"], f, 1.0, v["h"], 9.81, 1.0,
+                                           a=v["a"], k=v["k"], push=v["push"])
+                if want.margin < 1e-6:
+                    continue
+                got = phasemap.classify(model, theta=th, omega=v["omega"], f=f, h=v["h"])
+                n += 1
+                if (int(got.n_solutions), bool(got.stagnation)) != (want.n_solutions,
+                                                                     want.stagnation):
+                    wrong.append((th, f))
     assert n > 500 and not wrong, wrong[:3]
 
 
@@ -289,23 +289,12 @@ def test_the_peg_rods_boundaries_across_omega_zero(peg_rod):
             == b.class_right.values[p]
 
 
-@pytest.mark.early
-@pytest.mark.kernels_with("tests/test_two_contacts.py::barrow")
-@pytest.mark.parametrize("seed", [1])
-def test_random_barrows_cell_by_cell_and_traced(seed):
-    """Random two-contact declarations with a rolling contact (tests/unseen.py: a wheel
-    rolling with rolling friction, its handles sliding on the floor, of random mass
-    distribution, length and motor torque): a raster over (omega, f) through omega = 0,
-    cell by cell against the generalised-coordinate enumeration (tests/oracles.py); then
-    the boundaries of that slice, every class change of the check raster explained (or
-    boundaries raises), and each piece's side classes against the enumeration.  The slice
-    holds no solution (the Painleve paradox where the handles are pushed ahead: omega < 0,
-    f large), the wheel lifting off, rolling either way, and the statically indeterminate
-    rest (five reactions, four equations).  One seed: a declaration costs 2 to 4 min of
-    sympy and compilation on a fresh clone (seed 4 agreed on every cell of its raster
-    too, in the CI replays of this change)."""
+def _barrow(seed):
+    """A random barrow (tests/unseen.py: a wheel rolling with rolling friction, its handles
+    sliding on the floor, of random mass distribution, length and motor torque), its
+    slice's angle phi, and the generalised-coordinate enumeration over (omega, f) there
+    (tests/oracles.py)."""
     system, st = unseen.barrow(seed)
-    model = system.model
     phi = float(np.random.default_rng(seed).uniform(-np.pi, np.pi))
     tau = st["tau"] * 9.81
 
@@ -313,20 +302,47 @@ def test_random_barrows_cell_by_cell_and_traced(seed):
         return oracles.barrow(phi, omega, f, 0.05, 1.0, 9.81, 1.0, st["lw"], st["k"], st["mu"],
                               st["L"], tau)
 
+    return system.model, phi, oracle
+
+
+@pytest.mark.parametrize("seed", [1])
+def test_random_barrows_cell_by_cell(seed):
+    """A random two-contact declaration with a rolling contact: a raster over (omega, f)
+    through omega = 0, cell by cell against the enumeration.  The slice holds no solution
+    (the Painleve paradox where the handles are pushed ahead: omega < 0, f large), the
+    wheel lifting off, rolling either way, and the statically indeterminate rest (five
+    reactions, four equations).  The declaration's generated functions answer through
+    their interpreted twins (``PHASEMAP_JIT=off``: the same bits as their machine code,
+    tests/test_tiers.py), so this costs sympy's derivation and no compilation."""
+    model, phi, oracle = _barrow(seed)
     wrong, n, seen = [], 0, set()
-    for omega in np.linspace(-2.0, 2.0, 21):
-        for f in np.linspace(0.0, 6.0, 25):
-            want = oracle(omega, f)
-            if want.margin < 1e-6:
-                continue
-            got = phasemap.classify(model, phi=phi, omega=omega, f=f)
-            n += 1
-            seen.add((want.n_solutions, want.stagnation))
-            if (int(got.n_solutions), bool(got.stagnation)) != (want.n_solutions,
-                                                                 want.stagnation):
-                wrong.append((omega, f))
+    with tiers.forced("off"):
+        for omega in np.linspace(-2.0, 2.0, 21):
+            for f in np.linspace(0.0, 6.0, 25):
+                want = oracle(omega, f)
+                if want.margin < 1e-6:
+                    continue
+                got = phasemap.classify(model, phi=phi, omega=omega, f=f)
+                n += 1
+                seen.add((want.n_solutions, want.stagnation))
+                if (int(got.n_solutions), bool(got.stagnation)) != (want.n_solutions,
+                                                                     want.stagnation):
+                    wrong.append((omega, f))
     assert n > 400 and not wrong, wrong[:3]
     assert len(seen) >= 3, seen          # the slice holds several classes
+
+
+@pytest.mark.deep
+@pytest.mark.kernels_with("tests/test_two_contacts.py::barrow")
+@pytest.mark.parametrize("seed", [1, 4])
+def test_random_barrows_boundaries(seed):
+    """The boundaries of the random barrow's slice: every class change of the check raster
+    explained (or boundaries raises), and each piece's side classes against the
+    enumeration.  ``deep``: a random declaration's tracer compiles for 2-5 min on a fresh
+    clone (155 s of CPU at the suite's -O1, 185 s at numba's default), which CI's time
+    cannot hold with the rest; the drawer's and the peg rod's boundaries above are traced
+    in every run, and tests/test_boundaries_random.py traces random one-contact rods."""
+    model, phi, oracle = _barrow(seed)
     b = phasemap.boundaries(model, {"omega": (-2.0, 2.0), "f": (0.0, 6.0)}, fixed={"phi": phi})
     assert b.sizes["piece"] >= 2 and np.all(b.point_residual.values <= 1e-10)
     _sides_agree(b, "omega", (-2.0, 2.0), (0.0, 6.0), lambda om, f: oracle(om, f).n_solutions)
