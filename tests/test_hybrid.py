@@ -572,6 +572,66 @@ def test_dynamic_jam_of_the_rod_stops_its_slip_with_the_sliding_impulse(start, f
     assert ds.attrs["end_message"].endswith("theta reached 3.14159 rad")
 
 
+def _slot_rod():
+    """The Painleve rod (m = l = 1) with its end A in a rough slot: the contact two-sided,
+    so A's reaction may pull (N < 0), and the friction -f |N| sgn x_A' then turns with N's
+    sign."""
+    f = Parameter("f", "1", "friction coefficient in the slot", default=2.0, lower=0.0)
+    g = Parameter("g", "m s-2", "gravitational acceleration", default=G, lower=0.0)
+    theta = Coordinate("theta", "rad", "angle of the rod to the slot", default=1.0,
+                       lower=0.0, upper=math.pi,
+                       rate=Rate("omega", "rad s-1", "angular velocity", scale=sp.sqrt(g)))
+    x = Coordinate("x", "m", "position of end A along the slot",
+                   rate=Rate("xdot", "m s-1", "velocity of end A", scale=sp.sqrt(g)))
+    y = Coordinate("y", "m", "height of end A")
+    return System("slot_rod", "a uniform rod with its end A in a rough slot", "test",
+                  coordinates=(theta, x, y), parameters=(f, g),
+                  bodies=(Body(1, (x + sp.cos(theta), y + sp.sin(theta)),
+                               inertia=sp.Rational(1, 3), angle=theta),),
+                  potential=g * (y + sp.sin(theta)),
+                  contacts=(PointContact("A", point=(x, y), normal=(0, 1), friction=f,
+                                         sided="two", long_name="end A in the slot"),))
+
+
+def test_a_dynamic_jam_at_a_two_sided_contact_whose_reaction_pulls():
+    """A rod in a slot, spun fast (g - sin(theta) omega^2 < 0) while A slides forward: the
+    slot pulls (N < 0), so the friction f |N| acts backwards as f N would forwards, and
+    the slip obeys the one-sided rod's equations with x_A' < 0: N B = g - s omega^2,
+    B = 1 + 3 c^2 - 3 f s c -> 0, N -> -infinity.  It jams there (the two-sided
+    contact's jam used to end ``singular``: the impulse assumed a pressing reaction):
+    P_n = -v_t / (W_nt + f W_tt) < 0, P_t = f P_n, the slip stopped, the slot kept.
+    Run on the declaration's interpreted twins (the same bits as its machine code)."""
+    from phasemap.core import tiers
+
+    f, theta0, omega0, xdot0 = 2.0, 0.55, 5.0, 4.0
+    s0 = math.sin(theta0)
+    B0 = 1.0 + 3.0 * math.cos(theta0) ** 2 - 3.0 * f * s0 * math.cos(theta0)
+    assert (G - s0 * omega0 ** 2) / B0 < 0.0      # the slot pulls from the start
+    with tiers.forced("off"):
+        ds = phasemap.simulate(_slot_rod(), 0.05, rtol=1e-10, theta=theta0, omega=omega0,
+                               xdot=xdot0, f=f)
+    kinds = ds.event_kind.values.tolist()
+    assert kinds[:2] == [ev.START, ev.JAM], kinds
+    assert ds.attrs.get("phasemap_reduced_end") == "singular"
+    t_j, th, w, xd = _rod_slip_to_its_singular_point(theta0, omega0, xdot0, f)
+    assert abs(float(ds.event_t[1]) - t_j) <= 1e-6
+    th1, w1, xd1 = (float(ds[f"event_{k}"][1]) for k in ("theta", "omega", "xdot"))
+    s1, c1 = math.sin(th1), math.cos(th1)
+    assert abs(1.0 + 3.0 * c1 * c1 - 3.0 * f * s1 * c1) <= 1e-5
+    P_n = -xd1 / (-3.0 * s1 * c1 + f * (1.0 + 3.0 * s1 * s1))
+    assert P_n < 0.0                               # the slot's impulse pulls
+    assert abs(float(ds.event_impulse_n[1]) - P_n) <= 1e-9 * abs(P_n)
+    assert abs(float(ds.event_impulse_t[1]) - f * P_n) <= 1e-9 * abs(P_n)
+    s, c = math.sin(th), math.cos(th)
+    P_n = -xd / (-3.0 * s * c + f * (1.0 + 3.0 * s * s))
+    w_after = w + 3.0 * (-c + s * f) * P_n           # I = 1/3: r x P
+    at = np.flatnonzero(ds.t.values == float(ds.event_t[1]))[-1]
+    assert abs(float(ds.omega[at]) - w_after) <= 1e-6 * abs(w_after)
+    assert abs(float(ds.xdot[at])) <= 1e-9
+    assert np.abs(ds.y.values).max() <= 1e-12 and np.abs(ds.y_dot.values).max() <= 1e-12
+    assert float(ds.event_dKE[1]) < 0.0
+
+
 def test_a_slip_phase_singularity_is_b_over_its_scale():
     """``Motion.singularity`` of the rod's slip is B = W_nn - s f W_nt over |n| |n - s f t|
     in the inverse mass metric (W of the rod by hand, m = l = 1), so its zero is B's;

@@ -473,7 +473,7 @@ class Motion:
         modes = tuple(OPEN if (self.one_sided[c] and g[c] > 1e-9 * sc[3]) else STICK
                       for c in range(self.k))
         if first == -1:     # going on from the reduced model: the modes it moved in
-            modes = jam.sliding(self, q, u, t) or modes
+            modes = jam.sliding(self, q, u, t)
         v = P[3] @ u
         hit = [c for c in range(self.k) if self.one_sided[c] and g[c] <= 1e-9 * sc[3]
                and v[c, 0] < -TOL * sc[0]]
@@ -628,7 +628,10 @@ class Motion:
         the change of modes names where ``kind`` is -1) and returns ``(t, q, u, modes,
         rho)``, or None where the motion ends."""
         if depth < 4 and kind != QUIET:
-            jump = jam.jam(self, t, q, u, jam.sliding(self, q, u, t))
+            now = jam.sliding(self, q, u, t)
+            # (a two-sided contact's reaction sign, which its friction follows, is the
+            # phase's: its jam is met where the phase's step size collapses, at_singular)
+            jump = jam.jam(self, t, q, u, now) if jam.signs_known(self, now) else None
             if jump is not None:     # at a slip's singular point: a dynamic jam first
                 return self._decide(t, *jump, old, QUIET, -1, {}, depth + 1)
         groups = self.enumerate(q, u, prefer, t, flip)
