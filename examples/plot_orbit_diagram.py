@@ -12,8 +12,9 @@ orbit; below, the points spread.
 The branch is that orbit followed in F0 by :func:`phasemap.continue_orbit`, drawn where
 it crosses the forcing's phase 0: stable (solid) down to the period doubling it locates
 at F0 = 8.0115330, where a Floquet multiplier passes -1, unstable (dashed) below, where
-the swept motion has left it. Near F0 = 8.12 a reversal of the orbit grazes a stop and
-its mode sequence changes; the continuation goes on along the new sequence by itself.
+the swept motion has left it. Between F0 = 8.11245 and 8.11257 a short pair of
+reversals turns into a stop and vanishes (grazing- and crossing-sliding); the
+continuation goes through those changes of its mode sequence by itself.
 """
 
 import matplotlib.pyplot as plt

@@ -632,6 +632,36 @@ def test_a_dynamic_jam_at_a_two_sided_contact_whose_reaction_pulls():
     assert float(ds.event_dKE[1]) < 0.0
 
 
+def test_a_slip_velocity_that_dips_through_zero_inside_one_step_is_not_missed():
+    """Ueda's oscillator with dry friction (x'' + 0.05 x' + x^3 = F0 cos t - 0.01 sgn x',
+    F0 = 8.118): sliding back, its velocity rises through zero, forward for 0.04, and back
+    (a pair of reversals), all inside what would be one step at rtol 1e-12.  The slip
+    velocity's rate turning from negative to positive inside a step is checked at its
+    minimum, as a gap's is: both reversals are found, at the times of the slips
+    integrated here with scipy (max_step 1e-3), where they were missed before (and the
+    orbit's continuation reported its mode sequence changing at F0 = 8.1188 going down,
+    8.1202 going up)."""
+    from scipy.integrate import solve_ivp
+
+    F0, f, c = 8.118, 0.01, 0.05
+    ds = phasemap.simulate("duffing", 2 * math.pi, k=0.0, beta=1.0, c=c, f=f, Omega=1.0,
+                           F0=F0, x=2.40463071, xdot=-0.322798, rtol=1e-12)
+    assert ds.event_kind.values.tolist() == [ev.START] + [ev.REVERSAL] * 4 + [ev.HORIZON]
+    t, y = 0.0, [2.40463071, -0.322798]
+    for k, s in enumerate((-1.0, 1.0)):      # slipping back, then forward
+        def stop(tt, yy):
+            return yy[1]
+        stop.terminal, stop.direction = True, -s
+        sol = solve_ivp(lambda tt, yy, s=s: [yy[1], F0 * math.cos(tt) - yy[0] ** 3
+                                             - c * yy[1] - f * s],
+                        (t, t + 2.0), y, rtol=1e-12, atol=1e-14, max_step=1e-3,
+                        events=stop)
+        t, y = float(sol.t_events[0][0]), sol.y_events[0][0]
+        assert abs(float(ds.event_t[1 + k]) - t) <= 1e-8
+        assert s * (F0 * math.cos(t) - y[0] ** 3) < -f      # a reversal, not a stop
+    assert float(ds.event_t[2]) - float(ds.event_t[1]) < 0.05
+
+
 def test_a_slip_phase_singularity_is_b_over_its_scale():
     """``Motion.singularity`` of the rod's slip is B = W_nn - s f W_nt over |n| |n - s f t|
     in the inverse mass metric (W of the rod by hand, m = l = 1), so its zero is B's;

@@ -617,6 +617,33 @@ def test_a_period_doubling_is_located_where_a_multiplier_passes_minus_one():
     assert set(b.n_segments.values) == {3}      # one mode sequence all along
 
 
+@pytest.mark.slow
+def test_ueda_orbit_followed_down_meets_a_stop_where_simulate_finds_it():
+    """Ueda's period-one orbit at F0 = 8.12 reverses twice near x = 1.32 (its velocity
+    just crosses zero there, for 0.05 of the period), then twice more.  Followed down in
+    F0, the pair's first reversal reaches the edge of the sticking region: a stick
+    segment appears (crossing-sliding) between 8.112563 and 8.11257, the bracket that
+    simulate's settled motions give here (a stop every period below, none above).  The
+    continuation once reported its sequence changing at 8.1188 instead: the motion it
+    checks each orbit against missed that pair of reversals inside one step."""
+    from references import duffing_fold as ref
+
+    def stops(F0):
+        ds = phasemap.simulate("duffing", 150 * 2 * math.pi, **_duffing(ref.DOUBLING),
+                               F0=F0, x=2.404, xdot=-0.3226, rtol=1e-11)
+        last = ds.event_t.values > float(ds.t[-1]) - 2 * math.pi
+        return int(np.sum(ds.event_kind.values[last] == ev.STICK))
+    assert stops(8.112563) == 1 and stops(8.11257) == 0
+    o = phasemap.periodic_orbit("duffing", start={**_duffing(ref.DOUBLING), "F0": 8.12,
+                                                  "x": 2.40505631, "xdot": -0.3230207},
+                                period=2 * math.pi)
+    assert o.sizes["segment"] == 5
+    b = phasemap.continue_orbit(o, "F0", (8.1125, 8.12), steps=3)
+    kinds = [str(k) for k in b.point_kind.values]
+    assert kinds == ["end", "crossing_sliding"], kinds
+    assert 8.112563 < float(b.point_F0[1]) < 8.11257
+
+
 def test_a_symbol_that_is_not_the_declared_one_is_refused():
     """sympy tells Symbol('xdot') from the declared rate (real=True) by its assumptions,
     so a dissipation written with it would silently be zero: it is a one-line error."""

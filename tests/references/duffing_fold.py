@@ -38,8 +38,9 @@ OMEGA_LOWER = 1.40642806574375
 
 DOUBLING = {"Omega": 1.0, "r": 0.01, "k1": 0.0, "beta": 1.0, "c": 0.05}
 #: F where the period-one orbit's multiplier passes -1 (coming back from below -1: the
-#: orbit is unstable below it, stable above it to F = 8.18 or so, where its velocity
-#: grazes zero and the sequence changes).
+#: orbit is unstable below it, stable above it to F = 8.11245, where its velocity grazes
+#: zero and a stop appears; the return map below, whose steps are not capped, would miss
+#: a velocity that crosses zero and back inside one step).
 F_DOUBLING = 8.0115330045
 
 

@@ -11,7 +11,7 @@ import numpy as np
 from numba import cfunc, njit
 from numba.experimental import function_type
 
-from phasemap.motion.hybrid.flow import (FINISHED, OK, _gap_rates, _rhs, accel, advance,
+from phasemap.motion.hybrid.flow import (FINISHED, OK, _dip_rates, _rhs, accel, advance,
                                          dense_at, jacobian, locate, quiet_numba, watch,
                                          workspace)
 
@@ -117,10 +117,10 @@ class Phase:
             twin = tiers.is_twin(tiers.runner(jacobian, probe, self.warm))
         if twin:
             fns = functions(self.mech, True)
-            kernels = (accel, watch, advance, _rhs, _gap_rates, locate, dense_at, jacobian)
+            kernels = (accel, watch, advance, _rhs, _dip_rates, locate, dense_at, jacobian)
             kernels = tuple(interpreted(k) for k in kernels)
         else:
-            kernels = (accel, watch, advance, _rhs, _gap_rates, locate, dense_at, jacobian)
+            kernels = (accel, watch, advance, _rhs, _dip_rates, locate, dense_at, jacobian)
         (self.accel, self.watch_fn, self.advance_fn, self.rhs_fn, self.rates_fn,
          self.locate_fn, self.dense_fn, self.jacobian_fn) = kernels
         self.twin, self.fns = twin, fns

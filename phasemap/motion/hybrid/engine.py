@@ -449,6 +449,16 @@ class Motion:
         M, h, g, J, b, mu = self.mech.pieces(q, u, self.p, t)
         return float(J[c, 0] @ u)
 
+    def dip_rate(self, q, u, c, modes, rho, t=0.0):
+        """The rate of the function contact ``c``'s mode watches for a dip between steps
+        (:func:`phasemap.motion.hybrid.flow._watched`): an open contact's ``g'``, a
+        slipping one's tangential acceleration relative to its surface, signed by its
+        slip."""
+        if modes[c] == OPEN:
+            return self.gap_rate(q, u, c, t)
+        s = 1.0 if modes[c] == SLIP_POS else -1.0
+        return s * float(self.solve(q, u, modes, rho, t)[3][c, 1])
+
     # -- the motion -------------------------------------------------------------------------
 
     def run(self, q, u, t0=0.0, t_eval=None, first=ev.START) -> Record:
@@ -526,8 +536,9 @@ class Motion:
 
     def _first_event(self, dense, t0, t1, w0, w1, modes, rho, sc, jam=0.0):
         """``(t, index)`` of the earliest event function to reach zero in the step, or None.
-        A gap whose rate turns from negative to positive inside the step is checked at
-        its minimum too (an impact between the step's ends)."""
+        A gap or a slip velocity whose rate turns from negative to positive inside the
+        step is checked at its minimum too (an impact, a reversal or a stop between the
+        step's ends)."""
         from scipy.optimize import brentq
 
         n = self.n
@@ -555,19 +566,21 @@ class Motion:
             if best is None or r < best[0]:
                 best = (r, int(i))
         for c, m in enumerate(modes):
-            if m != OPEN or not self.one_sided[c] or w1[2 * c] < 0.0 or w0[2 * c] <= 0.0:
-                continue   # (a gap that starts at zero has just opened: rounding, not a dip)
-            y0, y1 = dense(t0), dense(t1)
-            r0 = self.gap_rate(y0[:n], y0[n:], c, t0)
-            r1 = self.gap_rate(y1[:n], y1[n:], c, t1)
-            if r0 < 0.0 < r1:
-                tm = brentq(lambda t: self.gap_rate(dense(t)[:n], dense(t)[n:], c, t), t0, t1,
-                            xtol=xtol)
-                if at(tm, 2 * c) < 0.0:
-                    r = brentq(lambda t: at(t, 2 * c), t0, tm, xtol=xtol)
-                    r = self._onto_root(at, 2 * c, r, tm)
+            j = 2 * c if m == OPEN and self.one_sided[c] else \
+                2 * c + 1 if m in (SLIP_POS, SLIP_NEG) else -1
+            if j < 0 or w1[j] < 0.0 or w0[j] <= 0.0:
+                continue   # (a function that starts at zero has just left it: not a dip)
+
+            def rate(t):
+                y = dense(t)
+                return self.dip_rate(y[:n], y[n:], c, modes, rho, t)
+            if rate(t0) < 0.0 < rate(t1):
+                tm = brentq(rate, t0, t1, xtol=xtol)
+                if at(tm, j) < 0.0:
+                    r = brentq(lambda t: at(t, j), t0, tm, xtol=xtol)
+                    r = self._onto_root(at, j, r, tm)
                     if best is None or r < best[0]:
-                        best = (r, 2 * c)
+                        best = (r, j)
         return best
 
     @staticmethod

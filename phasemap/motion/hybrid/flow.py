@@ -336,15 +336,32 @@ def _rhs(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, t, y, o
 
 
 @njit(cache=True, error_model="numpy")
-def _gap_rates(W, lay, y, out):
-    """Each contact's normal velocity ``J_n u`` from the pieces :func:`accel` left in ``W``."""
+def _dip_rates(W, a, lay, modes, y, out):
+    """Per contact, the rate of the function its mode watches for a dip between steps
+    (:func:`_watched`), from what :func:`accel` left in ``W`` and ``a``: an open
+    contact's normal velocity ``J_n u`` (its gap's rate), a slipping one's tangential
+    acceleration relative to its surface, signed by its slip (its slip velocity's rate);
+    0 for the others."""
     n, k = lay[0], lay[1]
     o = n * n + n + k
     for c in range(k):
-        v = 0.0
-        for i in range(n):
-            v += W[o + (3 * c) * n + i] * y[n + i]
-        out[c] = v
+        out[c] = 0.0
+        if modes[c] == OPEN:
+            for i in range(n):
+                out[c] += W[o + (3 * c) * n + i] * y[n + i]
+        elif modes[c] == SLIP_POS or modes[c] == SLIP_NEG:
+            out[c] = (1.0 if modes[c] == SLIP_POS else -1.0) * a[c, 1]
+
+
+@njit(cache=True, inline="always")
+def _watched(modes, one_sided, c):
+    """The event function whose minimum between two steps contact ``c`` must not miss
+    (where the function dips below zero and back within a step, both ends positive): an
+    open one-sided contact's gap (an impact), a slipping contact's slip velocity (a
+    reversal or a stop); -1 for the others."""
+    if modes[c] == OPEN:
+        return 2 * c if one_sided[c] else -1
+    return 2 * c + 1 if modes[c] == SLIP_POS or modes[c] == SLIP_NEG else -1
 
 
 @njit(cache=True, error_model="numpy")
@@ -543,7 +560,7 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
             continue
         st = watch(PC, SF, KN, DM, y, t, p, lay, one_sided, rolls, modes, rho, none, jam,
                    bounds, W, I, ud, N, F, a, w1)
-        _gap_rates(W, lay, y, gr1)
+        _dip_rates(W, a, lay, modes, y, gr1)
         state[0], state[1], state[2], state[3] = t, h_abs, t_old, h
         if st != OK:
             state[4] = i_eval
@@ -553,8 +570,8 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
             if w0[i] >= 0.0 and w1[i] < 0.0:
                 hit = True
         for c in range(k):
-            if (modes[c] == OPEN and one_sided[c] and w1[2 * c] >= 0.0 and w0[2 * c] > 0.0
-                    and gr0[c] < 0.0 < gr1[c]):
+            j = _watched(modes, one_sided, c)
+            if j >= 0 and w1[j] >= 0.0 and w0[j] > 0.0 and gr0[c] < 0.0 < gr1[c]:
                 hit = True
         dense = hit or (te.size > 0 and i_eval < te.size and te[i_eval] <= t)
         if dense:
@@ -593,15 +610,16 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
 def _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, bounds,
                  W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, kind, idx, t):
     """At ``t`` in the step (its dense output): the event function ``idx`` (``kind`` 0; its
-    value at the step's start for ``t <= t_old``) or contact ``idx``'s gap rate (1)."""
+    value at the step's start for ``t <= t_old``) or the rate of contact ``idx``'s watched
+    function (1; :func:`_dip_rates`)."""
     n = lay[0]
     if kind == 0 and t <= t_old:
         return w0[idx]
     dense_at(Fd, t_old, h, y_old, t, yt)
-    if kind == 0:
+    if kind == 0 or modes[idx] != OPEN:
         watch(PC, SF, KN, DM, yt, t, p, lay, one_sided, rolls, modes, rho, none, jam, bounds,
               W, I, ud, N, F, a, wt)
-        return wt[idx]
+        return wt[idx] if kind == 0 else (1.0 if modes[idx] == SLIP_POS else -1.0) * a[idx, 1]
     nf = n * n + n + lay[1] + 3 * lay[1] * n + 4 * lay[1]
     PC(W[:nf], yt, p, t)
     o = n * n + n + lay[1] + 3 * idx * n
@@ -684,7 +702,8 @@ def locate(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, boun
     """``(t, index)`` of the earliest event function to reach zero in the step ``t_old`` to
     ``t1`` (its dense output ``Fd`` from ``y_old``), or ``(nan, -1)``: the machine-code form
     of :meth:`phasemap.motion.hybrid.Motion._first_event` (a gap whose rate turns from
-    negative to positive inside the step is checked at its minimum too)."""
+    negative to positive inside the step is checked at its minimum too, and so is a slip
+    velocity whose rate does: :func:`_watched`)."""
     k = lay[1]
     eps = np.finfo(np.float64).eps
     xtol = 4.0 * eps * max(abs(t_old), abs(t1), 1e-300)
@@ -713,8 +732,9 @@ def locate(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, boun
         if r < best_t:
             best_t, best_i = r, i
     for c in range(k):
-        if modes[c] != OPEN or not one_sided[c] or w1[2 * c] < 0.0 or w0[2 * c] <= 0.0:
-            continue     # (a gap that starts at zero has just opened: rounding, not a dip)
+        j = _watched(modes, one_sided, c)
+        if j < 0 or w1[j] < 0.0 or w0[j] <= 0.0:
+            continue     # (a function that starts at zero has just left it: not a dip)
         r0 = _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
                           bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 1, c,
                           t_old)
@@ -726,18 +746,18 @@ def locate(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, boun
                     W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 1, c, t_old, t1, xtol,
                     4.0 * eps)
         if _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
-                        bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 0, 2 * c,
+                        bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 0, j,
                         tm) < 0.0:
             r = _brent(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
-                       bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 0, 2 * c,
+                       bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 0, j,
                        t_old, tm, xtol, 4.0 * eps)
             if np.isnan(r):
                 continue
             r = _onto_root(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam,
-                           bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, 2 * c,
+                           bounds, W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, j,
                            r, tm)
             if r < best_t:
-                best_t, best_i = r, 2 * c
+                best_t, best_i = r, j
     if best_i < 0:
         return np.nan, -1
     return best_t, best_i

@@ -26,7 +26,7 @@ def phase(self, t, q, u, modes, rho, sc, t_stop, jam_sign, w0, atol):
     if fl.rate(y, t, modes_a, rho_a, f) != flow.OK:
         return scipy_phase(self, t, y, modes, rho, sc, t_stop, jam_sign, w0, atol)
     gr0, gr1 = np.empty(self.k), np.empty(self.k)
-    fl.rates_fn(fl.W, fl.lay, y, gr0)
+    fl.rates_fn(fl.W, fl.a, fl.lay, modes_a, y, gr0)
     te = self.t_eval if self.t_eval is not None else np.empty(0)
     cap = max(binding.BUFFER, te.size - self.i_eval + 2)
     out_t, out_y = np.empty(cap), np.empty((cap, ny))

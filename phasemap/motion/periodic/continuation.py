@@ -346,8 +346,18 @@ class _Context:
                 return points, marks
             step = self.arc(lam, w, new, w_new, segs, h, lo, hi)
             if step is None:
-                marks.append(self.mark(new, segs, w_new, "no_convergence", 0.0))
-                return points, marks
+                # the secant is no tangent (after a change of the sequence, it spans a
+                # new segment's square-root growth): a step in the parameter, then
+                # secants from there
+                toward = math.copysign(abs(h), new - lam) if new != lam else h
+                nat = self.natural(new, segs, w_new, toward, hi if toward > 0 else lo)
+                if nat is None:
+                    marks.append(self.mark(new, segs, w_new, "no_convergence", 0.0))
+                    return points, marks
+                self.ds = None
+                lam, w = new, w_new
+                new, w_new, res = nat
+                continue
             X, res, fold = step
             # the fold itself, a point of the branch too, where its orbit is admissible
             # (else the sequence changes before it, which the next step locates)
