@@ -286,6 +286,43 @@ def test_elliptic_pendulum_sticks_exactly_and_slips_at_the_friction_limit(method
 R2 = math.sqrt(2.0)
 
 
+@pytest.mark.parametrize("method", ["DOPRI5", "DOP853"])
+def test_a_slider_velocity_that_dips_through_zero_inside_one_step_stops_there(method):
+    """The elliptic pendulum's bar spinning fast (omega = 20) shakes the slider: sliding
+    forward, its velocity falls to a minimum and rises again within about 1e-3 s.  With
+    the start chosen so that the minimum is -1e-4 (the slider's own velocity enters no
+    equation, so the start shifts the whole slip by a constant), the velocity reaches
+    zero inside what is one step at rtol 1e-8, and the slider stops there: the
+    integrator checks the minimum where the velocity's rate turns inside a step (it
+    went straight on before).  The time against the slip integrated with the unreduced
+    equations of tests/reference.py (scipy, max_step 1e-4)."""
+    import reference as ref
+    from scipy.optimize import brentq, minimize_scalar
+
+    l, g, m, f = 1.0, 9.81, 1.0, 0.3
+
+    def rhs(t, y):      # sliding forward; the guide's reaction of the sign it has
+        phi, omega, xd = y
+        out = ref.elliptic_slip(phi, omega, xd, f, l, g, m, 1.0, 1.0)
+        if out["N"] < 0.0:
+            out = ref.elliptic_slip(phi, omega, xd, f, l, g, m, 1.0, -1.0)
+        return [omega, out["phi_ddot"], out["x_ddot"]]
+
+    slip = solve_ivp(rhs, (0.0, 0.45), [0.3, 20.0, 20.0], rtol=1e-12, atol=1e-12,
+                     max_step=1e-4, dense_output=True)
+    low = minimize_scalar(lambda t: slip.sol(t)[2], bounds=(0.39, 0.41), method="bounded",
+                          options={"xatol": 1e-12})
+    shift = -float(low.fun) - 1e-4
+    t_zero = brentq(lambda t: slip.sol(t)[2] + shift, 0.3, float(low.x), xtol=1e-14)
+    ds = phasemap.simulate("elliptic_pendulum", 0.6, method=method, rtol=1e-8, phi=0.3,
+                           omega=20.0, xdot=20.0 + shift, f=f, through_contacts=False)
+    kinds = [int(k) for k in ds.event_kind.values]
+    first = next(i for i, k in enumerate(kinds) if k not in (phasemap.Event.START,
+                                                             phasemap.Event.SWITCH))
+    assert kinds[first] == phasemap.Event.STICK, kinds
+    assert abs(float(ds.event_t[first]) - t_zero) <= 1e-7
+
+
 @pytest.mark.parametrize("method", ["DOPRI5"])  # DOP853's events: the hinge, elliptic, wheel
 @pytest.mark.parametrize("f, phi, omega, ends", [
     (R2 - 1e-9, 0.3, -0.5, {"rest"}),

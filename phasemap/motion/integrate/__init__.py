@@ -28,7 +28,11 @@ Method
   keeps its sign); after a step the integrator reads only that decision,
   from the statuses of the rows that apply and the stage's coefficient
   (``GOES_ON`` in :mod:`phasemap.motion.integrate.templates`), and events classify
-  every row.  Otherwise the first state where it
+  every row.  Where the slip velocity's rate turns from against the slip to along it
+  inside a step, the velocity's minimum there is found on the dense output (``DIP``):
+  one at rest speed is a velocity zero that neither end of the step shows (a stop or a
+  pair of reversals inside the step), and ends the stage as one at its end would.
+  Otherwise the first state where it
   stops being so is located by bisection on the dense output, to the
   resolution of double precision in t, and classified there: a velocity zero
   (then rest, stick or reversal, with the velocity set to exactly 0), a sign

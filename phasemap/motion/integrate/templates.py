@@ -77,6 +77,7 @@ MOVING = None
 STILL = None
 INDICATOR = None
 ZERO = None
+DIP = None
 LOCATE = None
 START = None
 STAGE_COEFFICIENT = None
@@ -383,11 +384,11 @@ def _indicator_template(v, r, theta, branch, col, yb):
     return BRANCH_ROW(v, branch)[col]
 
 
-def _zero_template(v, r, branch, col, sg, level, fa, fb, h, t, yb):
+def _zero_template(v, r, branch, col, sg, level, fa, fb, h, t, yb, b_end):
     """Illinois on the step for the zero of ``sg`` times an indicator (see INDICATOR)
-    minus ``level``, from ``fa`` > 0 at theta = 0 and ``fb`` <= 0 at theta = 1:
+    minus ``level``, from ``fa`` > 0 at theta = 0 and ``fb`` <= 0 at theta = ``b_end``:
     ``(a, b)``, a bracket of width 4 eps in time."""
-    a, b = 0.0, 1.0
+    a, b = 0.0, b_end
     side = 0
     for _ in range(100):
         c = (a * fb - b * fa) / (fb - fa)
@@ -409,7 +410,37 @@ def _zero_template(v, r, branch, col, sg, level, fa, fb, h, t, yb):
     return a, b
 
 
-def _locate_template(v, y, y1, h, t, branch, coef_sign, r, out, yb, zs):
+def _dip_template(r, d, rest, yb):
+    """Where in the step (dense output ``r``) the stage's velocity, moving in its
+    direction ``d`` at both ends, comes closest to zero, if it comes to the speed that
+    classification counts as rest (``rest``) there: a velocity zero that neither end of
+    the step shows (a pair of reversals, or a stop, inside one step); else 2.  Called
+    where the velocity's rate turns from against ``d`` to along it inside the step, so
+    that ``d v`` has one minimum in it: a golden-section search, to 1e-13 of the step."""
+    a, b = 0.0, 1.0
+    g = 0.6180339887498949
+    c, e = b - g * (b - a), a + g * (b - a)
+    dense(r, c, yb)
+    fc = d * yb[VEL_Y]
+    dense(r, e, yb)
+    fe = d * yb[VEL_Y]
+    for _ in range(64):
+        if fc <= rest:
+            return c
+        if fc < fe:
+            b, e, fe = e, c, fc
+            c = b - g * (b - a)
+            dense(r, c, yb)
+            fc = d * yb[VEL_Y]
+        else:
+            a, c, fc = c, e, fe
+            e = a + g * (b - a)
+            dense(r, e, yb)
+            fe = d * yb[VEL_Y]
+    return c if fc <= rest else 2.0
+
+
+def _locate_template(v, y, y1, h, t, branch, coef_sign, r, out, yb, zs, theta_dip):
     """The first theta of the step ``y`` -> ``y1`` (dense output ``r``) where the stage
     stops being the unique solution, to 2 eps in time (``zs``: scratch, one row per
     WATCH column and one for the velocity).
@@ -428,14 +459,19 @@ def _locate_template(v, y, y1, h, t, branch, coef_sign, r, out, yb, zs):
     needs a step or two of bisection, not the dozen (each a classification)
     that the 1e-11 before an exact zero took.  Anything else (a friction cone left at stick,
     another branch turning admissible, the domain's edge) is bisected from the
-    whole step.
+    whole step.  ``theta_dip`` <= 1: the velocity is at rest speed there, inside the
+    step, though not at its end (DIP): its zero before it is a candidate too.
     """
     nz = 0
     d = DIRECTIONS[branch]
     rest = REST_SPEED(v)
-    if d != 0.0 and d * y[VEL_Y] > rest and d * y1[VEL_Y] <= rest:
+    if d != 0.0 and d * y[VEL_Y] > rest and (d * y1[VEL_Y] <= rest or theta_dip <= 1.0):
+        b_end, fb = 1.0, d * y1[VEL_Y] - rest
+        if fb > 0.0:
+            dense(r, theta_dip, yb)
+            b_end, fb = theta_dip, d * yb[VEL_Y] - rest
         zs[nz, 0], zs[nz, 1] = ZERO(v, r, branch, int(-1), d, rest, d * y[VEL_Y] - rest,
-                                     d * y1[VEL_Y] - rest, h, t, yb)
+                                     fb, h, t, yb, b_end)
         nz += 1
     if WATCH.shape[0] > 0:
         FILL(v, y)
@@ -447,7 +483,7 @@ def _locate_template(v, y, y1, h, t, branch, coef_sign, r, out, yb, zs):
             if a0 * a1 < 0.0:
                 sg = 1.0 if a0 > 0.0 else -1.0
                 zs[nz, 0], zs[nz, 1] = ZERO(v, r, branch, WATCH[q], sg, 0.0, sg * a0, sg * a1,
-                                             h, t, yb)
+                                             h, t, yb, 1.0)
                 nz += 1
     lo, hi = 0.0, 1.0
     for _ in range(nz):  # the candidates in order of their zeros
@@ -650,12 +686,19 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         # v holds y1 and its derived inputs from the last stage of the step
         still = GOES_ON(v, y1, out, branch, coef_sign)
         theta_end = 1.0
+        theta_dip = 2.0
+        d = DIRECTIONS[branch]
+        made = still and d != 0.0 and d * K[0, VEL_Y] < 0.0 < d * K[FSAL, VEL_Y]
+        if made:    # the velocity's rate turns inside the step: its minimum may be a zero
+            DENSE(v, y, y1, h, branch, K, yt, r)
+            theta_dip = DIP(r, d, REST_SPEED(v), yb)
+            still = theta_dip > 1.0
         # the dense output, only where it is used: to locate an event, at requested times
-        if not still or (n_eval < t_eval.shape[0]
-                         and t_eval[n_eval] <= (t_end if last else t + h)):
+        if not made and (not still or (n_eval < t_eval.shape[0]
+                                       and t_eval[n_eval] <= (t_end if last else t + h))):
             DENSE(v, y, y1, h, branch, K, yt, r)
         if not still:
-            theta_end = LOCATE(v, y, y1, h, t, branch, coef_sign, r, out, yb, zs)
+            theta_end = LOCATE(v, y, y1, h, t, branch, coef_sign, r, out, yb, zs, theta_dip)
             dense(r, theta_end, y1)
         t1 = t + theta_end * h
         if theta_end == 1.0 and last:
@@ -730,6 +773,7 @@ PIECES = (("FILL", _fill_template, True),
           ("LEAVE", _leave_template, True),
           ("INDICATOR", _indicator_template, True),
           ("ZERO", _zero_template, False),
+          ("DIP", _dip_template, False),
           ("LOCATE", _locate_template, False),
           ("START", _start_template, True),
           ("STALLED", _stalled_template, True),
