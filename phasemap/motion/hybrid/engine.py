@@ -457,7 +457,8 @@ class Motion:
         if modes[c] == OPEN:
             return self.gap_rate(q, u, c, t)
         s = 1.0 if modes[c] == SLIP_POS else -1.0
-        return s * float(self.solve(q, u, modes, rho, t)[3][c, 1])
+        sol = self.solve(q, u, modes, rho, t)
+        return math.nan if sol is None else s * float(sol[3][c, 1])
 
     # -- the motion -------------------------------------------------------------------------
 

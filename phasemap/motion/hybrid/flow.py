@@ -355,10 +355,8 @@ def _dip_rates(W, a, lay, modes, y, out):
 
 @njit(cache=True, inline="always")
 def _watched(modes, one_sided, c):
-    """The event function whose minimum between two steps contact ``c`` must not miss
-    (where the function dips below zero and back within a step, both ends positive): an
-    open one-sided contact's gap (an impact), a slipping contact's slip velocity (a
-    reversal or a stop); -1 for the others."""
+    """The event function of contact ``c`` whose dip below zero and back inside a step
+    is checked: an open one-sided gap's, a slip velocity's; -1 for the others."""
     if modes[c] == OPEN:
         return 2 * c if one_sided[c] else -1
     return 2 * c + 1 if modes[c] == SLIP_POS or modes[c] == SLIP_NEG else -1
@@ -617,9 +615,11 @@ def _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam
         return w0[idx]
     dense_at(Fd, t_old, h, y_old, t, yt)
     if kind == 0 or modes[idx] != OPEN:
-        watch(PC, SF, KN, DM, yt, t, p, lay, one_sided, rolls, modes, rho, none, jam, bounds,
-              W, I, ud, N, F, a, wt)
-        return wt[idx] if kind == 0 else (1.0 if modes[idx] == SLIP_POS else -1.0) * a[idx, 1]
+        st = watch(PC, SF, KN, DM, yt, t, p, lay, one_sided, rolls, modes, rho, none, jam,
+                   bounds, W, I, ud, N, F, a, wt)
+        if kind == 0:
+            return wt[idx]
+        return (1.0 if modes[idx] == SLIP_POS else -1.0) * a[idx, 1] if st == OK else np.nan
     nf = n * n + n + lay[1] + 3 * lay[1] * n + 4 * lay[1]
     PC(W[:nf], yt, p, t)
     o = n * n + n + lay[1] + 3 * idx * n

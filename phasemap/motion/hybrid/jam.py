@@ -37,7 +37,7 @@ def sliding(self, q, u, t):
     modes = []
     for c in range(self.k):
         touching = g[c] <= TOL * sc[3] and abs(v[c, 0]) <= TOL * sc[0]
-        if not touching:
+        if not touching and self.one_sided[c]:     # (a two-sided contact never opens)
             modes.append(OPEN)
         elif mu[c] == 0.0:
             modes.append(SMOOTH)

@@ -688,11 +688,18 @@ def _integrate_template(v, y0, t_end, rtol, atol, h_max, max_steps, max_events, 
         theta_end = 1.0
         theta_dip = 2.0
         d = DIRECTIONS[branch]
-        made = still and d != 0.0 and d * K[0, VEL_Y] < 0.0 < d * K[FSAL, VEL_Y]
+        rest = REST_SPEED(v)
+        made = (d != 0.0 and d * y[VEL_Y] > rest and d * y1[VEL_Y] > rest
+                and d * K[0, VEL_Y] < 0.0 < d * K[FSAL, VEL_Y])
         if made:    # the velocity's rate turns inside the step: its minimum may be a zero
             DENSE(v, y, y1, h, branch, K, yt, r)
-            theta_dip = DIP(r, d, REST_SPEED(v), yb)
-            still = theta_dip > 1.0
+            theta_dip = DIP(r, d, rest, yb)
+            if theta_dip <= 1.0:   # (where the stage holds there after all, no event)
+                dense(r, theta_dip, yb)
+                if STILL(v, yb, out, branch, coef_sign):
+                    theta_dip = 2.0
+                else:
+                    still = False
         # the dense output, only where it is used: to locate an event, at requested times
         if not made and (not still or (n_eval < t_eval.shape[0]
                                        and t_eval[n_eval] <= (t_end if last else t + h))):
