@@ -566,9 +566,8 @@ class Motion:
             r = self._onto_root(at, i, r, t1)
             if best is None or r < best[0]:
                 best = (r, int(i))
-        for c, m in enumerate(modes):
-            j = 2 * c if m == OPEN and self.one_sided[c] else \
-                2 * c + 1 if m in (SLIP_POS, SLIP_NEG) else -1
+        for c in range(self.k):
+            j = flow._watched.py_func(modes, self.one_sided, c)
             if j < 0 or w1[j] < 0.0 or w0[j] <= 0.0:
                 continue   # (a function that starts at zero has just left it: not a dip)
 
