@@ -212,7 +212,9 @@ def _load_or_generate(stem: str, text):
             _say(f"{path} was damaged ({why}); generating it again")
         except FileNotFoundError:  # removed meanwhile by another process's pruning
             pass
-    body = text()
+    from phasemap.core.selects import selects   # numba's, imported where a kernel is made
+
+    body = selects(text())
     try:
         root.mkdir(parents=True, exist_ok=True)   # removed while this process ran
         _write(path, body)
@@ -416,7 +418,7 @@ def _first_distrust(files, owner_only: bool = False) -> str | None:
 #: in stale; their hash goes into every hash file, and a change makes a miss
 #: (tests/test_kernel_cache.py checks that every module of ``core/`` with compiled code
 #: is here).
-SHARED = ("calls", "codegen", "compile", "events", "numerics")
+SHARED = ("calls", "codegen", "compile", "events", "numerics", "selects")
 
 
 @functools.lru_cache(maxsize=1)

@@ -1,0 +1,88 @@
+"""Conditional expressions of generated code as calls of one small function, for numba's compile time.
+
+numba turns each ``a if c else b`` into three basic blocks and a variable defined twice.
+Its SSA reconstruction then rewrites every block of the function once for each such
+variable, so its cost grows as (conditionals) x (blocks): the declared ladder's grid kernel
+of every layer holds about 400 of them and spent a third of its compile time there.
+:func:`selects` rewrites, in the text of a generated module, each conditional whose two
+arms are side-effect free and cannot fail (names, constants, arithmetic, a constant index
+of a name) into ``_select(c, a, b)``: one statement, no blocks.  :func:`select` is marked
+for LLVM to inline, where it becomes the same ``select`` instruction (or branch) as the
+conditional, so the machine code computes the same values; the interpreted twin
+(:mod:`phasemap.core.interpret`) runs its Python, which evaluates both arms first, with
+the twin's IEEE arithmetic, so that nothing an arm computes can raise there either.
+A conditional with a call in an arm (a branch function computed only where it applies)
+is left as it is: it is evaluated only where its condition holds.
+"""
+
+from __future__ import annotations
+
+import ast
+
+from numba import njit
+
+__all__ = ["select", "selects"]
+
+
+@njit(cache=True, forceinline=True, error_model="numpy")
+def select(c, a, b):
+    """``a if c else b``, for generated code (see the module)."""
+    return a if c else b
+
+
+_NAME = "_select"
+_IMPORT = f"from phasemap.core.selects import select as {_NAME}"
+
+
+def _harmless(node: ast.AST) -> bool:
+    """An arm that may be evaluated where its condition fails: no call (but ``_select``'s),
+    no subscript but a name's at a non-negative integer constant, nothing else that acts."""
+    for sub in ast.walk(node):
+        if isinstance(sub, ast.Call):
+            if not (isinstance(sub.func, ast.Name) and sub.func.id == _NAME and not sub.keywords):
+                return False
+        elif isinstance(sub, ast.Subscript):
+            index = sub.slice
+            if not (isinstance(sub.value, ast.Name) and isinstance(index, ast.Constant)
+                    and type(index.value) is int and index.value >= 0):
+                return False
+        elif not isinstance(sub, (ast.Name, ast.Constant, ast.BinOp, ast.UnaryOp, ast.BoolOp,
+                                  ast.Compare, ast.Attribute, ast.Load, ast.operator,
+                                  ast.unaryop, ast.boolop, ast.cmpop, ast.expr_context)):
+            return False
+    return True
+
+
+class _Rewrite(ast.NodeTransformer):
+    count = 0
+
+    def visit_IfExp(self, node: ast.IfExp) -> ast.AST:
+        self.generic_visit(node)  # the inner ones first: an arm may become a _select call
+        if _harmless(node.body) and _harmless(node.orelse):
+            self.count += 1
+            return ast.copy_location(ast.Call(func=ast.Name(_NAME, ast.Load()),
+                                              args=[node.test, node.body, node.orelse],
+                                              keywords=[]), node)
+        return node
+
+
+def selects(text: str) -> str:
+    """``text`` (a generated module) with its harmless conditionals as ``_select`` calls;
+    ``text`` itself if it has none.
+
+    >>> print(selects("def f(x, r):\\n    return r[0] if x > 0 else 0.0\\n"), end="")
+    from phasemap.core.selects import select as _select
+    <BLANKLINE>
+    def f(x, r):
+        return _select(x > 0, r[0], 0.0)
+    """
+    tree = ast.parse(text)
+    rewrite = _Rewrite()
+    tree = rewrite.visit(tree)
+    if not rewrite.count:
+        return text
+    body = tree.body
+    at = 1 if body and isinstance(body[0], ast.Expr) and isinstance(
+        getattr(body[0], "value", None), ast.Constant) and isinstance(body[0].value.value, str) else 0
+    body.insert(at, ast.parse(_IMPORT).body[0])
+    return ast.unparse(ast.fix_missing_locations(tree)) + "\n"
