@@ -76,3 +76,8 @@ def test_the_rewritten_function_computes_the_same_compiled_and_interpreted(tmp_p
             a, b, c = want(x, y, r), got(x, y, r), twin(x, y, r)
             assert (a == b == c) or (math.isnan(a) and math.isnan(b) and math.isnan(c)), \
                 (x, y, a, b, c)
+
+
+def test_an_expression_too_deep_for_pythons_ast_leaves_the_module_as_written():
+    deep = "def f(x):\n    return (x" + " + x" * 20000 + ") if x else 0.0\n"
+    assert selects(deep) == deep

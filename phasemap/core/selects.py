@@ -76,13 +76,16 @@ def selects(text: str) -> str:
     def f(x, r):
         return _select(x > 0, r[0], 0.0)
     """
-    tree = ast.parse(text)
     rewrite = _Rewrite()
-    tree = rewrite.visit(tree)
-    if not rewrite.count:
-        return text
-    body = tree.body
-    at = 1 if body and isinstance(body[0], ast.Expr) and isinstance(
-        getattr(body[0], "value", None), ast.Constant) and isinstance(body[0].value.value, str) else 0
-    body.insert(at, ast.parse(_IMPORT).body[0])
-    return ast.unparse(ast.fix_missing_locations(tree)) + "\n"
+    try:
+        tree = rewrite.visit(ast.parse(text))
+        if not rewrite.count:
+            return text
+        body = tree.body
+        at = 1 if body and isinstance(body[0], ast.Expr) and isinstance(
+            getattr(body[0], "value", None), ast.Constant) and isinstance(body[0].value.value,
+                                                                          str) else 0
+        body.insert(at, ast.parse(_IMPORT).body[0])
+        return ast.unparse(ast.fix_missing_locations(tree)) + "\n"
+    except RecursionError:   # an expression nested deeper than Python's ast can walk:
+        return text          # the module as written, its conditionals left as they are
