@@ -54,7 +54,8 @@ def _harmless(node: ast.AST) -> bool:
 
 
 class _Rewrite(ast.NodeTransformer):
-    count = 0
+    def __init__(self):
+        self.count = 0   # conditionals rewritten
 
     def visit_IfExp(self, node: ast.IfExp) -> ast.AST:
         self.generic_visit(node)  # the inner ones first: an arm may become a _select call
@@ -81,11 +82,8 @@ def selects(text: str) -> str:
         tree = rewrite.visit(ast.parse(text))
         if not rewrite.count:
             return text
-        body = tree.body
-        at = 1 if body and isinstance(body[0], ast.Expr) and isinstance(
-            getattr(body[0], "value", None), ast.Constant) and isinstance(body[0].value.value,
-                                                                          str) else 0
-        body.insert(at, ast.parse(_IMPORT).body[0])
+        at = 0 if ast.get_docstring(tree, clean=False) is None else 1   # after the docstring
+        tree.body.insert(at, ast.parse(_IMPORT).body[0])
         return ast.unparse(ast.fix_missing_locations(tree)) + "\n"
     except RecursionError:   # an expression nested deeper than Python's ast can walk:
         return text          # the module as written, its conditionals left as they are
