@@ -91,7 +91,7 @@ def copy_of(warm: pathlib.Path, where: pathlib.Path) -> pathlib.Path:
 def _hashed(body: str) -> bytes:
     from phasemap.core import cache
 
-    return f"{cache.HASH_PREFIX}{hashlib.sha256(body.encode()).hexdigest()}\n{body}".encode()
+    return cache.hash_line(body.encode()) + body.encode()
 
 
 DAMAGE = {
@@ -119,6 +119,24 @@ def test_a_damaged_module_is_generated_again_once_with_one_line(warm, tmp_path, 
     assert len(lines(r)) == 1 and "damaged" in r.stderr and str(path) in r.stderr, r.stderr
     assert path.read_text() == _hashed(TEXT).decode()   # repaired for good
     assert not list(root.glob(".*.tmp"))
+
+
+@pytest.mark.parametrize("rewriter", ["", " rewritten-by 0123456789abcdef"])
+def test_a_module_another_version_of_the_rewriter_wrote_is_generated_again(warm, tmp_path,
+                                                                            rewriter):
+    # the file's name hashes the text before phasemap.core.selects rewrites it: a file an
+    # older phasemap wrote (no rewriter on its hash line, or another one) has the name of
+    # today's and must not be loaded as today's, or the files named from its bytes differ
+    root = copy_of(warm, tmp_path)
+    path = root / f"{STEM}.py"
+    body = path.read_bytes().partition(b"\n")[2]
+    old = f"# phasemap-sha256 {hashlib.sha256(body).hexdigest()}{rewriter}\n".encode()
+    path.write_bytes(old + body)
+    r = child(load(), root)
+    assert loaded(r) == path
+    assert len(lines(r)) == 1 and "another version of phasemap" in r.stderr, r.stderr
+    assert path.read_bytes() == _hashed(TEXT)   # written again, with today's line
+    assert child(load(), root).stderr == ""
 
 
 @pytest.mark.parametrize("which", ["index", "data"])

@@ -7,16 +7,18 @@ from __future__ import annotations
 import ast
 import importlib.util
 import math
+import sys
 
 import numpy as np
 import pytest
 from numba import njit
 
 from phasemap.core.interpret import interpreted
-from phasemap.core.selects import selects
+from phasemap.core.selects import DEEPEST, selects
 
 SOURCE = '''"""A module as the code printer writes them."""
 import math
+import sys
 import numpy as np
 NAN = np.nan
 
@@ -81,3 +83,28 @@ def test_the_rewritten_function_computes_the_same_compiled_and_interpreted(tmp_p
 def test_an_expression_too_deep_for_pythons_ast_leaves_the_module_as_written():
     deep = "def f(x):\n    return (x" + " + x" * 20000 + ") if x else 0.0\n"
     assert selects(deep) == deep
+
+
+def _chain(levels: int) -> str:
+    """A module whose syntax tree is about ``levels`` deep, with one harmless conditional."""
+    return "def f(a, b, c):\n    return " + "a + " * (levels - 5) + "(b if c else a)\n"
+
+
+def _from_depth(frames: int, text: str) -> str:
+    return _from_depth(frames - 1, text) if frames else selects(text)
+
+
+@pytest.mark.parametrize("levels", [DEEPEST - 10, DEEPEST + 10])
+def test_the_rewrite_of_a_module_does_not_depend_on_the_callers_stack(levels):
+    # the file's text decides the names of the files generated from it (a contract hashes
+    # its declared module's file): a caller deep in a stack (pytest's, a dask worker's)
+    # must get the text a shallow caller gets, up to DEEPEST and beyond it
+    text = _chain(levels)
+    shallow = selects(text)
+    assert _from_depth(sys.getrecursionlimit() - 100, text) == shallow
+    assert bool(_calls(shallow)) == (levels <= DEEPEST)
+
+
+def test_an_error_in_the_rewrite_reaches_the_caller():
+    with pytest.raises(SyntaxError):
+        selects("def f(:\n")

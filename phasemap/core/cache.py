@@ -79,8 +79,13 @@ __all__ = ["CacheError", "CacheInfo", "DEFAULT_MAX_MB", "clear", "folder", "info
 #: Default bound on the whole cache (MB, 10^6 bytes); ``$PHASEMAP_CACHE_MAX_MB`` overrides it.
 DEFAULT_MAX_MB = 500
 
-#: The first line of every generated file: this prefix, then the SHA-256 of the rest.
+#: The first line of every generated file: this prefix, the SHA-256 of the rest, then
+#: :data:`REWRITER` and which version of :mod:`phasemap.core.selects` rewrote the rest.
 HASH_PREFIX = "# phasemap-sha256 "
+#: Between the hash and the rewriter's version on a generated file's first line: the
+#: file's name hashes the text before the rewrite, so a file another version of the
+#: rewriter wrote is found by this, and generated again.
+REWRITER = " rewritten-by "
 
 #: numba's files: ``<stem>.<function>-<line>.pyXY.nbi`` and ``....pyXY.<n>.nbc``, and
 #: phasemap's hashes of them, ``....pyXY.nbh``, and lock, ``....pyXY.nbl``.
@@ -208,6 +213,9 @@ def _load_or_generate(stem: str, text):
     if path.exists():
         try:
             return _import(stem, path)
+        except _Stale as why:
+            _say(f"{path} was written by another version of phasemap ({why}); "
+                 "generating it again")
         except _Damaged as why:
             _say(f"{path} was damaged ({why}); generating it again")
         except FileNotFoundError:  # removed meanwhile by another process's pruning
@@ -239,10 +247,25 @@ class _Damaged(Exception):
     """A cache file that fails its check or its import (the message says how)."""
 
 
+class _Stale(_Damaged):
+    """A cache file intact, but rewritten by another version of the rewriter."""
+
+
 def _write(path: pathlib.Path, body: str) -> None:
     """Write ``body`` under a hash line to ``path``, atomically: no temporary file is left."""
     data = body.encode()
-    _write_atomic(path, f"{HASH_PREFIX}{hashlib.sha256(data).hexdigest()}\n".encode() + data)
+    _write_atomic(path, hash_line(data) + data)
+
+
+def hash_line(data: bytes) -> bytes:
+    """The first line of a generated file whose rest is ``data``: its hash, and the
+    version of the rewriter (:mod:`phasemap.core.selects`) that wrote it."""
+    return f"{HASH_PREFIX}{hashlib.sha256(data).hexdigest()}{REWRITER}{_rewriter()}\n".encode()
+
+
+@functools.lru_cache(maxsize=1)
+def _rewriter() -> str:
+    return hashlib.sha256((_PACKAGE / "core" / "selects.py").read_bytes()).hexdigest()[:16]
 
 
 def _write_atomic(path: pathlib.Path, raw: bytes) -> None:
@@ -267,8 +290,11 @@ def _verified(path: pathlib.Path) -> str:
         raise _Damaged("it is empty")
     if not head.startswith(HASH_PREFIX.encode()) or not sep:
         raise _Damaged("it has no content hash")
-    if hashlib.sha256(data).hexdigest().encode() != head[len(HASH_PREFIX):].strip():
+    digest, _, rewriter = head[len(HASH_PREFIX):].strip().partition(REWRITER.encode())
+    if hashlib.sha256(data).hexdigest().encode() != digest:
         raise _Damaged("its content does not match its hash")
+    if rewriter != _rewriter().encode():
+        raise _Stale("another version of phasemap/core/selects.py rewrote it")
     return data.decode()
 
 

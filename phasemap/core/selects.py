@@ -18,6 +18,7 @@ is left as it is: it is evaluated only where its condition holds.
 from __future__ import annotations
 
 import ast
+import threading
 
 from numba import njit
 
@@ -67,9 +68,19 @@ class _Rewrite(ast.NodeTransformer):
         return node
 
 
+#: The deepest syntax tree :func:`selects` rewrites: Python's ``ast`` walks a tree by
+#: recursion, so how deep it can go depends on the stack it starts from; a module deeper
+#: than this (the corner block's contract, 317 levels) is left as written, whatever the
+#: caller's stack, so that a module's text never depends on where it was generated.
+DEEPEST = 250
+
+
 def selects(text: str) -> str:
     """``text`` (a generated module) with its harmless conditionals as ``_select`` calls;
-    ``text`` itself if it has none.
+    ``text`` itself if it has none, or if its syntax tree is deeper than :data:`DEEPEST`.
+
+    The rewrite runs in a thread of its own, from an empty stack: its result is the same
+    from whatever depth it is called.
 
     >>> print(selects("def f(x, r):\\n    return r[0] if x > 0 else 0.0\\n"), end="")
     from phasemap.core.selects import select as _select
@@ -77,13 +88,44 @@ def selects(text: str) -> str:
     def f(x, r):
         return _select(x > 0, r[0], 0.0)
     """
-    rewrite = _Rewrite()
+    out: list = []
+
+    def work():
+        try:
+            out.append((_rewritten(text), None))
+        except BaseException as err:   # raised again in the caller's thread
+            out.append((None, err))
+
+    worker = threading.Thread(target=work, name="phasemap-selects", daemon=True)
+    worker.start()
+    worker.join()
+    result, err = out[0]
+    if err is not None:
+        raise err
+    return result
+
+
+def _depth(tree: ast.AST) -> int:
+    """The number of levels of ``tree``, counted without recursion."""
+    deepest, stack = 0, [(tree, 1)]
+    while stack:
+        node, level = stack.pop()
+        deepest = max(deepest, level)
+        stack.extend((child, level + 1) for child in ast.iter_child_nodes(node))
+    return deepest
+
+
+def _rewritten(text: str) -> str:
     try:
-        tree = rewrite.visit(ast.parse(text))
+        tree = ast.parse(text)
+        if _depth(tree) > DEEPEST:
+            return text
+        rewrite = _Rewrite()
+        tree = rewrite.visit(tree)
         if not rewrite.count:
             return text
         at = 0 if ast.get_docstring(tree, clean=False) is None else 1   # after the docstring
         tree.body.insert(at, ast.parse(_IMPORT).body[0])
         return ast.unparse(ast.fix_missing_locations(tree)) + "\n"
-    except RecursionError:   # an expression nested deeper than Python's ast can walk:
-        return text          # the module as written, its conditionals left as they are
+    except RecursionError:   # only with a recursion limit set far below Python's default
+        return text
