@@ -48,6 +48,10 @@ LONG: dict[str, str] = {
     "entry points, the march's named steps and the curve geometry they call are one "
     "cached compilation, and numba keys a cached function on its own file alone (a "
     "helper edited in another file would leave the entry points stale in the cache)",
+    "phasemap/motion/hybrid/flow.py": "the compiled flow in full coordinates, one "
+    "concept: a phase's accelerations, its events, its DOP853 steps, and the transition "
+    "matrices and reactions built on them call one another as one cached compilation, and "
+    "numba keys a cached function on its own file alone",
     "phasemap/motion/phase/tracer.py": "the numba pieces of one phase-curve stage and of a "
     "curve, which compile together",
 }

@@ -202,15 +202,15 @@ def test_a_segment_ends_where_solve_ivp_ends_it(name, z, modes):
     both against a tight solve_ivp."""
     from types import SimpleNamespace
 
-    from phasemap.motion.periodic import orbit
+    from phasemap.motion.periodic import segments
 
     m = _motion(SYSTEMS[name])
     z = np.array(z)
     seg = SimpleNamespace(modes=modes, rho=np.ones(m.k))
     scale = 1.0 + np.abs(z).max()
     got = m.flow.segment(z, 0.3, 2.0, modes, None, 1e-10, 1e-10 * scale)
-    want = orbit._flow(m, z, 0.3, 2.0, seg, 1e-10).y[:, -1]
-    tight = orbit._flow(m, z, 0.3, 2.0, seg, 1e-13).y[:, -1]
+    want = segments.flow(m, z, 0.3, 2.0, seg, 1e-10).y[:, -1]
+    tight = segments.flow(m, z, 0.3, 2.0, seg, 1e-13).y[:, -1]
     assert np.abs(got - want).max() <= 1e-9 * scale
     assert np.abs(got - tight).max() <= 1e-9 * scale
     assert np.abs(want - tight).max() <= 1e-9 * scale
@@ -252,3 +252,117 @@ def test_the_rod_in_flight_lands_where_its_parabola_says():
     land = brentq(lambda t: 0.3 + l * math.sin(0.7) + l * math.cos(0.7) * t
                   - 0.5 * g * t * t - l * math.sin(0.7 + t), 1e-6, 0.6, xtol=1e-15)
     assert rec.ev_t[1] == pytest.approx(land, abs=1e-9)
+
+
+def _segment_case(name):
+    """A phase of ``name`` and a start ``X = (q, u, t)`` in it, for a segment of 2 s."""
+    z, modes = {"belt": ([0.3, 0.0, 0.1, 0.0], (SLIP_NEG,)),
+                "den_hartog": ([0.3, 0.0, 0.5, 0.0], (SLIP_POS,)),
+                "stribeck_belt": ([-0.2, 0.0, 0.6, 0.0], (SLIP_POS,)),
+                "rod": ([0.7, 0.5, 0.3, 0.2, 0.5, -0.4], (OPEN,))}[name]
+    return _motion(SYSTEMS[name]), np.array(z + [0.3]), modes
+
+
+@pytest.mark.parametrize("name", ["belt", "den_hartog", "stribeck_belt", "rod"])
+def test_the_compiled_transition_matrix_is_the_variational_flow(name):
+    """A segment's transition matrix (periodic orbits' monodromy) on the compiled flow
+    against the variational equations on solve_ivp (the same method and tolerances: they
+    part by rounding), and both against central differences of the segment's end (the
+    compiled flow at a tight tolerance), an independent derivative of the flow map."""
+    from types import SimpleNamespace
+
+    from phasemap.motion.periodic import floquet, segments
+
+    m, X, modes = _segment_case(name)
+    n2 = 2 * m.n
+    tau = 2.0
+    seg = SimpleNamespace(modes=modes, rho=np.ones(m.k))
+    got = m.flow.transition(X, tau, modes, None, 1e-11, 1e-11 * (1.0 + np.abs(X).max()),
+                            floquet.STEP)
+    kernel = m.flow.transition
+    m.flow.transition = lambda *a, **k: None     # segments.transition's solve_ivp path
+    try:
+        want = segments.transition(m, X, tau, seg, 1e-11)
+    finally:
+        m.flow.transition = kernel
+    assert got.shape == (n2 + 1, n2 + 1)
+    assert np.abs(got - want).max() <= 1e-8 * np.abs(want).max()
+
+    def end(Y):
+        return np.append(m.flow.segment(Y[:n2], Y[n2], tau, modes, None, 1e-13, 1e-13),
+                         Y[n2] + tau)
+    fd = np.column_stack([floquet.difference(end, X, j) for j in range(n2 + 1)])
+    assert np.abs(got - fd).max() <= 1e-5 * np.abs(fd).max()
+    assert np.array_equal(got[n2], np.eye(n2 + 1)[n2])     # the time row
+
+
+@pytest.mark.parametrize("name", ["belt", "rod"])
+def test_a_segments_samples_are_solve_ivps_dense_output(name):
+    """The states of a segment at given times on the compiled flow's dense output, against
+    solve_ivp's ``dense_output`` over the same phase, and asking for them leaves the
+    segment's end as it was, bit for bit."""
+    from types import SimpleNamespace
+
+    from phasemap.motion.periodic import segments
+
+    m, X, modes = _segment_case(name)
+    n2 = 2 * m.n
+    z, t, tau = X[:n2], X[n2], 2.0
+    scale = 1.0 + np.abs(z).max()
+    times = np.linspace(t, t + tau, 37)
+    end, states = m.flow.segment(z, t, tau, modes, None, 1e-10, 1e-10 * scale, times=times)
+    assert np.array_equal(end, m.flow.segment(z, t, tau, modes, None, 1e-10, 1e-10 * scale))
+    assert states.shape == (times.size, n2)
+    assert np.array_equal(states[0], z) and np.array_equal(states[-1], end)
+    sol = segments.flow(m, z, t, tau, SimpleNamespace(modes=modes, rho=np.ones(m.k)), 1e-10,
+                      dense=True)
+    want = np.array([sol.sol(s) for s in times])
+    assert np.abs(states - want).max() <= 1e-9 * scale
+
+
+@pytest.mark.parametrize("name", ["belt", "rod", "wheel", "rod_on_step"])
+def test_the_batch_of_reactions_is_each_states_solve(name):
+    """The reactions a Dataset records, in one compiled call, against the engine's solve of
+    each state alone: the same bits, and the same states without one."""
+    m = _motion(SYSTEMS[name])
+    rng = np.random.default_rng(5)
+    n = m.n
+    ts, ys, modes = [], [], []
+    for _ in range(40):
+        y = rng.normal(size=2 * n) * 0.5
+        y[:n] = np.clip(y[:n], m.bounds[:, 0] + 0.1, m.bounds[:, 1] - 0.1)
+        ts.append(rng.uniform(0.0, 3.0))
+        ys.append(y)
+        modes.append([int(rng.choice([OPEN, STICK, SLIP_POS, SLIP_NEG])) for _ in range(m.k)])
+    N, F, status = m.flow.reactions(np.array(ts), np.array(ys), np.array(modes))
+    solved = 0
+    for i in range(len(ts)):
+        sol = m.solve(ys[i][:n], ys[i][n:], tuple(modes[i]), None, ts[i])
+        if status[i] == flow.OK:
+            assert np.array_equal(N[i], sol[1]) and np.array_equal(F[i], sol[2])
+            solved += 1
+        else:
+            assert np.isnan(N[i]).all() and np.isnan(F[i]).all()
+            assert status[i] == flow.REDUNDANT or sol is None
+    assert solved >= 20
+
+
+def test_the_twin_computes_a_transition_matrix_and_reactions_as_the_machine_code():
+    """The periodic orbits' transition matrix and a Dataset's reactions on the interpreted
+    twins (``PHASEMAP_JIT=off``) and on the machine code: the same bits."""
+    from phasemap.motion.periodic import floquet
+
+    mech = mechanics(STRIBECK_BELT)
+    p = [mech.defaults[n] for n in mech.parameters]
+    X = np.array([-0.2, 0.0, 0.6, 0.0, 0.3])
+    out = []
+    for how in ("off", "eager"):
+        with tiers.forced(how):
+            m = hybrid.Motion(mech, p, hybrid.Options(t_end=1.0))
+            assert m.flow.twin == (how == "off")
+            out.append((m.flow.transition(X, 0.5, (SLIP_POS,), None, 1e-9, 1e-9,
+                                          floquet.STEP),
+                        *m.flow.reactions(np.array([0.3, 0.4]), np.array([X[:4], X[:4] * 2]),
+                                          np.array([[SLIP_POS], [STICK]]))))
+    for a, b in zip(*out):
+        assert np.array_equal(a, b)

@@ -12,8 +12,8 @@ from numba import cfunc, njit
 from numba.experimental import function_type
 
 from phasemap.motion.hybrid.flow import (FINISHED, OK, _dip_rates, _rhs, accel, advance,
-                                         dense_at, jacobian, locate, quiet_numba, watch,
-                                         workspace)
+                                         dense_at, jacobian, locate, quiet_numba,
+                                         reactions, transition, watch, workspace)
 
 #: (imported for what it registers: the numba type of a cfunc passed as an argument)
 _CFUNC_TYPES = function_type
@@ -106,23 +106,22 @@ class Phase:
         twin = tiers.mode() == "off"
         if not twin:
             fns = functions(self.mech, False)
-        if not twin and not jacobian.overloads:     # (not yet in this process: the cache?)
+        if not twin and not transition.overloads:   # (not yet in this process: the cache?)
             # the kernel the background compile (engine.warm) builds last: where it is in
             # the cache, so are the others, and no call compiles one in the foreground
             m = 2 * self.n + 1
             probe = (*fns[:3], self.p, self.lay, self.rolls, np.zeros(self.k, dtype=np.int64),
                      np.ones(self.k), self.none, self.W, self.I, self.ud, self.N, self.F,
-                     self.a, np.zeros(m), 1e-6, np.zeros((m, m)), np.zeros(m), np.zeros(m),
-                     np.zeros(self.n))
-            twin = tiers.is_twin(tiers.runner(jacobian, probe, self.warm))
+                     self.a, np.zeros(m), 0.0, 1e-8, 1e-8, 1e-6, 1, np.zeros((m, m)))
+            twin = tiers.is_twin(tiers.runner(transition, probe, self.warm))
+        kernels = (accel, watch, advance, _rhs, _dip_rates, locate, dense_at, jacobian,
+                   transition, reactions)
         if twin:
             fns = functions(self.mech, True)
-            kernels = (accel, watch, advance, _rhs, _dip_rates, locate, dense_at, jacobian)
             kernels = tuple(interpreted(k) for k in kernels)
-        else:
-            kernels = (accel, watch, advance, _rhs, _dip_rates, locate, dense_at, jacobian)
         (self.accel, self.watch_fn, self.advance_fn, self.rhs_fn, self.rates_fn,
-         self.locate_fn, self.dense_fn, self.jacobian_fn) = kernels
+         self.locate_fn, self.dense_fn, self.jacobian_fn, self.transition_fn,
+         self.reactions_fn) = kernels
         self.twin, self.fns = twin, fns
 
     def refresh(self):
@@ -161,16 +160,19 @@ class Phase:
         return rhs(PC, SF, KN, self.p, self.lay, self.rolls, modes, rho, self.none, self.W,
                    self.I, self.ud, self.N, self.F, self.a, float(t), y, out)
 
-    def segment(self, z, t, tau, modes, rho, rtol, atol):
+    def segment(self, z, t, tau, modes, rho, rtol, atol, times=None):
         """The state ``tau`` after ``(t, z)`` in the phase ``modes``, stepped as scipy's
         ``solve_ivp(method="DOP853")`` steps it (its rtol floor of 100 ulps included), no
-        event watched; None where the kernel cannot (redundant contacts, no finite
-        solution, a step below scipy's smallest)."""
+        event watched; with ``times`` (increasing, in ``[t, t + tau]``), ``(end, states)``
+        with the states at those times on the steps' dense output, as ``solve_ivp``'s
+        ``dense_output`` gives them.  None where the kernel cannot (redundant contacts, no
+        finite solution, a step below scipy's smallest)."""
         self.refresh()
         n2 = 2 * self.n
         y = np.array(z, dtype=float)
+        te = np.empty(0) if times is None else np.ascontiguousarray(times, dtype=float)
         if tau == 0.0:
-            return y
+            return y if times is None else (y, np.tile(y, (te.size, 1)))
         modes_a = np.asarray(modes, dtype=np.int64)
         rho_a = np.ones(self.k) if rho is None else np.asarray(rho, dtype=float)
         f = np.empty(n2)
@@ -178,15 +180,21 @@ class Phase:
             return None
         PC, SF, KN, DM = self.fns
         nw = self.n_watch
-        status, _, _ = self.advance_fn(
+        out_t = np.empty(te.size + 2)
+        out_y = np.empty((out_t.size, n2))
+        status, saved, _ = self.advance_fn(
             PC, SF, KN, DM, self.p, self.lay, self.one_sided, self.rolls, modes_a, rho_a, 0.0,
             self.bounds, self.none, np.array([float(t), 0.0, float(t), 0.0, 0.0]), y, f,
             np.empty(n2), np.zeros(nw), np.zeros(nw), np.zeros(self.k), np.zeros(self.k),
-            np.zeros((16, n2)), np.zeros((7, n2)), np.empty(0), float(t + tau),
+            np.zeros((16, n2)), np.zeros((7, n2)), te, float(t + tau),
             max(float(rtol), 100 * np.finfo(float).eps), float(atol), np.inf, 1 << 40,
-            np.empty(2), np.empty((2, n2)), self.W, self.I, self.ud, self.N, self.F, self.a,
+            out_t, out_y, self.W, self.I, self.ud, self.N, self.F, self.a,
             np.empty(n2), True)
-        return y if status == FINISHED else None
+        if status != FINISHED:
+            return None
+        if times is None:
+            return y
+        return (y, out_y[:saved].copy()) if saved == te.size else None
 
     def jacobian(self, X, modes, rho, step):
         """``dF/dX`` of the phase at ``X = (q, u, t)`` by :func:`jacobian`, or None where a
@@ -202,6 +210,38 @@ class Phase:
                               np.ascontiguousarray(X, dtype=float), float(step), A,
                               np.empty(m), np.empty(m), np.empty(self.n))
         return A if st == OK else None
+
+    def transition(self, X0, tau, modes, rho, rtol, atol, step, max_steps=100_000):
+        """The transition matrix of the phase over ``tau`` from ``X0 = (q, u, t)`` by
+        :func:`transition` (the variational equations, the Jacobian by central differences
+        of relative step ``step``), or None where the kernel cannot (redundant contacts, no
+        finite solution, a step below scipy's smallest, ``max_steps``)."""
+        self.refresh()
+        PC, SF, KN, _ = self.fns
+        m = 2 * self.n + 1
+        Phi = np.empty((m, m))
+        st = self.transition_fn(PC, SF, KN, self.p, self.lay, self.rolls,
+                                np.asarray(modes, dtype=np.int64),
+                                np.ones(self.k) if rho is None else np.asarray(rho, dtype=float),
+                                self.none, self.W, self.I, self.ud, self.N, self.F, self.a,
+                                np.ascontiguousarray(X0, dtype=float), float(tau), float(rtol),
+                                float(atol), float(step), int(max_steps), Phi)
+        return Phi if st == OK else None
+
+    def reactions(self, ts, ys, modes):
+        """``(N, F, status)`` of the phases ``modes[i]`` at the states ``(ts[i], ys[i])`` by
+        :func:`reactions` (every contact's friction assuming N >= 0; the reactions NaN where
+        the status is not ``OK``)."""
+        self.refresh()
+        PC, SF, KN, _ = self.fns
+        ts = np.ascontiguousarray(ts, dtype=float)
+        Ns, Fs = np.full((ts.size, self.k), np.nan), np.full((ts.size, self.k), np.nan)
+        status = np.empty(ts.size, dtype=np.int64)
+        self.reactions_fn(PC, SF, KN, self.p, self.lay, self.rolls, np.ones(self.k), self.none,
+                          self.W, self.I, self.ud, self.N, self.F, self.a, ts,
+                          np.ascontiguousarray(ys, dtype=float),
+                          np.ascontiguousarray(modes, dtype=np.int64), Ns, Fs, status)
+        return Ns, Fs, status
 
     def dense(self, Fd, t_old, h, y_old, t):
         """The state at ``t`` on a step's dense output (:func:`dense_at`)."""

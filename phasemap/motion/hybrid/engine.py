@@ -742,8 +742,8 @@ def warm():
     """Compiles the compiled flow's kernels (:mod:`.flow`) into the kernel cache: a
     background compile's job (:mod:`phasemap.core.tiers`), a flight of the Painleve rod
     that lands and slides (the step's event exit included), then a segment of known
-    length and the Jacobian of the periodic orbits (compiled last: binding.Phase probes
-    it)."""
+    length, the reactions of a Dataset, the Jacobian and the transition matrix of the
+    periodic orbits (compiled last: binding.Phase probes it)."""
     from phasemap.core import tiers
     from phasemap.declare.full import mechanics
     from phasemap.systems.painleve_rod import SYSTEM
@@ -755,4 +755,7 @@ def warm():
         m.run([0.7, 0.0, 0.3], [0.0, 0.5, 0.0])
         m.flow.segment(np.array([0.7, 0.0, 0.3, 0.0, 0.5, 0.0]), 0.0, 0.1, (OPEN,), None,
                        1e-8, 1e-8)
-        m.flow.jacobian(np.array([0.7, 0.0, 0.3, 0.0, 0.5, 0.0, 0.0]), (OPEN,), None, 1e-6)
+        X = np.array([0.7, 0.0, 0.3, 0.0, 0.5, 0.0, 0.0])
+        m.flow.jacobian(X, (OPEN,), None, 1e-6)
+        m.flow.reactions(np.zeros(1), X[None, :6], np.zeros((1, 1), dtype=np.int64))
+        m.flow.transition(X, 0.01, (OPEN,), None, 1e-8, 1e-8, 1e-6)

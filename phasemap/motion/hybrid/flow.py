@@ -390,6 +390,72 @@ def dense_at(Fd, t_old, h, y_old, t, out):
 
 
 @njit(cache=True, error_model="numpy")
+def _trial_step(y, f, rtol, atol, interval, yt, y1):
+    """scipy's ``select_initial_step`` up to its trial step: ``(h0, d1)``, with ``yt`` the
+    scale ``atol + rtol |y|`` and ``y1 = y + h0 f``, where the rate is to be taken next."""
+    for i in range(y.size):
+        yt[i] = atol + abs(y[i]) * rtol
+    d0 = _norm(y, yt)
+    d1 = _norm(f, yt)
+    h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+    h0 = min(h0, interval)
+    for i in range(y.size):
+        y1[i] = y[i] + h0 * f[i]
+    return h0, d1
+
+
+@njit(cache=True, error_model="numpy")
+def _first_step(f, f1, yt, h0, d1, interval, max_step):
+    """The rest of ``select_initial_step`` (order 7) from the rate ``f1`` at the trial."""
+    d2 = 0.0
+    for i in range(f.size):
+        v = (f1[i] - f[i]) / yt[i]
+        d2 += v * v
+    d2 = np.sqrt(d2 / f.size) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
+    return min(100.0 * h0, h1, interval, max_step)
+
+
+@njit(cache=True, error_model="numpy")
+def _error(K, y, y_new, h, rtol, atol):
+    """scipy's DOP853 error norm of the step ``y -> y_new`` over ``h`` with the stages
+    ``K``: ``|h| ||err5||^2 / sqrt(||err5||^2 + 0.01 ||err3||^2)``, RMS norms over
+    ``atol + rtol max(|y|, |y_new|)``."""
+    e5 = 0.0
+    e3 = 0.0
+    for i in range(y.size):
+        sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+        v5 = 0.0
+        v3 = 0.0
+        for j in range(13):
+            v5 += K[j, i] * _E5[j]
+            v3 += K[j, i] * _E3[j]
+        v5 /= sc
+        v3 /= sc
+        e5 += v5 * v5
+        e3 += v3 * v3
+    if e5 == 0.0 and e3 == 0.0:
+        return 0.0
+    return abs(h) * e5 / np.sqrt((e5 + 0.01 * e3) * y.size)
+
+
+@njit(cache=True, error_model="numpy")
+def _at_times(Fd, t_old, h, y_old, t, te, i_eval, out_t, out_y, saved):
+    """Save the step's dense output at the times ``te`` from ``i_eval`` on that it reaches
+    (``<= t``; those before ``t_old`` are passed over); ``(i_eval, saved)`` after."""
+    while i_eval < te.size and te[i_eval] <= t:
+        if te[i_eval] >= t_old:
+            dense_at(Fd, t_old, h, y_old, te[i_eval], out_y[saved])
+            out_t[saved] = te[i_eval]
+            saved += 1
+        i_eval += 1
+    return i_eval, saved
+
+
+@njit(cache=True, error_model="numpy")
 def _stages(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K, t, y, h, first,
             last, yt):
     """The stages ``first`` to ``last - 1`` of scipy's DOP853 from ``(t, y)`` over ``h``
@@ -455,27 +521,10 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
         if interval == 0.0:
             h_abs = 0.0
         else:
-            for i in range(ny):
-                yt[i] = atol + abs(y[i]) * rtol
-            d0 = _norm(y, yt)
-            d1 = _norm(f, yt)
-            h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
-            h0 = min(h0, interval)
-            y1 = y_old
-            for i in range(ny):
-                y1[i] = y[i] + h0 * f[i]
+            h0, d1 = _trial_step(y, f, rtol, atol, interval, yt, y_old)
             args_ok = _rhs(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a,
-                           t + h0, y1, K[15])
-            d2 = 0.0
-            for i in range(ny):
-                v = (K[15, i] - f[i]) / yt[i]
-                d2 += v * v
-            d2 = np.sqrt(d2 / ny) / h0
-            if d1 <= 1e-15 and d2 <= 1e-15:
-                h1 = max(1e-6, h0 * 1e-3)
-            else:
-                h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
-            h_abs = min(100.0 * h0, h1, interval, max_step)
+                           t + h0, y_old, K[15])
+            h_abs = _first_step(f, K[15], yt, h0, d1, interval, max_step)
     if args_ok != OK:
         state[1] = h_abs
         return args_ok, saved, steps
@@ -516,23 +565,7 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
             if st != OK:
                 state[0], state[1], state[4] = t, h_abs, i_eval
                 return st, saved, steps
-            e5 = 0.0
-            e3 = 0.0
-            for i in range(ny):
-                sc = atol + max(abs(y[i]), abs(y_old[i])) * rtol
-                v5 = 0.0
-                v3 = 0.0
-                for j in range(13):
-                    v5 += K[j, i] * _E5[j]
-                    v3 += K[j, i] * _E3[j]
-                v5 /= sc
-                v3 /= sc
-                e5 += v5 * v5
-                e3 += v3 * v3
-            if e5 == 0.0 and e3 == 0.0:
-                err = 0.0
-            else:
-                err = abs(h) * e5 / np.sqrt((e5 + 0.01 * e3) * ny)
+            err = _error(K, y, y_old, h, rtol, atol)
             if err < 1.0:
                 factor = _MAX_FACTOR if err == 0.0 else min(
                     _MAX_FACTOR, _SAFETY * err ** _EXPONENT)
@@ -551,8 +584,17 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
             y[i] = v
             f[i] = K[12, i]
         t = t_new
-        if quiet:       # (a segment of known length: no events, nothing saved)
+        if quiet:       # (a segment of known length: no events; only the times te saved)
             state[0], state[1], state[2], state[3] = t, h_abs, t_old, h
+            if te.size > 0 and i_eval < te.size and te[i_eval] <= t:
+                st = _dense(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a,
+                            K, t_old, y_old, y, f, h, yt, Fd)
+                if st != OK:
+                    state[4] = i_eval
+                    return st, saved, steps
+                i_eval, saved = _at_times(Fd, t_old, h, y_old, t, te, i_eval, out_t, out_y,
+                                          saved)
+                state[4] = i_eval
             if t >= t_stop:
                 return FINISHED, saved, steps
             continue
@@ -582,12 +624,7 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
             state[4] = i_eval
             return EVENT, saved, steps
         if te.size:
-            while i_eval < te.size and te[i_eval] <= t:
-                if te[i_eval] >= t_old:
-                    dense_at(Fd, t_old, h, y_old, te[i_eval], out_y[saved])
-                    out_t[saved] = te[i_eval]
-                    saved += 1
-                i_eval += 1
+            i_eval, saved = _at_times(Fd, t_old, h, y_old, t, te, i_eval, out_t, out_y, saved)
         else:
             out_t[saved] = t
             for i in range(ny):
@@ -798,3 +835,145 @@ def jacobian(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, X, 
         for i in range(n):
             A[n + i, j] = (up[i] - ud[i]) / d
     return OK
+
+
+@njit(cache=True, error_model="numpy")
+def _variational_rate(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, s, Y,
+                      step, A, xp, xm, up, X, out):
+    """``out`` <- the rate of the variational system at ``(s, Y)``, ``Y = (X, P)`` with
+    ``P`` the m x m transition matrix row by row and ``X``'s time taken as ``s``:
+    ``(F(X), A(X) P)``, ``F`` the phase's field and ``A`` its :func:`jacobian`; the
+    status of :func:`accel`."""
+    n = lay[0]
+    m = 2 * n + 1
+    for i in range(m):
+        X[i] = Y[i]
+    X[m - 1] = s
+    st, det = accel(PC, SF, KN, X[:2 * n], s, p, lay, rolls, modes, rho, none, False, W, I,
+                    ud, N, F, a)
+    if st != OK:
+        return st
+    for i in range(n):
+        out[i] = X[n + i]
+        out[n + i] = ud[i]
+    out[2 * n] = 1.0
+    st = jacobian(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, X, step, A,
+                  xp, xm, up)
+    if st != OK:
+        return st
+    for r in range(m):
+        for c in range(m):
+            v = 0.0
+            for j in range(m):
+                v += A[r, j] * Y[m + j * m + c]
+            out[m + r * m + c] = v
+    return OK
+
+
+@njit(cache=True, error_model="numpy")
+def transition(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, X0, tau, rtol,
+               atol, step, max_steps, Phi):
+    """``Phi`` <- the transition matrix of the phase over ``tau`` from ``X0 = (q, u, t)``:
+    the variational equations ``X' = F(X)``, ``P' = A(X) P`` from ``P = 1``
+    (:func:`_variational_rate`), stepped by scipy's DOP853 with its step-size control over
+    the whole system (``rtol``, scalar ``atol``), as ``solve_ivp`` stepped them
+    (:func:`phasemap.motion.periodic.segments.transition`).  The status of :func:`accel`,
+    or ``FAILED`` (a step below scipy's smallest), or ``MAX_STEPS``."""
+    n = lay[0]
+    m = 2 * n + 1
+    ny = m + m * m
+    Y = np.zeros(ny)
+    Yn = np.empty(ny)
+    f = np.empty(ny)
+    yt = np.empty(ny)
+    K = np.empty((13, ny))
+    A = np.empty((m, m))
+    xp, xm, up, X = np.empty(m), np.empty(m), np.empty(n), np.empty(m)
+    for i in range(m):
+        Y[i] = X0[i]
+        Y[m + i * m + i] = 1.0
+    t = X0[m - 1]
+    t_stop = t + tau
+    st = _variational_rate(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, t,
+                           Y, step, A, xp, xm, up, X, f)
+    if st != OK:
+        return st
+    interval = abs(t_stop - t)
+    h_abs = 0.0
+    if interval > 0.0:      # scipy's select_initial_step (order 7)
+        h0, d1 = _trial_step(Y, f, rtol, atol, interval, yt, Yn)
+        st = _variational_rate(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F,
+                               a, t + h0, Yn, step, A, xp, xm, up, X, K[12])
+        if st != OK:
+            return st
+        h_abs = _first_step(f, K[12], yt, h0, d1, interval, np.inf)
+    steps = 0
+    while t < t_stop:
+        if steps >= max_steps:
+            return MAX_STEPS
+        min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+        ha = max(h_abs, min_step)
+        rejected = False
+        while True:
+            if ha < min_step:
+                return FAILED
+            t_new = min(t + ha, t_stop)
+            h = t_new - t
+            ha = abs(h)
+            for i in range(ny):
+                K[0, i] = f[i]
+            for s in range(1, 12):
+                for i in range(ny):
+                    v = 0.0
+                    for j in range(s):
+                        v += K[j, i] * _A[s, j]
+                    yt[i] = Y[i] + v * h
+                st = _variational_rate(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud,
+                                       N, F, a, t + _C[s] * h, yt, step, A, xp, xm, up, X,
+                                       K[s])
+                if st != OK:
+                    return st
+            for i in range(ny):
+                v = 0.0
+                for j in range(12):
+                    v += K[j, i] * _B[j]
+                Yn[i] = Y[i] + h * v
+            st = _variational_rate(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N,
+                                   F, a, t + h, Yn, step, A, xp, xm, up, X, K[12])
+            if st != OK:
+                return st
+            err = _error(K, Y, Yn, h, rtol, atol)
+            if err < 1.0:
+                factor = _MAX_FACTOR if err == 0.0 else min(_MAX_FACTOR,
+                                                            _SAFETY * err ** _EXPONENT)
+                ha *= min(1.0, factor) if rejected else factor
+                break
+            ha *= max(_MIN_FACTOR, _SAFETY * err ** _EXPONENT)
+            rejected = True
+        h_abs = ha
+        steps += 1
+        for i in range(ny):
+            Y[i] = Yn[i]
+            f[i] = K[12, i]
+        t = t_new
+    for r in range(m):
+        for c in range(m):
+            Phi[r, c] = Y[m + r * m + c]
+    return OK
+
+
+@njit(cache=True, error_model="numpy")
+def reactions(PC, SF, KN, p, lay, rolls, rho, none, W, I, ud, N, F, a, ts, ys, modes, Ns, Fs,
+              status):
+    """Per saved state ``i``: the status of :func:`accel` of the phase ``modes[i]`` at
+    ``(ts[i], ys[i])`` into ``status[i]`` and, where ``OK``, its reactions into ``Ns[i]``,
+    ``Fs[i]`` (the reactions a Dataset of a motion records, in one call)."""
+    k = lay[1]
+    for i in range(ts.size):
+        st, det = accel(PC, SF, KN, ys[i], ts[i], p, lay, rolls, modes[i], rho, none, False,
+                        W, I, ud, N, F, a)
+        status[i] = st
+        if st == OK:
+            for c in range(k):
+                Ns[i, c] = N[c]
+                Fs[i, c] = F[c]

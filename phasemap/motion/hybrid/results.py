@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from phasemap.core import events as ev
+from phasemap.motion.hybrid import flow
 from phasemap.motion.hybrid.engine import (MODE_NAMES, POLICIES, ZENO_SPEED, Motion, Options,
                                            Record)
 
@@ -88,13 +89,21 @@ def _geometry(mech, p, ys, modes, ts) -> dict:
     pts = np.empty((len(ys), k, 2))
     N = np.full((len(ys), k), np.nan)
     F = np.full((len(ys), k), np.nan)
-    motion = Motion(mech, p, Options(1.0))
     for i, y in enumerate(ys):
         cen[i], pts[i] = mech.points(y[:n], p)
-        if modes[i].min() >= 0 and all(c.one_sided for c in mech.contacts):
-            sol = motion.solve(y[:n], y[n:], tuple(int(m) for m in modes[i]), None, ts[i])
-            if sol is not None:
-                N[i], F[i] = sol[1], sol[2]
+    at = np.flatnonzero(modes.min(axis=1, initial=0) >= 0) if all(
+        c.one_sided for c in mech.contacts) else np.empty(0, dtype=int)
+    if at.size:
+        motion = Motion(mech, p, Options(1.0))
+        Ns, Fs, status = motion.flow.reactions(ts[at], ys[at], modes[at])
+        for j, i in enumerate(at):
+            if status[j] == flow.OK:
+                N[i], F[i] = Ns[j], Fs[j]
+            elif status[j] == flow.REDUNDANT:   # (the engine picks an admissible member)
+                sol = motion.solve(ys[i, :n], ys[i, n:], tuple(int(m) for m in modes[i]),
+                                   None, ts[i])
+                if sol is not None:
+                    N[i], F[i] = sol[1], sol[2]
     data = {}
     for b in range(mech.n_bodies):
         tail = "" if mech.n_bodies == 1 else f"_{b + 1}"

@@ -16,6 +16,7 @@ from phasemap.core import events as ev
 from phasemap.motion.hybrid import MODE_NAMES, OPEN, Motion, Options, Record, dataset
 from phasemap.motion.hybrid.results import start_values
 from phasemap.motion.periodic import floquet as fq
+from phasemap.motion.periodic import segments
 from phasemap.motion.periodic.section import Section, returns, section_cycle, unit
 
 #: Events across which the state jumps by an impulse: not in the orbits solved here yet.
@@ -398,41 +399,6 @@ def _rho(motion, z, modes, t, sc):
     return np.ones(motion.k) if sol is None else sol[4]
 
 
-def _flow(motion, z, t, tau, seg, rtol, dense=False):
-    from scipy.integrate import solve_ivp
-
-    n = motion.n
-
-    def f(s, y):
-        sol = motion.solve(y[:n], y[n:], seg.modes, seg.rho, s)
-        if sol is None:
-            raise ValueError(f"{motion.mech.name}: the phase {_modes_text(motion, seg)} has "
-                             f"no accelerations at t = {s:.6g} (its linear system is "
-                             "singular there)")
-        return np.concatenate([y[n:], sol[0]])
-
-    scale = 1.0 + float(np.max(np.abs(z)))
-    sol = solve_ivp(f, (t, t + tau), z, method="DOP853", rtol=rtol, atol=rtol * scale,
-                    dense_output=dense)
-    if not sol.success:
-        raise ValueError(f"{motion.mech.name}: a segment ({_modes_text(motion, seg)}) could "
-                         f"not be integrated from t = {t:.6g}: {sol.message}")
-    return sol
-
-
-def _segment_end(motion, z, t, tau, seg, rtol):
-    """The end of :func:`_flow`'s integration, on the compiled flow (scipy's DOP853 in
-    machine code); on ``solve_ivp`` where the kernel cannot (and for its errors)."""
-    scale = 1.0 + float(np.max(np.abs(z)))
-    end = motion.flow.segment(z, t, tau, seg.modes, seg.rho, rtol, rtol * scale)
-    return end if end is not None else _flow(motion, z, t, tau, seg, rtol).y[:, -1]
-
-
-def _modes_text(motion, seg) -> str:
-    return ", ".join(f"{c.name} {MODE_NAMES[m]}" for c, m in zip(motion.mech.contacts,
-                                                                  seg.modes))
-
-
 def _jump(motion, z, t, nxt: Segment):
     n = motion.n
     closed = [c for c, m in enumerate(nxt.modes) if m != OPEN]
@@ -458,7 +424,7 @@ def _ends(motion, segs, w, t_a, rtol, sc):
 def _end(motion, segs, j, z, t, tau, rtol, sc):
     n = motion.n
     seg, nxt = segs[j], segs[(j + 1) % len(segs)]
-    end = _segment_end(motion, z, t, tau, seg, rtol)
+    end = segments.end(motion, z, t, tau, seg, rtol)
     if seg.section is not None:     # in the event functions' units, as _residual reads it
         w = float(seg.section.normal @ (end - seg.section.point)) * max(sc) / max(sc[0], sc[3])
         return _jump(motion, end, t + tau, nxt), w
@@ -632,14 +598,16 @@ def linearised(motion, segs, w, t_a, forcing, rtol, samples=0) -> Linearised:
     mono = np.eye(n2 + 1)
     t = t_a
     for j, seg in enumerate(segs):
-        sol = _flow(motion, zs[j], t, taus[j], seg, rtol, dense=bool(samples))
         if samples:
             m_j = max(2, int(round(samples * taus[j] / period)))
-            for s in np.linspace(t, t + taus[j], m_j, endpoint=j == K - 1):
-                rec.point(s, sol.sol(s), seg.modes)
-        end = sol.y[:, -1]
+            times = np.linspace(t, t + taus[j], m_j, endpoint=j == K - 1)
+            end, states = segments.samples(motion, zs[j], t, taus[j], seg, rtol, times)
+            for s, y in zip(times, states):
+                rec.point(s, y, seg.modes)
+        else:
+            end = segments.end(motion, zs[j], t, taus[j], seg, rtol)
         t_end = t + taus[j]
-        Phi = _transition(motion, np.concatenate([zs[j], [t]]), taus[j], seg, rtol)
+        Phi = segments.transition(motion, np.concatenate([zs[j], [t]]), taus[j], seg, rtol)
         Xm = np.concatenate([end, [t_end]])
         nxt = segs[(j + 1) % K]
         if not seg.ended:           # the end of the forcing period: time fixed
@@ -762,24 +730,3 @@ def state_variables(mech) -> list[tuple[str, str]]:
 
 def _contact_of(seg: Segment, motion) -> int:
     return -1 if seg.index is None or seg.index >= 2 * motion.k else seg.index // 2
-
-
-def _transition(motion, X0, tau, seg, rtol):
-    """``Phi``, the variational equations' solution over the segment."""
-    from scipy.integrate import solve_ivp
-
-    m = X0.size
-
-    def f(s, Y):
-        X = Y[:m]
-        X = X.copy()
-        X[-1] = s
-        P = Y[m:].reshape(m, m)
-        A = fq.jacobian(motion, X, seg.modes, seg.rho)
-        return np.concatenate([fq.field(motion, X, seg.modes, seg.rho), (A @ P).ravel()])
-
-    Y0 = np.concatenate([X0, np.eye(m).ravel()])
-    scale = 1.0 + float(np.max(np.abs(X0)))
-    sol = solve_ivp(f, (X0[-1], X0[-1] + tau), Y0, method="DOP853", rtol=max(rtol, 1e-11),
-                    atol=max(rtol, 1e-11) * scale)
-    return sol.y[m:, -1].reshape(m, m)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from phasemap.motion.periodic import orbit as _orbit
+from phasemap.motion.periodic import segments
 
 #: Points of the orbit sampled per branch point for its amplitudes.
 SAMPLES = 200
@@ -33,7 +34,7 @@ def extrema(motion, segs, w, t_a, rtol, forcing=None):
         starts = t_a + np.concatenate([[0.0], np.cumsum(taus)[:-1]])
         where = np.clip(np.searchsorted(starts, times, side="right") - 1, 0, K - 1)
     for j, seg in enumerate(segs):
-        sol = _orbit._flow(motion, zs[j], t, taus[j], seg, rtol, dense=True).sol
+        sol = segments.flow(motion, zs[j], t, taus[j], seg, rtol, dense=True).sol
         if forcing is not None:
             strobes.extend(sol(s) for s in np.clip(times[where == j], t, t + taus[j]))
         ts = np.linspace(t, t + taus[j], SAMPLES // K + 2)
@@ -70,7 +71,7 @@ def dips(motion, segs, w, t_a, rtol) -> bool:
     sc = motion.scales(z0[:n], z0[n:], motion.mech.pieces(z0[:n], z0[n:], motion.p, t_a))
     scale = max(sc)
     for j, seg in enumerate(segs):
-        sol = _orbit._flow(motion, zs[j], t, taus[j], seg, rtol, dense=True).sol
+        sol = segments.flow(motion, zs[j], t, taus[j], seg, rtol, dense=True).sol
 
         def watch(s, seg=seg, sol=sol):
             y = sol(s)
