@@ -34,11 +34,16 @@ def extrema(motion, segs, w, t_a, rtol, forcing=None):
         starts = t_a + np.concatenate([[0.0], np.cumsum(taus)[:-1]])
         where = np.clip(np.searchsorted(starts, times, side="right") - 1, 0, K - 1)
     for j, seg in enumerate(segs):
-        sol = segments.flow(motion, zs[j], t, taus[j], seg, rtol, dense=True).sol
+
+        def sol(s, j=j, t=t, seg=seg):
+            return segments.at(motion, zs[j], t, seg, rtol, s)
         if forcing is not None:
-            strobes.extend(sol(s) for s in np.clip(times[where == j], t, t + taus[j]))
+            strobe = np.sort(np.clip(times[where == j], t, t + taus[j]))
+            if strobe.size:
+                strobes.extend(segments.samples(motion, zs[j], t, taus[j], seg, rtol,
+                                                strobe)[1])
         ts = np.linspace(t, t + taus[j], SAMPLES // K + 2)
-        ys = sol(ts)
+        ys = segments.samples(motion, zs[j], t, taus[j], seg, rtol, ts)[1].T
         found = [ys[:n, 0], ys[:n, -1]]
         for i in range(n):
             rate = ys[n + i]
@@ -71,17 +76,17 @@ def dips(motion, segs, w, t_a, rtol) -> bool:
     sc = motion.scales(z0[:n], z0[n:], motion.mech.pieces(z0[:n], z0[n:], motion.p, t_a))
     scale = max(sc)
     for j, seg in enumerate(segs):
-        sol = segments.flow(motion, zs[j], t, taus[j], seg, rtol, dense=True).sol
 
-        def watch(s, seg=seg, sol=sol):
-            y = sol(s)
+        def watch(s, y=None, j=j, t=t, seg=seg):
+            y = segments.at(motion, zs[j], t, seg, rtol, s) if y is None else y
             out = motion.watch(y[:n], y[n:], seg.modes, seg.rho, sc, s)[:2 * motion.k]
             if seg.index is not None and seg.index < out.size:
                 out = np.delete(out, seg.index)
             return out
 
         ts = np.linspace(t, t + taus[j], DIP_SAMPLES)[1:-1]
-        vals = np.array([watch(s) for s in ts])
+        ys = segments.samples(motion, zs[j], t, taus[j], seg, rtol, ts)[1]
+        vals = np.array([watch(s, y) for s, y in zip(ts, ys)])
         if vals.size and np.min(vals) < -1e-9 * scale:
             return True
         for i in range(vals.shape[1] if vals.size else 0):

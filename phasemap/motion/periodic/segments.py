@@ -56,6 +56,12 @@ def samples(motion, z, t, tau, seg, rtol, times):
     return sol.y[:, -1], np.array([sol.sol(s) for s in times])
 
 
+def at(motion, z, t, seg, rtol, s):
+    """The state at the time ``s`` of the segment that starts at ``(t, z)``: its end
+    integrated to ``s`` (a point a search asks for between the samples)."""
+    return end(motion, z, t, s - t, seg, rtol) if s > t else np.array(z, dtype=float)
+
+
 def modes_text(motion, seg) -> str:
     return ", ".join(f"{c.name} {MODE_NAMES[m]}" for c, m in zip(motion.mech.contacts,
                                                                   seg.modes))
