@@ -114,15 +114,20 @@ def main() -> None:
              "the period doubling are checked against scipy's own "
              "(tests/references/duffing_fold.py: 5e-9 between its two steps of "
              "differences at the period doubling).", "", *rows, "",
-             "The orbits run on the full-coordinate motion: its settling motion and its "
-             "shooting segments on the compiled flow (phasemap.motion.hybrid.flow), its "
-             "variational equations on scipy's `solve_ivp` over the compiled phase solve "
-             "and Jacobian, called from Python (about 12 µs per call). The issue's targets (a belt orbit to 1e-10 in 10 ms, a continuation of 200 points "
-             "in 1 s) are not met: the hand-written computation, which knows the mode "
-             "sequence and integrates one segment, shows the floor a compiled hybrid flow "
-             "would start from. Most of `periodic_orbit`'s time is now the variational "
-             "equations of the Floquet multipliers on `solve_ivp` and the Dataset of the "
-             "settling motion (its forces at every saved step)."]
+             "The orbits run on the full-coordinate motion, on the compiled flow "
+             "(phasemap.motion.hybrid.flow): the settling motion, the shooting segments, "
+             "each segment's variational equations with its transition matrix "
+             "(`flow.transition`, one call a segment), the samples of the orbit and of a "
+             "continuation's checks (the flow's dense output) and the Dataset's reactions "
+             "(`flow.reactions`). What is left in Python is the settling motion's decisions "
+             "at its events (which phase follows, the projections): a profile of the "
+             "belt's orbit puts about half of its time there, and the Floquet multipliers "
+             "and the Dataset at about a sixth each. The issue's targets (a belt orbit to "
+             "1e-10 in 10 ms, a continuation of 200 points in 1 s) are not met: the "
+             "hand-written computation, which knows the mode sequence and integrates one "
+             "segment, shows the floor a compiled hybrid flow would start from, and the "
+             "decisions at events compiled (issue 38's fate cells need the same) are what "
+             "separates the two."]
     _report.publish(lines, "## Friction oscillators", write=not args.no_write)
 
 
