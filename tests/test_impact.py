@@ -324,11 +324,17 @@ def test_simulate_goes_on_through_the_rods_impact_without_collision():
     assert float(ds.event_impulse_t[0]) == pytest.approx(0.4, abs=1e-12)
     assert float(ds.event_dKE[0]) == pytest.approx(-0.2, abs=1e-12)
     assert np.isnan(ds.event_impulse_n.values[1:]).all()
-    omega, xdot = float(ds.event_omega[0]), float(ds.event_xdot[0])
+    # the event keeps the state before the impulse, as every impulsive event does; the
+    # state after it is the next saved point, at the same time
+    assert (float(ds.event_omega[0]), float(ds.event_xdot[0])) == (0.0, -1.0)
+    after = np.flatnonzero(ds.t.values == 0.0)
+    assert after.size == 2 and int(ds.branch[after[0]]) == -1
+    omega, xdot = float(ds.omega[after[1]]), float(ds.xdot[after[1]])
     assert omega == pytest.approx(0.3 * math.sqrt(5), abs=1e-12)
     assert xdot == pytest.approx(0.0, abs=1e-12)  # end A stuck
     m = phasemap.MODELS["painleve_rod"]
-    assert m.branches[int(ds.event_branch[0])] == "stick"
+    assert m.branches[int(ds.event_branch[0])] == "stick"       # the branch after it
+    assert m.branches[int(ds.branch[after[1]])] == "stick"
     # the kinetic energy after, from the state: G = A + l (cos, sin)
     vg = np.array([xdot - math.sin(th) * omega, math.cos(th) * omega])
     assert 0.5 * vg @ vg + 0.5 / 3 * omega ** 2 == pytest.approx(0.3, abs=1e-12)
@@ -355,7 +361,11 @@ def test_a_motion_goes_on_in_full_coordinates_after_an_impact_without_collision(
         assert float(ds[f"event_{k}"][0]) == float(reduced[f"event_{k}"][0])
     assert np.isnan(ds.event_impulse_n.values[1:]).all()
     assert int(ds.event_contact[0]) == 0
-    omega = float(reduced.event_omega[0])          # the reduced event: the state after it
+    # the iwc event, reduced or in full coordinates: the state before the impulse; the
+    # state after it is the next saved point
+    assert float(reduced.event_omega[0]) == float(ds.event_omega[0]) == start["omega"]
+    omega = float(reduced.omega[1])
+    assert float(reduced.t[1]) == 0.0 and omega != start["omega"]
     assert float(ds.event_omega[1]) == pytest.approx(omega, abs=1e-12)
     assert float(ds.event_xdot[1]) == pytest.approx(0.0, abs=1e-12)
     t_flat = (math.pi - start["theta"]) / omega

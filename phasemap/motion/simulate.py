@@ -209,7 +209,9 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
         velocities); ``branch``, the active branch; and an events table on
         dimension ``event``: ``event_t``, ``event_kind`` (see
         :class:`phasemap.Event`), ``event_branch`` (the branch after the
-        event) and the state at each event.  The first event is ``start`` (or
+        event) and the state at each event (for an impulsive event, ``iwc``,
+        ``impact`` or ``jam``, the state before its impulse: the state after it is the
+        next saved point, at the same time).  The first event is ``start`` (or
         the fate, when the motion cannot start); the last is the fate.
         ``attrs["end_reason"]`` names the fate, ``attrs["end_message"]``
         explains it.
@@ -491,22 +493,23 @@ def _through_impacts(m: Model, integrate, v, y0, run, names, full):
 
 def _joined(parts, starts):
     """The integrator outputs of consecutive stages of one motion as one: the times of
-    each after the first shifted by its start; the terminal event of each but the last
-    dropped, and the start event of each after the first called ``iwc`` (where a stage
-    ends at once, its only event is its end: an ``iwc`` event is put before it)."""
+    each after the first shifted by its start.  The terminal event of each but the last
+    (its ``no_solution``, where the impact without collision was applied) becomes its
+    ``iwc`` event: the state before the impulse, as every impulsive event keeps it (an
+    impact's and a jam's in full coordinates too), with the branch the next stage starts
+    on; that stage's start event is dropped (the state after the impulse is its first
+    saved point)."""
     offsets = [0.0, *starts[:len(parts) - 1]]
     points, events, evals = [], [], []
     for k, (r, t0) in enumerate(zip(parts, offsets)):
         pts, evs = r.points.copy(), r.events.copy()
         pts[:, 0] += t0
         evs[:, 0] += t0
-        if k and int(evs[0, 1]) == ev.START:
-            evs[0, 1] = ev.IWC
-        elif k:
-            evs = np.concatenate([evs[:1], evs])
-            evs[0, 1] = ev.IWC
+        if k and int(evs[0, 1]) == ev.START and len(evs) > 1:
+            evs = evs[1:]
         if k < len(parts) - 1:
-            evs = evs[:-1]
+            evs[-1, 1] = ev.IWC
+            evs[-1, 2] = parts[k + 1].events[0, 2]
         points.append(pts)
         events.append(evs)
         evals.append(r.y_eval)
@@ -680,7 +683,8 @@ def _motion_variables(m: Model, t_dims, event_dims, ys, ms, ev_t, ev_kind, ev_y,
     for j, var in enumerate(_layout(m).integrated):
         data[var.name] = xr.Variable(t_dims, ys[..., j], variable_attrs(var), fastpath=True)
         data[f"event_{var.name}"] = xr.Variable(
-            event_dims, ev_y[..., j], {"long_name": f"{var.long_name} at the event",
+            event_dims, ev_y[..., j], {"long_name": f"{var.long_name} at the event "
+                                       "(before its impulse, for an impulsive event)",
                                        "units": var.units}, fastpath=True)
     return data
 

@@ -188,8 +188,9 @@ def dataset(mech, rec: Record, attrs: dict, prefix=None, p=None):
             + [(r, f"{u} s-1", f"rate of {ln}") for r, u, ln in
                zip(mech.rates, mech.units, mech.long_names)]):
         data[name] = ("t", ys[:, j], {"long_name": long_name, "units": units})
-        data[f"event_{name}"] = ("event", ev_y[:, j], {"long_name": f"{long_name} at the event",
-                                                       "units": units})
+        data[f"event_{name}"] = ("event", ev_y[:, j], {
+            "long_name": f"{long_name} at the event (before its impulse, for an impulsive "
+                         "event)", "units": units})
     if p is not None:
         data.update(_geometry(mech, p, ys, modes, ts))
         surf = mech.surfaces(p)
