@@ -132,9 +132,15 @@ def test_a_module_another_version_of_the_rewriter_wrote_is_generated_again(warm,
     body = path.read_bytes().partition(b"\n")[2]
     old = f"# phasemap-sha256 {hashlib.sha256(body).hexdigest()}{rewriter}\n".encode()
     path.write_bytes(old + body)
-    r = child(load(), root)
-    assert loaded(r) == path
+    other = root / "probe_grid_fedcba9876543210.py"    # a second such file: one line for both
+    shutil.copy(path, other)
+    body = other.read_bytes().partition(b"\n")[2]
+    other.write_bytes(f"# phasemap-sha256 {hashlib.sha256(body).hexdigest()}\n".encode() + body)
+    r = child(load() + load("probe_grid_fedcba9876543210"), root)
+    assert r.returncode == 0, r.stderr
+    assert [pathlib.Path(line.split()[2]) for line in r.stdout.splitlines()] == [path, other]
     assert len(lines(r)) == 1 and "another version of phasemap" in r.stderr, r.stderr
+    assert str(root) in r.stderr
     assert path.read_bytes() == _hashed(TEXT)   # written again, with today's line
     assert child(load(), root).stderr == ""
 

@@ -213,9 +213,10 @@ def _load_or_generate(stem: str, text):
     if path.exists():
         try:
             return _import(stem, path)
-        except _Stale as why:
-            _say(f"{path} was written by another version of phasemap ({why}); "
-                 "generating it again")
+        except _Stale:      # (after an upgrade, every file: one line says it for all)
+            _say(f"{root} holds files another version of phasemap wrote (another "
+                 "phasemap/core/selects.py rewrote them); generating each again as it is "
+                 "needed")
         except _Damaged as why:
             _say(f"{path} was damaged ({why}); generating it again")
         except FileNotFoundError:  # removed meanwhile by another process's pruning
