@@ -18,9 +18,9 @@ and the median of the paired ratios B/A.  The calls:
 
     python benchmarks/tree_ab.py --a ../before --b . [--repeat 5] [--no-write]
 
-Each tree compiles into a numba cache of its own (under the system temp folder) at
-numba's default optimisation.  Writes the section "Before and after a refactoring" of
-../BENCHMARKS.md.
+Each tree compiles into kernel and numba caches of its own (under the system temp
+folder) at numba's default optimisation, in the timed process (``PHASEMAP_JIT=eager``).
+Writes the section "Before and after a refactoring" of ../BENCHMARKS.md.
 """
 
 from __future__ import annotations
@@ -93,7 +93,11 @@ print(json.dumps({"cpu": min(best), "file": phasemap.__file__}))
 
 
 def run(tree: pathlib.Path, call: str, cache: str) -> float:
-    env = dict(os.environ, PYTHONPATH=str(tree), NUMBA_CACHE_DIR=cache)
+    # each tree its own kernel and numba caches (two versions of phasemap that share a
+    # kernel cache may write its files by turns), and numba compiles in the process, not
+    # in a background one while the interpreted twins answer (phasemap.core.tiers)
+    env = dict(os.environ, PYTHONPATH=str(tree), NUMBA_CACHE_DIR=cache,
+               PHASEMAP_CACHE_DIR=str(pathlib.Path(cache) / "kernels"), PHASEMAP_JIT="eager")
     env.pop("NUMBA_OPT", None)
     out = subprocess.run([sys.executable, "-c", CHILD, call], env=env, check=True,
                          capture_output=True, text=True, cwd=tempfile.gettempdir())
