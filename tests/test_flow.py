@@ -314,10 +314,13 @@ def test_a_segments_samples_are_solve_ivps_dense_output(name):
     assert np.array_equal(end, m.flow.segment(z, t, tau, modes, None, 1e-10, 1e-10 * scale))
     assert states.shape == (times.size, n2)
     assert np.array_equal(states[0], z) and np.array_equal(states[-1], end)
-    sol = segments.flow(m, z, t, tau, SimpleNamespace(modes=modes, rho=np.ones(m.k)), 1e-10,
-                      dense=True)
+    seg = SimpleNamespace(modes=modes, rho=np.ones(m.k))
+    sol = segments.flow(m, z, t, tau, seg, 1e-10, dense=True)
     want = np.array([sol.sol(s) for s in times])
     assert np.abs(states - want).max() <= 1e-9 * scale
+    # one time asked alone (a search between the samples) gets a sample's own bits there
+    for i in (0, 5, 36):
+        assert np.array_equal(segments.at(m, z, t, tau, seg, 1e-10, times[i]), states[i])
 
 
 @pytest.mark.parametrize("name", ["belt", "rod", "wheel", "rod_on_step"])

@@ -36,7 +36,7 @@ def extrema(motion, segs, w, t_a, rtol, forcing=None):
     for j, seg in enumerate(segs):
 
         def sol(s, j=j, t=t, seg=seg):
-            return segments.at(motion, zs[j], t, seg, rtol, s)
+            return segments.at(motion, zs[j], t, taus[j], seg, rtol, s)
         if forcing is not None:
             strobe = np.sort(np.clip(times[where == j], t, t + taus[j]))
             if strobe.size:
@@ -78,7 +78,7 @@ def dips(motion, segs, w, t_a, rtol) -> bool:
     for j, seg in enumerate(segs):
 
         def watch(s, y=None, j=j, t=t, seg=seg):
-            y = segments.at(motion, zs[j], t, seg, rtol, s) if y is None else y
+            y = segments.at(motion, zs[j], t, taus[j], seg, rtol, s) if y is None else y
             out = motion.watch(y[:n], y[n:], seg.modes, seg.rho, sc, s)[:2 * motion.k]
             if seg.index is not None and seg.index < out.size:
                 out = np.delete(out, seg.index)

@@ -56,10 +56,12 @@ def samples(motion, z, t, tau, seg, rtol, times):
     return sol.y[:, -1], np.array([sol.sol(s) for s in times])
 
 
-def at(motion, z, t, seg, rtol, s):
-    """The state at the time ``s`` of the segment that starts at ``(t, z)``: its end
-    integrated to ``s`` (a point a search asks for between the samples)."""
-    return end(motion, z, t, s - t, seg, rtol) if s > t else np.array(z, dtype=float)
+def at(motion, z, t, tau, seg, rtol, s):
+    """The state at the time ``s`` of the segment of length ``tau`` that starts at
+    ``(t, z)``, on the dense output of the segment's own steps (a point a search asks for
+    between the samples): at a sample's time, the sample's own bits, so that a search
+    bracketed by the samples sees the signs they had."""
+    return samples(motion, z, t, tau, seg, rtol, np.array([float(s)]))[1][0]
 
 
 def modes_text(motion, seg) -> str:
