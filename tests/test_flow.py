@@ -369,3 +369,20 @@ def test_the_twin_computes_a_transition_matrix_and_reactions_as_the_machine_code
                                           np.array([[SLIP_POS], [STICK]]))))
     for a, b in zip(*out):
         assert np.array_equal(a, b)
+
+
+def test_the_flows_dop853_tables_are_scipys_and_importing_phasemap_leaves_scipy_integrate():
+    """The compiled flow's DOP853 tables are scipy's own, bit for bit, read from their file
+    without importing scipy.integrate: a process that imports phasemap (to classify, to
+    map) does not pay for scipy.integrate (0.4 s)."""
+    import subprocess
+    import sys
+
+    from scipy.integrate._ivp import dop853_coefficients as dc
+
+    for name in ("A", "C", "B", "E3", "E5", "D"):
+        assert np.array_equal(getattr(flow, f"_{name}"), getattr(dc, name)), name
+    code = "import sys, phasemap; print('scipy.integrate' in sys.modules)"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0 and r.stdout.split() == ["False"], r.stderr

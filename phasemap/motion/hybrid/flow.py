@@ -25,7 +25,6 @@ import warnings
 import numpy as np
 from numba import njit
 from numba.core.errors import NumbaExperimentalFeatureWarning
-from scipy.integrate._ivp import dop853_coefficients as _dc
 
 from phasemap.motion.hybrid.phases import OPEN, SLIP_NEG, SLIP_POS, SMOOTH, STICK
 
@@ -46,7 +45,28 @@ OK, REDUNDANT, SINGULAR = 0, 1, 2
 #: What :func:`advance` stopped at, beyond :data:`REDUNDANT` and :data:`SINGULAR`.
 FINISHED, EVENT, FAILED, MAX_STEPS, FULL = 3, 4, 5, 6, 7
 
+def _dop853_tables():
+    """scipy's DOP853 tables (scipy/integrate/_ivp/dop853_coefficients.py), executed from
+    their file: importing them as a module imports all of scipy.integrate first (0.4 s of
+    every ``import phasemap``), and the file needs only numpy."""
+    import importlib.util
+    import os
+
+    import scipy
+
+    path = os.path.join(os.path.dirname(scipy.__file__), "integrate", "_ivp",
+                        "dop853_coefficients.py")
+    try:
+        spec = importlib.util.spec_from_file_location("phasemap_dop853_coefficients", path)
+        tables = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(tables)
+    except OSError:      # (laid out otherwise: as a module, then)
+        from scipy.integrate._ivp import dop853_coefficients as tables
+    return tables
+
+
 # scipy's DOP853 (scipy/integrate/_ivp/rk.py, dop853_coefficients.py)
+_dc = _dop853_tables()
 _A = np.ascontiguousarray(_dc.A)
 _C = np.ascontiguousarray(_dc.C)
 _B = np.ascontiguousarray(_dc.B)
