@@ -160,6 +160,12 @@ class Phase:
         return rhs(PC, SF, KN, self.p, self.lay, self.rolls, modes, rho, self.none, self.W,
                    self.I, self.ud, self.N, self.F, self.a, float(t), y, out)
 
+    def _phase(self, modes, rho):
+        """``(modes, rho)`` as the kernels take them: int64 modes, and each contact's sign of
+        N (all +1 where ``rho`` is None)."""
+        return (np.asarray(modes, dtype=np.int64),
+                np.ones(self.k) if rho is None else np.asarray(rho, dtype=float))
+
     def segment(self, z, t, tau, modes, rho, rtol, atol, times=None):
         """The state ``tau`` after ``(t, z)`` in the phase ``modes``, stepped as scipy's
         ``solve_ivp(method="DOP853")`` steps it (its rtol floor of 100 ulps included), no
@@ -173,8 +179,7 @@ class Phase:
         te = np.empty(0) if times is None else np.ascontiguousarray(times, dtype=float)
         if tau == 0.0:
             return y if times is None else (y, np.tile(y, (te.size, 1)))
-        modes_a = np.asarray(modes, dtype=np.int64)
-        rho_a = np.ones(self.k) if rho is None else np.asarray(rho, dtype=float)
+        modes_a, rho_a = self._phase(modes, rho)
         f = np.empty(n2)
         if self.rate(y, t, modes_a, rho_a, f) != OK:
             return None
@@ -204,9 +209,8 @@ class Phase:
         m = 2 * self.n + 1
         A = np.empty((m, m))
         st = self.jacobian_fn(PC, SF, KN, self.p, self.lay, self.rolls,
-                              np.asarray(modes, dtype=np.int64),
-                              np.ones(self.k) if rho is None else np.asarray(rho, dtype=float),
-                              self.none, self.W, self.I, self.ud, self.N, self.F, self.a,
+                              *self._phase(modes, rho), self.none, self.W, self.I,
+                              self.ud, self.N, self.F, self.a,
                               np.ascontiguousarray(X, dtype=float), float(step), A,
                               np.empty(m), np.empty(m), np.empty(self.n))
         return A if st == OK else None
@@ -221,9 +225,8 @@ class Phase:
         m = 2 * self.n + 1
         Phi = np.empty((m, m))
         st = self.transition_fn(PC, SF, KN, self.p, self.lay, self.rolls,
-                                np.asarray(modes, dtype=np.int64),
-                                np.ones(self.k) if rho is None else np.asarray(rho, dtype=float),
-                                self.none, self.W, self.I, self.ud, self.N, self.F, self.a,
+                                *self._phase(modes, rho), self.none, self.W, self.I,
+                              self.ud, self.N, self.F, self.a,
                                 np.ascontiguousarray(X0, dtype=float), float(tau), float(rtol),
                                 float(atol), float(step), int(max_steps), Phi)
         return Phi if st == OK else None

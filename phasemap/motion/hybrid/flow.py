@@ -463,6 +463,16 @@ def _error(K, y, y_new, h, rtol, atol):
 
 
 @njit(cache=True, error_model="numpy")
+def _step_factor(err, rejected):
+    """scipy's step-size factor after a step of error norm ``err``: accepted (``err < 1``),
+    never above 1 after a rejection in the same step; rejected, the shrink."""
+    if err < 1.0:
+        factor = _MAX_FACTOR if err == 0.0 else min(_MAX_FACTOR, _SAFETY * err ** _EXPONENT)
+        return min(1.0, factor) if rejected else factor
+    return max(_MIN_FACTOR, _SAFETY * err ** _EXPONENT)
+
+
+@njit(cache=True, error_model="numpy")
 def _at_times(Fd, t_old, h, y_old, t, te, i_eval, out_t, out_y, saved):
     """Save the step's dense output at the times ``te`` from ``i_eval`` on that it reaches
     (``<= t``; those before ``t_old`` are passed over); ``(i_eval, saved)`` after."""
@@ -586,14 +596,9 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
                 state[0], state[1], state[4] = t, h_abs, i_eval
                 return st, saved, steps
             err = _error(K, y, y_old, h, rtol, atol)
+            ha *= _step_factor(err, rejected)
             if err < 1.0:
-                factor = _MAX_FACTOR if err == 0.0 else min(
-                    _MAX_FACTOR, _SAFETY * err ** _EXPONENT)
-                if rejected:
-                    factor = min(1.0, factor)
-                ha *= factor
                 break
-            ha *= max(_MIN_FACTOR, _SAFETY * err ** _EXPONENT)
             rejected = True
         h_abs = ha
         steps += 1
@@ -963,12 +968,9 @@ def transition(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, X
             if st != OK:
                 return st
             err = _error(K, Y, Yn, h, rtol, atol)
+            ha *= _step_factor(err, rejected)
             if err < 1.0:
-                factor = _MAX_FACTOR if err == 0.0 else min(_MAX_FACTOR,
-                                                            _SAFETY * err ** _EXPONENT)
-                ha *= min(1.0, factor) if rejected else factor
                 break
-            ha *= max(_MIN_FACTOR, _SAFETY * err ** _EXPONENT)
             rejected = True
         h_abs = ha
         steps += 1
