@@ -109,8 +109,10 @@ def main() -> None:
     rows.append(f"| `duffing` with k = 0 (Ueda) continued in F0, 8 to 8.05 | {sec:.1f} s | "
                 f"{b.point_kind.values[0]} at F0 = {at:.12f} | {abs(at - F0_DOUBLING):.1e} |")
     lines = ["## Friction oscillators (`benchmarks/oscillators.py`)", "",
-             f"Machine: {_report.machine()}; load {_report.load()}. CPU time of the public "
-             f"call, medians of {r} runs (the continuations: one run each). The fold and "
+             f"Machine: {_report.machine()}; load {_report.load()}.  ",
+             f"Command: `python benchmarks/oscillators.py --repeat {r}`", "",
+             f"CPU time of the public call on one thread (an orbit's computation is "
+             f"serial), medians of {r} runs (the continuations: one run each). The fold and "
              "the period doubling are checked against scipy's own "
              "(tests/references/duffing_fold.py: 5e-9 between its two steps of "
              "differences at the period doubling).", "", *rows, "",

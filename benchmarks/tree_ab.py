@@ -132,6 +132,8 @@ def main() -> None:
              f"B = `{trees['b'].name}`; CPU seconds of one call on one numba thread, warm "
              f"caches, best of 3 per process, median of {args.repeat} processes per tree "
              "alternating; B/A the median of the paired ratios.", "",
+             f"Command: `python benchmarks/tree_ab.py --a {trees['a']} --b . "
+             f"--repeat {args.repeat}`", "",
              "| call | A (s) | B (s) | B/A |", "| --- | ---: | ---: | ---: |"]
     lines += [f"| {n} | {a:.3f} | {b:.3f} | {r:.3f} |" for n, a, b, r in rows]
     text = "\n".join(lines) + "\n"
