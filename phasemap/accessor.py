@@ -21,22 +21,21 @@ import os
 import pathlib
 from typing import TYPE_CHECKING, Sequence
 
-import xarray as xr
-
 from phasemap.atlas.dataset import dataset_kind, recorded_model
+from phasemap.core.lazy import when_imported
 from phasemap.core.model import Model
 
 if TYPE_CHECKING:
+    from xarray import Dataset
     from matplotlib.figure import Figure
 
 __all__ = ["PhasemapAccessor"]
 
 
-@xr.register_dataset_accessor("phasemap")
 class PhasemapAccessor:
     """``ds.phasemap``: the atlas's kind, its model, and the figure that suits it."""
 
-    def __init__(self, ds: xr.Dataset):
+    def __init__(self, ds: Dataset):
         self._ds = ds
 
     @property
@@ -101,3 +100,12 @@ class PhasemapAccessor:
             return save_figure(fig, path_stem, dpi=dpi)
         finally:
             plt.close(fig)
+
+
+def _register(xarray) -> None:
+    xarray.register_dataset_accessor("phasemap")(PhasemapAccessor)
+
+
+# registered the moment xarray is imported, by phasemap or by anyone: import phasemap does
+# not import xarray itself (phasemap.core.lazy)
+when_imported("xarray", _register)

@@ -146,7 +146,7 @@ def test_guide_code_block_runner_catches_a_wrong_example(tmp_path):
                                     "phasemap.maps.blocks", "phasemap.declare.system",
                                     "phasemap.declare.api", "phasemap.declare.contacts",
                                     "phasemap.declare.law", "phasemap.declare.admissibility",
-                                    "phasemap.warm"])
+                                    "phasemap.warm", "phasemap.core.lazy"])
 def test_docstring_examples(module):
     result = doctest.testmod(importlib.import_module(module))
     assert result.attempted >= 2 and result.failed == 0
@@ -170,6 +170,44 @@ def test_import_phasemap_leaves_matplotlib_until_plot_is_used():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
     assert out == ["False", "True", "True", "True"]
+
+
+def test_import_phasemap_and_classify_leave_xarray_until_a_dataset_is_made():
+    """xarray (and pandas) are half of what import phasemap cost; a process that only
+    classifies never imports them, and the accessor is registered whoever imports xarray
+    later: the user's own import, or phasemap's first Dataset."""
+    code = ("import sys, phasemap; c = phasemap.classify('ladder', phi=1.2, omega=0.0); "
+            "print(c.n_solutions, 'xarray' in sys.modules, 'pandas' in sys.modules); "
+            "import xarray as xr; ds = xr.Dataset(attrs={'phasemap_model': 'ladder'}); "
+            "print(type(ds.phasemap).__name__, ds.phasemap.model.name)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == ["1", "False", "False", "PhasemapAccessor", "ladder"]
+    code = ("import sys, phasemap; ds = phasemap.Scene('ladder', axes={'phi': [0.5, 1.0]}, "
+            "fixed={'omega': 0.0}).compute(); print('xarray' in sys.modules, ds.phasemap.kind)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == ["True", "profile"]
+
+
+def test_when_imported_runs_at_once_or_after_the_import(tmp_path, monkeypatch):
+    """phasemap.core.lazy.when_imported: a module already imported calls back at once;
+    one imported later calls back after its code has run, once, with its real loader."""
+    from phasemap.core import lazy
+
+    seen = []
+    lazy.when_imported("json", lambda m: seen.append(("now", m.__name__)))
+    (tmp_path / "pm_lazy_probe.py").write_text("VALUE = 42\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    lazy.when_imported("pm_lazy_probe", lambda m: seen.append(("later", m.VALUE)))
+    assert seen == [("now", "json")]
+    import pm_lazy_probe
+
+    assert seen == [("now", "json"), ("later", 42)]
+    assert type(pm_lazy_probe.__loader__).__name__ == "SourceFileLoader"
+    importlib.reload(pm_lazy_probe)
+    assert seen == [("now", "json"), ("later", 42)]
+    assert any(isinstance(f, lazy._Finder) for f in sys.meta_path) == bool(lazy._WAITING)
 
 
 def documented_names(api: pathlib.Path = DOCS / "api") -> set[str]:

@@ -34,7 +34,7 @@ import time as _time
 from dataclasses import dataclass, field
 from typing import Mapping
 
-import xarray as xr
+from phasemap.core.lazy import xarray as xr
 
 from phasemap.core.memo import Memo
 from phasemap._version import __version__

@@ -10,7 +10,7 @@ import os
 from typing import Iterator
 
 import numpy as np
-import xarray as xr
+from phasemap.core.lazy import xarray as xr
 
 from phasemap.core import args as _args
 

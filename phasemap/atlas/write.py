@@ -38,7 +38,7 @@ import pathlib
 from typing import Iterator, Mapping
 
 import numpy as np
-import xarray as xr
+from phasemap.core.lazy import xarray as xr
 
 from phasemap.core import args as _args
 from phasemap.atlas.dataset import CONVENTIONS

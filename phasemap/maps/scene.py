@@ -23,7 +23,7 @@ import numbers
 from typing import Mapping, Sequence
 
 import numpy as np
-import xarray as xr
+from phasemap.core.lazy import xarray as xr
 
 from phasemap.core import args as _args
 from phasemap.core import numerics as nx

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import Mapping, NamedTuple, Sequence
 
 import numpy as np
-import xarray as xr
+from phasemap.core.lazy import xarray as xr
 
 from phasemap.core import progress
 from phasemap.core.progress import human_bytes

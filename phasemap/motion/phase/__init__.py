@@ -145,7 +145,7 @@ import math
 import warnings
 
 import numpy as np
-import xarray as xr
+from phasemap.core.lazy import xarray as xr
 
 from phasemap.core import args as _args
 from phasemap.core import events as ev
