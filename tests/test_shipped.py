@@ -129,7 +129,26 @@ def test_a_stale_shipped_file_is_derived_again(tmp_path, monkeypatch):
     model = loader._from_shipped(path, source)
     assert model is not None
     assert sys.modules[model.velocity_scale.py_func.__module__].MARKED is True
+    # the shipped rewrite is of the text before the mark: not used (the marked text was
+    # rewritten instead, above), and the file is stale until shipped again
+    assert ship.stale([source]) == [source]
+    from phasemap.core.cache import rewriter
+    from phasemap.core.selects import selects
+
+    ready = selects(data["source"]).replace("MARKED = True", "MARKED = 'shipped rewrite'")
+    data["rewritten"] = ship.rewritten(data["source"], ready, rewriter())
+    data["model"]["module"] = f"test_shipped_{tmp_path.name}_rewritten"
+    (tmp_path / f"{source}.json").write_text(json.dumps(data))
+    model = loader._from_shipped(path, source)
+    # a rewrite of this text by this rewriter is written as shipped: selects is not run
+    assert sys.modules[model.velocity_scale.py_func.__module__].MARKED == "shipped rewrite"
     assert ship.stale([source]) == []
+    data["rewritten"]["by"] = "0" * 16      # another version of the rewriter made it
+    data["model"]["module"] = f"test_shipped_{tmp_path.name}_other"
+    (tmp_path / f"{source}.json").write_text(json.dumps(data))
+    model = loader._from_shipped(path, source)
+    assert sys.modules[model.velocity_scale.py_func.__module__].MARKED is True
+    assert ship.stale([source]) == [source]
     # a file that is not JSON is no model
     (tmp_path / f"{source}.json").write_text("{")
     assert loader._from_shipped(path, source) is None and ship.stale([source]) == [source]

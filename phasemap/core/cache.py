@@ -193,21 +193,24 @@ def _private(reason: str) -> pathlib.Path:
 # --------------------------------------------------------------------------- load
 
 
-def load_module(stem: str, text):
+def load_module(stem: str, text, rewritten=None):
     """The module ``stem`` of the kernel cache, imported and registered in ``sys.modules``.
 
     The file is written from ``text()`` (a callable, called only when needed)
     if it is missing, atomically, with the hash of its text on its first line.
+    What is written is ``text()`` rewritten by :func:`phasemap.core.selects.selects`;
+    ``rewritten``, a callable, gives that rewrite ready made (a shipped derivation's,
+    written by this version of the rewriter: :func:`rewriter`), so it is not run again.
     A file that fails the check or its import is written again once, with one
     line on stderr.  Writing a new file prunes the cache to :func:`limit`.
     """
     with _LOCK:
         if stem not in _LOADED:
-            _LOADED[stem] = _load_or_generate(stem, text)
+            _LOADED[stem] = _load_or_generate(stem, text, rewritten)
         return _LOADED[stem]
 
 
-def _load_or_generate(stem: str, text):
+def _load_or_generate(stem: str, text, rewritten=None):
     root = folder()
     path = root / f"{stem}.py"
     if path.exists():
@@ -221,9 +224,12 @@ def _load_or_generate(stem: str, text):
             _say(f"{path} was damaged ({why}); generating it again")
         except FileNotFoundError:  # removed meanwhile by another process's pruning
             pass
-    from phasemap.core.selects import selects   # numba's, imported where a kernel is made
+    if rewritten is not None:
+        body = rewritten()
+    else:
+        from phasemap.core.selects import selects   # numba's, imported where a kernel is made
 
-    body = selects(text())
+        body = selects(text())
     try:
         root.mkdir(parents=True, exist_ok=True)   # removed while this process ran
         _write(path, body)
@@ -261,11 +267,13 @@ def _write(path: pathlib.Path, body: str) -> None:
 def hash_line(data: bytes) -> bytes:
     """The first line of a generated file whose rest is ``data``: its hash, and the
     version of the rewriter (:mod:`phasemap.core.selects`) that wrote it."""
-    return f"{HASH_PREFIX}{hashlib.sha256(data).hexdigest()}{REWRITER}{_rewriter()}\n".encode()
+    return f"{HASH_PREFIX}{hashlib.sha256(data).hexdigest()}{REWRITER}{rewriter()}\n".encode()
 
 
 @functools.lru_cache(maxsize=1)
-def _rewriter() -> str:
+def rewriter() -> str:
+    """The version of the rewriter (:mod:`phasemap.core.selects`): its file's hash, 16
+    hex digits."""
     return hashlib.sha256((_PACKAGE / "core" / "selects.py").read_bytes()).hexdigest()[:16]
 
 
@@ -291,10 +299,10 @@ def _verified(path: pathlib.Path) -> str:
         raise _Damaged("it is empty")
     if not head.startswith(HASH_PREFIX.encode()) or not sep:
         raise _Damaged("it has no content hash")
-    digest, _, rewriter = head[len(HASH_PREFIX):].strip().partition(REWRITER.encode())
+    digest, _, by = head[len(HASH_PREFIX):].strip().partition(REWRITER.encode())
     if hashlib.sha256(data).hexdigest().encode() != digest:
         raise _Damaged("its content does not match its hash")
-    if rewriter != _rewriter().encode():
+    if by != rewriter().encode():
         raise _Stale("another version of phasemap/core/selects.py rewrote it")
     return data.decode()
 

@@ -45,6 +45,7 @@ import numba
 import numpy as np
 
 from phasemap.core.memo import Memo
+from phasemap.core import cache as _cache
 from phasemap.core import codegen as _codegen
 from phasemap._version import __version__
 from phasemap.core.model import Candidate, Derived, Dynamics, Model, Variable
@@ -337,7 +338,14 @@ def _from_shipped(path: pathlib.Path, source: str) -> Model | None:
     key = key_of(path, versions=False)
     if data.get("format") != FORMAT or key is None or data.get("key") != key:
         return None     # stale: derived again (tests/test_shipped.py says so first)
-    module = _codegen.load_module(data["model"]["module"], lambda: data["source"])
+    ready = data.get("rewritten") or {}
+    mine = (ready.get("by") == _cache.rewriter() and isinstance(ready.get("text"), str)
+            and ready.get("of") == hashlib.sha256(data["source"].encode()).hexdigest())
+    module = _codegen.load_module(
+        data["model"]["module"], lambda: data["source"],
+        # the rewrite shipped beside the text, where this version of the rewriter made it
+        # of this text (python -m phasemap.systems.ship)
+        (lambda: ready["text"]) if mine else None)
     return _rebuilt(data["model"], module, source)
 
 

@@ -4,8 +4,10 @@ A built-in declared model (``phasemap.systems.DECLARED``: the ladder, the wheel,
 Painlevé rod, the rod on a step) is derived with sympy the first time a machine uses it:
 about a second to import sympy and up to five to derive.  The package ships each
 derivation instead (``phasemap/systems/derived/<module>.json``: the generated module's
-text and the manifest :func:`phasemap.declare.loader.build` reads, and the full-coordinate
-modules of :mod:`phasemap.declare.full`), so that a first ``classify``, and a first
+text; that text as the kernel cache writes it, rewritten by :mod:`phasemap.core.selects`,
+used while the rewriter is the one that made it; the manifest
+:func:`phasemap.declare.loader.build` reads; and the full-coordinate modules of
+:mod:`phasemap.declare.full`), so that a first ``classify``, and a first
 motion through contact changes, answer at once.  :func:`phasemap.declare.loader.load`
 uses a shipped file only while its key (:func:`phasemap.declare.loader.key_of` with ``versions=False``: the
 declaration file, the phasemap modules it imports and the sources that derive it) is
@@ -21,6 +23,7 @@ After a change to :mod:`phasemap.declare`, the shared numerics or a built-in dec
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import pathlib
 import sys
@@ -51,20 +54,43 @@ def record(source: str) -> dict:
     if key is None:
         raise ValueError(f"{source}: the declaration file cannot be keyed (it reads what its "
                          "key does not hold: see phasemap.declare.loader), so it cannot ship")
+    from phasemap.core.cache import rewriter
+    from phasemap.core.selects import selects
+    from phasemap.declare.emit import module_source
+
+    # the generated text, as the derivation gave it to the kernel cache (the cache's file
+    # holds it rewritten)
+    text = module_source(S)
+    if selects(text) != module_text(module):
+        raise AssertionError(f"{source}: the kernel cache holds another derivation")
     out = {"format": loader.FORMAT, "key": key,
-           "sympy": sympy.__version__, "model": data, "source": module_text(module)}
+           "sympy": sympy.__version__, "model": data, "source": text,
+           # what the kernel cache writes of it, made here so that a first use does not
+           # rewrite it (a third of a second for the ladder and the rod on a step)
+           "rewritten": rewritten(text, selects(text), rewriter())}
     for kind in KINDS:      # the full coordinates of the motion through contact changes
         out[kind] = {"key": full.shipped_key(S, kind), "text": full.text(S, kind)}
     return out
 
 
+def rewritten(source: str, text: str, by: str) -> dict:
+    """A record's ``rewritten`` field: the rewrite ``text`` of ``source`` by the rewriter
+    ``by``, which :func:`phasemap.declare.loader.load` uses while both match."""
+    return {"by": by, "of": hashlib.sha256(source.encode()).hexdigest(), "text": text}
+
+
 def stale(sources=None) -> list[str]:
-    """The built-in declarations whose shipped derivation is missing or not the tree's."""
+    """The built-in declarations whose shipped derivation is missing or not the tree's (its
+    rewrite made by another version of the rewriter included)."""
+    from phasemap.core.cache import rewriter
+
     out = []
     for source in sources or DECLARED.values():
         data = loader.shipped_record(source) or {}
         key = loader.shipped_key(source)
         ok = key is not None and data.get("key") == key and "model" in data
+        ok = ok and data.get("rewritten") == rewritten(
+            data.get("source", ""), (data.get("rewritten") or {}).get("text"), rewriter())
         if ok:      # the same declaration: its full-coordinate modules' keys, from its hash
             declaration = loader.Declaration(source, data["model"]["declaration_sha256"])
             ok = all((data.get(kind) or {}).get("key") == full.shipped_key(declaration, kind)
