@@ -47,7 +47,9 @@ from __future__ import annotations
 import ast
 import builtins
 import dis
+import functools
 import inspect
+import linecache
 import math
 import textwrap
 import threading
@@ -396,8 +398,8 @@ def _twin_of(py, options):
     if py.__closure__:
         raise Unsupported(f"{py.__qualname__} is a closure")
     try:
-        source = textwrap.dedent(inspect.getsource(py))
         filename = inspect.getsourcefile(py) or "<phasemap-interpreted>"
+        source = _source(py, filename)
     except (OSError, TypeError) as err:
         raise Unsupported(f"the source of {py.__qualname__} is not available") from err
     # padded so that the twin's line numbers are the file's (tracebacks point there)
@@ -428,6 +430,33 @@ def _twin_of(py, options):
     twin.__qualname__ = py.__qualname__
     twin.__doc__ = py.__doc__
     return twin
+
+
+def _source(py, filename: str) -> str:
+    """The source of the function ``py``, dedented, from its first decorator to its end:
+    ``inspect.getsource``'s text.  A module-level function's lines are read from one parse
+    of its file, shared by every function of it (``getsource`` tokenizes from the
+    function on, for each: a quarter of a second for a large generated module's twins)."""
+    first = py.__code__.co_firstlineno
+    lines = linecache.getlines(filename, py.__globals__)
+    end = _ends(filename, len(lines), hash(tuple(lines))).get(first) if lines else None
+    if end is None:
+        return textwrap.dedent(inspect.getsource(py))
+    return textwrap.dedent("".join(lines[first - 1:end]))
+
+
+@functools.lru_cache(maxsize=32)
+def _ends(filename: str, n: int, key: int) -> dict[int, int]:
+    """Per module-level function of the file (read through linecache; ``n`` and ``key``:
+    its lines' count and hash, so that a changed file is parsed again), its first line
+    (its first decorator's) -> its last line."""
+    lines = linecache.getlines(filename)
+    try:
+        tree = ast.parse("".join(lines))
+    except (SyntaxError, ValueError):
+        return {}
+    return {min([node.lineno] + [d.lineno for d in node.decorator_list]): node.end_lineno
+            for node in tree.body if isinstance(node, ast.FunctionDef)}
 
 
 def _looks_up(code, name: str) -> bool:
