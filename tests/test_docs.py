@@ -146,7 +146,8 @@ def test_guide_code_block_runner_catches_a_wrong_example(tmp_path):
                                     "phasemap.maps.blocks", "phasemap.declare.system",
                                     "phasemap.declare.api", "phasemap.declare.contacts",
                                     "phasemap.declare.law", "phasemap.declare.admissibility",
-                                    "phasemap.warm", "phasemap.core.lazy"])
+                                    "phasemap.warm", "phasemap.core.lazy",
+                                    "phasemap.core.jit"])
 def test_docstring_examples(module):
     result = doctest.testmod(importlib.import_module(module))
     assert result.attempted >= 2 and result.failed == 0

@@ -44,9 +44,10 @@ from collections import namedtuple
 
 import numba
 import numpy as np
-from numba import njit, types
+from numba import types
 from numba.extending import intrinsic
 
+from phasemap.core.jit import njit
 from phasemap.core.memo import Memo
 from phasemap.core import numerics as nx
 from phasemap.core import calls

@@ -23,9 +23,9 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-from numba import njit
 from numba.core.errors import NumbaExperimentalFeatureWarning
 
+from phasemap.core.jit import njit
 from phasemap.motion.hybrid.phases import OPEN, SLIP_NEG, SLIP_POS, SMOOTH, STICK
 
 

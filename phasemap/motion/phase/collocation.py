@@ -15,7 +15,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from phasemap.core.jit import njit
 
 #: Gauss-Legendre collocation nodes per panel (order 2 NODES for moderate slopes).
 NODES = 6
