@@ -39,6 +39,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 MODELS = ("ladder", "wheel", "elliptic_pendulum", "hinge_pendulum", "painleve_rod",
           "rod_on_step", "README rod")
 TARGET = 1.5
+#: a new declaration's first classify, sympy's derivation included (one contact)
+DECLARED_TARGET = 3.0
 SIMULATE_TARGET = 5.0
 
 CHILD = r'''
@@ -129,7 +131,8 @@ def main() -> None:
         "derivation shipped in the package (`phasemap/systems/derived`); the README rod's "
         "classify includes its derivation with sympy.  Targets (issue 40): a built-in "
         f"model's first classify <= {TARGET} s of CPU in all (*to classify*), its first "
-        f"simulate <= {SIMULATE_TARGET} s.",
+        f"simulate <= {SIMULATE_TARGET} s; a new declaration's first classify, its "
+        f"derivation included, <= {DECLARED_TARGET} s (the README rod: one contact).",
         "",
         "| model | eager: process wall | CPU | classify | simulate | compiling "
         "| background: process wall | CPU | to classify | classify | simulate | compiling "
@@ -140,8 +143,10 @@ def main() -> None:
     for name, r in results.items():
         e, b, s = r["eager"], r["background"], r["second"]
         builtin = name != "README rod"
-        verdicts = [("met" if ok else "**missed**") if builtin else "-"
-                    for ok in (b["to_classify"] <= TARGET, b["simulate"] <= SIMULATE_TARGET)]
+        verdicts = [("met" if ok else "**missed**") if builtin or i == 0 else "-"
+                    for i, ok in enumerate((b["to_classify"] <= (TARGET if builtin
+                                                                  else DECLARED_TARGET),
+                                            b["simulate"] <= SIMULATE_TARGET))]
         lines.append(
             f"| {name} | {e['wall']:.2f} | {e['cpu']:.2f} | {e['classify']:.2f} | "
             f"{e['simulate']:.2f} | {e['compile'] + e['simulate_compile']:.1f} | "

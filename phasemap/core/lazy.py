@@ -32,15 +32,16 @@ __all__ = ["xarray", "when_imported"]
 
 
 class _Module:
-    """A stand-in for the module ``name``: any attribute imports it and reads its own."""
-
-    __slots__ = ("_name",)
+    """A stand-in for the module ``name``: any attribute imports it and reads its own,
+    which the stand-in then keeps (a second read is an ordinary attribute's)."""
 
     def __init__(self, name: str):
         self._name = name
 
     def __getattr__(self, attr: str):
-        return getattr(importlib.import_module(self._name), attr)
+        value = getattr(importlib.import_module(self._name), attr)
+        setattr(self, attr, value)
+        return value
 
     def __repr__(self) -> str:
         return f"<module {self._name!r}, imported on first use>"
