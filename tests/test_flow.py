@@ -386,3 +386,51 @@ def test_the_flows_dop853_tables_are_scipys_and_importing_phasemap_leaves_scipy_
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                        timeout=120)
     assert r.returncode == 0 and r.stdout.split() == ["False"], r.stderr
+
+
+@pytest.mark.parametrize("name", sorted(SYSTEMS))
+def test_the_admissible_phases_in_one_call_are_those_of_each_phase_alone(name):
+    """flow.phases (every candidate phase at a state, in one compiled call) against the
+    engine's per-phase path (Motion.admissible, whose tests are flow.admits): the same
+    phases in the same order, the same signs of N and the same bits, on states put on
+    every contact, some at relative rest, with events' preferences and flipped signs."""
+    m = _motion(SYSTEMS[name])
+    rng = np.random.default_rng(11)
+    compared = several = 0
+    for _ in range(200):
+        if compared >= 20:
+            break
+        q = rng.normal(size=m.n) * 0.3 + np.where(np.isfinite(m.bounds[:, 0]),
+                                                   m.bounds[:, 0] + 0.6, 0.0)
+        q = np.clip(q, m.bounds[:, 0] + 1e-3, m.bounds[:, 1] - 1e-3)
+        u = rng.normal(size=m.n) * 0.5
+        t = float(rng.uniform(0.0, 3.0))
+        held = [c for c in range(m.k) if rng.random() < 0.6]
+        try:
+            q, u = m.project(q, u, list(range(m.k)), held, t=t)
+        except np.linalg.LinAlgError:
+            continue
+        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(u))):
+            continue
+        P = m.mech.pieces(q, u, m.p, t)
+        sc = m.scales(q, u, P)
+        cand = m.candidates(q, u, P, sc, t)
+        prefer = {c: int(rng.choice([SLIP_POS, SLIP_NEG, OPEN])) for c in range(m.k)
+                  if rng.random() < 0.3}
+        flip = tuple(c for c in range(m.k) if rng.random() < 0.3)
+        got = m.flow.phases(np.concatenate([q, u]), t, cand, flip, prefer, m.mech.plain, sc)
+        if got is None:     # redundant contacts: the engine's own pick
+            continue
+        want = []
+        for pick in np.ndindex(*[len(ms) for ms in cand]):
+            modes = tuple(cand[c][i] for c, i in enumerate(pick))
+            sol = m.admissible(q, u, modes, sc, prefer, t, flip)
+            if sol is not None:
+                want.append((modes, sol))
+        assert [x[0] for x in got] == [x[0] for x in want]
+        for (_, a), (_, b) in zip(got, want):
+            for x, y in zip(a, b):
+                assert np.array_equal(x, y)
+        compared += 1
+        several += len(got) > 1 or any(len(ms) > 1 for ms in cand)
+    assert compared >= 20 and several >= 5, (compared, several)

@@ -11,9 +11,10 @@ import numpy as np
 from numba import cfunc, njit
 from numba.experimental import function_type
 
-from phasemap.motion.hybrid.flow import (FINISHED, OK, _dip_rates, _rhs, accel, advance,
-                                         dense_at, jacobian, locate, quiet_numba,
-                                         reactions, transition, watch, workspace)
+from phasemap.motion.hybrid.flow import (FINISHED, OK, _dip_rates, _rhs, accel, admits,
+                                         advance, dense_at, jacobian, locate, phases,
+                                         quiet_numba, reactions, transition, watch,
+                                         workspace)
 
 #: (imported for what it registers: the numba type of a cfunc passed as an argument)
 _CFUNC_TYPES = function_type
@@ -115,13 +116,13 @@ class Phase:
                      self.a, np.zeros(m), 0.0, 1e-8, 1e-8, 1e-6, 1, np.zeros((m, m)))
             twin = tiers.is_twin(tiers.runner(transition, probe, self.warm))
         kernels = (accel, watch, advance, _rhs, _dip_rates, locate, dense_at, jacobian,
-                   transition, reactions)
+                   transition, reactions, phases, admits)
         if twin:
             fns = functions(self.mech, True)
             kernels = tuple(interpreted(k) for k in kernels)
         (self.accel, self.watch_fn, self.advance_fn, self.rhs_fn, self.rates_fn,
          self.locate_fn, self.dense_fn, self.jacobian_fn, self.transition_fn,
-         self.reactions_fn) = kernels
+         self.reactions_fn, self.phases_fn, self.admits) = kernels
         self.twin, self.fns = twin, fns
 
     def refresh(self):
@@ -136,6 +137,41 @@ class Phase:
         PC, SF, KN, _ = self.fns
         return self.accel(PC, SF, KN, y, float(t), self.p, self.lay, self.rolls, modes, rho,
                           start, want_det, self.W, self.I, self.ud, self.N, self.F, self.a)
+
+    def phases(self, y, t, candidates, flip, prefer, plain, sc):
+        """Every admissible phase at ``(t, y)`` among ``candidates`` (per contact, the modes
+        it may take), in :meth:`phasemap.motion.hybrid.Motion.enumerate`'s order: a list of
+        ``(modes, (ud, N, F, a, rho))``, or None where a phase's contacts are redundant
+        (:func:`flow.phases`).  ``flip``: the contacts whose sign of N is tried -1 first;
+        ``prefer``: ``{contact: mode}``."""
+        n, k = self.n, self.k
+        most = 1
+        for ms in candidates:
+            most *= len(ms)
+        cand = np.zeros((k, 4), dtype=np.int64)
+        ncand = np.zeros(k, dtype=np.int64)
+        for c, ms in enumerate(candidates):
+            cand[c, :len(ms)] = ms
+            ncand[c] = len(ms)
+        flips = np.zeros(k, dtype=np.bool_)
+        flips[list(flip)] = True
+        pref = np.full(k, -1, dtype=np.int64)
+        for c, m in (prefer or {}).items():
+            pref[c] = m
+        out = (np.zeros((most, k), dtype=np.int64), np.zeros((most, k)), np.zeros((most, n)),
+               np.zeros((most, k)), np.zeros((most, k)), np.zeros((most, k, 3)))
+        PC, SF, KN, _ = self.fns
+        scratch = (np.zeros(k, dtype=np.int64), np.zeros(k), np.zeros(k, dtype=np.bool_),
+                   np.zeros(k), np.zeros(k), np.zeros(k), np.zeros(k))
+        count = self.phases_fn(PC, SF, KN, self.p, self.lay, self.one_sided, self.rolls, y,
+                               float(t), cand, ncand, flips, pref, bool(plain),
+                               np.asarray(sc, dtype=float), self.W, self.I, self.ud, self.N,
+                               self.F, self.a, *scratch, *out)
+        if count < 0:
+            return None
+        modes, rho, ud, N, F, a = out
+        return [(tuple(int(m) for m in modes[i]), (ud[i], N[i], F[i], a[i], rho[i]))
+                for i in range(count)]
 
     def pieces(self):
         """``(M, h, g, J, b, mu)`` the last call left in the workspace (copies)."""

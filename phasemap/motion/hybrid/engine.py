@@ -255,7 +255,10 @@ class Motion:
         """``(u', N, F, a, rho)`` of the phase ``modes`` if it is admissible at
         ``(q, u)``, else None (a two-sided contact's friction tries each sign of N).
         A slip that starts from relative rest is tested with the static coefficient."""
-        vs, fs, acs, L = sc
+        vs = sc[0]
+        pref = np.full(self.k, -1, dtype=np.int64)
+        for c, m in (prefer or {}).items():
+            pref[c] = m
         two = [c for c, m in enumerate(modes) if m != OPEN and not self.one_sided[c]]
         start = ()
         if not self.mech.plain:
@@ -272,23 +275,11 @@ class Motion:
             ud, N, F, a, P = sol
             M, h, g, J, b, mu = P
             v = self.relative(J, u, t)
-            ok = True
-            for c, m in enumerate(modes):
-                if m == OPEN:
-                    if g[c] <= TOL * L and v[c, 0] <= TOL * vs:
-                        ok &= a[c, 0] >= -TOL * acs
-                    continue
-                ok &= rho[c] * N[c] >= -TOL * fs
-                if m == STICK:
-                    ok &= abs(F[c]) <= mu[c] * rho[c] * N[c] + TOL * fs
-                elif m in (SLIP_POS, SLIP_NEG) and abs(v[c, 1]) <= TOL * vs:
-                    # a slip starts where its acceleration points its way; at the stuck
-                    # contact's friction limit (the event ``prefer`` names) it may start
-                    # from a zero acceleration, the tie with stick decided by the event
-                    s = 1.0 if m == SLIP_POS else -1.0
-                    tie = prefer is not None and prefer.get(c) == m
-                    ok &= s * a[c, 1] >= -TOL * acs if tie else s * a[c, 1] > TOL * acs
-            if ok:
+            # the tests of flow.admits, which flow.phases runs for every phase at once
+            if self.flow.admits(np.asarray(modes, dtype=np.int64), rho, self.one_sided, N, F,
+                                a, g, np.ascontiguousarray(v[:, 0]),
+                                np.ascontiguousarray(v[:, 1]), mu, np.asarray(sc, dtype=float),
+                                pref):
                 return ud, N, F, a, rho
         return None
 
@@ -301,11 +292,16 @@ class Motion:
         sc = self.scales(q, u, P)
         groups = []
         cand = self.candidates(q, u, P, sc, t)
-        for pick in np.ndindex(*[len(m) for m in cand]):
-            modes = tuple(cand[c][i] for c, i in enumerate(pick))
-            sol = self.admissible(q, u, modes, sc, prefer, t, flip)
-            if sol is None:
-                continue
+        found = self.flow.phases(np.concatenate([q, u]), t, cand, flip, prefer,
+                                 self.mech.plain, sc)
+        if found is None:   # redundant contacts: a member of their reactions picked here
+            found = []
+            for pick in np.ndindex(*[len(m) for m in cand]):
+                modes = tuple(cand[c][i] for c, i in enumerate(pick))
+                sol = self.admissible(q, u, modes, sc, prefer, t, flip)
+                if sol is not None:
+                    found.append((modes, sol))
+        for modes, sol in found:
             for grp in groups:
                 if np.allclose(grp[0][1][0], sol[0], rtol=1e-7, atol=1e-7 * sc[2]):
                     grp.append((modes, sol))

@@ -26,7 +26,7 @@ import numpy as np
 from numba.core.errors import NumbaExperimentalFeatureWarning
 
 from phasemap.core.jit import njit
-from phasemap.motion.hybrid.phases import OPEN, SLIP_NEG, SLIP_POS, SMOOTH, STICK
+from phasemap.motion.hybrid.phases import OPEN, SLIP_NEG, SLIP_POS, SMOOTH, STICK, TOL
 
 
 
@@ -297,6 +297,115 @@ def accel(PC, SF, KN, y, t, p, lay, rolls, modes, rho, start, want_det, W, I, ud
         if lay[3]:
             a[c, 1] -= W[osd + k + c]
     return OK, det
+
+
+@njit(cache=True, error_model="numpy")
+def admits(modes, rho, one_sided, N, F, a, g, vn, vt, mu, sc, prefer):
+    """Whether the phase ``modes`` is admissible at a state, from its solution (reactions
+    ``N``, ``F``, contact accelerations ``a``, each contact's sign ``rho`` of N), the
+    state's gaps ``g``, its contacts' normal and tangential velocities ``vn``, ``vt``
+    (the tangential relative to the surface), the static coefficients ``mu`` and the
+    scales ``sc`` (velocity, force, acceleration, length): a touching open contact does
+    not accelerate into its obstacle, a closed one pushes (or pulls, as ``rho`` says),
+    a stuck one within its cone, and a slip that starts from relative rest accelerates its
+    way; at the friction limit of a stuck contact (``prefer[c]``, the mode its event points
+    to, else -1) it may start from a zero acceleration, the tie with stick decided by the
+    next derivative (:meth:`phasemap.motion.hybrid.Motion.enumerate`)."""
+    vs, fs, acs, L = sc[0], sc[1], sc[2], sc[3]
+    ok = True
+    for c in range(modes.size):
+        m = modes[c]
+        if m == OPEN:
+            if g[c] <= TOL * L and vn[c] <= TOL * vs:
+                ok = ok and a[c, 0] >= -TOL * acs
+            continue
+        ok = ok and rho[c] * N[c] >= -TOL * fs
+        if m == STICK:
+            ok = ok and abs(F[c]) <= mu[c] * rho[c] * N[c] + TOL * fs
+        elif (m == SLIP_POS or m == SLIP_NEG) and abs(vt[c]) <= TOL * vs:
+            s = 1.0 if m == SLIP_POS else -1.0
+            if prefer[c] == m:
+                ok = ok and s * a[c, 1] >= -TOL * acs
+            else:
+                ok = ok and s * a[c, 1] > TOL * acs
+    return ok
+
+
+@njit(cache=True, error_model="numpy")
+def phases(PC, SF, KN, p, lay, one_sided, rolls, y, t, cand, ncand, flip, prefer, plain, sc,
+           W, I, ud, N, F, a, modes, rho, start, vn, vt, gk, muk, out_modes, out_rho, out_ud,
+           out_N, out_F, out_a):
+    """Every admissible phase at ``(t, y)`` among the candidate modes (``cand[c, :ncand[c]]``
+    per contact), in :meth:`phasemap.motion.hybrid.Motion.enumerate`'s order (the last
+    contact's mode varying fastest), each with the first sign of N of its two-sided
+    closed contacts that admits it (+1 first, flipped for those in ``flip``): its
+    ``modes``, ``rho``, accelerations and reactions into the ``out_`` rows.  Returns how
+    many, or -1 where a phase's contacts are redundant (the caller picks a member of
+    their family of reactions: :meth:`phasemap.motion.hybrid.Motion.admissible`).
+    ``modes``, ``rho``, ``start``, ``vn``, ``vt``, ``gk``, ``muk``: scratch (k,); ``plain``: every slip
+    with one coefficient, at surfaces at rest (no slip starts on a static one)."""
+    n, k = lay[0], lay[1]
+    nf = n * n + n + k + 3 * k * n + 3 * k + k
+    og = n * n + n
+    oJ = og + k
+    om0 = oJ + 3 * k * n + 3 * k
+    PC(W[:nf], y, p, t)
+    if lay[3]:
+        SF(W[nf:nf + 2 * k], y, p, t)
+    for c in range(k):
+        v0 = 0.0
+        v1 = 0.0
+        for i in range(n):
+            v0 += W[oJ + 3 * c * n + i] * y[n + i]
+            v1 += W[oJ + (3 * c + 1) * n + i] * y[n + i]
+        vn[c] = v0
+        vt[c] = v1 - W[nf + c] if lay[3] else v1
+    total = 1
+    for c in range(k):
+        total *= ncand[c]
+    count = 0
+    for pick in range(total):
+        r = pick
+        for c in range(k - 1, -1, -1):
+            modes[c] = cand[c, r % ncand[c]]
+            r //= ncand[c]
+        two = 0
+        for c in range(k):
+            md = modes[c]
+            start[c] = (not plain) and (md == SLIP_POS or md == SLIP_NEG) \
+                and abs(vt[c]) <= TOL * sc[0]
+            if md != OPEN and not one_sided[c]:
+                two += 1
+        for signs in range(2 ** two):
+            bit = two - 1
+            for c in range(k):
+                rho[c] = 1.0
+                if modes[c] != OPEN and not one_sided[c]:
+                    s = (signs >> bit) & 1
+                    rho[c] = (1.0 - 2.0 * s) * (-1.0 if flip[c] else 1.0)
+                    bit -= 1
+            st, _ = accel(PC, SF, KN, y, t, p, lay, rolls, modes, rho, start, False, W, I,
+                          ud, N, F, a)
+            if st == REDUNDANT:
+                return -1
+            if st != OK:
+                continue
+            for c in range(k):          # (the pieces accel left: the state's)
+                gk[c] = W[og + c]
+                muk[c] = W[om0 + c]
+            if admits(modes, rho, one_sided, N, F, a, gk, vn, vt, muk, sc, prefer):
+                for c in range(k):
+                    out_modes[count, c] = modes[c]
+                    out_rho[count, c] = rho[c]
+                    out_N[count, c] = N[c]
+                    out_F[count, c] = F[c]
+                    for j in range(3):
+                        out_a[count, c, j] = a[c, j]
+                for i in range(n):
+                    out_ud[count, i] = ud[i]
+                count += 1
+                break
+    return count
 
 
 @njit(cache=True, error_model="numpy")
