@@ -129,7 +129,10 @@ def main() -> None:
         "classify, `import phasemap` included: what a process that only classifies costs.  "
         "A declared built-in model (the ladder, the wheel, the rods) is read from its "
         "derivation shipped in the package (`phasemap/systems/derived`); the README rod's "
-        "classify includes its derivation with sympy.  Targets (issue 40): a built-in "
+        "classify includes its derivation with sympy.  `import phasemap` does not import "
+        "xarray (and pandas): the process's first Dataset does, which the *simulate* columns "
+        "include (about 0.6 s here; before 2026-12-01 it was in *to classify*).  "
+        "Targets (issue 40): a built-in "
         f"model's first classify <= {TARGET} s of CPU in all (*to classify*), its first "
         f"simulate <= {SIMULATE_TARGET} s; a new declaration's first classify, its "
         f"derivation included, <= {DECLARED_TARGET} s (the README rod: one contact).",

@@ -202,8 +202,7 @@ def test_when_imported_runs_at_once_or_after_the_import(tmp_path, monkeypatch):
     monkeypatch.syspath_prepend(str(tmp_path))
     lazy.when_imported("pm_lazy_probe", lambda m: seen.append(("later", m.VALUE)))
     assert seen == [("now", "json")]
-    import pm_lazy_probe
-
+    pm_lazy_probe = importlib.import_module("pm_lazy_probe")     # (a module of tmp_path's)
     assert seen == [("now", "json"), ("later", 42)]
     assert type(pm_lazy_probe.__loader__).__name__ == "SourceFileLoader"
     importlib.reload(pm_lazy_probe)
