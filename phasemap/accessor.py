@@ -1,7 +1,9 @@
 """The ``ds.phasemap`` accessor: what an atlas is, its model, and its figure.
 
-Importing this module registers the accessor on every :class:`xarray.Dataset`
-(``import phasemap`` does it).  phasemap never subclasses ``Dataset``:
+Importing this module (``import phasemap`` does it) registers the accessor on every
+:class:`xarray.Dataset` as soon as xarray is imported, by phasemap's first Dataset or by
+the user's own ``import xarray`` (:mod:`phasemap.core.lazy`: ``import phasemap`` does
+not import xarray itself).  phasemap never subclasses ``Dataset``:
 
 >>> import numpy as np, phasemap, phasemap.accessor
 >>> ds = phasemap.Scene("ladder", axes={"phi": np.linspace(0, 1.5, 30)},
