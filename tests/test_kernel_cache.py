@@ -163,7 +163,11 @@ def test_a_damaged_system_module_and_contract_leave_classify_working(tmp_path):
     import phasemap
     from phasemap.core import cache
 
+    from phasemap.core import tiers
+
     model = phasemap.MODELS["ladder"]
+    with tiers.forced("eager"):   # the contract's machine code saved by this phasemap (a
+        phasemap.classify(model, phi=0.5, omega=0.0, f=0.3)   # kept cache may hold older)
     declared = pathlib.Path(sys.modules[model.candidates[0].func.py_func.__module__].__file__)
     contract = pathlib.Path(model.contract.__file__)
     root = tmp_path / "cache"

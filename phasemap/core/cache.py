@@ -448,12 +448,13 @@ def _first_distrust(files, owner_only: bool = False) -> str | None:
 
 #: The modules of ``core/`` whose compiled code (njit functions, intrinsics) the cached
 #: functions of other files compile in: the calls by address, the grid driver's pieces,
-#: ``grow``, the events and the numerics.  numba checks a cached function against its
+#: ``grow``, the events and the numerics; and ``jit``, whose dispatcher decides which
+#: overloads a compiled caller links.  numba checks a cached function against its
 #: own file alone, so an edit of one of these would leave the functions that compiled it
 #: in stale; their hash goes into every hash file, and a change makes a miss
 #: (tests/test_kernel_cache.py checks that every module of ``core/`` with compiled code
 #: is here).
-SHARED = ("calls", "codegen", "compile", "events", "numerics", "selects")
+SHARED = ("calls", "codegen", "compile", "events", "jit", "numerics", "selects")
 
 
 @functools.lru_cache(maxsize=1)

@@ -75,6 +75,10 @@ KERNEL_BYTES = 125_000_000
 #: 10^9, 4 * 10^9 and 2 * 10^10 cells; at 25 MB the 4 * 10^9-cell estimate was 24 % below
 #: its peak (issue 44).
 WRITER_BYTES = 65_000_000
+#: Resident memory that importing xarray (with pandas) adds, counted while it is not
+#: imported yet: ``import phasemap`` leaves it to the first Dataset (phasemap.core.lazy).
+#: Measured 41 MB (``import phasemap`` 103 MB, then ``import xarray`` 144 MB).
+XARRAY_BYTES = 45_000_000
 #: Copies of a block that writing it holds at once (the result, HDF5's conversion
 #: and compression buffers; 1.45 measured for 4 * 10^6 cells of int8 + float64).
 WRITER_COPIES = 2
@@ -117,7 +121,8 @@ def estimate(scene, block_cells: int | None = None, timed: bool = False,
     (:data:`SAMPLE_CELLS`, at most :data:`SAMPLE_SECONDS`) after the kernels
     are compiled, scaled to the whole grid.  The memory is this process's
     resident memory now (plus :data:`KERNEL_BYTES` when not timed: the
-    kernels may not be loaded yet) and what the computation allocates: with
+    kernels may not be loaded yet; plus :data:`XARRAY_BYTES` while xarray is
+    not imported) and what the computation allocates: with
     ``eager`` every layer of the whole grid (``Scene.compute()``), otherwise
     the blocks of :func:`write_scene` (at most ``block_cells`` cells).
     """
@@ -134,7 +139,8 @@ def estimate(scene, block_cells: int | None = None, timed: bool = False,
     scratch = block * _fate_scratch(scene)  # the integrator's arrays of one block
     axes = 8 * sum(a.size for a in scene.axes.values())
     resident = _resident()
-    base = resident + (0 if timed else KERNEL_BYTES)
+    base = (resident + (0 if timed else KERNEL_BYTES)
+            + (0 if "xarray" in sys.modules else XARRAY_BYTES))
     if eager:
         memory = base + eager_bytes(scene, block_cells) + axes
     else:
