@@ -391,7 +391,8 @@ def test_the_flows_dop853_tables_are_scipys_and_importing_phasemap_leaves_scipy_
 @pytest.mark.parametrize("name", sorted(SYSTEMS))
 def test_the_admissible_phases_in_one_call_are_those_of_each_phase_alone(name):
     """flow.phases (every candidate phase at a state, in one compiled call) against the
-    engine's per-phase path (Motion.admissible, whose tests are flow.admits): the same
+    engine's per-phase path (Motion.each_phase: Motion.admissible of each phase, whose
+    tests are flow.admits; what the engine runs for redundant contacts): the same
     phases in the same order, the same signs of N and the same bits, on states put on
     every contact, some at relative rest, with events' preferences and flipped signs."""
     m = _motion(SYSTEMS[name])
@@ -421,12 +422,7 @@ def test_the_admissible_phases_in_one_call_are_those_of_each_phase_alone(name):
         got = m.flow.phases(np.concatenate([q, u]), t, cand, flip, prefer, m.mech.plain, sc)
         if got is None:     # redundant contacts: the engine's own pick
             continue
-        want = []
-        for pick in np.ndindex(*[len(ms) for ms in cand]):
-            modes = tuple(cand[c][i] for c, i in enumerate(pick))
-            sol = m.admissible(q, u, modes, sc, prefer, t, flip)
-            if sol is not None:
-                want.append((modes, sol))
+        want = m.each_phase(q, u, cand, sc, prefer, t, flip)
         assert [x[0] for x in got] == [x[0] for x in want]
         for (_, a), (_, b) in zip(got, want):
             for x, y in zip(a, b):

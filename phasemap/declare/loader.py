@@ -338,15 +338,23 @@ def _from_shipped(path: pathlib.Path, source: str) -> Model | None:
     key = key_of(path, versions=False)
     if data.get("format") != FORMAT or key is None or data.get("key") != key:
         return None     # stale: derived again (tests/test_shipped.py says so first)
-    ready = data.get("rewritten") or {}
-    mine = (ready.get("by") == _cache.rewriter() and isinstance(ready.get("text"), str)
-            and ready.get("of") == hashlib.sha256(data["source"].encode()).hexdigest())
-    module = _codegen.load_module(
-        data["model"]["module"], lambda: data["source"],
-        # the rewrite shipped beside the text, where this version of the rewriter made it
-        # of this text (python -m phasemap.systems.ship)
-        (lambda: ready["text"]) if mine else None)
+    ready = shipped_rewrite(data)
+    module = _codegen.load_module(data["model"]["module"], lambda: data["source"],
+                                  None if ready is None else (lambda: ready))
     return _rebuilt(data["model"], module, source)
+
+
+def shipped_rewrite(data: dict) -> str | None:
+    """The rewrite of a shipped record's module text (:mod:`phasemap.core.selects`) that
+    the record carries, where this version of the rewriter made it of this text (written
+    by ``python -m phasemap.systems.ship``); else None: the text is rewritten on use."""
+    ready = data.get("rewritten") or {}
+    source = data.get("source")
+    if (ready.get("by") == _cache.rewriter() and isinstance(ready.get("text"), str)
+            and isinstance(source, str)
+            and ready.get("of") == hashlib.sha256(source.encode()).hexdigest()):
+        return ready["text"]
+    return None
 
 
 def described(S, model: Model) -> dict | None:

@@ -61,13 +61,14 @@ def record(source: str) -> dict:
     # the generated text, as the derivation gave it to the kernel cache (the cache's file
     # holds it rewritten)
     text = module_source(S)
-    if selects(text) != module_text(module):
+    ready = selects(text)
+    if ready != module_text(module):
         raise AssertionError(f"{source}: the kernel cache holds another derivation")
     out = {"format": loader.FORMAT, "key": key,
            "sympy": sympy.__version__, "model": data, "source": text,
            # what the kernel cache writes of it, made here so that a first use does not
            # rewrite it (a third of a second for the ladder and the rod on a step)
-           "rewritten": rewritten(text, selects(text), rewriter())}
+           "rewritten": rewritten(text, ready, rewriter())}
     for kind in KINDS:      # the full coordinates of the motion through contact changes
         out[kind] = {"key": full.shipped_key(S, kind), "text": full.text(S, kind)}
     return out
@@ -81,16 +82,13 @@ def rewritten(source: str, text: str, by: str) -> dict:
 
 def stale(sources=None) -> list[str]:
     """The built-in declarations whose shipped derivation is missing or not the tree's (its
-    rewrite made by another version of the rewriter included)."""
-    from phasemap.core.cache import rewriter
-
+    rewrite made by another version of the rewriter, or of another text, included)."""
     out = []
     for source in sources or DECLARED.values():
         data = loader.shipped_record(source) or {}
         key = loader.shipped_key(source)
         ok = key is not None and data.get("key") == key and "model" in data
-        ok = ok and data.get("rewritten") == rewritten(
-            data.get("source", ""), (data.get("rewritten") or {}).get("text"), rewriter())
+        ok = ok and loader.shipped_rewrite(data) is not None
         if ok:      # the same declaration: its full-coordinate modules' keys, from its hash
             declaration = loader.Declaration(source, data["model"]["declaration_sha256"])
             ok = all((data.get(kind) or {}).get("key") == full.shipped_key(declaration, kind)

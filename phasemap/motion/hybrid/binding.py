@@ -24,6 +24,15 @@ _LOCK = threading.Lock()
 _FUNCTIONS: dict = {}
 
 
+def preferences(k: int, prefer) -> np.ndarray:
+    """``prefer`` (``{contact: mode}``, or None) as :func:`flow.admits` takes it: per
+    contact the mode its event points to, -1 where none."""
+    out = np.full(k, -1, dtype=np.int64)
+    for c, m in (prefer or {}).items():
+        out[c] = m
+    return out
+
+
 class _Pointer:
     """A compiled ``cfunc`` as a kernel's argument, its numba type and address found once:
     numba finds a cfunc's type anew at every call (about 9 us), more than a phase's solve
@@ -155,9 +164,7 @@ class Phase:
             ncand[c] = len(ms)
         flips = np.zeros(k, dtype=np.bool_)
         flips[list(flip)] = True
-        pref = np.full(k, -1, dtype=np.int64)
-        for c, m in (prefer or {}).items():
-            pref[c] = m
+        pref = preferences(k, prefer)
         out = (np.zeros((most, k), dtype=np.int64), np.zeros((most, k)), np.zeros((most, n)),
                np.zeros((most, k)), np.zeros((most, k)), np.zeros((most, k, 3)))
         PC, SF, KN, _ = self.fns
@@ -262,7 +269,7 @@ class Phase:
         Phi = np.empty((m, m))
         st = self.transition_fn(PC, SF, KN, self.p, self.lay, self.rolls,
                                 *self._phase(modes, rho), self.none, self.W, self.I,
-                              self.ud, self.N, self.F, self.a,
+                                self.ud, self.N, self.F, self.a,
                                 np.ascontiguousarray(X0, dtype=float), float(tau), float(rtol),
                                 float(atol), float(step), int(max_steps), Phi)
         return Phi if st == OK else None

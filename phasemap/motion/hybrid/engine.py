@@ -256,9 +256,7 @@ class Motion:
         ``(q, u)``, else None (a two-sided contact's friction tries each sign of N).
         A slip that starts from relative rest is tested with the static coefficient."""
         vs = sc[0]
-        pref = np.full(self.k, -1, dtype=np.int64)
-        for c, m in (prefer or {}).items():
-            pref[c] = m
+        pref = binding.preferences(self.k, prefer)
         two = [c for c, m in enumerate(modes) if m != OPEN and not self.one_sided[c]]
         start = ()
         if not self.mech.plain:
@@ -283,6 +281,18 @@ class Motion:
                 return ud, N, F, a, rho
         return None
 
+    def each_phase(self, q, u, cand, sc, prefer=None, t=0.0, flip=()):
+        """:meth:`admissible` of each phase the candidate modes ``cand`` (per contact) make,
+        in :func:`flow.phases`' order: the admissible ones as ``(modes, solution)``.  What
+        :meth:`enumerate` runs where the contacts are redundant."""
+        found = []
+        for pick in np.ndindex(*[len(m) for m in cand]):
+            modes = tuple(cand[c][i] for c, i in enumerate(pick))
+            sol = self.admissible(q, u, modes, sc, prefer, t, flip)
+            if sol is not None:
+                found.append((modes, sol))
+        return found
+
     def enumerate(self, q, u, prefer=None, t=0.0, flip=()):
         """Every admissible phase at ``(q, u)``, grouped by their accelerations (phases
         that move the body alike, such as slip with N = 0 and open with g'' = 0, are one
@@ -295,12 +305,7 @@ class Motion:
         found = self.flow.phases(np.concatenate([q, u]), t, cand, flip, prefer,
                                  self.mech.plain, sc)
         if found is None:   # redundant contacts: a member of their reactions picked here
-            found = []
-            for pick in np.ndindex(*[len(m) for m in cand]):
-                modes = tuple(cand[c][i] for c, i in enumerate(pick))
-                sol = self.admissible(q, u, modes, sc, prefer, t, flip)
-                if sol is not None:
-                    found.append((modes, sol))
+            found = self.each_phase(q, u, cand, sc, prefer, t, flip)
         for modes, sol in found:
             for grp in groups:
                 if np.allclose(grp[0][1][0], sol[0], rtol=1e-7, atol=1e-7 * sc[2]):
