@@ -103,10 +103,11 @@ def _sub(sub, name: str, help: str, description: str):
 
 def _model_names() -> str:
     """What MODEL may be, for the commands' help."""
-    from phasemap.systems import MODELS
+    from phasemap.systems import MODELS, OSCILLATORS
 
-    return (f"a built-in model ({', '.join(MODELS)}) or a declaration file "
-            "(path/to/system.py, defining SYSTEM)")
+    return (f"a built-in model ({', '.join(MODELS)}), a friction oscillator "
+            f"({', '.join(OSCILLATORS)}) or a declaration file (path/to/system.py, "
+            "defining SYSTEM)")
 
 
 def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.ArgumentParser]]:
@@ -352,12 +353,12 @@ def _run(args) -> int:
     elif args.command == "classify":
         from phasemap.maps.classify import classify
 
-        from phasemap.systems import get_model
+        from phasemap.maps.full import map_model
 
         if args.model is None:
             raise ValueError(f"classify needs MODEL, {_model_names()}; NAME=VALUE pairs "
                              "are optional (phasemap classify ladder phi=0.5)")
-        model = get_model(args.model)
+        model = map_model(args.model)
         print(classify(model, **_parse_values(args.values, model=model)))
     elif args.command == "cache":
         print(_cache(args.action))
@@ -495,11 +496,11 @@ def _parse_axis(item: str, model=None) -> tuple[str, object]:
 def _atlas(args) -> str:
     from phasemap.maps import blocks
     from phasemap.atlas.atomic import destination
-    from phasemap.systems import get_model
+    from phasemap.maps.full import map_model
     from phasemap.core.progress import human_duration
     from phasemap.maps.scene import Scene
 
-    model = get_model(args.model)
+    model = map_model(args.model)
     destination(args.output)  # the folder exists, the output is no folder
     axes = dict(_parse_axis(a, model) for a in args.axis)
     if len(axes) != len(args.axis):

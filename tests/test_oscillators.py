@@ -255,10 +255,11 @@ def test_bad_oscillator_declarations_say_what_is_wrong(make, match):
     _fails(make(), match)
 
 
-def test_oscillators_say_why_they_have_no_map():
+def test_oscillators_say_why_they_have_no_reduced_model():
     for name in phasemap.systems.OSCILLATORS:
-        with pytest.raises(ValueError, match="phasemap.simulate runs its motion"):
-            phasemap.classify(name)
+        with pytest.raises(ValueError, match="no reduced model .* phasemap.Scene map it in "
+                           "full coordinates"):
+            phasemap.get_model(name)
     with pytest.raises(ValueError, match="forcing in time"):
         DEN_HARTOG.model
     with pytest.raises(ValueError, match="speed-dependent friction"):

@@ -166,7 +166,7 @@ def eager_bytes(scene, block_cells: int | None = None) -> int:
 
 def largest_block(scene) -> int:
     """The most cells a block of ``scene`` takes."""
-    return FATE_BLOCK_CELLS if scene.has_fates else MAP_BLOCK_CELLS
+    return FATE_BLOCK_CELLS if scene.slow_cells else MAP_BLOCK_CELLS
 
 
 def _fate_scratch(scene) -> int:
@@ -202,7 +202,7 @@ def seconds_per_cell(scene) -> float:
     (waking the threads, tens of milliseconds on a busy machine) that the
     large blocks of the real work pay rarely.
     """
-    kind = "fate" if scene.has_fates else "map"
+    kind = "fate" if scene.slow_cells else "map"
     target = min(SAMPLE_CELLS[kind], scene.size)
     per_axis = max(1, int(round(target ** (1.0 / len(scene.axes)))))
     rng = np.random.default_rng(0)
@@ -214,7 +214,7 @@ def seconds_per_cell(scene) -> float:
     with progress.activity(f"{scene.model.name}: compiling or loading the kernels"):
         scene.evaluate({n: a[:1] for n, a in sample.items()})
     n = math.prod(a.size for a in sample.values())
-    if not scene.has_fates:
+    if not scene.slow_cells:
         with progress.activity(f"{scene.model.name}: timing {n} sample cells"):
             best = math.inf
             for _ in range(MAP_SAMPLE_REPEATS):
@@ -338,7 +338,7 @@ def slabs(shape: tuple[int, ...], start: int, stop: int) -> Iterator[tuple[slice
 
 def first_block(scene) -> int:
     """Cells of the first block: one per thread for a fate map, else :data:`MAP_FIRST_CELLS`."""
-    if scene.has_fates:
+    if scene.slow_cells:
         import numba
 
         return max(1, numba.get_num_threads())
@@ -409,7 +409,7 @@ def write_scene(scene, path, *, block_cells: int | None = None, complevel: int =
     path = check_output(path, overwrite=overwrite)
     reg = layers_for(scene.model)
     shape = scene.shape
-    k, length = plan(shape, CHUNK_CELLS["fate" if scene.has_fates else "map"])
+    k, length = plan(shape, CHUNK_CELLS["fate" if scene.slow_cells else "map"])
     ds = prepare(scene.template())
     dims = list(scene.axes)
     encoding = cf_encoding(ds, {d: 1 for d in dims[:k]}, complevel=complevel)

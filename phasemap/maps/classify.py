@@ -15,7 +15,7 @@ from phasemap.core import args as _args
 from phasemap.core import numerics as nx
 from phasemap.core import tiers
 from phasemap.core.model import BranchStatus, Model, Solvability
-from phasemap.systems import get_model, reference
+from phasemap.systems import reference
 
 
 @dataclass(frozen=True)
@@ -161,7 +161,11 @@ def classify(model: str | Model, **values: float) -> Classification:
     >>> phasemap.classify("hinge_pendulum", phi=0.05, omega=0.0).stagnation
     True
     """
-    m = get_model(model)
+    from phasemap.maps import full as _full
+
+    m = _full.map_model(model)
+    if isinstance(m, _full.FullModel):   # no reduced model: the phases in full coordinates
+        return _classify_full(m, values)
     values = _args.scalars(values, m.names, m.name,
                            " for classify(); use a Scene for arrays of values")
     full = m.complete(values)
@@ -201,3 +205,37 @@ def _branch(m: Model, b: int, row: np.ndarray) -> BranchResult:
         accelerations={v.name: float(x) for v, x in zip(m.accelerations, acc)},
         reactions={v.name: float(x) for v, x in zip(m.reactions, rea)},
     )
+
+
+def _classify_full(m, values: Mapping[str, float]) -> Classification:
+    """:func:`classify` of a system in full coordinates (:mod:`phasemap.maps.full`): its
+    branches are the admissible phases (``belt_stick``, ``floor_slip_pos``...), each with
+    the accelerations and reactions of its motion; a phase that opens a contact is a
+    separation."""
+    from phasemap.maps import full as _full
+
+    values = _args.scalars(values, m.names, m.name,
+                           " for classify(); use a Scene for arrays of values")
+    complete = m.complete(values)
+    q, u, p, t = m.state_of(complete)
+    motion = m.motion(p)
+    n, stagnation, lost, groups, cand = _full.survey(m, motion, q, u, t)
+    na = len(m.accelerations)
+    branches = []
+    for g in groups:
+        for modes, solution in g:
+            row = _full.motion_row(m, [[(modes, solution)]])
+            branches.append(BranchResult(
+                name=_full.phase_name(m, modes),
+                status=(BranchStatus.SEPARATION if _full.opens(modes, cand)
+                        else BranchStatus.ADMISSIBLE),
+                singular=False, coefficient=float("nan"),
+                accelerations={v.name: float(x) for v, x in zip(m.accelerations, row)},
+                reactions={v.name: float(x) for v, x in zip(m.reactions, row[na:])}))
+    return Classification(
+        model=m.name, values={k: float(x) for k, x in complete.items()},
+        n_solutions=int(n), stagnation=stagnation, contact_lost=lost,
+        singular=_full.singular(motion, q, u, t, cand),
+        branches=tuple(branches), candidates=tuple(branches),
+        units={v.name: v.units for v in (*m.variables.values(), *m.accelerations,
+                                         *m.reactions)})

@@ -171,7 +171,8 @@ def layers_for(model: str | Model) -> dict[str, Layer]:
     Parameters
     ----------
     model : str or Model
-        a model name (``phasemap.MODELS``) or a :class:`Model`.
+        a model name (``phasemap.MODELS``, or a friction oscillator's), or a
+        :class:`Model`.
 
     Returns
     -------
@@ -193,6 +194,19 @@ def layers_for(model: str | Model) -> dict[str, Layer]:
     >>> layers["n_solutions"].flag_meanings
     'none unique two continuum three_or_more'
     """
-    from phasemap.systems import get_model
+    from phasemap.maps.full import FullModel, map_model
 
-    return dict(_registry(get_model(model)))
+    model = map_model(model)
+    if isinstance(model, FullModel):   # a system in full coordinates (phasemap.maps.full)
+        return _full_registry(model)
+    return dict(_registry(model))
+
+
+def _full_registry(model) -> dict[str, Layer]:
+    """The layers of a map in full coordinates (:mod:`phasemap.maps.full`): the summaries,
+    then the unique motion's accelerations and reactions (its row's columns)."""
+    out = {l.name: l for l in SUMMARY_LAYERS}
+    for j, var in enumerate(model.accelerations + model.reactions):
+        out[var.name] = Layer(var.name, "float64", f"{var.long_name} (the unique motion)",
+                              units=var.units, branch=0, column=j)
+    return out

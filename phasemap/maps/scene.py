@@ -31,10 +31,11 @@ from phasemap.core.codegen import content_hash
 from phasemap.atlas.dataset import assemble, cf_header, declaration_hash, read_json, variable_attrs
 from phasemap.maps.grid import evaluate
 from phasemap.motion.integrate import run_fate_map
-from phasemap.maps import through
+from phasemap.maps import full, through
+from phasemap.maps.full import FullModel, map_model
 from phasemap.maps.layers import Outcome, layers_for
 from phasemap.core.model import Model
-from phasemap.systems import builtin_model, get_model
+from phasemap.systems import OSCILLATORS, builtin_model
 from phasemap.motion.simulate import Options
 
 #: Default relative tolerance of a fate map's trajectories.
@@ -50,7 +51,9 @@ class Scene:
     Parameters
     ----------
     model:
-        model name or :class:`phasemap.Model`.
+        model name or :class:`phasemap.Model`; a friction oscillator's name (``belt``,
+        ``den_hartog``...) maps it in full coordinates (:mod:`phasemap.maps.full`: its
+        names include the forcing's phase ``t``, its stagnation is riding with the belt).
     axes:
         ``{name: values}`` for 1 or more state or parameter names, each a
         non-empty 1-D sequence of finite values inside the variable's domain,
@@ -102,7 +105,7 @@ class Scene:
                  fixed: Mapping[str, float] | None = None,
                  layers: Sequence[str] | None = None,
                  options: Mapping[str, float] | None = None):
-        self.model = get_model(model)
+        self.model = map_model(model)
         m = self.model
         for what, given in (("axes", axes), ("fixed", fixed), ("options", options)):
             if given is not None and not isinstance(given, Mapping):
@@ -163,7 +166,21 @@ class Scene:
         reg = layers_for(self.model)
         return any(reg[n].fate for n in self.layers)
 
+    @property
+    def full(self) -> bool:
+        """Whether the model has no reduced model: its map surveys the phases in full
+        coordinates cell by cell (:mod:`phasemap.maps.full`)."""
+        return isinstance(self.model, FullModel)
+
+    @property
+    def slow_cells(self) -> bool:
+        """Whether a cell costs a motion or a survey (a fate map, or a map in full
+        coordinates): such a scene runs in small blocks, with a progress bar."""
+        return self.has_fates or self.full
+
     def _velocity_can_be_zero(self) -> bool:
+        if self.full:   # a surface's velocity may be anything: the stick state too
+            return True
         name = self.model.velocity
         values = self.axes.get(name)
         if values is None:
@@ -214,13 +231,13 @@ class Scene:
         name, axes, fixed, layers, options, recorded = _read_spec(spec)
         if model is None:
             try:
-                m = builtin_model(name)
+                m = map_model(name) if name in OSCILLATORS else builtin_model(name)
             except ValueError:
                 raise ValueError(f"Scene.from_spec: the spec's model {name!r} is not a built-in "
                                  "model; pass the declaration it was made with explicitly, "
                                  "Scene.from_spec(spec, model='path/to/system.py')") from None
         else:
-            m = get_model(model)
+            m = map_model(model)
             if m.name != name:
                 raise ValueError(f"Scene.from_spec: the spec is of {name!r}, the model given "
                                  f"is {m.name!r}")
@@ -299,7 +316,7 @@ class Scene:
         reg = layers_for(self.model)
         maps = [n for n in self.layers if not reg[n].fate]
         out = {}
-        if maps and self.size <= SLAB_CELLS:
+        if maps and self.size <= SLAB_CELLS and not self.full:
             out = self.evaluate(self.axes, maps)
             maps = []
         blocked = maps + [n for n in self.layers if reg[n].fate]
@@ -326,7 +343,9 @@ class Scene:
         wanted = [reg[n] for n in (self.layers if layers is None else layers)]
         result = {}
         maps = [l for l in wanted if not l.fate]
-        if maps:
+        if maps and self.full:
+            result.update(full.evaluate(self.model, dict(axes), self.fixed, maps))
+        elif maps:
             result.update(evaluate(self.model, dict(axes), self.fixed, maps))
         fates = [l for l in wanted if l.fate]
         if fates:
@@ -365,7 +384,8 @@ class Scene:
         reg = layers_for(self.model)
         ndim = len(self.axes)
         normal = da.core.normalize_chunks(sizes, self.shape, dtype=np.float64)
-        token = tokenize(content_hash(self.model), json.dumps(self.spec(), default=str),
+        token = tokenize(declaration_hash(self.model) if self.full else
+                         content_hash(self.model), json.dumps(self.spec(), default=str),
                          self.options.as_dict(), [a.tobytes() for a in self.axes.values()],
                          normal)
         token = f"phasemap-{self.model.name}-{token}"

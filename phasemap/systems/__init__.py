@@ -9,8 +9,9 @@ disk) the first time it is asked for.  What runs, by name:
   (:mod:`phasemap.systems.seeds`, two of the four systems of Lapshin 2021):
   declared, so that their maps count a body leaving a contact;
 * ``belt``, ``stribeck_belt``, ``den_hartog``, ``duffing``: friction oscillators
-  (:mod:`phasemap.systems.oscillators`), which :func:`phasemap.simulate` runs by name
-  in full coordinates; they are not in ``MODELS`` (no maps yet);
+  (:mod:`phasemap.systems.oscillators`), which :func:`phasemap.simulate`,
+  :func:`phasemap.classify` and :class:`phasemap.Scene` run by name in full coordinates;
+  they are not in ``MODELS`` (they have no reduced model);
 * ``elliptic_pendulum``, ``hinge_pendulum``: written by hand
   (:mod:`phasemap.systems.elliptic_pendulum`,
   :mod:`phasemap.systems.hinge_pendulum`, each defining a
@@ -112,10 +113,15 @@ def get_model(model: str | Model) -> Model:
     if isinstance(model, str) and model in MODELS:
         return MODELS[model]
     if isinstance(model, str) and model in OSCILLATORS:
-        from phasemap.declare.validation import reduced_limits
+        from phasemap.declare.validation import oscillator_features
         from phasemap.systems.oscillators import OSCILLATORS as systems
 
-        reduced_limits(systems[model])     # (raises: they have no maps yet)
+        raise ValueError(
+            f"{model}: a friction oscillator has no reduced model (it has "
+            f"{' and '.join(oscillator_features(systems[model]))}): phasemap.classify and "
+            "phasemap.Scene map it in full coordinates, phasemap.simulate and "
+            "phasemap.periodic_orbit move it; the phase curves and the bifurcation tracer "
+            "need a reduced model")
     raise ValueError(_args.unknown("model", model, MODELS, listing=(
         f"available models: {', '.join(MODELS)}, or the path of a declaration file, "
         "path/to/system.py")))

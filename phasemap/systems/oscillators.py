@@ -23,9 +23,10 @@ the Lagrangian L = m (x'^2 + y'^2)/2 - k x^2/2 - m g y and the contact's law.
   defaults: a large and a small stable orbit coexist for Omega in (1.406, 1.573)); with
   k = 0 it is Ueda's oscillator, whose period-one orbit doubles its period.
 
-These run in full coordinates (:func:`phasemap.simulate`: a moving surface, static
-friction above kinetic, friction that depends on the speed and forcing in time are not
-in the maps yet).
+These run in full coordinates: a moving surface, static friction above kinetic,
+friction that depends on the speed and forcing in time do not fit a reduced model.
+:func:`phasemap.simulate` moves them, :func:`phasemap.classify` and
+:class:`phasemap.Scene` map them (:mod:`phasemap.maps.full`).
 
 Leine R. I., van Campen D. H., de Kraker A., van den Steen L. (1998), Stick-slip
 vibrations induced by alternate friction models, Nonlinear Dynamics 16, 41-54.

@@ -298,6 +298,21 @@ class Motion:
         that move the body alike, such as slip with N = 0 and open with g'' = 0, are one
         motion): a list of groups, each a list of ``(modes, solution)``.  ``prefer``:
         ``{contact: mode}`` orders each group (the mode an event points to first)."""
+        return self.survey(q, u, prefer, t, flip)[0]
+
+    def at_parameters(self, p):
+        """This motion at the parameters ``p`` from now on (a map's cells: the flow stays
+        bound, its parameters are written in place)."""
+        self.p[:] = p
+        self.flow.p[:] = p
+        self.bounds = self.mech.bounds(self.p)
+        self.flow.bounds[:] = self.bounds
+
+    def survey(self, q, u, prefer=None, t=0.0, flip=()):
+        """``(groups, candidates)``: :meth:`enumerate`'s groups, and per contact the modes
+        it may take at ``(q, u)`` (:meth:`candidates`), which say what touches and what is
+        at relative rest (what :func:`phasemap.classify` and the maps of a system in full
+        coordinates read)."""
         P = self.mech.pieces(q, u, self.p, t)
         sc = self.scales(q, u, P)
         groups = []
@@ -327,7 +342,7 @@ class Motion:
             if len(g) > 1:   # a tie: the next derivative decides (kept stable: sorted)
                 g = sorted(g, key=lambda item: not self._holds(q, u, item, touching, sc, t))
             out.append(g)
-        return out
+        return out, cand
 
     def _holds(self, q, u, item, touching, sc, t=0.0) -> bool:
         """Whether the phase ``item`` (modes and solution) still holds a moment later

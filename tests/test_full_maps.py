@@ -1,0 +1,147 @@
+"""Maps and classify of the friction oscillators, which have no reduced model (issue 39:
+"maps, events and stagnation read the relative velocity"; "maps take the forcing phase as
+an axis or a fixed value"): each layer against a closed form derived here, the map
+against classify and simulate, dask against eager, the atlas through netCDF."""
+
+import math
+
+import numpy as np
+import pytest
+
+import phasemap
+from phasemap.maps.full import FullModel, map_model
+
+
+def _belt_closed_form(x, xdot, m, k, g, v, f_s, f_k):
+    """The block on the belt, by hand: at the belt's speed it sticks (x'' = 0, F = k x)
+    while |k x| <= f_s m g, else starts to slip against the static limit; off it, it slips
+    with m x'' = -k x - f_k m g sgn(x' - v)."""
+    rel = xdot - v
+    N = m * g
+    if rel == 0.0:
+        if abs(k * x) <= f_s * N:
+            return True, 0.0, N, k * x
+        s = -math.copysign(1.0, k * x)     # the spring drags it off the belt's speed
+        return False, (-k * x - s * f_s * N) / m, N, -s * f_s * N
+    s = math.copysign(1.0, rel)
+    return False, (-k * x - s * f_k * N) / m, N, -s * f_k * N
+
+
+def test_belt_classify_matches_its_closed_form_at_random_states():
+    rng = np.random.default_rng(39)
+    for _ in range(60):
+        m, k, g = rng.uniform(0.3, 3.0, 3)
+        f_k = rng.uniform(0.0, 1.0)
+        f_s = f_k + rng.uniform(0.0, 1.0)
+        v = rng.uniform(-1.0, 1.0)
+        x = rng.uniform(-3.0, 3.0)
+        xdot = v if rng.random() < 0.5 else rng.uniform(-2.0, 2.0)
+        stuck, xdd, N, F = _belt_closed_form(x, xdot, m, k, g, v, f_s, f_k)
+        c = phasemap.classify("belt", x=x, xdot=xdot, m=m, k=k, g=g, v=v, f_s=f_s, f_k=f_k)
+        assert c.n_solutions == 1 and not c.contact_lost and not c.singular
+        assert c.stagnation == stuck
+        (b,) = c.branches
+        assert b.name == ("belt_stick" if stuck else "belt_slip_" + (
+            "pos" if xdd * m + k * x < 0 else "neg"))
+        assert b.accelerations["x_ddot"] == pytest.approx(xdd, abs=1e-12)
+        assert b.reactions["N_belt"] == pytest.approx(N, rel=1e-12)
+        assert b.reactions["F_belt"] == pytest.approx(F, abs=1e-12)
+
+
+def test_the_stick_zone_is_exact_at_its_edges():
+    """|k x| = f_s m g sticks (the limit is inside the cone), and so does what is within
+    the engine's tie tolerance (1e-9 of the forces' scale) beyond; a little more slips."""
+    edge = 1.0     # k = m = g = f_s = 1
+    assert phasemap.classify("belt", x=edge, xdot=0.2).stagnation
+    assert phasemap.classify("belt", x=-edge, xdot=0.2).stagnation
+    assert phasemap.classify("belt", x=edge * (1 + 1e-10), xdot=0.2).stagnation
+    assert not phasemap.classify("belt", x=edge * (1 + 1e-8), xdot=0.2).stagnation
+    # off the belt's speed by a hair more than the tie tolerance: slipping, no stagnation
+    assert not phasemap.classify("belt", x=0.0, xdot=0.2 + 1e-6).stagnation
+
+
+def test_den_hartog_map_over_the_forcing_phase():
+    """At x' = 0 the forced block stays put where |F0 cos(Omega t) - k x| <= f m g, and
+    elsewhere starts with m x'' = F0 cos(Omega t) - k x - f m g sgn(...)."""
+    Omega, f = 0.8, 0.2
+    xs = np.linspace(-1.5, 1.5, 13)
+    ts = np.linspace(0.0, 2 * np.pi / Omega, 9)
+    ds = phasemap.Scene("den_hartog", axes={"x": xs, "t": ts}, fixed={"xdot": 0.0},
+                        layers=["n_solutions", "stagnation", "contact_lost", "x_ddot",
+                                "F_floor"]).compute()
+    assert ds.n_solutions.dims == ("x", "t") and ds.t.attrs["units"] == "s"
+    push = np.cos(Omega * ts)[None, :] - xs[:, None]
+    clear = np.abs(np.abs(push) - f) > 1e-9          # away from the tie
+    assert np.array_equal(ds.stagnation.values[clear], (np.abs(push) <= f)[clear])
+    assert (ds.n_solutions == 1).all() and not ds.contact_lost.any()
+    want = np.where(np.abs(push) <= f, 0.0, push - f * np.sign(push))
+    assert np.allclose(ds.x_ddot.values[clear], want[clear], atol=1e-12)
+    assert np.allclose(ds.F_floor.values[clear],
+                       np.where(np.abs(push) <= f, -push, -f * np.sign(push))[clear],
+                       atol=1e-12)
+
+
+def test_stribeck_slip_reads_the_relative_speed():
+    rng = np.random.default_rng(1998)
+    for _ in range(20):
+        v, xdot, x = rng.uniform(-1, 1), rng.uniform(-2, 2), rng.uniform(-2, 2)
+        f_s, delta = rng.uniform(0.2, 1.5), rng.uniform(0.0, 5.0)
+        rel = xdot - v
+        c = phasemap.classify("stribeck_belt", x=x, xdot=xdot, v=v, f_s=f_s, delta=delta)
+        want = -x - np.sign(rel) * f_s / (1 + delta * abs(rel))
+        assert c.branches[0].accelerations["x_ddot"] == pytest.approx(want, abs=1e-12)
+
+
+def test_a_map_agrees_with_classify_and_with_the_motion():
+    """One truth: a cell of the map, classify at its values, and simulate from them (a
+    motion that starts stuck stays with the belt) say the same."""
+    axes = {"x": np.array([-1.2, -0.3, 0.9, 1.4]), "f_s": np.array([0.8, 1.3])}
+    scene = phasemap.Scene("belt", axes=axes, fixed={"xdot": 0.2},
+                           layers=["n_solutions", "stagnation", "x_ddot", "F_belt"])
+    ds = scene.compute()
+    for i, x in enumerate(axes["x"]):
+        for j, fs in enumerate(axes["f_s"]):
+            c = phasemap.classify("belt", x=x, xdot=0.2, f_s=fs)
+            assert ds.stagnation.values[i, j] == c.stagnation
+            assert ds.x_ddot.values[i, j] == c.branches[0].accelerations["x_ddot"]
+            assert ds.F_belt.values[i, j] == c.branches[0].reactions["F_belt"]
+    motion = phasemap.simulate("belt", 0.5, x=-0.3, xdot=0.2, f_s=0.8)
+    assert np.allclose(np.diff(motion.x.values) / np.diff(motion.t.values), 0.2)
+
+
+def test_dask_chunks_spec_and_netcdf_keep_every_value(tmp_path):
+    scene = phasemap.Scene("den_hartog", axes={"x": np.linspace(-1, 1, 6),
+                                               "t": np.linspace(0, 7, 5)},
+                           fixed={"xdot": 0.3}, layers=["n_solutions", "stagnation",
+                                                        "x_ddot"])
+    eager = scene.compute()
+    lazy = scene.compute(chunks=2)
+    assert lazy.x_ddot.chunks == ((2, 2, 2), (2, 2, 1))
+    done = lazy.compute()
+    for v in eager.data_vars:
+        assert done[v].dtype == eager[v].dtype
+        assert np.array_equal(done[v].values, eager[v].values, equal_nan=True)
+    again = phasemap.Scene.from_spec(scene.spec())
+    assert again.spec() == scene.spec() and isinstance(again.model, FullModel)
+    path = tmp_path / "den_hartog.nc"
+    phasemap.write_atlas(eager, path)
+    back = phasemap.open_atlas(path)
+    assert np.array_equal(back.x_ddot.values, eager.x_ddot.values)
+    assert back.attrs["phasemap_model"] == "den_hartog"
+
+
+def test_full_maps_refuse_bad_input_in_one_line():
+    with pytest.raises(ValueError, match="unknown variable"):
+        phasemap.classify("belt", y=0.0)               # the contact fixes y
+    with pytest.raises(ValueError, match="unknown variable"):
+        phasemap.classify("belt", t=1.0)               # the belt is not forced in time
+    with pytest.raises(ValueError, match="use a Scene"):
+        phasemap.classify("belt", x=[0.0, 1.0])
+    with pytest.raises(ValueError, match="m = -1 is outside its domain"):
+        phasemap.classify("belt", m=-1.0)
+    with pytest.raises(ValueError, match="fate"):
+        phasemap.Scene("belt", axes={"x": [0.0, 1.0]}, layers=["fate"])
+    assert set(phasemap.layers_for("belt")) == {
+        "n_solutions", "stagnation", "contact_lost", "singular", "x_ddot", "N_belt",
+        "F_belt"}
+    assert map_model("ladder") is phasemap.get_model("ladder")
