@@ -613,17 +613,25 @@ def _table() -> str:
 
 
 def _models(name: str | None = None) -> str:
-    from phasemap.systems import MODELS, get_model
+    from phasemap.maps.full import FullModel, map_model
+    from phasemap.systems import MODELS, OSCILLATORS
 
     lines = []
-    for m in (MODELS.values() if name is None else [get_model(name)]):
-        lines.append(f"{m.name}: {m.title}")
+    listed = [*MODELS.values(), *map(map_model, OSCILLATORS)] if name is None \
+        else [map_model(name)]
+    for m in listed:
+        full = isinstance(m, FullModel)
+        lines.append(f"{m.name}: {m.title}" + (" (in full coordinates)" if full else ""))
         width = max(14, *(len(v.domain_text()) for v in (*m.state, *m.params)))
         for kind, group in (("state", m.state), ("param", m.params)):
             for v in group:
                 lines.append(f"  {kind}  {v.name:<6} {v.units:<8} default {v.default:<8.4g} "
                              f"domain {v.domain_text():<{width}} {v.long_name}")
-        lines.append(f"  branches: {', '.join(m.branches)}")
+        if full:
+            lines.append("  phases: each contact open, stuck or slipping relative to its "
+                         "surface (phasemap.maps.full)")
+        else:
+            lines.append(f"  branches: {', '.join(m.branches)}")
         if name is not None:
             from phasemap.maps.layers import layers_for
 

@@ -3,6 +3,8 @@ accelerations against an independent NumPy solve of the same phase, its interpre
 against its machine code bit for bit, and the rewritten declaration functions against
 the generated ones."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -10,7 +12,7 @@ from phasemap.core import tiers
 from phasemap.declare.full import mechanics
 from phasemap.motion import hybrid
 from phasemap.motion.hybrid import binding, flow
-from phasemap.motion.hybrid.phases import OPEN, SLIP_NEG, SLIP_POS, SMOOTH, STICK
+from phasemap.motion.hybrid.phases import OPEN, SLIP_NEG, SLIP_POS, SMOOTH, STICK, TOL
 from phasemap.systems.oscillators import BELT, DEN_HARTOG, STRIBECK_BELT
 from phasemap.systems.painleve_rod import SYSTEM as ROD
 from phasemap.systems.rod_on_step import SYSTEM as STEP
@@ -388,13 +390,50 @@ def test_the_flows_dop853_tables_are_scipys_and_importing_phasemap_leaves_scipy_
     assert r.returncode == 0 and r.stdout.split() == ["False"], r.stderr
 
 
+def _scales(q, u, P):
+    """The scales of a state, by NumPy (LAPACK's solve): the oracle of flow.scales."""
+    M, h, g, J, b, mu = P
+    ud0 = np.linalg.solve(M, h)
+    k = len(g)
+    acc = float(np.abs(J @ ud0).max() + np.abs(b).max()) if k else 1.0
+    force = float(np.abs(h).max() + np.abs(M).max() * np.abs(ud0).max())
+    vel = float(np.abs(J @ u).max()) if k else 0.0
+    length = float(1.0 + np.abs(q).max())
+    return (max(vel, math.sqrt(acc * length), 1e-300), max(force, 1e-300),
+            max(acc, 1e-300), length)
+
+
+def _candidates(m, q, u, t, P, sc):
+    """Each contact's candidate modes, by the rules written out here: the oracle of the
+    compiled survey's."""
+    M, h, g, J, b, mu = P
+    v = J[:, :2, :] @ u - np.column_stack([np.zeros(m.k), m.surf(t)])
+    out = []
+    for c in range(m.k):
+        vn, vt = v[c]
+        if m.one_sided[c] and (g[c] > TOL * sc[3] or vn > TOL * sc[0]):
+            out.append((OPEN,))
+            continue
+        ms = (OPEN,) if m.one_sided[c] else ()
+        if mu[c] == 0.0:
+            ms += (SMOOTH,)
+        elif abs(vt) > TOL * sc[0]:
+            ms += (SLIP_POS if vt > 0 else SLIP_NEG,)
+        else:
+            ms += (STICK, SLIP_POS, SLIP_NEG)
+        out.append(ms)
+    return out
+
+
 @pytest.mark.parametrize("name", sorted(SYSTEMS))
 def test_the_admissible_phases_in_one_call_are_those_of_each_phase_alone(name):
-    """flow.phases (every candidate phase at a state, in one compiled call) against the
-    engine's per-phase path (Motion.each_phase: Motion.admissible of each phase, whose
-    tests are flow.admits; what the engine runs for redundant contacts): the same
-    phases in the same order, the same signs of N and the same bits, on states put on
-    every contact, some at relative rest, with events' preferences and flipped signs."""
+    """flow.survey (the scales, the candidate modes and every admissible phase at a
+    state, in one compiled call) against the engine's per-phase path (Motion.each_phase:
+    Motion.admissible of each phase, whose tests are flow.admits; what the engine runs
+    for redundant contacts): the same phases in the same order, the same signs of N and
+    the same bits, on states put on every contact, some at relative rest, with events'
+    preferences and flipped signs.  Its scales agree with NumPy's to 1e-12 and its
+    candidate modes with the rules written out here; its groups are numpy's allclose."""
     m = _motion(SYSTEMS[name])
     rng = np.random.default_rng(11)
     compared = several = 0
@@ -414,19 +453,28 @@ def test_the_admissible_phases_in_one_call_are_those_of_each_phase_alone(name):
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(u))):
             continue
         P = m.mech.pieces(q, u, m.p, t)
-        sc = m.scales(q, u, P)
-        cand = m.candidates(q, u, P, sc, t)
         prefer = {c: int(rng.choice([SLIP_POS, SLIP_NEG, OPEN])) for c in range(m.k)
                   if rng.random() < 0.3}
         flip = tuple(c for c in range(m.k) if rng.random() < 0.3)
-        got = m.flow.phases(np.concatenate([q, u]), t, cand, flip, prefer, m.mech.plain, sc)
+        sc, cand, got = m.flow.survey(np.concatenate([q, u]), t, flip, prefer, m.mech.plain)
+        assert sc == m.scales(q, u, P)
+        assert np.allclose(sc, _scales(q, u, P), rtol=1e-12, atol=0)
+        assert cand == _candidates(m, q, u, t, P, sc)
         if got is None:     # redundant contacts: the engine's own pick
             continue
         want = m.each_phase(q, u, cand, sc, prefer, t, flip)
         assert [x[0] for x in got] == [x[0] for x in want]
-        for (_, a), (_, b) in zip(got, want):
+        for (_, a, _), (_, b) in zip(got, want):
             for x, y in zip(a, b):
                 assert np.array_equal(x, y)
+        firsts, ids = [], []     # groups by numpy's allclose with each group's first
+        for _, a, _ in got:
+            same = [i for i, f in enumerate(firsts)
+                    if np.allclose(f, a[0], rtol=1e-7, atol=1e-7 * sc[2])]
+            ids.append(same[0] if same else len(firsts))
+            if not same:
+                firsts.append(a[0])
+        assert [x[2] for x in got] == ids
         compared += 1
         several += len(got) > 1 or any(len(ms) > 1 for ms in cand)
     assert compared >= 20 and several >= 5, (compared, several)

@@ -145,3 +145,42 @@ def test_full_maps_refuse_bad_input_in_one_line():
         "n_solutions", "stagnation", "contact_lost", "singular", "x_ddot", "N_belt",
         "F_belt"}
     assert map_model("ladder") is phasemap.get_model("ladder")
+
+
+def _random_values(m, rng):
+    """A state of ``m`` with every contact closed: positions inside their bounds, rates
+    at relative rest half of the time (zero; the belt's speed ``v`` where there is one),
+    parameters at their defaults."""
+    values = {}
+    for v in m.state:
+        lo, hi = max(v.lower, -2.0), min(v.upper, 2.0)
+        values[v.name] = float(rng.uniform(lo + 1e-3, hi - 1e-3))
+    for name in m.names[len(m.state) // 2:len(m.state)]:
+        if name != "t" and rng.random() < 0.5:
+            values[name] = m.defaults.get("v", 0.0)
+    return m.complete(values)
+
+
+@pytest.mark.parametrize("name", ["ladder", "wheel", "rod_on_step", "belt", "den_hartog"])
+def test_a_compiled_cell_is_the_motions_own_survey(name):
+    """The map's compiled cell (flow.survey_cells) against the engine's survey in Python
+    (Motion.survey, with the summary written out in maps.full.python_cell): the same
+    count, flags and unique motion, bit for bit, on random states of systems with one
+    and two contacts, where they stick, slip and leave a contact."""
+    from phasemap.maps import full
+    from phasemap.systems.oscillators import OSCILLATORS
+
+    S = OSCILLATORS.get(name) or phasemap.get_model(name).declaration
+    m = FullModel(getattr(S, "system", S))
+    rng = np.random.default_rng(7)
+    seen = set()
+    for _ in range(60):
+        q, u, p, t = m.state_of(_random_values(m, rng))
+        motion = m.motion(p)
+        n, flags, row = full.cell(m, motion, q, u, t)
+        want = full.python_cell(m, motion, q, u, t, True)
+        assert (n, flags) == want[:2]
+        assert np.array_equal(row, want[2], equal_nan=True)
+        seen |= {("n", n)} | {b for b, bit in full.BITS.items() if flags & bit}
+    assert ("n", 1) in seen and "stagnation" in seen, seen
+    assert name != "ladder" or "contact_lost" in seen, seen      # it leaves the wall

@@ -171,7 +171,12 @@ def largest_block(scene) -> int:
 
 def _fate_scratch(scene) -> int:
     """Bytes per cell that the integrator allocates besides the layers (fate, reversals,
-    final time, one position per coordinate)."""
+    final time, one position per coordinate); of a map in full coordinates, what its
+    cells' kernel takes (:func:`phasemap.maps.full.scratch_bytes`)."""
+    if scene.full:
+        from phasemap.maps.full import scratch_bytes
+
+        return scratch_bytes(scene.model)
     if not scene.has_fates:
         return 0
     return 1 + 4 + 8 + 8 * len(scene.model.dynamics.coordinates)

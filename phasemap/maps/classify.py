@@ -219,7 +219,8 @@ def _classify_full(m, values: Mapping[str, float]) -> Classification:
     complete = m.complete(values)
     q, u, p, t = m.state_of(complete)
     motion = m.motion(p)
-    n, stagnation, lost, groups, cand = _full.survey(m, motion, q, u, t)
+    n, flags, _ = _full.cell(m, motion, q, u, t)      # what the map's cell says
+    _, _, _, groups, cand = _full.survey(m, motion, q, u, t)
     na = len(m.accelerations)
     branches = []
     for g in groups:
@@ -234,8 +235,9 @@ def _classify_full(m, values: Mapping[str, float]) -> Classification:
                 reactions={v.name: float(x) for v, x in zip(m.reactions, row[na:])}))
     return Classification(
         model=m.name, values={k: float(x) for k, x in complete.items()},
-        n_solutions=int(n), stagnation=stagnation, contact_lost=lost,
-        singular=_full.singular(motion, q, u, t, cand),
+        n_solutions=int(n), stagnation=bool(flags & _full.BITS["stagnation"]),
+        contact_lost=bool(flags & _full.BITS["contact_lost"]),
+        singular=bool(flags & _full.BITS["singular"]),
         branches=tuple(branches), candidates=tuple(branches),
         units={v.name: v.units for v in (*m.variables.values(), *m.accelerations,
                                          *m.reactions)})

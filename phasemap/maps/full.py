@@ -26,9 +26,11 @@ the forcing) of a system forced in time.  Its layers (:func:`layers`):
 * the unique motion's accelerations (``x_ddot``...) and each contact's reactions
   (``N_belt``, ``F_belt``...), NaN where the motion is not unique.
 
-Each cell costs one survey, some 0.1-0.3 ms (the phases on the compiled flow, their
-grouping in Python), so a map of these systems runs in blocks with a progress bar, like a
-fate map.
+A map's cells run in one compiled, parallel call per block
+(:func:`phasemap.motion.hybrid.flow.survey_cells`, the engine's own survey, some 3-10 us a
+cell per thread), in blocks with a progress bar like a fate map's; a cell whose contacts
+are redundant is surveyed by the engine in Python.  While the kernel compiles, its
+interpreted twin answers (:mod:`phasemap.core.tiers`; tens of milliseconds a cell).
 
 >>> import numpy as np, phasemap
 >>> c = phasemap.classify("belt", x=-0.5, xdot=0.2)    # with the belt (v = 0.2), |k x| < f_s m g
@@ -49,12 +51,10 @@ import numpy as np
 from phasemap.core import args as _args
 from phasemap.core.memo import Memo
 from phasemap.core.model import Solvability, Variable
+from phasemap.motion.hybrid import flow as _flow
 
 #: A map's default grid over a coordinate and over its rate: (start, stop, count).
 DEFAULT_AXIS = (-2.0, 2.0, 201)
-#: Where a slipping phase's reaction matrix counts as singular: its determinant, scaled
-#: to [-1, 1] (:meth:`phasemap.motion.hybrid.Motion.singularity`), at most this.
-SINGULAR_TOL = 1e-9
 
 _MODELS = Memo("maps.full.models")
 
@@ -196,9 +196,29 @@ def singular(motion, q, u, t, cand) -> bool:
     for pick in np.ndindex(*[len(ms) for ms in cand]):
         modes = tuple(cand[c][i] for c, i in enumerate(pick))
         if any(m in (SLIP_POS, SLIP_NEG) for m in modes) and \
-                abs(motion.singularity(q, u, modes, t=t)) <= SINGULAR_TOL:
+                abs(motion.singularity(q, u, modes, t=t)) <= _flow.SINGULAR_TOL:
             return True
     return False
+
+
+def cell(model: FullModel, motion, q, u, t, want_singular: bool = True):
+    """``(n_solutions, flags, row)`` of one state, as a map's cell
+    (:func:`phasemap.motion.hybrid.flow.survey_cells`; :func:`python_cell` where the
+    contacts are redundant): what :func:`phasemap.classify` reports."""
+    n, flags, rows = motion.flow.cells(motion.p[None, :], np.concatenate([q, u])[None, :],
+                                       np.array([t]), model.moving, want_singular)
+    if n[0] < 0:
+        return python_cell(model, motion, q, u, t, want_singular)
+    return int(n[0]), int(flags[0]), rows[0]
+
+
+def python_cell(model: FullModel, motion, q, u, t, want_singular: bool):
+    """:func:`cell` from :meth:`phasemap.motion.hybrid.Motion.survey` in Python: where the
+    contacts are redundant (a member of their family of reactions picked by the engine)."""
+    n, stagnation, lost, groups, cand = survey(model, motion, q, u, t)
+    flags = (BITS["stagnation"] * stagnation + BITS["contact_lost"] * lost
+             + BITS["singular"] * (want_singular and singular(motion, q, u, t, cand)))
+    return n, flags, motion_row(model, groups)
 
 
 def motion_row(model: FullModel, groups) -> np.ndarray:
@@ -215,34 +235,89 @@ def motion_row(model: FullModel, groups) -> np.ndarray:
 
 def evaluate(model: FullModel, axes: Mapping[str, np.ndarray], fixed: Mapping[str, float],
              wanted) -> dict[str, np.ndarray]:
-    """The layers ``wanted`` over the grid of ``axes`` (the other names ``fixed``): one
-    survey per cell (module docstring)."""
-    shape = tuple(np.size(a) for a in axes.values())
-    out = {l.name: np.zeros(shape, dtype=l.dtype) for l in wanted}
-    fields = [l for l in wanted if not l.is_summary]
-    motion = None
+    """The layers ``wanted`` over the grid of ``axes`` (the other names ``fixed``): every
+    cell in one compiled call (:func:`phasemap.motion.hybrid.flow.survey_cells`, the
+    survey :meth:`phasemap.motion.hybrid.Motion.survey` makes), a cell whose contacts are
+    redundant by the motion's own survey in Python."""
     names = list(axes)
-    for index in np.ndindex(*shape):
-        values = dict(fixed)
-        for n, i in zip(names, index):
-            values[n] = float(axes[n][i])
+    shape = tuple(np.size(a) for a in axes.values())
+    cells = math.prod(shape)
+    Y, P, T = _cells(model, axes, fixed, shape)
+    motion = model.motion(P[0] if cells else np.zeros(len(model.mech.parameters)))
+    want_singular = any(l.name == "singular" for l in wanted)
+    n, flags, rows = motion.flow.cells(P, Y, T, model.moving, want_singular)
+    for i in np.flatnonzero(n < 0):      # redundant contacts: the engine picks a member
+        index = np.unravel_index(i, shape)
+        values = {**fixed, **{nm: float(axes[nm][j]) for nm, j in zip(names, index)}}
         q, u, p, t = model.state_of(values)
-        if motion is None:
-            motion = model.motion(p)
-        elif not np.array_equal(p, motion.p):
-            motion.at_parameters(p)
-        n, stagnation, lost, groups, cand = survey(model, motion, q, u, t)
-        for l in wanted:
-            if l.name == "n_solutions":
-                out[l.name][index] = n
-            elif l.name == "stagnation":
-                out[l.name][index] = stagnation
-            elif l.name == "contact_lost":
-                out[l.name][index] = lost
-            elif l.name == "singular":
-                out[l.name][index] = singular(motion, q, u, t, cand)
-        if fields:
-            row = motion_row(model, groups)
-            for l in fields:
-                out[l.name][index] = row[l.column]
+        motion.at_parameters(p)
+        n[i], flags[i], rows[i] = python_cell(model, motion, q, u, t, want_singular)
+    out = {}
+    for l in wanted:
+        if l.name == "n_solutions":
+            a = n
+        elif l.name in BITS:
+            a = (flags & BITS[l.name]) != 0
+        else:
+            a = rows[:, l.column]
+        out[l.name] = np.ascontiguousarray(a.reshape(shape), dtype=l.dtype)
     return out
+
+
+def scratch_bytes(model: FullModel) -> int:
+    """Bytes per cell :func:`evaluate` allocates besides the layers: each cell's full
+    state, parameters and time (twice: built, then made writable for the kernel), its
+    count, flags and unique motion's row."""
+    n, k = model.mech.n, len(model.mech.contacts)
+    return 2 * 8 * (2 * n + len(model.mech.parameters) + 1) + 2 + 8 * (len(model.moving)
+                                                                      + 2 * k)
+
+
+#: Each flag layer's bit in :func:`phasemap.motion.hybrid.flow.survey_cells`' flags.
+BITS = {"stagnation": _flow.STAGNATION, "contact_lost": _flow.CONTACT_LOST,
+        "singular": _flow.SINGULAR_PHASE}
+
+
+def _cells(model: FullModel, axes, fixed, shape):
+    """``(Y, P, T)``: each cell's full state (every contact closed), parameters and time,
+    in C order.  The positions and the rates are each computed once per value of the
+    names they read (:func:`_reads`): a map over a position and a rate makes one call per
+    value of each, not per cell."""
+    cells = math.prod(shape)
+    names = list(axes)
+    mech, cl = model.mech, model.closure
+
+    def grid(name):
+        """The values of ``name`` over the grid (broadcast, no copy)."""
+        if name in axes:
+            i = names.index(name)
+            return np.broadcast_to(np.asarray(axes[name], dtype=float).reshape(
+                [-1 if j == i else 1 for j in range(len(shape))]), shape)
+        return np.broadcast_to(float(fixed[name]), shape)
+
+    def over(fn):
+        """``fn``'s values over the grid, (cells, n)."""
+        on = [nm for nm in names if nm in _reads(fn)]
+        sub = tuple(np.size(axes[nm]) for nm in on)
+        small = np.empty(sub + (mech.n,))
+        values = dict(fixed)
+        for index in np.ndindex(*sub):
+            values.update({nm: float(axes[nm][j]) for nm, j in zip(on, index)})
+            small[index] = fn(*(float(values.get(a, 0.0)) for a in cl.args))
+        view = small.reshape([np.size(axes[nm]) if nm in on else 1 for nm in names]
+                             + [mech.n])
+        return np.broadcast_to(view, shape + (mech.n,)).reshape(cells, mech.n)
+
+    Y = np.concatenate([over(cl.positions), over(cl.rates)], axis=1)
+    P = np.stack([grid(p).reshape(cells) for p in mech.parameters], axis=1) \
+        if mech.parameters else np.zeros((cells, 0))
+    T = grid("t").reshape(cells) if "t" in model.variables else np.zeros(cells)
+    return Y, np.ascontiguousarray(P), np.ascontiguousarray(T)
+
+
+def _reads(fn) -> set:
+    """The arguments a generated function reads (a closure's positions read the positions,
+    its rates the rates too)."""
+    import dis
+
+    return {i.argval for i in dis.get_instructions(fn) if i.opname.startswith("LOAD_FAST")}

@@ -205,8 +205,17 @@ def layers_for(model: str | Model) -> dict[str, Layer]:
 def _full_registry(model) -> dict[str, Layer]:
     """The layers of a map in full coordinates (:mod:`phasemap.maps.full`): the summaries,
     then the unique motion's accelerations and reactions (its row's columns)."""
-    out = {l.name: l for l in SUMMARY_LAYERS}
+    out = {l.name: dataclasses.replace(l, long_name=_FULL_MEANINGS.get(l.name, l.long_name))
+           for l in SUMMARY_LAYERS}
     for j, var in enumerate(model.accelerations + model.reactions):
         out[var.name] = Layer(var.name, "float64", f"{var.long_name} (the unique motion)",
                               units=var.units, branch=0, column=j)
     return out
+
+
+#: What the summaries mean in full coordinates, where the candidates are phases.
+_FULL_MEANINGS = {
+    "stagnation": "a contact at rest relative to its surface, and a motion that keeps it stuck",
+    "contact_lost": "a motion opens a one-sided contact that touches: the body leaves it",
+    "singular": "the coefficient of the senior derivative of a slipping phase vanishes",
+}

@@ -12,8 +12,9 @@ from numba import cfunc, njit
 from numba.experimental import function_type
 
 from phasemap.motion.hybrid.flow import (FINISHED, OK, _dip_rates, _rhs, accel, admits,
-                                         advance, dense_at, jacobian, locate, phases,
-                                         quiet_numba, reactions, transition, watch,
+                                         advance, dense_at, groups, jacobian, locate,
+                                         quiet_numba, reactions, scales, survey,
+                                         survey_cells, survey_range, transition, watch,
                                          workspace)
 
 #: (imported for what it registers: the numba type of a cfunc passed as an argument)
@@ -98,6 +99,7 @@ class Phase:
         self.rolls = np.ascontiguousarray(rolls, dtype=np.bool_)
         self.bounds = np.ascontiguousarray(mech.bounds(self.p), dtype=float)
         self.W, self.I = workspace(n, k)
+        self.S = np.zeros(n * n + n)
         self.none = np.zeros(k, dtype=np.bool_)
         self.ud, self.N, self.F = np.zeros(n), np.zeros(k), np.zeros(k)
         self.a = np.zeros((k, 3))
@@ -125,13 +127,14 @@ class Phase:
                      self.a, np.zeros(m), 0.0, 1e-8, 1e-8, 1e-6, 1, np.zeros((m, m)))
             twin = tiers.is_twin(tiers.runner(transition, probe, self.warm))
         kernels = (accel, watch, advance, _rhs, _dip_rates, locate, dense_at, jacobian,
-                   transition, reactions, phases, admits)
+                   transition, reactions, survey, admits, scales, groups, survey_range)
         if twin:
             fns = functions(self.mech, True)
             kernels = tuple(interpreted(k) for k in kernels)
         (self.accel, self.watch_fn, self.advance_fn, self.rhs_fn, self.rates_fn,
          self.locate_fn, self.dense_fn, self.jacobian_fn, self.transition_fn,
-         self.reactions_fn, self.phases_fn, self.admits) = kernels
+         self.reactions_fn, self.survey_fn, self.admits, self.scales_fn,
+         self.groups, self.range_fn) = kernels
         self.twin, self.fns = twin, fns
 
     def refresh(self):
@@ -147,38 +150,69 @@ class Phase:
         return self.accel(PC, SF, KN, y, float(t), self.p, self.lay, self.rolls, modes, rho,
                           start, want_det, self.W, self.I, self.ud, self.N, self.F, self.a)
 
-    def phases(self, y, t, candidates, flip, prefer, plain, sc):
-        """Every admissible phase at ``(t, y)`` among ``candidates`` (per contact, the modes
-        it may take), in :meth:`phasemap.motion.hybrid.Motion.enumerate`'s order: a list of
-        ``(modes, (ud, N, F, a, rho))``, or None where a phase's contacts are redundant
-        (:func:`flow.phases`).  ``flip``: the contacts whose sign of N is tried -1 first;
-        ``prefer``: ``{contact: mode}``."""
+    def survey(self, y, t, flip, prefer, plain):
+        """``(sc, candidates, found)`` at ``(t, y)`` (:func:`flow.survey`): the scales, per
+        contact the modes it may take, and every admissible phase among them in
+        :meth:`phasemap.motion.hybrid.Motion.enumerate`'s order, a list of
+        ``(modes, (ud, N, F, a, rho), group)`` (phases of one group move the body alike:
+        :func:`flow.groups`), or None where a phase's contacts are redundant.
+        ``flip``: the contacts whose sign of N is tried -1 first; ``prefer``:
+        ``{contact: mode}``."""
         n, k = self.n, self.k
-        most = 1
-        for ms in candidates:
-            most *= len(ms)
+        most = 4 ** k
         cand = np.zeros((k, 4), dtype=np.int64)
         ncand = np.zeros(k, dtype=np.int64)
-        for c, ms in enumerate(candidates):
-            cand[c, :len(ms)] = ms
-            ncand[c] = len(ms)
         flips = np.zeros(k, dtype=np.bool_)
         flips[list(flip)] = True
-        pref = preferences(k, prefer)
         out = (np.zeros((most, k), dtype=np.int64), np.zeros((most, k)), np.zeros((most, n)),
                np.zeros((most, k)), np.zeros((most, k)), np.zeros((most, k, 3)))
+        sc = np.zeros(4)
+        group = np.zeros(most, dtype=np.int64)
         PC, SF, KN, _ = self.fns
-        scratch = (np.zeros(k, dtype=np.int64), np.zeros(k), np.zeros(k, dtype=np.bool_),
-                   np.zeros(k), np.zeros(k), np.zeros(k), np.zeros(k))
-        count = self.phases_fn(PC, SF, KN, self.p, self.lay, self.one_sided, self.rolls, y,
-                               float(t), cand, ncand, flips, pref, bool(plain),
-                               np.asarray(sc, dtype=float), self.W, self.I, self.ud, self.N,
-                               self.F, self.a, *scratch, *out)
+        count = self.survey_fn(PC, SF, KN, self.p, self.lay, self.one_sided, self.rolls, y,
+                               float(t), flips, preferences(k, prefer), bool(plain), self.W,
+                               self.I, self.S, sc, cand, ncand, self.ud, self.N, self.F,
+                               self.a, *self._scratch(), *out, group)
+        candidates = [tuple(int(m) for m in cand[c, :ncand[c]]) for c in range(k)]
         if count < 0:
-            return None
+            return tuple(float(x) for x in sc), candidates, None
         modes, rho, ud, N, F, a = out
-        return [(tuple(int(m) for m in modes[i]), (ud[i], N[i], F[i], a[i], rho[i]))
-                for i in range(count)]
+        return (tuple(float(x) for x in sc), candidates,
+                [(tuple(int(m) for m in modes[i]), (ud[i], N[i], F[i], a[i], rho[i]),
+                  int(group[i])) for i in range(count)])
+
+    def cells(self, P, Y, T, moving, want_singular):
+        """:func:`flow.survey_cells` of the cells ``(P[i], Y[i], T[i])`` (parameters, full
+        state, time): ``(n, flags, rows)``."""
+        cells = Y.shape[0]
+        n_out = np.zeros(cells, dtype=np.int8)
+        flags = np.zeros(cells, dtype=np.int8)
+        rows = np.zeros((cells, len(moving) + 2 * self.k))
+        PC, SF, KN, _ = self.fns
+        # (writable: the kernel passes rows of them to the declaration's cfuncs, typed for
+        # writable arrays)
+        args = (PC, SF, KN, np.require(P, float, ("C", "W")), self.lay, self.one_sided,
+                self.rolls, np.require(Y, float, ("C", "W")), np.require(T, float, ("C", "W")),
+                bool(self.mech.plain), np.asarray(moving, dtype=np.int64), bool(want_singular))
+        if self.twin:       # the parallel kernel has no twin: its cells one after another
+            self.range_fn(*args, 0, cells, n_out, flags, rows)
+        else:
+            survey_cells(*args, n_out, flags, rows)
+        return n_out, flags, rows
+
+    def _scratch(self):
+        """The per-contact scratch of :func:`flow.phases`."""
+        k = self.k
+        return (np.zeros(k, dtype=np.int64), np.zeros(k), np.zeros(k, dtype=np.bool_),
+                np.zeros(k), np.zeros(k), np.zeros(k), np.zeros(k))
+
+    def scales(self, P, y):
+        """:func:`flow.scales` of the pieces ``P`` (``(M, h, g, J, b, mu)``) at the state
+        ``y``: ``(velocity, force, acceleration, length)``."""
+        flat = np.concatenate([np.ravel(x) for x in P])
+        sc = np.zeros(4)
+        self.scales_fn(flat, self.lay, y, self.S, self.I, sc)
+        return tuple(float(x) for x in sc)
 
     def pieces(self):
         """``(M, h, g, J, b, mu)`` the last call left in the workspace (copies)."""

@@ -219,37 +219,10 @@ class Motion:
     # -- which phase follows -------------------------------------------------------
 
     def scales(self, q, u, P):
-        """Scales of the contact velocities, reactions and accelerations at a state."""
-        M, h, g, J, b, mu = P
-        v = J @ u
-        ud0 = np.linalg.solve(M, h)
-        acc = float(np.abs(J @ ud0).max() + np.abs(b).max()) if self.k else 1.0
-        force = float(np.abs(h).max() + np.abs(M).max() * np.abs(ud0).max())
-        vel = float(np.abs(v).max()) if self.k else 0.0
-        length = float(1.0 + np.abs(q).max())
-        return (max(vel, math.sqrt(acc * length), 1e-300), max(force, 1e-300),
-                max(acc, 1e-300), length)
-
-    def candidates(self, q, u, P, sc, t=0.0):
-        """Per contact, the modes it may take at ``(q, u)``."""
-        M, h, g, J, b, mu = P
-        v = self.relative(J, u, t)
-        vs, _, _, L = sc
-        out = []
-        for c in range(self.k):
-            vn, vt = v[c, :2]
-            if self.one_sided[c] and (g[c] > TOL * L or vn > TOL * vs):
-                out.append((OPEN,))
-                continue
-            ms = (OPEN,) if self.one_sided[c] else ()
-            if mu[c] == 0.0:
-                ms += (SMOOTH,)
-            elif abs(vt) > TOL * vs:
-                ms += (SLIP_POS if vt > 0 else SLIP_NEG,)
-            else:
-                ms += (STICK, SLIP_POS, SLIP_NEG)
-            out.append(ms)
-        return out
+        """Scales of the contact velocities, reactions, accelerations and lengths at a state
+        (``P``: its pieces), what every tolerance of a decision is relative to: compiled
+        (:func:`flow.scales`), the numbers :meth:`survey` and the maps use."""
+        return self.flow.scales(P, np.concatenate([q, u]))
 
     def admissible(self, q, u, modes, sc, prefer=None, t=0.0, flip=()):
         """``(u', N, F, a, rho)`` of the phase ``modes`` if it is admissible at
@@ -310,24 +283,23 @@ class Motion:
 
     def survey(self, q, u, prefer=None, t=0.0, flip=()):
         """``(groups, candidates)``: :meth:`enumerate`'s groups, and per contact the modes
-        it may take at ``(q, u)`` (:meth:`candidates`), which say what touches and what is
+        it may take at ``(q, u)`` (:func:`flow.survey`), which say what touches and what is
         at relative rest (what :func:`phasemap.classify` and the maps of a system in full
         coordinates read)."""
-        P = self.mech.pieces(q, u, self.p, t)
-        sc = self.scales(q, u, P)
-        groups = []
-        cand = self.candidates(q, u, P, sc, t)
-        found = self.flow.phases(np.concatenate([q, u]), t, cand, flip, prefer,
-                                 self.mech.plain, sc)
+        # the scales, each contact's candidate modes and the admissible phases among them,
+        # in one compiled call (flow.survey)
+        sc, cand, found = self.flow.survey(np.concatenate([q, u]), t, flip, prefer,
+                                           self.mech.plain)
         if found is None:   # redundant contacts: a member of their reactions picked here
             found = self.each_phase(q, u, cand, sc, prefer, t, flip)
-        for modes, sol in found:
-            for grp in groups:
-                if np.allclose(grp[0][1][0], sol[0], rtol=1e-7, atol=1e-7 * sc[2]):
-                    grp.append((modes, sol))
-                    break
-            else:
-                groups.append([(modes, sol)])
+            ids = np.zeros(len(found), dtype=np.int64)
+            if found:
+                self.flow.groups(np.array([sol[0] for _, sol in found]), len(found), self.n,
+                                 sc[2], ids)
+            found = [(modes, sol, int(i)) for (modes, sol), i in zip(found, ids)]
+        groups = [[] for _ in range(max((g for _, _, g in found), default=-1) + 1)]
+        for modes, sol, g in found:
+            groups[g].append((modes, sol))
         prefer = prefer or {}
         touching = [c for c in range(self.k) if len(cand[c]) > 1]
 
@@ -758,8 +730,8 @@ def warm():
     """Compiles the compiled flow's kernels (:mod:`.flow`) into the kernel cache: a
     background compile's job (:mod:`phasemap.core.tiers`), a flight of the Painleve rod
     that lands and slides (the step's event exit included), then a segment of known
-    length, the reactions of a Dataset, the Jacobian and the transition matrix of the
-    periodic orbits (compiled last: binding.Phase probes it)."""
+    length, the reactions of a Dataset, the Jacobian, a map's cells and the transition
+    matrix of the periodic orbits (compiled last: binding.Phase probes it)."""
     from phasemap.core import tiers
     from phasemap.declare.full import mechanics
     from phasemap.systems.painleve_rod import SYSTEM
@@ -774,4 +746,5 @@ def warm():
         X = np.array([0.7, 0.0, 0.3, 0.0, 0.5, 0.0, 0.0])
         m.flow.jacobian(X, (OPEN,), None, 1e-6)
         m.flow.reactions(np.zeros(1), X[None, :6], np.zeros((1, 1), dtype=np.int64))
+        m.flow.cells(np.array([p]), X[None, :6], np.zeros(1), [0], True)
         m.flow.transition(X, 0.01, (OPEN,), None, 1e-8, 1e-8, 1e-6)

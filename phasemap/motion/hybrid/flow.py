@@ -25,6 +25,8 @@ import warnings
 import numpy as np
 from numba.core.errors import NumbaExperimentalFeatureWarning
 
+from numba import prange
+
 from phasemap.core.jit import njit
 from phasemap.motion.hybrid.phases import OPEN, SLIP_NEG, SLIP_POS, SMOOTH, STICK, TOL
 
@@ -76,12 +78,18 @@ _D = np.ascontiguousarray(_dc.D)
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR, _EXPONENT = 0.9, 0.2, 10.0, -1.0 / 8.0
 
 
-def sizes(n: int, k: int) -> tuple[int, int]:
+@njit(cache=True, error_model="numpy")
+def sizes_of(n, k):
     """``(pieces, workspace)``: the flat pieces' length and the float workspace's."""
     nf = n * n + n + k + 3 * k * n + 3 * k + k
     m = 3 * k
     return nf, (nf + 3 * k + n * n + 2 * (m + 1) * n + (m + 1) + (m + 1) * n
                 + 2 * (m * m + 1) + (n + m + 1) + n + 8)
+
+
+def sizes(n: int, k: int) -> tuple[int, int]:
+    """:func:`sizes_of` in Python (no compile)."""
+    return sizes_of.py_func(n, k)
 
 
 def workspace(n: int, k: int):
@@ -342,24 +350,14 @@ def phases(PC, SF, KN, p, lay, one_sided, rolls, y, t, cand, ncand, flip, prefer
     ``modes``, ``rho``, accelerations and reactions into the ``out_`` rows.  Returns how
     many, or -1 where a phase's contacts are redundant (the caller picks a member of
     their family of reactions: :meth:`phasemap.motion.hybrid.Motion.admissible`).
-    ``modes``, ``rho``, ``start``, ``vn``, ``vt``, ``gk``, ``muk``: scratch (k,); ``plain``: every slip
-    with one coefficient, at surfaces at rest (no slip starts on a static one)."""
+    ``vn``, ``vt``: the state's contact velocities (normal, tangential relative to the
+    surface: :func:`survey` fills them); ``modes``, ``rho``, ``start``, ``gk``, ``muk``:
+    scratch (k,); ``plain``: every slip with one coefficient, at surfaces at rest (no slip
+    starts on a static one)."""
     n, k = lay[0], lay[1]
-    nf = n * n + n + k + 3 * k * n + 3 * k + k
     og = n * n + n
     oJ = og + k
     om0 = oJ + 3 * k * n + 3 * k
-    PC(W[:nf], y, p, t)
-    if lay[3]:
-        SF(W[nf:nf + 2 * k], y, p, t)
-    for c in range(k):
-        v0 = 0.0
-        v1 = 0.0
-        for i in range(n):
-            v0 += W[oJ + 3 * c * n + i] * y[n + i]
-            v1 += W[oJ + (3 * c + 1) * n + i] * y[n + i]
-        vn[c] = v0
-        vt[c] = v1 - W[nf + c] if lay[3] else v1
     total = 1
     for c in range(k):
         total *= ncand[c]
@@ -406,6 +404,294 @@ def phases(PC, SF, KN, p, lay, one_sided, rolls, y, t, cand, ncand, flip, prefer
                 count += 1
                 break
     return count
+
+
+@njit(cache=True, error_model="numpy")
+def scales(W, lay, y, S, I, sc):
+    """The scales of a state into ``sc``: its contacts' velocities, its forces, its
+    accelerations and its lengths, from the pieces at the start of ``W`` and the state
+    ``y``.  The free flow's ``M^-1 h`` by :func:`_lu` (``S``: scratch, ``n * n + n``; ``I``:
+    the pivots).  What every tolerance of a decision is relative to
+    (:meth:`phasemap.motion.hybrid.Motion.scales`)."""
+    n, k = lay[0], lay[1]
+    oh = n * n
+    oJ = oh + n + k
+    ob = oJ + 3 * k * n
+    for i in range(n * n):
+        S[i] = W[i]
+    _lu(S, 0, I, 0, n)
+    for i in range(n):
+        S[n * n + i] = W[oh + i]
+    _lu_solve(S, 0, I, 0, n, n * n)
+    acc = 0.0
+    bmax = 0.0
+    vel = 0.0
+    for r in range(3 * k):
+        v = 0.0
+        w = 0.0
+        for i in range(n):
+            v += W[oJ + r * n + i] * S[n * n + i]
+            w += W[oJ + r * n + i] * y[n + i]
+        acc = max(acc, abs(v))
+        vel = max(vel, abs(w))
+        bmax = max(bmax, abs(W[ob + r]))
+    acc = acc + bmax if k > 0 else 1.0
+    hmax = 0.0
+    umax = 0.0
+    qmax = 0.0
+    for i in range(n):
+        hmax = max(hmax, abs(W[oh + i]))
+        umax = max(umax, abs(S[n * n + i]))
+        qmax = max(qmax, abs(y[i]))
+    mmax = 0.0
+    for i in range(n * n):
+        mmax = max(mmax, abs(W[i]))
+    length = 1.0 + qmax
+    sc[0] = max(vel, np.sqrt(acc * length), 1e-300)
+    sc[1] = max(hmax + mmax * umax, 1e-300)
+    sc[2] = max(acc, 1e-300)
+    sc[3] = length
+
+
+@njit(cache=True, error_model="numpy")
+def survey(PC, SF, KN, p, lay, one_sided, rolls, y, t, flip, prefer, plain, W, I, S, sc,
+           cand, ncand, ud, N, F, a, modes, rho, start, vn, vt, gk, muk, out_modes, out_rho,
+           out_ud, out_N, out_F, out_a, out_group):
+    """What a state is: its scales (:func:`scales`, into ``sc``), each contact's candidate
+    modes (``cand[c, :ncand[c]]``: a one-sided contact apart or opening, open only; a
+    frictionless one smooth; one that slips relative to its surface, that slip; one at
+    relative rest, stuck or slipping either way; a touching one-sided contact may also
+    open), every admissible phase among them (:func:`phases`, whose count it returns, -1
+    for redundant contacts) and their motions (:func:`groups`, into ``out_group``).  The
+    one survey of a state that a motion's decisions
+    (:meth:`phasemap.motion.hybrid.Motion.survey`) and the maps in full coordinates
+    (:func:`survey_cells`) make."""
+    n, k = lay[0], lay[1]
+    nf = n * n + n + k + 3 * k * n + 3 * k + k
+    og = n * n + n
+    oJ = og + k
+    om0 = oJ + 3 * k * n + 3 * k
+    PC(W[:nf], y, p, t)
+    if lay[3]:
+        SF(W[nf:nf + 2 * k], y, p, t)
+    scales(W, lay, y, S, I, sc)
+    vs, L = sc[0], sc[3]
+    for c in range(k):
+        v0 = 0.0
+        v1 = 0.0
+        for i in range(n):
+            v0 += W[oJ + 3 * c * n + i] * y[n + i]
+            v1 += W[oJ + (3 * c + 1) * n + i] * y[n + i]
+        vn[c] = v0
+        vt[c] = v1 - W[nf + c] if lay[3] else v1
+        v1 = vt[c]
+        if one_sided[c] and (W[og + c] > TOL * L or v0 > TOL * vs):
+            cand[c, 0] = OPEN
+            ncand[c] = 1
+            continue
+        j = 0
+        if one_sided[c]:
+            cand[c, 0] = OPEN
+            j = 1
+        if W[om0 + c] == 0.0:
+            cand[c, j] = SMOOTH
+            j += 1
+        elif abs(v1) > TOL * vs:
+            cand[c, j] = SLIP_POS if v1 > 0.0 else SLIP_NEG
+            j += 1
+        else:
+            cand[c, j] = STICK
+            cand[c, j + 1] = SLIP_POS
+            cand[c, j + 2] = SLIP_NEG
+            j += 3
+        ncand[c] = j
+    count = phases(PC, SF, KN, p, lay, one_sided, rolls, y, t, cand, ncand, flip, prefer,
+                   plain, sc, W, I, ud, N, F, a, modes, rho, start, vn, vt, gk, muk, out_modes,
+                   out_rho, out_ud, out_N, out_F, out_a)
+    groups(out_ud, count, n, sc[2], out_group)
+    return count
+
+
+#: Where a slipping phase's reaction matrix counts as singular: its determinant, scaled to
+#: [-1, 1] (:func:`accel`'s ``det``), at most this (:func:`survey_cells`).
+SINGULAR_TOL = 1e-9
+#: The bits of :func:`survey_cells`' flags.
+STAGNATION, CONTACT_LOST, SINGULAR_PHASE = 1, 2, 4
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def survey_cells(PC, SF, KN, P, lay, one_sided, rolls, Y, T, plain, moving, want_singular,
+                 out_n, out_flags, out_row):
+    """The maps of a system in full coordinates (:mod:`phasemap.maps.full`): at each cell's
+    state ``Y[i]``, parameters ``P[i]`` and time ``T[i]``, :func:`survey`'s motions.
+    ``out_n[i]``: how many (3 or more as 4), -1 where the contacts are redundant (the
+    caller surveys that cell in Python); ``out_flags[i]``: :data:`STAGNATION` (a contact at
+    rest relative to its surface, and a motion that keeps every such contact stuck),
+    :data:`CONTACT_LOST` (a motion opens a touching contact), :data:`SINGULAR_PHASE` (with
+    ``want_singular``: a candidate phase that slips has a singular reaction matrix);
+    ``out_row[i]``: the unique motion's accelerations of the coordinates ``moving``, then
+    each contact's N and F (NaN unless it is unique).  Cells in parallel, in chunks
+    (:func:`survey_range`, each with its own scratch)."""
+    cells = Y.shape[0]
+    chunks = min(cells, 256)
+    for ch in prange(chunks):
+        survey_range(PC, SF, KN, P, lay, one_sided, rolls, Y, T, plain, moving,
+                     want_singular, ch * cells // chunks, (ch + 1) * cells // chunks, out_n,
+                     out_flags, out_row)
+
+
+@njit(cache=True, error_model="numpy")
+def survey_range(PC, SF, KN, P, lay, one_sided, rolls, Y, T, plain, moving, want_singular,
+                 lo, hi, out_n, out_flags, out_row):
+    """:func:`survey_cells` of the cells ``lo`` to ``hi``, one after another (what the
+    interpreter tier runs while the parallel kernel compiles)."""
+    n, k = lay[0], lay[1]
+    most = 4 ** k
+    if hi <= lo:
+        return
+    W = np.zeros(sizes_of(n, k)[1])
+    I = np.zeros(9 * k + n + 8, dtype=np.int64)
+    S = np.zeros(n * n + n)
+    sc = np.zeros(4)
+    cand = np.zeros((k, 4), dtype=np.int64)
+    ncand = np.zeros(k, dtype=np.int64)
+    ud = np.zeros(n)
+    N = np.zeros(k)
+    F = np.zeros(k)
+    a = np.zeros((k, 3))
+    modes = np.zeros(k, dtype=np.int64)
+    rho = np.ones(k)
+    start = np.zeros(k, dtype=np.bool_)
+    vn = np.zeros(k)
+    vt = np.zeros(k)
+    gk = np.zeros(k)
+    muk = np.zeros(k)
+    flip = np.zeros(k, dtype=np.bool_)
+    prefer = np.full(k, -1, dtype=np.int64)
+    om = np.zeros((most, k), dtype=np.int64)
+    orho = np.zeros((most, k))
+    oud = np.zeros((most, n))
+    oN = np.zeros((most, k))
+    oF = np.zeros((most, k))
+    oa = np.zeros((most, k, 3))
+    og = np.zeros(most, dtype=np.int64)
+    for i in range(lo, hi):
+        y = Y[i]
+        p = P[i]
+        t = T[i]
+        for j in range(out_row.shape[1]):
+            out_row[i, j] = np.nan
+        count = survey(PC, SF, KN, p, lay, one_sided, rolls, y, t, flip, prefer, plain,
+                       W, I, S, sc, cand, ncand, ud, N, F, a, modes, rho, start, vn, vt,
+                       gk, muk, om, orho, oud, oN, oF, oa, og)
+        out_flags[i] = 0
+        if count < 0:
+            out_n[i] = -1
+            continue
+        ng = 0
+        for j in range(count):
+            ng = max(ng, og[j] + 1)
+        out_n[i] = ng if ng < 3 else 4
+        flags = 0
+        rest = False
+        for c in range(k):
+            rest = rest or _at_rest(cand, ncand, c)
+        for j in range(count):
+            keeps = True
+            for c in range(k):
+                if om[j, c] != STICK and _at_rest(cand, ncand, c):
+                    keeps = False
+                if om[j, c] == OPEN and ncand[c] > 1:
+                    flags |= CONTACT_LOST
+            if rest and keeps:
+                flags |= STAGNATION
+        if want_singular and _singular(PC, SF, KN, p, lay, rolls, y, t, cand, ncand, W,
+                                       I, ud, N, F, a, modes, rho, start):
+            flags |= SINGULAR_PHASE
+        out_flags[i] = flags
+        if ng == 1:
+            for j in range(moving.size):
+                out_row[i, j] = oud[0, moving[j]]
+            for c in range(k):
+                out_row[i, moving.size + 2 * c] = oN[0, c]
+                out_row[i, moving.size + 2 * c + 1] = oF[0, c]
+
+
+@njit(cache=True, error_model="numpy")
+def _at_rest(cand, ncand, c):
+    """Whether contact ``c`` may stick (it is at rest relative to its surface)."""
+    for j in range(ncand[c]):
+        if cand[c, j] == STICK:
+            return True
+    return False
+
+
+@njit(cache=True, error_model="numpy")
+def _singular(PC, SF, KN, p, lay, rolls, y, t, cand, ncand, W, I, ud, N, F, a, modes, rho,
+              start):
+    """Whether a candidate phase that slips has a singular reaction matrix (its
+    :func:`accel` ``det`` within :data:`SINGULAR_TOL` of 0, each N assumed positive)."""
+    k = lay[1]
+    total = 1
+    for c in range(k):
+        total *= ncand[c]
+        rho[c] = 1.0
+        start[c] = False
+    for pick in range(total):
+        r = pick
+        slips = False
+        for c in range(k - 1, -1, -1):
+            modes[c] = cand[c, r % ncand[c]]
+            r //= ncand[c]
+            slips = slips or modes[c] == SLIP_POS or modes[c] == SLIP_NEG
+        if not slips:
+            continue
+        _, det = accel(PC, SF, KN, y, t, p, lay, rolls, modes, rho, start, True, W, I, ud, N,
+                       F, a)
+        if abs(det) <= SINGULAR_TOL:
+            return True
+    return False
+
+
+#: Phases whose accelerations agree to this (relative, and of the acceleration scale) move
+#: the body alike: one motion (:func:`groups`).
+SAME_MOTION = 1e-7
+
+
+@njit(cache=True, error_model="numpy")
+def groups(out_ud, count, n, acs, out_group):
+    """Each of the ``count`` phases' group into ``out_group``: the phases whose
+    accelerations agree with a group's first to :data:`SAME_MOTION` (numpy's ``allclose``
+    test, relative and of the acceleration scale ``acs``) are one motion (slip with
+    N = 0 and open with g'' = 0); the groups in the order of their first phase.  How many
+    groups."""
+    ng = 0
+    for i in range(count):
+        out_group[i] = -1
+        for j in range(i):
+            if out_group[j] == -1 or j != _first(out_group, out_group[j]):
+                continue
+            same = True
+            for r in range(n):
+                if not abs(out_ud[j, r] - out_ud[i, r]) <= SAME_MOTION * acs + \
+                        SAME_MOTION * abs(out_ud[i, r]):
+                    same = False
+            if same:
+                out_group[i] = out_group[j]
+                break
+        if out_group[i] == -1:
+            out_group[i] = ng
+            ng += 1
+    return ng
+
+
+@njit(cache=True, error_model="numpy")
+def _first(out_group, g):
+    """The first phase of group ``g``."""
+    i = 0
+    while out_group[i] != g:
+        i += 1
+    return i
 
 
 @njit(cache=True, error_model="numpy")
