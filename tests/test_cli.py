@@ -729,3 +729,20 @@ def test_timing_says_how_much_of_a_command_was_compiling():
     m = re.fullmatch(r"phasemap: ([\d.]+) s in all, ([\d.]+) s of it compiling numba kernels "
                      r"in this process", last)
     assert m and float(m.group(2)) <= float(m.group(1)), last
+
+
+def test_the_oscillators_are_mapped_and_classified_from_the_command_line(tmp_path):
+    """A friction oscillator (no reduced model) takes the map commands: classify names
+    its phases, models lists it, atlas maps its forcing's phase; a bad name is one line."""
+    r = quiet("classify", "belt", "x=1.2", "xdot=0.2")
+    assert r.returncode == 0, r.stderr
+    assert "belt_slip_neg" in r.stdout and "stagnation = False" in r.stdout
+    listing = quiet("models", "belt").stdout
+    assert "(in full coordinates)" in listing and "F_belt" in listing
+    out = tmp_path / "dh.nc"
+    r = quiet("atlas", "den_hartog", "--axis", "t=0:7.85:5", "--axis", "x=-1:1:4",
+              "--set", "xdot=0", "--layers", "stagnation,x_ddot", "-o", out)
+    assert r.returncode == 0, r.stderr
+    ds = phasemap.open_atlas(out)
+    assert ds.x_ddot.dims == ("t", "x") and ds.x_ddot.attrs["units"] == "m s-2"
+    one_line_error(quiet("classify", "belt", "y=0"), "unknown variable")

@@ -123,6 +123,9 @@ def test_dask_chunks_spec_and_netcdf_keep_every_value(tmp_path):
         assert np.array_equal(done[v].values, eager[v].values, equal_nan=True)
     again = phasemap.Scene.from_spec(scene.spec())
     assert again.spec() == scene.spec() and isinstance(again.model, FullModel)
+    from phasemap.plot.labels import axis_label
+
+    assert axis_label(eager, "x_ddot") == r"$\ddot{x}$ (m s$^{-2}$)"
     path = tmp_path / "den_hartog.nc"
     phasemap.write_atlas(eager, path)
     back = phasemap.open_atlas(path)

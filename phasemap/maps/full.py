@@ -82,8 +82,10 @@ class FullModel:
         self.closure = closure(S)
         self.reactions = tuple(
             v for c in self.mech.contacts for v in (
-                Variable(f"N_{c.name}", "N", f"normal reaction of the contact {c.name}"),
-                Variable(f"F_{c.name}", "N", f"friction force of the contact {c.name}")))
+                Variable(f"N_{c.name}", "N", f"normal reaction of the contact {c.name}",
+                         rf"N_{{\mathrm{{{_tex(c.name)}}}}}"),
+                Variable(f"F_{c.name}", "N", f"friction force of the contact {c.name}",
+                         rf"F_{{\mathrm{{{_tex(c.name)}}}}}")))
         # what an atlas header describes (phasemap.atlas.dataset): no branches, no
         # coefficient, no reduced dynamics
         self.coefficient, self.branches, self.dynamics = None, (), None
@@ -134,6 +136,11 @@ class FullModel:
         q, u = self.closure(values)
         p = np.array([float(values[n]) for n in self.mech.parameters])
         return q, u, p, float(values.get("t", 0.0))
+
+
+def _tex(name: str) -> str:
+    r"""A contact's name inside mathtext's ``\mathrm{}``."""
+    return name.replace("_", r"\_")
 
 
 def map_model(model):

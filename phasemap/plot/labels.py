@@ -86,6 +86,9 @@ def _declared_symbol(ds: xr.Dataset, name: str) -> tuple[str, str | None] | None
         symbol, units, _ = words.variables[name]
         return symbol, units
     for table in (words.accelerations, words.reactions):
+        if name in table:       # the unique motion's (a map in full coordinates)
+            symbol, units, _ = table[name]
+            return symbol, units
         for var, (symbol, units, _) in table.items():
             for branch in words.branches:
                 if name == f"{var}_{branch}":

@@ -246,7 +246,7 @@ class Motion:
             ud, N, F, a, P = sol
             M, h, g, J, b, mu = P
             v = self.relative(J, u, t)
-            # the tests of flow.admits, which flow.phases runs for every phase at once
+            # the tests of flow.admits, which flow.survey runs for every phase at once
             if self.flow.admits(np.asarray(modes, dtype=np.int64), rho, self.one_sided, N, F,
                                 a, g, np.ascontiguousarray(v[:, 0]),
                                 np.ascontiguousarray(v[:, 1]), mu, np.asarray(sc, dtype=float),
@@ -256,7 +256,7 @@ class Motion:
 
     def each_phase(self, q, u, cand, sc, prefer=None, t=0.0, flip=()):
         """:meth:`admissible` of each phase the candidate modes ``cand`` (per contact) make,
-        in :func:`flow.phases`' order: the admissible ones as ``(modes, solution)``.  What
+        in :func:`flow.survey`'s order: the admissible ones as ``(modes, solution)``.  What
         :meth:`enumerate` runs where the contacts are redundant."""
         found = []
         for pick in np.ndindex(*[len(m) for m in cand]):
