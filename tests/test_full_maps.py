@@ -187,3 +187,50 @@ def test_a_compiled_cell_is_the_motions_own_survey(name):
         seen |= {("n", n)} | {b for b, bit in full.BITS.items() if flags & bit}
     assert ("n", 1) in seen and "stagnation" in seen, seen
     assert name != "ladder" or "contact_lost" in seen, seen      # it leaves the wall
+
+
+def test_each_cell_holds_its_own_full_state():
+    """A map's full states, computed once per value of the names each of the closure's
+    functions reads, against the closure called at every cell: the rolling wheel's
+    x' = r omega reads a parameter and a rate together, with the axes in another order
+    than the closure's arguments."""
+    from phasemap.maps import full
+
+    S = phasemap.get_model("wheel").declaration
+    m = FullModel(getattr(S, "system", S))
+    axes = {"r": np.array([1.0, 1.5]), "omega": np.array([-1.0, 0.0, 2.0]),
+            "phi": np.array([0.1, 0.2, 0.4, 0.9])}
+    fixed = {k: v for k, v in m.defaults.items() if k not in axes}
+    Y, P, T = full._cells(m, axes, fixed, (2, 3, 4))
+    for i, index in enumerate(np.ndindex(2, 3, 4)):
+        values = {**fixed, **{n: float(a[j]) for (n, a), j in zip(axes.items(), index)}}
+        q, u = m.closure(values)
+        assert np.array_equal(Y[i], np.concatenate([q, u]))
+        assert np.array_equal(P[i], [values[p] for p in m.mech.parameters])
+    assert not T.any()
+
+
+def test_a_survey_grows_its_rows_to_the_states_candidates():
+    """The outputs of a survey hold 16 candidate phases at first (the most, 4 ** k, would
+    take 0.5 GB for ten contacts) and grow where a state has more: started from one row,
+    the engine's survey and the map's cells give what they give from sixteen, on the
+    ladder's states at rest against the wall and the floor (up to sixteen phases)."""
+    S = phasemap.get_model("ladder").declaration
+    m = FullModel(getattr(S, "system", S))
+    rng = np.random.default_rng(3)
+    states = [m.state_of(_random_values(m, rng)) for _ in range(30)]
+    P = np.array([p for _, _, p, _ in states])
+    Y = np.array([np.concatenate([q, u]) for q, u, _, _ in states])
+    T = np.zeros(len(states))
+    motion = m.motion(P[0])
+    want = motion.flow.cells(P, Y, T, m.moving, True)
+    surveys = [motion.survey(q, u, t=t) for q, u, _, t in states]
+    motion.flow.rows = 1
+    got = motion.flow.cells(P, Y, T, m.moving, True)
+    for a, b in zip(got, want):
+        assert np.array_equal(a, b, equal_nan=True)
+    for (q, u, _, t), (groups, cand) in zip(states, surveys):
+        again, cand2 = motion.survey(q, u, t=t)
+        assert cand2 == cand and [[x[0] for x in g] for g in again] == \
+            [[x[0] for x in g] for g in groups]
+    assert max(math.prod(len(c) for c in cand) for _, cand in surveys) > 1

@@ -91,7 +91,8 @@ class FullModel:
         self.coefficient, self.branches, self.dynamics = None, (), None
         moving = [c for c in S.coordinates if c.rate]
         self.default_axes = dict(S.default_axes) or {
-            moving[0].name: DEFAULT_AXIS, moving[0].rate.name: DEFAULT_AXIS}
+            v.name: _within(v) for v in (self.variables[moving[0].name],
+                                        self.variables[moving[0].rate.name])}
         self.moving = [self.mech.coordinates.index(c.name) for c in moving]
 
     def __repr__(self) -> str:
@@ -136,6 +137,16 @@ class FullModel:
         q, u = self.closure(values)
         p = np.array([float(values[n]) for n in self.mech.parameters])
         return q, u, p, float(values.get("t", 0.0))
+
+
+def _within(v: Variable) -> tuple[float, float, int]:
+    """:data:`DEFAULT_AXIS` inside the domain of ``v`` (an open end stepped in by a
+    thousandth of the span)."""
+    lo, hi, count = DEFAULT_AXIS
+    lo, hi = max(lo, v.lower), min(hi, v.upper)
+    inset = 1e-3 * (hi - lo)
+    return (lo + inset * v.lower_open * (lo == v.lower),
+            hi - inset * v.upper_open * (hi == v.upper), count)
 
 
 def _tex(name: str) -> str:
@@ -225,7 +236,12 @@ def python_cell(model: FullModel, motion, q, u, t, want_singular: bool):
     n, stagnation, lost, groups, cand = survey(model, motion, q, u, t)
     flags = (BITS["stagnation"] * stagnation + BITS["contact_lost"] * lost
              + BITS["singular"] * (want_singular and singular(motion, q, u, t, cand)))
-    return n, flags, motion_row(model, groups)
+    # the row of the unique motion's first phase in the survey's order, as the compiled
+    # cell takes it (a group's phases agree in their accelerations to 1e-7, not always in
+    # their reactions: stuck at the limit and slipping from rest)
+    first = [[min(g, key=lambda item: tuple(cand[c].index(m) for c, m in enumerate(item[0])))]
+             for g in groups]
+    return n, flags, motion_row(model, first)
 
 
 def motion_row(model: FullModel, groups) -> np.ndarray:
@@ -250,7 +266,7 @@ def evaluate(model: FullModel, axes: Mapping[str, np.ndarray], fixed: Mapping[st
     shape = tuple(np.size(a) for a in axes.values())
     cells = math.prod(shape)
     Y, P, T = _cells(model, axes, fixed, shape)
-    motion = model.motion(P[0] if cells else np.zeros(len(model.mech.parameters)))
+    motion = model.motion(P[0].copy() if cells else np.zeros(len(model.mech.parameters)))
     want_singular = any(l.name == "singular" for l in wanted)
     n, flags, rows = motion.flow.cells(P, Y, T, model.moving, want_singular)
     for i in np.flatnonzero(n < 0):      # redundant contacts: the engine picks a member
@@ -327,4 +343,8 @@ def _reads(fn) -> set:
     its rates the rates too)."""
     import dis
 
-    return {i.argval for i in dis.get_instructions(fn) if i.opname.startswith("LOAD_FAST")}
+    out = set()
+    for i in dis.get_instructions(fn):
+        if i.opname.startswith("LOAD_FAST"):     # (3.13's LOAD_FAST_LOAD_FAST: a pair)
+            out |= set(i.argval) if isinstance(i.argval, tuple) else {i.argval}
+    return out

@@ -100,6 +100,9 @@ class Phase:
         self.bounds = np.ascontiguousarray(mech.bounds(self.p), dtype=float)
         self.W, self.I = workspace(n, k)
         self.S = np.zeros(n * n + n)
+        #: the candidate phases a survey's outputs hold at first: grown where a state has
+        #: more (the most, 4 ** k, would take 0.5 GB for ten contacts)
+        self.rows = 16
         self.none = np.zeros(k, dtype=np.bool_)
         self.ud, self.N, self.F = np.zeros(n), np.zeros(k), np.zeros(k)
         self.a = np.zeros((k, 3))
@@ -159,20 +162,25 @@ class Phase:
         ``flip``: the contacts whose sign of N is tried -1 first; ``prefer``:
         ``{contact: mode}``."""
         n, k = self.n, self.k
-        most = 4 ** k
         cand = np.zeros((k, 4), dtype=np.int64)
         ncand = np.zeros(k, dtype=np.int64)
         flips = np.zeros(k, dtype=np.bool_)
         flips[list(flip)] = True
-        out = (np.zeros((most, k), dtype=np.int64), np.zeros((most, k)), np.zeros((most, n)),
-               np.zeros((most, k)), np.zeros((most, k)), np.zeros((most, k, 3)))
         sc = np.zeros(4)
-        group = np.zeros(most, dtype=np.int64)
         PC, SF, KN, _ = self.fns
-        count = self.survey_fn(PC, SF, KN, self.p, self.lay, self.one_sided, self.rolls, y,
-                               float(t), flips, preferences(k, prefer), bool(plain), self.W,
-                               self.I, self.S, sc, cand, ncand, self.ud, self.N, self.F,
-                               self.a, *self._scratch(), *out, group)
+        most = self.rows
+        while True:     # rows for the state's candidate phases (flow.phases says how many)
+            out = (np.zeros((most, k), dtype=np.int64), np.zeros((most, k)),
+                   np.zeros((most, n)), np.zeros((most, k)), np.zeros((most, k)),
+                   np.zeros((most, k, 3)))
+            group = np.zeros(most, dtype=np.int64)
+            count = self.survey_fn(PC, SF, KN, self.p, self.lay, self.one_sided, self.rolls,
+                                   y, float(t), flips, preferences(k, prefer), bool(plain),
+                                   self.W, self.I, self.S, sc, cand, ncand, self.ud, self.N,
+                                   self.F, self.a, *self._scratch(), *out, group)
+            if count > -2:
+                break
+            most = -2 - count
         candidates = [tuple(int(m) for m in cand[c, :ncand[c]]) for c in range(k)]
         if count < 0:
             return tuple(float(x) for x in sc), candidates, None
@@ -195,9 +203,9 @@ class Phase:
                 self.rolls, np.require(Y, float, ("C", "W")), np.require(T, float, ("C", "W")),
                 bool(self.mech.plain), np.asarray(moving, dtype=np.int64), bool(want_singular))
         if self.twin:       # the parallel kernel has no twin: its cells one after another
-            self.range_fn(*args, 0, cells, n_out, flags, rows)
+            self.range_fn(*args, self.rows, 0, cells, n_out, flags, rows)
         else:
-            survey_cells(*args, n_out, flags, rows)
+            survey_cells(*args, self.rows, n_out, flags, rows)
         return n_out, flags, rows
 
     def _scratch(self):

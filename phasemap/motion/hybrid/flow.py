@@ -349,7 +349,10 @@ def phases(PC, SF, KN, p, lay, one_sided, rolls, y, t, cand, ncand, flip, prefer
     closed contacts that admits it (+1 first, flipped for those in ``flip``): its
     ``modes``, ``rho``, accelerations and reactions into the ``out_`` rows.  Returns how
     many, or -1 where a phase's contacts are redundant (the caller picks a member of
-    their family of reactions: :meth:`phasemap.motion.hybrid.Motion.admissible`).
+    their family of reactions: :meth:`phasemap.motion.hybrid.Motion.admissible`), or
+    ``-2 - m`` where the ``out_`` rows are fewer than the ``m`` candidate phases (the
+    caller grows them to ``m`` and calls again: they are sized by the state's
+    candidates, not by the most a system's contacts could have, ``4 ** k``).
     ``vn``, ``vt``: the state's contact velocities (normal, tangential relative to the
     surface: :func:`survey` fills them); ``modes``, ``rho``, ``start``, ``gk``, ``muk``:
     scratch (k,); ``plain``: every slip with one coefficient, at surfaces at rest (no slip
@@ -361,6 +364,8 @@ def phases(PC, SF, KN, p, lay, one_sided, rolls, y, t, cand, ncand, flip, prefer
     total = 1
     for c in range(k):
         total *= ncand[c]
+    if total > out_modes.shape[0]:
+        return -2 - total
     count = 0
     for pick in range(total):
         r = pick
@@ -461,8 +466,8 @@ def survey(PC, SF, KN, p, lay, one_sided, rolls, y, t, flip, prefer, plain, W, I
     modes (``cand[c, :ncand[c]]``: a one-sided contact apart or opening, open only; a
     frictionless one smooth; one that slips relative to its surface, that slip; one at
     relative rest, stuck or slipping either way; a touching one-sided contact may also
-    open), every admissible phase among them (:func:`phases`, whose count it returns, -1
-    for redundant contacts) and their motions (:func:`groups`, into ``out_group``).  The
+    open), every admissible phase among them (:func:`phases`, whose count it returns: -1
+    for redundant contacts, ``-2 - m`` for too few ``out_`` rows) and their motions (:func:`groups`, into ``out_group``).  The
     one survey of a state that a motion's decisions
     (:meth:`phasemap.motion.hybrid.Motion.survey`) and the maps in full coordinates
     (:func:`survey_cells`) make."""
@@ -508,7 +513,8 @@ def survey(PC, SF, KN, p, lay, one_sided, rolls, y, t, flip, prefer, plain, W, I
     count = phases(PC, SF, KN, p, lay, one_sided, rolls, y, t, cand, ncand, flip, prefer,
                    plain, sc, W, I, ud, N, F, a, modes, rho, start, vn, vt, gk, muk, out_modes,
                    out_rho, out_ud, out_N, out_F, out_a)
-    groups(out_ud, count, n, sc[2], out_group)
+    if count >= 0:
+        groups(out_ud, count, n, sc[2], out_group)
     return count
 
 
@@ -521,7 +527,7 @@ STAGNATION, CONTACT_LOST, SINGULAR_PHASE = 1, 2, 4
 
 @njit(cache=True, error_model="numpy", parallel=True)
 def survey_cells(PC, SF, KN, P, lay, one_sided, rolls, Y, T, plain, moving, want_singular,
-                 out_n, out_flags, out_row):
+                 rows, out_n, out_flags, out_row):
     """The maps of a system in full coordinates (:mod:`phasemap.maps.full`): at each cell's
     state ``Y[i]``, parameters ``P[i]`` and time ``T[i]``, :func:`survey`'s motions.
     ``out_n[i]``: how many (3 or more as 4), -1 where the contacts are redundant (the
@@ -530,23 +536,25 @@ def survey_cells(PC, SF, KN, P, lay, one_sided, rolls, Y, T, plain, moving, want
     :data:`CONTACT_LOST` (a motion opens a touching contact), :data:`SINGULAR_PHASE` (with
     ``want_singular``: a candidate phase that slips has a singular reaction matrix);
     ``out_row[i]``: the unique motion's accelerations of the coordinates ``moving``, then
-    each contact's N and F (NaN unless it is unique).  Cells in parallel, in chunks
+    each contact's N and F, of its first phase in the survey's order (NaN unless the
+    motion is unique).  ``rows``: the candidate phases a chunk's scratch holds at first
+    (grown where a state has more).  Cells in parallel, in chunks
     (:func:`survey_range`, each with its own scratch)."""
     cells = Y.shape[0]
     chunks = min(cells, 256)
     for ch in prange(chunks):
         survey_range(PC, SF, KN, P, lay, one_sided, rolls, Y, T, plain, moving,
-                     want_singular, ch * cells // chunks, (ch + 1) * cells // chunks, out_n,
-                     out_flags, out_row)
+                     want_singular, rows, ch * cells // chunks, (ch + 1) * cells // chunks,
+                     out_n, out_flags, out_row)
 
 
 @njit(cache=True, error_model="numpy")
 def survey_range(PC, SF, KN, P, lay, one_sided, rolls, Y, T, plain, moving, want_singular,
-                 lo, hi, out_n, out_flags, out_row):
+                 rows, lo, hi, out_n, out_flags, out_row):
     """:func:`survey_cells` of the cells ``lo`` to ``hi``, one after another (what the
     interpreter tier runs while the parallel kernel compiles)."""
     n, k = lay[0], lay[1]
-    most = 4 ** k
+    most = rows                    # grown where a state has more candidate phases
     if hi <= lo:
         return
     W = np.zeros(sizes_of(n, k)[1])
@@ -584,6 +592,18 @@ def survey_range(PC, SF, KN, P, lay, one_sided, rolls, Y, T, plain, moving, want
         count = survey(PC, SF, KN, p, lay, one_sided, rolls, y, t, flip, prefer, plain,
                        W, I, S, sc, cand, ncand, ud, N, F, a, modes, rho, start, vn, vt,
                        gk, muk, om, orho, oud, oN, oF, oa, og)
+        if count <= -2:
+            most = -2 - count
+            om = np.zeros((most, k), dtype=np.int64)
+            orho = np.zeros((most, k))
+            oud = np.zeros((most, n))
+            oN = np.zeros((most, k))
+            oF = np.zeros((most, k))
+            oa = np.zeros((most, k, 3))
+            og = np.zeros(most, dtype=np.int64)
+            count = survey(PC, SF, KN, p, lay, one_sided, rolls, y, t, flip, prefer, plain,
+                           W, I, S, sc, cand, ncand, ud, N, F, a, modes, rho, start, vn,
+                           vt, gk, muk, om, orho, oud, oN, oF, oa, og)
         out_flags[i] = 0
         if count < 0:
             out_n[i] = -1
