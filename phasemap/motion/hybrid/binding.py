@@ -11,9 +11,9 @@ import numpy as np
 from numba import cfunc, njit
 from numba.experimental import function_type
 
-from phasemap.motion.hybrid.flow import (FINISHED, OK, _dip_rates, _rhs, accel, admits,
-                                         advance, dense_at, groups, jacobian, locate,
-                                         quiet_numba, reactions, scales, survey,
+from phasemap.motion.hybrid.flow import (FINISHED, OK, _dip_rates, _rhs, _rows, accel,
+                                         admits, advance, dense_at, groups, jacobian,
+                                         locate, quiet_numba, reactions, scales, survey,
                                          survey_cells, survey_range, transition, watch,
                                          workspace)
 
@@ -170,10 +170,7 @@ class Phase:
         PC, SF, KN, _ = self.fns
         most = self.rows
         while True:     # rows for the state's candidate phases (flow.phases says how many)
-            out = (np.zeros((most, k), dtype=np.int64), np.zeros((most, k)),
-                   np.zeros((most, n)), np.zeros((most, k)), np.zeros((most, k)),
-                   np.zeros((most, k, 3)))
-            group = np.zeros(most, dtype=np.int64)
+            *out, group = _rows.py_func(most, n, k)
             count = self.survey_fn(PC, SF, KN, self.p, self.lay, self.one_sided, self.rolls,
                                    y, float(t), flips, preferences(k, prefer), bool(plain),
                                    self.W, self.I, self.S, sc, cand, ncand, self.ud, self.N,

@@ -576,31 +576,17 @@ def survey_range(PC, SF, KN, P, lay, one_sided, rolls, Y, T, plain, moving, want
     muk = np.zeros(k)
     flip = np.zeros(k, dtype=np.bool_)
     prefer = np.full(k, -1, dtype=np.int64)
-    om = np.zeros((most, k), dtype=np.int64)
-    orho = np.zeros((most, k))
-    oud = np.zeros((most, n))
-    oN = np.zeros((most, k))
-    oF = np.zeros((most, k))
-    oa = np.zeros((most, k, 3))
-    og = np.zeros(most, dtype=np.int64)
+    om, orho, oud, oN, oF, oa, og = _rows(most, n, k)
     for i in range(lo, hi):
         y = Y[i]
         p = P[i]
         t = T[i]
         for j in range(out_row.shape[1]):
             out_row[i, j] = np.nan
-        count = survey(PC, SF, KN, p, lay, one_sided, rolls, y, t, flip, prefer, plain,
-                       W, I, S, sc, cand, ncand, ud, N, F, a, modes, rho, start, vn, vt,
-                       gk, muk, om, orho, oud, oN, oF, oa, og)
-        if count <= -2:
-            most = -2 - count
-            om = np.zeros((most, k), dtype=np.int64)
-            orho = np.zeros((most, k))
-            oud = np.zeros((most, n))
-            oN = np.zeros((most, k))
-            oF = np.zeros((most, k))
-            oa = np.zeros((most, k, 3))
-            og = np.zeros(most, dtype=np.int64)
+        count = -2 - most
+        while count <= -2:
+            if -2 - count > om.shape[0]:     # more candidate phases than rows: grown
+                om, orho, oud, oN, oF, oa, og = _rows(-2 - count, n, k)
             count = survey(PC, SF, KN, p, lay, one_sided, rolls, y, t, flip, prefer, plain,
                            W, I, S, sc, cand, ncand, ud, N, F, a, modes, rho, start, vn,
                            vt, gk, muk, om, orho, oud, oN, oF, oa, og)
@@ -635,6 +621,15 @@ def survey_range(PC, SF, KN, P, lay, one_sided, rolls, Y, T, plain, moving, want
             for c in range(k):
                 out_row[i, moving.size + 2 * c] = oN[0, c]
                 out_row[i, moving.size + 2 * c + 1] = oF[0, c]
+
+
+@njit(cache=True, error_model="numpy")
+def _rows(most, n, k):
+    """A survey's output rows for ``most`` candidate phases: their modes, signs of N,
+    accelerations, N, F, contact accelerations and groups."""
+    return (np.zeros((most, k), dtype=np.int64), np.zeros((most, k)), np.zeros((most, n)),
+            np.zeros((most, k)), np.zeros((most, k)), np.zeros((most, k, 3)),
+            np.zeros(most, dtype=np.int64))
 
 
 @njit(cache=True, error_model="numpy")
