@@ -476,23 +476,3 @@ def _closure_text(S) -> str:
     w.add("positions", args, positions)
     w.add("rates", args, rates)
     return w.text({"args": [str(a) for a in args]})
-
-
-def map_variables(S):
-    """What a map of ``S`` in full coordinates takes (a declaration without a reduced
-    model: :mod:`phasemap.maps.full`): ``(state, params, accelerations, check)``.  The
-    state is every coordinate a closed contact leaves free, then their rates, then the
-    time ``t`` where the system depends on it; ``check`` tests the bounds that are
-    expressions of the parameters (None if there are none).  The same variables as a
-    reduced model's (:func:`phasemap.declare.build.build_model`)."""
-    from phasemap.core.model import Variable
-    from phasemap.declare import build
-    from phasemap.declare.validation import time_dependent
-
-    moving = [c for c in S.coordinates if c.rate]
-    state = tuple(build._bounded(c) for c in moving)
-    state += tuple(build._variable(c.rate, default=float(c.rate.default)) for c in moving)
-    if time_dependent(S):
-        state += (Variable("t", "s", "time (the phase of the forcing)", "t", 0.0),)
-    return (state, tuple(build._bounded(p) for p in S.parameters),
-            build._accelerations(moving), build._bounds_check(S))

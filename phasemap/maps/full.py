@@ -72,12 +72,13 @@ class FullModel:
     """
 
     def __init__(self, S):
-        from phasemap.declare.full import closure, map_variables
+        from phasemap.declare.full import closure
         from phasemap.motion.hybrid.start import mechanics_of
 
         self.declaration = S
         self.name, self.title, self.citation = S.name, S.title, S.citation
-        self.state, self.params, self.accelerations, self.check = map_variables(S)
+        self.state, self.params, self.accelerations = _variables(S)
+        self.check = None
         self.mech = mechanics_of(S)
         self.closure = closure(S)
         self.reactions = tuple(
@@ -137,6 +138,42 @@ class FullModel:
         q, u = self.closure(values)
         p = np.array([float(values[n]) for n in self.mech.parameters])
         return q, u, p, float(values.get("t", 0.0))
+
+
+def _variables(S):
+    """``(state, params, accelerations)`` of a map of ``S`` in full coordinates: every
+    coordinate a closed contact leaves free, then their rates, then the time ``t`` where
+    the system depends on it; the parameters; the free coordinates' accelerations.  As a
+    reduced model's (:func:`phasemap.declare.build.build_model`; built here, since a
+    change to :mod:`phasemap.declare` renews every declared model's derivation)."""
+    import sympy as sp       # (a System is made with sympy: it is loaded)
+
+    from phasemap.declare.api import numeric_bound
+    from phasemap.declare.validation import time_dependent
+
+    def variable(x, bounded=True):
+        kw = {}
+        if bounded:
+            for b in (x.lower, x.upper):
+                if not numeric_bound(b):
+                    raise ValueError(f"{S.name}: {x.name} has the bound {b}, an expression "
+                                     "of the parameters: a map in full coordinates takes "
+                                     "numbers only")
+            kw = dict(lower=float(x.lower), upper=float(x.upper), lower_open=x.lower_open,
+                      upper_open=x.upper_open)
+        return Variable(x.name, x.units, x.long_name, x.symbol or sp.latex(sp.Symbol(x.name)),
+                        default=float(x.default), **kw)
+
+    moving = [c for c in S.coordinates if c.rate]
+    state = tuple(variable(c) for c in moving) + tuple(variable(c.rate, False)
+                                                      for c in moving)
+    if time_dependent(S):
+        state += (Variable("t", "s", "time (the phase of the forcing)", "t", 0.0),)
+    accelerations = tuple(Variable(f"{c.name}_ddot",
+                                   "s-2" if c.units == "1" else f"{c.units} s-2",
+                                   f"second derivative of the {c.long_name}",
+                                   f"\\ddot{{{c.symbol or c.name}}}") for c in moving)
+    return state, tuple(variable(p) for p in S.parameters), accelerations
 
 
 def _within(v: Variable) -> tuple[float, float, int]:
