@@ -27,7 +27,7 @@ the forcing) of a system forced in time.  Its layers (:func:`layers`):
   (``N_belt``, ``F_belt``...), NaN where the motion is not unique.
 
 A map's cells run in one compiled, parallel call per block
-(:func:`phasemap.motion.hybrid.flow.survey_cells`, the engine's own survey, some 3-10 us a
+(:func:`phasemap.motion.hybrid.flow.survey_cells`, the engine's own survey, some 3-5 us a
 cell per thread), in blocks with a progress bar like a fate map's; a cell whose contacts
 are redundant is surveyed by the engine in Python.  While the kernel compiles, its
 interpreted twin answers (:mod:`phasemap.core.tiers`; tens of milliseconds a cell).
