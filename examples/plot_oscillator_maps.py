@@ -14,7 +14,7 @@ cos(0.8 t) - x - f sgn(...).
 
 Right: the block on the belt, moving with it (x' = v = 0.2), over its position and the
 static coefficient f_s: it rides with the belt (stagnation relative to the belt) while
-the spring's pull |k x| is within f_s m g, the wedge |x| <= f_s.
+the spring's pull k x is within plus or minus f_s m g, the wedge -f_s <= x <= f_s.
 """
 
 import matplotlib.pyplot as plt
