@@ -78,7 +78,6 @@ class FullModel:
         self.declaration = S
         self.name, self.title, self.citation = S.name, S.title, S.citation
         self.state, self.params, self.accelerations = _variables(S)
-        self.check = None
         self.mech = mechanics_of(S)
         self.closure = closure(S)
         self.reactions = tuple(
@@ -121,8 +120,6 @@ class FullModel:
         full.update(_args.values(values, self.names, self.name))
         for name, var in self.variables.items():
             var.check(self.name, full[name])
-        if self.check is not None:
-            self.check(full)
         return full
 
     def motion(self, p):

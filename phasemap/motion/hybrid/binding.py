@@ -169,7 +169,7 @@ class Phase:
         sc = np.zeros(4)
         PC, SF, KN, _ = self.fns
         most = self.rows
-        while True:     # rows for the state's candidate phases (flow.phases says how many)
+        while True:     # rows for the state's candidate phases (flow.survey says how many)
             *out, group = _rows.py_func(most, n, k)
             count = self.survey_fn(PC, SF, KN, self.p, self.lay, self.one_sided, self.rolls,
                                    y, float(t), flips, preferences(k, prefer), bool(plain),
@@ -206,7 +206,7 @@ class Phase:
         return n_out, flags, rows
 
     def _scratch(self):
-        """The per-contact scratch of :func:`flow.phases`."""
+        """The per-contact scratch of :func:`flow.survey`."""
         k = self.k
         return (np.zeros(k, dtype=np.int64), np.zeros(k), np.zeros(k, dtype=np.bool_),
                 np.zeros(k), np.zeros(k), np.zeros(k), np.zeros(k))
