@@ -23,6 +23,11 @@ The public API is re-exported here explicitly.
 
 from phasemap._version import __version__
 from phasemap.core import compiletime as _compiletime
+from phasemap.core import fasttyping as _fasttyping
+
+# numba types each scalar operation once per process (before anything below compiles)
+_fasttyping.install()
+
 from phasemap.core import interrupts as _interrupts
 from phasemap.atlas.read import describe_atlas, open_atlas
 from phasemap.atlas.write import write_atlas

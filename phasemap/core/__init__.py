@@ -6,6 +6,7 @@ fates a motion can meet), ``numerics`` (tolerances, statuses, branch-free helper
 functions), ``compile`` (per-model engine kernels from templates), ``cache`` (the kernel
 cache and its bound), ``args`` (the argument checks every entry point shares),
 ``progress`` (bars and activity lines), ``interrupts`` (a signal during a compile is
-raised where Python can raise it) and ``compiletime`` (how long numba has compiled).
+raised where Python can raise it), ``compiletime`` (how long numba has compiled) and
+``fasttyping`` (numba types each scalar operation once per process).
 Nothing here imports from another part of phasemap.
 """
