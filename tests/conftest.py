@@ -281,9 +281,24 @@ def studies(tmp_path_factory):
                 warnings.simplefilter("error")
                 claims = module.main(["--quick", "--out", str(out), "--size", "both"])
             runs[name] = StudyRun(name, claims, printed.getvalue(), out, seen)
+            _keep_claims(name, claims)
         return runs[name]
 
     return run
+
+
+def _keep_claims(name: str, claims) -> None:
+    """With ``PHASEMAP_STUDY_CLAIMS=FOLDER`` (.ci/run sets it), each study's claims as
+    ``FOLDER/NAME.json``: the documentation build that follows in the same job renders
+    its claims tables from them (docs/claims.py) instead of running every study again."""
+    folder = os.environ.get("PHASEMAP_STUDY_CLAIMS")
+    if not folder:
+        return
+    path = pathlib.Path(folder) / f"{name}.json"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    part = path.with_suffix(f".{os.getpid()}.part")
+    part.write_text(json.dumps([[c.claim, c.paper, c.measured, c.verdict] for c in claims]))
+    os.replace(part, path)
 
 
 def require_tool(name: str, install: str):

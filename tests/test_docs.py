@@ -314,6 +314,7 @@ def test_the_docs_build_fills_the_studies_claims_tables(monkeypatch):
         import claims
     finally:
         sys.path.remove(str(DOCS))
+    monkeypatch.delenv("PHASEMAP_STUDY_CLAIMS", raising=False)   # CI sets it
     row = types.SimpleNamespace(claim="a | b", paper="p", measured="m", verdict="agrees")
     monkeypatch.setattr(tour, "load", lambda path: types.SimpleNamespace(
         main=lambda argv: [row] if "--quick" in argv else []))
@@ -324,6 +325,38 @@ def test_the_docs_build_fills_the_studies_claims_tables(monkeypatch):
     assert all(rows == [("a | b", "p", "m", "agrees")] for rows in tables.values())
     conf = (DOCS / "conf.py").read_text()
     assert 'app.connect("source-read", _claims_tables)' in conf
+
+
+def test_the_docs_build_takes_the_claims_the_test_session_kept(monkeypatch, tmp_path):
+    """In CI the test session keeps each study's claims (tests/conftest.py, with
+    PHASEMAP_STUDY_CLAIMS) and the docs build renders those; a study without a kept file
+    is run as before, and nothing is read where the variable is unset."""
+    import types
+
+    from conftest import _keep_claims
+    from phasemap import tour
+    from phasemap.study import Claim
+
+    sys.path.insert(0, str(DOCS))
+    try:
+        import claims
+    finally:
+        sys.path.remove(str(DOCS))
+    ran = []
+    row = types.SimpleNamespace(claim="ran", paper="p", measured="m", verdict="agrees")
+    monkeypatch.setattr(tour, "load", lambda path: ran.append(path.stem) or
+                        types.SimpleNamespace(main=lambda argv: [row]))
+    kept = [Claim("kept | one", "0.5", "0.500001", "agrees"), Claim("two", "x", "y", "finding")]
+    monkeypatch.setenv("PHASEMAP_STUDY_CLAIMS", str(tmp_path / "claims"))
+    _keep_claims("ladder", kept)
+    assert claims.from_tests("ladder") == kept and claims.from_tests("wheel") is None
+    tables = claims.parse(claims.filled((DOCS / "guide" / "studies.md").read_text()))
+    assert tables["ladder"] == [("kept | one", "0.5", "0.500001", "agrees"),
+                                ("two", "x", "y", "finding")]
+    assert all(tables[n] == [("ran", "p", "m", "agrees")] for n in tour.ORDER if n != "ladder")
+    assert sorted(ran) == sorted(n for n in tour.ORDER if n != "ladder")
+    monkeypatch.delenv("PHASEMAP_STUDY_CLAIMS")
+    assert claims.from_tests("ladder") is None
 
 
 def test_ci_docs_without_the_docs_extra_says_so_in_one_line(tmp_path):
