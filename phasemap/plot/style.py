@@ -17,6 +17,10 @@ from matplotlib import patheffects
 from matplotlib.patches import Patch
 
 from phasemap.core import events as _events
+from phasemap.plot import mathcache as _mathcache
+
+# a mathtext label is laid out once per process, not once per file saved
+_mathcache.install()
 
 # --------------------------------------------------------------------------- style
 
