@@ -14,6 +14,11 @@ imports it: the ``ds.phasemap`` accessor is registered on xarray's Dataset the m
 xarray is imported, by phasemap or by the user's ``import xarray``, so
 ``xr.open_dataset(path).phasemap`` works after ``import phasemap`` as before.
 
+xarray's first Variable imported ``dask.array`` (0.9 s of CPU, as long as xarray's own
+import) to ask whether a NumPy array is a dask array; :func:`dask_checked_lazily`, which
+runs as xarray is imported, lets it ask that without importing dask, which a process
+that never makes a dask array then never does.
+
 >>> import sys, phasemap
 >>> from phasemap.core.lazy import xarray as xr
 >>> xr.Dataset().phasemap.__class__.__name__        # imported, accessor registered
@@ -28,7 +33,7 @@ import sys
 import threading
 from collections.abc import Callable
 
-__all__ = ["xarray", "when_imported"]
+__all__ = ["xarray", "when_imported", "dask_checked_lazily"]
 
 
 class _Module:
@@ -111,3 +116,57 @@ class _Loader(importlib.abc.Loader):
 
     def __getattr__(self, attr):   # (get_resource_reader, is_package, get_code, ...)
         return getattr(self._loader, attr)
+
+
+def dask_checked_lazily(xr=None) -> bool:
+    """Let xarray test whether an array is a dask array without importing ``dask.array``.
+
+    xarray records each duck-array library in a cache
+    (``xarray.namedarray.pycompat._cached_duck_array_modules``) whose entry for dask
+    imports ``dask.array`` when first read, and every Variable reads it
+    (``isinstance(data, array_type("dask"))``): the first Dataset of a process cost
+    0.9 s of CPU more than it does without dask installed.  No object is a dask array
+    unless ``dask.array`` has been imported, so the entry put here answers "no such
+    type" until then, and from then on is xarray's own (made on the first read after
+    the import, and put in the cache in its place).  Returns whether the entry was put;
+    where xarray's cache is not as expected, or dask is already imported, nothing is
+    changed.  ``xr``: the xarray module (:func:`when_imported` passes it)."""
+    try:
+        from xarray.namedarray import pycompat
+    except ImportError:
+        return False
+    cache = getattr(pycompat, "_cached_duck_array_modules", None)
+    record = getattr(pycompat, "DuckArrayModule", None)
+    if not isinstance(cache, dict) or record is None or "dask" in cache \
+            or "dask.array" in sys.modules:
+        return False
+    cache["dask"] = _DaskWhenImported(cache, record)
+    return True
+
+
+class _DaskWhenImported:
+    """xarray's record of dask as a duck-array library, made when dask.array is there."""
+
+    def __init__(self, cache: dict, record):
+        self._cache, self._record = cache, record
+
+    @property
+    def type(self) -> tuple:
+        array = sys.modules.get("dask.array")
+        if getattr(array, "Array", None) is None:   # not imported (or half-way through)
+            return ()
+        return self._real().type
+
+    def _real(self):
+        real = self._record("dask")       # xarray's own, which imports dask.array
+        if self._cache.get("dask") is self:
+            self._cache["dask"] = real
+        return real
+
+    def __getattr__(self, attr):          # module, version, available: xarray's own
+        if attr.startswith("_"):
+            raise AttributeError(attr)
+        return getattr(self._real(), attr)
+
+
+when_imported("xarray", dask_checked_lazily)
