@@ -297,7 +297,7 @@ def _keep_claims(name: str, claims) -> None:
     path = pathlib.Path(folder) / f"{name}.json"
     path.parent.mkdir(parents=True, exist_ok=True)
     part = path.with_suffix(f".{os.getpid()}.part")
-    part.write_text(json.dumps([[c.claim, c.paper, c.measured, c.verdict] for c in claims]))
+    part.write_text(json.dumps([dataclasses.astuple(c) for c in claims]))
     os.replace(part, path)
 
 
