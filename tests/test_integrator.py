@@ -546,6 +546,12 @@ def test_scipy_stage_driver_and_work_precision_rows(references):
     assert [e[1] for e in staged.events] == kinds(ds)
     np.testing.assert_allclose([e[0] for e in staged.events], ds.event_t.values, atol=1e-7)
     np.testing.assert_allclose(staged.y, np.column_stack([ds.phi, ds.omega]), atol=1e-7)
+    # without t_eval a stage that ends before t_end reaches no requested time: scipy 1.17
+    # then returns lists, not arrays, which the driver once read as arrays
+    bare = wp.solve_ivp_staged("hinge_pendulum", 20.0, method="DOP853", rtol=1e-10,
+                               phi=2.5, omega=0.0, delta=0.05)
+    assert bare.fate == "rest" and bare.n_reversals == staged.n_reversals
+    assert bare.t.tolist() == [20.0] and abs(bare.y[0] - staged.y[-1]).max() < 1e-9
     rows = wp.work_precision("ladder", tolerances=[1e-6, 1e-9], methods=["phasemap", "RK45"],
                              repeats=1, min_time=0.0)
     assert {(r["method"], r["tol"]) for r in rows} == {(m, t) for m in ("phasemap", "RK45")

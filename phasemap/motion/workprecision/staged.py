@@ -191,19 +191,23 @@ class StageDriver:
                                 t_eval=te[i_eval:], events=[e for _, e in evs],
                                 dense_output=dense, max_step=h_max)
             nfev += sol.nfev
-            if sol.t.size:
-                ts.append(sol.t)
-                ys.append(sol.y.T)
-                i_eval += sol.t.size
+            # (scipy 1.17 gives empty lists, not arrays, where no requested time was
+            # reached before a terminal event)
+            sol_t = np.asarray(sol.t, dtype=float)
+            sol_y = np.asarray(sol.y, dtype=float).reshape(y.size, sol_t.size)
+            if sol_t.size:
+                ts.append(sol_t)
+                ys.append(sol_y.T)
+                i_eval += sol_t.size
             if sol.status == -1:
                 fate = ev.STEP_FAILURE
-                t, y = float(sol.t[-1]) if sol.t.size else t, (
-                    np.array(sol.y[:, -1]) if sol.t.size else y)
+                t, y = float(sol_t[-1]) if sol_t.size else t, (
+                    np.array(sol_y[:, -1]) if sol_t.size else y)
                 break
             if sol.status == 0:  # reached t_end on this stage
                 if dense:
                     stages.append((t, t_end, branch, sol.sol))
-                t, y = t_end, np.array(sol.y[:, -1], dtype=float)
+                t, y = t_end, np.array(sol_y[:, -1], dtype=float)
                 fate = ev.HORIZON
                 break
             # the terminal event that ended the stage: the latest recorded one
