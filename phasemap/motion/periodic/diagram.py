@@ -10,7 +10,7 @@ gives one point per value, a period-two orbit two, a chaotic motion a cloud.  Th
 are independent, so a diagram is chunked with dask over its parameter axis like an atlas.
 
 >>> import numpy as np, phasemap
->>> d = phasemap.orbit_diagram("den_hartog", "f", [0.2, 0.3], periods=3, settle=40)
+>>> d = phasemap.orbit_diagram("den_hartog", "f", [0.3, 0.5], periods=3, settle=100)
 >>> d.x.dims, d.sizes["cycle"], [int(m) for m in d.multiple]   # period-one orbits
 (('f', 'cycle'), 3, [1, 1])
 """
@@ -111,14 +111,16 @@ def orbit_diagram(model, param: str, values, *, start=None, periods: int = PERIO
 
     Examples
     --------
-    Den Hartog's oscillator (Omega = 0.8) as its friction grows: a non-stop orbit, then
-    stops (the points move with f), one point per value while the orbit is stable:
+    Den Hartog's oscillator (Omega = 0.8) as its friction grows: one point per value
+    while the orbit is stable, moving with f, and every motion ran through:
 
     >>> import numpy as np, phasemap
-    >>> d = phasemap.orbit_diagram("den_hartog", "f", np.linspace(0.2, 0.6, 3),
-    ...                            periods=2, settle=60)
-    >>> [int(m) for m in d.multiple], d.fate.attrs["flag_meanings"].split()[0]
-    ([1, 1, 1], 'rest')
+    >>> d = phasemap.orbit_diagram("den_hartog", "f", np.linspace(0.3, 0.6, 3),
+    ...                            periods=2, settle=100)
+    >>> [int(m) for m in d.multiple], [phasemap.Event(int(f)).name for f in d.fate.values]
+    ([1, 1, 1], ['HORIZON', 'HORIZON', 'HORIZON'])
+    >>> d.x.values[:, -1].round(4).tolist()        # x at the forcing's phase 0
+    [2.4603, 2.0416, 1.4333]
     """
     from phasemap.core.progress import human_bytes
     from phasemap.core.resources import MEMORY_SHARE, available_memory
@@ -133,19 +135,6 @@ def orbit_diagram(model, param: str, values, *, start=None, periods: int = PERIO
     if not isinstance(param, str) or param not in mech.parameters:
         raise ValueError(f"{name}: unknown parameter {param!r}; the parameters are "
                          f"{', '.join(mech.parameters)}")
-    if mech.period is None:
-        if section is None:
-            section = mech.coordinates[0]
-        if not isinstance(section, str) or section not in mech.coordinates:
-            raise ValueError(f"{name}: section must name a coordinate whose maxima are "
-                             f"kept ({', '.join(mech.coordinates)}), got "
-                             f"{_args.describe(section)}")
-        if phase != 0.0:
-            raise ValueError(f"{name} is autonomous: its points are the maxima of "
-                             f"{section}, at no phase of a forcing; leave phase out")
-    elif section is not None:
-        raise ValueError(f"{name} is forced: its points are taken once per forcing "
-                         "period (at phase=); section= is for an autonomous system")
     values = _values(name, S, param, values)
     if start is not None and not isinstance(start, Mapping):
         raise ValueError(f"{name}: start must be a dict of values by name, got "
@@ -154,15 +143,9 @@ def orbit_diagram(model, param: str, values, *, start=None, periods: int = PERIO
     if param in start:
         raise ValueError(f"{name}: {param!r} is on the diagram's axis, so the start cannot "
                          "fix it")
-    periods = _args.count("periods", periods, name)
-    settle = _args.count("settle", settle, name, least=0)
-    phase = _args.finite("phase", phase, name)
-    if not 0.0 <= phase < 1.0:
-        raise ValueError(f"{name}: phase is a fraction of the forcing period in [0, 1), "
-                         f"got {phase!r}")
-    rtol = _args.finite("rtol", rtol, name)
-    if not 1e-12 <= rtol <= 1e-4:
-        raise ValueError(f"{name}: rtol must be in [1e-12, 1e-4], got {rtol!r}")
+    spec = settings(mech, periods, settle, phase, rtol, section)
+    periods = spec["periods"]
+    settle = spec["settle"]
     if not isinstance(follow, (bool, np.bool_)):
         raise ValueError(f"{name}: follow must be True or False, got {_args.describe(follow)}")
     if follow and chunks is not None:
@@ -183,13 +166,45 @@ def orbit_diagram(model, param: str, values, *, start=None, periods: int = PERIO
                              f"keeps about {human_bytes(work)} while it runs (its events "
                              f"and points), more than half the memory available "
                              f"({human_bytes(avail)}); keep fewer periods")
-    spec = {"periods": periods, "settle": settle, "phase": phase, "rtol": rtol,
-            "follow": bool(follow), "section": section}
+    spec = {**{k: spec[k] for k in ("periods", "settle", "phase", "rtol")},
+            "follow": bool(follow), "section": spec["section"]}
     if chunks is None:
         arrays = _eager(S, mech, p, q, u, param, values, spec, progress)
     else:
         arrays = _lazy(S, mech, p, q, u, param, values, spec, chunks)
     return _dataset(S, mech, p, param, values, arrays, spec, start)
+
+
+def settings(mech, periods=PERIODS, settle=SETTLE, phase=0.0, rtol=1e-8, section=None) -> dict:
+    """The settings of a motion's section points, checked (a one-line ValueError naming
+    the setting): ``{"periods", "settle", "phase", "rtol", "section"}``, ``section`` the
+    coordinate whose maxima an autonomous system keeps (default its first; None for a
+    forced one)."""
+    name = mech.name
+    if mech.period is None:
+        if section is None:
+            section = mech.coordinates[0]
+        if not isinstance(section, str) or section not in mech.coordinates:
+            raise ValueError(f"{name}: section must name a coordinate whose maxima are "
+                             f"kept ({', '.join(mech.coordinates)}), got "
+                             f"{_args.describe(section)}")
+        if phase != 0.0:
+            raise ValueError(f"{name} is autonomous: its points are the maxima of "
+                             f"{section}, at no phase of a forcing; leave phase out")
+    elif section is not None:
+        raise ValueError(f"{name} is forced: its points are taken once per forcing "
+                         "period (at phase=); section= is for an autonomous system")
+    periods = _args.count("periods", periods, name)
+    settle = _args.count("settle", settle, name, least=0)
+    phase = _args.finite("phase", phase, name)
+    if not 0.0 <= phase < 1.0:
+        raise ValueError(f"{name}: phase is a fraction of the forcing period in [0, 1), "
+                         f"got {phase!r}")
+    rtol = _args.finite("rtol", rtol, name)
+    if not 1e-12 <= rtol <= 1e-4:
+        raise ValueError(f"{name}: rtol must be in [1e-12, 1e-4], got {rtol!r}")
+    return {"periods": periods, "settle": settle, "phase": phase, "rtol": rtol,
+            "section": section}
 
 
 def _values(name, S, param, values) -> np.ndarray:
@@ -216,19 +231,23 @@ def _values(name, S, param, values) -> np.ndarray:
     return a
 
 
-def strobe(mech, p, q, u, spec):
-    """One value's motion: ``(points, fate, end state)``, the points an array of
-    ``(periods, 2 n)`` (NaN after the motion ended)."""
+def strobe(mech, p, q, u, spec, t0=0.0, contact=None):
+    """One value's motion from ``(q, u)`` at the time ``t0``: ``(points, fate, end
+    state)``, the points an array of ``(periods, 2 n)`` (NaN after the motion ended).
+    A forced system's points are at the forcing phase ``spec["phase"]``, the first
+    ``spec["settle"]`` of those at or after ``t0`` discarded.  ``contact``: the contact
+    settings (``impact_law``...; default :func:`phasemap.simulate`'s)."""
     from phasemap.motion.hybrid import Motion, Options
 
     if mech.period is None:
-        return peaks(mech, p, q, u, spec)
+        return peaks(mech, p, q, u, spec, t0, contact)
     T = float(mech.period(*p))
     settle, periods = spec["settle"], spec["periods"]
-    te = T * (np.arange(settle, settle + periods) + spec["phase"])
+    first = math.ceil(t0 / T - spec["phase"]) if t0 else 0   # the first phase point >= t0
+    te = T * (np.arange(first + settle, first + settle + periods) + spec["phase"])
     opts = Options(float(te[-1]), rtol=spec["rtol"], max_events=10_000_000,
-                   max_steps=10_000_000)
-    rec = Motion(mech, p, opts).run(q, u, t0=0.0, t_eval=te)
+                   max_steps=10_000_000, **(contact or {}))
+    rec = Motion(mech, p, opts).run(q, u, t0=t0, t_eval=te)
     out = np.full((periods, 2 * mech.n), np.nan)
     kept = [i for i, t in enumerate(rec.t) if t >= te[0]]
     if kept:
@@ -249,7 +268,7 @@ CHUNK = 50
 STEP = 0.05
 
 
-def peaks(mech, p, q, u, spec):
+def peaks(mech, p, q, u, spec, t0=0.0, contact=None):
     """An autonomous motion's maxima of the coordinate ``spec["section"]``, as
     :func:`strobe` returns its points: the motion run in chunks of :data:`CHUNK` time
     scales until ``settle + periods`` maxima are found, it ends, or a chunk holds none
@@ -267,12 +286,12 @@ def peaks(mech, p, q, u, spec):
     scale_t = math.sqrt(sc[3] / sc[2])
     chunk = CHUNK * scale_t
     out = np.full((periods, 2 * n), np.nan)
-    t, z = 0.0, np.concatenate([q, u])
+    t, z = float(t0), np.concatenate([q, u])
     ts, ys = [], []             # the last saved steps, for a maximum across two chunks
     found, fate = 0, ev.HORIZON
     while found < settle + periods:
         opts = Options(t + chunk, rtol=rtol, max_step=STEP * scale_t, max_events=10_000_000,
-                       max_steps=10_000_000)
+                       max_steps=10_000_000, **(contact or {}))
         rec = Motion(mech, p, opts).run(z[:n], z[n:], t0=t)
         if not ts:                        # the first chunk: its start too
             ts, ys = rec.t[:1], rec.y[:1]
