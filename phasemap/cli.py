@@ -30,6 +30,9 @@ EXAMPLES = {
          "        --layers n_solutions,stagnation,phi_ddot_roll_pos -o wheel.nc", ""),
         ("phasemap atlas hinge_pendulum --axis phi=-3:3:200 --axis omega=-6:6:200 \\\n"
          "        --layers fate,phi_rest,n_reversals --option t_end=30 -o fates.nc", ""),
+        ("phasemap atlas den_hartog --axis f=0.1:0.7:61 --layers section_x,multiple \\\n"
+         "        --option periods=50 -o diagram.nc",
+         "the orbit diagram as an atlas (phasemap plot draws it)"),
     ],
     "simulate": [
         ("phasemap simulate hinge_pendulum phi=2.5 omega=0 --t-end 20 -o swing.nc", ""),
@@ -174,7 +177,9 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                    help="integrator setting of the fate layers: t_end, rtol, atol, max_step, "
                    "max_steps, max_events, method (DOPRI5 or DOP853); through_contacts=true "
                    "follows a declared system's motions through lift-off and impacts (with "
-                   "impact_law, restitution, painleve, zeno_speed; slower) (repeatable)")
+                   "impact_law, restitution, painleve, zeno_speed; slower); a friction "
+                   "oscillator's orbit layers (multiple, section_x...) take periods, settle, "
+                   "phase and section (repeatable)")
     p.add_argument("--chunk-cells", type=int, default=None, metavar="N",
                    help="cells per block (default: each block about a quarter second of "
                    "work, sized as the work goes)")

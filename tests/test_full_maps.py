@@ -142,11 +142,14 @@ def test_full_maps_refuse_bad_input_in_one_line():
         phasemap.classify("belt", x=[0.0, 1.0])
     with pytest.raises(ValueError, match="m = -1 is outside its domain"):
         phasemap.classify("belt", m=-1.0)
-    with pytest.raises(ValueError, match="fate"):
-        phasemap.Scene("belt", axes={"x": [0.0, 1.0]}, layers=["fate"])
-    assert set(phasemap.layers_for("belt")) == {
+    with pytest.raises(ValueError, match="unknown layer 'phi_rest'"):
+        phasemap.Scene("belt", axes={"x": [0.0, 1.0]}, layers=["phi_rest"])
+    # the survey's layers, then the motion layers (tests/test_full_motions.py)
+    state = ["x", "y", "xdot", "y_dot"]
+    assert list(phasemap.layers_for("belt")) == [
         "n_solutions", "stagnation", "contact_lost", "singular", "x_ddot", "N_belt",
-        "F_belt"}
+        "F_belt", "fate", "n_reversals", "n_sticks", "t_final", "t_rest",
+        *(f"{n}_final" for n in state), *(f"section_{n}" for n in state), "multiple"]
     assert map_model("ladder") is phasemap.get_model("ladder")
 
 

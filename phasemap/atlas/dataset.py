@@ -410,7 +410,8 @@ def dataset_kind(ds: xr.Dataset) -> str:
     """Which of :data:`KINDS` the Dataset ``ds`` is, and so which figure suits it.
 
     The global attribute ``phasemap_kind`` decides first (``"atlas"`` there
-    means: decide from the dimensions); then a ``fate`` layer makes a fate
+    means: decide from the dimensions); then section points on a ``cycle``
+    dimension over one axis make an orbit diagram; then a ``fate`` layer makes a fate
     map; otherwise the dimensions of the first categorical layer (or of the
     first layer, if none is categorical) make a ``profile`` (1-D) or a
     ``map`` (2-D).
@@ -437,6 +438,9 @@ def dataset_kind(ds: xr.Dataset) -> str:
                          "global attribute")
     if not ds.data_vars:
         raise ValueError("not a phasemap atlas: it has no layers (data variables)")
+    cycles = [v for v in ds.data_vars.values() if v.ndim == 2 and v.dims[1] == "cycle"]
+    if cycles and all(v.dims[:1] == cycles[0].dims[:1] for v in ds.data_vars.values()):
+        return "orbit_diagram"      # a scene's section points over one axis (maps.motions)
     if "fate" in ds.data_vars:
         return "fate"
     var = first_layer(ds)

@@ -358,7 +358,8 @@ def _describe_motion(ds: xr.Dataset, where: str, kind: str) -> str:
 
 def _describe_grid(ds: xr.Dataset, where: str) -> str:
     a = ds.attrs
-    dims = [str(d) for d in ds.dims]
+    # (a scene's section points have one more dimension, cycle, than its cells)
+    dims = [str(d) for d in ds.dims if d != "cycle"]
     cells = math.prod(ds.sizes[d] for d in dims)
     lines = [f"phasemap atlas {where}"]
     if "title" in a:
@@ -371,7 +372,7 @@ def _describe_grid(ds: xr.Dataset, where: str) -> str:
 
     lines.append("axes")
     rows = []
-    for d in dims:
+    for d in dims + ["cycle"] * ("cycle" in ds.dims):
         if d in ds.coords:
             x = np.asarray(ds[d].values, dtype=float)
             attrs = ds[d].attrs
@@ -392,14 +393,16 @@ def _describe_grid(ds: xr.Dataset, where: str) -> str:
     lines.append("layers")
     for name, var in ds.data_vars.items():
         attrs = var.attrs
+        values = int(var.size)      # (the cells, or their section points)
         if "flag_meanings" in attrs:
             lines.append(f"  {name} ({var.dtype}, categorical): {attrs.get('long_name', '')}")
-            lines += _class_lines(var, cells)
+            lines += _class_lines(var, values)
         else:
-            defined = _count_finite(var) if np.issubdtype(var.dtype, np.floating) else cells
-            pct = 100.0 * defined / cells if cells else 0.0
+            defined = _count_finite(var) if np.issubdtype(var.dtype, np.floating) else values
+            pct = 100.0 * defined / values if values else 0.0
             lines.append(f"  {name} ({var.dtype}, {attrs.get('units', 'no units')}): "
-                         f"{attrs.get('long_name', '')}; defined on {defined} cells ({pct:.1f}%)")
+                         f"{attrs.get('long_name', '')}; defined on {defined} "
+                         f"{'points' if 'cycle' in var.dims else 'cells'} ({pct:.1f}%)")
     return "\n".join(lines)
 
 

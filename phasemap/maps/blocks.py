@@ -126,8 +126,8 @@ def estimate(scene, block_cells: int | None = None, timed: bool = False,
     ``eager`` every layer of the whole grid (``Scene.compute()``), otherwise
     the blocks of :func:`write_scene` (at most ``block_cells`` cells).
     """
+    itemsizes = cell_bytes(scene)
     reg = layers_for(scene.model)
-    itemsizes = {n: np.dtype(reg[n].dtype).itemsize for n in scene.layers}
     cells = scene.size
     per_cell = sum(itemsizes.values())
     typical = int(sum(cells * s * TYPICAL_RATIO.get(reg[n].dtype, 1.0)
@@ -158,10 +158,17 @@ UNCHECKED_BYTES = 1 << 20
 def eager_bytes(scene, block_cells: int | None = None) -> int:
     """What ``scene.compute()`` allocates: every layer of the grid and the integrator's
     arrays of one block (of at most ``block_cells`` cells; default the largest)."""
-    reg = layers_for(scene.model)
-    per_cell = sum(np.dtype(reg[n].dtype).itemsize for n in scene.layers)
+    per_cell = sum(cell_bytes(scene).values())
     block = min(scene.size, block_cells or largest_block(scene))
     return scene.size * per_cell + block * _fate_scratch(scene)
+
+
+def cell_bytes(scene) -> dict[str, int]:
+    """Bytes a cell of each layer of ``scene`` takes (an orbit layer's section points:
+    one value per kept period)."""
+    reg = layers_for(scene.model)
+    return {n: np.dtype(reg[n].dtype).itemsize * math.prod(scene.layer_shape(n)[len(scene.shape):])
+            for n in scene.layers}
 
 
 def largest_block(scene) -> int:
@@ -197,7 +204,9 @@ def check_memory(scene, est: Estimate) -> None:
 def seconds_per_cell(scene) -> float:
     """Seconds per cell of ``scene``, from a strided sample of its cells (compiled first).
 
-    The sample takes up to :data:`SAMPLE_CELLS` cells spread over the grid.  A
+    The sample takes up to :data:`SAMPLE_CELLS` cells spread over the grid (cells
+    whose section points run many forcing periods run a few, and their time is scaled:
+    :func:`phasemap.maps.motions.shortened`).  A
     map's sample (milliseconds of work) is timed in one call, the best of
     :data:`MAP_SAMPLE_REPEATS`.  A fate map's, whose cells can be long
     trajectories, goes in a shuffled order in growing blocks and stops after
@@ -207,6 +216,12 @@ def seconds_per_cell(scene) -> float:
     (waking the threads, tens of milliseconds on a busy machine) that the
     large blocks of the real work pay rarely.
     """
+    if getattr(scene, "orbit", None):    # section points: timed over a few periods
+        from phasemap.maps.motions import shortened
+
+        short, factor = shortened(scene)
+        if factor != 1.0:
+            return seconds_per_cell(short) * factor
     kind = "fate" if scene.slow_cells else "map"
     target = min(SAMPLE_CELLS[kind], scene.size)
     per_axis = max(1, int(round(target ** (1.0 / len(scene.axes)))))
@@ -422,18 +437,21 @@ def write_scene(scene, path, *, block_cells: int | None = None, complevel: int =
     with no_partial_file(path, overwrite=overwrite) as tmp:
         nc = netCDF4.Dataset(tmp, "w", format="NETCDF4")
         try:  # a failure or an interrupt: close (quietly) and let atomic_path remove tmp
-            for d, n in zip(dims, shape):
+            cycle = "cycle" in ds.dims     # the orbit layers' section points
+            for d, n in zip(dims + ["cycle"] * cycle, shape + (ds.sizes.get("cycle"),) * cycle):
                 nc.createDimension(d, n)
-            for d in dims:
-                var = nc.createVariable(d, "f8", (d,), fill_value=False)
+            for d in dims + ["cycle"] * cycle:
+                var = nc.createVariable(d, ds[d].dtype.str if d == "cycle" else "f8", (d,),
+                                        fill_value=False)
                 var.setncatts(ds[d].attrs)
                 var[:] = ds[d].values
             for name in scene.layers:
                 enc = encoding[name]
                 itemsize = np.dtype(reg[name].dtype).itemsize
-                chunks = default_chunks(chunk_shape, itemsize, fixed=set(range(k)))
+                extra = scene.layer_shape(name)[len(shape):]
+                chunks = default_chunks(chunk_shape + extra, itemsize, fixed=set(range(k)))
                 fill = enc["_FillValue"]
-                var = nc.createVariable(name, reg[name].dtype, tuple(dims), zlib=True,
+                var = nc.createVariable(name, reg[name].dtype, tuple(ds[name].dims), zlib=True,
                                         complevel=enc["complevel"], shuffle=True,
                                         chunksizes=chunks,
                                         fill_value=fill if fill is not None else None)

@@ -24,7 +24,10 @@ the forcing) of a system forced in time.  Its layers (:func:`layers`):
   (:meth:`phasemap.motion.hybrid.Motion.singularity`, the coefficient of the senior
   derivative);
 * the unique motion's accelerations (``x_ddot``...) and each contact's reactions
-  (``N_belt``, ``F_belt``...), NaN where the motion is not unique.
+  (``N_belt``, ``F_belt``...), NaN where the motion is not unique;
+* the motion layers, which move from each cell (:mod:`phasemap.maps.motions`): its fate
+  over ``t_end`` (``fate``, ``n_sticks``, ``x_final``...) and its settled motion's
+  section points (``section_x``... on one more dimension, and ``multiple``).
 
 A map's cells run in one compiled, parallel call per block
 (:func:`phasemap.motion.hybrid.flow.survey_cells`, the engine's own survey, some 3-5 us a

@@ -67,6 +67,9 @@ class Layer:
     column: int = -1  # ... and the column of out[branch] to copy
     admissible_only: bool = True  # NaN unless the branch is admissible
     fate: bool = False  # computed by integrating from each cell (see phasemap.motion.integrate)
+    #: on the scene's axes and one more, ``cycle``: a cell's section points (the orbit
+    #: layers of a map in full coordinates, :mod:`phasemap.maps.motions`)
+    cycle: bool = False
     #: Summary layers: the position of the layer's bits in the byte a grid kernel
     #: packs several summaries into (see :data:`SUMMARY_LAYERS`).
     shift: int = -1
@@ -210,7 +213,45 @@ def _full_registry(model) -> dict[str, Layer]:
     for j, var in enumerate(model.accelerations + model.reactions):
         out[var.name] = Layer(var.name, "float64", f"{var.long_name} (the unique motion)",
                               units=var.units, branch=0, column=j)
+    out.update(_full_motion_layers(model))
     return out
+
+
+def _full_motion_layers(model) -> dict[str, Layer]:
+    """The layers a map in full coordinates computes by moving from each cell
+    (:mod:`phasemap.maps.motions`): the motion's end, then its section points."""
+    from phasemap.motion.periodic.orbit import state_variables
+
+    state = state_variables(model.mech)
+    out = {
+        "fate": Layer("fate", "int8", "how the motion from this state ends (horizon: it ran "
+                      "through)", flag_values=ev.FATE_VALUES, flag_meanings=ev.FATE_MEANINGS,
+                      fate=True),
+        "n_reversals": Layer("n_reversals", "int32", "number of reversals of a relative "
+                             "velocity", units="1", fate=True),
+        "n_sticks": Layer("n_sticks", "int32", "number of times a contact stuck (to its "
+                          "surface: on a belt, moving with it)", units="1", fate=True),
+        "t_final": Layer("t_final", "float64", "time from the start at which the motion "
+                         "ended (t_end if still moving)", units="s", fate=True),
+        "t_rest": Layer("t_rest", "float64", "time from the start to rest", units="s",
+                        fate=True),
+    }
+    for name, units in state:
+        out[f"{name}_final"] = Layer(f"{name}_final", "float64",
+                                     f"{name} where the motion ended", units=units, fate=True)
+    forced = model.mech.period is not None
+    where = ("at the forcing phase, once per forcing period" if forced
+             else "at each maximum of the section coordinate")
+    for name, units in state:
+        out[f"section_{name}"] = Layer(f"section_{name}", "float64",
+                                       f"{name} of the settled motion {where}", units=units,
+                                       fate=True, cycle=True)
+    # (0: no period up to phasemap.motion.periodic.orbit.MAX_MULTIPLE)
+    out["multiple"] = Layer("multiple", "int8", "settled motion's period, in "
+                            f"{'forcing periods' if forced else 'section points'} (0: none)",
+                            units="1", fate=True)
+    return out
+
 
 
 #: What the summaries mean in full coordinates, where the candidates are phases.

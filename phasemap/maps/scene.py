@@ -31,7 +31,7 @@ from phasemap.core.codegen import content_hash
 from phasemap.atlas.dataset import assemble, cf_header, declaration_hash, read_json, variable_attrs
 from phasemap.maps.grid import evaluate
 from phasemap.motion.integrate import run_fate_map
-from phasemap.maps import full, through
+from phasemap.maps import full, motions, through
 from phasemap.maps.full import FullModel, map_model
 from phasemap.maps.layers import Outcome, layers_for
 from phasemap.core.model import Model
@@ -78,7 +78,11 @@ class Scene:
         follows the cells whose motion ends where a contact changes on through lift-off,
         flight and impacts, as :func:`phasemap.simulate` does, with its ``impact_law``,
         ``restitution``, ``painleve`` and ``zeno_speed`` (:mod:`phasemap.maps.through`:
-        those cells run in Python, 10-50 ms each).
+        those cells run in Python, 10-50 ms each).  A map in full coordinates (a
+        friction oscillator) always moves through its contact changes: it takes those
+        settings without ``through_contacts``, and its orbit layers (``multiple``,
+        ``section_x``...) take ``periods``, ``settle``, ``phase`` and ``section``, as
+        :func:`phasemap.orbit_diagram` does (:mod:`phasemap.maps.motions`).
 
     Examples
     --------
@@ -145,11 +149,19 @@ class Scene:
         self.layers: tuple[str, ...] = tuple(_args.layers(layers, registry, m.name, (
             f"phasemap.layers_for({m.name!r}) lists its {len(registry)} layers; on the "
             f"command line: phasemap models {m.name}")))
+        known = {**Options().as_dict(), **through.DEFAULTS}
+        if self.full:
+            known.update(motions.ORBIT_OPTIONS)
         for name in options or {}:
-            _args.check_name("integrator option", name,
-                             {**Options().as_dict(), **through.DEFAULTS}, m.name)
-        options, self.contact = through.split(m, dict(options or {}))
-        self.options = Options(**{"rtol": FATE_RTOL, **options}).checked(m.name)
+            _args.check_name("integrator option", name, known, m.name)
+        options = dict(options or {})
+        #: the orbit layers' settings (phasemap.maps.motions), None without such a layer
+        self.orbit = None
+        if self.full:
+            options, self.orbit = motions.split(m, options, self.layers, registry)
+        options, self.contact = through.split(m, options)
+        rtol = FATE_RTOL if self.orbit is None else self.orbit["rtol"]
+        self.options = Options(**{"rtol": rtol, **options}).checked(m.name)
 
     # ------------------------------------------------------------------
     @property
@@ -202,6 +214,8 @@ class Scene:
             spec["declaration_sha256"] = declared
         if self.has_fates:
             spec["options"] = {**self.options.as_dict(), **through.as_options(self.contact)}
+            if self.orbit is not None:
+                spec["options"].update({k: self.orbit[k] for k in motions.ORBIT_OPTIONS})
         return spec
 
     @classmethod
@@ -321,7 +335,7 @@ class Scene:
             maps = []
         blocked = maps + [n for n in self.layers if reg[n].fate]
         if blocked:
-            arrays = {n: np.empty(self.shape, dtype=reg[n].dtype) for n in blocked}
+            arrays = {n: np.empty(self.layer_shape(n), dtype=reg[n].dtype) for n in blocked}
             for index, block in compute_blocks(self, f"{self.model.name} atlas", show=show,
                                                layers=blocked):
                 for name, a in block.items():
@@ -348,7 +362,9 @@ class Scene:
         elif maps:
             result.update(evaluate(self.model, dict(axes), self.fixed, maps))
         fates = [l for l in wanted if l.fate]
-        if fates:
+        if fates and self.full:
+            result.update(motions.evaluate(self, dict(axes), fates))
+        elif fates:
             m, o = self.model, self.options
             # positions that are not model inputs (the slider's x) start at 0
             y0 = np.zeros(2 * len(m.dynamics.coordinates))
@@ -364,8 +380,16 @@ class Scene:
         """The atlas's Dataset with every layer zero (broadcast, no memory), for a writer
         that fills it block by block: coordinates, attributes, provenance."""
         reg = layers_for(self.model)
-        return self._dataset({n: np.broadcast_to(np.zeros((), dtype=reg[n].dtype), self.shape)
+        return self._dataset({n: np.broadcast_to(np.zeros((), dtype=reg[n].dtype),
+                                                 self.layer_shape(n))
                               for n in self.layers})
+
+    def layer_shape(self, name: str) -> tuple[int, ...]:
+        """The shape of the layer ``name``: the scene's, and the ``cycle`` dimension's
+        length after it for an orbit layer's section points."""
+        if layers_for(self.model)[name].cycle:
+            return self.shape + (motions.cycles(self),)
+        return self.shape
 
     def _lazy(self, chunks) -> xr.Dataset:
         """Dask-backed layers: one blockwise task per block computes every layer once.
@@ -392,9 +416,16 @@ class Scene:
         raw = da.map_blocks(_raw_block, chunks=normal, dtype=object,
                             meta=np.empty((0,) * ndim, dtype=object), name=f"{token}-blocks",
                             scene=self)
-        arrays = {n: raw.map_blocks(_pick, n, dtype=reg[n].dtype, name=f"{token}-{n}",
-                                    meta=np.empty((0,) * ndim, dtype=reg[n].dtype))
-                  for n in self.layers}
+        arrays = {}
+        for n in self.layers:
+            if reg[n].cycle:     # the section points: one more axis, whole in each block
+                arrays[n] = raw.map_blocks(
+                    _pick, n, dtype=reg[n].dtype, name=f"{token}-{n}",
+                    chunks=normal + ((motions.cycles(self),),), new_axis=ndim,
+                    meta=np.empty((0,) * (ndim + 1), dtype=reg[n].dtype))
+            else:
+                arrays[n] = raw.map_blocks(_pick, n, dtype=reg[n].dtype, name=f"{token}-{n}",
+                                           meta=np.empty((0,) * ndim, dtype=reg[n].dtype))
         return self._dataset(arrays)
 
     def _dataset(self, arrays: Mapping[str, object]) -> xr.Dataset:
@@ -406,8 +437,16 @@ class Scene:
             coords[name] = xr.Variable(name, a, variable_attrs(var), fastpath=True)
         # fastpath: the arrays are ours, so xarray need not ask whether they are dask
         # arrays (which imports dask.array, seconds in a fresh process)
-        data_vars = {n: xr.Variable(dims, arrays[n], reg[n].attrs, fastpath=True)
+        data_vars = {n: xr.Variable(dims + (("cycle",) if reg[n].cycle else ()), arrays[n],
+                                    reg[n].attrs, fastpath=True)
                      for n in self.layers}
+        if self.orbit is not None and any(reg[n].cycle for n in self.layers):
+            each = ("forcing periods" if self.orbit["section"] is None
+                    else f"maxima of {self.orbit['section']}")
+            coords["cycle"] = xr.Variable("cycle", np.arange(1, self.orbit["periods"] + 1,
+                                                             dtype=np.int32),
+                                          {"long_name": f"{each} after the settling ones",
+                                           "units": "1"}, fastpath=True)
         attrs = {**cf_header(m), "phasemap_scene": json.dumps(self.spec())}
         for name, value in self.fixed.items():
             attrs[f"phasemap_fixed_{name}"] = value

@@ -38,12 +38,17 @@ def split(model, options: dict) -> tuple[dict, dict | None]:
     ``through_contacts`` is off (then no other contact setting may be given)."""
     from phasemap.motion import hybrid
 
+    from phasemap.maps.full import FullModel
+
     opts = dict(options)
     given = {k: opts.pop(k) for k in DEFAULTS if k in opts}
-    through = given.pop("through_contacts", False)
+    through = given.pop("through_contacts", isinstance(model, FullModel))
     if not isinstance(through, (bool, np.bool_)):
         raise _args.WrongType(f"{model.name}: through_contacts must be True or False, got "
                               f"{_args.describe(through)}")
+    if isinstance(model, FullModel) and not through:
+        raise ValueError(f"{model.name}: a system in full coordinates always moves through "
+                         "its contact changes; leave through_contacts out")
     if not through:
         if given:
             raise ValueError(f"{model.name}: {sorted(given)[0]} is a setting of motions "

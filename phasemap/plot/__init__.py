@@ -220,5 +220,9 @@ def plot(ds: xr.Dataset, layer: str | Sequence[str] | None = None, *, ax=None,
     if kind == "orbit_diagram":         # layer: the variable drawn against the parameter
         from phasemap.plot.orbits import diagram_figure
 
+        if isinstance(layer, str) and layer in ds.data_vars and "cycle" not in ds[layer].dims:
+            # a scene's other layers over its axis (its fate, its period)
+            return profile_figure(ds, layer, ax=ax, size=size, **kw)
+
         return diagram_figure(ds, layer, ax=ax, size=size, **kw)
     return trajectory_figure(ds, states=layer, ax=ax, size=size, **kw)

@@ -82,13 +82,14 @@ def _state_names(ds):
                                        "segment_end", "segment_event_index"))]
 
 
-def _label(ds, name):
-    """``name (units)``; a dimensionless name in math type (``$f$``, ``$f_s$``), as the
-    maps write a variable."""
+def _label(ds, name, shown=None):
+    """``name (units)``, or ``shown`` in its place; a dimensionless name in math type
+    (``$f$``, ``$f_s$``), as the maps write a variable."""
     units = ds[name].attrs.get("units", "")
+    shown = shown or name
     if units and units != "1":
-        return f"{name} ({units})"
-    return f"${name}$" if units == "1" and name.isidentifier() else name
+        return f"{shown} ({units})"
+    return f"${shown}$" if units == "1" and shown.isidentifier() else shown
 
 
 def branch_figure(ds: xr.Dataset, y: str | None = None, *, ax=None,
@@ -173,7 +174,10 @@ def diagram_figure(ds: xr.Dataset, y: str | None = None, *, branches=(), ax=None
     >>> len(phasemap.plot.orbits.diagram_figure(d).axes)
     1
     """
-    param = str(ds.attrs["phasemap_parameter"])
+    # (a Scene's section points, phasemap.maps.motions: the parameter is the scene's axis,
+    # the points are section_x..., the settings are the scene's options)
+    param = str(ds.attrs.get("phasemap_parameter") or next(
+        v.dims[0] for v in ds.data_vars.values() if v.dims[1:] == ("cycle",)))
     points = [str(v) for v in ds.data_vars if ds[v].dims == (param, "cycle")]
     if y is None:
         moving = [v for v in points if np.nanmax(ds[v].values, initial=-np.inf)
@@ -184,11 +188,13 @@ def diagram_figure(ds: xr.Dataset, y: str | None = None, *, branches=(), ax=None
                          + ", ".join(points))
     if isinstance(branches, xr.Dataset):
         branches = [branches]
+    coordinate = y.removeprefix("section_") if "phasemap_parameter" not in ds.attrs else y
     for b in branches:
         if not isinstance(b, xr.Dataset) or b.attrs.get("phasemap_kind") != "orbit_branch" \
-                or b.attrs.get("phasemap_parameter") != param or f"section_{y}" not in b:
+                or b.attrs.get("phasemap_parameter") != param \
+                or f"section_{coordinate}" not in b:
             raise ValueError(f"branches= takes Datasets of phasemap.continue_orbit in {param} "
-                             f"of a forced system (with section_{y})")
+                             f"of a forced system (with section_{coordinate})")
     width = width_of(size)
     p = ds[param].values
     v = ds[y].values
@@ -198,14 +204,15 @@ def diagram_figure(ds: xr.Dataset, y: str | None = None, *, branches=(), ax=None
         a.plot(xs.ravel(), v.ravel(), ls="none", marker=".", mew=0,
                ms=2.0 if np.count_nonzero(~np.isnan(v)) > 2000 else 4.0,
                color=_OI["black"], alpha=0.7, rasterized=v.size > 5000, zorder=2.5)
-        spec = json.loads(ds.attrs.get("phasemap_diagram", "{}"))
+        spec = json.loads(ds.attrs.get("phasemap_diagram") or json.dumps(
+            json.loads(ds.attrs.get("phasemap_scene", "{}")).get("options", {})))
         each = ("once per period" if spec.get("section") is None
                 else f"each maximum of {spec['section']}")
         handles = [Line2D([], [], ls="none", marker=".", ms=4, color=_OI["black"],
                           label=f"settled motion, {each}")]
         styles = set()
         for b in branches:
-            bp, sec = b[param].values, b[f"section_{y}"].values
+            bp, sec = b[param].values, b[f"section_{coordinate}"].values
             for run, ls in _runs(b.stable.values):
                 styles.add(ls)
                 a.plot(bp[run], sec[run], color=_OI["vermillion"], lw=1.2, ls=ls, zorder=2)
@@ -218,8 +225,8 @@ def diagram_figure(ds: xr.Dataset, y: str | None = None, *, branches=(), ax=None
                 for col in range(sec.shape[1]):
                     if np.isnan(sec[:, col]).all():
                         continue
-                    val = _at_point(b.drop_vars([f"point_{y}"], errors="ignore"), i, y, at,
-                                    bp, sec[:, col])
+                    val = _at_point(b.drop_vars([f"point_{coordinate}"], errors="ignore"),
+                                    i, coordinate, at, bp, sec[:, col])
                     a.plot([at], [val], marker=marker, color=colour, ms=6, ls="none",
                            zorder=3)
                 if kind.replace("_", "-") not in {h.get_label() for h in handles}:
@@ -229,6 +236,6 @@ def diagram_figure(ds: xr.Dataset, y: str | None = None, *, branches=(), ax=None
                     for ls, label in (("-", "stable orbit"), ("--", "unstable orbit"))
                     if ls in styles]
         a.set_xlabel(_label(ds, param))
-        a.set_ylabel(_label(ds, y))
+        a.set_ylabel(_label(ds, y, coordinate))
         legend_above(a, handles)
     return a.figure

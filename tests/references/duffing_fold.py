@@ -45,10 +45,16 @@ F_DOUBLING = 8.0115330045
 
 
 def return_map(z, F, Omega, r, k1, beta, c):
+    return flow(z, 0.0, 2 * np.pi / Omega, F, Omega, r, k1, beta, c)[0]
+
+
+def flow(z, t0, t1, F, Omega, r, k1, beta, c):
+    """``(state at t1, reversals)`` of the flow from ``z`` at ``t0`` (x' = 0 at the
+    start: the sign it takes first is +)."""
     from scipy.integrate import solve_ivp
 
-    period = 2 * np.pi / Omega
-    t, y = 0.0, np.array(z, float)
+    n = 0
+    t, y = t0, np.array(z, float)
     s = np.sign(y[1]) or 1.0
     while True:
         def f(tt, yy, s=s):
@@ -59,15 +65,15 @@ def return_map(z, F, Omega, r, k1, beta, c):
             return yy[1]
 
         reversal.terminal, reversal.direction = True, -s
-        sol = solve_ivp(f, (t, period), y, rtol=1e-12, atol=1e-13, events=reversal,
+        sol = solve_ivp(f, (t, t1), y, rtol=1e-12, atol=1e-13, events=reversal,
                         method="DOP853")
         if sol.status != 1:
-            return sol.y[:, -1]
+            return sol.y[:, -1], n
         t, y = sol.t_events[0][0], sol.y_events[0][0].copy()
         y[1] = 0.0
         if abs(-k1 * y[0] - beta * y[0] ** 3 + F * np.cos(Omega * t)) <= r:
             raise RuntimeError("the orbit sticks: not a pure-slip orbit")
-        s = -s
+        s, n = -s, n + 1
 
 
 def derivative(z, h=1e-6, **par):

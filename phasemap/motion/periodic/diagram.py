@@ -126,12 +126,11 @@ def orbit_diagram(model, param: str, values, *, start=None, periods: int = PERIO
     from phasemap.core.resources import MEMORY_SHARE, available_memory
     from phasemap.declare.full import mechanics
     from phasemap.motion.hybrid.results import start_values
-    from phasemap.motion.periodic.orbit import no_rolling, system_of
+    from phasemap.motion.periodic.orbit import system_of
 
     S = system_of(model)
     mech = mechanics(S)
     name = mech.name
-    no_rolling(mech)
     if not isinstance(param, str) or param not in mech.parameters:
         raise ValueError(f"{name}: unknown parameter {param!r}; the parameters are "
                          f"{', '.join(mech.parameters)}")
@@ -155,17 +154,11 @@ def orbit_diagram(model, param: str, values, *, start=None, periods: int = PERIO
     avail = available_memory()
     if avail is not None:
         need = values.size * periods * 2 * mech.n * 8
-        work = (settle + periods) * PERIOD_BYTES
         if chunks is None and need > MEMORY_SHARE * avail:
             raise ValueError(f"{name}: the diagram's points take {human_bytes(need)}, more "
                              f"than half the memory available ({human_bytes(avail)}); keep "
                              "fewer periods or values, or pass chunks= and write it block "
                              "by block (ds.to_netcdf)")
-        if work > MEMORY_SHARE * avail:
-            raise ValueError(f"{name}: one value's motion over {settle + periods:,} periods "
-                             f"keeps about {human_bytes(work)} while it runs (its events "
-                             f"and points), more than half the memory available "
-                             f"({human_bytes(avail)}); keep fewer periods")
     spec = {**{k: spec[k] for k in ("periods", "settle", "phase", "rtol")},
             "follow": bool(follow), "section": spec["section"]}
     if chunks is None:
@@ -180,7 +173,12 @@ def settings(mech, periods=PERIODS, settle=SETTLE, phase=0.0, rtol=1e-8, section
     the setting): ``{"periods", "settle", "phase", "rtol", "section"}``, ``section`` the
     coordinate whose maxima an autonomous system keeps (default its first; None for a
     forced one)."""
+    from phasemap.core.progress import human_bytes
+    from phasemap.core.resources import MEMORY_SHARE, available_memory
+    from phasemap.motion.periodic.orbit import no_rolling
+
     name = mech.name
+    no_rolling(mech)
     if mech.period is None:
         if section is None:
             section = mech.coordinates[0]
@@ -203,6 +201,13 @@ def settings(mech, periods=PERIODS, settle=SETTLE, phase=0.0, rtol=1e-8, section
     rtol = _args.finite("rtol", rtol, name)
     if not 1e-12 <= rtol <= 1e-4:
         raise ValueError(f"{name}: rtol must be in [1e-12, 1e-4], got {rtol!r}")
+    avail = available_memory()
+    work = (settle + periods) * PERIOD_BYTES
+    if avail is not None and work > MEMORY_SHARE * avail:
+        raise ValueError(f"{name}: one motion over {settle + periods:,} periods keeps "
+                         f"about {human_bytes(work)} while it runs (its events and points), "
+                         f"more than half the memory available ({human_bytes(avail)}); keep "
+                         "fewer periods")
     return {"periods": periods, "settle": settle, "phase": phase, "rtol": rtol,
             "section": section}
 
