@@ -521,7 +521,7 @@ def _atlas(args) -> str:
         _args.count("--chunk-cells", args.chunk_cells)
     layers = [x.strip() for x in args.layers.split(",") if x.strip()] if args.layers else None
     options = _parse_values(args.option, words=("method", "impact_law", "painleve",
-                                                "through_contacts"))
+                                                "through_contacts", "section"))
     if "through_contacts" in options:
         options["through_contacts"] = _switch("through_contacts", options["through_contacts"])
     scene = Scene(model, axes=axes, fixed=fixed, layers=layers, options=options)

@@ -147,6 +147,12 @@ def test_a_period_map_is_the_same_eager_chunked_and_written(tmp_path):
     report = cfchecks(path, tmp_path)
     assert "ERRORS detected: 0" in report and "WARNINGS given: 0" in report, report
     assert_atlas_round_trip(eager, tmp_path)
+    # over two axes the atlas is a map: of its fates, or of the periods
+    assert phasemap.plot.atlas_kind(eager) == "fate"
+    assert phasemap.plot.atlas_kind(eager[["section_x", "multiple"]]) == "map"
+    import matplotlib.pyplot as plt
+
+    plt.close(eager.phasemap.plot("multiple"))
     text = phasemap.describe_atlas(path)
     assert "cells     4 = 2 f x 2 Omega" in text and "defined on 8 points" in text
     again = phasemap.Scene.from_spec(scene.spec())
@@ -211,28 +217,80 @@ def test_docstring_examples(module):
 
 
 def test_section_points_that_cannot_fit_are_refused_before_any_work():
-    """A million cells of 10^5 section points each (800 GB): compute() refuses in one line
+    """A million cells of 10^6 section points each (8 TB): compute() refuses in one line
     and names the ways that fit (dask chunks, or the atlas written block by block)."""
     scene = phasemap.Scene("den_hartog", axes={"f": np.linspace(0.2, 0.4, 10**6)},
-                           layers=["section_x"], options={"periods": 10**5})
-    assert scene.estimate(timed=False).bytes == 10**6 * 10**5 * 8
-    with pytest.raises(ValueError, match="need about 800 GB more memory") as err:
+                           layers=["section_x"], options={"periods": 10**6})
+    assert scene.estimate(timed=False).bytes == 10**6 * 10**6 * 8      # 8 TB
+    with pytest.raises(ValueError, match="more memory") as err:
         scene.compute()
     assert "\n" not in str(err.value) and "chunks=" in str(err.value)
 
 
 def test_a_timed_estimate_samples_a_few_periods_and_scales_them():
     """Cells of 10^5 forcing periods are timed over SAMPLE_PERIODS of them (the same
-    share kept), their time scaled by the periods: an estimate in seconds, not the
-    minutes one such cell takes."""
+    share kept), their time scaled by the periods, and the fate layers timed apart,
+    unscaled: an estimate in seconds, not the minutes one such cell takes."""
     from phasemap.maps import motions
 
-    scene = phasemap.Scene("den_hartog", axes={"f": [0.3, 0.4]}, layers=["section_x"],
+    scene = phasemap.Scene("den_hartog", axes={"f": [0.3, 0.4]},
+                           layers=["section_x", "fate", "multiple"],
                            options={"periods": 75_000, "settle": 25_000})
-    short, factor = motions.shortened(scene)
-    assert factor == 100_000 / motions.SAMPLE_PERIODS
+    (short, factor), (rest, one) = motions.timed_parts(scene)
+    assert factor == 100_000 / motions.SAMPLE_PERIODS and one == 1.0
+    assert short.layers == ("section_x", "multiple") and rest.layers == ("fate",)
     assert short.orbit["periods"] + short.orbit["settle"] == motions.SAMPLE_PERIODS
     assert short.orbit["periods"] == 15 and scene.orbit["periods"] == 75_000
     assert short.evaluate()["section_x"].shape == (2, 15)
+    assert scene.layers == ("section_x", "fate", "multiple")     # untouched
+    small = phasemap.Scene("den_hartog", axes={"f": [0.3]}, layers=["multiple"],
+                           options={"periods": 5, "settle": 5})
+    assert motions.timed_parts(small) is None
     est = scene.estimate()
     assert est.seconds > 0 and math.isfinite(est.seconds)
+
+
+def test_section_points_start_at_the_cells_own_time():
+    """A scene over the forcing's time: a cell that starts on a phase point (t = 3 T,
+    exactly) keeps that point first, so after the settling its points are those of the
+    cell that starts at 0 (the same stable orbit); a cell just after it starts its
+    count one period later and settles on the same points.  t_final is t_end exactly
+    wherever the motion ran through."""
+    T = 2 * math.pi / 0.8
+    t = np.array([0.0, 1.1, 3 * T, 3 * T + 1e-3])
+    ds = phasemap.Scene("den_hartog", axes={"t": t}, fixed={"f": 0.4, "x": 2.0},
+                        layers=["section_x", "section_xdot", "multiple", "fate", "t_final"],
+                        options={"periods": 3, "settle": 100, "t_end": 3.0}).compute()
+    assert ds.multiple.values.tolist() == [1, 1, 1, 1]
+    assert (ds.t_final.values == 3.0).all() and (ds.fate.values == ev.HORIZON).all()
+    pts = np.stack([ds.section_x.values, ds.section_xdot.values], axis=-1)
+    assert np.abs(pts - pts[0]).max() < 1e-6
+    # the first point kept where a start lies on a phase point whose quotient rounds up
+    from phasemap.motion.periodic.diagram import _first
+
+    assert math.ceil(143 * T / T) == 144 and _first(143 * T, T, 0.0) == 143
+    assert _first(143 * T + 1e-9, T, 0.0) == 144 and _first(1.0, T, 0.5) == 0
+
+
+def test_the_command_line_writes_an_autonomous_section(tmp_path):
+    """`phasemap atlas` takes the orbit layers' options, section= as a name."""
+    import subprocess
+    import sys
+
+    import xarray as xr
+
+    out = tmp_path / "belt.nc"
+    r = subprocess.run([sys.executable, "-m", "phasemap.cli", "atlas", "belt", "--axis",
+                        "v=0.2:0.3:2", "--set", "xdot=0.2", "--layers", "section_x,multiple",
+                        "--option", "section=x", "--option", "periods=2", "--option",
+                        "settle=2", "-o", str(out)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    with xr.open_dataset(out) as ds:
+        assert ds.multiple.values.tolist() == [1, 1]
+        top = 0.5 + np.sqrt(0.25 + ds.v.values ** 2)
+        assert np.abs(ds.section_x.values - top[:, None]).max() < 1e-6
+    bad = subprocess.run([sys.executable, "-m", "phasemap.cli", "atlas", "belt", "--layers",
+                          "multiple", "--option", "section=q", "-o", str(tmp_path / "b.nc")],
+                         capture_output=True, text=True)
+    assert bad.returncode != 0 and "section must name a coordinate" in bad.stderr
+    assert "Traceback" not in bad.stderr

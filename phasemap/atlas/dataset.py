@@ -364,11 +364,14 @@ def is_categorical(var: xr.DataArray) -> bool:
 
 
 def first_layer(ds: xr.Dataset) -> xr.DataArray:
-    """The first categorical layer of ``ds``, else its first layer."""
-    for var in ds.data_vars.values():
+    """The first categorical layer of ``ds``, else its first layer; a layer on the
+    scene's cells before section points on one more dimension (``cycle``)."""
+    layers = list(ds.data_vars.values())
+    cells = [v for v in layers if "cycle" not in v.dims] or layers
+    for var in cells:
         if is_categorical(var):
             return var
-    return next(iter(ds.data_vars.values()))
+    return cells[0]
 
 
 def curve_kind(ds: xr.Dataset) -> str | None:

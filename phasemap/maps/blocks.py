@@ -206,7 +206,7 @@ def seconds_per_cell(scene) -> float:
 
     The sample takes up to :data:`SAMPLE_CELLS` cells spread over the grid (cells
     whose section points run many forcing periods run a few, and their time is scaled:
-    :func:`phasemap.maps.motions.shortened`).  A
+    :func:`phasemap.maps.motions.timed_parts`).  A
     map's sample (milliseconds of work) is timed in one call, the best of
     :data:`MAP_SAMPLE_REPEATS`.  A fate map's, whose cells can be long
     trajectories, goes in a shuffled order in growing blocks and stops after
@@ -217,11 +217,11 @@ def seconds_per_cell(scene) -> float:
     large blocks of the real work pay rarely.
     """
     if getattr(scene, "orbit", None):    # section points: timed over a few periods
-        from phasemap.maps.motions import shortened
+        from phasemap.maps.motions import timed_parts
 
-        short, factor = shortened(scene)
-        if factor != 1.0:
-            return seconds_per_cell(short) * factor
+        parts = timed_parts(scene)
+        if parts is not None:
+            return sum(seconds_per_cell(part) * factor for part, factor in parts)
     kind = "fate" if scene.slow_cells else "map"
     target = min(SAMPLE_CELLS[kind], scene.size)
     per_axis = max(1, int(round(target ** (1.0 / len(scene.axes)))))

@@ -20,7 +20,9 @@ impact and Zeno decided as there), from the cell's time ``t`` where the system i
   the periods.  Their options are ``periods`` (200), ``settle`` (100), ``phase`` (0)
   and ``section``.  A scene with an orbit layer integrates at ``rtol`` =
   :data:`ORBIT_RTOL` unless it gives one (a period is read to 1e-6 of the points'
-  scale).
+  scale); they read ``rtol`` and the contact settings, as ``orbit_diagram`` does, while
+  ``t_end`` and the step settings are the fate layers'.  Either runs scipy's DOP853 on
+  the compiled flow, as ``simulate`` does in full coordinates, whatever ``method``.
 
 A cell costs one motion: some milliseconds over a few dozen events, and about 2 ms a
 forcing period for the orbit layers (BENCHMARKS.md, Orbit diagrams).  The cells run
@@ -93,19 +95,34 @@ def split(model, options: dict, layers, registry) -> tuple[dict, dict | None]:
 SAMPLE_PERIODS = 20
 
 
-def shortened(scene):
-    """``(scene, factor)``: ``scene`` whose orbit layers run at most
-    :data:`SAMPLE_PERIODS` periods, and the factor its time per cell is to be scaled by
-    (``(scene, 1.0)`` where they run no more)."""
+def timed_parts(scene) -> list | None:
+    """``[(scene, factor), ...]`` whose times per cell, scaled by their factors, add up
+    to ``scene``'s: its orbit layers over at most :data:`SAMPLE_PERIODS` periods (the
+    same share kept), scaled by its periods over those, and its other layers as they
+    are; None where the orbit layers run no more than that (or there are none)."""
     import copy
 
     total = scene.orbit["settle"] + scene.orbit["periods"] if scene.orbit else 0
     if total <= SAMPLE_PERIODS:
-        return scene, 1.0
+        return None
+    reg = _registry(scene)
     short = copy.copy(scene)
     periods = max(1, round(SAMPLE_PERIODS * scene.orbit["periods"] / total))
     short.orbit = {**scene.orbit, "periods": periods, "settle": SAMPLE_PERIODS - periods}
-    return short, total / SAMPLE_PERIODS
+    short.layers = tuple(n for n in scene.layers if is_orbit(reg[n]))
+    parts = [(short, total / SAMPLE_PERIODS)]
+    rest = tuple(n for n in scene.layers if not is_orbit(reg[n]))
+    if rest:
+        other = copy.copy(scene)
+        other.layers, other.orbit = rest, None
+        parts.append((other, 1.0))
+    return parts
+
+
+def _registry(scene):
+    from phasemap.maps.layers import layers_for
+
+    return layers_for(scene.model)
 
 
 def cycles(scene) -> int:
@@ -140,29 +157,36 @@ def evaluate(scene, axes: dict, wanted) -> dict[str, np.ndarray]:
                                atol=o.atol, max_step=o.max_step, max_steps=o.max_steps,
                                max_events=o.max_events, t_eval=[t0 + o.t_end],
                                **scene.contact)
-                row = _ends(rec, t0, state)
+                row = _ends(rec, t0, o.t_end, state)
             except FAILURES as err:
                 failed.append((values, err))
                 row = {"fate": ev.STEP_FAILURE}
             for l in ends:
                 out[l.name][index] = row.get(l.name, -1 if l.dtype == "int32" else math.nan)
         if orbit:
-            pts, _, _ = strobe(mech, p, q, u, scene.orbit, t0, scene.contact)
+            try:
+                pts, _, _ = strobe(mech, p, q, u, scene.orbit, t0, scene.contact)
+            except FAILURES as err:
+                failed.append((values, err))
+                pts = np.full((cycles(scene), len(state)), np.nan)
             for l in orbit:
                 out[l.name][index] = (multiple(pts) if l.name == "multiple"
                                       else pts[:, state.index(l.name[len("section_"):])])
     if failed:
         values, err = failed[0]
-        warnings.warn(f"{m.name}: {len(failed)} of {math.prod(shape)} cells could not be "
-                      f"moved (their fate is step_failure, their values NaN); the first, "
-                      f"{values}: {err}", RuntimeWarning, stacklevel=3)
+        warnings.warn(f"{m.name}: {len(failed)} motions of {math.prod(shape)} cells could "
+                      "not be run (their fate is step_failure, their values NaN, their "
+                      f"multiple 0); the first, {values}: {err}", RuntimeWarning,
+                      stacklevel=3)
     return out
 
 
-def _ends(rec, t0: float, state) -> dict:
-    """The fate layers' values of one motion's :class:`phasemap.motion.hybrid.Record`."""
+def _ends(rec, t0: float, t_end: float, state) -> dict:
+    """The fate layers' values of one motion's :class:`phasemap.motion.hybrid.Record`
+    from ``t0`` over ``t_end``."""
     kinds = np.array(rec.ev_kind)
-    t_final = float(rec.ev_t[-1]) - t0
+    # (t_end itself where it ran through: (t0 + t_end) - t0 need not round to it)
+    t_final = t_end if rec.fate == ev.HORIZON else float(rec.ev_t[-1]) - t0
     row = {"fate": int(rec.fate), "n_reversals": int(np.count_nonzero(kinds == ev.REVERSAL)),
            "n_sticks": int(np.count_nonzero(kinds == ev.STICK)), "t_final": t_final,
            "t_rest": t_final if rec.fate == ev.REST else math.nan}

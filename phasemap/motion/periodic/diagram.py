@@ -248,7 +248,7 @@ def strobe(mech, p, q, u, spec, t0=0.0, contact=None):
         return peaks(mech, p, q, u, spec, t0, contact)
     T = float(mech.period(*p))
     settle, periods = spec["settle"], spec["periods"]
-    first = math.ceil(t0 / T - spec["phase"]) if t0 else 0   # the first phase point >= t0
+    first = _first(t0, T, spec["phase"])
     te = T * (np.arange(first + settle, first + settle + periods) + spec["phase"])
     opts = Options(float(te[-1]), rtol=spec["rtol"], max_events=10_000_000,
                    max_steps=10_000_000, **(contact or {}))
@@ -263,6 +263,19 @@ def strobe(mech, p, q, u, spec, t0=0.0, contact=None):
         out[rows[ok]] = np.array([rec.y[i] for i in kept])[ok]
     end = np.array(rec.y[-1]) if rec.y else np.concatenate([q, u])
     return out, int(rec.fate), end
+
+
+def _first(t0: float, T: float, phase: float) -> int:
+    """The least k with ``T (k + phase) >= t0``, in the floating point the times are
+    computed in (a t0 on a phase point keeps it: t0 / T may round above the integer)."""
+    if not t0:
+        return 0
+    k = math.ceil(t0 / T - phase)
+    while T * (k - 1 + phase) >= t0:
+        k -= 1
+    while T * (k + phase) < t0:
+        k += 1
+    return k
 
 
 #: An autonomous motion runs in chunks of this many of its time scales ...
