@@ -32,7 +32,7 @@ EXAMPLES = {
          "        --layers fate,phi_rest,n_reversals --option t_end=30 -o fates.nc", ""),
         ("phasemap atlas den_hartog --axis f=0.1:0.7:61 --layers section_x,multiple \\\n"
          "        --option periods=50 -o diagram.nc",
-         "the orbit diagram as an atlas (phasemap plot draws it)"),
+         "the orbit diagram as an atlas (the plot command draws it as one)"),
     ],
     "simulate": [
         ("phasemap simulate hinge_pendulum phi=2.5 omega=0 --t-end 20 -o swing.nc", ""),
