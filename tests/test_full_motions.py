@@ -176,7 +176,8 @@ def test_the_atlas_draws_as_an_orbit_diagram_with_a_branch(diagram, tmp_path):
     (ax,) = fig.axes
     dots = ax.lines[0]
     assert np.allclose(np.asarray(dots.get_ydata(), float),
-                       diagram.section_x.values.ravel()) and ax.get_ylabel() == "x (m)"
+                       diagram.section_x.values.ravel()) and ax.get_ylabel() == "$x$ (m)"
+    assert ax.get_xlabel() == "$f$"                # the model's symbols, as its maps
     branch = phasemap.continue_orbit(phasemap.periodic_orbit("den_hartog", start={"f": 0.3}),
                                      "f", (0.3, 0.5))
     fig2 = diagram.phasemap.plot("section_x", branches=branch)

@@ -235,7 +235,15 @@ def diagram_figure(ds: xr.Dataset, y: str | None = None, *, branches=(), ax=None
         handles += [Line2D([], [], color=_OI["vermillion"], lw=1.2, ls=ls, label=label)
                     for ls, label in (("-", "stable orbit"), ("--", "unstable orbit"))
                     if ls in styles]
-        a.set_xlabel(_label(ds, param))
-        a.set_ylabel(_label(ds, y, coordinate))
+        if coordinate != y:       # a scene's atlas: the model's symbols, as its maps
+            from phasemap.plot.labels import _symbol_and_units, _with_units, axis_label
+
+            a.set_xlabel(axis_label(ds, param))
+            known = _symbol_and_units(ds, coordinate)
+            a.set_ylabel(axis_label(ds, y) if known is None else _with_units(
+                f"${known[0]}$", known[1]))
+        else:
+            a.set_xlabel(_label(ds, param))
+            a.set_ylabel(_label(ds, y))
         legend_above(a, handles)
     return a.figure
