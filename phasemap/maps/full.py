@@ -101,6 +101,11 @@ class FullModel:
     def __repr__(self) -> str:
         return f"FullModel({self.name!r})"
 
+    def __reduce__(self):
+        # made again from its declaration, which pickles: its generated functions live
+        # in kernel modules another process (a dask worker) has not imported
+        return (map_model, (self.declaration,))
+
     @property
     def names(self) -> tuple[str, ...]:
         return tuple(v.name for v in self.state + self.params)
