@@ -39,6 +39,8 @@ EXAMPLES = {
         ("phasemap simulate elliptic_pendulum phi=1 xdot=1 f=0.3 --t-end 5", ""),
         ("phasemap simulate ladder phi=0.5236 omega=0 f=0 l=0.5 --t-end 1",
          "leaves the wall, falls on"),
+        ("phasemap simulate den_hartog x=2 xdot=1 --t0 1.3 --t-end 13.3",
+         "starts where the forcing is at t = 1.3 s"),
     ],
     "info": [("phasemap info elliptic.nc", "axes, fixed values, cells per class")],
     "plot": [("phasemap plot elliptic.nc -o elliptic --size two", "elliptic.pdf and .png")],
@@ -196,6 +198,8 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
                    help="initial state and parameters (defaults: phasemap models)")
     p.add_argument("--t-end", type=float, default=10.0, metavar="T", help="horizon in s "
                    "(default %(default)s)")
+    p.add_argument("--t0", type=float, default=0.0, metavar="T0", help="start time in s of "
+                   "a system forced in time (default 0)")
     p.add_argument("--rtol", type=float, default=1e-8, help="relative tolerance "
                    "(default %(default)s)")
     p.add_argument("--method", default="DOPRI5", help="DOPRI5 (Dormand-Prince 5(4), the "
@@ -565,7 +569,7 @@ def _simulate(args) -> str:
         ds = simulate(model, args.t_end, rtol=args.rtol, method=args.method,
                       impact_law=args.impact_law, restitution=args.restitution,
                       painleve=args.painleve, zeno_speed=args.zeno_speed,
-                      through_contacts=not args.reduced, **values)
+                      through_contacts=not args.reduced, t0=args.t0, **values)
     full = ds.attrs.get("phasemap_coordinates") == "full"
     if full:   # the motion went on through contact changes, in full coordinates
         names = [str(v)[len("event_"):] for v in ds.data_vars if str(v).startswith("event_")

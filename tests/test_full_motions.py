@@ -77,6 +77,33 @@ def test_a_forced_cell_starts_at_its_own_time():
         assert ds.n_reversals.values[i] == n
 
 
+def test_simulate_starts_at_t0_as_a_maps_cell_does():
+    """simulate(t0=...) of a forced oscillator: the state at t_end is scipy's flow from
+    t0, the map's cell at t = t0 ends where it does (one motion), t_eval lies in
+    [t0, t_end], and t0 is recorded; a reduced model's motion refuses it in one line."""
+    from references import duffing_fold as ref
+
+    ds = phasemap.simulate("den_hartog", 13.3, t0=1.3, rtol=1e-11, x=2.0, xdot=1.0,
+                           t_eval=[1.3, 5.0, 13.3])
+    assert ds.t.values.tolist() == [1.3, 5.0, 13.3] and ds.attrs["phasemap_t0"] == 1.3
+    assert ds.event_t.values[0] == 1.3 and ds.x.values[0] == 2.0
+    (x, xd), n = ref.flow([2.0, 1.0], 1.3, 13.3, F=1.0, Omega=0.8, r=0.2, k1=1.0,
+                          beta=0.0, c=0.0)
+    assert abs(ds.x.values[-1] - x) < 1e-7 and abs(ds.xdot.values[-1] - xd) < 1e-7
+    assert int(np.count_nonzero(ds.event_kind.values == ev.REVERSAL)) == n
+    cell = phasemap.Scene("den_hartog", axes={"t": [1.3]}, fixed={"x": 2.0, "xdot": 1.0},
+                          layers=["x_final"], options={"t_end": 12.0, "rtol": 1e-11}).compute()
+    assert abs(cell.x_final.values[0] - ds.x.values[-1]) < 1e-9
+    assert "phasemap_t0" not in phasemap.simulate("den_hartog", 1.0, x=2.0).attrs
+    for kw, match in (({"t0": 20.0}, "t_end must come after t0"),
+                      ({"t0": 2.0, "t_eval": [1.0]}, r"t_eval must be .* in \[t0 = 2"),
+                      ({"t": 1.0}, "a motion's start time is t0=")):
+        with pytest.raises(ValueError, match=match):
+            phasemap.simulate("den_hartog", 13.3, **kw)
+    with pytest.raises(ValueError, match="leave t0 out"):
+        phasemap.simulate("hinge_pendulum", 5.0, t0=1.0)
+
+
 @pytest.fixture(scope="module")
 def diagram():
     return phasemap.Scene("den_hartog", axes={"f": [0.3, 0.5]},

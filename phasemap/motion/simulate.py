@@ -152,7 +152,7 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
              max_events: int = 10_000, method: str = DEFAULT_METHOD,
              impact_law: str = "stronge", restitution: float = 0.0,
              painleve: str = "liftoff", zeno_speed: float = hybrid.ZENO_SPEED,
-             through_contacts: bool = True, **values: float) -> xr.Dataset:
+             through_contacts: bool = True, t0: float = 0.0, **values: float) -> xr.Dataset:
     """Integrate the motion from an initial state, with exact stick and slip.
 
     Parameters
@@ -161,14 +161,14 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
         a model name or :class:`phasemap.Model` with dynamics (all four
         built-in models).
     t_end:
-        the time horizon (s).
+        the time horizon (s): the motion runs from ``t0`` to ``t_end``.
     rtol, atol:
         relative and absolute tolerances of the steps (``atol`` defaults to
         ``rtol``); ``rtol`` in [1e-14, 0.1].
     max_step:
         largest step (s); lower it to resolve short excursions between steps.
     t_eval:
-        sorted times in [0, t_end] at which to report the state (from the
+        sorted times in [t0, t_end] at which to report the state (from the
         dense output).  Default: every accepted step and every event.
     max_steps, max_events:
         limits after which the motion ends with ``max_steps`` or ``max_events``.
@@ -194,6 +194,12 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
         (every contact closed) ends, with ``contact_lost``, ``no_solution`` or
         ``indeterminate``: the fate :func:`phasemap.phase_curve` and the fate maps give
         (``False`` is recorded, ``phasemap_through_contacts = "false"``, for a re-run).
+    t0:
+        the start time (s, default 0): where the forcing of a system forced in time is
+        at the start (Den Hartog's block started at ``t0`` feels F0 cos(Omega t0)).  A
+        motion in full coordinates takes it (a friction oscillator, a start in full
+        coordinates); a reduced model's motion does not depend on the time, so it
+        starts at 0.  Recorded as ``attrs["phasemap_t0"]`` where not 0.
     **values:
         initial state and parameters by name (``phasemap models`` lists them);
         missing names take the model's defaults.  The elliptic pendulum also
@@ -269,8 +275,17 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
             raise ValueError(f"{name}: its contacts cannot all be closed at once, so it has "
                              "no reduced model: through_contacts=False has nothing to run")
         S = None
+    t0 = _args.finite("t0", t0, name)
     if S is not None and (m is None or _full_start(m, S, values)):
-        return simulate_full(S, m, opts, contact, _times(name, t_eval, opts), values)
+        if not opts.t_end > t0:
+            raise ValueError(f"{name}: the motion runs from t0 = {t0:g} to t_end = "
+                             f"{opts.t_end:g}: t_end must come after t0")
+        return simulate_full(S, m, opts, contact, _times(name, t_eval, opts, t0), values,
+                             t0)
+    if t0 != 0.0:
+        raise ValueError(f"{name}: t0 = {t0:g} is the start time of a motion in full "
+                         "coordinates (a system forced in time); this one runs on its "
+                         "reduced model, which does not depend on the time: leave t0 out")
     starts = _starts(m, values)
     full, positions = split_values(m, {k: (val[0] if k in starts else val)
                                        for k, val in values.items()})
@@ -373,14 +388,15 @@ def _full_start(m: Model, S, values) -> bool:
     return bool(extra & hybrid.full_names(mech))
 
 
-def _times(name, t_eval, opts: Options):
+def _times(name, t_eval, opts: Options, t0: float = 0.0):
     if t_eval is None:
         return None
     te = _args.reals("t_eval", t_eval, name)
     if te.ndim != 1 or not np.all(np.isfinite(te)) or np.any(np.diff(te) < 0) or (
-            te.size and (te[0] < 0 or te[-1] > opts.t_end)):
+            te.size and (te[0] < t0 or te[-1] > opts.t_end)):
+        start = "0" if t0 == 0.0 else f"t0 = {t0:g}"
         raise ValueError(f"{name}: t_eval must be a sorted 1-D sequence of times in "
-                         f"[0, t_end = {opts.t_end:g}]")
+                         f"[{start}, t_end = {opts.t_end:g}]")
     return te
 
 

@@ -65,7 +65,8 @@ def start_values(mech, values: dict, known: dict | None = None):
     if bad:
         raise ValueError(f"{mech.name}: unknown variable(s) {', '.join(sorted(bad))}; the "
                          "full coordinates are " + ", ".join(mech.coordinates + mech.rates)
-                         + " and the parameters " + ", ".join(mech.parameters))
+                         + " and the parameters " + ", ".join(mech.parameters)
+                         + ("; a motion's start time is t0=" if "t" in bad else ""))
     vals = {**mech.defaults, **(known or {}), **values}
     for k, x in vals.items():
         vals[k] = _args.finite(k, x, mech.name)

@@ -57,7 +57,8 @@ def simulate_full(S, m, opts, contact: dict, te, values, t0: float = 0.0):
     q, u, p = start_values(mech, values)
     settings = run_settings(opts, mech.n if te is None else 0)
     rec = run_full(mech, p, q, u, t0=t0, t_eval=te, **settings, **contact)
-    ds = dataset(mech, rec, full_attrs(S, m, opts.as_dict(), contact, values), p=p)
+    recorded = opts.as_dict() if t0 == 0.0 else {**opts.as_dict(), "t0": t0}
+    ds = dataset(mech, rec, full_attrs(S, m, recorded, contact, values), p=p)
     say_full_memory(ds, opts, settings)
     return ds
 
