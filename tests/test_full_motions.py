@@ -211,6 +211,10 @@ def test_the_atlas_draws_as_an_orbit_diagram_with_a_branch(diagram, tmp_path):
     assert len(fig2.axes[0].lines) >= 2           # the points and the branch
     fig3 = diagram.phasemap.plot("multiple")
     assert fig3.axes[0].get_xlabel().strip("$") == "f"
+    from phasemap.plot.labels import axis_label
+
+    assert axis_label(diagram, "section_x") == r"$x_{\mathrm{section}}$ (m)"
+    assert axis_label(diagram, "section_xdot") == r"$\dot x_{\mathrm{section}}$ (m s$^{-1}$)"
     for f in (fig, fig2, fig3):
         plt.close(f)
 

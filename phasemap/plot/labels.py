@@ -102,6 +102,10 @@ def _declared_symbol(ds: xr.Dataset, name: str) -> tuple[str, str | None] | None
     if head in words.variables and moment in _MOMENTS:
         symbol, units, _ = words.variables[head]
         return rf"{symbol}_{{\mathrm{{{moment}}}}}", units
+    # section_x: the settled motion's points on a Poincare section (maps.motions)
+    if name.startswith("section_") and name[len("section_"):] in words.variables:
+        symbol, units, _ = words.variables[name[len("section_"):]]
+        return rf"{symbol}_{{\mathrm{{section}}}}", units
     return None
 
 
