@@ -342,3 +342,18 @@ def test_a_chunked_scene_runs_in_other_processes():
         done = scene.compute(chunks=2).compute()
     for name in eager.data_vars:
         np.testing.assert_array_equal(done[name].values, eager[name].values)
+
+
+def test_auto_chunks_count_a_cells_section_points():
+    """chunks="auto" sizes the blocks by what a cell holds: with 1000 section points a
+    cell, a block of the points stays within dask's chunk size (1 MiB here)."""
+    import dask
+
+    scene = phasemap.Scene("den_hartog", axes={"f": np.linspace(0.2, 0.4, 10_000)},
+                           layers=["section_x", "multiple"], options={"periods": 1000})
+    with dask.config.set({"array.chunk-size": "1MiB"}):
+        lazy = scene.compute(chunks="auto")
+    block = max(lazy.section_x.chunks[0])
+    assert block * 1000 * 8 <= 2**20 and block >= 64
+    assert lazy.section_x.chunks[0] == lazy.multiple.chunks[0]
+    assert lazy.section_x.chunks[1] == (1000,)

@@ -407,7 +407,15 @@ class Scene:
         sizes = sizes if sizes == "auto" else tuple(sizes.values())
         reg = layers_for(self.model)
         ndim = len(self.axes)
-        normal = da.core.normalize_chunks(sizes, self.shape, dtype=np.float64)
+        limit = None
+        if sizes == "auto" and motions.cycles(self) > 1:   # a cell holds its section points
+            from dask.utils import parse_bytes
+
+            import dask
+
+            limit = max(8, parse_bytes(dask.config.get("array.chunk-size"))
+                        // motions.cycles(self))
+        normal = da.core.normalize_chunks(sizes, self.shape, dtype=np.float64, limit=limit)
         token = tokenize(declaration_hash(self.model) if self.full else
                          content_hash(self.model), json.dumps(self.spec(), default=str),
                          self.options.as_dict(), [a.tobytes() for a in self.axes.values()],
