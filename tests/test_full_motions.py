@@ -357,3 +357,27 @@ def test_auto_chunks_count_a_cells_section_points():
     assert block * 1000 * 8 <= 2**20 and block >= 64
     assert lazy.section_x.chunks[0] == lazy.multiple.chunks[0]
     assert lazy.section_x.chunks[1] == (1000,)
+
+
+def test_awkward_orbit_options_and_t0_answer_or_refuse_in_one_line():
+    """Every awkward value of the fuzz (tests/fuzzing.py: NaN, huge, arrays, text, bools,
+    objects...) as an orbit option of a Scene or as simulate's t0: an answer, or a
+    ValueError or TypeError of phasemap's that names the argument, never a traceback's
+    text or another library's error."""
+    from fuzzing import AWKWARD, Tally, _judge
+
+    tally = Tally()
+    for name in ("periods", "settle", "phase", "section"):
+        model, axes = ("belt", {"v": [0.2]}) if name == "section" else ("den_hartog",
+                                                                        {"f": [0.3]})
+        for value in AWKWARD:
+            def call(name=name, value=value, model=model, axes=axes):
+                return phasemap.Scene(model, axes=axes, layers=["multiple"],
+                                      options={name: value}).spec()
+            _judge(tally, "Scene", name, value, call)
+    for value in AWKWARD:
+        _judge(tally, "simulate", "t0", value, lambda value=value: phasemap.simulate(
+            "den_hartog", 0.5, t0=value, max_steps=2000, t_eval=[0.5]))
+    assert not tally.failures, "\n".join(tally.failures[:10])
+    assert tally.refused["Scene"] > 100 and tally.answered["Scene"] >= 10
+    assert tally.answered["simulate"] >= 5

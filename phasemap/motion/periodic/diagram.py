@@ -206,8 +206,8 @@ def settings(mech, periods=PERIODS, settle=SETTLE, phase=0.0, rtol=1e-8, section
     if avail is not None and work > MEMORY_SHARE * avail:
         raise ValueError(f"{name}: one motion over {settle + periods:,} periods keeps "
                          f"about {human_bytes(work)} while it runs (its events and points), "
-                         f"more than half the memory available ({human_bytes(avail)}); keep "
-                         "fewer periods")
+                         f"more than half the memory available ({human_bytes(avail)}); give "
+                         "fewer periods or a shorter settle")
     return {"periods": periods, "settle": settle, "phase": phase, "rtol": rtol,
             "section": section}
 
