@@ -253,7 +253,6 @@ def _full_motion_layers(model) -> dict[str, Layer]:
     return out
 
 
-
 #: What the summaries mean in full coordinates, where the candidates are phases.
 _FULL_MEANINGS = {
     "stagnation": "a contact at rest relative to its surface, and a motion that keeps it stuck",

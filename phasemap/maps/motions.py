@@ -54,6 +54,7 @@ import warnings
 import numpy as np
 
 from phasemap.core import events as ev
+from phasemap.maps.layers import layers_for
 
 #: The options of the orbit layers and their defaults (:func:`phasemap.orbit_diagram`'s).
 ORBIT_OPTIONS = {"periods": 200, "settle": 100, "phase": 0.0, "section": None}
@@ -105,7 +106,7 @@ def timed_parts(scene) -> list | None:
     total = scene.orbit["settle"] + scene.orbit["periods"] if scene.orbit else 0
     if total <= SAMPLE_PERIODS:
         return None
-    reg = _registry(scene)
+    reg = layers_for(scene.model)
     short = copy.copy(scene)
     periods = max(1, round(SAMPLE_PERIODS * scene.orbit["periods"] / total))
     short.orbit = {**scene.orbit, "periods": periods, "settle": SAMPLE_PERIODS - periods}
@@ -117,12 +118,6 @@ def timed_parts(scene) -> list | None:
         other.layers, other.orbit = rest, None
         parts.append((other, 1.0))
     return parts
-
-
-def _registry(scene):
-    from phasemap.maps.layers import layers_for
-
-    return layers_for(scene.model)
 
 
 def cycles(scene) -> int:

@@ -426,14 +426,12 @@ class Scene:
                             scene=self)
         arrays = {}
         for n in self.layers:
-            if reg[n].cycle:     # the section points: one more axis, whole in each block
-                arrays[n] = raw.map_blocks(
-                    _pick, n, dtype=reg[n].dtype, name=f"{token}-{n}",
-                    chunks=normal + ((motions.cycles(self),),), new_axis=ndim,
-                    meta=np.empty((0,) * (ndim + 1), dtype=reg[n].dtype))
-            else:
-                arrays[n] = raw.map_blocks(_pick, n, dtype=reg[n].dtype, name=f"{token}-{n}",
-                                           meta=np.empty((0,) * ndim, dtype=reg[n].dtype))
+            # the section points: one more axis, whole in each block
+            extra = ({"chunks": normal + ((motions.cycles(self),),), "new_axis": ndim}
+                     if reg[n].cycle else {})
+            arrays[n] = raw.map_blocks(_pick, n, dtype=reg[n].dtype, name=f"{token}-{n}",
+                                       meta=np.empty((0,) * (ndim + bool(extra)),
+                                                     dtype=reg[n].dtype), **extra)
         return self._dataset(arrays)
 
     def _dataset(self, arrays: Mapping[str, object]) -> xr.Dataset:

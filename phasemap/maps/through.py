@@ -36,17 +36,17 @@ def split(model, options: dict) -> tuple[dict, dict | None]:
     """``(integrator options, contact settings or None)`` of a scene's ``options``: the
     contact settings checked as :func:`phasemap.simulate` checks them, None where
     ``through_contacts`` is off (then no other contact setting may be given)."""
+    from phasemap.maps.full import FullModel
     from phasemap.motion import hybrid
 
-    from phasemap.maps.full import FullModel
-
+    full = isinstance(model, FullModel)     # always through its contact changes
     opts = dict(options)
     given = {k: opts.pop(k) for k in DEFAULTS if k in opts}
-    through = given.pop("through_contacts", isinstance(model, FullModel))
+    through = given.pop("through_contacts", full)
     if not isinstance(through, (bool, np.bool_)):
         raise _args.WrongType(f"{model.name}: through_contacts must be True or False, got "
                               f"{_args.describe(through)}")
-    if isinstance(model, FullModel) and not through:
+    if full and not through:
         raise ValueError(f"{model.name}: a system in full coordinates always moves through "
                          "its contact changes; leave through_contacts out")
     if not through:

@@ -82,14 +82,13 @@ def _state_names(ds):
                                        "segment_end", "segment_event_index"))]
 
 
-def _label(ds, name, shown=None):
-    """``name (units)``, or ``shown`` in its place; a dimensionless name in math type
-    (``$f$``, ``$f_s$``), as the maps write a variable."""
+def _label(ds, name):
+    """``name (units)``; a dimensionless name in math type (``$f$``, ``$f_s$``), as the
+    maps write a variable."""
     units = ds[name].attrs.get("units", "")
-    shown = shown or name
     if units and units != "1":
-        return f"{shown} ({units})"
-    return f"${shown}$" if units == "1" and shown.isidentifier() else shown
+        return f"{name} ({units})"
+    return f"${name}$" if units == "1" and name.isidentifier() else name
 
 
 def branch_figure(ds: xr.Dataset, y: str | None = None, *, ax=None,
@@ -236,12 +235,13 @@ def diagram_figure(ds: xr.Dataset, y: str | None = None, *, branches=(), ax=None
                     for ls, label in (("-", "stable orbit"), ("--", "unstable orbit"))
                     if ls in styles]
         if coordinate != y:       # a scene's atlas: the model's symbols, as its maps
-            from phasemap.plot.labels import _symbol_and_units, _with_units, axis_label
+            from phasemap.plot.labels import _symbol_and_units, axis_label
 
             a.set_xlabel(axis_label(ds, param))
-            known = _symbol_and_units(ds, coordinate)
-            a.set_ylabel(axis_label(ds, y) if known is None else _with_units(
-                f"${known[0]}$", known[1]))
+            # the coordinate's symbol where the model knows it (not y, which a contact
+            # fixes): else the layer's own label
+            known = _symbol_and_units(ds, coordinate) is not None
+            a.set_ylabel(axis_label(ds, coordinate if known else y))
         else:
             a.set_xlabel(_label(ds, param))
             a.set_ylabel(_label(ds, y))
