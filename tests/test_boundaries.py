@@ -18,6 +18,7 @@ import xarray as xr
 import phasemap
 from phasemap.bifurcation import Condition, boundaries, threshold
 from phasemap.bifurcation import _trace
+from phasemap.core import tiers
 
 from conftest import assert_atlas_round_trip
 
@@ -582,3 +583,127 @@ def test_the_generated_hessian_is_the_exact_one_to_differencing_accuracy():
                 assert np.array_equal(np.sign(H), np.sign(want)), (H, want)
                 continue
             assert np.abs(H - want).max() <= 1e-6 * size, (name, point, H, want)
+
+
+# -- the tracer's interpreter tier (issue 40) ----------------------------------------------
+
+def same_result(got, want) -> None:
+    """Two results of boundaries (or threshold's Datasets) alike: every variable and
+    coordinate bit for bit (NaNs alike), every attribute but the time stamps."""
+    assert set(got.variables) == set(want.variables)
+    for name in want.variables:
+        a, b = want[name].values, got[name].values
+        assert a.dtype == b.dtype and a.shape == b.shape, name
+        if a.dtype.kind == "f":
+            assert np.array_equal(a, b, equal_nan=True), name
+            assert np.array_equal(np.signbit(a), np.signbit(b)), name   # -0.0 apart
+        else:
+            assert np.array_equal(a, b), name
+    stamps = {"history", "date_created"}
+    assert {k: v for k, v in got.attrs.items() if k not in stamps} == \
+        {k: v for k, v in want.attrs.items() if k not in stamps}
+
+
+def in_both_tiers(call):
+    """``call()`` on the tracer's machine code, then on its interpreted twins (what a first
+    ``boundaries`` runs while numba compiles the tracer in the background)."""
+    with tiers.forced("eager"):
+        want = call()
+    with tiers.forced("off"):
+        run = _trace.runs()
+        assert all(tiers.is_twin(f) for f in run.values()), run
+        got = call()
+    return got, want
+
+
+@pytest.mark.parametrize("case", ["rod fold", "rod crossings", "contact lost", "loop at the edges",
+                                  "unexplained"])
+def test_the_tracers_twin_traces_bit_for_bit(case, block):
+    """The twins of the tracer's entry points trace every slice as its machine code does:
+    the rod's fold and its singular crossings (velocity an axis), a closed loop, a loop
+    that the slice's edges cut, and a trace with unexplained class changes kept."""
+    model, conds = block
+    calls = {
+        "rod fold": lambda: boundaries("painleve_rod", {"theta": (0.2, 1.5), "f": (0.0, 3.0)},
+                                       fixed=SLIDE_BACK),
+        "rod crossings": lambda: boundaries("painleve_rod", {"theta": (0.1, 1.5),
+                                                             "omega": (-5.0, 5.0)},
+                                            fixed={"xdot": -1.0, "f": 2.0}),
+        "contact lost": lambda: boundaries(model, {"theta": (-2, 2), "omega": (-2, 2)},
+                                           fixed={"xdot": 1.0}, layer="contact_lost",
+                                           conditions=conds),
+        "loop at the edges": lambda: boundaries(model, {"theta": (-2, 2), "omega": (-1, 1)},
+                                                fixed={"xdot": 1.0}, layer="contact_lost",
+                                                conditions=conds),
+        "unexplained": lambda: boundaries("painleve_rod", {"theta": (0.2, 1.5),
+                                                           "f": (0.0, 3.0)},
+                                          fixed=SLIDE_BACK,
+                                          conditions=rod_conditions(coefficient=False),
+                                          strict=False),
+    }
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")   # (the unexplained changes' warning, in both)
+        got, want = in_both_tiers(calls[case])
+    same_result(got, want)
+    if case == "unexplained":   # no piece: the coefficient's is unexplained, as data
+        assert got.sizes["unexplained"] > 10
+    else:
+        assert got.sizes["piece"] >= 1
+
+
+def test_the_tracers_twin_finds_thresholds_and_grows_its_buffers_alike(monkeypatch):
+    """A threshold (traced, then refined by Newton's method) and a trace whose vertex
+    buffers fill (run again with larger ones: ``assemble``, ``uncovered`` and ``mark``
+    called from Python between the entry points) in both tiers."""
+    from phasemap.bifurcation import tracing
+
+    got, want = in_both_tiers(lambda: threshold(
+        "painleve_rod", "f", value=0, over={"theta": (0.1, 1.5), "f": (0, 3)},
+        fixed=SLIDE_BACK, conditions=ROD))
+    assert (got.value, got.at, got.kind, got.residual) == (want.value, want.at, want.kind,
+                                                           want.residual)
+    assert abs(got.value - 4 / 3) <= 1e-10
+    sl = tracing.make_slice("painleve_rod", {"theta": (0.2, 1.5), "f": (0.0, 3.0)},
+                            SLIDE_BACK, ROD)
+    monkeypatch.setattr(tracing._Buffers.__init__, "__defaults__", (16, 1))
+    got, want = in_both_tiers(lambda: tracing.trace(sl, "n_solutions", 1e-10))
+    assert got.buf.verts.shape[0] > 16
+    for field in ("pv", "pp", "pq", "pieces", "points_f", "points_i", "classes", "group",
+                  "active", "unresolved"):
+        a, b = getattr(want, field), getattr(got, field)
+        assert type(a) is type(b) and a.dtype == b.dtype, field   # plain arrays, not records
+        assert np.array_equal(a, b), field
+
+
+def test_a_process_under_off_traces_without_compiling_the_tracer(tmp_path):
+    """``PHASEMAP_JIT=off`` in a fresh process with empty caches: the boundaries of the
+    rod's first paradox with none of the tracer's functions compiled (the rod's own
+    functions are: the twins call them at their addresses), its fold at f = 4/3."""
+    import json
+    import os
+    import subprocess
+    import sys
+    import textwrap
+
+    code = textwrap.dedent("""
+        import json, numba
+        import phasemap
+        from phasemap.bifurcation import _trace
+        b = phasemap.boundaries("painleve_rod", {"theta": (0.2, 1.5), "f": (0.0, 3.0)},
+                                fixed={"xdot": -1.0, "omega": 0.0})
+        compiled = [k for k, v in vars(_trace).items()
+                    if isinstance(v, numba.core.dispatcher.Dispatcher) and v.signatures
+                    and k not in ("_no_gradient", "_no_hessian")]
+        fold = b.point_f.values[b.point_kind.values == "fold_f"]
+        print(json.dumps({"compiled": compiled, "fold": fold.tolist(),
+                          "pieces": int(b.sizes["piece"])}))
+    """)
+    env = dict(os.environ, PHASEMAP_JIT="off", PHASEMAP_CACHE_DIR=str(tmp_path / "kernels"),
+               NUMBA_CACHE_DIR=str(tmp_path / "numba"))
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                         text=True, timeout=600, check=True)
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    assert got["compiled"] == [] and got["pieces"] >= 1
+    assert len(got["fold"]) == 1 and abs(got["fold"][0] - 4 / 3) <= 1e-10

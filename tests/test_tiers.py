@@ -82,6 +82,11 @@ def _in_place(a, x):
 
 
 @njit(cache=True, error_model="numpy")
+def _erf(x):
+    return math.erf(x)
+
+
+@njit(cache=True, error_model="numpy")
 def _floor(x):
     return math.floor(x)
 
@@ -91,8 +96,45 @@ def test_in_place_arithmetic_changes_the_callers_array_and_the_unreproduced_is_r
     _in_place(a, 0.0)
     interpret.interpreted(_in_place)(b, 0.0)
     assert same_bits(a, b) and np.isinf(b[1])
-    with pytest.raises(interpret.Unsupported, match="math.floor"):
-        interpret.interpreted(_floor)      # when the twin is made, not in a call
+    with pytest.raises(interpret.Unsupported, match="math.erf"):
+        interpret.interpreted(_erf)      # when the twin is made, not in a call
+
+
+def test_floor_is_numbas_int64_on_every_awkward_number():
+    """``math.floor`` gives an int64 in machine code: NaN, the infinities and floats beyond
+    int64 are x86's 'integer indefinite', where Python raises or grows its int."""
+    twin = interpret.interpreted(_floor)
+    for x in EDGES + [2.0 ** 63, -2.0 ** 63, -2.0 ** 63 - 2048.0, 4.5e18, -0.5]:
+        assert twin(x) == _floor(x), x
+
+
+_RECORD = np.dtype([("u", np.float64), ("k", np.int64)])
+
+
+@njit(cache=True, error_model="numpy")
+def _records(n, stable):
+    """Record arrays made in the function, their fields written as attributes, and a sort."""
+    out = np.empty(n, dtype=_RECORD)
+    for i in range(n):
+        q = out[i]
+        q.u, q.k = (i * 7) % 3 * 0.5, i
+    keys = np.empty(n)
+    for i in range(n):
+        keys[i] = out[i].u
+    order = np.argsort(keys, kind="mergesort") if stable else np.argsort(keys)
+    return out, order, np.flatnonzero(keys), np.zeros(2, dtype=np.int8)
+
+
+def test_records_stable_sorts_and_integer_arrays_as_numba_has_them():
+    """A record array's elements take their fields as attributes (numba's records), a
+    stable argsort orders equal keys alike (numba's quicksort has its own order: refused),
+    and the result is a plain structured array, as the machine code returns."""
+    want = _records(9, True)
+    got = tiers.twin(_records)(9, True)
+    assert type(got[0]) is np.ndarray and got[0].dtype == want[0].dtype
+    assert all(np.array_equal(a, b) and a.dtype == b.dtype for a, b in zip(got, want))
+    with pytest.raises(interpret.Unsupported, match="argsort"):
+        tiers.twin(_records)(9, False)
 
 
 @njit(cache=True)

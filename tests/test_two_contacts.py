@@ -346,3 +346,27 @@ def test_random_barrows_boundaries(seed):
     b = phasemap.boundaries(model, {"omega": (-2.0, 2.0), "f": (0.0, 6.0)}, fixed={"phi": phi})
     assert b.sizes["piece"] >= 2 and np.all(b.point_residual.values <= 1e-10)
     _sides_agree(b, "omega", (-2.0, 2.0), (0.0, 6.0), lambda om, f: oracle(om, f).n_solutions)
+
+
+@pytest.mark.parametrize("which", ["drawer", "peg rod"])
+def test_two_contacts_trace_alike_on_the_tracers_twin(which, request):
+    """The tracer's interpreted twins (a first ``boundaries`` while numba compiles the
+    tracer) on the two-contact slices above: the same pieces, points and classes, bit
+    for bit, as its machine code."""
+    from phasemap.bifurcation import _trace
+
+    model = request.getfixturevalue("drawer" if which == "drawer" else "peg_rod")
+    axes, fixed = (({"d": (-1.0, 1.0), "f": (0.0, 2.0)}, {"xdot": 0.0}) if which == "drawer"
+                   else ({"theta": (0.1, 0.9), "f": (0.0, 2.0)}, {"omega": 0.0}))
+    layer = "stagnation" if which == "drawer" else "n_solutions"
+    with tiers.forced("eager"):
+        want = phasemap.boundaries(model, axes, fixed=fixed, layer=layer)
+    with tiers.forced("off"):
+        assert all(tiers.is_twin(f) for f in _trace.runs().values())
+        got = phasemap.boundaries(model, axes, fixed=fixed, layer=layer)
+    assert got.sizes["piece"] >= 1
+    for name in want.variables:
+        a, b = want[name].values, got[name].values
+        assert a.dtype == b.dtype and np.array_equal(a, b, equal_nan=a.dtype.kind == "f"), name
+        if a.dtype.kind == "f":
+            assert np.array_equal(np.signbit(a), np.signbit(b)), name

@@ -50,7 +50,7 @@ from numba.extending import intrinsic
 from phasemap.core.jit import njit
 from phasemap.core.memo import Memo
 from phasemap.core import numerics as nx
-from phasemap.core import calls
+from phasemap.core import calls, interpret, tiers
 from phasemap.core.codegen import call_cells
 from phasemap.core.types import B1, B2, F1, F2, I1, I2, S3
 
@@ -239,7 +239,7 @@ def class_changes(classes):
             down = classes[i + 1, j] != c
             right = classes[i, j + 1] != c
             bits[i, j] = down + 2 * right
-            count += down + right
+            count += int(down) + int(right)
         down = classes[i + 1, n1 - 1] != classes[i, n1 - 1]
         bits[i, n1 - 1] = down
         count += down
@@ -1968,7 +1968,41 @@ def _classify(typingctx, addresses, v, out, layer):
     return _typer(3, CLASS_SIG, addresses, (v, out, layer))
 
 
+# what the twins of the entry points (:func:`runs`) call instead of these intrinsics
+for _index, _intrinsic in enumerate((_values, _gradient, _hessian, _classify)):
+    interpret.register(_intrinsic, tiers.at_address(_index))
+interpret.register(call_cells, tiers.at_address())
+
 _ENTRIES: dict = {}
+_SIGNATURES: dict = {}
+
+
+def _signatures() -> dict:
+    """name -> (the entry point's function, its signature), for :func:`entries`."""
+    if not _SIGNATURES:
+        sig_trace = types.int64(ADDRESSES, F2, I2, B1, F1, F2, types.int64, types.int64,
+                                F1, types.int64, VERTS, I1, I2, S3, B2, types.float64,
+                                types.float64, types.boolean)
+        sig_seeds = F2(ADDRESSES, B1, F1, types.int64, types.int64, F1, types.int64, B2)
+        sig_survey = types.void(ADDRESSES, F1, types.int64, types.int64, F1, F2, F2)
+        sig_seed_trace = types.Tuple((_C2, B2, F2, I1, I2, I2, F2, I1, I1, I2, F2,
+                                      I2, I2))(
+            ADDRESSES, F2, F1, APPLICABLE, RASTER, types.int64, B1, I1, F1,
+            F2, types.int64, types.int64, F1, types.int64, types.int64, VERTS, I1, I2,
+            S3, types.float64, types.float64)
+        sig_thin = F2(ADDRESSES, B1, F1, types.int64, types.int64, F1, types.int64)
+        sig_applicable = types.void(ADDRESSES, F1, F2, types.int64, types.int64, F1,
+                                    APPLICABLE, B1)
+        sig_raster = types.void(types.intp, F1, types.int64, F1, I1, F2, F1, F2, _C2,
+                                F2)
+        _SIGNATURES.update({"trace": (_trace_all, sig_trace),
+                            "seeds": (_seeds_all, sig_seeds),
+                            "seed_trace": (_seed_trace_all, sig_seed_trace),
+                            "thin": (_thin_all, sig_thin),
+                            "survey": (_survey_all, sig_survey),
+                            "raster": (_raster_all, sig_raster),
+                            "applicable": (_applicable_all, sig_applicable)})
+    return _SIGNATURES
 
 
 def entries() -> dict:
@@ -1985,31 +2019,48 @@ def entries() -> dict:
     addresses, :data:`ADDRESSES`).
     """
     if not _ENTRIES:
-        sig_trace = types.int64(ADDRESSES, F2, I2, B1, F1, F2, types.int64, types.int64,
-                                F1, types.int64, VERTS, I1, I2, S3, B2, types.float64,
-                                types.float64, types.boolean)
-        sig_seeds = F2(ADDRESSES, B1, F1, types.int64, types.int64, F1, types.int64, B2)
-        sig_survey = types.void(ADDRESSES, F1, types.int64, types.int64, F1, F2, F2)
-        sig_seed_trace = types.Tuple((_C2, B2, F2, I1, I2, I2, F2, I1, I1, I2, F2,
-                                      I2, I2))(
-            ADDRESSES, F2, F1, APPLICABLE, RASTER, types.int64, B1, I1, F1,
-            F2, types.int64, types.int64, F1, types.int64, types.int64, VERTS, I1, I2,
-            S3, types.float64, types.float64)
-        sig_thin = F2(ADDRESSES, B1, F1, types.int64, types.int64, F1, types.int64)
-        sig_applicable = types.void(ADDRESSES, F1, F2, types.int64, types.int64, F1,
-                                    APPLICABLE, B1)
-        sig_raster = types.void(types.intp, F1, types.int64, F1, I1, F2, F1, F2, _C2,
-                                F2)
-        for name, fn, sig in (("trace", _trace_all, sig_trace),
-                              ("seeds", _seeds_all, sig_seeds),
-                              ("seed_trace", _seed_trace_all, sig_seed_trace),
-                              ("thin", _thin_all, sig_thin),
-                              ("survey", _survey_all, sig_survey),
-                              ("raster", _raster_all, sig_raster),
-                              ("applicable", _applicable_all, sig_applicable)):
+        for name, (fn, sig) in _signatures().items():
             fn.compile(sig)
             _ENTRIES[name] = _entry_point(fn, sig)
     return _ENTRIES
+
+
+#: the functions a trace's Python calls between its entry points (:func:`runs`)
+_HELPERS = {"assemble": assemble, "uncovered": _uncovered, "mark": _mark, "groups": groups}
+
+
+def runs() -> dict:
+    """The tracer's entry points (:func:`entries`) and the helpers its Python calls
+    between them (``assemble``, ``uncovered``, ``mark``, ``groups``), as
+    :mod:`phasemap.core.tiers` chooses: machine code where it is in this process or the
+    kernel cache, or under ``PHASEMAP_JIT=eager``; otherwise their interpreted twins, with
+    the same bits, while a background process compiles them all into the cache (numba takes
+    about 30 s of CPU for the tracer, which serves every model; the twins trace the
+    README's rod in about half a second, the model's own functions called as machine code
+    at their addresses).  A call once that compile has ended loads the machine code.
+    Under ``PHASEMAP_JIT=off``, the twins always."""
+    if not _ENTRIES or tiers.mode() == "off":
+        fn, sig = _signatures()["trace"]
+        chosen = tiers.runner(fn, None, warm=(entries, (), {}), sig=tuple(sig.args))
+        if tiers.is_twin(chosen):
+            try:
+                return _twins()
+            except interpret.Unsupported:  # (a twin differs: compile, as eager)
+                pass
+        entries()
+    return {**_ENTRIES, **_HELPERS}
+
+
+_TWINS: dict = {}
+
+
+def _twins() -> dict:
+    """:func:`runs`' interpreted twins (made once per process)."""
+    if not _TWINS:
+        made = {name: tiers.twin(fn) for name, (fn, _) in _signatures().items()}
+        made.update({name: tiers.twin(fn) for name, fn in _HELPERS.items()})
+        _TWINS.update(made)
+    return _TWINS
 
 
 def _entry_point(dispatcher, sig):
@@ -2072,7 +2123,7 @@ def functions(model, conds) -> tuple:
         for fn, sig in ((conds.values, VALUES_SIG), (gradient, GRADIENT_SIG),
                         (hessian, HESSIAN_SIG), (classifier(model), CLASS_SIG)):
             # the hessian is compiled (or loaded) when first needed
-            fns.append(calls.address(fn, sig.args))
+            fns.append(tiers.addressed(fn, sig.args))
         return tuple(fns)
 
     return _FUNCTIONS.get((model, mod if mod is not None else conds.values), (), make)

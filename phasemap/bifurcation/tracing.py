@@ -12,7 +12,7 @@ from typing import Mapping
 import numpy as np
 import xarray as xr
 
-from phasemap.core import calls
+from phasemap.core import tiers
 from phasemap.core.memo import Memo
 from phasemap.core import args as _args
 from phasemap.atlas.dataset import cf_header
@@ -213,7 +213,7 @@ def _applicable(sl: Slice) -> tuple[np.ndarray, np.ndarray]:
     active = np.empty(len(sl.conds), dtype=bool)
     v = sl.base.copy()
     m = sl.model
-    T.entries()["applicable"](sl.fns, v, np.empty((len(m.candidates), m.n_fields)),
+    T.runs()["applicable"](sl.fns, v, np.empty((len(m.candidates), m.n_fields)),
                               *sl.slots, sl.geo, _applicable_args(sl), active)
     return active, v
 
@@ -232,8 +232,9 @@ def _active(sl: Slice) -> tuple[np.ndarray, np.ndarray]:
     # values at random points: constant conditions, and proportional ones
     ix, iy = sl.slots
     vals = np.empty((len(_SURVEY), len(sl.conds)))
-    T.entries()["survey"](sl.fns, v, ix, iy, sl.geo, _SURVEY, vals)
-    group = T.groups(vals, active)
+    run = T.runs()
+    run["survey"](sl.fns, v, ix, iy, sl.geo, _SURVEY, vals)
+    group = run["groups"](vals, active)
     return active, group
 
 
@@ -284,7 +285,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     ``Traced.unexplained`` (rows: the two cells' indices on the raster) with a warning.
     """
     fns, m = sl.fns, sl.model
-    run = T.entries()
+    run = T.runs()
     code = _LAYER_CODE[layer]
     if only is not None:
         check_cells = 0
@@ -341,7 +342,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     if check_cells:
         traced.classes = classes
         if full or more:
-            bad = T._uncovered(check_cells, changes, traced.pv, traced.pp)
+            bad = run["uncovered"](check_cells, changes, traced.pv, traced.pp)
         if len(bad):
             rescue = _rescue_seeds(sl, active, bad, check_cells)
             if len(rescue):
@@ -349,7 +350,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
                 for p in range(len(traced.pieces)):
                     sel = traced.pv[traced.pp == p]
                     for q in range(len(sel) - 1):
-                        T._mark(fine, int(traced.pieces[p, 1]), sel[q, 0], sel[q, 1],
+                        run["mark"](fine, int(traced.pieces[p, 1]), sel[q, 0], sel[q, 1],
                                 sel[q + 1, 0], sel[q + 1, 1])
                 run["trace"](fns, rescue, grp, active, v, out, ix, iy, geo, code, buf.verts,
                              buf.counts, buf.curves, fine, near, tol_u, tol_w, True)
@@ -357,7 +358,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
                     raise RuntimeError(f"{m.name}: more than {buf.verts.shape[0]} vertices")
                 traced = _assembled(buf, group, active)
                 traced.classes, traced.unresolved = classes, _unresolved(thin, mark)
-                bad = T._uncovered(check_cells, changes, traced.pv, traced.pp)
+                bad = run["uncovered"](check_cells, changes, traced.pv, traced.pp)
             if len(bad):
                 message = _uncovered_message(sl, layer, classes, bad, axes)
                 if strict:
@@ -395,7 +396,8 @@ def _ranked(conds: Conditions, group: np.ndarray) -> np.ndarray:
 
 
 def _assembled(buf: _Buffers, group, active) -> Traced:
-    pv, pp, pq, pieces, pf, pi = T.assemble(buf.verts, buf.curves, int(buf.counts[1]))
+    pv, pp, pq, pieces, pf, pi = T.runs()["assemble"](buf.verts, buf.curves,
+                                                      int(buf.counts[1]))
     return Traced(pv, pp, pq, pieces, pf, pi, group, active, buf)
 
 
@@ -417,7 +419,7 @@ def _check_raster(sl: Slice, layer: str, axes: dict) -> np.ndarray:
     a trace computes it inside its one call)."""
     at, x, xslot, xderiv, y, yderiv = _raster_args(sl, layer, axes)
     flags = np.empty((1, len(x) * len(y)), dtype=np.int8)
-    T.entries()["raster"](at, sl.base.copy(), sl.slots[0], x, xslot, xderiv, y, yderiv, flags,
+    T.runs()["raster"](at, sl.base.copy(), sl.slots[0], x, xslot, xderiv, y, yderiv, flags,
                           np.empty((0, flags.shape[1])))
     return flags.reshape(len(x), len(y))
 
@@ -449,7 +451,7 @@ def _raster_kernel(m: Model, x: str, y: str, layer: str) -> tuple:
         slot = {n: i for i, n in enumerate(m.inputs)}
         cells = grid_kernel(m, (layers_for(m)[layer],), y)
         # the kernel is kept with its address, so that the code stays loaded
-        return (cells, calls.address(cells, CELLS_SIGNATURE.args),
+        return (cells, tiers.addressed(cells, CELLS_SIGNATURE.args),
                 from_x, [d for d in m.derived if d.source == y],
                 np.array([slot[d.name] for d in from_x], dtype=np.int64))
 

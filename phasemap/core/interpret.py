@@ -226,7 +226,59 @@ _EXACT_NUMPY = {"inf", "nan", "pi", "e", "isfinite", "isnan", "isinf", "abs", "a
                 "zeros_like", "ones_like", "full_like", "float64", "int64", "intp", "bool_",
                 "int32", "uint8", "array", "asarray", "arange", "minimum", "maximum",
                 "fmin", "fmax", "floor", "ceil", "trunc", "rint", "signbit", "radians",
-                "degrees", "newaxis", "nextafter", "spacing", "finfo"}
+                "degrees", "newaxis", "nextafter", "spacing", "finfo", "int8", "flatnonzero"}
+#: What x86-64 machine code gives for an integer conversion of NaN, an infinity or a float
+#: beyond int64 (``cvttsd2si``'s "integer indefinite"): numba's ``math.floor`` of them.
+_INDEFINITE = -(1 << 63)
+
+
+def _floor(x):
+    """numba's ``math.floor``: an int64, not Python's unbounded int or its exception."""
+    try:
+        r = math.floor(x)
+    except (ValueError, OverflowError):
+        return _INDEFINITE
+    return r if -(1 << 63) <= r < (1 << 63) else _INDEFINITE
+
+
+def _argsort(a, kind=None):
+    """``np.argsort`` with a stable kind, whose order is unique (numba's quicksort and
+    numpy's order equal keys each their own way)."""
+    if kind not in ("mergesort", "stable"):
+        raise Unsupported("np.argsort without kind='mergesort' or 'stable' orders equal "
+                          "keys as numba does not")
+    return np.argsort(a, kind=kind)
+
+
+def _records(make):
+    """numpy's ``make`` (``np.empty``, ``np.zeros``), giving a record array where the
+    dtype has fields: numba reads and writes a record's fields as attributes
+    (``a[i].u = 1.0``), which a record array's elements take and a plain array's do
+    not."""
+
+    def f(*args, **kwargs):
+        out = make(*args, **kwargs)
+        return out.view(np.recarray) if out.dtype.names else out
+
+    f.__name__ = f.__qualname__ = make.__name__
+    return f
+
+
+def records(value):
+    """``value`` as compiled code sees it: a structured array as a record array (its
+    elements' fields read and written as attributes), anything else as it is."""
+    if type(value) is np.ndarray and value.dtype.names:
+        return value.view(np.recarray)
+    return value
+
+
+def plain(value):
+    """A twin's result as compiled code returns it: record arrays as plain arrays."""
+    if isinstance(value, np.recarray):
+        return value.view(np.ndarray)
+    if type(value) is tuple:
+        return tuple(plain(v) for v in value)
+    return value
 
 _MATH = {name: _safe(name, getattr(math, name), getattr(np, np_name))
          for name, np_name in _ELEMENTARY.items()}
@@ -251,8 +303,11 @@ class _Namespace(types.SimpleNamespace):
         raise Unsupported(f"{self._label}.{name} is not reproduced by the interpreter tier")
 
 
-MATH = _Namespace("math", {**{n: getattr(math, n) for n in _EXACT_MATH}, **_MATH})
-NUMPY = _Namespace("numpy", {**{n: getattr(np, n) for n in _EXACT_NUMPY}, **_NUMPY})
+MATH = _Namespace("math", {**{n: getattr(math, n) for n in _EXACT_MATH}, **_MATH,
+                            "floor": _floor})
+NUMPY = _Namespace("numpy", {**{n: getattr(np, n) for n in _EXACT_NUMPY}, **_NUMPY,
+                             "argsort": _argsort, "empty": _records(np.empty),
+                             "zeros": _records(np.zeros)})
 
 
 # --------------------------------------------------------------------------- source
@@ -532,7 +587,22 @@ def _identities() -> dict:
         if callable(value) and not isinstance(value, type):
             table[id(value)] = value
     table[id(numba.prange)] = range
+    table[id(math.floor)] = _floor
+    table[id(np.argsort)] = _argsort
+    table[id(np.empty)] = _records(np.empty)
+    table[id(np.zeros)] = _records(np.zeros)
     return table
 
 
 _BY_IDENTITY = _identities()
+#: the objects of :data:`_BY_IDENTITY`'s registered keys, held so that an id is never reused
+_REGISTERED: list = []
+
+
+def register(compiled, twin) -> None:
+    """Let twins call ``twin`` where the compiled code calls ``compiled``: an intrinsic
+    (which has no Python of its own), with a Python function that does what its machine
+    code does (:func:`phasemap.core.calls.twin`: the compiled function at an address)."""
+    with _LOCK:
+        _REGISTERED.append(compiled)
+        _BY_IDENTITY[id(compiled)] = twin

@@ -16,6 +16,11 @@ is neither in this process nor in the kernel cache is answered:
 * ``off``: always the twin (to debug, or where nothing should be compiled; slow for many
   calls); a function the twin cannot reproduce is still compiled.
 
+A shared driver that calls a model's functions at their addresses (the bifurcation
+tracer, :func:`phasemap.bifurcation._trace.runs`) has twins too: where the driver's twin
+calls a function at an address (:func:`at_address`), the function's machine code runs
+from Python (a model's own functions are small and compiled first, :func:`addressed`).
+
 Machine code already in the process or in the cache always runs, except under ``off``.
 Two processes never compile the same function at once in the background: the first
 leaves a marker in the cache folder (``compiling/``), the other waits for its result.
@@ -48,7 +53,8 @@ import numpy as np
 
 from phasemap.core import interpret
 
-__all__ = ["MODES", "forced", "is_twin", "mode", "runner", "wait_for"]
+__all__ = ["MODES", "addressed", "at_address", "forced", "is_twin", "mode", "runner", "twin",
+           "wait_for"]
 
 #: The values of ``$PHASEMAP_JIT``, the default first.
 MODES = ("background", "eager", "off")
@@ -111,10 +117,16 @@ class _Twin:
 
     def __call__(self, *args):
         with np.errstate(all="ignore"):
-            return self.function(*args)
+            return interpret.plain(self.function(*map(interpret.records, args)))
 
 
-def runner(dispatcher, args: tuple, warm=None):
+def twin(dispatcher):
+    """The interpreted twin of the jitted ``dispatcher``, called as :func:`runner` calls
+    it (:class:`phasemap.core.interpret.Unsupported` where there is none)."""
+    return _Twin(interpret.interpreted(dispatcher))
+
+
+def runner(dispatcher, args: tuple | None, warm=None, sig: tuple | None = None):
     """What to call with ``args`` instead of the jitted ``dispatcher``: the dispatcher itself
     where its machine code is here or in the cache (or ``$PHASEMAP_JIT`` is ``eager``),
     else its interpreted twin.
@@ -122,12 +134,14 @@ def runner(dispatcher, args: tuple, warm=None):
     ``warm`` is ``(function, args, kwargs)``, picklable: a call that compiles the
     dispatcher's machine code for ``args`` into the cache when run in a fresh process
     under ``PHASEMAP_JIT=eager``.  Without it, or where the cache is this process's own,
-    machine code is compiled here (as ``eager``).
+    machine code is compiled here (as ``eager``).  ``sig``, the argument types, stands
+    for ``args`` where the caller knows them.
     """
     how = mode()
     if how == "eager":
         return dispatcher
-    sig = tuple(dispatcher.typeof_pyval(a) for a in args)
+    if sig is None:
+        sig = tuple(dispatcher.typeof_pyval(a) for a in args)
     if how == "background" and sig in dispatcher.overloads:
         return dispatcher
     key = (id(dispatcher), sig)
@@ -149,6 +163,41 @@ def runner(dispatcher, args: tuple, warm=None):
         if not _background(state, sig, warm):
             return dispatcher
         return state["twin"]
+
+
+#: address -> the Python-callable entry point of the compiled overload whose code is there
+_AT: dict = {}
+
+
+def addressed(dispatcher, args) -> int:
+    """:func:`phasemap.core.calls.address` (the address of ``dispatcher``'s machine code for
+    the argument types ``args``), remembered for :func:`at_address`: a driver's twin calls
+    what the compiled driver calls at that address."""
+    from phasemap.core import calls
+
+    at = calls.address(dispatcher, args)
+    if at not in _AT:
+        _AT[at] = dispatcher.overloads[tuple(args)].entry_point
+    return at
+
+
+def at_address(index: int | None = None):
+    """What an interpreted driver calls where the compiled one calls a function at its
+    address (an intrinsic of :func:`phasemap.core.calls.typer`, registered with
+    :func:`phasemap.core.interpret.register`): that function's machine code, from Python,
+    with the same arguments.  The address is the first argument, or with ``index``
+    element ``index`` of it (a model's set of functions).
+
+    A shared driver's twin answers while the driver compiles (the bifurcation tracer's,
+    :func:`phasemap.bifurcation._trace.runs`); what it calls is the model's own code,
+    small and compiled already (an address is known once it is, :func:`addressed`)."""
+    if index is None:
+        def call(at, *args):
+            return _AT[at](*args)
+    else:
+        def call(table, *args):
+            return _AT[table[index]](*args)
+    return call
 
 
 def is_twin(function) -> bool:
