@@ -2048,7 +2048,12 @@ def runs() -> dict:
             except interpret.Unsupported:  # (a twin differs: compile, as eager)
                 pass
         entries()
-    return {**_ENTRIES, **_HELPERS}
+    if not _MACHINE:
+        _MACHINE.update({**_ENTRIES, **_HELPERS})
+    return _MACHINE
+
+
+_MACHINE: dict = {}
 
 
 _TWINS: dict = {}
