@@ -677,33 +677,48 @@ def test_the_tracers_twin_finds_thresholds_and_grows_its_buffers_alike(monkeypat
         assert np.array_equal(a, b), field
 
 
-def test_a_process_under_off_traces_without_compiling_the_tracer(tmp_path):
-    """``PHASEMAP_JIT=off`` in a fresh process with empty caches: the boundaries of the
-    rod's first paradox with none of the tracer's functions compiled (the rod's own
-    functions are: the twins call them at their addresses), its fold at f = 4/3."""
+def test_a_process_traces_on_the_twins_under_off_and_loads_the_tracer_where_it_is_built():
+    """Fresh processes on the suite's caches, where this one has compiled the tracer
+    (into the kernel cache, as a background compile does). Under ``PHASEMAP_JIT=off``:
+    the boundaries of the rod's first paradox with none of the tracer's functions compiled
+    or loaded (the rod's own functions are: the twins call them at their addresses).
+    Under ``background``: the tracer's machine code loaded from the cache, nothing compiled
+    and no background compile started (the cache once looked for it under another key than
+    the one it was saved under, and every later process traced on the twins, starting
+    another compile).  The fold at f = 4/3 in both."""
     import json
     import os
     import subprocess
     import sys
     import textwrap
 
+    with tiers.forced("eager"):
+        _trace.runs()   # compiled (or loaded), and saved in the suite's cache
     code = textwrap.dedent("""
         import json, numba
         import phasemap
         from phasemap.bifurcation import _trace
+        from phasemap.core import tiers
         b = phasemap.boundaries("painleve_rod", {"theta": (0.2, 1.5), "f": (0.0, 3.0)},
                                 fixed={"xdot": -1.0, "omega": 0.0})
-        compiled = [k for k, v in vars(_trace).items()
-                    if isinstance(v, numba.core.dispatcher.Dispatcher) and v.signatures
-                    and k not in ("_no_gradient", "_no_hessian")]
+        tracer = [k for k, v in vars(_trace).items()
+                  if isinstance(v, numba.core.dispatcher.Dispatcher) and v.signatures
+                  and k not in ("_no_gradient", "_no_hessian")]
         fold = b.point_f.values[b.point_kind.values == "fold_f"]
-        print(json.dumps({"compiled": compiled, "fold": fold.tolist(),
-                          "pieces": int(b.sizes["piece"])}))
+        print(json.dumps({"tracer": tracer, "fold": fold.tolist(), "jobs": len(tiers._JOBS),
+                          "pieces": int(b.sizes["piece"]), "machine": bool(_trace._ENTRIES),
+                          "compiled": [k for k, v in vars(_trace).items()
+                                       if isinstance(v, numba.core.dispatcher.Dispatcher)
+                                       and sum(v._cache_misses.values())]}))
     """)
-    env = dict(os.environ, PHASEMAP_JIT="off", PHASEMAP_CACHE_DIR=str(tmp_path / "kernels"),
-               NUMBA_CACHE_DIR=str(tmp_path / "numba"))
-    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
-                         text=True, timeout=600, check=True)
-    got = json.loads(out.stdout.strip().splitlines()[-1])
-    assert got["compiled"] == [] and got["pieces"] >= 1
-    assert len(got["fold"]) == 1 and abs(got["fold"][0] - 4 / 3) <= 1e-10
+    got = {}
+    for how in ("off", "background"):
+        env = dict(os.environ, PHASEMAP_JIT=how)   # the suite's caches
+        out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                             text=True, timeout=600, check=True)
+        got[how] = json.loads(out.stdout.strip().splitlines()[-1])
+        assert got[how]["pieces"] >= 1 and len(got[how]["fold"]) == 1, how
+        assert abs(got[how]["fold"][0] - 4 / 3) <= 1e-10, how
+    assert got["off"]["tracer"] == [] and not got["off"]["machine"]
+    assert got["background"]["machine"] and got["background"]["jobs"] == 0
+    assert "_trace_all" in got["background"]["tracer"] and got["background"]["compiled"] == []

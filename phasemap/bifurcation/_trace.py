@@ -2020,7 +2020,10 @@ def entries() -> dict:
     """
     if not _ENTRIES:
         for name, (fn, sig) in _signatures().items():
-            fn.compile(sig)
+            # by the argument types, as numba's cache indexes a call's machine code (and
+            # runs() looks for it there): under the whole signature, return type and all,
+            # it was saved under another key, which a look-up by types never found
+            fn.compile(tuple(sig.args))
             _ENTRIES[name] = _entry_point(fn, sig)
     return _ENTRIES
 
