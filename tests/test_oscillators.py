@@ -264,3 +264,32 @@ def test_oscillators_say_why_they_have_no_reduced_model():
         DEN_HARTOG.model
     with pytest.raises(ValueError, match="speed-dependent friction"):
         STRIBECK_BELT.model
+    # the declaration itself, to what needs a reduced model: the same text, which names
+    # what takes it (it once said that maps and classify did not)
+    why = "belt: no reduced model .* phasemap.classify and phasemap.Scene map it in full"
+    with pytest.raises(ValueError, match=why):
+        BELT.model
+    for call in (lambda: phasemap.get_model(BELT),
+                 lambda: phasemap.boundaries(BELT, {"x": (-1, 1), "xdot": (-1, 1)}),
+                 lambda: phasemap.phase_curve(BELT, x=0.1, xdot=0.0),
+                 lambda: phasemap.threshold(BELT, "f_k", over={"x": (-1, 1)})):
+        with pytest.raises(ValueError, match=why):
+            call()
+    assert phasemap.classify(BELT, x=0.1, xdot=0.0).n_solutions == 1
+
+
+def test_a_declaration_with_a_reduced_model_is_a_model_everywhere():
+    """get_model (and so boundaries, threshold, phase_curve) takes a declaration as
+    classify and Scene do: its reduced model."""
+    x = Coordinate("x", "m", "position", rate=Rate("xdot", "m s-1", "velocity"))
+    y = Coordinate("y", "m", "height")
+    m = Parameter("m", "kg", "mass", default=1.0, lower=0.0, lower_open=True)
+    g = Parameter("g", "m s-2", "gravity", default=9.81, lower=0.0)
+    f = Parameter("f", "1", "friction", default=0.3, lower=0.0)
+    block = System("block_on_floor", "a block sliding on a rough floor", "test",
+                   coordinates=(x, y), parameters=(m, g, f), bodies=(Body(m, (x, y)),),
+                   potential=m * g * y,
+                   contacts=(PointContact("floor", (x, y), normal=(0, 1), friction=f),))
+    assert phasemap.get_model(block) is block.model
+    c = phasemap.classify(block, xdot=1.0)
+    assert c.n_solutions == 1 and phasemap.get_model(block).name == "block_on_floor"

@@ -318,12 +318,22 @@ def oscillator_features(S) -> list[str]:
     return out
 
 
+def no_reduced_model(S) -> str | None:
+    """Why the declaration ``S`` has no reduced model and what takes it instead, or None
+    where it has one (the one text of :attr:`System.model` and :func:`phasemap.get_model`)."""
+    found = oscillator_features(S)
+    if not found:
+        return None
+    return (f"no reduced model (it has {' and '.join(found)}): phasemap.classify and "
+            "phasemap.Scene map it in full coordinates, phasemap.simulate and "
+            "phasemap.periodic_orbit move it; the phase curves and the bifurcation tracer "
+            "need a reduced model")
+
+
 def reduced_limits(S) -> None:
     """A ValueError where the declaration needs what its reduced model (maps, classify,
-    the fate maps, the phase curves) does not take yet: its motion runs in full
-    coordinates (:func:`phasemap.simulate`)."""
-    found = oscillator_features(S)
-    if found:
-        fail(S, "model", "maps, classify and the phase curves do not take "
-             f"{' and '.join(found)} yet: phasemap.simulate runs its motion (in full "
-             "coordinates)")
+    the fate maps, the phase curves, the tracer) does not take yet: it runs in full
+    coordinates (:func:`no_reduced_model`)."""
+    why = no_reduced_model(S)
+    if why:
+        raise ValueError(f"{S.name}: {why}")

@@ -31,6 +31,7 @@ Anywhere a model name is accepted, a path to a declaration file
 from __future__ import annotations
 
 import os
+import sys
 from collections.abc import Mapping
 
 from phasemap.core import args as _args
@@ -84,9 +85,10 @@ def get_model(model: str | Model) -> Model:
 
     Parameters
     ----------
-    model : str, os.PathLike or Model
+    model : str, os.PathLike, Model or phasemap.declare.System
         a registered name (``phasemap.MODELS``), the path of a ``.py`` file
-        that declares a ``SYSTEM`` (see :func:`phasemap.declare.loader`), or a
+        that declares a ``SYSTEM`` (see :func:`phasemap.declare.loader`), a
+        declaration (its reduced model, :attr:`phasemap.declare.System.model`), or a
         :class:`Model`, returned as it is.
 
     Returns
@@ -97,7 +99,8 @@ def get_model(model: str | Model) -> Model:
     ------
     ValueError
         for an unknown name; for a file, naming the file and the part of the
-        declaration that is wrong.
+        declaration that is wrong; for a friction oscillator or a declaration like
+        one (a moving surface, forcing in time...), saying what takes it instead.
 
     Examples
     --------
@@ -113,15 +116,14 @@ def get_model(model: str | Model) -> Model:
     if isinstance(model, str) and model in MODELS:
         return MODELS[model]
     if isinstance(model, str) and model in OSCILLATORS:
-        from phasemap.declare.validation import oscillator_features
+        from phasemap.declare.validation import no_reduced_model
         from phasemap.systems.oscillators import OSCILLATORS as systems
 
-        raise ValueError(
-            f"{model}: a friction oscillator has no reduced model (it has "
-            f"{' and '.join(oscillator_features(systems[model]))}): phasemap.classify and "
-            "phasemap.Scene map it in full coordinates, phasemap.simulate and "
-            "phasemap.periodic_orbit move it; the phase curves and the bifurcation tracer "
-            "need a reduced model")
+        raise ValueError(f"{model}: a friction oscillator has "
+                         f"{no_reduced_model(systems[model])}")
+    declared = sys.modules.get("phasemap.declare.system")  # (a System imported it)
+    if declared is not None and isinstance(model, declared.System):
+        return model.model   # its reduced model, or why it has none
     raise ValueError(_args.unknown("model", model, MODELS, listing=(
         f"available models: {', '.join(MODELS)}, or the path of a declaration file, "
         "path/to/system.py")))
