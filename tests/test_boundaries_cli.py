@@ -45,6 +45,18 @@ def test_boundaries_writes_the_pieces(tmp_path):
     assert "fold_f" in r.stdout and "theta = 1.10714871779" in r.stdout
 
 
+def test_boundaries_without_two_axes_names_them_and_gives_the_models_as_an_example(tmp_path):
+    """A first try without --axis (or with one) is one line that says what to add, with
+    the model's default axes to copy; nothing is written."""
+    for axes, got in (([], "got 0"), (["--axis", "phi=0:1"], "got 1 (phi)")):
+        r = run("boundaries", "ladder", *axes, "-o", str(tmp_path / "l.nc"))
+        assert r.returncode == 2 and "Traceback" not in r.stderr
+        assert r.stderr.strip().splitlines()[-1] == (
+            f"phasemap: error: ladder: the slice needs two axes, --axis NAME=LO:HI twice; "
+            f"{got}, e.g. --axis phi=0:1.5708 --axis f=0:3 (ladder's default axes)")
+    assert not (tmp_path / "l.nc").exists()
+
+
 def test_info_and_plot_take_a_boundaries_file(tmp_path):
     """``info`` called a boundaries file an atlas ("cells 303 = 101 vertex x ..."), and
     ``plot`` refused it (issue 41 item 2)."""

@@ -83,6 +83,21 @@ def _ranges(items: list[str], option: str) -> dict[str, tuple[float, float]]:
     return out
 
 
+def _two_axes(model, axes: dict) -> str:
+    """What to say where --axis was not given twice: with the model's default axes as an
+    example, where it has two."""
+    from phasemap.systems import get_model
+
+    m = get_model(model)
+    got = f"got {len(axes)}" + (f" ({', '.join(axes)})" if axes else "")
+    example = ""
+    if len(m.default_axes) >= 2:
+        example = ", e.g. " + " ".join(f"--axis {k}={v[0]:.6g}:{v[1]:.6g}" for k, v in
+                                       list(m.default_axes.items())[:2]) + \
+            f" ({m.name}'s default axes)"
+    return f"{m.name}: the slice needs two axes, --axis NAME=LO:HI twice; {got}{example}"
+
+
 def run(args, parse_values) -> str:
     """Run ``args.command`` (``boundaries`` or ``threshold``); ``parse_values`` reads the
     NAME=VALUE items of --set.  Returns what to print."""
@@ -93,6 +108,8 @@ def run(args, parse_values) -> str:
         from phasemap.bifurcation.tracing import boundaries
 
         axes = _ranges(args.axis, "--axis")
+        if len(axes) != 2:
+            raise ValueError(_two_axes(args.model, axes))
         out = check_output(args.output, overwrite=args.overwrite)
         ds = boundaries(args.model, axes, fixed=fixed, layer=args.layer, tol=args.tol)
         write_atlas(ds, out)
