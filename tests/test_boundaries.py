@@ -694,6 +694,7 @@ def test_a_process_traces_on_the_twins_under_off_and_loads_the_tracer_where_it_i
 
     with tiers.forced("eager"):
         _trace.runs()   # compiled (or loaded), and saved in the suite's cache
+        boundaries("painleve_rod", {"theta": (0.2, 1.5), "f": (0.0, 3.0)}, fixed=SLIDE_BACK)
     code = textwrap.dedent("""
         import json, numba
         import phasemap
@@ -705,7 +706,14 @@ def test_a_process_traces_on_the_twins_under_off_and_loads_the_tracer_where_it_i
                   if isinstance(v, numba.core.dispatcher.Dispatcher) and v.signatures
                   and k not in ("_no_gradient", "_no_hessian")]
         fold = b.point_f.values[b.point_kind.values == "fold_f"]
+        from phasemap.bifurcation import tracing
+        sl = tracing.make_slice("painleve_rod", {"theta": (0.2, 1.5), "f": (0.0, 3.0)},
+                                {"xdot": -1.0, "omega": 0.0})
+        own = [bool(f.signatures) for f in (sl.conds.values, sl.conds.module.gradient,
+                                            sl.conds.module.hessian,
+                                            _trace.classifier(sl.model))]
         print(json.dumps({"tracer": tracer, "fold": fold.tolist(), "jobs": len(tiers._JOBS),
+                          "own": own, "handles": [a < 0 for a in sl.fns],
                           "pieces": int(b.sizes["piece"]), "machine": bool(_trace._ENTRIES),
                           "compiled": [k for k, v in vars(_trace).items()
                                        if isinstance(v, numba.core.dispatcher.Dispatcher)
@@ -720,5 +728,8 @@ def test_a_process_traces_on_the_twins_under_off_and_loads_the_tracer_where_it_i
         assert got[how]["pieces"] >= 1 and len(got[how]["fold"]) == 1, how
         assert abs(got[how]["fold"][0] - 4 / 3) <= 1e-10, how
     assert got["off"]["tracer"] == [] and not got["off"]["machine"]
+    # nor the rod's conditions and class function: the twins' handles stand for them
+    assert got["off"]["own"] == [False] * 4 and got["off"]["handles"] == [True] * 4
     assert got["background"]["machine"] and got["background"]["jobs"] == 0
+    assert got["background"]["own"] == [True] * 4 and not any(got["background"]["handles"])
     assert "_trace_all" in got["background"]["tracer"] and got["background"]["compiled"] == []

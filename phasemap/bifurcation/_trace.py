@@ -2032,7 +2032,7 @@ def entries() -> dict:
 _HELPERS = {"assemble": assemble, "uncovered": _uncovered, "mark": _mark, "groups": groups}
 
 
-def runs() -> dict:
+def runs(twins: bool | None = None) -> dict:
     """The tracer's entry points (:func:`entries`) and the helpers its Python calls
     between them (``assemble``, ``uncovered``, ``mark``, ``groups``), as
     :mod:`phasemap.core.tiers` chooses: machine code where it is in this process or the
@@ -2041,8 +2041,12 @@ def runs() -> dict:
     about 30 s of CPU for the tracer, which serves every model; the twins trace the
     README's rod in about half a second, the model's own functions called as machine code
     at their addresses).  A call once that compile has ended loads the machine code.
-    Under ``PHASEMAP_JIT=off``, the twins always."""
-    if not _ENTRIES or tiers.mode() == "off":
+    Under ``PHASEMAP_JIT=off``, the twins always.  ``twins``: True or False for the tier a
+    slice was made for (:func:`phasemap.bifurcation.tracing.make_slice`: its functions may
+    be twins' handles, which only the twins can take), None to choose."""
+    if twins:
+        return _twins()
+    if twins is None and (not _ENTRIES or tiers.mode() == "off"):
         fn, sig = _signatures()["trace"]
         chosen = tiers.runner(fn, None, warm=(entries, (), {}), sig=tuple(sig.args))
         if tiers.is_twin(chosen):
@@ -2060,6 +2064,11 @@ _MACHINE: dict = {}
 
 
 _TWINS: dict = {}
+
+
+def on_twins(run: dict) -> bool:
+    """Whether ``run`` (of :func:`runs`) is the interpreted twins."""
+    return run is _TWINS
 
 
 def _twins() -> dict:
@@ -2080,16 +2089,14 @@ _CLASSIFIERS = Memo("trace.classifiers")
 
 
 def classifier(model):
-    """The model's ``classify(v, out, layer)`` (its own point and summarize), compiled
-    with :data:`CLASS_SIG` so that a trace can take it as an argument."""
+    """The model's ``classify(v, out, layer)`` (its own point and summarize), for a trace
+    to take at its address, compiled for :data:`CLASS_SIG` (:func:`functions`)."""
     from phasemap.core.compile import specialize
 
-    def make():
+    def make():   # (compiled where its address is taken: :func:`functions`)
         contract = model.contract
-        fn = specialize(_class_template, model, "bif_class", POINT=contract.point,
-                        DERIVE=contract.derive_inline, STICK=model.stick_branch)
-        fn.compile(CLASS_SIG)
-        return fn
+        return specialize(_class_template, model, "bif_class", POINT=contract.point,
+                          DERIVE=contract.derive_inline, STICK=model.stick_branch)
 
     return _CLASSIFIERS.get((model,), (), make)
 
@@ -2109,13 +2116,21 @@ def _no_hessian(k, x, g, H):
     return np.nan, np.nan
 
 
-def functions(model, conds) -> tuple:
+def functions(model, conds, twins: bool = False, warm=None) -> tuple:
     """The addresses of the functions a trace of ``model`` with the two-variable
     condition module ``conds`` takes (:data:`ADDRESSES`), made once per model and
     module: per function, its compiled overload's code.  A values-only condition set
     (:func:`phasemap.bifurcation.conditions.values_of`) has no derivatives: its
     gradient and Hessian are NaN, for the entry points that read only values and
     classes (:func:`_applicable_all`).
+
+    With ``twins`` (a trace on the tracer's interpreted twins, :func:`runs`), a condition
+    function whose machine code is neither in the process nor in the kernel cache is
+    not compiled here: its interpreted twin's handle (:func:`phasemap.core.tiers.handle`)
+    stands for its address, and ``warm``, a picklable call, compiles it in a background
+    process (:func:`compile_conditions`; numba takes half a minute for the drawer's 62
+    conditions; the ladder's class function 10 s).  Such a tuple is made anew at each call, so that a later slice takes the
+    machine code once it is built.
 
     A jitted function passed as such is looked up in its dispatcher at every call
     (0.2 ms a call), and a first-class function object is unboxed through Python at
@@ -2125,13 +2140,45 @@ def functions(model, conds) -> tuple:
     mod = conds.module
     gradient, hessian = (_no_gradient, _no_hessian) if mod is None else (mod.gradient,
                                                                          mod.hessian)
+    pairs = ((conds.values, VALUES_SIG), (gradient, GRADIENT_SIG), (hessian, HESSIAN_SIG),
+             (classifier(model), CLASS_SIG))
+    if twins:
+        fns = []
+        for fn, sig in pairs:
+            args = tuple(sig.args)
+            if fn in (_no_gradient, _no_hessian):
+                fns.append(tiers.addressed(fn, args))
+                continue
+            chosen = tiers.runner(fn, None, warm=warm, sig=args)
+            fns.append(tiers.handle(fn) if tiers.is_twin(chosen) else
+                       tiers.addressed(fn, args))
+        return tuple(fns)
 
     def make():
         fns = []
-        for fn, sig in ((conds.values, VALUES_SIG), (gradient, GRADIENT_SIG),
-                        (hessian, HESSIAN_SIG), (classifier(model), CLASS_SIG)):
+        for fn, sig in pairs:
             # the hessian is compiled (or loaded) when first needed
             fns.append(tiers.addressed(fn, sig.args))
         return tuple(fns)
 
     return _FUNCTIONS.get((model, mod if mod is not None else conds.values), (), make)
+
+
+def compile_conditions(model, conditions, variables, subset) -> None:
+    """What a background process runs (under ``PHASEMAP_JIT=eager``) to compile a slice's
+    condition functions into the kernel cache (:func:`functions`): ``model`` as
+    :func:`phasemap.systems.reference` gives it, the conditions given to the trace (None:
+    the model's own); with ``variables`` None the values of every condition, else their
+    gradients and Hessians in ``variables`` for the conditions of ``subset``; the values
+    come with the model's class function (:func:`classifier`), which the trace takes too."""
+    from phasemap.bifurcation.conditions import compiled, values_of
+    from phasemap.systems import get_model
+
+    m = get_model(model)
+    if variables is None:
+        tiers.addressed(values_of(m, conditions).values, VALUES_SIG.args)
+        tiers.addressed(classifier(m), CLASS_SIG.args)
+        return
+    mod = compiled(m, tuple(variables), conditions, subset).module
+    tiers.addressed(mod.gradient, GRADIENT_SIG.args)
+    tiers.addressed(mod.hessian, HESSIAN_SIG.args)

@@ -309,11 +309,12 @@ def _explicit_key(conds) -> str:
                      for c in conds)
 
 
-#: The signatures of the generated entry points, as the tracer calls them
-#: (:data:`phasemap.bifurcation._trace.VALUES_SIG` and the next two); ``hessian`` is
-#: compiled for its signature when first needed (:func:`phasemap.bifurcation._trace.functions`).
-_VALUES = "void(float64[::1], float64[::1], float64[::1])"
-_GRADIENT = "UniTuple(float64, 2)(int64, float64[::1], float64[::1])"
+# The generated functions are compiled (or loaded from numba's cache) when first called,
+# not when their module is imported: a first boundaries traces on their interpreted twins
+# while a background process compiles them (the drawer's 62 conditions take numba about
+# 30 s; :func:`phasemap.bifurcation._trace.functions`).  The tracer takes each at its
+# address, compiled for its signature (:data:`phasemap.bifurcation._trace.VALUES_SIG` and
+# the next two).
 
 
 #: The relative step of the Hessian's forward differences: the square root of the machine
@@ -447,7 +448,7 @@ def _generate_values(model: Model, conds) -> str:
            'do not edit."""', *pr.head]
     pairs = [(f"_out[{k}]", e) for k, e in enumerate(pr.exprs)]
     pairs += [(f"_scale[{k}]", pr.scale_of(s)) for k, s in enumerate(pr.scales)]
-    out += [f'@njit("{_VALUES}", cache=True, error_model="numpy")',
+    out += ['@njit(cache=True, error_model="numpy")',
             "def values(_x, _out, _scale):",
             '    """Every condition\'s value into out, its tie scale into scale."""',
             f"    _vscale = {pr.vsc}"]
@@ -471,7 +472,7 @@ def _generate(model: Model, variables: tuple[str, ...], conds, subset=None) -> s
     # 67-76 s in 4 to 62), so only fewer operations save time: the conditions a slice
     # cannot meet are left out (subset); the Hessian is not printed
     # (_hessian_by_differences)
-    gradient = [f'@njit("{_GRADIENT}", cache=True, error_model="numpy")',
+    gradient = ['@njit(cache=True, error_model="numpy")',
                 "def gradient(_k, _x, _g):",
                 '    """Condition k: (value, tie scale), its gradient into the arrays."""']
     for i, k in enumerate(keep):

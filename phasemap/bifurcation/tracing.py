@@ -19,7 +19,7 @@ from phasemap.atlas.dataset import cf_header
 from phasemap.core.codegen import CELLS_SIGNATURE, grid_kernel
 from phasemap.maps.layers import layers_for
 from phasemap.core.model import Model
-from phasemap.systems import get_model
+from phasemap.systems import get_model, reference
 from phasemap.bifurcation import _trace as T
 from phasemap.bifurcation.conditions import Conditions, compiled, values_of
 
@@ -51,6 +51,9 @@ class Slice:
     conds: Conditions
     fns: tuple  # addresses of the functions a trace takes (phasemap.bifurcation._trace.ADDRESSES)
     base: np.ndarray  # the input vector with the fixed values
+    #: traced by the tracer's interpreted twins (phasemap.bifurcation._trace.runs): then
+    #: ``fns`` may hold handles of interpreted condition functions, which only they take
+    twins: bool = False
 
     @cached_property
     def geo(self) -> np.ndarray:
@@ -137,13 +140,20 @@ def make_slice(model, axes: Mapping, fixed: Mapping | None, conditions=None) -> 
     # derivatives are compiled (a moving slice of the drawer needs 11 of its 62), and
     # the trace's own test (phasemap.bifurcation._trace._applicable_all, the same
     # function on the same arguments) never asks for another's
+    # the tier of the whole slice: on the tracer's twins (while numba compiles it) the
+    # condition functions not yet compiled are twins too, compiled in the background
+    twins = T.on_twins(T.runs())
     values = values_of(m, conditions)
+    ref = reference(m)
     probe = Slice(m, names[0], names[1], np.array(lo), np.array(hi), fixed, values,
-                  T.functions(m, values), base)
+                  T.functions(m, values, twins, (T.compile_conditions,
+                                                 (ref, conditions, None, None), {})),
+                  base, twins)
     active, _ = _applicable(probe)
     subset = None if active.all() else tuple(np.flatnonzero(active).tolist())
     conds = compiled(m, tuple(names), conditions, subset)
-    return replace(probe, conds=conds, fns=T.functions(m, conds))
+    return replace(probe, conds=conds, fns=T.functions(m, conds, twins, (
+        T.compile_conditions, (ref, conditions, tuple(names), subset), {})))
 
 
 def _complete(m: Model, variables: dict, fixed: dict, names: list, lo: list,
@@ -213,7 +223,7 @@ def _applicable(sl: Slice) -> tuple[np.ndarray, np.ndarray]:
     active = np.empty(len(sl.conds), dtype=bool)
     v = sl.base.copy()
     m = sl.model
-    T.runs()["applicable"](sl.fns, v, np.empty((len(m.candidates), m.n_fields)),
+    T.runs(sl.twins)["applicable"](sl.fns, v, np.empty((len(m.candidates), m.n_fields)),
                               *sl.slots, sl.geo, _applicable_args(sl), active)
     return active, v
 
@@ -232,7 +242,7 @@ def _active(sl: Slice) -> tuple[np.ndarray, np.ndarray]:
     # values at random points: constant conditions, and proportional ones
     ix, iy = sl.slots
     vals = np.empty((len(_SURVEY), len(sl.conds)))
-    run = T.runs()
+    run = T.runs(sl.twins)
     run["survey"](sl.fns, v, ix, iy, sl.geo, _SURVEY, vals)
     group = run["groups"](vals, active)
     return active, group
@@ -285,7 +295,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     ``Traced.unexplained`` (rows: the two cells' indices on the raster) with a warning.
     """
     fns, m = sl.fns, sl.model
-    run = T.runs()
+    run = T.runs(sl.twins)
     code = _LAYER_CODE[layer]
     if only is not None:
         check_cells = 0
@@ -337,7 +347,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
     if check_cells and not full and not more:
         traced = Traced(*assembled, group, active, buf)
     else:
-        traced = _assembled(buf, group, active)
+        traced = _assembled(buf, group, active, run)
     traced.unresolved = _unresolved(thin, mark)
     if check_cells:
         traced.classes = classes
@@ -356,7 +366,7 @@ def trace(sl: Slice, layer: str, tol: float, seed_nodes: int = SEED_NODES,
                              buf.counts, buf.curves, fine, near, tol_u, tol_w, True)
                 if buf.counts[2]:
                     raise RuntimeError(f"{m.name}: more than {buf.verts.shape[0]} vertices")
-                traced = _assembled(buf, group, active)
+                traced = _assembled(buf, group, active, run)
                 traced.classes, traced.unresolved = classes, _unresolved(thin, mark)
                 bad = run["uncovered"](check_cells, changes, traced.pv, traced.pp)
             if len(bad):
@@ -395,9 +405,8 @@ def _ranked(conds: Conditions, group: np.ndarray) -> np.ndarray:
     return grp
 
 
-def _assembled(buf: _Buffers, group, active) -> Traced:
-    pv, pp, pq, pieces, pf, pi = T.runs()["assemble"](buf.verts, buf.curves,
-                                                      int(buf.counts[1]))
+def _assembled(buf: _Buffers, group, active, run: dict) -> Traced:
+    pv, pp, pq, pieces, pf, pi = run["assemble"](buf.verts, buf.curves, int(buf.counts[1]))
     return Traced(pv, pp, pq, pieces, pf, pi, group, active, buf)
 
 
@@ -419,7 +428,7 @@ def _check_raster(sl: Slice, layer: str, axes: dict) -> np.ndarray:
     a trace computes it inside its one call)."""
     at, x, xslot, xderiv, y, yderiv = _raster_args(sl, layer, axes)
     flags = np.empty((1, len(x) * len(y)), dtype=np.int8)
-    T.runs()["raster"](at, sl.base.copy(), sl.slots[0], x, xslot, xderiv, y, yderiv, flags,
+    T.runs(sl.twins)["raster"](at, sl.base.copy(), sl.slots[0], x, xslot, xderiv, y, yderiv, flags,
                           np.empty((0, flags.shape[1])))
     return flags.reshape(len(x), len(y))
 
@@ -493,6 +502,8 @@ def _rescue_seeds(sl: Slice, active, bad, n: int) -> np.ndarray:
     active condition that changes sign between the two cells, or comes within two
     cells of them."""
     C = sl.conds
+    # the functions the trace took (machine code, or twins where it ran on them)
+    values, gradient = tiers.callable_at(sl.fns[0]), tiers.callable_at(sl.fns[1])
     ix, iy = sl.slots
     v = sl.base.copy()
     nc = len(C)
@@ -507,7 +518,7 @@ def _rescue_seeds(sl: Slice, active, bad, n: int) -> np.ndarray:
         for (u, w, out) in ((ua, wa, a), (ub, wb, b)):
             v[ix] = sl.lo[0] + u * (sl.hi[0] - sl.lo[0])
             v[iy] = sl.lo[1] + w * (sl.hi[1] - sl.lo[1])
-            C.values(v, out, s)
+            values(v, out, s)
         for k in np.flatnonzero(active):
             if a[k] * b[k] < 0:
                 t = a[k] / (a[k] - b[k])
@@ -515,7 +526,7 @@ def _rescue_seeds(sl: Slice, active, bad, n: int) -> np.ndarray:
                 continue
             v[ix] = sl.lo[0] + ua * (sl.hi[0] - sl.lo[0])
             v[iy] = sl.lo[1] + wa * (sl.hi[1] - sl.lo[1])
-            c, sc = C.module.gradient(k, v, g)
+            c, sc = gradient(int(k), v, g)
             if math.hypot(g[0] * sl.geo[1], g[1] * sl.geo[3]) * 2.0 / n >= abs(c):
                 rows.append((k, ua, wa, 0.0))
     return np.array(rows, dtype=float).reshape(-1, 4)

@@ -53,8 +53,8 @@ import numpy as np
 
 from phasemap.core import interpret
 
-__all__ = ["MODES", "addressed", "at_address", "forced", "is_twin", "mode", "runner", "twin",
-           "wait_for"]
+__all__ = ["MODES", "addressed", "at_address", "callable_at", "forced", "handle", "is_twin",
+           "mode", "runner", "twin", "wait_for"]
 
 #: The values of ``$PHASEMAP_JIT``, the default first.
 MODES = ("background", "eager", "off")
@@ -179,6 +179,30 @@ def addressed(dispatcher, args) -> int:
     if at not in _AT:
         _AT[at] = dispatcher.overloads[tuple(args)].entry_point
     return at
+
+
+#: id(dispatcher) -> (dispatcher, its handle): :func:`handle`'s stand-in addresses
+_HANDLES: dict = {}
+
+
+def handle(dispatcher) -> int:
+    """A stand-in address of ``dispatcher``'s interpreted twin (a negative number: never an
+    address of machine code), for a driver's twin to take where the compiled driver takes
+    the function's address and the function is not compiled yet (:func:`at_address` calls
+    the twin).  Only twins may take it: machine code would jump to it."""
+    with _LOCK:
+        held = _HANDLES.get(id(dispatcher))
+        if held is None:
+            at = -(len(_HANDLES) + 1)
+            _AT[at] = _Twin(interpret.interpreted(dispatcher))
+            held = _HANDLES[id(dispatcher)] = (dispatcher, at)
+    return held[1]
+
+
+def callable_at(at: int):
+    """What runs at the address ``at`` (of :func:`addressed` or :func:`handle`), called from
+    Python: the machine code's entry point, or the interpreted twin."""
+    return _AT[at]
 
 
 def at_address(index: int | None = None):
