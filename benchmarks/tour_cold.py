@@ -93,7 +93,16 @@ def main() -> None:
     met = cold["machine"] <= TARGET_CPU and cold["wall"] <= TARGET_WALL
     lines += ["", f"Target from empty caches: {'met' if met else '**missed**'} "
               f"({max(cold['cpu'], cold['machine']):.0f} s of CPU, {cold['wall']:.0f} s of "
-              f"wall time).  The tour's last line: {cold['verdicts']}"]
+              f"wall time).  The tour's last line: {cold['verdicts']}",
+              "",
+              "The studies compile before they answer (`PHASEMAP_JIT=eager` in the tour's "
+              "study processes, unless it is set): on 2026-12-02, same machine, one run "
+              "each from empty caches, the machine's CPU time was 348 s (wall 177 s) with "
+              "the interpreter tier's twins for classify and simulate, 390 s (203 s) with "
+              "them for the tracer and its conditions too, and 311 s (159 s) compiling "
+              "first: a study makes many calls of each kernel, and the twins' arithmetic and "
+              "the background compiles, which compete with the other study for the cores, "
+              "cost more than they save."]
     publish(lines, "## The tour from empty caches", not args.no_write)
 
 

@@ -130,7 +130,8 @@ def tour(out: str = "phasemap-out", *, full: bool = False, studies: str | None =
                   f"{time.perf_counter() - start:.0f} s so far", flush=True)
             # a ticking line on stderr for the whole study (compiling included), the
             # study's own bars beneath it, and its printing above both
-            with progress.activity(f"[{i}/{len(names)}] {name}"), _above_the_bars():
+            with progress.activity(f"[{i}/{len(names)}] {name}"), _above_the_bars(), \
+                    _compiling_first():
                 claims = load(folder / f"{name}.py").main(argv)
             verdicts.update(c.verdict for c in claims)
         compiled = compiletime.seconds() - compiled
@@ -179,6 +180,22 @@ def _in_parallel(folder: pathlib.Path, names: list[str], argv: list[str], jobs: 
     return compiled
 
 
+def _compiling_first():
+    """The studies compile before they answer (``PHASEMAP_JIT=eager``) unless the user chose
+    otherwise: a study makes many calls of each kernel, and the interpreter tier's first
+    answers (:mod:`phasemap.core.tiers`) would cost it the twins' arithmetic and background
+    compiles that compete with the other studies for the cores: from empty caches the tour
+    took 390 s of the machine's CPU time with them, 311 s compiling first (BENCHMARKS.md,
+    the tour)."""
+    import os
+
+    from phasemap.core import tiers
+
+    if os.environ.get("PHASEMAP_JIT"):
+        return contextlib.nullcontext()
+    return tiers.forced("eager")
+
+
 def run_study(folder: str, name: str, argv: list[str]
               ) -> tuple[str, dict, float, float, float]:
     """One study in a worker process: ``(its printing, {verdict: count}, seconds, seconds
@@ -189,7 +206,11 @@ def run_study(folder: str, name: str, argv: list[str]
     from phasemap.workers import ended_by_signal
 
     t0, c0 = time.perf_counter(), compiletime.seconds()
+    import os
+
     out = io.StringIO()
+    # (this worker process's own setting: the threads a study starts see it too)
+    os.environ.setdefault("PHASEMAP_JIT", "eager")
     with progress.enable(False), ended_by_signal(), contextlib.redirect_stdout(out):
         claims = load(pathlib.Path(folder) / f"{name}.py").main(argv)
     return (out.getvalue(), Counter(c.verdict for c in claims), time.perf_counter() - t0,

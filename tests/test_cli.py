@@ -229,6 +229,31 @@ def test_the_tour_runs_its_studies_at_once_in_processes_of_their_own(tmp_path):
     assert bad.returncode == 2 and "jobs must be an integer >= 1" in bad.stderr
 
 
+@pytest.mark.parametrize("jobs", ["1", "2"])
+def test_the_tours_studies_compile_first_unless_told_otherwise(tmp_path, jobs):
+    """A study makes many calls of each kernel: the tour runs it under PHASEMAP_JIT=eager
+    (the twins and background compiles cost the cold tour a quarter more CPU), in a
+    worker process or in the tour's own; a PHASEMAP_JIT the user set is kept."""
+    studies = tmp_path / "studies"
+    studies.mkdir()
+    (studies / "ladder.py").write_text(
+        "from phasemap.core import tiers\n"
+        "from phasemap.study import Claim, arguments\n"
+        "def main(argv=None):\n"
+        "    arguments('fake study', argv)\n"
+        "    print('mode', tiers.mode())\n"
+        "    return [Claim('mode', '-', tiers.mode(), 'agrees')]\n")
+    for given, want in ((None, "eager"), ("off", "off"), ("background", "background")):
+        e = {k: v for k, v in env(None).items() if k != "PHASEMAP_JIT"}
+        if given:
+            e["PHASEMAP_JIT"] = given
+        r = subprocess.run(PHASEMAP + ["tour", "--studies", str(studies), "--out",
+                                       str(tmp_path / "out"), "--jobs", jobs],
+                           capture_output=True, text=True, timeout=300, env=e)
+        assert r.returncode == 0, r.stderr
+        assert f"mode {want}" in r.stdout.splitlines(), (given, r.stdout)
+
+
 # ---------------------------------------- a new user without a traceback -----
 def test_a_closed_pipe_ends_quietly():
     """``phasemap classify ... | head`` with the reader gone before the output."""
