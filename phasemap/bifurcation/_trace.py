@@ -638,11 +638,17 @@ def _bisect(F, k, grp, active, v, ix, iy, geo, g, out, layer, ua, wa, ub, wb, la
 
 @njit(cache=True, error_model="numpy")
 def _explain(F, k, grp, active, v, ix, iy, geo, g, H, cv, cs, u, w, tol_u, tol_w):
-    """The condition (other than k's group) that vanishes nearest (u, w) and its
-    crossing with k there: (j, ok, u, w, residual, error); j = -1 if none is near."""
+    """The condition (other than k's group) that vanishes nearest (u, w) and crosses k's
+    curve there, and that crossing: (j, ok, u, w, residual, error); j = -1 if none is
+    near.  A condition whose gradient is parallel to k's there does not cross the curve:
+    one that vanishes on the whole curve with k (the rod on a step's gap line, on which
+    two family conditions vanish too) was taken before, and its crossing with k, a
+    singular system, left the change at the bisection's 1e-6 with no residual."""
     v[ix] = geo[0] + u * geo[1]
     v[iy] = geo[2] + w * geo[3]
     _values(F, v, cv, cs)
+    ck, sk, ku, kw = _grad(F, k, v, ix, iy, geo, u, w, g)
+    nk = math.hypot(ku, kw)
     best = -1
     dist = 1e-6
     for j in range(active.shape[0]):
@@ -650,6 +656,8 @@ def _explain(F, k, grp, active, v, ix, iy, geo, g, H, cv, cs, u, w, tol_u, tol_w
             continue
         c, s, cu, cw = _grad(F, j, v, ix, iy, geo, u, w, g)
         n = math.hypot(cu, cw)
+        if abs(cu * kw - cw * ku) <= 1e-9 * n * nk:
+            continue   # parallel to k's curve here: no crossing
         if n > 0.0 and abs(c) / n < dist:
             dist = abs(c) / n
             best = j
