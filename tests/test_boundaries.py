@@ -665,6 +665,20 @@ def test_the_tracers_twin_finds_thresholds_and_grows_its_buffers_alike(monkeypat
     assert (got.value, got.at, got.kind, got.residual) == (want.value, want.at, want.kind,
                                                            want.residual)
     assert abs(got.value - 4 / 3) <= 1e-10
+    # on a line (no trace: Newton on the conditions, their twins called from Python) and
+    # along a further parameter
+    for call in (lambda: threshold("painleve_rod", "f", value=0, over={"f": (0, 3)},
+                                   fixed={**SLIDE_BACK, "theta": math.atan(2)},
+                                   conditions=ROD),
+                 lambda: threshold("painleve_rod", "f", value=0, over={"theta": (0.1, 1.5),
+                                                                       "f": (0, 3)},
+                                   fixed=SLIDE_BACK, along={"l": (0.5, 0.6)})):
+        got, want = in_both_tiers(call)
+        if isinstance(want, xr.Dataset):
+            same_result(got, want)
+        else:
+            assert (got.value, got.at, got.kind, got.residual) == (
+                want.value, want.at, want.kind, want.residual)
     sl = tracing.make_slice("painleve_rod", {"theta": (0.2, 1.5), "f": (0.0, 3.0)},
                             SLIDE_BACK, ROD)
     monkeypatch.setattr(tracing._Buffers.__init__, "__defaults__", (16, 1))

@@ -370,3 +370,20 @@ def test_two_contacts_trace_alike_on_the_tracers_twin(which, request):
         assert a.dtype == b.dtype and np.array_equal(a, b, equal_nan=a.dtype.kind == "f"), name
         if a.dtype.kind == "f":
             assert np.array_equal(np.signbit(a), np.signbit(b)), name
+
+
+def test_the_drawers_line_threshold_alike_on_the_twins(drawer):
+    """A threshold on a line runs Newton on the conditions from Python: on their
+    interpreted twins (while numba compiles the 62 conditions' gradients, 14 s) it finds
+    the wedge's f_w with the same bits as on their machine code."""
+    def call():
+        return phasemap.threshold(drawer, "f", layer="stagnation", value=1,
+                                  over={"f": (0.0, 2.0)}, fixed={"xdot": 0.0, "d": 0.3})
+
+    with tiers.forced("eager"):
+        want = call()
+    with tiers.forced("off"):
+        got = call()
+    assert (got.value, got.at, got.kind, got.condition, got.residual) == (
+        want.value, want.at, want.kind, want.condition, want.residual)
+    assert abs(got.value - F_W) <= 1e-12

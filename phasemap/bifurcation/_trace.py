@@ -2172,12 +2172,38 @@ def functions(model, conds, twins: bool = False, warm=None) -> tuple:
     return _FUNCTIONS.get((model, mod if mod is not None else conds.values), (), make)
 
 
-def compile_conditions(model, conditions, variables, subset) -> None:
+def tiered(conds, conditions=None):
+    """``conds`` with its functions (``values``, ``module.gradient``, ``module.hessian``) as
+    :mod:`phasemap.core.tiers` chooses for calls from Python: their machine code where it
+    is built (or under ``PHASEMAP_JIT=eager``), else their interpreted twins, with the same
+    bits, while a background process compiles them (:func:`compile_conditions`): the
+    drawer's first threshold on a line compiled its 62 conditions' gradients in f first,
+    14 s of numba.  ``conditions``: those given to the call (None: the model's own)."""
+    import copy
+    import types
+
+    from phasemap.systems import reference
+
+    warm = (compile_conditions, (reference(conds.model), conditions, conds.variables,
+                                 conds.subset, True), {})
+
+    def pick(fn, sig):
+        return tiers.runner(fn, None, warm=warm, sig=tuple(sig.args))
+
+    out = copy.copy(conds)
+    out.values = pick(conds.values, VALUES_SIG)
+    out.module = types.SimpleNamespace(gradient=pick(conds.module.gradient, GRADIENT_SIG),
+                                       hessian=pick(conds.module.hessian, HESSIAN_SIG))
+    return out
+
+
+def compile_conditions(model, conditions, variables, subset, values=False) -> None:
     """What a background process runs (under ``PHASEMAP_JIT=eager``) to compile a slice's
     condition functions into the kernel cache (:func:`functions`): ``model`` as
     :func:`phasemap.systems.reference` gives it, the conditions given to the trace (None:
     the model's own); with ``variables`` None the values of every condition, else their
-    gradients and Hessians in ``variables`` for the conditions of ``subset``; the values
+    gradients and Hessians in ``variables`` for the conditions of ``subset`` (and their
+    values with ``values``: :func:`phasemap.bifurcation.conditions.tiered`); the values
     come with the model's class function (:func:`classifier`), which the trace takes too."""
     from phasemap.bifurcation.conditions import compiled, values_of
     from phasemap.systems import get_model
@@ -2187,6 +2213,9 @@ def compile_conditions(model, conditions, variables, subset) -> None:
         tiers.addressed(values_of(m, conditions).values, VALUES_SIG.args)
         tiers.addressed(classifier(m), CLASS_SIG.args)
         return
-    mod = compiled(m, tuple(variables), conditions, subset).module
+    conds = compiled(m, tuple(variables), conditions, subset)
+    if values:
+        tiers.addressed(conds.values, VALUES_SIG.args)
+    mod = conds.module
     tiers.addressed(mod.gradient, GRADIENT_SIG.args)
     tiers.addressed(mod.hessian, HESSIAN_SIG.args)

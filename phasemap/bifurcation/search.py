@@ -37,6 +37,7 @@ from phasemap.core import args as _args
 from phasemap.core.model import Model
 from phasemap.systems import get_model
 from phasemap.bifurcation.tracing import check_tol, header, parse_range
+from phasemap.bifurcation import _trace as T
 from phasemap.bifurcation.conditions import compiled
 from phasemap.bifurcation.thresholds import Spec, Threshold, on_a_default_edge, solve
 
@@ -181,7 +182,7 @@ def threshold_curve(m: Model, param: str, layer: str, value: int, over, fixed, s
     if len(spec.others) > 1:
         raise ValueError(f"{m.name}: along needs at most one name ranged over besides "
                          f"{param!r}")
-    C = compiled(m, (*spec.others, param, name), conditions)
+    C = T.tiered(compiled(m, (*spec.others, param, name), conditions), conditions)
     base = m.input_vector(m.complete({**spec.fixed, **{n: r[0] for n, r in spec.ranges.items()}}))
     prange = spec.ranges[param]
     span_p = prange[1] - prange[0]
@@ -457,7 +458,7 @@ def threshold_volume(spec: Spec, conditions=None) -> Threshold | None:
         return None
     best = t
     if t.kind != "edge" and same[0] < i < same[-1]:
-        C = compiled(m, (x, p, a), conditions)
+        C = T.tiered(compiled(m, (x, p, a), conditions), conditions)
         base = m.input_vector(m.complete({**spec.fixed, x: ranges[x][0], p: ranges[p][0],
                                           a: float(av[i])}))
         sysm = _System(spec, a, t, C, base)

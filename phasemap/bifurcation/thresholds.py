@@ -304,7 +304,7 @@ def _class_at(m: Model, v: np.ndarray, slot: int, x: float, layer: str) -> int:
 def _line(spec: Spec, conditions) -> Threshold | None:
     m, p = spec.model, spec.param
     lo, hi = spec.ranges[p]
-    C = compiled(m, (p,), conditions)
+    C = T.tiered(compiled(m, (p,), conditions), conditions)
     full = m.complete({**spec.fixed, p: np.array([lo, hi])})
     fixed = {n: float(v) for n, v in full.items() if n != p}
     samples = np.linspace(lo, hi, LINE_SAMPLES + 1)
