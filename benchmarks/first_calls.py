@@ -11,6 +11,8 @@ at numba's default optimisation (what a user's process compiles), runs in turn
 * *boundaries, second slice*: the same axes at another velocity (moving where the first
   is at rest, or the other way): only the derivatives of the conditions that can bound
   a class there are compiled (:func:`phasemap.bifurcation.tracing.make_slice`);
+* *first threshold on a line*: the least f at which a class exists, on a line of f (Newton
+  on the conditions' values and gradients in f, called from Python);
 
 and reports each step's wall and CPU time (the process's user + system time), and
 the compile time numba spent in it, per kind of compiled function (the conditions
@@ -44,16 +46,20 @@ from _report import background_quiet, load, machine, parser, publish
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 #: name -> (the code that makes the System, the slice (two axes, ranges), fixed values,
-#: the fixed values of a second slice on the same axes, moving where the first is at rest)
+#: the fixed values of a second slice on the same axes, moving where the first is at rest,
+#: and a threshold of f on a line: its layer, value and fixed values)
 CASES = {
     "README rod": ("sys.path.insert(0, str(ROOT / 'docs' / 'examples'))\n"
                    "from own_system import SYSTEM as S",
                    {"theta": (0.05, 1.5), "f": (0.0, 2.0)}, {"omega": 0.0, "xdot": -1.0},
-                   {"omega": 0.0, "xdot": 1.0}),
+                   {"omega": 0.0, "xdot": 1.0},
+                   ("n_solutions", 0, {"omega": 0.0, "xdot": -1.0, "theta": 1.1071487177940904})),
     "drawer": ("sys.path.insert(0, str(ROOT / 'tests'))\nimport unseen\nS = unseen.drawer()",
-               {"d": (-1.0, 1.0), "f": (0.0, 2.0)}, {"xdot": 0.0}, {"xdot": 0.5}),
+               {"d": (-1.0, 1.0), "f": (0.0, 2.0)}, {"xdot": 0.0}, {"xdot": 0.5},
+               ("stagnation", 1, {"xdot": 0.0, "d": 0.3})),
     "peg rod": ("sys.path.insert(0, str(ROOT / 'tests'))\nimport unseen\nS = unseen.peg_rod()",
-                {"theta": (0.05, 0.95), "f": (0.0, 2.0)}, {"omega": 0.0}, {"omega": 0.5}),
+                {"theta": (0.05, 0.95), "f": (0.0, 2.0)}, {"omega": 0.0}, {"omega": 0.5},
+                ("stagnation", 1, {"omega": 0.0, "theta": 0.5})),
 }
 
 CHILD = r'''
@@ -114,18 +120,21 @@ phasemap.boundaries(m, axes, fixed=fixed)
 mark("first boundaries")
 phasemap.boundaries(m, axes, fixed={moving!r})
 mark("boundaries, second slice")
+layer, value, line = {line!r}
+phasemap.threshold(m, "f", layer=layer, value=value, over={{"f": (0.0, 2.0)}}, fixed=line)
+mark("first threshold on a line")
 print("RESULT " + json.dumps(steps))
 '''
 
 
 def run(name: str) -> list[dict]:
-    make, axes, fixed, moving = CASES[name]
+    make, axes, fixed, moving, line = CASES[name]
     with tempfile.TemporaryDirectory() as tmp:
         env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_OPT",)}
         env.update(PHASEMAP_CACHE_DIR=str(pathlib.Path(tmp) / "kernels"),
                    NUMBA_CACHE_DIR=str(pathlib.Path(tmp) / "numba"), MPLBACKEND="Agg")
         code = CHILD.format(root=str(ROOT), make=make, axes=axes, fixed=fixed,
-                            moving=moving)
+                            moving=moving, line=line)
         out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                              text=True, cwd=tmp)
         # the background compiles it started write into the caches until they end
@@ -165,7 +174,9 @@ def main() -> None:
         "processes compile them all (2026-12-02; before, the README rod's first boundaries "
         "took 29.6 s of CPU, 28.4 of them compiling the tracer, the drawer's 28.1 s, the "
         "peg rod's 15.4 s): what is left is the twins' arithmetic and sympy's printing of "
-        "the conditions (the drawer's 62, most of its 10.7 s).",
+        "the conditions (the drawer's 62: most of its first boundaries).  A threshold on "
+        "a line calls the conditions from Python, on their twins too until they are built "
+        "(the drawer's first one took 30.9 s of CPU before, 14 of them compiling).",
         "",
         "| declaration | step | wall | CPU | compile: conditions | shared drivers | own |",
         "|---|---|---:|---:|---:|---:|---:|",
