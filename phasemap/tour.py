@@ -20,6 +20,7 @@ import contextlib
 import io
 from collections import Counter
 import importlib.util
+import os
 import pathlib
 import sys
 import time
@@ -187,8 +188,6 @@ def _compiling_first():
     compiles that compete with the other studies for the cores: from empty caches the tour
     took 390 s of the machine's CPU time with them, 311 s compiling first (BENCHMARKS.md,
     the tour)."""
-    import os
-
     from phasemap.core import tiers
 
     if os.environ.get("PHASEMAP_JIT"):
@@ -206,8 +205,6 @@ def run_study(folder: str, name: str, argv: list[str]
     from phasemap.workers import ended_by_signal
 
     t0, c0 = time.perf_counter(), compiletime.seconds()
-    import os
-
     out = io.StringIO()
     # (this worker process's own setting: the threads a study starts see it too)
     os.environ.setdefault("PHASEMAP_JIT", "eager")

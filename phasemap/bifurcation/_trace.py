@@ -1983,6 +1983,9 @@ interpret.register(call_cells, tiers.at_address())
 
 _ENTRIES: dict = {}
 _SIGNATURES: dict = {}
+#: what :func:`runs` gives: the machine code's entry points and helpers, or the twins
+_MACHINE: dict = {}
+_TWINS: dict = {}
 
 
 def _signatures() -> dict:
@@ -2062,16 +2065,9 @@ def runs(twins: bool | None = None) -> dict:
                 return _twins()
             except interpret.Unsupported:  # (a twin differs: compile, as eager)
                 pass
-        entries()
     if not _MACHINE:
-        _MACHINE.update({**_ENTRIES, **_HELPERS})
+        _MACHINE.update({**entries(), **_HELPERS})
     return _MACHINE
-
-
-_MACHINE: dict = {}
-
-
-_TWINS: dict = {}
 
 
 def on_twins(run: dict) -> bool:
@@ -2137,8 +2133,8 @@ def functions(model, conds, twins: bool = False, warm=None) -> tuple:
     not compiled here: its interpreted twin's handle (:func:`phasemap.core.tiers.handle`)
     stands for its address, and ``warm``, a picklable call, compiles it in a background
     process (:func:`compile_conditions`; numba takes half a minute for the drawer's 62
-    conditions; the ladder's class function 10 s).  Such a tuple is made anew at each call, so that a later slice takes the
-    machine code once it is built.
+    conditions, 10 s for the ladder's class function).  Such a tuple is made anew at each
+    call, so that a later slice takes the machine code once it is built.
 
     A jitted function passed as such is looked up in its dispatcher at every call
     (0.2 ms a call), and a first-class function object is unboxed through Python at
@@ -2154,9 +2150,6 @@ def functions(model, conds, twins: bool = False, warm=None) -> tuple:
         fns = []
         for fn, sig in pairs:
             args = tuple(sig.args)
-            if fn in (_no_gradient, _no_hessian):
-                fns.append(tiers.addressed(fn, args))
-                continue
             chosen = tiers.runner(fn, None, warm=warm, sig=args)
             fns.append(tiers.handle(fn) if tiers.is_twin(chosen) else
                        tiers.addressed(fn, args))
@@ -2203,7 +2196,7 @@ def compile_conditions(model, conditions, variables, subset, values=False) -> No
     :func:`phasemap.systems.reference` gives it, the conditions given to the trace (None:
     the model's own); with ``variables`` None the values of every condition, else their
     gradients and Hessians in ``variables`` for the conditions of ``subset`` (and their
-    values with ``values``: :func:`phasemap.bifurcation.conditions.tiered`); the values
+    values with ``values``: :func:`tiered`); the values
     come with the model's class function (:func:`classifier`), which the trace takes too."""
     from phasemap.bifurcation.conditions import compiled, values_of
     from phasemap.systems import get_model

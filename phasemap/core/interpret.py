@@ -222,7 +222,7 @@ _EXACT_MATH = {"fabs", "copysign", "isnan", "isinf", "isfinite", "pi", "e", "tau
                "nan", "degrees", "radians"}
 #: numpy names the code may use as they are (numpy's scalar and array results are numba's).
 _EXACT_NUMPY = {"inf", "nan", "pi", "e", "isfinite", "isnan", "isinf", "abs", "absolute",
-                "fabs", "sign", "copysign", "empty", "zeros", "ones", "full", "empty_like",
+                "fabs", "sign", "copysign", "ones", "full", "empty_like",
                 "zeros_like", "ones_like", "full_like", "float64", "int64", "intp", "bool_",
                 "int32", "uint8", "array", "asarray", "arange", "minimum", "maximum",
                 "fmin", "fmax", "floor", "ceil", "trunc", "rint", "signbit", "radians",
@@ -272,6 +272,13 @@ def records(value):
     return value
 
 
+#: Functions whose twin is not the function itself, by module: what each namespace and the
+#: identity table give (:data:`MATH`, :data:`NUMPY`, :func:`_identities`).
+_SPECIAL_MATH = {"floor": _floor}
+_SPECIAL_NUMPY = {"argsort": _argsort, "empty": _records(np.empty),
+                  "zeros": _records(np.zeros)}
+
+
 def plain(value):
     """A twin's result as compiled code returns it: record arrays as plain arrays."""
     if isinstance(value, np.recarray):
@@ -304,10 +311,9 @@ class _Namespace(types.SimpleNamespace):
 
 
 MATH = _Namespace("math", {**{n: getattr(math, n) for n in _EXACT_MATH}, **_MATH,
-                            "floor": _floor})
+                            **_SPECIAL_MATH})
 NUMPY = _Namespace("numpy", {**{n: getattr(np, n) for n in _EXACT_NUMPY}, **_NUMPY,
-                             "argsort": _argsort, "empty": _records(np.empty),
-                             "zeros": _records(np.zeros)})
+                             **_SPECIAL_NUMPY})
 
 
 # --------------------------------------------------------------------------- source
@@ -587,10 +593,8 @@ def _identities() -> dict:
         if callable(value) and not isinstance(value, type):
             table[id(value)] = value
     table[id(numba.prange)] = range
-    table[id(math.floor)] = _floor
-    table[id(np.argsort)] = _argsort
-    table[id(np.empty)] = _records(np.empty)
-    table[id(np.zeros)] = _records(np.zeros)
+    table.update({id(getattr(math, n)): f for n, f in _SPECIAL_MATH.items()})
+    table.update({id(getattr(np, n)): f for n, f in _SPECIAL_NUMPY.items()})
     return table
 
 
@@ -602,7 +606,7 @@ _REGISTERED: list = []
 def register(compiled, twin) -> None:
     """Let twins call ``twin`` where the compiled code calls ``compiled``: an intrinsic
     (which has no Python of its own), with a Python function that does what its machine
-    code does (:func:`phasemap.core.calls.twin`: the compiled function at an address)."""
+    code does (:func:`phasemap.core.tiers.at_address`: the function at an address)."""
     with _LOCK:
         _REGISTERED.append(compiled)
         _BY_IDENTITY[id(compiled)] = twin

@@ -19,7 +19,8 @@ is neither in this process nor in the kernel cache is answered:
 A shared driver that calls a model's functions at their addresses (the bifurcation
 tracer, :func:`phasemap.bifurcation._trace.runs`) has twins too: where the driver's twin
 calls a function at an address (:func:`at_address`), the function's machine code runs
-from Python (a model's own functions are small and compiled first, :func:`addressed`).
+from Python (:func:`addressed`), or its own twin where it is not compiled either, at a
+stand-in address (:func:`handle`).
 
 Machine code already in the process or in the cache always runs, except under ``off``.
 Two processes never compile the same function at once in the background: the first
@@ -209,12 +210,11 @@ def at_address(index: int | None = None):
     """What an interpreted driver calls where the compiled one calls a function at its
     address (an intrinsic of :func:`phasemap.core.calls.typer`, registered with
     :func:`phasemap.core.interpret.register`): that function's machine code, from Python,
-    with the same arguments.  The address is the first argument, or with ``index``
-    element ``index`` of it (a model's set of functions).
+    with the same arguments (or its twin, at a :func:`handle`).  The address is the first
+    argument, or with ``index`` element ``index`` of it (a model's set of functions).
 
     A shared driver's twin answers while the driver compiles (the bifurcation tracer's,
-    :func:`phasemap.bifurcation._trace.runs`); what it calls is the model's own code,
-    small and compiled already (an address is known once it is, :func:`addressed`)."""
+    :func:`phasemap.bifurcation._trace.runs`)."""
     if index is None:
         def call(at, *args):
             return _AT[at](*args)
