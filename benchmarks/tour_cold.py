@@ -98,9 +98,10 @@ def main() -> None:
               "The studies compile before they answer (`PHASEMAP_JIT=eager` in the tour's "
               "study processes, unless it is set): on 2026-12-02, same machine, one run "
               "each from empty caches, the machine's CPU time was 348 s (wall 177 s) with "
-              "the interpreter tier's twins for classify and simulate, 390 s (203 s) with "
-              "them for the tracer and its conditions too, and 311 s (159 s) compiling "
-              "first: a study makes many calls of each kernel, and the twins' arithmetic and "
+              "the interpreter tier's twins for classify and simulate (the tree at "
+              "4ea7232), 390 s (203 s) with them for the tracer and its conditions too (at "
+              "50ad334), and 311 s (159 s) compiling first (each `PYTHONPATH=<checkout> "
+              "python benchmarks/tour_cold.py`): a study makes many calls of each kernel, and the twins' arithmetic and "
               "the background compiles, which compete with the other study for the cores, "
               "cost more than they save."]
     publish(lines, "## The tour from empty caches", not args.no_write)
