@@ -478,3 +478,79 @@ def test_the_admissible_phases_in_one_call_are_those_of_each_phase_alone(name):
         compared += 1
         several += len(got) > 1 or any(len(ms) > 1 for ms in cand)
     assert compared >= 20 and several >= 5, (compared, several)
+
+
+def _lapack_projection(m, q, u, closed, held, fixed, t):
+    """The projection as NumPy's LAPACK computes it (the engine's until 2026-12-02):
+    Newton on the gaps with ``solve``, then the velocities by ``lstsq``."""
+    mech, p = m.mech, m.p
+    q0, q = q, q.copy()
+    for _ in range(20):
+        M, h, g, J, b, mu = mech.pieces(q, u, p, t)
+        r = g[closed]
+        if np.abs(r).max() <= 4e-16 * (1.0 + np.abs(q).max()):
+            break
+        G = np.vstack([J[closed, 0], np.eye(m.n)[list(fixed)]])
+        r = np.concatenate([r, np.zeros(len(fixed))])
+        X = np.linalg.solve(M, G.T)
+        q = q - X @ np.linalg.lstsq(G @ X, r, rcond=None)[0]
+        q[list(fixed)] = q0[list(fixed)]
+    M, h, g, J, b, mu = mech.pieces(q, u, p, t)
+    rolling = [c for c in closed if m.rolls[c]]
+    A = np.array([J[c, 0] for c in closed] + [J[c, 2] for c in rolling]
+                 + [J[c, 1] for c in held])
+    X = np.linalg.solve(M, A.T)
+    target = A @ u
+    target[len(closed) + len(rolling):] -= m.surf(t)[list(held)]
+    return q, u - X @ np.linalg.lstsq(A @ X, target, rcond=None)[0]
+
+
+@pytest.mark.parametrize("name", sorted(SYSTEMS))
+def test_the_compiled_projection_is_lapacks(name):
+    """Random states off their contacts, random closed, held (sticking: with the surface)
+    and fixed sets, redundant ones among them (more rows than coordinates): the compiled
+    projection (pivoted Cholesky of the reduced matrix) against NumPy's LAPACK solve and
+    least squares, to 1e-10, where the gaps can close; the projected state on its gaps' zero, its closed contacts'
+    normal velocities zero and its held ones moving with their surface; the fixed
+    coordinates unmoved; and the twin's bits the machine code's."""
+    S = SYSTEMS[name]
+    m = _motion(S)
+    with tiers.forced("off"):
+        twin = _motion(S)
+    assert twin.flow.twin and not m.flow.twin
+    rng = np.random.default_rng(11)
+    k, n = m.k, m.n
+    q_mid = np.array([m.mech.defaults[c] for c in m.mech.coordinates])
+    redundant = 0
+    for _ in range(60):
+        q = q_mid + 0.05 * rng.standard_normal(n)
+        u = rng.standard_normal(n)
+        closed = [c for c in range(k) if rng.random() < 0.8] or [int(rng.integers(k))]
+        held = tuple(c for c in closed if rng.random() < 0.6)
+        fixed = tuple(j for j in range(n) if rng.random() < 0.2)
+        t = float(rng.random())
+        got = m.project(q, u, closed, held=held, fixed=fixed, t=t)
+        assert np.array_equal(np.concatenate(got),
+                              np.concatenate(twin.project(q, u, closed, held=held,
+                                                          fixed=fixed, t=t)))
+        qp, up = got
+        assert np.all(np.isfinite(qp)) and np.all(np.isfinite(up))
+        assert np.all(qp[list(fixed)] == q[list(fixed)])
+        M, h, g, J, b, mu = m.mech.pieces(qp, up, m.p, t)
+        G = np.vstack([J[closed, 0], np.eye(n)[list(fixed)]])
+        if np.linalg.matrix_rank(G) < len(G):
+            # the gaps cannot all close with those coordinates fixed: no projection to
+            # compare (LAPACK's least squares and the pivoted Cholesky stop apart)
+            continue
+        A = np.vstack([J[closed, 0], J[list(held), 1]])
+        redundant += np.linalg.matrix_rank(A) < len(A)
+        want = _lapack_projection(m, q, u, closed, held, fixed, t)
+        for a, b in zip(got, want):
+            assert np.allclose(a, b, rtol=1e-10, atol=1e-10), (closed, held, fixed, a, b)
+        assert np.abs(g[closed]).max() <= 1e-12 * (1 + np.abs(qp).max())
+        if np.linalg.matrix_rank(A) == len(A):
+            assert np.abs(J[closed, 0] @ up).max() <= 1e-12 * (1 + np.abs(u).max())
+            for c in held:
+                assert abs(J[c, 1] @ up - m.surf(t)[c]) <= 1e-12 * (1 + np.abs(u).max())
+    assert m.project(q, u, []) == (q, u)    # nothing closed: as it is
+    assert redundant or 2 * k <= n      # (redundant rows met where there can be)

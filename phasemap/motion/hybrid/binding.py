@@ -13,9 +13,9 @@ from numba.experimental import function_type
 
 from phasemap.motion.hybrid.flow import (FINISHED, OK, _dip_rates, _rhs, _rows, accel,
                                          admits, advance, dense_at, groups, jacobian,
-                                         locate, quiet_numba, reactions, scales, survey,
-                                         survey_cells, survey_range, transition, watch,
-                                         workspace)
+                                         locate, project, project_sizes, quiet_numba,
+                                         reactions, scales, survey, survey_cells,
+                                         survey_range, transition, watch, workspace)
 
 #: (imported for what it registers: the numba type of a cfunc passed as an argument)
 _CFUNC_TYPES = function_type
@@ -99,6 +99,8 @@ class Phase:
         self.rolls = np.ascontiguousarray(rolls, dtype=np.bool_)
         self.bounds = np.ascontiguousarray(mech.bounds(self.p), dtype=float)
         self.W, self.I = workspace(n, k)
+        nz, nI = project_sizes(n, k)
+        self.Z, self.Iz = np.zeros(nz), np.zeros(nI, dtype=np.int64)
         self.S = np.zeros(n * n + n)
         #: the candidate phases a survey's outputs hold at first: grown where a state has
         #: more (the most, 4 ** k, would take 0.5 GB for ten contacts)
@@ -130,14 +132,15 @@ class Phase:
                      self.a, np.zeros(m), 0.0, 1e-8, 1e-8, 1e-6, 1, np.zeros((m, m)))
             twin = tiers.is_twin(tiers.runner(transition, probe, self.warm))
         kernels = (accel, watch, advance, _rhs, _dip_rates, locate, dense_at, jacobian,
-                   transition, reactions, survey, admits, scales, groups, survey_range)
+                   transition, reactions, survey, admits, scales, groups, survey_range,
+                   project)
         if twin:
             fns = functions(self.mech, True)
             kernels = tuple(interpreted(k) for k in kernels)
         (self.accel, self.watch_fn, self.advance_fn, self.rhs_fn, self.rates_fn,
          self.locate_fn, self.dense_fn, self.jacobian_fn, self.transition_fn,
          self.reactions_fn, self.survey_fn, self.admits, self.scales_fn,
-         self.groups, self.range_fn) = kernels
+         self.groups, self.range_fn, self.project_fn) = kernels
         self.twin, self.fns = twin, fns
 
     def refresh(self):
@@ -185,6 +188,16 @@ class Phase:
         return (tuple(float(x) for x in sc), candidates,
                 [(tuple(int(m) for m in modes[i]), (ud[i], N[i], F[i], a[i], rho[i]),
                   int(group[i])) for i in range(count)])
+
+    def project(self, y, t, closed, moving, held, fixed):
+        """:func:`project` of the state ``y`` at ``t`` (the contacts and coordinates as
+        boolean arrays): the projected state, or None where a solve has no finite
+        result."""
+        PC, SF, _, _ = self.fns
+        out = np.empty(2 * self.n)
+        st = self.project_fn(PC, SF, self.p, self.lay, self.rolls, y, float(t), closed,
+                             moving, held, fixed, self.W, self.Z, self.Iz, out)
+        return out if st == OK else None
 
     def cells(self, P, Y, T, moving, want_singular):
         """:func:`flow.survey_cells` of the cells ``(P[i], Y[i], T[i])`` (parameters, full

@@ -354,42 +354,37 @@ class Motion:
         gaps' zero, velocities on ``J_n u = 0`` for the closed contacts (or for those in
         ``moving``, where given: a contact that closes with an impact keeps its approach)
         and ``J_t u`` on the surface's velocity for those in ``held``: the smallest change
-        in kinetic-energy norm.  ``fixed``: coordinates held where they are."""
+        in kinetic-energy norm.  ``fixed``: coordinates held where they are.  Compiled
+        (:func:`phasemap.motion.hybrid.flow.project`); a solve without a finite result
+        raises ``numpy.linalg.LinAlgError``."""
         closed = list(closed)
-        moving = closed if moving is None else list(moving)
         if not closed:
             return q, u
-        q0, q = q, q.copy()
-        for _ in range(20):
-            M, h, g, J, b, mu = self.mech.pieces(q, u, self.p, t)
-            r = g[closed]
-            if np.abs(r).max() <= 4e-16 * (1.0 + np.abs(q).max()):
-                break
-            G = J[closed, 0]
-            if fixed:    # coordinates held where they are (one on its bound)
-                G = np.vstack([G, np.eye(self.n)[list(fixed)]])
-                r = np.concatenate([r, np.zeros(len(fixed))])
-            X = np.linalg.solve(M, G.T)
-            q = q - X @ np.linalg.solve(G @ X, r)
-            for j in fixed:
-                q[j] = q0[j]
-        return q, self.project_velocity(q, u, moving, held, t)
+        moving = closed if moving is None else list(moving)
+        return self._projected(q, u, closed, moving, held, fixed, t)
 
     def project_velocity(self, q, u, moving, held=(), t=0.0):
         """The velocities put on ``J_n u = 0`` for the contacts ``moving`` and ``J_t u``
         on the surface's velocity for those in ``held``, at the positions ``q``: the
         smallest change in kinetic-energy norm."""
-        if not moving and not held:
+        if not len(moving) and not len(held):
             return u
-        M, h, g, J, b, mu = self.mech.pieces(q, u, self.p, t)
-        rolling = [c for c in moving if self.rolls[c]]     # (a rolling disc does not slip)
-        A = np.array([J[c, 0] for c in moving] + [J[c, 2] for c in rolling]
-                     + [J[c, 1] for c in held])
-        X = np.linalg.solve(M, A.T)
-        target = A @ u
-        if held and not self.mech.plain:
-            target[len(moving) + len(rolling):] -= self.surf(t)[list(held)]
-        return u - X @ np.linalg.lstsq(A @ X, target, rcond=None)[0]
+        return self._projected(q, u, (), moving, held, (), t)[1]
+
+    def _projected(self, q, u, closed, moving, held, fixed, t):
+        k = self.k
+        flags = np.zeros((3, k), dtype=np.bool_)
+        for row, which in enumerate((closed, moving, held)):
+            flags[row, list(which)] = True
+        still = np.zeros(self.n, dtype=np.bool_)
+        still[list(fixed)] = True
+        y = self.flow.project(np.concatenate([np.asarray(q, dtype=float),
+                                              np.asarray(u, dtype=float)]),
+                              t, flags[0], flags[1], flags[2], still)
+        if y is None:
+            raise np.linalg.LinAlgError(f"{self.mech.name}: the projection onto the "
+                                        "closed contacts has no finite solution")
+        return y[:self.n], y[self.n:]
 
     # -- the events of a phase ----------------------------------------------------------
 

@@ -9,8 +9,10 @@ They are compiled once for every declaration: a declaration's own functions (its
 generated pieces, rewritten by :mod:`.flowtext`) are numba ``cfunc`` pointers they take as
 arguments, compiled in well under a second (:mod:`.binding`).  Where a step holds an
 event, :func:`locate` finds it.  Every kernel is in this one file: numba's cache renews a
-function whose file changed, not one that calls it from another file.  What follows an event (which phase, an impact, a jam)
-stays in :class:`phasemap.motion.hybrid.Motion`, in Python.
+function whose file changed, not one that calls it from another file.  The projection of a
+state onto its closed contacts in the mass metric (:func:`project`) is here too.  What
+follows an event (which phase, an impact, a jam) stays in
+:class:`phasemap.motion.hybrid.Motion`, in Python.
 
 Layout ``lay`` (int64): ``[n, k, n_domain, has_surface, has_kinetic]``.  The workspace
 ``W`` (float64, :func:`workspace`) holds the pieces first, at the offsets of
@@ -1409,3 +1411,177 @@ def reactions(PC, SF, KN, p, lay, rolls, rho, none, W, I, ud, N, F, a, ts, ys, m
             for c in range(k):
                 Ns[i, c] = N[c]
                 Fs[i, c] = F[c]
+
+
+
+def project_sizes(n, k):
+    """``(float scratch, int scratch)`` lengths of :func:`project`: M's LU factors, then
+    at most ``m`` constraint rows, their ``M^-1 R^T``, the reduced matrix, two vectors of
+    ``m`` and three of ``n``; M's pivots and the constraints' order."""
+    m = max(k + n, 3 * k)
+    return n * n + 2 * m * n + m * m + 2 * m + 3 * n, n + m
+
+
+@njit(cache=True, error_model="numpy")
+def _constrained(Z, Iz, n, m, mm, uo, out):
+    """``Z[out:out + n] <- u - M^-1 R^T lam`` (``u`` at ``Z[uo:]``) with
+    ``(R M^-1 R^T) lam = R u - target``: the smallest change of ``u`` in the mass metric
+    that puts ``R u`` on the target.  The layout is :func:`project_sizes`' for ``mm``
+    rows at most: M's LU factors at ``Z[0:]`` (pivots at ``Iz[0:]``), the ``m`` rows ``R``
+    at ``Z[n * n:]``, the targets after the reduced matrix.  The reduced matrix is factored
+    by Cholesky with diagonal pivoting; a constraint whose pivot falls below 1e-13 of the
+    largest diagonal (redundant, on a consistent target) is left out, as a least-squares
+    solve leaves it.  False where the result is not finite."""
+    oR = n * n
+    oX = oR + mm * n                # M^-1 R^T, a row per constraint
+    oS = oX + mm * n
+    orr = oS + mm * mm              # R u - target, then the solution in pivot order
+    otg = orr + mm
+    op = n                          # the constraints' pivoted order, in Iz
+    for j in range(m):
+        v = 0.0
+        for i in range(n):
+            v += Z[oR + j * n + i] * Z[uo + i]
+        Z[otg + j] = v - Z[otg + j]
+        for i in range(n):
+            Z[oX + j * n + i] = Z[oR + j * n + i]
+        _lu_solve(Z, 0, Iz, 0, n, oX + j * n)
+    big = 0.0
+    for r in range(m):
+        for j in range(m):
+            v = 0.0
+            for i in range(n):
+                v += Z[oR + r * n + i] * Z[oX + j * n + i]
+            Z[oS + r * mm + j] = v
+        big = max(big, Z[oS + r * mm + r])
+        Iz[op + r] = r
+    rank = 0
+    for j in range(m):              # S = L L^T in place (L[b, a] at S[b, a])
+        p, dp = j, Z[oS + Iz[op + j] * mm + Iz[op + j]]
+        for i in range(j + 1, m):
+            d = Z[oS + Iz[op + i] * mm + Iz[op + i]]
+            if d > dp:
+                p, dp = i, d
+        if not dp > 1e-13 * big:
+            break
+        Iz[op + j], Iz[op + p] = Iz[op + p], Iz[op + j]
+        a = Iz[op + j]
+        lj = np.sqrt(dp)
+        Z[oS + a * mm + a] = lj
+        for i in range(j + 1, m):
+            Z[oS + Iz[op + i] * mm + a] /= lj
+        for i in range(j + 1, m):   # the Schur complement, both halves
+            b = Iz[op + i]
+            for l in range(j + 1, m):
+                c = Iz[op + l]
+                Z[oS + b * mm + c] -= Z[oS + b * mm + a] * Z[oS + c * mm + a]
+        rank += 1
+    for j in range(rank):           # L y = R u - target, then L^T lam = y
+        a = Iz[op + j]
+        v = Z[otg + a]
+        for l in range(j):
+            v -= Z[oS + a * mm + Iz[op + l]] * Z[orr + l]
+        Z[orr + j] = v / Z[oS + a * mm + a]
+    for j in range(rank - 1, -1, -1):
+        a = Iz[op + j]
+        v = Z[orr + j]
+        for l in range(j + 1, rank):
+            v -= Z[oS + Iz[op + l] * mm + a] * Z[orr + l]
+        Z[orr + j] = v / Z[oS + a * mm + a]
+    ok = True
+    for i in range(n):
+        v = Z[uo + i]
+        for j in range(rank):
+            v -= Z[oX + Iz[op + j] * n + i] * Z[orr + j]
+        Z[out + i] = v
+        ok = ok and np.isfinite(v)
+    return ok
+
+
+@njit(cache=True, error_model="numpy")
+def project(PC, SF, p, lay, rolls, y, t, closed, moving, held, fixed, W, Z, Iz, out):
+    """The state ``y`` put on the contacts ``closed`` (a boolean per contact) in the mass
+    metric, into ``out``: the positions on their gaps' zero (Newton, at most 20 steps;
+    ``fixed``, a boolean per coordinate: held where it is), then the velocities on
+    ``J_n u = 0`` for the contacts ``moving`` (and a rolling disc's ``J_r u = 0``) and
+    ``J_t u`` on the surface's velocity for those ``held``, each the smallest change in
+    kinetic-energy norm (:meth:`phasemap.motion.hybrid.Motion.project`).  With no contact
+    closed the positions are left as they are; with none moving or held, the velocities.  The
+    pieces are evaluated into ``W``; ``Z``, ``Iz``: :func:`project_sizes`' scratch.
+    Returns ``OK``, or ``SINGULAR`` where a solve has no finite result."""
+    n, k = lay[0], lay[1]
+    nf = n * n + n + k + 3 * k * n + 3 * k + k
+    og, oJ = n * n + n, n * n + n + k
+    mm = max(k + n, 3 * k)
+    oR = n * n
+    otg = oR + 2 * mm * n + mm * mm + mm
+    ou = otg + mm                   # a velocity (n), the result (n), q before (n)
+    oo = ou + n
+    oq = oo + n
+    for i in range(2 * n):
+        out[i] = y[i]
+    any_closed = False
+    for c in range(k):
+        any_closed = any_closed or closed[c]
+    for i in range(n):
+        Z[oq + i] = y[i]
+    for _ in range(20 if any_closed else 0):
+        PC(W[:nf], out, p, t)
+        worst, qmax = 0.0, 0.0
+        for c in range(k):
+            if closed[c]:
+                worst = max(worst, abs(W[og + c]))
+        for i in range(n):
+            qmax = max(qmax, abs(out[i]))
+        if worst <= 4e-16 * (1.0 + qmax):
+            break
+        # the Newton step X (G X)^-1 g: the constrained change of a zero velocity that
+        # puts G on -g, subtracted from q
+        m = 0
+        for c in range(k):
+            if closed[c]:
+                for i in range(n):
+                    Z[oR + m * n + i] = W[oJ + 3 * c * n + i]
+                Z[otg + m] = -W[og + c]
+                m += 1
+        for j in range(n):
+            if fixed[j]:
+                for i in range(n):
+                    Z[oR + m * n + i] = 1.0 if i == j else 0.0
+                Z[otg + m] = 0.0
+                m += 1
+        for i in range(n * n):
+            Z[i] = W[i]
+        _lu(Z, 0, Iz, 0, n)
+        for i in range(n):
+            Z[ou + i] = 0.0
+        if not _constrained(Z, Iz, n, m, mm, ou, oo):
+            return SINGULAR
+        for i in range(n):
+            out[i] = Z[oq + i] if fixed[i] else out[i] + Z[oo + i]
+    any_moving = False
+    for c in range(k):
+        any_moving = any_moving or moving[c] or held[c]
+    if not any_moving:
+        return OK
+    PC(W[:nf], out, p, t)
+    if lay[3]:
+        SF(W[nf:nf + 2 * k], out, p, t)
+    m = 0
+    for r in (0, 2, 1):             # the normals, rolling discs' tangents, held slips
+        for c in range(k):
+            if (held[c] if r == 1 else moving[c]) and (r != 2 or rolls[c]):
+                for i in range(n):
+                    Z[oR + m * n + i] = W[oJ + (3 * c + r) * n + i]
+                Z[otg + m] = W[nf + c] if r == 1 and lay[3] else 0.0
+                m += 1
+    for i in range(n * n):
+        Z[i] = W[i]
+    _lu(Z, 0, Iz, 0, n)
+    for i in range(n):
+        Z[ou + i] = out[n + i]
+    if not _constrained(Z, Iz, n, m, mm, ou, oo):
+        return SINGULAR
+    for i in range(n):
+        out[n + i] = Z[oo + i]
+    return OK
