@@ -100,7 +100,8 @@ def per_step(repeat: int) -> list[str]:
         "",
         f"A flight step costs **{f_ / c:.0f}×** a contact step, and the compiled flow is "
         f"{tw / f_:.0f}× its interpreted twin (the same bits). A flight step runs the "
-        "declaration's functions through numba `cfunc` pointers, solves the phase by a "
+        "declaration's functions at the addresses of their machine code (not inlined), "
+        "solves the phase by a "
         "small LU and checks the event functions, about 10 times the arithmetic of the "
         "reduced model's step, whose equations are solved in closed form and inlined. The "
         "issue's target (a flight step no dearer than a contact step) is not met; it is "

@@ -86,12 +86,17 @@ def test_the_twin_steps_as_the_machine_code_does(S, start):
     assert np.array_equal(np.array(a.ev_t), np.array(b.ev_t))
 
 
+@pytest.mark.parametrize("twin", [True, False], ids=["twins", "machine"])
 @pytest.mark.parametrize("name", sorted(SYSTEMS))
-def test_rewritten_functions_give_the_generated_pieces(name):
-    """pieces_into, domain_into, surface_into and kinetic_into (the twins of the cfuncs)
-    against the generated functions they were rewritten from, at random states."""
+def test_rewritten_functions_give_the_generated_pieces(name, twin):
+    """pieces_into, domain_into, surface_into and kinetic_into (what the kernels call at
+    the addresses binding.functions gives: their machine code, or at the handles of the
+    twins' tier their interpreted twins) against the generated functions they were
+    rewritten from, at random states."""
     mech = mechanics(SYSTEMS[name])
-    PC, SF, KN, DM = binding.functions(mech, True)
+    at = binding.functions(mech, twin)
+    assert all((a < 0) == twin for a in at)      # (a handle is never an address)
+    PC, SF, KN, DM = (tiers.callable_at(a) for a in at)
     p = np.array([mech.defaults[n] for n in mech.parameters], dtype=float)
     n, k = mech.n, len(mech.contacts)
     rng = np.random.default_rng(3)

@@ -1,6 +1,6 @@
 """A declaration's compiled flow (:mod:`.flow`) bound to its parameters:
-its functions compiled into ``cfunc`` pointers, the workspace, and the choice between the
-machine code and its interpreted twins (:mod:`phasemap.core.tiers`)."""
+its functions compiled and the addresses of their machine code, the workspace, and the
+choice between the machine code and its interpreted twins (:mod:`phasemap.core.tiers`)."""
 
 from __future__ import annotations
 
@@ -8,18 +8,14 @@ import hashlib
 import threading
 
 import numpy as np
-from numba import cfunc, njit
-from numba.experimental import function_type
+from numba import njit
 
-from phasemap.motion.hybrid.flow import (FINISHED, OK, _dip_rates, _rhs, _rows, accel,
-                                         admits, advance, dense_at, groups, jacobian,
-                                         locate, project, project_sizes, quiet_numba,
-                                         reactions, scales, survey, survey_cells,
-                                         survey_range, transition, watch, workspace)
-
-#: (imported for what it registers: the numba type of a cfunc passed as an argument)
-_CFUNC_TYPES = function_type
-
+from phasemap.core import tiers
+from phasemap.motion.hybrid.flow import (FINISHED, FUNCTION, OK, _dip_rates, _rhs, _rows,
+                                         accel, admits, advance, dense_at, groups, jacobian,
+                                         locate, project, project_sizes, reactions, scales,
+                                         survey, survey_cells, survey_range, transition,
+                                         watch, workspace)
 
 _LOCK = threading.Lock()
 _FUNCTIONS: dict = {}
@@ -34,30 +30,13 @@ def preferences(k: int, prefer) -> np.ndarray:
     return out
 
 
-class _Pointer:
-    """A compiled ``cfunc`` as a kernel's argument, its numba type and address found once:
-    numba finds a cfunc's type anew at every call (about 9 us), more than a phase's solve
-    costs."""
-
-    __slots__ = ("cfunc", "_numba_type_", "_address")
-
-    def __init__(self, fn):
-        from numba import typeof
-
-        self.cfunc = fn
-        self._numba_type_ = typeof(fn)
-        self._address = fn.address
-
-    def __wrapper_address__(self):
-        return self._address
-
-
 def functions(mech, twin: bool):
-    """The declaration's rewritten functions (:mod:`phasemap.motion.hybrid.flowtext`): numba
-    ``cfunc`` pointers, or their interpreted twins (``twin``), in the order of
-    :data:`phasemap.motion.hybrid.flowtext.NAMES`."""
+    """The declaration's rewritten functions (:mod:`phasemap.motion.hybrid.flowtext`) as
+    the kernels take them, in the order of :data:`phasemap.motion.hybrid.flowtext.NAMES`:
+    the addresses of their machine code (compiled, or loaded from the cache), or, for the
+    kernels' interpreted twins (``twin``), handles of their own twins
+    (:func:`phasemap.core.tiers.handle`)."""
     from phasemap.core.cache import load_module
-    from phasemap.core.interpret import interpreted
     from phasemap.motion.hybrid import flowtext
 
     key = (mech.source, twin)
@@ -68,12 +47,10 @@ def functions(mech, twin: bool):
             text = flowtext.text(fh.read(), mech.n, len(mech.contacts), len(mech.parameters))
         digest = hashlib.sha256(f"{flowtext.LAYOUT}\n{text}".encode()).hexdigest()[:16]
         module = load_module(f"flow_declared_{digest}", lambda: text)
-        if twin:
-            made = tuple(interpreted(njit(error_model="numpy")(getattr(module, name)))
-                         for name in flowtext.NAMES)
-        else:
-            made = tuple(_Pointer(cfunc(flowtext.SIGNATURE, cache=True, error_model="numpy")(
-                getattr(module, name))) for name in flowtext.NAMES)
+        jitted = [njit(cache=True, error_model="numpy")(getattr(module, name))
+                  for name in flowtext.NAMES]
+        made = tuple(tiers.handle(fn) if twin else tiers.addressed(fn, FUNCTION.args)
+                     for fn in jitted)
         _FUNCTIONS[key] = made
         return made
 
@@ -119,7 +96,6 @@ class Phase:
         from phasemap.core import tiers
         from phasemap.core.interpret import interpreted
 
-        quiet_numba()
         twin = tiers.mode() == "off"
         if not twin:
             fns = functions(self.mech, False)
@@ -207,7 +183,7 @@ class Phase:
         flags = np.zeros(cells, dtype=np.int8)
         rows = np.zeros((cells, len(moving) + 2 * self.k))
         PC, SF, KN, _ = self.fns
-        # (writable: the kernel passes rows of them to the declaration's cfuncs, typed for
+        # (writable: the kernel passes rows of them to the declaration's functions, typed for
         # writable arrays)
         args = (PC, SF, KN, np.require(P, float, ("C", "W")), self.lay, self.one_sided,
                 self.rolls, np.require(Y, float, ("C", "W")), np.require(T, float, ("C", "W")),

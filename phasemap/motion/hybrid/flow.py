@@ -6,8 +6,9 @@ linear system (:mod:`phasemap.motion.hybrid.phases`): ``M u' = h + sum G lam`` w
 held accelerations ``R u' = rhs``.  The functions here solve it and step it with
 scipy's DOP853 method (its coefficients and its step-size control, in machine code).
 They are compiled once for every declaration: a declaration's own functions (its
-generated pieces, rewritten by :mod:`.flowtext`) are numba ``cfunc`` pointers they take as
-arguments, compiled in well under a second (:mod:`.binding`).  Where a step holds an
+generated pieces, rewritten by :mod:`.flowtext`) are compiled on their own, in well under
+a second (:mod:`.binding`), and the kernels take the addresses of their machine code and
+call them there (:func:`_at`).  Where a step holds an
 event, :func:`locate` finds it.  Every kernel is in this one file: numba's cache renews a
 function whose file changed, not one that calls it from another file.  The projection of a
 state onto its closed contacts in the mass metric (:func:`project`) is here too.  What
@@ -22,27 +23,32 @@ then the slip coefficients.
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
-from numba.core.errors import NumbaExperimentalFeatureWarning
+from numba import prange, types
+from numba.extending import intrinsic
 
-from numba import prange
-
+from phasemap.core import calls, interpret, tiers
 from phasemap.core.jit import njit
 from phasemap.motion.hybrid.phases import OPEN, SLIP_NEG, SLIP_POS, SMOOTH, STICK, TOL
 
+#: The signature of a declaration's rewritten functions (:mod:`.flowtext`):
+#: ``f(out, y, p, t)``.
+FUNCTION = types.none(types.Array(types.float64, 1, "C"), types.Array(types.float64, 1, "C"),
+                      types.Array(types.float64, 1, "C"), types.float64)
 
 
-def quiet_numba():
-    """Silences numba's warning that first-class functions (the cfunc arguments) are
-    experimental, which it gives at every compile of a kernel (called where a motion is
-    set up: a filter set at import does not outlive a ``warnings.catch_warnings`` block)."""
-    warnings.filterwarnings("ignore", "First-class function type feature is experimental",
-                            NumbaExperimentalFeatureWarning)
+@intrinsic
+def _at(typingctx, at, out, y, p, t):
+    """``f(out, y, p, t)`` for the declaration's function ``f`` whose machine code is at
+    the address ``at`` (:func:`phasemap.core.calls.address`): called in numba's own
+    calling convention, so that the kernels, compiled once for every declaration, are not
+    typed again at each call as first-class function arguments are (about 4 us each)."""
+    return calls.typer(FUNCTION, at, (out, y, p, t))
 
 
-quiet_numba()
+# what the kernels' twins call instead (the function's machine code, or its own twin, at
+# phasemap.core.tiers' address or handle)
+interpret.register(_at, tiers.at_address())
 
 #: What :func:`accel` and :func:`advance` return.
 OK, REDUNDANT, SINGULAR = 0, 1, 2
@@ -163,7 +169,7 @@ def accel(PC, SF, KN, y, t, p, lay, rolls, modes, rho, start, want_det, W, I, ud
     solution is not finite.  The pieces are left at the start of ``W``."""
     n, k = lay[0], lay[1]
     nf = n * n + n + k + 3 * k * n + 3 * k + k
-    PC(W[:nf], y, p, t)
+    _at(PC, W[:nf], y, p, t)
     oh = n * n                     # M at 0, h, g, J (k, 3, n), b (k, 3), mu (static)
     oJ = oh + n + k
     ob = oJ + 3 * k * n
@@ -182,7 +188,7 @@ def accel(PC, SF, KN, y, t, p, lay, rolls, modes, rho, start, want_det, W, I, ud
     otmp = ocol + max(n, mm) + 1
     oc, oj, op = 0, mm + 1, 2 * mm + 2   # owners (contact, row) of each reaction; pivots
     if lay[3]:
-        SF(W[osd:osd + 2 * k], y, p, t)
+        _at(SF, W[osd:osd + 2 * k], y, p, t)
     else:
         for c in range(2 * k):
             W[osd + c] = 0.0
@@ -192,7 +198,7 @@ def accel(PC, SF, KN, y, t, p, lay, rolls, modes, rho, start, want_det, W, I, ud
             for i in range(n):
                 v += W[oJ + (3 * c + 1) * n + i] * y[n + i]
             W[omu + c] = abs(v - W[osd + c])
-        KN(W[omu:omu + k], y, p, t)
+        _at(KN, W[omu:omu + k], y, p, t)
         for c in range(k):
             if start[c]:
                 W[omu + c] = W[om0 + c]
@@ -478,9 +484,9 @@ def survey(PC, SF, KN, p, lay, one_sided, rolls, y, t, flip, prefer, plain, W, I
     og = n * n + n
     oJ = og + k
     om0 = oJ + 3 * k * n + 3 * k
-    PC(W[:nf], y, p, t)
+    _at(PC, W[:nf], y, p, t)
     if lay[3]:
-        SF(W[nf:nf + 2 * k], y, p, t)
+        _at(SF, W[nf:nf + 2 * k], y, p, t)
     scales(W, lay, y, S, I, sc)
     vs, L = sc[0], sc[3]
     for c in range(k):
@@ -751,7 +757,7 @@ def watch(PC, SF, KN, DM, y, t, p, lay, one_sided, rolls, modes, rho, none, jam,
         out[i0 + i] = y[i] - bounds[i, 0]
         out[i0 + n + i] = bounds[i, 1] - y[i]
     if nd:
-        DM(out[i0 + 2 * n:i0 + 2 * n + nd], y, p, t)
+        _at(DM, out[i0 + 2 * n:i0 + 2 * n + nd], y, p, t)
     return OK
 
 
@@ -1095,7 +1101,7 @@ def _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam
             return wt[idx]
         return (1.0 if modes[idx] == SLIP_POS else -1.0) * a[idx, 1] if st == OK else np.nan
     nf = n * n + n + lay[1] + 3 * lay[1] * n + 4 * lay[1]
-    PC(W[:nf], yt, p, t)
+    _at(PC, W[:nf], yt, p, t)
     o = n * n + n + lay[1] + 3 * idx * n
     v = 0.0
     for i in range(n):
@@ -1526,7 +1532,7 @@ def project(PC, SF, p, lay, rolls, y, t, closed, moving, held, fixed, W, Z, Iz, 
     for i in range(n):
         Z[oq + i] = y[i]
     for _ in range(20 if any_closed else 0):
-        PC(W[:nf], out, p, t)
+        _at(PC, W[:nf], out, p, t)
         worst, qmax = 0.0, 0.0
         for c in range(k):
             if closed[c]:
@@ -1564,9 +1570,9 @@ def project(PC, SF, p, lay, rolls, y, t, closed, moving, held, fixed, W, Z, Iz, 
         any_moving = any_moving or moving[c] or held[c]
     if not any_moving:
         return OK
-    PC(W[:nf], out, p, t)
+    _at(PC, W[:nf], out, p, t)
     if lay[3]:
-        SF(W[nf:nf + 2 * k], out, p, t)
+        _at(SF, W[nf:nf + 2 * k], out, p, t)
     m = 0
     for r in (0, 2, 1):             # the normals, rolling discs' tangents, held slips
         for c in range(k):

@@ -16,16 +16,15 @@ rates), ``p`` the parameters, the results written into ``out``.
 * ``kinetic_into``: each contact's slip coefficient at its sliding speed, which ``out``
   holds on entry (left as it is where the declaration slips with the static one).
 
-Each is plain Python over :mod:`math`: numba compiles it into a ``cfunc`` (a function
-pointer the kernel calls), and the same text run by Python is its interpreted twin.
+Each is plain Python over :mod:`math`: numba compiles it on its own, for the signature
+:data:`phasemap.motion.hybrid.flow.FUNCTION`, and the kernels call its machine code at its
+address; the same text run by Python is its interpreted twin.
 """
 
 from __future__ import annotations
 
 import ast
 
-#: numba's signature of every function of the module.
-SIGNATURE = "void(float64[::1], float64[::1], float64[::1], float64)"
 #: the functions, in the order the kernels take them
 NAMES = ("pieces_into", "surface_into", "kinetic_into", "domain_into")
 #: bumped when the rewritten module's layout changes
