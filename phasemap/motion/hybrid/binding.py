@@ -14,8 +14,8 @@ from phasemap.core import tiers
 from phasemap.motion.hybrid.flow import (FINISHED, FUNCTION, OK, _dip_rates, _rhs, _rows,
                                          accel, admits, advance, dense_at, groups, jacobian,
                                          locate, project, project_sizes, reactions, scales,
-                                         survey, survey_cells, survey_range, transition,
-                                         watch, workspace)
+                                         scales_at, survey, survey_cells, survey_range,
+                                         transition, watch, workspace)
 
 _LOCK = threading.Lock()
 _FUNCTIONS: dict = {}
@@ -109,14 +109,14 @@ class Phase:
             twin = tiers.is_twin(tiers.runner(transition, probe, self.warm))
         kernels = (accel, watch, advance, _rhs, _dip_rates, locate, dense_at, jacobian,
                    transition, reactions, survey, admits, scales, groups, survey_range,
-                   project)
+                   project, scales_at)
         if twin:
             fns = functions(self.mech, True)
             kernels = tuple(interpreted(k) for k in kernels)
         (self.accel, self.watch_fn, self.advance_fn, self.rhs_fn, self.rates_fn,
          self.locate_fn, self.dense_fn, self.jacobian_fn, self.transition_fn,
          self.reactions_fn, self.survey_fn, self.admits, self.scales_fn,
-         self.groups, self.range_fn, self.project_fn) = kernels
+         self.groups, self.range_fn, self.project_fn, self.scales_at_fn) = kernels
         self.twin, self.fns = twin, fns
 
     def refresh(self):
@@ -206,6 +206,14 @@ class Phase:
         flat = np.concatenate([np.ravel(x) for x in P])
         sc = np.zeros(4)
         self.scales_fn(flat, self.lay, y, self.S, self.I, sc)
+        return tuple(float(x) for x in sc)
+
+    def scales_at(self, y, t):
+        """:func:`flow.scales_at`: the scales of the state ``y`` at ``t``, its pieces the
+        declaration's machine code's (the numbers :meth:`survey` finds)."""
+        sc = np.zeros(4)
+        self.scales_at_fn(self.fns[0], self.p, self.lay, y, float(t), self.W, self.S, self.I,
+                          sc)
         return tuple(float(x) for x in sc)
 
     def pieces(self):

@@ -224,6 +224,11 @@ class Motion:
         (:func:`flow.scales`), the numbers :meth:`survey` and the maps use."""
         return self.flow.scales(P, np.concatenate([q, u]))
 
+    def scales_at(self, q, u, t=0.0):
+        """:meth:`scales` at the state ``(q, u)`` and time ``t``, its pieces evaluated by
+        the compiled flow (no NumPy arrays of them in Python)."""
+        return self.flow.scales_at(np.concatenate([q, u]), t)
+
     def admissible(self, q, u, modes, sc, prefer=None, t=0.0, flip=()):
         """``(u', N, F, a, rho)`` of the phase ``modes`` if it is admissible at
         ``(q, u)``, else None (a two-sided contact's friction tries each sign of N).
@@ -491,7 +496,7 @@ class Motion:
             if rec.ev_t and len(rec.ev_t) >= o.max_events:
                 self._end(t, q, u, modes, ev.MAX_EVENTS)
                 break
-            sc = self.scales(q, u, self.mech.pieces(q, u, self.p, t))
+            sc = self.scales_at(q, u, t)
 
             t_stop = o.t_end
             if self.zeno_until > t:
@@ -648,8 +653,7 @@ class Motion:
                 return None
         if kind == ev.LIFTOFF and self.one_sided[contact] and tuple(
                 groups[0][0][0]) == tuple(old) and not self._holds(
-                q, u, groups[0][0], [contact], self.scales(q, u, self.mech.pieces(
-                    q, u, self.p, t)), t):
+                q, u, groups[0][0], [contact], self.scales_at(q, u, t), t):
             # N reached zero on its way down and the contact cannot open either: the
             # accelerations have no solution just after (a Painleve inconsistency)
             return self._inconsistent(t, q, u, old, contact, depth)
@@ -657,7 +661,7 @@ class Motion:
         held = [c for c, m in enumerate(modes) if m == STICK]
         q, u = self.project(q, u, [c for c, m in enumerate(modes) if m != OPEN], held, t=t)
         y = np.concatenate([q, u])
-        sc = self.scales(q, u, self.mech.pieces(q, u, self.p, t))
+        sc = self.scales_at(q, u, t)
         if (self.rests and np.abs(u).max() <= TOL * sc[0]
                 and np.abs(ud).max() <= TOL * sc[2] / max(sc[3], 1.0)):
             if self.zeno_until > t:

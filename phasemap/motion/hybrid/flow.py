@@ -467,6 +467,14 @@ def scales(W, lay, y, S, I, sc):
 
 
 @njit(cache=True, error_model="numpy")
+def scales_at(PC, p, lay, y, t, W, S, I, sc):
+    """:func:`scales` of the state ``(t, y)``, its pieces evaluated into ``W`` first."""
+    n, k = lay[0], lay[1]
+    _at(PC, W[:n * n + n + k + 3 * k * n + 3 * k + k], y, p, t)
+    scales(W, lay, y, S, I, sc)
+
+
+@njit(cache=True, error_model="numpy")
 def survey(PC, SF, KN, p, lay, one_sided, rolls, y, t, flip, prefer, plain, W, I, S, sc,
            cand, ncand, ud, N, F, a, modes, rho, start, vn, vt, gk, muk, out_modes, out_rho,
            out_ud, out_N, out_F, out_a, out_group):
