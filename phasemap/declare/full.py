@@ -86,12 +86,15 @@ class Mechanics:
     #: the generated module's file (what :mod:`phasemap.motion.hybrid.flowtext` rewrites)
     source: str = ""
 
-    def points(self, q, p):
-        """``(centres, contacts)``: each body's centre of mass (b, 2) and each contact's
-        body point (k, 2) at the positions ``q``."""
-        a = np.array(self._points(*q, *p), dtype=float)
+    def points_along(self, Q, p):
+        """Where the bodies and contacts are at each row of the positions ``Q`` (m, n):
+        ``(centres, contacts)``, each body's centre of mass (m, b, 2) and each contact's
+        body point (m, k, 2)."""
         b = self.n_bodies
-        return a[:2 * b].reshape(b, 2), a[2 * b:].reshape(-1, 2)
+        m, k = len(Q), len(self.contacts)
+        a = np.array([self._points(*q, *p) for q in np.asarray(Q, dtype=float).tolist()],
+                     dtype=float).reshape(m, 2 * (b + k))
+        return a[:, :2 * b].reshape(m, b, 2), a[:, 2 * b:].reshape(m, k, 2)
 
     @property
     def n(self) -> int:

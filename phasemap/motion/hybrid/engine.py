@@ -59,6 +59,12 @@ class Record:
         self.y.append(np.array(y, dtype=float))
         self.modes.append(tuple(modes))
 
+    def points(self, ts, ys, modes):
+        """:meth:`point` of each time of ``ts`` and row of ``ys`` (copied)."""
+        self.t.extend(ts.tolist())
+        self.y.extend(np.array(ys, dtype=float))
+        self.modes.extend([tuple(modes)] * len(ts))
+
     def event(self, t, kind, contact, y, modes, impulse=(math.nan,) * 3):
         self.ev_t.append(float(t))
         self.ev_kind.append(int(kind))

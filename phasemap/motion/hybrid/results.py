@@ -86,12 +86,9 @@ def _geometry(mech, p, ys, modes, ts) -> dict:
     """Where the bodies and contacts are, and the contact reactions, at each saved state:
     what a figure of the motion draws (``phasemap.plot``'s outline strip)."""
     n, k = mech.n, len(mech.contacts)
-    cen = np.empty((len(ys), mech.n_bodies, 2))
-    pts = np.empty((len(ys), k, 2))
+    cen, pts = mech.points_along(ys[:, :n], p)
     N = np.full((len(ys), k), np.nan)
     F = np.full((len(ys), k), np.nan)
-    for i, y in enumerate(ys):
-        cen[i], pts[i] = mech.points(y[:n], p)
     at = np.flatnonzero(modes.min(axis=1, initial=0) >= 0) if all(
         c.one_sided for c in mech.contacts) else np.empty(0, dtype=int)
     if at.size:

@@ -43,8 +43,7 @@ def phase(self, t, q, u, modes, rho, sc, t_stop, jam_sign, w0, atol):
             int(o.max_steps - rec.n_steps), out_t, out_y, fl.W, fl.I, fl.ud, fl.N, fl.F, fl.a,
             yt, False)
         rec.n_steps += steps
-        for i in range(saved):
-            rec.point(out_t[i], out_y[i], modes)
+        rec.points(out_t[:saved], out_y[:saved], modes)
         self.i_eval = int(state[4])
         t1 = state[0]
         if status == flow.FULL:

@@ -602,8 +602,7 @@ def linearised(motion, segs, w, t_a, forcing, rtol, samples=0) -> Linearised:
             m_j = max(2, int(round(samples * taus[j] / period)))
             times = np.linspace(t, t + taus[j], m_j, endpoint=j == K - 1)
             end, states = segments.samples(motion, zs[j], t, taus[j], seg, rtol, times)
-            for s, y in zip(times, states):
-                rec.point(s, y, seg.modes)
+            rec.points(times, states, seg.modes)
         else:
             end = segments.end(motion, zs[j], t, taus[j], seg, rtol)
         t_end = t + taus[j]
