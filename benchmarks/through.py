@@ -95,9 +95,10 @@ def main():
           f"{r['times'][True][0]:.2f} / {r['times'][True][1]:.2f} | "
           f"{1e3 * r['per_cell']:.1f} | {r['before']} | {r['after']} |" for r in rows],
         "",
-        "The followed cells cost what a `simulate` call costs: the reduced motion again, "
-        "then the full-coordinate motion, its phases stepped by the compiled flow and "
-        "what follows each event decided in Python (NumPy), and a Dataset per cell. The "
+        "The followed cells cost what a `simulate` call costs without its Dataset "
+        "(`motion_end`, since 2026-12-02): the reduced motion again, then the "
+        "full-coordinate motion, its phases stepped by the compiled flow and what follows "
+        "each event decided in Python (NumPy). The "
         "issue's target for the wheel's 10^6 cells with the new fates (<= 20 s on 2 "
         "threads) needs the decisions compiled too and the cells followed in parallel; it "
         "is not met this way.",

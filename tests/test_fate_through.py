@@ -110,7 +110,7 @@ def test_a_cell_that_cannot_be_followed_keeps_its_reduced_end_and_says_so(monkey
     and a warning counts the cells and names the first."""
     from phasemap.motion import simulate as sim
 
-    real = sim.simulate
+    real = sim.motion_end
     calls = []
 
     def flaky(model, t_end, **kw):
@@ -119,7 +119,7 @@ def test_a_cell_that_cannot_be_followed_keeps_its_reduced_end_and_says_so(monkey
             raise ValueError("no such motion")
         return real(model, t_end, **kw)
 
-    monkeypatch.setattr(sim, "simulate", flaky)
+    monkeypatch.setattr(sim, "motion_end", flaky)
     axes = AXES
     reduced = phasemap.Scene("painleve_rod", axes=axes, fixed=FIXED, layers=["fate"],
                              options={"t_end": 1.0}).compute()
@@ -130,3 +130,34 @@ def test_a_cell_that_cannot_be_followed_keeps_its_reduced_end_and_says_so(monkey
         ev.CONTACT_LOST, ev.NO_SOLUTION, ev.INDETERMINATE, ev.SINGULAR])))][1]
     assert int(through.fate[kept]) == int(reduced.fate[kept])
     assert len(calls) >= 3
+
+
+@pytest.mark.parametrize("model, axes, t_end", [
+    ("wheel", {"phi": (-np.pi, np.pi), "omega": (-6.0, 6.0)}, 3.0),
+    ("painleve_rod", {"theta": (0.3, 1.3), "xdot": (-4.0, -0.5), "omega": (2.0, 2.0),
+                      "f": (2.0, 2.0)}, 1.0),
+    ("ladder", {"phi": (0.05, 1.5), "omega": (-3.0, 3.0)}, 2.0)])
+def test_a_motions_end_without_its_dataset_is_the_datasets(model, axes, t_end):
+    """What a followed cell keeps (motion_end: the fate, reversals, last event's time and
+    state, read from the records) is what the Dataset of simulate gives, exactly, on
+    random starts: motions that stay on their reduced model and motions that go on in
+    full coordinates."""
+    from phasemap.motion.simulate import end_of, motion_end
+
+    m = phasemap.get_model(model)
+    names = [c[0] for c in m.dynamics.coordinates]
+    rng = np.random.default_rng(5)
+    kinds = set()
+    for _ in range(16):
+        vals = {k: float(rng.uniform(*b)) for k, b in axes.items()}
+        try:
+            ds = phasemap.simulate(model, t_end, t_eval=[t_end], **vals)
+        except ValueError:
+            with pytest.raises(ValueError):
+                motion_end(model, t_end, t_eval=[t_end], **vals)
+            continue
+        kinds.add(ds.attrs.get("phasemap_coordinates", "reduced"))
+        want, got = end_of(ds, names), motion_end(model, t_end, t_eval=[t_end], **vals)
+        assert (got.fate, got.n_reversals, got.t) == (want.fate, want.n_reversals, want.t)
+        assert {k: got.state[k] for k in names} == want.state
+    assert kinds == {"reduced", "full"}

@@ -10,9 +10,10 @@ settings, and goes on in full coordinates through lift-off, flight, impacts, imp
 without collision, dynamic jams and Zeno (:mod:`phasemap.motion.hybrid`): its fate layers
 are that motion's end.  A cell is exactly the motion ``simulate`` gives from its start.
 
-A followed cell costs a ``simulate`` call, some 3-5 ms (its phases on the compiled flow,
-what follows each event in Python, a Dataset): a map whose cells mostly leave their
-contacts takes about a hundred times the reduced one.  The other cells keep the compiled integrator's values, bit for bit.
+A followed cell costs a ``simulate`` call without its Dataset
+(:func:`phasemap.motion.simulate.motion_end`), some 2 ms (its phases on the compiled
+flow, what follows each event in Python): a map whose cells mostly leave their contacts
+takes about fifty times the reduced one.  The other cells keep the compiled integrator's values, bit for bit.
 """
 
 from __future__ import annotations
@@ -22,7 +23,6 @@ import warnings
 import numpy as np
 
 from phasemap.core import args as _args
-from phasemap.core import events as ev
 from phasemap.maps.layers import Outcome
 
 #: The fate-map options that say how a motion goes on through contact changes, with the
@@ -70,7 +70,7 @@ def as_options(contact: dict | None) -> dict:
 def go_on(scene, axes: dict, outcome: Outcome) -> Outcome:
     """``outcome`` with every cell that ended at a contact change followed through it by
     :func:`phasemap.simulate` (module docstring)."""
-    from phasemap.motion.simulate import GOES_ON, simulate
+    from phasemap.motion.simulate import GOES_ON, motion_end
 
     fate, n_rev, t_final, positions = (np.array(a) for a in outcome)
     cells = np.flatnonzero(np.isin(fate, GOES_ON))
@@ -86,18 +86,15 @@ def go_on(scene, axes: dict, outcome: Outcome) -> Outcome:
         values = {**scene.fixed, **{n: float(axes[n][i]) for n, i in zip(names, at)}}
         try:
             # (the fate layers read the events: no saved steps, one requested time)
-            ds = simulate(m, o.t_end, rtol=o.rtol, atol=o.atol, max_step=o.max_step,
-                          max_steps=o.max_steps, max_events=o.max_events, method=o.method,
-                          t_eval=[o.t_end], **scene.contact, **values)
+            end = motion_end(m, o.t_end, rtol=o.rtol, atol=o.atol, max_step=o.max_step,
+                             max_steps=o.max_steps, max_events=o.max_events,
+                             method=o.method, t_eval=[o.t_end], **scene.contact, **values)
         except (ValueError, ArithmeticError, np.linalg.LinAlgError) as err:
             failed.append((values, err))     # (the cell keeps the reduced model's end)
             continue
-        fate[at] = int(ev.Event[ds.attrs["end_reason"].upper()])
-        kinds = ds.event_kind.values
-        n_rev[at] = int(np.count_nonzero(kinds == ev.REVERSAL))
-        t_final[at] = float(ds.event_t.values[-1])
+        fate[at], n_rev[at], t_final[at] = end.fate, end.n_reversals, end.t
         for j, name in enumerate(coords):
-            positions[(j, *at)] = float(ds[f"event_{name}"].values[-1])
+            positions[(j, *at)] = end.state[name]
     if failed:
         values, err = failed[0]
         warnings.warn(f"{m.name}: {len(failed)} of {cells.size} cells could not be followed "

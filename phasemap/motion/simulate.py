@@ -7,6 +7,7 @@ returns a self-describing :class:`xarray.Dataset`.
 
 from __future__ import annotations
 
+import inspect
 import math
 import threading
 import warnings
@@ -31,6 +32,7 @@ from phasemap.motion.hybrid.start import (full_attrs, mechanics_of, run_settings
 from phasemap.motion.integrate import (DEFAULT_METHOD, METHODS, NO_STOP, check_method,
                                        compile_integrator, integrator, run_batch, unpack)
 from phasemap.core.model import Model, Variable
+from phasemap.motion.without_collision import impact_variables, through_impacts
 from phasemap.systems import OSCILLATORS, get_model, reference
 
 #: Tolerances tighter than this cannot be met in double precision.
@@ -262,6 +264,51 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     >>> sweep.n_reversals.values.tolist()
     [1, 3, 5]
     """
+    return _run(model, t_end, rtol, atol, max_step, t_eval, max_steps, max_events, method,
+                impact_law, restitution, painleve, zeno_speed, through_contacts, t0, values)
+
+
+class MotionEnd(NamedTuple):
+    """Where a motion ends, as a fate map's layers read it (:func:`motion_end`)."""
+
+    fate: int             #: its fate (:class:`phasemap.Event`)
+    n_reversals: int      #: its events of kind ``reversal``
+    t: float              #: the time of its last event
+    #: each state variable at its last event, by name: the reduced model's, or the full
+    #: coordinates and their rates where the motion went on in them
+    state: dict
+
+
+def motion_end(model, t_end: float, **kwargs) -> MotionEnd:
+    """The end of the motion ``simulate(model, t_end, **kwargs)`` gives (one start), read
+    from the integrator's and the motion's own records, without building its Dataset:
+    what a fate map's cell followed through its contact changes keeps
+    (:mod:`phasemap.maps.through`).  The same numbers as :func:`end_of` of that Dataset
+    (tests/test_fate_through.py)."""
+    opts = {**_SIMULATE_DEFAULTS, **{k: kwargs.pop(k) for k in list(kwargs)
+                                     if k in _SIMULATE_DEFAULTS}}
+    return _run(model, t_end, *opts.values(), kwargs, summary=True)
+
+
+def end_of(ds, names) -> MotionEnd:
+    """:class:`MotionEnd` of a motion's Dataset (``names``: the state variables)."""
+    return MotionEnd(int(ev.Event[ds.attrs["end_reason"].upper()]),
+                     int(np.count_nonzero(ds.event_kind.values == ev.REVERSAL)),
+                     float(ds.event_t.values[-1]),
+                     {n: float(ds[f"event_{n}"].values[-1]) for n in names})
+
+
+#: :func:`simulate`'s settings and their defaults, in its order (what :func:`motion_end`
+#: takes by name)
+_SIMULATE_DEFAULTS = {k: prm.default for k, prm in
+                      inspect.signature(simulate).parameters.items()
+                      if prm.kind is prm.KEYWORD_ONLY}
+
+
+def _run(model, t_end, rtol, atol, max_step, t_eval, max_steps, max_events, method,
+         impact_law, restitution, painleve, zeno_speed, through_contacts, t0, values,
+         summary=False):
+    """:func:`simulate`; with ``summary``, its :class:`MotionEnd` (one start)."""
     S, m = _model_of(model, values)
     name = m.name if m is not None else S.name
     opts = Options(t_end, rtol, atol, max_step, max_steps, max_events, method).checked(name)
@@ -280,8 +327,11 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
         if not opts.t_end > t0:
             raise ValueError(f"{name}: the motion runs from t0 = {t0:g} to t_end = "
                              f"{opts.t_end:g}: t_end must come after t0")
-        return simulate_full(S, m, opts, contact, _times(name, t_eval, opts, t0), values,
-                             t0)
+        ds = simulate_full(S, m, opts, contact, _times(name, t_eval, opts, t0), values, t0)
+        if summary:
+            mech = mechanics_of(S)
+            return end_of(ds, [*mech.coordinates, *mech.rates])
+        return ds
     if t0 != 0.0:
         raise ValueError(f"{name}: t0 = {t0:g} is the start time of a motion in full "
                          "coordinates (a system forced in time); this one runs on its "
@@ -297,6 +347,8 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
     capped = _memory_cap(m, opts, len(names), t_eval is None, te.size, n_starts)
     run = (opts.t_end, opts.rtol, opts.atol, opts.max_step,
            *((opts.max_steps, opts.max_events) if capped is None else capped), t_eval is None, te)
+    if starts and summary:
+        raise ValueError(f"{m.name}: motion_end takes one start, not arrays of them")
     if starts:
         y0s = np.repeat(y0[None, :], n_starts, axis=0)
         for j, n in enumerate(names):
@@ -319,18 +371,22 @@ def simulate(model: str | Model, t_end: float = 10.0, *, rtol: float = 1e-8,
                              (compile_integrator, (reference(m), opts.method), {}))
     if tiers.is_twin(integrate) and tiers.mode() != "off":
         integrate = _budgeted(integrate, machine, m.name)
-    fate, t, y, n_rev, n_steps, points, events, y_eval, impacts = _through_impacts(
+    fate, t, y, n_rev, n_steps, points, events, y_eval, impacts = through_impacts(
         m, integrate, v, y0, run, names, full)
     if S is not None and int(fate) in GOES_ON and float(t) < opts.t_end:
         ds = _continued(S, m, opts, contact, names, full, positions, points, events,
                         y_eval, te if t_eval is not None else None, float(t), y,
-                        int(n_steps), impacts)
+                        int(n_steps), impacts, summary)
         if ds is not None:
             return ds
+    if summary:
+        ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode = _columns(points, events, y_eval, None)
+        return MotionEnd(int(fate), int(np.count_nonzero(ev_kind == ev.REVERSAL)),
+                         float(ev_t[-1]), dict(zip(names, (float(x) for x in ev_y[-1]))))
     ds = _dataset(m, full, positions, opts, names, int(fate), int(n_rev), int(n_steps),
                   *_columns(points, events, y_eval, te if t_eval is not None else None))
     if impacts:
-        _impact_variables(ds, impacts)
+        impact_variables(ds, impacts)
     ds.attrs.update({} if through_contacts else {"phasemap_through_contacts": "false"})
     if capped is not None and int(fate) in (ev.MAX_STEPS, ev.MAX_EVENTS):
         _say_memory(m, ds, opts, capped)
@@ -401,13 +457,15 @@ def _times(name, t_eval, opts: Options, t0: float = 0.0):
 
 
 def _continued(S, m: Model, opts: Options, contact: dict, names, full, positions, points,
-               events, y_eval, te, t_stop: float, y_stop, n_steps: int, impacts=()
-               ) -> xr.Dataset | None:
+               events, y_eval, te, t_stop: float, y_stop, n_steps: int, impacts=(),
+               summary=False) -> xr.Dataset | MotionEnd | None:
     """The reduced motion that ended at ``t_stop`` where a contact opens (or the
     accelerations have no or two solutions, or a slip reached its singular point) goes
     on in full coordinates: the Dataset of both, or None where the declaration's contacts
     are not the kind that can open.  ``impacts``: the reduced motion's impacts without
-    collision (:func:`_through_impacts`), whose impulses its ``iwc`` events keep."""
+    collision (:func:`phasemap.motion.without_collision.through_impacts`), whose impulses
+    its ``iwc`` events keep.  With ``summary``, the :class:`MotionEnd` of that Dataset,
+    without making it."""
     from phasemap.declare.full import closure
 
     try:
@@ -422,7 +480,6 @@ def _continued(S, m: Model, opts: Options, contact: dict, names, full, positions
         q, u = close(vals)
         return np.concatenate([q, u])
 
-    py = np.array([full_of(y) for y in ys]).reshape(-1, 2 * mech.n)
     pey = np.array([full_of(y) for y in ev_y[:-1]]).reshape(-1, 2 * mech.n)
     q0, u0 = np.split(full_of(y_stop), 2)
     p = np.array([float(full[k]) for k in mech.parameters])
@@ -431,6 +488,14 @@ def _continued(S, m: Model, opts: Options, contact: dict, names, full, positions
     rec = hybrid.run_full(mech, p, q0, u0, t0=t_stop, t_eval=rest, first=-1,
                           **settings, **contact)
     kinds = np.asarray(ev_kind[:-1])
+    if summary:     # (the Dataset's events: the reduced motion's but its last, then rec's)
+        last = rec.ev_y[-1] if rec.ev_t else pey[-1]
+        return MotionEnd(int(rec.fate), int(np.count_nonzero(kinds == ev.REVERSAL))
+                         + sum(k == ev.REVERSAL for k in rec.ev_kind),
+                         float(rec.ev_t[-1] if rec.ev_t else ev_t[-2]),
+                         dict(zip([*mech.coordinates, *mech.rates],
+                                  (float(x) for x in last))))
+    py = np.array([full_of(y) for y in ys]).reshape(-1, 2 * mech.n)
     imp = np.full((kinds.size, 3), np.nan)
     imp[kinds == ev.IWC] = [i[1:] for i in impacts] if len(impacts) else np.empty((0, 3))
     prefix = (np.asarray(ts, float), py, ms, np.asarray(ev_t[:-1], float), kinds, pey,
@@ -441,10 +506,6 @@ def _continued(S, m: Model, opts: Options, contact: dict, names, full, positions
     ds.attrs["phasemap_reduced_end"] = ev.Event(int(events[-1, 1])).name.lower()
     say_full_memory(ds, opts, settings)
     return ds
-
-
-#: The most impacts without collision one motion goes through (each ends a stage).
-MAX_IMPACTS = 10_000
 
 
 #: Seconds of a motion the interpreted integrator runs before the machine code takes over
@@ -473,114 +534,6 @@ def _budgeted(twin, machine, name: str):
             return machine(*args)
 
     return integrate
-
-
-def _through_impacts(m: Model, integrate, v, y0, run, names, full):
-    """Integrate, and where the motion of a declared system ends with ``no_solution`` at
-    a contact that slips into the obstacle (a Painleve inconsistency), apply the impact
-    without collision there (:func:`phasemap.motion.impact.impact`, e = 0) and go on
-    from the state after it: the integrator's outputs joined, times shifted, the fate
-    ``no_solution`` replaced by an ``iwc`` event; and the impacts ``(t, P_n, P_t, dKE)``.
-    A motion that meets no such state is the integrator's own, bit for bit."""
-    t_end, rtol, atol, h_max, max_steps, max_events, save, te = run
-    res = integrate(v, y0, *run, NO_STOP)
-    if int(res.fate) != ev.NO_SOLUTION or getattr(m, "declaration", None) is None:
-        return (*res, [])
-    parts, impacts, t0 = [res], [], 0.0
-    while int(res.fate) == ev.NO_SOLUTION and len(impacts) < MAX_IMPACTS:
-        jump = _impact_without_collision(m, names, res.y, full)
-        if jump is None:
-            break
-        y0, kick = jump
-        t0 += float(res.t)
-        impacts.append((t0, *kick))
-        steps = max_steps - sum(int(r.n_steps) for r in parts)
-        events = max_events - sum(len(r.events) - 1 for r in parts)
-        if steps <= 0 or events <= 1 or t0 >= t_end:
-            break
-        done = sum(len(r.y_eval) for r in parts)
-        res = integrate(v, y0, t_end - t0, rtol, atol, h_max, steps, events, save,
-                        te[done:] - t0, NO_STOP)
-        parts.append(res)
-    if len(parts) == 1:  # the impact could not go on (no steps, events or time left)
-        return (*res, [])
-    return (*_joined(parts, [i[0] for i in impacts]), impacts[:len(parts) - 1])
-
-
-def _joined(parts, starts):
-    """The integrator outputs of consecutive stages of one motion as one: the times of
-    each after the first shifted by its start.  The terminal event of each but the last
-    (its ``no_solution``, where the impact without collision was applied) becomes its
-    ``iwc`` event: the state before the impulse, as every impulsive event keeps it (an
-    impact's and a jam's in full coordinates too), with the branch the next stage starts
-    on; that stage's start event is dropped (the state after the impulse is its first
-    saved point)."""
-    offsets = [0.0, *starts[:len(parts) - 1]]
-    points, events, evals = [], [], []
-    for k, (r, t0) in enumerate(zip(parts, offsets)):
-        pts, evs = r.points.copy(), r.events.copy()
-        pts[:, 0] += t0
-        evs[:, 0] += t0
-        if k and int(evs[0, 1]) == ev.START and len(evs) > 1:
-            evs = evs[1:]
-        if k < len(parts) - 1:
-            evs[-1, 1] = ev.IWC
-            evs[-1, 2] = parts[k + 1].events[0, 2]
-        points.append(pts)
-        events.append(evs)
-        evals.append(r.y_eval)
-    last = parts[-1]
-    return (last.fate, float(last.t) + offsets[-1], last.y,
-            sum(int(r.n_reversals) for r in parts), sum(int(r.n_steps) for r in parts),
-            np.concatenate(points), np.concatenate(events), np.concatenate(evals))
-
-
-def _impact_without_collision(m: Model, names, y, full):
-    """The state after the impact without collision at the end state ``y`` of a declared
-    system with one contact, and ``(P_n, P_t, dKE)``; None where that is not what the
-    state calls for (the normal velocity is not zero, or the slip does not force the
-    contact in: the impact is refused), or the system has other contacts."""
-    from phasemap.declare.full import closure
-
-    S = m.declaration       # (a loaded model's stays unbuilt: full.py reads the cache)
-    values = {**full, **dict(zip(names, (float(x) for x in y)))}
-    try:
-        mech = mechanics_of(S)
-        if len(mech.contacts) != 1:
-            return None
-        q, qd = closure(S)(values)
-    except (ValueError, KeyError):
-        return None     # a contact that cannot take an impulse, or a value missing
-    M, _, _, J, _, mu = mech.pieces(q, qd, [float(values[k]) for k in mech.parameters])
-    vn, vt = J[0, :2] @ qd
-    if abs(vn) > 1e-9 * (abs(vt) + 1e-300):
-        return None
-    try:
-        after, r = hybrid.tangential_impact(M, J[0, :2], qd, float(mu[0]), None,
-                                            J[0, 2] if mech.contacts[0].rolls else None)
-    except ValueError:
-        return None
-    y1 = np.array(y, dtype=float)
-    for rate, value in zip(mech.rates, after):
-        if rate in names:
-            y1[names.index(rate)] = value
-    return y1, (r.P_n, r.P_t, r.dKE)
-
-
-def _impact_variables(ds: xr.Dataset, impacts) -> None:
-    """The impulses and the energy change of each impact, on the events: NaN at events
-    that are not impacts."""
-    kinds = ds.event_kind.values
-    at = np.flatnonzero(kinds == ev.IWC)
-    for j, (name, long_name, units) in enumerate((
-            ("event_impulse_n", "normal impulse of the impact on the body", "N s"),
-            ("event_impulse_t", "tangential impulse of the impact on the body", "N s"),
-            ("event_dKE", "change of kinetic energy in the impact", "J"))):
-        col = np.full(kinds.shape, np.nan)
-        col[at] = [i[1 + j] for i in impacts]
-        ds[name] = xr.Variable("event", col, {"long_name": long_name, "units": units})
-
-
 
 
 def _memory_cap(m: Model, opts: Options, ny: int, every_step: bool, n_eval: int,
