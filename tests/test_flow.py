@@ -485,39 +485,56 @@ def test_the_admissible_phases_in_one_call_are_those_of_each_phase_alone(name):
     assert compared >= 20 and several >= 5, (compared, several)
 
 
-def _lapack_projection(m, q, u, closed, held, fixed, t):
-    """The projection as NumPy's LAPACK computes it (the engine's until 2026-12-02):
-    Newton on the gaps with ``solve``, then the velocities by ``lstsq``."""
+def _numpy_project(m, q, u, closed, held=(), fixed=(), moving=None, t=0.0):
+    """Motion.project as NumPy computed it until 2026-12-02 (the engine's code of then):
+    Newton on the gaps with LAPACK's ``solve``, then the velocities by ``lstsq``."""
     mech, p = m.mech, m.p
+    closed = list(closed)
+    moving = closed if moving is None else list(moving)
+    if not closed:
+        return q, u
     q0, q = q, q.copy()
     for _ in range(20):
         M, h, g, J, b, mu = mech.pieces(q, u, p, t)
         r = g[closed]
         if np.abs(r).max() <= 4e-16 * (1.0 + np.abs(q).max()):
             break
-        G = np.vstack([J[closed, 0], np.eye(m.n)[list(fixed)]])
-        r = np.concatenate([r, np.zeros(len(fixed))])
+        G = J[closed, 0]
+        if fixed:
+            G = np.vstack([G, np.eye(m.n)[list(fixed)]])
+            r = np.concatenate([r, np.zeros(len(fixed))])
         X = np.linalg.solve(M, G.T)
-        q = q - X @ np.linalg.lstsq(G @ X, r, rcond=None)[0]
-        q[list(fixed)] = q0[list(fixed)]
-    M, h, g, J, b, mu = mech.pieces(q, u, p, t)
-    rolling = [c for c in closed if m.rolls[c]]
-    A = np.array([J[c, 0] for c in closed] + [J[c, 2] for c in rolling]
+        q = q - X @ np.linalg.solve(G @ X, r)
+        for j in fixed:
+            q[j] = q0[j]
+    return q, _numpy_project_velocity(m, q, u, moving, held, t)
+
+
+def _numpy_project_velocity(m, q, u, moving, held=(), t=0.0):
+    if not moving and not held:
+        return u
+    M, h, g, J, b, mu = m.mech.pieces(q, u, m.p, t)
+    rolling = [c for c in moving if m.rolls[c]]
+    A = np.array([J[c, 0] for c in moving] + [J[c, 2] for c in rolling]
                  + [J[c, 1] for c in held])
     X = np.linalg.solve(M, A.T)
     target = A @ u
-    target[len(closed) + len(rolling):] -= m.surf(t)[list(held)]
-    return q, u - X @ np.linalg.lstsq(A @ X, target, rcond=None)[0]
+    if held and not m.mech.plain:
+        target[len(moving) + len(rolling):] -= m.surf(t)[list(held)]
+    return u - X @ np.linalg.lstsq(A @ X, target, rcond=None)[0]
 
 
 @pytest.mark.parametrize("name", sorted(SYSTEMS))
-def test_the_compiled_projection_is_lapacks(name):
-    """Random states off their contacts, random closed, held (sticking: with the surface)
-    and fixed sets, redundant ones among them (more rows than coordinates): the compiled
-    projection (pivoted Cholesky of the reduced matrix) against NumPy's LAPACK solve and
-    least squares, to 1e-10, where the gaps can close; the projected state on its gaps' zero, its closed contacts'
+def test_the_compiled_projection_is_numpys(name):
+    """Random states off their contacts, random closed, moving (a landing contact keeps
+    its approach), held (sticking: with the surface) and fixed sets, redundant rows among
+    them: the compiled projection (pivoted Cholesky of the reduced matrix) against the
+    NumPy code it replaced (LAPACK's solve and least squares), to 1e-10; where that
+    refused the Newton step (dependent rows: a fixed coordinate that moves a gap alone),
+    a LinAlgError too.  The projected state on its gaps' zero, its closed contacts'
     normal velocities zero and its held ones moving with their surface; the fixed
-    coordinates unmoved; and the twin's bits the machine code's."""
+    coordinates unmoved; the velocities alone (project_velocity) as NumPy's; and the
+    twin's bits the machine code's."""
     S = SYSTEMS[name]
     m = _motion(S)
     with tiers.forced("off"):
@@ -526,36 +543,68 @@ def test_the_compiled_projection_is_lapacks(name):
     rng = np.random.default_rng(11)
     k, n = m.k, m.n
     q_mid = np.array([m.mech.defaults[c] for c in m.mech.coordinates])
-    redundant = 0
-    for _ in range(60):
+    redundant = refused = compared = 0
+    for _ in range(80):
         q = q_mid + 0.05 * rng.standard_normal(n)
         u = rng.standard_normal(n)
         closed = [c for c in range(k) if rng.random() < 0.8] or [int(rng.integers(k))]
         held = tuple(c for c in closed if rng.random() < 0.6)
         fixed = tuple(j for j in range(n) if rng.random() < 0.2)
+        moving = None if rng.random() < 0.7 else closed[:-1]
         t = float(rng.random())
-        got = m.project(q, u, closed, held=held, fixed=fixed, t=t)
-        assert np.array_equal(np.concatenate(got),
-                              np.concatenate(twin.project(q, u, closed, held=held,
-                                                          fixed=fixed, t=t)))
-        qp, up = got
-        assert np.all(np.isfinite(qp)) and np.all(np.isfinite(up))
-        assert np.all(qp[list(fixed)] == q[list(fixed)])
-        M, h, g, J, b, mu = m.mech.pieces(qp, up, m.p, t)
-        G = np.vstack([J[closed, 0], np.eye(n)[list(fixed)]])
-        if np.linalg.matrix_rank(G) < len(G):
-            # the gaps cannot all close with those coordinates fixed: no projection to
-            # compare (LAPACK's least squares and the pivoted Cholesky stop apart)
+        try:
+            want = _numpy_project(m, q, u, closed, held, fixed, moving, t)
+        except np.linalg.LinAlgError:
+            want = None
+        try:
+            got = m.project(q, u, closed, held=held, fixed=fixed, moving=moving, t=t)
+        except np.linalg.LinAlgError:
+            with pytest.raises(np.linalg.LinAlgError):
+                twin.project(q, u, closed, held=held, fixed=fixed, moving=moving, t=t)
+            refused += 1
+            M, h, g, J, b, mu = m.mech.pieces(q, u, m.p, t)
+            G = np.vstack([J[closed, 0], np.eye(n)[list(fixed)]])
+            assert want is None or np.linalg.matrix_rank(G) < len(G)
             continue
-        A = np.vstack([J[closed, 0], J[list(held), 1]])
-        redundant += np.linalg.matrix_rank(A) < len(A)
-        want = _lapack_projection(m, q, u, closed, held, fixed, t)
+        assert np.array_equal(np.concatenate(got), np.concatenate(
+            twin.project(q, u, closed, held=held, fixed=fixed, moving=moving, t=t)))
+        assert want is not None
+        compared += 1
         for a, b in zip(got, want):
             assert np.allclose(a, b, rtol=1e-10, atol=1e-10), (closed, held, fixed, a, b)
+        qp, up = got
+        assert np.all(qp[list(fixed)] == q[list(fixed)])
+        M, h, g, J, b, mu = m.mech.pieces(qp, up, m.p, t)
         assert np.abs(g[closed]).max() <= 1e-12 * (1 + np.abs(qp).max())
-        if np.linalg.matrix_rank(A) == len(A):
-            assert np.abs(J[closed, 0] @ up).max() <= 1e-12 * (1 + np.abs(u).max())
-            for c in held:
-                assert abs(J[c, 1] @ up - m.surf(t)[c]) <= 1e-12 * (1 + np.abs(u).max())
-    assert m.project(q, u, []) == (q, u)    # nothing closed: as it is
+        rows = closed if moving is None else moving
+        A = np.vstack([J[rows, 0], J[[c for c in rows if m.rolls[c]], 2], J[list(held), 1]])
+        if np.linalg.matrix_rank(A) < len(A):
+            redundant += 1
+            continue
+        scale = 1 + np.abs(u).max()
+        assert np.abs(A[:len(rows)] @ up).max(initial=0.0) <= 1e-12 * scale
+        for c in held:
+            assert abs(J[c, 1] @ up - m.surf(t)[c]) <= 1e-12 * scale
+        assert np.allclose(m.project_velocity(q, u, (), held, t),
+                           _numpy_project_velocity(m, q, u, [], held, t), rtol=1e-10,
+                           atol=1e-10)
+    assert compared >= 40
     assert redundant or 2 * k <= n      # (redundant rows met where there can be)
+    a, b = m.project(q, u, [])
+    assert a is q and b is u            # nothing closed: the state as it is
+
+
+@pytest.mark.parametrize("bad", ["mass", "state"])
+def test_a_projection_without_a_finite_answer_is_refused(bad):
+    """A singular mass matrix (the rod's m = 0: a LinAlgError, as NumPy's solve gave) or a
+    state that is not finite: never the state handed back unprojected."""
+    m = _motion(ROD, m=0.0) if bad == "mass" else _motion(ROD)
+    q = np.array([m.mech.defaults[c] for c in m.mech.coordinates]) + 0.01
+    u = np.array([0.1, -0.2, 0.3])
+    if bad == "state":
+        q[1] = np.nan
+    with pytest.raises(np.linalg.LinAlgError, match="cannot be projected"):
+        m.project(q, u, [0])
+    if bad == "mass":
+        with pytest.raises(np.linalg.LinAlgError):
+            _numpy_project(m, q, u, [0])

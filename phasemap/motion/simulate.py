@@ -284,7 +284,9 @@ def motion_end(model, t_end: float, **kwargs) -> MotionEnd:
     from the integrator's and the motion's own records, without building its Dataset:
     what a fate map's cell followed through its contact changes keeps
     (:mod:`phasemap.maps.through`).  The same numbers as :func:`end_of` of that Dataset
-    (tests/test_fate_through.py)."""
+    wherever ``simulate`` answers (tests/test_fate_through.py); the Dataset's own columns
+    (the outlines, the saved states in full coordinates) and its memory warnings are not
+    made."""
     opts = {**_SIMULATE_DEFAULTS, **{k: kwargs.pop(k) for k in list(kwargs)
                                      if k in _SIMULATE_DEFAULTS}}
     return _run(model, t_end, *opts.values(), kwargs, summary=True)

@@ -42,7 +42,7 @@ def functions(mech, twin: bool):
     key = (mech.source, twin)
     with _LOCK:
         if key in _FUNCTIONS:
-            return _FUNCTIONS[key]
+            return _FUNCTIONS[key][0]
         with open(mech.source, encoding="utf-8") as fh:
             text = flowtext.text(fh.read(), mech.n, len(mech.contacts), len(mech.parameters))
         digest = hashlib.sha256(f"{flowtext.LAYOUT}\n{text}".encode()).hexdigest()[:16]
@@ -51,7 +51,8 @@ def functions(mech, twin: bool):
                   for name in flowtext.NAMES]
         made = tuple(tiers.handle(fn) if twin else tiers.addressed(fn, FUNCTION.args)
                      for fn in jitted)
-        _FUNCTIONS[key] = made
+        # (the dispatchers held beside their addresses: their machine code lives as long)
+        _FUNCTIONS[key] = made, jitted
         return made
 
 

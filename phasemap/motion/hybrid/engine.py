@@ -366,8 +366,8 @@ class Motion:
         ``moving``, where given: a contact that closes with an impact keeps its approach)
         and ``J_t u`` on the surface's velocity for those in ``held``: the smallest change
         in kinetic-energy norm.  ``fixed``: coordinates held where they are.  Compiled
-        (:func:`phasemap.motion.hybrid.flow.project`); a solve without a finite result
-        raises ``numpy.linalg.LinAlgError``."""
+        (:func:`phasemap.motion.hybrid.flow.project`); ``numpy.linalg.LinAlgError`` where
+        it has no finite result or the gaps cannot close with the fixed coordinates."""
         closed = list(closed)
         if not closed:
             return q, u
@@ -393,8 +393,9 @@ class Motion:
                                               np.asarray(u, dtype=float)]),
                               t, flags[0], flags[1], flags[2], still)
         if y is None:
-            raise np.linalg.LinAlgError(f"{self.mech.name}: the projection onto the "
-                                        "closed contacts has no finite solution")
+            raise np.linalg.LinAlgError(f"{self.mech.name}: the state cannot be projected "
+                                        "onto its closed contacts (a singular system, or "
+                                        "values that are not finite)")
         return y[:self.n], y[self.n:]
 
     # -- the events of a phase ----------------------------------------------------------

@@ -1437,7 +1437,7 @@ def project_sizes(n, k):
 
 
 @njit(cache=True, error_model="numpy")
-def _constrained(Z, Iz, n, m, mm, uo, out):
+def _constrained(Z, Iz, n, m, mm, uo, out, full_rank):
     """``Z[out:out + n] <- u - M^-1 R^T lam`` (``u`` at ``Z[uo:]``) with
     ``(R M^-1 R^T) lam = R u - target``: the smallest change of ``u`` in the mass metric
     that puts ``R u`` on the target.  The layout is :func:`project_sizes`' for ``mm``
@@ -1445,7 +1445,9 @@ def _constrained(Z, Iz, n, m, mm, uo, out):
     at ``Z[n * n:]``, the targets after the reduced matrix.  The reduced matrix is factored
     by Cholesky with diagonal pivoting; a constraint whose pivot falls below 1e-13 of the
     largest diagonal (redundant, on a consistent target) is left out, as a least-squares
-    solve leaves it.  False where the result is not finite."""
+    solve leaves it, unless ``full_rank`` is asked for.  False where the reduced matrix or
+    the result is not finite (a singular mass matrix, non-finite pieces) or, with
+    ``full_rank``, a constraint is redundant."""
     oR = n * n
     oX = oR + mm * n                # M^-1 R^T, a row per constraint
     oS = oX + mm * n
@@ -1466,6 +1468,8 @@ def _constrained(Z, Iz, n, m, mm, uo, out):
             v = 0.0
             for i in range(n):
                 v += Z[oR + r * n + i] * Z[oX + j * n + i]
+            if not np.isfinite(v):
+                return False
             Z[oS + r * mm + j] = v
         big = max(big, Z[oS + r * mm + r])
         Iz[op + r] = r
@@ -1477,6 +1481,8 @@ def _constrained(Z, Iz, n, m, mm, uo, out):
             if d > dp:
                 p, dp = i, d
         if not dp > 1e-13 * big:
+            if full_rank:
+                return False
             break
         Iz[op + j], Iz[op + p] = Iz[op + p], Iz[op + j]
         a = Iz[op + j]
@@ -1522,7 +1528,11 @@ def project(PC, SF, p, lay, rolls, y, t, closed, moving, held, fixed, W, Z, Iz, 
     kinetic-energy norm (:meth:`phasemap.motion.hybrid.Motion.project`).  With no contact
     closed the positions are left as they are; with none moving or held, the velocities.  The
     pieces are evaluated into ``W``; ``Z``, ``Iz``: :func:`project_sizes`' scratch.
-    Returns ``OK``, or ``SINGULAR`` where a solve has no finite result."""
+    Returns ``OK``, or ``SINGULAR`` where a solve has no finite result (a singular mass
+    matrix, non-finite pieces or state) or the gaps cannot close (a Newton step's rows
+    dependent: a fixed coordinate that moves a closed gap alone), as NumPy's ``solve``
+    refused the step before.  The velocities are a least-squares projection: redundant
+    rows are left out."""
     n, k = lay[0], lay[1]
     nf = n * n + n + k + 3 * k * n + 3 * k + k
     og, oJ = n * n + n, n * n + n + k
@@ -1534,6 +1544,8 @@ def project(PC, SF, p, lay, rolls, y, t, closed, moving, held, fixed, W, Z, Iz, 
     oq = oo + n
     for i in range(2 * n):
         out[i] = y[i]
+        if not np.isfinite(y[i]):
+            return SINGULAR
     any_closed = False
     for c in range(k):
         any_closed = any_closed or closed[c]
@@ -1543,10 +1555,11 @@ def project(PC, SF, p, lay, rolls, y, t, closed, moving, held, fixed, W, Z, Iz, 
         _at(PC, W[:nf], out, p, t)
         worst, qmax = 0.0, 0.0
         for c in range(k):
-            if closed[c]:
-                worst = max(worst, abs(W[og + c]))
+            if closed[c] and not abs(W[og + c]) <= worst:     # (a NaN gap stays NaN)
+                worst = abs(W[og + c])
         for i in range(n):
-            qmax = max(qmax, abs(out[i]))
+            if not abs(out[i]) <= qmax:
+                qmax = abs(out[i])
         if worst <= 4e-16 * (1.0 + qmax):
             break
         # the Newton step X (G X)^-1 g: the constrained change of a zero velocity that
@@ -1569,7 +1582,7 @@ def project(PC, SF, p, lay, rolls, y, t, closed, moving, held, fixed, W, Z, Iz, 
         _lu(Z, 0, Iz, 0, n)
         for i in range(n):
             Z[ou + i] = 0.0
-        if not _constrained(Z, Iz, n, m, mm, ou, oo):
+        if not _constrained(Z, Iz, n, m, mm, ou, oo, True):
             return SINGULAR
         for i in range(n):
             out[i] = Z[oq + i] if fixed[i] else out[i] + Z[oo + i]
@@ -1594,7 +1607,7 @@ def project(PC, SF, p, lay, rolls, y, t, closed, moving, held, fixed, W, Z, Iz, 
     _lu(Z, 0, Iz, 0, n)
     for i in range(n):
         Z[ou + i] = out[n + i]
-    if not _constrained(Z, Iz, n, m, mm, ou, oo):
+    if not _constrained(Z, Iz, n, m, mm, ou, oo, False):
         return SINGULAR
     for i in range(n):
         out[n + i] = Z[oo + i]
