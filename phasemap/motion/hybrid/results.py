@@ -122,11 +122,12 @@ def _geometry(mech, p, ys, modes, ts) -> dict:
     return data
 
 
-def dataset(mech, rec: Record, attrs: dict, prefix=None, p=None):
+def dataset(mech, rec: Record, attrs: dict, prefix=None, p=None, extra=None):
     """The Dataset of a motion in full coordinates (``prefix``: the reduced motion before
     it, as ``(ts, ys, branch, ev_t, ev_kind, ev_y[, impulses, contacts])`` with ``ys`` in
     full coordinates, and its events' impulses ``(P_n, P_t, dKE)`` and contacts where
-    they had any)."""
+    they had any); ``extra``: more variables, ``(dims, values, attrs)`` by name, after
+    the motion's."""
     import xarray as xr
 
     n, k = mech.n, len(mech.contacts)
@@ -202,8 +203,13 @@ def dataset(mech, rec: Record, attrs: dict, prefix=None, p=None):
                  mech, fate, ev_y[-1] if len(ev_y) else None, p),
              "n_steps": np.int64(rec.n_steps), "phasemap_coordinates": "full",
              "phasemap_integrator_full": "DOP853 (scipy), events rooted on its dense output"}
-    return xr.Dataset(data, coords={"t": ("t", ts, {"long_name": "time", "units": "s"})},
-                      attrs=attrs)
+    data.update(extra or {})
+    # fastpath: every value is a NumPy array or number made here, which xarray takes as it
+    # is (without, it asks each whether it is a pandas, dask or masked array)
+    return xr.Dataset({k: xr.Variable(v[0], np.asarray(v[1]), v[2], fastpath=True)
+                       for k, v in data.items()},
+                      coords={"t": xr.Variable("t", ts, {"long_name": "time", "units": "s"},
+                                               fastpath=True)}, attrs=attrs)
 
 
 def _end_message(mech, fate, y, p) -> str:

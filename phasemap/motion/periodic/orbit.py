@@ -669,7 +669,6 @@ def _orbit_dataset(S, mech, motion, segs, w, t_a, forcing, res, samples, rtol, s
     attrs = full_attrs(S, None, {"t_end": t_a + period, "rtol": rtol}, {}, start)
     attrs.update({"phasemap_kind": "periodic_orbit",
                   "title": f"phasemap periodic orbit: {S.title}"})
-    ds = dataset(mech, rec, attrs, p=motion.p)
     seg_attrs = {"flag_values": np.arange(len(MODE_NAMES), dtype=np.int8),
                  "flag_meanings": " ".join(MODE_NAMES)}
     data = {
@@ -711,7 +710,7 @@ def _orbit_dataset(S, mech, motion, segs, w, t_a, forcing, res, samples, rtol, s
         data[f"segment_mode_{c.name}"] = ("segment", np.array(
             [s.modes[c.index] for s in segs], dtype=np.int8),
             {**seg_attrs, "long_name": f"mode of contact {c.name} in the segment"})
-    ds = ds.assign(data)
+    ds = dataset(mech, rec, attrs, p=motion.p, extra=data)
     ds.attrs.update({f"phasemap_parameter_{nm}": float(v)
                      for nm, v in zip(mech.parameters, motion.p)})
     ds.attrs.update({"phasemap_trivial_multiplier": np.int64(trivial),
