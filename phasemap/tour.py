@@ -181,18 +181,23 @@ def _in_parallel(folder: pathlib.Path, names: list[str], argv: list[str], jobs: 
     return compiled
 
 
+@contextlib.contextmanager
 def _compiling_first():
     """The studies compile before they answer (``PHASEMAP_JIT=eager``) unless the user chose
     otherwise: a study makes many calls of each kernel, and the interpreter tier's first
     answers (:mod:`phasemap.core.tiers`) would cost it the twins' arithmetic and background
     compiles that compete with the other studies for the cores: from empty caches the tour
     took 390 s of the machine's CPU time with them, 311 s compiling first (BENCHMARKS.md,
-    the tour)."""
-    from phasemap.core import tiers
-
+    the tour).  Set in the environment for the study's time, so that the threads it
+    starts see it too (:func:`phasemap.core.tiers.forced` holds in its own thread only)."""
     if os.environ.get("PHASEMAP_JIT"):
-        return contextlib.nullcontext()
-    return tiers.forced("eager")
+        yield
+        return
+    os.environ["PHASEMAP_JIT"] = "eager"
+    try:
+        yield
+    finally:
+        os.environ.pop("PHASEMAP_JIT", None)
 
 
 def run_study(folder: str, name: str, argv: list[str]
@@ -206,9 +211,8 @@ def run_study(folder: str, name: str, argv: list[str]
 
     t0, c0 = time.perf_counter(), compiletime.seconds()
     out = io.StringIO()
-    # (this worker process's own setting: the threads a study starts see it too)
-    os.environ.setdefault("PHASEMAP_JIT", "eager")
-    with progress.enable(False), ended_by_signal(), contextlib.redirect_stdout(out):
+    with progress.enable(False), ended_by_signal(), contextlib.redirect_stdout(out), \
+            _compiling_first():
         claims = load(pathlib.Path(folder) / f"{name}.py").main(argv)
     return (out.getvalue(), Counter(c.verdict for c in claims), time.perf_counter() - t0,
             compiletime.seconds() - c0, time.time())

@@ -224,7 +224,7 @@ def _applicable(sl: Slice) -> tuple[np.ndarray, np.ndarray]:
     v = sl.base.copy()
     m = sl.model
     T.runs(sl.twins)["applicable"](sl.fns, v, np.empty((len(m.candidates), m.n_fields)),
-                              *sl.slots, sl.geo, _applicable_args(sl), active)
+                                   *sl.slots, sl.geo, _applicable_args(sl), active)
     return active, v
 
 
@@ -428,8 +428,8 @@ def _check_raster(sl: Slice, layer: str, axes: dict) -> np.ndarray:
     a trace computes it inside its one call)."""
     at, x, xslot, xderiv, y, yderiv = _raster_args(sl, layer, axes)
     flags = np.empty((1, len(x) * len(y)), dtype=np.int8)
-    T.runs(sl.twins)["raster"](at, sl.base.copy(), sl.slots[0], x, xslot, xderiv, y, yderiv, flags,
-                          np.empty((0, flags.shape[1])))
+    T.runs(sl.twins)["raster"](at, sl.base.copy(), sl.slots[0], x, xslot, xderiv, y, yderiv,
+                               flags, np.empty((0, flags.shape[1])))
     return flags.reshape(len(x), len(y))
 
 

@@ -287,21 +287,25 @@ def motion_end(model, t_end: float, **kwargs) -> MotionEnd:
     wherever ``simulate`` answers (tests/test_fate_through.py); the Dataset's own columns
     (the outlines, the saved states in full coordinates) and its memory warnings are not
     made."""
-    opts = {**_SIMULATE_DEFAULTS, **{k: kwargs.pop(k) for k in list(kwargs)
-                                     if k in _SIMULATE_DEFAULTS}}
-    return _run(model, t_end, *opts.values(), kwargs, summary=True)
+    settings = {**_SIMULATE_DEFAULTS, **{k: kwargs.pop(k) for k in list(kwargs)
+                                         if k in _SIMULATE_DEFAULTS}}
+    return _run(model, t_end, **settings, values=kwargs, summary=True)
 
 
 def end_of(ds, names) -> MotionEnd:
     """:class:`MotionEnd` of a motion's Dataset (``names``: the state variables)."""
-    return MotionEnd(int(ev.Event[ds.attrs["end_reason"].upper()]),
-                     int(np.count_nonzero(ds.event_kind.values == ev.REVERSAL)),
-                     float(ds.event_t.values[-1]),
-                     {n: float(ds[f"event_{n}"].values[-1]) for n in names})
+    return _ended(int(ev.Event[ds.attrs["end_reason"].upper()]), ds.event_kind.values,
+                  ds.event_t.values, [ds[f"event_{n}"].values[-1] for n in names], names)
 
 
-#: :func:`simulate`'s settings and their defaults, in its order (what :func:`motion_end`
-#: takes by name)
+def _ended(fate, kinds, times, last, names) -> MotionEnd:
+    """:class:`MotionEnd` of a motion's events table (their kinds and times) and the state
+    ``last`` at its last event (the values of ``names``)."""
+    return MotionEnd(int(fate), int(np.count_nonzero(np.asarray(kinds) == ev.REVERSAL)),
+                     float(times[-1]), dict(zip(names, (float(x) for x in last))))
+
+
+#: :func:`simulate`'s settings and their defaults (what :func:`motion_end` takes by name)
 _SIMULATE_DEFAULTS = {k: prm.default for k, prm in
                       inspect.signature(simulate).parameters.items()
                       if prm.kind is prm.KEYWORD_ONLY}
@@ -383,8 +387,7 @@ def _run(model, t_end, rtol, atol, max_step, t_eval, max_steps, max_events, meth
             return ds
     if summary:
         ts, ys, ms, ev_t, ev_kind, ev_y, ev_mode = _columns(points, events, y_eval, None)
-        return MotionEnd(int(fate), int(np.count_nonzero(ev_kind == ev.REVERSAL)),
-                         float(ev_t[-1]), dict(zip(names, (float(x) for x in ev_y[-1]))))
+        return _ended(fate, ev_kind, ev_t, ev_y[-1], names)
     ds = _dataset(m, full, positions, opts, names, int(fate), int(n_rev), int(n_steps),
                   *_columns(points, events, y_eval, te if t_eval is not None else None))
     if impacts:
@@ -491,12 +494,8 @@ def _continued(S, m: Model, opts: Options, contact: dict, names, full, positions
                           **settings, **contact)
     kinds = np.asarray(ev_kind[:-1])
     if summary:     # (the Dataset's events: the reduced motion's but its last, then rec's)
-        last = rec.ev_y[-1] if rec.ev_t else pey[-1]
-        return MotionEnd(int(rec.fate), int(np.count_nonzero(kinds == ev.REVERSAL))
-                         + sum(k == ev.REVERSAL for k in rec.ev_kind),
-                         float(rec.ev_t[-1] if rec.ev_t else ev_t[-2]),
-                         dict(zip([*mech.coordinates, *mech.rates],
-                                  (float(x) for x in last))))
+        return _ended(rec.fate, [*kinds, *rec.ev_kind], [*ev_t[:-1], *rec.ev_t],
+                      rec.ev_y[-1] if rec.ev_t else pey[-1], [*mech.coordinates, *mech.rates])
     py = np.array([full_of(y) for y in ys]).reshape(-1, 2 * mech.n)
     imp = np.full((kinds.size, 3), np.nan)
     imp[kinds == ev.IWC] = [i[1:] for i in impacts] if len(impacts) else np.empty((0, 3))
