@@ -150,9 +150,13 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=7)
     args = ap.parse_args()
     lines = ["## Motion through contact changes (`benchmarks/contacts.py`)", "",
-             f"Machine: {_report.machine()}; load {_report.load()}. CPU time "
-             "(`time.process_time`), medians of "
-             f"{args.repeat} runs, compilation excluded.", "",
+             f"Machine: {_report.machine()}; load {_report.load()}.  ",
+             f"Command: `python benchmarks/contacts.py --repeat {args.repeat}`", "",
+             "CPU time (`time.process_time`) of one thread (a motion is serial), medians "
+             f"of {args.repeat} runs, compilation excluded. The contact step is timed at "
+             "the public call (`simulate`); the flight step at the motion in full "
+             "coordinates that `simulate` runs after the release (`hybrid.run_full`, "
+             "without the Dataset).", "",
              "### What a flight step costs", ""]
     lines += per_step(args.repeat)
     lines += ["", "### The ladder's release and landing, error against CPU time "

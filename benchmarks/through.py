@@ -81,8 +81,9 @@ def main():
         f"{args.side} x {args.side} grid, warm caches, without and with "
         "`options={\"through_contacts\": True}`, alternating, medians of "
         f"{args.repeat}. *followed*: the cells whose reduced motion ends where a contact "
-        "changes (contact_lost, no_solution, indeterminate, singular), each run again by "
-        "`simulate` and followed in full coordinates. CPU is the process's, "
+        "changes (contact_lost, no_solution, indeterminate, singular), each run again "
+        "as `simulate` runs it (`motion_end`: its end without the Dataset) and followed "
+        "in full coordinates. CPU is the process's, "
         f"over numba's {numba.get_num_threads()} threads for the compiled cells; the "
         "followed cells run one at a time in the calling thread, so *per followed cell*, "
         "the extra CPU time over the cells followed, is one thread's.",
