@@ -378,6 +378,75 @@ def test_the_twin_computes_a_transition_matrix_and_reactions_as_the_machine_code
         assert np.array_equal(a, b)
 
 
+@pytest.mark.parametrize("name", ["belt", "den_hartog", "rod"])
+def test_a_segments_kept_steps_give_its_samples_bits(name):
+    """A segment integrated once with every step's dense output kept (what an orbit's
+    checks share, ``Phase.steps``): its end and its states at any times are the bits of
+    the segment stepped again for each of them (``Phase.segment``), the interpreted twin's
+    the machine code's, and a segment too long for the first arrays grows them."""
+    from types import SimpleNamespace
+
+    from phasemap.motion.periodic import segments
+
+    m, X, modes = _segment_case(name)
+    n2 = 2 * m.n
+    z, t, tau = X[:n2], X[n2], 2.0
+    atol = 1e-10 * (1.0 + np.abs(z).max())
+    times = np.sort(np.concatenate([np.linspace(t, t + tau, 11),
+                                    np.random.default_rng(3).uniform(t, t + tau, 20)]))
+    kept = m.flow.steps(z, t, tau, modes, None, 1e-10, atol)
+    end, states = m.flow.segment(z, t, tau, modes, None, 1e-10, atol, times=times)
+    assert np.array_equal(kept.end, end)
+    assert np.array_equal(kept.at(times), states)
+    assert np.array_equal(kept.at(times[::-1]), states[::-1])     # in any order
+    assert kept.count > 1                           # (the times fall in several steps)
+    for s in (t, t + 0.37 * tau, t + tau):          # one at a time, as a search asks
+        assert np.array_equal(kept.at(s)[0], segments.at(
+            m, z, t, tau, SimpleNamespace(modes=modes, rho=np.ones(m.k)), 1e-10, s))
+    with tiers.forced("off"):
+        twin = _motion(SYSTEMS[name])
+        assert twin.flow.twin
+        got = twin.flow.steps(z, t, tau, modes, None, 1e-10, atol)
+    assert np.array_equal(got.end, end) and np.array_equal(got.at(times), states)
+    if name != "rod":       # (an oscillator's long segment: more steps than 64)
+        long = m.flow.steps(z, t, 60.0, modes, None, 1e-14, 1e-14)
+        assert long.count > 64
+        assert np.array_equal(long.end, m.flow.segment(z, t, 60.0, modes, None, 1e-14, 1e-14))
+    assert m.flow.steps(z, t, 0.0, modes, None, 1e-10, atol).at([t])[0].tolist() == z.tolist()
+
+
+@pytest.mark.parametrize("name", ["belt", "den_hartog", "stribeck_belt", "rod"])
+def test_directions_carried_alone_are_the_transition_matrix_applied_to_them(name):
+    """The variational equations of a few directions alone (each ``A d`` by central
+    differences along ``d``: what the Floquet multipliers carry) against the whole
+    transition matrix applied to them, and the batch of event functions against each
+    state's."""
+    from phasemap.motion.periodic import floquet
+
+    m, X, modes = _segment_case(name)
+    n2 = 2 * m.n
+    tau = 2.0
+    atol = 1e-11 * (1.0 + np.abs(X).max())
+    Phi = m.flow.transition(X, tau, modes, None, 1e-11, atol, floquet.STEP)
+    D = np.random.default_rng(5).normal(size=(n2 + 1, 3))
+    D[n2] = 0.0                     # (the time's component: none, as the orbits' are)
+    D[:, 2] = 0.0                   # (a zero direction stays zero)
+    got = m.flow.transition(X, tau, modes, None, 1e-11, atol, floquet.DIRECTIONAL_STEP,
+                            directions=D)
+    want = Phi @ D
+    assert got.shape == (n2 + 1, 3)
+    assert np.abs(got - want).max() <= 1e-7 * np.abs(want).max()
+    assert np.array_equal(got[n2], np.zeros(3)) and not got[:, 2].any()
+    # the phase's event functions at states along it, in one call and one at a time
+    ts = X[n2] + np.linspace(0.0, tau, 9)
+    ys = m.flow.segment(X[:n2], X[n2], tau, modes, None, 1e-10, atol, times=ts)[1]
+    sc = m.scales_at(X[:m.n], X[m.n:n2], X[n2])
+    many = m.watch_many(ts, ys, modes, None, sc)
+    for i in range(ts.size):
+        assert np.array_equal(many[i], m.watch(ys[i, :m.n], ys[i, m.n:], modes, None, sc,
+                                               ts[i]))
+
+
 def test_the_flows_dop853_tables_are_scipys_and_importing_phasemap_leaves_scipy_integrate():
     """The compiled flow's DOP853 tables are scipy's own, bit for bit, read from their file
     without importing scipy.integrate: a process that imports phasemap (to classify, to

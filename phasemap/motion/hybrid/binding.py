@@ -11,11 +11,12 @@ import numpy as np
 from numba import njit
 
 from phasemap.core import tiers
-from phasemap.motion.hybrid.flow import (FINISHED, FUNCTION, OK, _dip_rates, _rhs, _rows,
+from phasemap.motion.hybrid.flow import (FINISHED, FULL, FUNCTION, OK, _dip_rates, _rhs, _rows,
                                          accel, admits, advance, dense_at, groups, jacobian,
                                          locate, project, project_sizes, reactions, scales,
-                                         scales_at, survey, survey_cells, survey_range,
-                                         transition, watch, workspace)
+                                         scales_at, steps_of, dense_many, survey,
+                                         survey_cells, survey_range, transition, watch,
+                                         watch_many, workspace)
 
 _LOCK = threading.Lock()
 _FUNCTIONS: dict = {}
@@ -106,18 +107,20 @@ class Phase:
             m = 2 * self.n + 1
             probe = (*fns[:3], self.p, self.lay, self.rolls, np.zeros(self.k, dtype=np.int64),
                      np.ones(self.k), self.none, self.W, self.I, self.ud, self.N, self.F,
-                     self.a, np.zeros(m), 0.0, 1e-8, 1e-8, 1e-6, 1, np.zeros((m, m)))
+                     self.a, np.zeros(m), 0.0, 1e-8, 1e-8, 1e-6, 1, np.zeros((m, m)),
+                     np.eye(m), False)
             twin = tiers.is_twin(tiers.runner(transition, probe, self.warm))
         kernels = (accel, watch, advance, _rhs, _dip_rates, locate, dense_at, jacobian,
                    transition, reactions, survey, admits, scales, groups, survey_range,
-                   project, scales_at)
+                   project, scales_at, steps_of, dense_many, watch_many)
         if twin:
             fns = functions(self.mech, True)
             kernels = tuple(interpreted(k) for k in kernels)
         (self.accel, self.watch_fn, self.advance_fn, self.rhs_fn, self.rates_fn,
          self.locate_fn, self.dense_fn, self.jacobian_fn, self.transition_fn,
          self.reactions_fn, self.survey_fn, self.admits, self.scales_fn,
-         self.groups, self.range_fn, self.project_fn, self.scales_at_fn) = kernels
+         self.groups, self.range_fn, self.project_fn, self.scales_at_fn, self.steps_fn,
+         self.dense_many_fn, self.watch_many_fn) = kernels
         self.twin, self.fns = twin, fns
 
     def refresh(self):
@@ -281,6 +284,40 @@ class Phase:
             return y
         return (y, out_y[:saved].copy()) if saved == te.size else None
 
+    def steps(self, z, t, tau, modes, rho, rtol, atol):
+        """:meth:`segment`'s steps with their dense output kept (:func:`steps_of`): a
+        :class:`Steps`, whose states anywhere in ``[t, t + tau]`` are the bits
+        :meth:`segment` gives at those times; None where :meth:`segment` gives None."""
+        self.refresh()
+        n2 = 2 * self.n
+        y = np.array(z, dtype=float)
+        if tau == 0.0:
+            return Steps(self, np.empty(0), np.empty(0), np.empty((0, n2)),
+                         np.empty((0, 7, n2)), 0, y)
+        modes_a, rho_a = self._phase(modes, rho)
+        f = np.empty(n2)
+        if self.rate(y, t, modes_a, rho_a, f) != OK:
+            return None
+        PC, SF, KN, DM = self.fns
+        most = 64
+        while True:
+            T, TE = np.empty(most), np.empty(most)
+            Y0, FD = np.empty((most, n2)), np.empty((most, 7, n2))
+            yy, ff = y.copy(), f.copy()
+            status, count = self.steps_fn(
+                PC, SF, KN, DM, self.p, self.lay, self.one_sided, self.rolls, modes_a, rho_a,
+                self.bounds, self.none, float(t), yy, ff, float(t + tau),
+                max(float(rtol), 100 * np.finfo(float).eps), float(atol), self.W, self.I,
+                self.ud, self.N, self.F, self.a, T, TE, Y0, FD)
+            if status != FULL:
+                break
+            if most >= 1 << 20:
+                return None
+            most *= 4
+        if status != FINISHED:
+            return None
+        return Steps(self, T, TE, Y0, FD, count, yy)
+
     def jacobian(self, X, modes, rho, step):
         """``dF/dX`` of the phase at ``X = (q, u, t)`` by :func:`jacobian`, or None where a
         solve on the way is not the plain one (redundant contacts, no finite solution)."""
@@ -295,20 +332,27 @@ class Phase:
                               np.empty(m), np.empty(m), np.empty(self.n))
         return A if st == OK else None
 
-    def transition(self, X0, tau, modes, rho, rtol, atol, step, max_steps=100_000):
+    def transition(self, X0, tau, modes, rho, rtol, atol, step, max_steps=100_000,
+                   directions=None):
         """The transition matrix of the phase over ``tau`` from ``X0 = (q, u, t)`` by
         :func:`transition` (the variational equations, the Jacobian by central differences
-        of relative step ``step``), or None where the kernel cannot (redundant contacts, no
-        finite solution, a step below scipy's smallest, ``max_steps``)."""
+        of relative step ``step``), or, given ``directions`` (m x c), the matrix applied to
+        them (the variational equations of those directions alone, each ``A d`` by
+        central differences along ``d``: two solves a direction, not two a coordinate);
+        None where the kernel cannot (redundant contacts, no finite solution, a step below
+        scipy's smallest, ``max_steps``)."""
         self.refresh()
         PC, SF, KN, _ = self.fns
         m = 2 * self.n + 1
-        Phi = np.empty((m, m))
+        P0 = (np.eye(m) if directions is None else
+              np.ascontiguousarray(directions, dtype=float))
+        Phi = np.empty((m, P0.shape[1]))
         st = self.transition_fn(PC, SF, KN, self.p, self.lay, self.rolls,
                                 *self._phase(modes, rho), self.none, self.W, self.I,
                                 self.ud, self.N, self.F, self.a,
                                 np.ascontiguousarray(X0, dtype=float), float(tau), float(rtol),
-                                float(atol), float(step), int(max_steps), Phi)
+                                float(atol), float(step), int(max_steps), Phi, P0,
+                                directions is not None)
         return Phi if st == OK else None
 
     def reactions(self, ts, ys, modes):
@@ -349,3 +393,29 @@ class Phase:
                              self.rolls, modes, rho, self.none, float(jam), self.bounds,
                              self.W, self.I, self.ud, self.N, self.F, self.a, out)
 
+    def watch_many(self, ys, ts, modes, rho, jam, out):
+        """:func:`watch_many` into ``out`` (a row per state); the statuses."""
+        PC, SF, KN, DM = self.fns
+        status = np.empty(len(ts), dtype=np.int64)
+        self.watch_many_fn(PC, SF, KN, DM, ys, ts, self.p, self.lay, self.one_sided,
+                           self.rolls, modes, rho, self.none, float(jam), self.bounds,
+                           self.W, self.I, self.ud, self.N, self.F, self.a, out, status)
+        return status
+
+
+class Steps:
+    """A segment's steps with their dense output (:meth:`Phase.steps`): ``end``, the state
+    after the last, and :meth:`at`, the states at given times."""
+
+    def __init__(self, phase, T, TE, Y0, FD, count, end):
+        self.phase, self.T, self.TE, self.Y0, self.FD = phase, T, TE, Y0, FD
+        self.count, self.end = int(count), end
+
+    def at(self, times):
+        """The states at ``times`` (in the segment), a row each: on the dense output of the
+        step that :meth:`Phase.segment` saves each of them from."""
+        times = np.ascontiguousarray(np.atleast_1d(times), dtype=float)
+        out = np.empty((times.size, self.end.size))
+        self.phase.dense_many_fn(self.T, self.TE, self.Y0, self.FD, self.count, self.end,
+                                 times, out)
+        return out

@@ -439,6 +439,20 @@ class Motion:
             out[i + 2 * self.n:-1] = self.mech.domain(*q, *self.p)
         return out
 
+    def watch_many(self, ts, ys, modes, rho, sc, jam=0.0):
+        """:meth:`watch` at each state ``(ts[i], ys[i])`` (rows of ``q`` then ``u``), a row
+        each: in one compiled call, and in Python where the phase's solve is not the plain
+        one."""
+        ts = np.ascontiguousarray(ts, dtype=float)
+        ys = np.ascontiguousarray(ys, dtype=float)
+        out = np.ones((ts.size, self.k * 2 + 2 * self.n + self.mech.n_domain + 1))
+        status = self.flow.watch_many(ys, ts, np.asarray(modes, dtype=np.int64),
+                                      np.ones(self.k) if rho is None else
+                                      np.asarray(rho, dtype=float), jam, out)
+        for i in np.flatnonzero(status != flow.OK):
+            out[i] = self.watch(ys[i, :self.n], ys[i, self.n:], modes, rho, sc, ts[i], jam)
+        return out
+
     def gap_rate(self, q, u, c, t=0.0):
         """``g'`` of contact ``c``."""
         M, h, g, J, b, mu = self.mech.pieces(q, u, self.p, t)

@@ -770,6 +770,16 @@ def watch(PC, SF, KN, DM, y, t, p, lay, one_sided, rolls, modes, rho, none, jam,
 
 
 @njit(cache=True, error_model="numpy")
+def watch_many(PC, SF, KN, DM, ys, ts, p, lay, one_sided, rolls, modes, rho, none, jam,
+               bounds, W, I, ud, N, F, a, out, status):
+    """:func:`watch` at each state ``(ts[i], ys[i])`` into ``out[i]``, its status into
+    ``status[i]``: a phase's conditions along a sampled segment in one call."""
+    for i in range(ts.size):
+        status[i] = watch(PC, SF, KN, DM, ys[i], ts[i], p, lay, one_sided, rolls, modes, rho,
+                          none, jam, bounds, W, I, ud, N, F, a, out[i])
+
+
+@njit(cache=True, error_model="numpy")
 def _rhs(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, t, y, out):
     """``out`` <- ``y'`` of the phase; the status of :func:`accel`."""
     n = lay[0]
@@ -1093,6 +1103,71 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
 
 
 @njit(cache=True, error_model="numpy")
+def steps_of(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, bounds, none, t0, y, f,
+             t_stop, rtol, atol, W, I, ud, N, F, a, T, TE, Y0, FD):
+    """A segment of known length as :func:`advance` steps it quietly (the same steps, so
+    the same end in ``y``), with every step's dense output kept: step ``i`` runs from
+    ``T[i]`` to ``TE[i]`` from ``Y0[i]``, its coefficients ``FD[i]`` (:func:`_dense`), so
+    that its states anywhere are what :func:`advance` gives at given times
+    (:func:`dense_many`).  ``(status, steps)``: ``FINISHED``, ``FULL`` where the arrays
+    hold too few steps, or :func:`advance`'s failure."""
+    ny = y.size
+    state = np.array([t0, 0.0, t0, 0.0, 0.0])
+    K = np.zeros((16, ny))
+    Fd = np.zeros((7, ny))
+    y_old = np.empty(ny)
+    yt = np.empty(ny)
+    none_t = np.empty(0)
+    out_t = np.empty(1)
+    out_y = np.empty((1, ny))
+    nw = 2 * lay[1] + 2 * lay[0] + lay[2] + 1
+    w0, w1 = np.zeros(nw), np.zeros(nw)
+    g0, g1 = np.zeros(lay[1]), np.zeros(lay[1])
+    count = 0
+    while True:
+        if count >= T.size:
+            return FULL, count
+        st, _, taken = advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, 0.0,
+                               bounds, none, state, y, f, y_old, w0, w1, g0, g1, K, Fd,
+                               none_t, t_stop, rtol, atol, np.inf, 1, out_t, out_y, W, I,
+                               ud, N, F, a, yt, True)
+        if st != FINISHED and st != MAX_STEPS:
+            return st, count
+        if taken == 1:      # the step just taken: its dense output, as advance makes it
+            s2 = _dense(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K,
+                        state[2], y_old, y, f, state[3], yt, FD[count])
+            if s2 != OK:
+                return s2, count
+            T[count], TE[count] = state[2], state[0]
+            for i in range(ny):
+                Y0[count, i] = y_old[i]
+            count += 1
+        if st == FINISHED:
+            return FINISHED, count
+
+
+@njit(cache=True, error_model="numpy")
+def dense_many(T, TE, Y0, FD, count, y_end, times, out):
+    """``out[i]`` <- the state at ``times[i]`` on the steps of :func:`steps_of`, each time
+    on the first step that ends at it or after (where :func:`advance` saves it), the end
+    state beyond the last step (a segment of no steps)."""
+    for i in range(times.size):
+        s = times[i]
+        lo, hi = 0, count
+        while lo < hi:          # the first step whose end is not before s
+            mid = (lo + hi) // 2
+            if TE[mid] < s:
+                lo = mid + 1
+            else:
+                hi = mid
+        if lo >= count:
+            for j in range(y_end.size):
+                out[i, j] = y_end[j]
+        else:
+            dense_at(FD[lo], T[lo], TE[lo] - T[lo], Y0[lo], s, out[i])
+
+
+@njit(cache=True, error_model="numpy")
 def _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, bounds,
                  W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, kind, idx, t):
     """At ``t`` in the step (its dense output): the event function ``idx`` (``kind`` 0; its
@@ -1290,11 +1365,13 @@ def jacobian(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, X, 
 
 @njit(cache=True, error_model="numpy")
 def _variational_rate(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, s, Y,
-                      step, A, xp, xm, up, X, out):
+                      step, A, xp, xm, up, X, out, nc, directional):
     """``out`` <- the rate of the variational system at ``(s, Y)``, ``Y = (X, P)`` with
-    ``P`` the m x m transition matrix row by row and ``X``'s time taken as ``s``:
-    ``(F(X), A(X) P)``, ``F`` the phase's field and ``A`` its :func:`jacobian`; the
-    status of :func:`accel`."""
+    ``P`` the m x ``nc`` matrix of directions row by row and ``X``'s time taken as ``s``:
+    ``(F(X), A(X) P)``, ``F`` the phase's field and ``A`` its :func:`jacobian`, or, with
+    ``directional``, each column ``A d`` by central differences of the accelerations along
+    ``d`` itself (two solves a column, not two a coordinate); the status of
+    :func:`accel`."""
     n = lay[0]
     m = 2 * n + 1
     for i in range(m):
@@ -1308,31 +1385,72 @@ def _variational_rate(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, 
         out[i] = X[n + i]
         out[n + i] = ud[i]
     out[2 * n] = 1.0
+    if directional:
+        for c in range(nc):
+            for i in range(n):          # the positions' rates: the velocities' directions
+                out[m + i * nc + c] = Y[m + (n + i) * nc + c]
+            out[m + 2 * n * nc + c] = 0.0
+            # the longest step along d that moves no coordinate further than
+            # :func:`jacobian`'s own step for it, step (1 + |X_i|)
+            delta = np.inf
+            big, at = 0.0, -1
+            for i in range(m):
+                d = abs(Y[m + i * nc + c])
+                if d > 0.0:
+                    delta = min(delta, step * (1.0 + abs(X[i])) / d)
+                if d > big:
+                    big, at = d, i
+            if at < 0:
+                for i in range(n):
+                    out[m + (n + i) * nc + c] = 0.0
+                continue
+            for i in range(m):
+                xp[i] = X[i] + delta * Y[m + i * nc + c]
+                xm[i] = X[i] - delta * Y[m + i * nc + c]
+            # the step as taken in floating point, read off d's largest component (exact
+            # where d is a coordinate's direction, as :func:`jacobian`'s steps are)
+            width = (xp[at] - xm[at]) / Y[m + at * nc + c]
+            st, det = accel(PC, SF, KN, xp[:2 * n], xp[2 * n], p, lay, rolls, modes, rho,
+                            none, False, W, I, ud, N, F, a)
+            if st != OK:
+                return st
+            for i in range(n):
+                up[i] = ud[i]
+            st, det = accel(PC, SF, KN, xm[:2 * n], xm[2 * n], p, lay, rolls, modes, rho,
+                            none, False, W, I, ud, N, F, a)
+            if st != OK:
+                return st
+            for i in range(n):
+                out[m + (n + i) * nc + c] = (up[i] - ud[i]) / width
+        return OK
     st = jacobian(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, X, step, A,
                   xp, xm, up)
     if st != OK:
         return st
     for r in range(m):
-        for c in range(m):
+        for c in range(nc):
             v = 0.0
             for j in range(m):
-                v += A[r, j] * Y[m + j * m + c]
-            out[m + r * m + c] = v
+                v += A[r, j] * Y[m + j * nc + c]
+            out[m + r * nc + c] = v
     return OK
 
 
 @njit(cache=True, error_model="numpy")
 def transition(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, X0, tau, rtol,
-               atol, step, max_steps, Phi):
-    """``Phi`` <- the transition matrix of the phase over ``tau`` from ``X0 = (q, u, t)``:
-    the variational equations ``X' = F(X)``, ``P' = A(X) P`` from ``P = 1``
-    (:func:`_variational_rate`), stepped by scipy's DOP853 with its step-size control over
-    the whole system (``rtol``, scalar ``atol``), as ``solve_ivp`` stepped them
+               atol, step, max_steps, Phi, P0, directional):
+    """``Phi`` <- the transition matrix of the phase over ``tau`` from ``X0 = (q, u, t)``
+    applied to the directions ``P0`` (m x c; the identity: the matrix itself):
+    the variational equations ``X' = F(X)``, ``P' = A(X) P`` from ``P = P0``
+    (:func:`_variational_rate`; ``directional``: ``A P`` by differences along the
+    columns), stepped by scipy's DOP853 with its step-size control over the whole system
+    (``rtol``, scalar ``atol``), as ``solve_ivp`` stepped them
     (:func:`phasemap.motion.periodic.segments.transition`).  The status of :func:`accel`,
     or ``FAILED`` (a step below scipy's smallest), or ``MAX_STEPS``."""
     n = lay[0]
     m = 2 * n + 1
-    ny = m + m * m
+    nc = P0.shape[1]
+    ny = m + m * nc
     Y = np.zeros(ny)
     Yn = np.empty(ny)
     f = np.empty(ny)
@@ -1342,11 +1460,12 @@ def transition(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, X
     xp, xm, up, X = np.empty(m), np.empty(m), np.empty(n), np.empty(m)
     for i in range(m):
         Y[i] = X0[i]
-        Y[m + i * m + i] = 1.0
+        for c in range(nc):
+            Y[m + i * nc + c] = P0[i, c]
     t = X0[m - 1]
     t_stop = t + tau
     st = _variational_rate(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, t,
-                           Y, step, A, xp, xm, up, X, f)
+                           Y, step, A, xp, xm, up, X, f, nc, directional)
     if st != OK:
         return st
     interval = abs(t_stop - t)
@@ -1354,7 +1473,8 @@ def transition(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, X
     if interval > 0.0:      # scipy's select_initial_step (order 7)
         h0, d1 = _trial_step(Y, f, rtol, atol, interval, yt, Yn)
         st = _variational_rate(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F,
-                               a, t + h0, Yn, step, A, xp, xm, up, X, K[12])
+                               a, t + h0, Yn, step, A, xp, xm, up, X, K[12], nc,
+                               directional)
         if st != OK:
             return st
         h_abs = _first_step(f, K[12], yt, h0, d1, interval, np.inf)
@@ -1381,7 +1501,7 @@ def transition(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, X
                     yt[i] = Y[i] + v * h
                 st = _variational_rate(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud,
                                        N, F, a, t + _C[s] * h, yt, step, A, xp, xm, up, X,
-                                       K[s])
+                                       K[s], nc, directional)
                 if st != OK:
                     return st
             for i in range(ny):
@@ -1390,7 +1510,8 @@ def transition(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, X
                     v += K[j, i] * _B[j]
                 Yn[i] = Y[i] + h * v
             st = _variational_rate(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N,
-                                   F, a, t + h, Yn, step, A, xp, xm, up, X, K[12])
+                                   F, a, t + h, Yn, step, A, xp, xm, up, X, K[12], nc,
+                                   directional)
             if st != OK:
                 return st
             err = _error(K, Y, Yn, h, rtol, atol)
@@ -1405,8 +1526,8 @@ def transition(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, X
             f[i] = K[12, i]
         t = t_new
     for r in range(m):
-        for c in range(m):
-            Phi[r, c] = Y[m + r * m + c]
+        for c in range(nc):
+            Phi[r, c] = Y[m + r * nc + c]
     return OK
 
 

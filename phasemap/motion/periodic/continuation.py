@@ -12,7 +12,7 @@ from phasemap.core import args as _args
 from phasemap.core import events as ev
 from phasemap.motion.hybrid import MODE_NAMES, Motion, Options
 from phasemap.motion.periodic import orbit as _orbit
-from phasemap.motion.periodic import sliding
+from phasemap.motion.periodic import segments, sliding
 from phasemap.motion.periodic.orbit import Segment
 from phasemap.motion.periodic.sampling import dips, extrema
 
@@ -173,6 +173,7 @@ class _Context:
         self.rtol, self.tol, self.locate, self.t_a = rtol, tol, locate, t_a
         self.lo, self.hi = span
         self.max_points = max_points
+        self._traced = self._motion = None
         self.start(t_a)
 
     def start(self, t_a):
@@ -188,7 +189,12 @@ class _Context:
         return p
 
     def motion(self, lam):
-        return Motion(self.mech, self.params(lam), Options(1.0, rtol=self.rtol))
+        """The motion at ``lam`` that the segments are integrated on (the last one kept:
+        a step asks for it again and again, and a segment changes nothing in it)."""
+        if self._motion is None or self._motion[0] != lam:
+            self._motion = (lam, Motion(self.mech, self.params(lam),
+                                        Options(1.0, rtol=self.rtol)))
+        return self._motion[1]
 
     def forcing(self, lam):
         per = self.mech.period
@@ -202,11 +208,24 @@ class _Context:
                                self.rtol, self.tol, sc, max_iter, self.jac)
         return w, res
 
+    def traced(self, lam, segs, w):
+        """The orbit ``w``'s segments at ``lam``, each integrated once for all of its
+        checks (:class:`~phasemap.motion.periodic.segments.Traced`): the last orbit's
+        kept, for its admissibility and its point ask for the same one."""
+        last = self._traced
+        if not (last is not None and last[0] == lam and last[1] is segs
+                and np.array_equal(last[2], w)):
+            self._traced = last = (lam, segs, w.copy(), segments.Traced(
+                self.motion(lam), segs, w, self.t_a, self.rtol))
+        return last[3]
+
     def point(self, lam, segs, w, res=0.0):
-        motion = self.motion(lam)
+        traced = self.traced(lam, segs, w)
+        motion = traced.motion
+        low, high, strobes = extrema(motion, segs, w, self.t_a, self.rtol, self.forcing(lam),
+                                     traced)
         mult, trivial, stable, _, continuum = _orbit.linearised(
-            motion, segs, w, self.t_a, self.forcing(lam), self.rtol)
-        low, high, strobes = extrema(motion, segs, w, self.t_a, self.rtol, self.forcing(lam))
+            motion, segs, w, self.t_a, self.forcing(lam), self.rtol, traced=traced)
         others = np.delete(mult, trivial) if trivial >= 0 else mult
         n2 = 2 * self.mech.n
         return {"lam": lam, "w": w, "segs": segs, "period": float(np.sum(w[len(segs) * n2:])),
@@ -224,7 +243,8 @@ class _Context:
         K = len(segs)
         if np.any(w[K * n2:] <= 0.0):
             return False
-        if dips(self.motion(lam), segs, w, self.t_a, self.rtol):
+        traced = self.traced(lam, segs, w)
+        if dips(traced.motion, segs, w, self.t_a, self.rtol, traced):
             return False
         return _same(_sequence(self, lam, segs, w), [s.modes for s in segs])
 
@@ -232,7 +252,7 @@ class _Context:
         """The scales of the orbit ``w``'s start (held through one solve)."""
         n = self.mech.n
         z = w[:2 * n]
-        return motion.scales(z[:n], z[n:], self.mech.pieces(z[:n], z[n:], motion.p, self.t_a))
+        return motion.scales_at(z[:n], z[n:], self.t_a)
 
     def residual(self, lam, segs, w, sc):
         """The shooting equations at ``(w, lam)``, with the pieces of their Jacobian."""
@@ -252,7 +272,10 @@ class _Context:
     def correct(self, segs, X_pred, t, D, max_iter=12):
         """Newton's method on the shooting equations and the pseudo-arclength condition
         (the orbit on the hyperplane through ``X_pred`` normal to ``t`` in the metric
-        ``D``): ``(X, residual, iterations)``; ValueError where it does not converge."""
+        ``D``): ``(X, residual, iterations)``; ValueError where it does not converge.  The
+        Jacobian is a chord kept along the branch, updated by Broyden's rule after every
+        step taken (about three steps a point, where the chord alone took four or five)
+        and computed afresh where a step does not contract the residual tenfold."""
         K = len(segs)
         N = X_pred.size - 1
         X = X_pred.copy()
@@ -285,6 +308,10 @@ class _Context:
                 M = None            # the chord went stale: a fresh Jacobian
                 continue
             contraction = res_t / res
+            dx = trial - X          # Broyden's update of the chord along the step taken
+            self.arc_jac = self.arc_jac + np.outer(r_t - r - self.arc_jac @ dx,
+                                                   dx / float(dx @ dx))
+            M = np.vstack([self.arc_jac, t * D])
             X, r, pieces, res = trial, r_t, pieces_t, res_t
             if contraction > 0.1:
                 M, fresh = None, False
@@ -687,7 +714,7 @@ def _from_dataset(mech, orbit, p0, rtol):
     zs = [np.array([float(orbit[f"segment_{nm}"][j]) for nm in names]) for j in range(K)]
     n = mech.n
     t_a = float(orbit.segment_start[0])
-    sc = motion.scales(zs[0][:n], zs[0][n:], mech.pieces(zs[0][:n], zs[0][n:], p0, t_a))
+    sc = motion.scales_at(zs[0][:n], zs[0][n:], t_a)
     segs = []
     for j in range(K):
         modes = tuple(int(orbit[f"segment_mode_{c.name}"][j]) for c in mech.contacts)

@@ -300,7 +300,7 @@ def peaks(mech, p, q, u, spec, t0=0.0, contact=None):
     settle, periods, rtol = spec["settle"], spec["periods"], spec["rtol"]
     normal = np.zeros(2 * n)
     normal[n + mech.coordinates.index(spec["section"])] = -1.0    # the rate turning down
-    sc = Motion(mech, p, Options(1.0, rtol=rtol)).scales(q, u, mech.pieces(q, u, p, 0.0))
+    sc = Motion(mech, p, Options(1.0, rtol=rtol)).scales_at(q, u, 0.0)
     scale_t = math.sqrt(sc[3] / sc[2])
     chunk = CHUNK * scale_t
     out = np.full((periods, 2 * n), np.nan)

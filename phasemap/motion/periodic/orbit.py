@@ -180,7 +180,7 @@ def periodic_orbit(model, start=None, period=None, *, settle=None, rtol=1e-12, t
     q, u, p = start_values(mech, start)
     forcing = None if mech.period is None else float(mech.period(*p))
     motion = Motion(mech, p, Options(1.0, rtol=rtol))
-    sc = motion.scales(q, u, mech.pieces(q, u, p, 0.0))
+    sc = motion.scales_at(q, u, 0.0)
     scale_t = math.sqrt(sc[3] / sc[2])
     if period is not None:
         period = _args.finite("period", period, name, lower=0.0, lower_open=True)
@@ -582,31 +582,41 @@ def _flat(end, scale, sc):
     return np.concatenate([-after / scale, [] if wv is None else [wv / max(sc)]])
 
 
-def linearised(motion, segs, w, t_a, forcing, rtol, samples=0) -> Linearised:
+def linearised(motion, segs, w, t_a, forcing, rtol, samples=0, traced=None) -> Linearised:
     """The Floquet multipliers of the orbit ``w`` from the variational equations and the
     saltation matrices, and, with ``samples``, the orbit sampled into a Record (see
-    :class:`Linearised`)."""
+    :class:`Linearised`).  ``traced``: the orbit's
+    :class:`~phasemap.motion.periodic.segments.Traced`, whose segments' ends (and samples)
+    are read from the integrations it already holds."""
     n2 = 2 * motion.n
     n = motion.n
     K = len(segs)
     zs, taus = _unpack(w, K, n2)
     period = float(np.sum(taus))
-    sc = motion.scales(zs[0][:n], zs[0][n:], motion.mech.pieces(zs[0][:n], zs[0][n:],
-                                                                 motion.p, t_a))
+    sc = motion.scales_at(zs[0][:n], zs[0][n:], t_a)
     rec = Record()
     rec.fate = ev.HORIZON
-    mono = np.eye(n2 + 1)
+    closed0 = [c for c, m in enumerate(segs[0].modes) if m != OPEN]
+    B = fq.tangent_basis(motion, np.concatenate([zs[0], [t_a]]), closed0)
+    # the monodromy applied to the directions along the contacts at the start (the time's
+    # component 0, which neither the segments nor the saltations change): each segment's
+    # variational equations carry those directions alone
+    P = np.vstack([B, np.zeros((1, B.shape[1]))])
     t = t_a
     for j, seg in enumerate(segs):
         if samples:
             m_j = max(2, int(round(samples * taus[j] / period)))
             times = np.linspace(t, t + taus[j], m_j, endpoint=j == K - 1)
-            end, states = segments.samples(motion, zs[j], t, taus[j], seg, rtol, times)
+            end, states = (segments.samples(motion, zs[j], t, taus[j], seg, rtol, times)
+                           if traced is None else traced.samples(j, times))
             rec.points(times, states, seg.modes)
         else:
-            end = segments.end(motion, zs[j], t, taus[j], seg, rtol)
+            end = (segments.end(motion, zs[j], t, taus[j], seg, rtol) if traced is None else
+                   traced.end(j))
         t_end = t + taus[j]
-        Phi = segments.transition(motion, np.concatenate([zs[j], [t]]), taus[j], seg, rtol)
+        if np.all(np.isfinite(P)):      # (NaN after a grazing event: NaN from there on)
+            P = segments.transition(motion, np.concatenate([zs[j], [t]]), taus[j], seg, rtol,
+                                    directions=P)
         Xm = np.concatenate([end, [t_end]])
         nxt = segs[(j + 1) % K]
         if not seg.ended:           # the end of the forcing period: time fixed
@@ -625,11 +635,9 @@ def linearised(motion, segs, w, t_a, forcing, rtol, samples=0) -> Linearised:
                 rec.event(t_end, seg.kind, _contact_of(seg, motion), after, nxt.modes)
         Fm = fq.field(motion, Xm, seg.modes, seg.rho)
         Fp = fq.field(motion, np.concatenate([after, [t_end]]), nxt.modes, nxt.rho)
-        mono = fq.saltation(DJ, Fm, Fp, grad) @ Phi @ mono
+        P = fq.saltation(DJ, Fm, Fp, grad) @ P
         t = t_end
-    closed0 = [c for c, m in enumerate(segs[0].modes) if m != OPEN]
-    B = fq.tangent_basis(motion, np.concatenate([zs[0], [t_a]]), closed0)
-    reduced = B.T @ mono[:n2, :n2] @ B
+    reduced = B.T @ P[:n2]
     lam = np.linalg.eigvals(reduced).astype(complex)
     lam = lam[np.argsort(-np.abs(lam))]
     trivial = -1

@@ -13,17 +13,20 @@ from phasemap.motion.periodic import segments
 SAMPLES = 200
 
 
-def extrema(motion, segs, w, t_a, rtol, forcing=None):
+def extrema(motion, segs, w, t_a, rtol, forcing=None, traced=None):
     """Each coordinate's least and greatest value over the orbit: at the segments' ends,
     or where its rate vanishes inside one (located on the segment's dense output); and,
     for a forced orbit (``forcing`` its period), its states at the forcing's phase 0 in
-    order (what :func:`phasemap.orbit_diagram` samples; an empty array otherwise)."""
+    order (what :func:`phasemap.orbit_diagram` samples; an empty array otherwise).
+    ``traced``: the orbit's :class:`~phasemap.motion.periodic.segments.Traced`, whose
+    segments are integrated once for every sample and search (made here if not given)."""
     from scipy.optimize import brentq
 
     n = motion.n
     n2 = 2 * n
     K = len(segs)
     zs, taus = _orbit._unpack(w, K, n2)
+    traced = traced or segments.Traced(motion, segs, w, t_a, rtol)
     low, high = np.full(n, np.inf), np.full(n, -np.inf)
     t = t_a
     strobes = []
@@ -35,15 +38,14 @@ def extrema(motion, segs, w, t_a, rtol, forcing=None):
         where = np.clip(np.searchsorted(starts, times, side="right") - 1, 0, K - 1)
     for j, seg in enumerate(segs):
 
-        def sol(s, j=j, t=t, seg=seg):
-            return segments.at(motion, zs[j], t, taus[j], seg, rtol, s)
+        def sol(s, j=j):
+            return traced.at(j, s)
         if forcing is not None:
             strobe = np.sort(np.clip(times[where == j], t, t + taus[j]))
             if strobe.size:
-                strobes.extend(segments.samples(motion, zs[j], t, taus[j], seg, rtol,
-                                                strobe)[1])
+                strobes.extend(traced.samples(j, strobe)[1])
         ts = np.linspace(t, t + taus[j], SAMPLES // K + 2)
-        ys = segments.samples(motion, zs[j], t, taus[j], seg, rtol, ts)[1].T
+        ys = traced.samples(j, ts)[1].T
         found = [ys[:n, 0], ys[:n, -1]]
         for i in range(n):
             rate = ys[n + i]
@@ -61,32 +63,36 @@ def extrema(motion, segs, w, t_a, rtol, forcing=None):
 DIP_SAMPLES = 24
 
 
-def dips(motion, segs, w, t_a, rtol) -> bool:
+def dips(motion, segs, w, t_a, rtol, traced=None) -> bool:
     """Whether a condition of a segment's phase (its event functions but the one that
     ends it) goes below zero inside the segment: sampled, and each sampled minimum near
-    zero refined on the dense output (a tangency between samples is found)."""
+    zero refined on the dense output (a tangency between samples is found).  ``traced``:
+    as :func:`extrema`'s."""
     from scipy.optimize import minimize_scalar
 
     n = motion.n
     n2 = 2 * n
     K = len(segs)
     zs, taus = _orbit._unpack(w, K, n2)
+    traced = traced or segments.Traced(motion, segs, w, t_a, rtol)
     t = t_a
     z0 = zs[0]
-    sc = motion.scales(z0[:n], z0[n:], motion.mech.pieces(z0[:n], z0[n:], motion.p, t_a))
+    sc = motion.scales_at(z0[:n], z0[n:], t_a)
     scale = max(sc)
     for j, seg in enumerate(segs):
 
-        def watch(s, y=None, j=j, t=t, seg=seg):
-            y = segments.at(motion, zs[j], t, taus[j], seg, rtol, s) if y is None else y
+        def watch(s, y=None, j=j, seg=seg):
+            y = traced.at(j, s) if y is None else y
             out = motion.watch(y[:n], y[n:], seg.modes, seg.rho, sc, s)[:2 * motion.k]
             if seg.index is not None and seg.index < out.size:
                 out = np.delete(out, seg.index)
             return out
 
         ts = np.linspace(t, t + taus[j], DIP_SAMPLES)[1:-1]
-        ys = segments.samples(motion, zs[j], t, taus[j], seg, rtol, ts)[1]
-        vals = np.array([watch(s, y) for s, y in zip(ts, ys)])
+        ys = traced.samples(j, ts)[1]
+        vals = motion.watch_many(ts, ys, seg.modes, seg.rho, sc)[:, :2 * motion.k]
+        if seg.index is not None and seg.index < vals.shape[1]:
+            vals = np.delete(vals, seg.index, axis=1)
         if vals.size and np.min(vals) < -1e-9 * scale:
             return True
         for i in range(vals.shape[1] if vals.size else 0):

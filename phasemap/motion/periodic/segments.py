@@ -64,23 +64,89 @@ def at(motion, z, t, tau, seg, rtol, s):
     return samples(motion, z, t, tau, seg, rtol, np.array([float(s)]))[1][0]
 
 
+def steps(motion, z, t, tau, seg, rtol):
+    """The segment's steps with their dense output, kept (an object with ``end`` and
+    ``at(times)``, the bits :func:`end` and :func:`samples` give): on the compiled flow
+    (:meth:`phasemap.motion.hybrid.binding.Phase.steps`); on ``solve_ivp`` where the
+    kernel cannot."""
+    scale = 1.0 + float(np.max(np.abs(z)))
+    got = motion.flow.steps(z, t, tau, seg.modes, seg.rho, rtol, rtol * scale)
+    return got if got is not None else _Solved(flow(motion, z, t, tau, seg, rtol, dense=True))
+
+
+class _Solved:
+    """:func:`steps` on ``solve_ivp``'s dense output."""
+
+    def __init__(self, sol):
+        self.sol, self.end = sol, sol.y[:, -1]
+
+    def at(self, times):
+        return np.array([self.sol.sol(s) for s in np.atleast_1d(times)])
+
+
+class Traced:
+    """The segments of the orbit ``w`` (``segs`` from ``t_a``), each integrated once, when
+    first asked for, with its dense output kept (:func:`steps`): what the checks of one
+    orbit share (its ends, its samples, the states a search asks for between them), in
+    the bits :func:`end`, :func:`samples` and :func:`at` give."""
+
+    def __init__(self, motion, segs, w, t_a, rtol):
+        n2 = 2 * motion.n
+        K = len(segs)
+        self.motion, self.segs, self.w, self.rtol = motion, segs, w, rtol
+        self.zs = [w[j * n2:(j + 1) * n2] for j in range(K)]
+        self.taus = w[K * n2:]
+        self.starts, t = [], t_a
+        for tau in self.taus:       # (summed in turn, as the checks step through them)
+            self.starts.append(t)
+            t = t + tau
+        self._steps = [None] * K
+
+    def steps(self, j):
+        if self._steps[j] is None:
+            self._steps[j] = steps(self.motion, self.zs[j], float(self.starts[j]),
+                                   self.taus[j], self.segs[j], self.rtol)
+        return self._steps[j]
+
+    def end(self, j):
+        return self.steps(j).end
+
+    def samples(self, j, times):
+        """``(end, states)`` as :func:`samples` gives them."""
+        got = self.steps(j)
+        return got.end, got.at(times)
+
+    def at(self, j, s):
+        return self.steps(j).at(np.array([float(s)]))[0]
+
+
 def modes_text(motion, seg) -> str:
     return ", ".join(f"{c.name} {MODE_NAMES[m]}" for c, m in zip(motion.mech.contacts,
                                                                   seg.modes))
 
 
-def transition(motion, X0, tau, seg, rtol):
-    """``Phi``, the variational equations' solution over the segment: on the compiled flow
+def transition(motion, X0, tau, seg, rtol, directions=None):
+    """``Phi``, the variational equations' solution over the segment, or with
+    ``directions`` (m x c) ``Phi @ directions`` from the variational equations of those
+    directions alone: on the compiled flow
     (:func:`phasemap.motion.hybrid.flow.transition`), else on ``solve_ivp`` as it steps them
     (where the kernel cannot: redundant contacts, no finite solution; and for its
     errors)."""
-    from scipy.integrate import solve_ivp
-
     tol = max(rtol, 1e-11)
     Phi = motion.flow.transition(X0, tau, seg.modes, seg.rho, tol,
-                                 tol * (1.0 + float(np.max(np.abs(X0)))), fq.STEP)
+                                 tol * (1.0 + float(np.max(np.abs(X0)))),
+                                 fq.STEP if directions is None else fq.DIRECTIONAL_STEP,
+                                 directions=directions)
     if Phi is not None:
         return Phi
+    Phi = _solved_transition(motion, X0, tau, seg, rtol)
+    return Phi if directions is None else Phi @ directions
+
+
+def _solved_transition(motion, X0, tau, seg, rtol):
+    """:func:`transition`'s matrix on ``solve_ivp``."""
+    from scipy.integrate import solve_ivp
+
     m = X0.size
 
     def f(s, Y):
