@@ -101,6 +101,11 @@ def test_the_shipped_derivation_is_what_sympy_derives(name):
         assert loader.described(S, S.model) == shipped["model"]
         for kind in ship.KINDS:
             assert full.text(S, kind) == shipped[kind]["text"], kind
+    # the default map's axes in the declaration's order, read from the shipped record
+    # (a record written with sorted keys once turned the rod's (theta, f) into (f, theta))
+    assert list(derived.default_axes.items()) == list(model.default_axes.items())
+    if S.default_axes:
+        assert list(model.default_axes) == list(S.default_axes)
     rng = np.random.default_rng(7)
     with tiers.forced("off"):
         for values in _random_states(model, rng, 40):

@@ -51,8 +51,8 @@ from phasemap._version import __version__
 from phasemap.core.model import Candidate, Derived, Dynamics, Model, Variable
 from phasemap.declare.runtime import checks, declare_sources
 
-#: Bumped when the manifest's layout changes.
-FORMAT = 2
+#: Bumped when the manifest's layout changes (3: the default axes as pairs in their order).
+FORMAT = 3
 #: Imports a declaration may make and stay eligible (their versions are in the key).
 _PURE = {"__future__", "math", "numpy", "sympy"}
 #: Calls that may read what the key does not hold.
@@ -442,7 +442,9 @@ def manifest(S, model: Model) -> dict | None:
         "velocity": model.velocity,
         "velocity_scale": model.velocity_scale.py_func.__name__,
         "check": check,
-        "default_axes": {k: list(v) for k, v in model.default_axes.items()},
+        # pairs, not a mapping: the axes' order is the map's (a record written with sorted
+        # keys would otherwise turn (theta, f) into (f, theta))
+        "default_axes": [[k, list(v)] for k, v in model.default_axes.items()],
         "dynamics": None if dyn is None else {
             "coordinates": [list(c) for c in dyn.coordinates],
             "positions": [_variable(v) for v in dyn.positions],
@@ -471,7 +473,7 @@ def build(data: dict, module, check, declaration) -> Model:
         reactions=tuple(map(var, data["reactions"])),
         coefficient=var(data["coefficient"]),
         velocity=data["velocity"], velocity_scale=getattr(module, data["velocity_scale"]),
-        default_axes={k: tuple(v) for k, v in data["default_axes"].items()},
+        default_axes={k: tuple(v) for k, v in data["default_axes"]},
         dynamics=None if dyn is None else Dynamics(
             coordinates=tuple(tuple(c) for c in dyn["coordinates"]),
             positions=tuple(map(var, dyn["positions"])), stick_is_rest=dyn["stick_is_rest"],
