@@ -182,6 +182,7 @@ class _Context:
         self.jac = []       # the last shooting Jacobian (the chord method's)
         self.arc_jac = None     # the same with the parameter's column (the corrector's)
         self.w_scale = self.ds = None       # the arclength's metric and step
+        self._arc_prev = None               # the last step's two points
 
     def params(self, lam):
         p = self.p0.copy()
@@ -416,8 +417,13 @@ class _Context:
         D = self.metric(Xa, Xb, h)
         t, L = _unit(Xb - Xa, D)
         ds = self.ds if self.ds else L
+        # the point before a, where the last step was from it to a: a parabola through
+        # the three predicts better than the secant (one Newton step fewer a point)
+        prev, self._arc_prev = self._arc_prev, (Xa, Xb)
+        Xz = prev[0] if (prev is not None and prev[0].size == Xa.size
+                         and np.array_equal(prev[1], Xa)) else None
         for _ in range(8):
-            X_pred = Xb + ds * t
+            X_pred = Xb + ds * t if Xz is None else _parabola(Xz, Xa, Xb, ds, D)
             over = (X_pred[-1] - hi) if X_pred[-1] > hi else (lo - X_pred[-1]) if (
                 X_pred[-1] < lo) else 0.0
             if over > 0 and abs(t[-1]) > 0:     # the span's end: land on it
@@ -681,6 +687,18 @@ def _same(seq, modes) -> bool:
     def runs(x):
         return [m for m, _ in sliding.merged([(tuple(m), 0.0) for m in x])]
     return runs(seq) == runs(modes)
+
+
+def _parabola(Xz, Xa, Xb, ds, D):
+    """The point ``ds`` beyond ``Xb`` along the parabola through ``Xz``, ``Xa``, ``Xb``,
+    each placed at its chordal distance in the metric ``D``."""
+    sz = -math.sqrt(float((Xa - Xz) * D @ (Xa - Xz)))
+    sb = math.sqrt(float((Xb - Xa) * D @ (Xb - Xa)))
+    s = sb + ds
+    if not (sz < 0.0 < sb):
+        return Xb + ds * _unit(Xb - Xa, D)[0]
+    return (Xz * (s * (s - sb)) / (sz * (sz - sb)) + Xa * ((s - sz) * (s - sb)) / (sz * sb)
+            + Xb * ((s - sz) * s) / ((sb - sz) * sb))
 
 
 def _unit(d, D):

@@ -78,12 +78,19 @@ def jacobian(motion, X, modes, rho):
 
 
 def event_gradient(motion, X, modes, rho, index, sc):
-    """``grad h`` of the event function ``index`` of the phase (central differences)."""
+    """``grad h`` of the event function ``index`` of the phase (central differences, as
+    :func:`difference` takes them: the event functions at the 2 (2n + 1) states in one
+    call, :meth:`phasemap.motion.hybrid.Motion.watch_many`)."""
     n = motion.n
-
-    def w(Y):
-        return motion.watch(Y[:n], Y[n:2 * n], modes, rho, sc, Y[2 * n])[index]
-    return np.array([difference(w, X, j) for j in range(2 * n + 1)])
+    m = 2 * n + 1
+    states = np.repeat(X[None, :], 2 * m, axis=0)
+    for j in range(m):
+        h = STEP * (1.0 + abs(X[j]))
+        states[2 * j, j] += h
+        states[2 * j + 1, j] -= h
+    w = motion.watch_many(states[:, 2 * n], states[:, :2 * n], modes, rho, sc)[:, index]
+    steps = states[0::2].diagonal() - states[1::2].diagonal()
+    return (w[0::2] - w[1::2]) / steps
 
 
 def jump_derivative(motion, X, closed, held):
