@@ -197,8 +197,9 @@ def main() -> None:
              f"({per_point * 1e3:.0f} ms a point) | - |", "",
              "A point of a branch: its corrector (Newton's method on the shooting equations "
              "with a chord Jacobian kept along the branch and updated by Broyden's rule "
-             "after every step, since 2026-12-02: about three steps a point where the chord "
-             "alone took four or five), its checks (each segment integrated once with its "
+             "after every step, from a prediction along the parabola through the last "
+             "three points, since 2026-12-02: about two steps a point where the chord alone "
+             "from the secant took four or five), its checks (each segment integrated once with its "
              "dense output kept, `flow.steps_of`, for its end, its samples and every search "
              "between them, and its conditions in one call, `flow.watch_many`; until "
              "2026-12-02 every sample and every step of a search integrated the segment "

@@ -13,6 +13,7 @@ from phasemap.core import events as ev
 from phasemap.motion.hybrid import MODE_NAMES, Motion, Options
 from phasemap.motion.periodic import orbit as _orbit
 from phasemap.motion.periodic import segments, sliding
+from phasemap.motion.periodic.arclength import doubling_test, parabola, torus_test, unit
 from phasemap.motion.periodic.orbit import Segment
 from phasemap.motion.periodic.sampling import dips, extrema
 
@@ -275,7 +276,8 @@ class _Context:
         (the orbit on the hyperplane through ``X_pred`` normal to ``t`` in the metric
         ``D``): ``(X, residual, iterations)``; ValueError where it does not converge.  The
         Jacobian is a chord kept along the branch, updated by Broyden's rule after every
-        step taken (about three steps a point, where the chord alone took four or five)
+        step taken (about two steps a point from :meth:`arc`'s parabola, where the chord
+        alone from the secant took four or five)
         and computed afresh where a step does not contract the residual tenfold."""
         K = len(segs)
         N = X_pred.size - 1
@@ -358,7 +360,7 @@ class _Context:
                     return points, marks
                 continue
             point = self.point(new, segs, w_new, res)
-            for test in (_doubling_test, _torus_test):
+            for test in (doubling_test, torus_test):
                 if (test(last["mult"]) > 0) != (test(point["mult"]) > 0):
                     got = self.doubling(lam, w, new, w_new, segs, h, test)
                     if got is not None:
@@ -415,7 +417,7 @@ class _Context:
         :meth:`fold`'s, where the parameter turned), or None where it does not converge."""
         Xa, Xb = np.append(w_a, lam_a), np.append(w_b, lam_b)
         D = self.metric(Xa, Xb, h)
-        t, L = _unit(Xb - Xa, D)
+        t, L = unit(Xb - Xa, D)
         ds = self.ds if self.ds else L
         # the point before a, where the last step was from it to a: a parabola through
         # the three predicts better than the secant (one Newton step fewer a point)
@@ -423,7 +425,7 @@ class _Context:
         Xz = prev[0] if (prev is not None and prev[0].size == Xa.size
                          and np.array_equal(prev[1], Xa)) else None
         for _ in range(8):
-            X_pred = Xb + ds * t if Xz is None else _parabola(Xz, Xa, Xb, ds, D)
+            X_pred = Xb + ds * t if Xz is None else parabola(Xz, Xa, Xb, ds, D)
             over = (X_pred[-1] - hi) if X_pred[-1] > hi else (lo - X_pred[-1]) if (
                 X_pred[-1] < lo) else 0.0
             if over > 0 and abs(t[-1]) > 0:     # the span's end: land on it
@@ -468,7 +470,7 @@ class _Context:
         0)``; the point is None where the fold is b itself (already a point)."""
         from scipy.optimize import minimize_scalar
 
-        t, L = _unit(Xc - Xa, D)
+        t, L = unit(Xc - Xa, D)
         sign = 1.0 if Xb[-1] > Xa[-1] else -1.0
         found = {}
 
@@ -507,18 +509,18 @@ class _Context:
 
     def doubling(self, lam, w, new, w_new, segs, h, test=None):
         """The period doubling or torus point between the orbits at ``lam`` and ``new``:
-        the root (Brent's method) of ``test`` (:func:`_doubling_test`, the default, or
-        :func:`_torus_test`) along the branch, on the hyperplanes normal to the chord
-        between them: ``(mark, point)``, its kind read from the multipliers there (a real
-        one at -1, or a complex pair on the unit circle); None where there is neither
-        (the corrector failed, or the root is not a bifurcation)."""
+        the root (Brent's method) of ``test`` (:func:`~.arclength.doubling_test`, the
+        default, or :func:`~.arclength.torus_test`) along the branch, on the hyperplanes
+        normal to the chord between them: ``(mark, point)``, its kind read from the
+        multipliers there (a real one at -1, or a complex pair on the unit circle); None
+        where there is neither (the corrector failed, or the root is not a bifurcation)."""
         from scipy.optimize import brentq
 
         Xa, Xb = np.append(w, lam), np.append(w_new, new)
         D = self.metric(Xa, Xb, h)
-        t, L = _unit(Xb - Xa, D)
+        t, L = unit(Xb - Xa, D)
         found = {}
-        test = test or _doubling_test
+        test = test or doubling_test
 
         def g(sig):
             X, res = (Xa, 0.0) if sig == 0.0 else (Xb, 0.0) if sig == 1.0 else \
@@ -551,7 +553,7 @@ class _Context:
         sequence or None, direction of the parameter)``."""
         Xa, Xb = np.append(w, lam), np.append(w_new, new)
         D = self.metric(Xa, Xb, h)
-        t, L = _unit(Xb - Xa, D)
+        t, L = unit(Xb - Xa, D)
         # in the parameter where at least a quarter of the chord's squared length is
         # along it (the shooting alone, as cheap as a step of natural-parameter
         # continuation), else along the chord
@@ -687,41 +689,6 @@ def _same(seq, modes) -> bool:
     def runs(x):
         return [m for m, _ in sliding.merged([(tuple(m), 0.0) for m in x])]
     return runs(seq) == runs(modes)
-
-
-def _parabola(Xz, Xa, Xb, ds, D):
-    """The point ``ds`` beyond ``Xb`` along the parabola through ``Xz``, ``Xa``, ``Xb``,
-    each placed at its chordal distance in the metric ``D``."""
-    sz = -math.sqrt(float((Xa - Xz) * D @ (Xa - Xz)))
-    sb = math.sqrt(float((Xb - Xa) * D @ (Xb - Xa)))
-    s = sb + ds
-    if not (sz < 0.0 < sb):
-        return Xb + ds * _unit(Xb - Xa, D)[0]
-    return (Xz * (s * (s - sb)) / (sz * (sz - sb)) + Xa * ((s - sz) * (s - sb)) / (sz * sb)
-            + Xb * ((s - sz) * s) / ((sb - sz) * sb))
-
-
-def _unit(d, D):
-    """The chord ``d`` as a unit vector in the metric ``D``, and its length."""
-    L = math.sqrt(float(d * D @ d))
-    return d / L, L
-
-
-def _doubling_test(mult) -> float:
-    """The period doubling's test function, the product of ``1 + m`` over the nontrivial
-    multipliers (det(I + M) on them): real, continuous, and of another sign exactly where
-    a real multiplier has passed -1 (a complex pair adds |1 + m|^2 > 0)."""
-    return float(np.real(np.prod(1.0 + np.asarray(mult, dtype=complex))))
-
-
-def _torus_test(mult) -> float:
-    """The torus (Neimark-Sacker) point's test function, the product of ``m_i m_j - 1``
-    over the pairs of nontrivial multipliers: of another sign where a complex pair has
-    passed the unit circle (|m|^2 - 1), and also where two real ones pass m_i m_j = 1 (a
-    neutral saddle, not a bifurcation: :meth:`_Context.doubling` checks the point)."""
-    m = np.asarray(mult, dtype=complex)
-    pairs = [m[i] * m[j] - 1.0 for i in range(m.size) for j in range(i + 1, m.size)]
-    return float(np.real(np.prod(pairs))) if pairs else 1.0
 
 
 def _from_dataset(mech, orbit, p0, rtol):
