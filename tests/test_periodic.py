@@ -554,6 +554,45 @@ def _duffing(ref_values):
     return {names.get(nm, nm): v for nm, v in ref_values.items()}
 
 
+def test_a_branch_that_comes_back_fast_lands_on_the_spans_end():
+    """Round the fold and back down, the branch runs fast in Omega towards the span's
+    start: the parabola through the last three points overshoots the end, and the step
+    that lands on it is the secant's, never behind the last point (once, predicted from
+    the parabola, it went back and the branch turned at 16 folds that are not there)."""
+    from references import duffing_fold as ref
+
+    o = phasemap.periodic_orbit("duffing", start={**_duffing(ref.FOLD), "Omega": 1.55,
+                                                  "x": 0.19, "xdot": 1.96})
+    b = phasemap.continue_orbit(o, "Omega", (1.545, 1.6), steps=2)
+    assert [str(kd) for kd in b.point_kind.values] == ["end", "fold", "end"]
+    assert abs(float(b.point_Omega[1]) - ref.OMEGA_UPPER) < 1e-9
+    om = b.Omega.values
+    top = int(np.argmax(om))
+    assert np.all(np.diff(om[:top + 1]) > 0) and np.all(np.diff(om[top:]) < 0)
+
+
+def test_a_grazing_event_leaves_the_multipliers_undefined_not_an_error(monkeypatch):
+    """Where the flow meets an event tangentially the saltation matrix is not defined
+    (NaN): the multipliers are NaN and the orbit is not called stable, where NumPy's
+    eigenvalues of a NaN matrix raised."""
+    from phasemap.declare.full import mechanics
+    from phasemap.motion.hybrid import Motion, Options
+    from phasemap.motion.periodic import continuation, floquet, orbit
+
+    o = phasemap.periodic_orbit("belt")
+    mech = mechanics(orbit.system_of("belt"))
+    p = np.array([float(o.attrs[f"phasemap_parameter_{nm}"]) for nm in mech.parameters])
+    segs, w, t_a = continuation._from_dataset(mech, o, p, 1e-12)
+    motion = Motion(mech, p, Options(1.0, rtol=1e-12))
+    good = orbit.linearised(motion, segs, w, t_a, None, 1e-12)
+    assert np.all(np.isfinite(good.multipliers))
+    monkeypatch.setattr(floquet, "saltation",
+                        lambda DJ, Fm, Fp, grad: np.full_like(DJ, np.nan))
+    got = orbit.linearised(motion, segs, w, t_a, None, 1e-12)
+    assert got.multipliers.shape == good.multipliers.shape
+    assert np.all(np.isnan(got.multipliers)) and not got.stable and got.trivial == -1
+
+
 @pytest.mark.slow
 def test_pseudo_arclength_goes_round_the_fold_of_a_hardening_oscillator():
     """A forced hardening oscillator with dry and viscous friction: its large orbit,

@@ -215,9 +215,10 @@ class _Context:
         checks (:class:`~phasemap.motion.periodic.segments.Traced`): the last orbit's
         kept, for its admissibility and its point ask for the same one."""
         last = self._traced
-        if not (last is not None and last[0] == lam and last[1] is segs
+        if not (last is not None and last[0] == (lam, self.t_a) and last[1] is segs
                 and np.array_equal(last[2], w)):
-            self._traced = last = (lam, segs, w.copy(), segments.Traced(
+            w = w.copy()        # (the key and the segments' starts: the caller's may change)
+            self._traced = last = ((lam, self.t_a), segs, w, segments.Traced(
                 self.motion(lam), segs, w, self.t_a, self.rtol))
         return last[3]
 
@@ -384,7 +385,7 @@ class _Context:
                 if nat is None:
                     marks.append(self.mark(new, segs, w_new, "no_convergence", 0.0))
                     return points, marks
-                self.ds = None
+                self.ds = self._arc_prev = None     # (the next parabola not through a)
                 lam, w = new, w_new
                 new, w_new, res = nat
                 continue
@@ -426,6 +427,8 @@ class _Context:
                          and np.array_equal(prev[1], Xa)) else None
         for _ in range(8):
             X_pred = Xb + ds * t if Xz is None else parabola(Xz, Xa, Xb, ds, D)
+            if not lo <= X_pred[-1] <= hi:      # beyond the span: the secant's step, as
+                X_pred = Xb + ds * t            # it lands on the end (never behind b)
             over = (X_pred[-1] - hi) if X_pred[-1] > hi else (lo - X_pred[-1]) if (
                 X_pred[-1] < lo) else 0.0
             if over > 0 and abs(t[-1]) > 0:     # the span's end: land on it
@@ -603,6 +606,7 @@ class _Context:
             mark["kind"] = "continuum"
             return mark, None, direction
         self.w_scale, self.ds, self.arc_jac = None, None, None     # a new sequence
+        self._arc_prev = None
         return mark, point, direction
 
     def beyond(self, lam, segs, w, settle=False):

@@ -638,6 +638,9 @@ def linearised(motion, segs, w, t_a, forcing, rtol, samples=0, traced=None) -> L
         P = fq.saltation(DJ, Fm, Fp, grad) @ P
         t = t_end
     reduced = B.T @ P[:n2]
+    if not np.all(np.isfinite(reduced)):    # a grazing event: no linearised map there
+        return Linearised(np.full(reduced.shape[0], np.nan, dtype=complex), -1, False, rec,
+                          False)
     lam = np.linalg.eigvals(reduced).astype(complex)
     lam = lam[np.argsort(-np.abs(lam))]
     trivial = -1
