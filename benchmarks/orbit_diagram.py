@@ -78,6 +78,26 @@ def fixed_point(f, z0):
     return root(lambda z: ref.return_map(z, r=f, **AT) - z, z0, tol=1e-13).x
 
 
+def compiled_share(values, periods=50, settle=50):
+    """CPU seconds per forcing period spent inside the compiled flow's calls (the steps,
+    the events' location, the surveys and the projections: every function of
+    phasemap/motion/hybrid/flow.py that cProfile sees called from Python), and in the
+    whole sweep, over a short sweep of ``values`` under cProfile (which slows the Python
+    around the calls, not the machine code inside them)."""
+    import cProfile
+    import pstats
+
+    prof = cProfile.Profile()
+    prof.enable()
+    phasemap.orbit_diagram("den_hartog", "f", values, periods=periods, settle=settle,
+                           rtol=RTOL)
+    prof.disable()
+    stats = pstats.Stats(prof).stats
+    inside = sum(row[2] for (path, _, _), row in stats.items()
+                 if path.replace("\\", "/").endswith("motion/hybrid/flow.py"))
+    return inside / (len(values) * (periods + settle))
+
+
 def main() -> None:
     ap = _report.parser(__doc__)
     args = ap.parse_args()
@@ -109,6 +129,7 @@ def main() -> None:
     wall = time.perf_counter() - t0
     same = all(np.array_equal(lazy[n].values, d[n].values, equal_nan=True)
                for n in ("x", "xdot", "fate", "multiple"))
+    kernels = compiled_share(values[::VALUES // 4])
     checked = np.linspace(0, VALUES - 1, SCIPY_VALUES).astype(int)
     err_pm, err_sp, scipy_cpu = 0.0, 0.0, 0.0
     for j in checked:
@@ -138,6 +159,7 @@ def main() -> None:
             f"| `solve_ivp` by hand ({SCIPY_VALUES} of the values) | "
             f"{per_value_sp:.2f} s CPU per value | {per_value_sp / periods * 1e3:.2f} ms | "
             f"{err_sp:.1e} | {per_value_sp * 1000 / 60:.0f} min CPU |"]
+    per_period_target = 2 * 5.0 / (1000 * 200)
     lines = ["## Orbit diagrams (`benchmarks/orbit_diagram.py`)", "",
              f"Machine: {_report.machine()}; load {_report.load()}. Den Hartog's oscillator "
              f"(Omega = 0.8), {VALUES} values of f in [0.15, 0.35], each settled for {SETTLE} "
@@ -153,10 +175,18 @@ def main() -> None:
              "admissible phases are found in one compiled call (`flow.survey`) and the "
              "state is projected onto its contacts in another (`flow.project`), but the "
              "rest of each decision (the ties, the events' records) runs "
-             "in Python, two per forcing period here. Meeting it "
-             "needs the decisions compiled and the values run in a prange kernel, the "
-             "same work a compiled fate-map cell through contact changes needs (issue "
-             "38). The scipy column knows the orbit cannot stick and flips the sign by "
+             "in Python, two per forcing period here. Compiling the decisions would not "
+             "be enough: the compiled calls alone (the steps, the events' location, the "
+             "surveys and the projections) take "
+             f"{kernels * 1e3:.2f} ms a forcing period here (cProfile over 4 values x "
+             f"100 periods: what the functions of flow.py take from their calls), "
+             f"{kernels / per_period_target:.1f} times the "
+             f"{per_period_target * 1e3:.3f} ms a period that the target leaves one "
+             "thread (10 s of CPU for 200 000 periods). A step in full coordinates costs "
+             "about ten times a step of the reduced model (the section 'Motion through "
+             "contact changes'): the steps themselves must become cheaper, and the values "
+             "run in a prange kernel, the same work a compiled fate-map cell through "
+             "contact changes needs (issue 38). The scipy column knows the orbit cannot stick and flips the sign by "
              "hand; phasemap's sweep decides every reversal and would follow stops. Two dask "
              "worker processes do not yet pay for themselves at this size: each imports "
              "phasemap and loads the oscillator's kernels before its first value, and the "

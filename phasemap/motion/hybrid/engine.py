@@ -750,8 +750,9 @@ def warm():
     """Compiles the compiled flow's kernels (:mod:`.flow`) into the kernel cache: a
     background compile's job (:mod:`phasemap.core.tiers`), a flight of the Painleve rod
     that lands and slides (the step's event exit included), then a segment of known
-    length, the reactions of a Dataset, the Jacobian, a map's cells and the transition
-    matrix of the periodic orbits (compiled last: binding.Phase probes it)."""
+    length, the reactions of a Dataset, the Jacobian, a map's cells, a segment's kept
+    steps and a batch of its conditions, and the transition matrix of the periodic
+    orbits (compiled last: binding.Phase probes it)."""
     from phasemap.core import tiers
     from phasemap.declare.full import mechanics
     from phasemap.systems.painleve_rod import SYSTEM
@@ -767,4 +768,7 @@ def warm():
         m.flow.jacobian(X, (OPEN,), None, 1e-6)
         m.flow.reactions(np.zeros(1), X[None, :6], np.zeros((1, 1), dtype=np.int64))
         m.flow.cells(np.array([p]), X[None, :6], np.zeros(1), [0], True)
+        # a periodic orbit's checks: a segment's kept steps and its conditions in one call
+        m.flow.steps(X[:6], 0.0, 0.1, (OPEN,), None, 1e-8, 1e-8).at([0.05])
+        m.watch_many(np.zeros(1), X[None, :6], (OPEN,), None, m.scales_at(X[:3], X[3:6]))
         m.flow.transition(X, 0.01, (OPEN,), None, 1e-8, 1e-8, 1e-6)
