@@ -554,6 +554,38 @@ def _duffing(ref_values):
     return {names.get(nm, nm): v for nm, v in ref_values.items()}
 
 
+@pytest.mark.parametrize("name", ["belt", "den_hartog", "stribeck_belt"])
+def test_the_jump_derivative_is_the_loop_of_differences(name):
+    """The saltation's jump derivative takes its differences' projections in one compiled
+    call (``Motion.project_velocities``): the bits of the loop of central differences of
+    ``project_velocity``, one projection each, at random states, the held contacts' time
+    column included."""
+    from phasemap.declare.full import mechanics
+    from phasemap.motion.hybrid import Motion, Options
+    from phasemap.motion.periodic import floquet as fq
+    from phasemap.motion.periodic import orbit
+
+    mech = mechanics(orbit.system_of(name))
+    p = np.array([mech.defaults[k] for k in mech.parameters])
+    m = Motion(mech, p, Options(1.0))
+    n = mech.n
+    rng = np.random.default_rng(4)
+    for _ in range(10):
+        X = rng.normal(size=2 * n + 1)
+        q, u, t = X[:n], X[n:2 * n], X[2 * n]
+        for closed, held in [([0], ()), ([0], (0,))]:
+            got = fq.jump_derivative(m, X, closed, held)
+            for j in range(n):
+                want = fq.difference(lambda r: m.project_velocity(r, u, closed, held, t), q, j)
+                assert np.array_equal(got[n:2 * n, j], want)
+            if held:
+                want = fq.difference(lambda s: m.project_velocity(q, u, closed, held, s[0]),
+                                     np.array([t]), 0)
+                assert np.array_equal(got[n:2 * n, 2 * n], want)
+            else:
+                assert np.array_equal(got[:, 2 * n], np.eye(2 * n + 1)[:, 2 * n])
+
+
 def test_a_branch_that_comes_back_fast_lands_on_the_spans_end():
     """Round the fold and back down, the branch runs fast in Omega towards the span's
     start: the parabola through the last three points overshoots the end, and the step

@@ -13,7 +13,8 @@ from numba import njit
 from phasemap.core import tiers
 from phasemap.motion.hybrid.flow import (FINISHED, FULL, FUNCTION, OK, _dip_rates, _rhs, _rows,
                                          accel, admits, advance, dense_at, groups, jacobian,
-                                         locate, project, project_sizes, reactions, scales,
+                                         locate, project, project_many, project_sizes,
+                                         reactions, scales,
                                          scales_at, steps_of, dense_many, survey,
                                          survey_cells, survey_range, transition, watch,
                                          watch_many, workspace)
@@ -112,7 +113,7 @@ class Phase:
             twin = tiers.is_twin(tiers.runner(transition, probe, self.warm))
         kernels = (accel, watch, advance, _rhs, _dip_rates, locate, dense_at, jacobian,
                    transition, reactions, survey, admits, scales, groups, survey_range,
-                   project, scales_at, steps_of, dense_many, watch_many)
+                   project, scales_at, steps_of, dense_many, watch_many, project_many)
         if twin:
             fns = functions(self.mech, True)
             kernels = tuple(interpreted(k) for k in kernels)
@@ -120,7 +121,7 @@ class Phase:
          self.locate_fn, self.dense_fn, self.jacobian_fn, self.transition_fn,
          self.reactions_fn, self.survey_fn, self.admits, self.scales_fn,
          self.groups, self.range_fn, self.project_fn, self.scales_at_fn, self.steps_fn,
-         self.dense_many_fn, self.watch_many_fn) = kernels
+         self.dense_many_fn, self.watch_many_fn, self.project_many_fn) = kernels
         self.twin, self.fns = twin, fns
 
     def refresh(self):
@@ -178,6 +179,18 @@ class Phase:
         st = self.project_fn(PC, SF, self.p, self.lay, self.rolls, y, float(t), closed,
                              moving, held, fixed, self.W, self.Z, self.Iz, out)
         return out if st == OK else None
+
+    def project_many(self, ys, ts, closed, moving, held, fixed):
+        """:func:`project_many`: the projected states, a row each, or None where one has no
+        finite result."""
+        PC, SF, _, _ = self.fns
+        ts = np.ascontiguousarray(ts, dtype=float)
+        out = np.empty((ts.size, 2 * self.n))
+        status = np.empty(ts.size, dtype=np.int64)
+        self.project_many_fn(PC, SF, self.p, self.lay, self.rolls,
+                             np.ascontiguousarray(ys, dtype=float), ts, closed, moving, held,
+                             fixed, self.W, self.Z, self.Iz, out, status)
+        return out if np.all(status == OK) else None
 
     def cells(self, P, Y, T, moving, want_singular):
         """:func:`flow.survey_cells` of the cells ``(P[i], Y[i], T[i])`` (parameters, full

@@ -382,20 +382,40 @@ class Motion:
             return u
         return self._projected(q, u, (), moving, held, (), t)[1]
 
-    def _projected(self, q, u, closed, moving, held, fixed, t):
-        k = self.k
-        flags = np.zeros((3, k), dtype=np.bool_)
+    def project_velocities(self, qs, us, ts, moving, held=()):
+        """:meth:`project_velocity` at each state ``(qs[i], us[i], ts[i])`` (rows), in one
+        compiled call: the velocities, a row each."""
+        if not len(moving) and not len(held):
+            return np.array(us, dtype=float)
+        flags, still = self._flags((), moving, held, ())
+        y = self.flow.project_many(np.hstack([np.asarray(qs, dtype=float),
+                                              np.asarray(us, dtype=float)]),
+                                   ts, flags[0], flags[1], flags[2], still)
+        if y is None:
+            raise np.linalg.LinAlgError(self._UNPROJECTED.format(self.mech.name))
+        return y[:, self.n:]
+
+    _UNPROJECTED = ("{}: the state cannot be projected onto its closed contacts (a singular "
+                    "system, or values that are not finite)")
+
+    def _flags(self, closed, moving, held, fixed):
+        """The contacts ``closed``, ``moving``, ``held`` and the coordinates ``fixed`` as
+        :func:`flow.project` takes them: a boolean row per contact set, and one per
+        coordinate."""
+        flags = np.zeros((3, self.k), dtype=np.bool_)
         for row, which in enumerate((closed, moving, held)):
             flags[row, list(which)] = True
         still = np.zeros(self.n, dtype=np.bool_)
         still[list(fixed)] = True
+        return flags, still
+
+    def _projected(self, q, u, closed, moving, held, fixed, t):
+        flags, still = self._flags(closed, moving, held, fixed)
         y = self.flow.project(np.concatenate([np.asarray(q, dtype=float),
                                               np.asarray(u, dtype=float)]),
                               t, flags[0], flags[1], flags[2], still)
         if y is None:
-            raise np.linalg.LinAlgError(f"{self.mech.name}: the state cannot be projected "
-                                        "onto its closed contacts (a singular system, or "
-                                        "values that are not finite)")
+            raise np.linalg.LinAlgError(self._UNPROJECTED.format(self.mech.name))
         return y[:self.n], y[self.n:]
 
     # -- the events of a phase ----------------------------------------------------------
@@ -771,4 +791,5 @@ def warm():
         # a periodic orbit's checks: a segment's kept steps and its conditions in one call
         m.flow.steps(X[:6], 0.0, 0.1, (OPEN,), None, 1e-8, 1e-8).at([0.05])
         m.watch_many(np.zeros(1), X[None, :6], (OPEN,), None, m.scales_at(X[:3], X[3:6]))
+        m.project_velocities(X[None, :3], X[None, 3:6], np.zeros(1), [0])
         m.flow.transition(X, 0.01, (OPEN,), None, 1e-8, 1e-8, 1e-6)

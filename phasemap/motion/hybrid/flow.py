@@ -1640,6 +1640,16 @@ def _constrained(Z, Iz, n, m, mm, uo, out, full_rank):
 
 
 @njit(cache=True, error_model="numpy")
+def project_many(PC, SF, p, lay, rolls, ys, ts, closed, moving, held, fixed, W, Z, Iz, out,
+                 status):
+    """:func:`project` of each state ``(ts[i], ys[i])`` into ``out[i]``, its status into
+    ``status[i]``: the projections a difference quotient takes, in one call."""
+    for i in range(ts.size):
+        status[i] = project(PC, SF, p, lay, rolls, ys[i], ts[i], closed, moving, held, fixed,
+                            W, Z, Iz, out[i])
+
+
+@njit(cache=True, error_model="numpy")
 def project(PC, SF, p, lay, rolls, y, t, closed, moving, held, fixed, W, Z, Iz, out):
     """The state ``y`` put on the contacts ``closed`` (a boolean per contact) in the mass
     metric, into ``out``: the positions on their gaps' zero (Newton, at most 20 steps;
