@@ -413,6 +413,8 @@ def test_a_segments_kept_steps_give_its_samples_bits(name):
         assert long.count > 64
         assert np.array_equal(long.end, m.flow.segment(z, t, 60.0, modes, None, 1e-14, 1e-14))
     assert m.flow.steps(z, t, 0.0, modes, None, 1e-10, atol).at([t])[0].tolist() == z.tolist()
+    # a time outside the segment has no state on its steps
+    assert np.isnan(kept.at([t - 1e-3, t + tau + 1e-3])).all()
 
 
 @pytest.mark.parametrize("name", ["belt", "den_hartog", "stribeck_belt", "rod"])

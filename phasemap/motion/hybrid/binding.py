@@ -300,7 +300,9 @@ class Phase:
     def steps(self, z, t, tau, modes, rho, rtol, atol):
         """:meth:`segment`'s steps with their dense output kept (:func:`steps_of`): a
         :class:`Steps`, whose states anywhere in ``[t, t + tau]`` are the bits
-        :meth:`segment` gives at those times; None where :meth:`segment` gives None."""
+        :meth:`segment` gives at those times; None where :meth:`segment` gives None, or
+        where the segment takes more than 65 536 steps (their dense output is kept in
+        memory: the caller integrates it otherwise)."""
         self.refresh()
         n2 = 2 * self.n
         y = np.array(z, dtype=float)
@@ -324,7 +326,7 @@ class Phase:
                 self.ud, self.N, self.F, self.a, T, TE, Y0, FD)
             if status != FULL:
                 break
-            if most >= 1 << 20:
+            if most >= 1 << 16:     # (7 coefficients a step: 22 MB for three coordinates)
                 return None
             most *= 4
         if status != FINISHED:

@@ -1149,10 +1149,14 @@ def steps_of(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, bounds, none,
 @njit(cache=True, error_model="numpy")
 def dense_many(T, TE, Y0, FD, count, y_end, times, out):
     """``out[i]`` <- the state at ``times[i]`` on the steps of :func:`steps_of`, each time
-    on the first step that ends at it or after (where :func:`advance` saves it), the end
-    state beyond the last step (a segment of no steps)."""
+    on the first step that ends at it or after (where :func:`advance` saves it); NaN at a
+    time outside the steps (a segment of no steps: its state at every time)."""
     for i in range(times.size):
         s = times[i]
+        if count > 0 and not T[0] <= s <= TE[count - 1]:
+            for j in range(y_end.size):
+                out[i, j] = np.nan
+            continue
         lo, hi = 0, count
         while lo < hi:          # the first step whose end is not before s
             mid = (lo + hi) // 2
