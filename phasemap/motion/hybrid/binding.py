@@ -11,13 +11,12 @@ import numpy as np
 from numba import njit
 
 from phasemap.core import tiers
-from phasemap.motion.hybrid.flow import (FINISHED, FULL, FUNCTION, OK, _dip_rates, _rhs, _rows,
-                                         accel, admits, advance, dense_at, groups, jacobian,
-                                         locate, project, project_many, project_sizes,
-                                         reactions, scales,
-                                         scales_at, steps_of, dense_many, survey,
-                                         survey_cells, survey_range, transition, watch,
-                                         watch_many, workspace)
+from phasemap.motion.hybrid.flow import (FINISHED, FULL, FUNCTION, OK, _dip_rates, _rhs,
+                                         _rows, accel, admits, advance, dense_at, dense_many,
+                                         groups, jacobian, locate, project, project_many,
+                                         project_sizes, reactions, scales, scales_at,
+                                         steps_of, survey, survey_cells, survey_range,
+                                         transition, watch, watch_many, workspace)
 
 _LOCK = threading.Lock()
 _FUNCTIONS: dict = {}

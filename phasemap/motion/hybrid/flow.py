@@ -1153,21 +1153,18 @@ def dense_many(T, TE, Y0, FD, count, y_end, times, out):
     time outside the steps (a segment of no steps: its state at every time)."""
     for i in range(times.size):
         s = times[i]
-        if count > 0 and not T[0] <= s <= TE[count - 1]:
-            for j in range(y_end.size):
-                out[i, j] = np.nan
-            continue
-        lo, hi = 0, count
-        while lo < hi:          # the first step whose end is not before s
-            mid = (lo + hi) // 2
-            if TE[mid] < s:
-                lo = mid + 1
-            else:
-                hi = mid
-        if lo >= count:
-            for j in range(y_end.size):
-                out[i, j] = y_end[j]
+        if count == 0:
+            out[i, :] = y_end
+        elif not T[0] <= s <= TE[count - 1]:
+            out[i, :] = np.nan
         else:
+            lo, hi = 0, count - 1   # the first step whose end is not before s (a search
+            while lo < hi:          # by halves: the interpreted twin has no searchsorted)
+                mid = (lo + hi) // 2
+                if TE[mid] < s:
+                    lo = mid + 1
+                else:
+                    hi = mid
             dense_at(FD[lo], T[lo], TE[lo] - T[lo], Y0[lo], s, out[i])
 
 

@@ -278,8 +278,8 @@ class _Context:
         ``D``): ``(X, residual, iterations)``; ValueError where it does not converge.  The
         Jacobian is a chord kept along the branch, updated by Broyden's rule after every
         step taken (about two steps a point from :meth:`arc`'s parabola, where the chord
-        alone from the secant took four or five)
-        and computed afresh where a step does not contract the residual tenfold."""
+        alone from the secant took four or five), and computed afresh where a step does
+        not contract the residual tenfold."""
         K = len(segs)
         N = X_pred.size - 1
         X = X_pred.copy()

@@ -60,6 +60,21 @@ def difference(fn, x, j):
     return (np.asarray(fn(xp)) - np.asarray(fn(xm))) / (xp[j] - xm[j])
 
 
+def differences(fn_rows, x, cols):
+    """:func:`difference` along each ``x[j]`` of ``cols``, a row each, with ``fn_rows``
+    evaluated once on all the shifted points (a row of them each, two a column): the
+    same bits as :func:`difference` column by column."""
+    cols = list(cols)
+    states = np.repeat(x[None, :], 2 * len(cols), axis=0)
+    for i, j in enumerate(cols):
+        h = STEP * (1.0 + abs(x[j]))
+        states[2 * i, j] += h
+        states[2 * i + 1, j] -= h
+    values = np.asarray(fn_rows(states))
+    steps = states[0::2, cols].diagonal() - states[1::2, cols].diagonal()
+    return (values[0::2] - values[1::2]) / steps.reshape((-1,) + (1,) * (values.ndim - 1))
+
+
 def jacobian(motion, X, modes, rho):
     """``A = dF/dX`` at ``X`` (central differences of the accelerations): in one call of
     the compiled flow, the same bits as the loop below, which serves where a solve on the
@@ -82,15 +97,8 @@ def event_gradient(motion, X, modes, rho, index, sc):
     :func:`difference` takes them: the event functions at the 2 (2n + 1) states in one
     call, :meth:`phasemap.motion.hybrid.Motion.watch_many`)."""
     n = motion.n
-    m = 2 * n + 1
-    states = np.repeat(X[None, :], 2 * m, axis=0)
-    for j in range(m):
-        h = STEP * (1.0 + abs(X[j]))
-        states[2 * j, j] += h
-        states[2 * j + 1, j] -= h
-    w = motion.watch_many(states[:, 2 * n], states[:, :2 * n], modes, rho, sc)[:, index]
-    steps = states[0::2].diagonal() - states[1::2].diagonal()
-    return (w[0::2] - w[1::2]) / steps
+    return differences(lambda S: motion.watch_many(S[:, 2 * n], S[:, :2 * n], modes, rho,
+                                                   sc)[:, index], X, range(2 * n + 1))
 
 
 def jump_derivative(motion, X, closed, held):
@@ -109,15 +117,8 @@ def jump_derivative(motion, X, closed, held):
     # d(projected u)/dq, and with a held contact d/dt (the surface's velocity moves with
     # the time): :func:`difference`'s quotients, their projections in one call
     cols = list(range(n)) + ([2 * n] if held else [])
-    states = np.repeat(X[None, :], 2 * len(cols), axis=0)
-    for i, j in enumerate(cols):
-        h = STEP * (1.0 + abs(X[j]))
-        states[2 * i, j] += h
-        states[2 * i + 1, j] -= h
-    V = motion.project_velocities(states[:, :n], states[:, n:2 * n], states[:, 2 * n],
-                                  closed, held)
-    for i, j in enumerate(cols):
-        D[n:2 * n, j] = (V[2 * i] - V[2 * i + 1]) / (states[2 * i, j] - states[2 * i + 1, j])
+    D[n:2 * n, cols] = differences(lambda S: motion.project_velocities(
+        S[:, :n], S[:, n:2 * n], S[:, 2 * n], closed, held), X, cols).T
     return D
 
 

@@ -93,7 +93,7 @@ class Traced:
     def __init__(self, motion, segs, w, t_a, rtol):
         n2 = 2 * motion.n
         K = len(segs)
-        self.motion, self.segs, self.w, self.rtol = motion, segs, w, rtol
+        self.motion, self.segs, self.rtol = motion, segs, rtol
         self.zs = [w[j * n2:(j + 1) * n2] for j in range(K)]
         self.taus = w[K * n2:]
         self.starts, t = [], t_a
