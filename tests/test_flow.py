@@ -679,3 +679,46 @@ def test_a_projection_without_a_finite_answer_is_refused(bad):
     if bad == "mass":
         with pytest.raises(np.linalg.LinAlgError):
             _numpy_project(m, q, u, [0])
+
+
+def test_the_kernels_without_reference_counts_leave_no_array_behind():
+    """The flow's kernels that allocate nothing run without numba's reference counts
+    (``_nrt=False``; flow.ALLOCATING lists the others, and numba refuses an allocation
+    in them, their callees' included).  A motion through a lift-off, a flight and a
+    landing, a periodic orbit continued (segments, transition matrices, projections) and
+    a full map, which pass arrays between both kinds and through the declaration's
+    functions at their addresses, free every array numba allocated for them."""
+    import phasemap
+    from numba.core.dispatcher import Dispatcher
+    from numba.core.runtime import _nrt_python as nrt
+
+    kernels = {name: fn for name, fn in vars(flow).items() if isinstance(fn, Dispatcher)
+               and fn.targetoptions.get("inline") != "always"}    # (inlined: the caller's)
+    assert set(flow.ALLOCATING) <= set(kernels)
+    lean = {name for name, fn in kernels.items() if fn.targetoptions.get("_nrt") is False}
+    assert lean == set(kernels) - set(flow.ALLOCATING)
+    assert {"accel", "advance", "watch", "locate", "project"} <= lean
+
+    def work():
+        ds = phasemap.simulate("ladder", t_end=1.0, phi=math.radians(30.0), omega=0.0,
+                               f=0.0, l=0.5)
+        orbit = phasemap.periodic_orbit("den_hartog")
+        branch = phasemap.continue_orbit(orbit, "f", (0.2, 0.5), steps=10, max_points=3)
+        scene = phasemap.Scene("belt", axes={"x": (-1.0, 1.0, 4), "xdot": (-1.0, 1.0, 4)})
+        return ds, branch, scene.compute()
+
+    with tiers.forced("eager"):
+        work()                       # compiled and loaded before counting
+        was = nrt.memsys_stats_enabled()
+        nrt.memsys_enable_stats()
+        try:
+            before = nrt.memsys_get_stats_mi_alloc(), nrt.memsys_get_stats_mi_free()
+            ds, branch, maps = work()
+            after = nrt.memsys_get_stats_mi_alloc(), nrt.memsys_get_stats_mi_free()
+        finally:
+            if not was:
+                nrt.memsys_disable_stats()
+    assert phasemap.Event.LIFTOFF in [int(k) for k in ds.event_kind.values]
+    assert branch.sizes["vertex"] >= 3 and int(maps["n_solutions"].count()) >= 9
+    allocated, freed = after[0] - before[0], after[1] - before[1]
+    assert allocated > 0 and allocated == freed

@@ -108,8 +108,21 @@ def workspace(n: int, k: int):
 # The hot functions index the workspace at offsets, without slices: a slice is an array
 # whose reference count numba raises and lowers (two atomic operations each time), which
 # cost more than the arithmetic of a small phase.
+#
+# Every kernel that allocates no array is compiled without numba's reference counting
+# (``_nrt=False``): numba otherwise raises and lowers the count of each array an argument
+# holds around the calls between these functions (an atomic operation each, a few
+# nanoseconds, and tens of them per call), which made half of what a phase's solve cost
+# (the ladder in flight: ``accel`` 248 ns -> 122 ns, eleven DOP853 stages 4.6 us -> 1.5
+# us; the same bits).  They only read and write the arrays their caller holds and
+# return numbers, never an array, so that no count is needed; numba refuses to compile
+# an allocation in them or in a kernel they call (it compiles the callee without the
+# counts too).  The kernels that allocate are these:
+ALLOCATING = ("sizes_of", "survey_cells", "survey_range", "_rows", "dense_many", "steps_of",
+              "transition")
 
-@njit(cache=True, error_model="numpy")
+
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _lu(W, o, I, op, m):
     """LU factors, in place, of the ``m x m`` matrix at ``W[o:]`` (row-major), partial
     pivoting, the pivots at ``I[op:]``; its determinant."""
@@ -138,7 +151,7 @@ def _lu(W, o, I, op, m):
     return det
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _lu_solve(W, o, I, op, m, x):
     """``W[x:x+m]`` <- its solution by :func:`_lu`'s factors at ``W[o:]``, ``I[op:]``."""
     for j in range(m):
@@ -157,7 +170,7 @@ def _lu_solve(W, o, I, op, m, x):
         W[x + i] = s / W[o + i * m + i]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def accel(PC, SF, KN, y, t, p, lay, rolls, modes, rho, start, want_det, W, I, ud, N, F, a):
     """The accelerations ``ud``, reactions ``N``, ``F`` and contact accelerations ``a`` (k, 3;
     the tangential relative to the surface) of the phase ``modes`` at ``(t, y)``:
@@ -315,7 +328,7 @@ def accel(PC, SF, KN, y, t, p, lay, rolls, modes, rho, start, want_det, W, I, ud
     return OK, det
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def admits(modes, rho, one_sided, N, F, a, g, vn, vt, mu, sc, prefer):
     """Whether the phase ``modes`` is admissible at a state, from its solution (reactions
     ``N``, ``F``, contact accelerations ``a``, each contact's sign ``rho`` of N), the
@@ -347,7 +360,7 @@ def admits(modes, rho, one_sided, N, F, a, g, vn, vt, mu, sc, prefer):
     return ok
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def phases(PC, SF, KN, p, lay, one_sided, rolls, y, t, cand, ncand, flip, prefer, plain, sc,
            W, I, ud, N, F, a, modes, rho, start, vn, vt, gk, muk, out_modes, out_rho, out_ud,
            out_N, out_F, out_a):
@@ -419,7 +432,7 @@ def phases(PC, SF, KN, p, lay, one_sided, rolls, y, t, cand, ncand, flip, prefer
     return count
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def scales(W, lay, y, S, I, sc):
     """The scales of a state into ``sc``: its contacts' velocities, its forces, its
     accelerations and its lengths, from the pieces at the start of ``W`` and the state
@@ -466,7 +479,7 @@ def scales(W, lay, y, S, I, sc):
     sc[3] = length
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def scales_at(PC, p, lay, y, t, W, S, I, sc):
     """:func:`scales` of the state ``(t, y)``, its pieces evaluated into ``W`` first."""
     n, k = lay[0], lay[1]
@@ -474,7 +487,7 @@ def scales_at(PC, p, lay, y, t, W, S, I, sc):
     scales(W, lay, y, S, I, sc)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def survey(PC, SF, KN, p, lay, one_sided, rolls, y, t, flip, prefer, plain, W, I, S, sc,
            cand, ncand, ud, N, F, a, modes, rho, start, vn, vt, gk, muk, out_modes, out_rho,
            out_ud, out_N, out_F, out_a, out_group):
@@ -648,7 +661,7 @@ def _rows(most, n, k):
             np.zeros(most, dtype=np.int64))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _at_rest(cand, ncand, c):
     """Whether contact ``c`` may stick (it is at rest relative to its surface)."""
     for j in range(ncand[c]):
@@ -657,7 +670,7 @@ def _at_rest(cand, ncand, c):
     return False
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _singular(PC, SF, KN, p, lay, rolls, y, t, cand, ncand, W, I, ud, N, F, a, modes, rho,
               start):
     """Whether a candidate phase that slips has a singular reaction matrix (its
@@ -689,7 +702,7 @@ def _singular(PC, SF, KN, p, lay, rolls, y, t, cand, ncand, W, I, ud, N, F, a, m
 SAME_MOTION = 1e-7
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def groups(out_ud, count, n, acs, out_group):
     """Each of the ``count`` phases' group into ``out_group``: the phases whose
     accelerations agree with a group's first to :data:`SAME_MOTION` (numpy's ``allclose``
@@ -716,7 +729,7 @@ def groups(out_ud, count, n, acs, out_group):
     return ng
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _first(out_group, g):
     """The first phase of group ``g``."""
     i = 0
@@ -725,7 +738,7 @@ def _first(out_group, g):
     return i
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def watch(PC, SF, KN, DM, y, t, p, lay, one_sided, rolls, modes, rho, none, jam, bounds,
           W, I, ud, N, F, a, out):
     """The event functions of the phase at ``(t, y)`` into ``out``, each >= 0 while it goes
@@ -769,7 +782,7 @@ def watch(PC, SF, KN, DM, y, t, p, lay, one_sided, rolls, modes, rho, none, jam,
     return OK
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def watch_many(PC, SF, KN, DM, ys, ts, p, lay, one_sided, rolls, modes, rho, none, jam,
                bounds, W, I, ud, N, F, a, out, status):
     """:func:`watch` at each state ``(ts[i], ys[i])`` into ``out[i]``, its status into
@@ -779,7 +792,7 @@ def watch_many(PC, SF, KN, DM, ys, ts, p, lay, one_sided, rolls, modes, rho, non
                           none, jam, bounds, W, I, ud, N, F, a, out[i])
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _rhs(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, t, y, out):
     """``out`` <- ``y'`` of the phase; the status of :func:`accel`."""
     n = lay[0]
@@ -791,7 +804,7 @@ def _rhs(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, t, y, o
     return st
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _dip_rates(W, a, lay, modes, y, out):
     """Per contact, the rate of the function its mode watches for a dip between steps
     (:func:`_watched`), from what :func:`accel` left in ``W`` and ``a``: an open
@@ -818,7 +831,7 @@ def _watched(modes, one_sided, c):
     return 2 * c + 1 if modes[c] == SLIP_POS or modes[c] == SLIP_NEG else -1
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _norm(x, scale):
     s = 0.0
     for i in range(x.size):
@@ -827,7 +840,7 @@ def _norm(x, scale):
     return np.sqrt(s / x.size)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def dense_at(Fd, t_old, h, y_old, t, out):
     """scipy's DOP853 dense output of a step at ``t`` into ``out``."""
     if h == 0.0:            # (an empty step: scipy's constant dense output)
@@ -845,7 +858,7 @@ def dense_at(Fd, t_old, h, y_old, t, out):
         out[j] += y_old[j]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _trial_step(y, f, rtol, atol, interval, yt, y1):
     """scipy's ``select_initial_step`` up to its trial step: ``(h0, d1)``, with ``yt`` the
     scale ``atol + rtol |y|`` and ``y1 = y + h0 f``, where the rate is to be taken next."""
@@ -860,7 +873,7 @@ def _trial_step(y, f, rtol, atol, interval, yt, y1):
     return h0, d1
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _first_step(f, f1, yt, h0, d1, interval, max_step):
     """The rest of ``select_initial_step`` (order 7) from the rate ``f1`` at the trial."""
     d2 = 0.0
@@ -875,7 +888,7 @@ def _first_step(f, f1, yt, h0, d1, interval, max_step):
     return min(100.0 * h0, h1, interval, max_step)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _error(K, y, y_new, h, rtol, atol):
     """scipy's DOP853 error norm of the step ``y -> y_new`` over ``h`` with the stages
     ``K``: ``|h| ||err5||^2 / sqrt(||err5||^2 + 0.01 ||err3||^2)``, RMS norms over
@@ -898,7 +911,7 @@ def _error(K, y, y_new, h, rtol, atol):
     return abs(h) * e5 / np.sqrt((e5 + 0.01 * e3) * y.size)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _step_factor(err, rejected):
     """scipy's step-size factor after a step of error norm ``err``: accepted (``err < 1``),
     never above 1 after a rejection in the same step; rejected, the shrink."""
@@ -908,7 +921,7 @@ def _step_factor(err, rejected):
     return max(_MIN_FACTOR, _SAFETY * err ** _EXPONENT)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _at_times(Fd, t_old, h, y_old, t, te, i_eval, out_t, out_y, saved):
     """Save the step's dense output at the times ``te`` from ``i_eval`` on that it reaches
     (``<= t``; those before ``t_old`` are passed over); ``(i_eval, saved)`` after."""
@@ -921,7 +934,7 @@ def _at_times(Fd, t_old, h, y_old, t, te, i_eval, out_t, out_y, saved):
     return i_eval, saved
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _stages(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K, t, y, h, first,
             last, yt):
     """The stages ``first`` to ``last - 1`` of scipy's DOP853 from ``(t, y)`` over ``h``
@@ -938,7 +951,7 @@ def _stages(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K, t
     return st
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _dense(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K, t_old,
            y_old, y, f, h, yt, Fd):
     """The dense output's coefficients ``Fd`` (7, 2n) of the step ``y_old -> y`` (scipy's
@@ -959,7 +972,7 @@ def _dense(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K, t_
     return st
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, none,
             state, y, f, y_old, w0, w1, gr0, gr1, K, Fd, te, t_stop, rtol, atol, max_step,
             steps_left, out_t, out_y, W, I, ud, N, F, a, yt, quiet):
@@ -1168,7 +1181,7 @@ def dense_many(T, TE, Y0, FD, count, y_end, times, out):
             dense_at(FD[lo], T[lo], TE[lo] - T[lo], Y0[lo], s, out[i])
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, bounds,
                  W, I, ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, kind, idx, t):
     """At ``t`` in the step (its dense output): the event function ``idx`` (``kind`` 0; its
@@ -1193,7 +1206,7 @@ def _event_value(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam
     return v
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _brent(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, bounds, W, I, ud,
            N, F, a, Fd, t_old, h, y_old, w0, wt, yt, kind, idx, xa, xb, xtol, rtol):
     """scipy's ``brentq`` (its C code, 100 iterations) on :func:`_event_value`."""
@@ -1246,7 +1259,7 @@ def _brent(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, boun
     return xcur
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _onto_root(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, bounds, W, I,
                ud, N, F, a, Fd, t_old, h, y_old, w0, wt, yt, i, r, t1):
     """The root ``r`` moved, by ulps, to where the function is no longer positive
@@ -1260,7 +1273,7 @@ def _onto_root(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, 
     return r
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def locate(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, bounds, W, I, ud,
            N, F, a, Fd, t_old, t1, h, y_old, w0, w1, wt, yt):
     """``(t, index)`` of the earliest event function to reach zero in the step ``t_old`` to
@@ -1327,7 +1340,7 @@ def locate(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, none, jam, boun
     return best_t, best_i
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def jacobian(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, X, step, A, xp,
              xm, up):
     """``A = dF/dX`` of the phase's field ``F(X) = (u, u', 1)`` at ``X = (q, u, t)``: the
@@ -1364,7 +1377,7 @@ def jacobian(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, X, 
     return OK
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _variational_rate(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, s, Y,
                       step, A, xp, xm, up, X, out, nc, directional):
     """``out`` <- the rate of the variational system at ``(s, Y)``, ``Y = (X, P)`` with
@@ -1532,7 +1545,7 @@ def transition(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, X
     return OK
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def reactions(PC, SF, KN, p, lay, rolls, rho, none, W, I, ud, N, F, a, ts, ys, modes, Ns, Fs,
               status):
     """Per saved state ``i``: the status of :func:`accel` of the phase ``modes[i]`` at
@@ -1558,7 +1571,7 @@ def project_sizes(n, k):
     return n * n + 2 * m * n + m * m + 2 * m + 3 * n, n + m
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _constrained(Z, Iz, n, m, mm, uo, out, full_rank):
     """``Z[out:out + n] <- u - M^-1 R^T lam`` (``u`` at ``Z[uo:]``) with
     ``(R M^-1 R^T) lam = R u - target``: the smallest change of ``u`` in the mass metric
@@ -1640,7 +1653,7 @@ def _constrained(Z, Iz, n, m, mm, uo, out, full_rank):
     return ok
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def project_many(PC, SF, p, lay, rolls, ys, ts, closed, moving, held, fixed, W, Z, Iz, out,
                  status):
     """:func:`project` of each state ``(ts[i], ys[i])`` into ``out[i]``, its status into
@@ -1650,7 +1663,7 @@ def project_many(PC, SF, p, lay, rolls, ys, ts, closed, moving, held, fixed, W, 
                             W, Z, Iz, out[i])
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def project(PC, SF, p, lay, rolls, y, t, closed, moving, held, fixed, W, Z, Iz, out):
     """The state ``y`` put on the contacts ``closed`` (a boolean per contact) in the mass
     metric, into ``out``: the positions on their gaps' zero (Newton, at most 20 steps;
