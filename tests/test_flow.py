@@ -688,6 +688,8 @@ def test_the_kernels_without_reference_counts_leave_no_array_behind():
     landing, a periodic orbit continued (segments, transition matrices, projections) and
     a full map, which pass arrays between both kinds and through the declaration's
     functions at their addresses, free every array numba allocated for them."""
+    import gc
+
     import phasemap
     from numba.core.dispatcher import Dispatcher
     from numba.core.runtime import _nrt_python as nrt
@@ -714,11 +716,14 @@ def test_the_kernels_without_reference_counts_leave_no_array_behind():
         try:
             before = nrt.memsys_get_stats_mi_alloc(), nrt.memsys_get_stats_mi_free()
             ds, branch, maps = work()
+            kinds = [int(k) for k in ds.event_kind.values]
+            vertices, counted = branch.sizes["vertex"], int(maps["n_solutions"].count())
+            del ds, branch, maps         # (arrays numba made may live in them)
+            gc.collect()
             after = nrt.memsys_get_stats_mi_alloc(), nrt.memsys_get_stats_mi_free()
         finally:
             if not was:
                 nrt.memsys_disable_stats()
-    assert phasemap.Event.LIFTOFF in [int(k) for k in ds.event_kind.values]
-    assert branch.sizes["vertex"] >= 3 and int(maps["n_solutions"].count()) >= 9
+    assert phasemap.Event.LIFTOFF in kinds and vertices >= 3 and counted >= 9
     allocated, freed = after[0] - before[0], after[1] - before[1]
     assert allocated > 0 and allocated == freed

@@ -35,7 +35,7 @@ _BUILT = Memo("compile.built", replace=True)
 
 
 def specialize(template, model: Model, kind: str, parallel: bool = False, inline: bool = False,
-               **constants):
+               counts: bool = True, **constants):
     """The template compiled for ``model`` with ``constants`` as its globals.
 
     With ``inline`` the function is marked for LLVM to inline into its callers
@@ -45,6 +45,12 @@ def specialize(template, model: Model, kind: str, parallel: bool = False, inline
     its (one) caller instead: it is never compiled on its own, where a called
     function's code is optimised and generated once in its own library and again
     in each caller's.
+
+    ``counts=False`` compiles it without numba's reference counts (``_nrt=False``), for a
+    helper that allocates no array and returns none (numba refuses an allocation there):
+    the counts of its array arguments, raised and lowered around its calls, are atomic
+    operations that cost more than a small helper's arithmetic (the integrator's step
+    pieces: a wheel fate cell 37 -> 32 us, the same bits).
     """
     module = sys.modules[template.__module__]
     digest = source_hash(model, module, *getattr(module, "SOURCES", ()))
@@ -59,9 +65,10 @@ def specialize(template, model: Model, kind: str, parallel: bool = False, inline
         fn.__doc__ = template.__doc__
         if inline == "ir":
             return njit(cache=True, inline="always", error_model="numpy")(fn)
+        lean = {} if counts else {"_nrt": False}
         if inline:
-            return njit(cache=True, forceinline=True, error_model="numpy")(fn)
-        return njit(parallel=parallel, cache=True, error_model="numpy")(fn)
+            return njit(cache=True, forceinline=True, error_model="numpy", **lean)(fn)
+        return njit(parallel=parallel, cache=True, error_model="numpy", **lean)(fn)
 
     return _CACHE.get((), key, make)
 

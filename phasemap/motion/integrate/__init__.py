@@ -85,6 +85,9 @@ from phasemap.core.codegen import pack_axes
 from phasemap.core.model import Model
 from phasemap.motion.integrate import templates as tp
 
+#: The integrator's pieces that allocate arrays (or return one), compiled with numba's
+#: reference counts; the others without (``specialize(counts=False)``).
+COUNTED = ("INTEGRATE",)
 #: The methods by name (``simulate(method=...)``, the fate layers' ``method`` option).
 METHODS = {m.NAME: m for m in (_dopri5, _dop853)}
 #: The default method.
@@ -292,7 +295,8 @@ def _stage_kernels(model: Model) -> Stage:
     consts["WATCH"] = np.concatenate([[nx.COEF], consts["REACTIONS"]]).astype(np.int64)
     consts["MOVING"] = moving_test(model).moving
     for name, template, inline in tp.PIECES:
-        consts[name] = specialize(template, model, name.lower(), inline=inline, **consts)
+        consts[name] = specialize(template, model, name.lower(), inline=inline,
+                                  counts=name in COUNTED, **consts)
     return Stage(consts["CLASSIFY"], consts["STILL"], consts["EVENT"], consts["START"],
                  consts["STAGE_COEFFICIENT"], consts)
 
@@ -321,7 +325,7 @@ def _integrator(model: Model, method: str):
     for name, template, inline in (("STEP", spec.step_template, True),
                                    ("DENSE", spec.dense_template, True), *tp.METHOD_PIECES):
         consts[name] = specialize(template, model, f"{name.lower()}_{tag}", inline=inline,
-                                  **consts)
+                                  counts=name in COUNTED, **consts)
     return consts["INTEGRATE"]
 
 
