@@ -736,3 +736,19 @@ def test_many_points_per_stage_answer():
                      points_per_stage=100000)
     assert ds.sizes["point"] == 100000 * ds.sizes["stage"]
     assert np.all(np.isfinite(ds.omega.values))
+
+
+def test_the_curves_pieces_count_no_references_but_those_that_allocate():
+    """The compiled curve's pieces run without numba's reference counts, but for the two
+    that allocate its output (``tracer.COUNTED``); the curve is the same either way (its
+    closed forms are checked above), and numba refuses an allocation in the others."""
+    from phasemap.models import get_model
+    from phasemap.motion.phase import tracer
+
+    curve = phase.kernel(get_model("hinge_pendulum"))
+    built = dict(curve.py_func.__globals__, CURVE=curve)     # (each piece, by its name)
+    for name, _, inline in tracer.PIECES:
+        if inline == "ir":
+            continue                    # (inlined into the curve's own code)
+        lean = built[name].targetoptions.get("_nrt") is False
+        assert lean == (name not in tracer.COUNTED), name

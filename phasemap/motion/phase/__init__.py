@@ -207,7 +207,8 @@ def _build(m: Model):
                         if m.kinks is None or r.name in m.kinks], dtype=np.int64),
     )
     for name, template, inline in tracer.PIECES:
-        consts[name] = specialize(template, m, f"phase_{name.lower()}", inline=inline, **consts)
+        consts[name] = specialize(template, m, f"phase_{name.lower()}", inline=inline,
+                                  counts=name in tracer.COUNTED, **consts)
     return consts["CURVE"]
 
 
