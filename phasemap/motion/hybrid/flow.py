@@ -581,9 +581,9 @@ def survey_cells(PC, SF, KN, P, lay, one_sided, rolls, Y, T, plain, moving, want
 def survey_range(PC, SF, KN, P, lay, one_sided, rolls, Y, T, plain, moving, want_singular,
                  rows, lo, hi, out_n, out_flags, out_row):
     """:func:`survey_cells` of the cells ``lo`` to ``hi``, one after another (what the
-    interpreter tier runs while the parallel kernel compiles)."""
+    interpreter tier runs while the parallel kernel compiles): the scratch, grown where a
+    state has more candidate phases than ``rows``, around :func:`_survey_run`."""
     n, k = lay[0], lay[1]
-    most = rows                    # grown where a state has more candidate phases
     if hi <= lo:
         return
     W = np.zeros(sizes_of(n, k)[1])
@@ -605,20 +605,38 @@ def survey_range(PC, SF, KN, P, lay, one_sided, rolls, Y, T, plain, moving, want
     muk = np.zeros(k)
     flip = np.zeros(k, dtype=np.bool_)
     prefer = np.full(k, -1, dtype=np.int64)
-    om, orho, oud, oN, oF, oa, og = _rows(most, n, k)
+    om, orho, oud, oN, oF, oa, og = _rows(rows, n, k)
+    i = lo
+    while i < hi:
+        i, need = _survey_run(PC, SF, KN, P, lay, one_sided, rolls, Y, T, plain, moving,
+                              want_singular, i, hi, out_n, out_flags, out_row, W, I, S, sc,
+                              cand, ncand, ud, N, F, a, modes, rho, start, vn, vt, gk, muk,
+                              flip, prefer, om, orho, oud, oN, oF, oa, og)
+        if need > om.shape[0]:       # more candidate phases than rows: grown
+            om, orho, oud, oN, oF, oa, og = _rows(need, n, k)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _survey_run(PC, SF, KN, P, lay, one_sided, rolls, Y, T, plain, moving, want_singular,
+                lo, hi, out_n, out_flags, out_row, W, I, S, sc, cand, ncand, ud, N, F, a,
+                modes, rho, start, vn, vt, gk, muk, flip, prefer, om, orho, oud, oN, oF, oa,
+                og):
+    """The cells ``lo`` to ``hi`` of :func:`survey_range` on its scratch, without numba's
+    reference counts: ``(hi, 0)``, or ``(i, rows)`` at the first cell ``i`` whose state
+    has more candidate phases than the rows ``om`` hold (its survey then starts again,
+    on ``rows`` of them)."""
+    k = lay[1]
     for i in range(lo, hi):
         y = Y[i]
         p = P[i]
         t = T[i]
         for j in range(out_row.shape[1]):
             out_row[i, j] = np.nan
-        count = -2 - most
-        while count <= -2:
-            if -2 - count > om.shape[0]:     # more candidate phases than rows: grown
-                om, orho, oud, oN, oF, oa, og = _rows(-2 - count, n, k)
-            count = survey(PC, SF, KN, p, lay, one_sided, rolls, y, t, flip, prefer, plain,
-                           W, I, S, sc, cand, ncand, ud, N, F, a, modes, rho, start, vn,
-                           vt, gk, muk, om, orho, oud, oN, oF, oa, og)
+        count = survey(PC, SF, KN, p, lay, one_sided, rolls, y, t, flip, prefer, plain,
+                       W, I, S, sc, cand, ncand, ud, N, F, a, modes, rho, start, vn,
+                       vt, gk, muk, om, orho, oud, oN, oF, oa, og)
+        if count <= -2:
+            return i, -2 - count
         out_flags[i] = 0
         if count < 0:
             out_n[i] = -1
@@ -650,6 +668,7 @@ def survey_range(PC, SF, KN, P, lay, one_sided, rolls, Y, T, plain, moving, want
             for c in range(k):
                 out_row[i, moving.size + 2 * c] = oN[0, c]
                 out_row[i, moving.size + 2 * c + 1] = oF[0, c]
+    return hi, 0
 
 
 @njit(cache=True, error_model="numpy")
