@@ -180,6 +180,29 @@ def accel(PC, SF, KN, y, t, p, lay, rolls, modes, rho, start, want_det, W, I, ud
     relative rest (their static coefficient).  ``REDUNDANT`` where the reaction matrix is
     near singular (the caller picks an admissible member), ``SINGULAR`` where the
     solution is not finite.  The pieces are left at the start of ``W``."""
+    st, det = _solve(PC, SF, KN, y, t, p, lay, rolls, modes, rho, start, want_det, W, I, ud,
+                     N, F)
+    if st != OK:
+        return st, det
+    n, k = lay[0], lay[1]
+    oJ = n * n + n + k             # J (k, 3, n), b (k, 3), then the static mu
+    ob = oJ + 3 * k * n
+    osd = ob + 3 * k + k           # the surfaces' speeds (k) and rates (k)
+    for c in range(k):
+        for r in range(3):
+            v = W[ob + 3 * c + r]
+            for i in range(n):
+                v += W[oJ + (3 * c + r) * n + i] * ud[i]
+            a[c, r] = v
+        if lay[3]:
+            a[c, 1] -= W[osd + k + c]
+    return OK, det
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _solve(PC, SF, KN, y, t, p, lay, rolls, modes, rho, start, want_det, W, I, ud, N, F):
+    """:func:`accel` but the contact accelerations ``a``: what a stage of a step needs
+    (its accelerations ``ud``), without the ``3 k n`` products it does not read."""
     n, k = lay[0], lay[1]
     nf = n * n + n + k + 3 * k * n + 3 * k + k
     _at(PC, W[:nf], y, p, t)
@@ -317,14 +340,6 @@ def accel(PC, SF, KN, y, t, p, lay, rolls, modes, rho, start, want_det, W, I, ud
             if modes[c] == SLIP_POS or modes[c] == SLIP_NEG:
                 s = 1.0 if modes[c] == SLIP_POS else -1.0
                 F[c] = -s * rho[c] * W[omu + c] * N[c]
-    for c in range(k):
-        for r in range(3):
-            v = W[ob + 3 * c + r]
-            for i in range(n):
-                v += W[oJ + (3 * c + r) * n + i] * ud[i]
-            a[c, r] = v
-        if lay[3]:
-            a[c, 1] -= W[osd + k + c]
     return OK, det
 
 
@@ -824,6 +839,18 @@ def _rhs(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, t, y, o
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
+def _ydot(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, t, y, out):
+    """:func:`_rhs` without the contact accelerations (:func:`_solve`): a stage's."""
+    n = lay[0]
+    st, det = _solve(PC, SF, KN, y, t, p, lay, rolls, modes, rho, none, False, W, I, ud, N,
+                     F)
+    for i in range(n):
+        out[i] = y[n + i]
+        out[n + i] = ud[i]
+    return st
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _dip_rates(W, a, lay, modes, y, out):
     """Per contact, the rate of the function its mode watches for a dip between steps
     (:func:`_watched`), from what :func:`accel` left in ``W`` and ``a``: an open
@@ -965,8 +992,8 @@ def _stages(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K, t
             for j in range(s):
                 v += K[j, i] * _A[s, j]
             yt[i] = y[i] + v * h
-        st = max(st, _rhs(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a,
-                          t + _C[s] * h, yt, K[s]))
+        st = max(st, _ydot(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F,
+                           t + _C[s] * h, yt, K[s]))
     return st
 
 
@@ -1020,8 +1047,8 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
             h_abs = 0.0
         else:
             h0, d1 = _trial_step(y, f, rtol, atol, interval, yt, y_old)
-            args_ok = _rhs(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a,
-                           t + h0, y_old, K[15])
+            args_ok = _ydot(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F,
+                            t + h0, y_old, K[15])
             h_abs = _first_step(f, K[15], yt, h0, d1, interval, max_step)
     if args_ok != OK:
         state[1] = h_abs
@@ -1058,8 +1085,8 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
                 for j in range(12):
                     v += K[j, i] * _B[j]
                 y_old[i] = y[i] + h * v          # (y_new, kept here for now)
-            st = max(st, _rhs(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a,
-                              t + h, y_old, K[12]))
+            st = max(st, _ydot(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F,
+                               t + h, y_old, K[12]))
             if st != OK:
                 state[0], state[1], state[4] = t, h_abs, i_eval
                 return st, saved, steps
