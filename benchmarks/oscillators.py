@@ -209,8 +209,9 @@ def main() -> None:
              "(its mode sequence). Before 2026-12-02 the same 200-point branches took "
              "1.55-1.64 s (belt) and 1.62-1.78 s (Den Hartog), this script run on the tree at "
              "e8cbe03 (`PYTHONPATH=<checkout of e8cbe03> python benchmarks/oscillators.py "
-             "--no-write`) alternating with this tree, which took 0.74-0.76 s and 0.88-0.92 s "
-             "in the same minutes. A fold's or a period doubling's branch adds their location. The "
+             "--no-write`) alternating with the tree at 994e7c3, which took 0.74-0.76 s and "
+             "0.88-0.92 s in the same minutes; the flow's kernels have run without numba's "
+             "reference counts since (`flow.ALLOCATING`), about 0.2 s less each. A fold's or a period doubling's branch adds their location. The "
              "hand-written belt orbits know the mode sequence and integrate one segment "
              "each, without stability or checks: the floor a compiled hybrid flow would "
              "start from."]
