@@ -182,8 +182,15 @@ def accel(PC, SF, KN, y, t, p, lay, rolls, modes, rho, start, want_det, W, I, ud
     solution is not finite.  The pieces are left at the start of ``W``."""
     st, det = _solve(PC, SF, KN, y, t, p, lay, rolls, modes, rho, start, want_det, W, I, ud,
                      N, F)
-    if st != OK:
-        return st, det
+    if st == OK:
+        _contact_accelerations(W, lay, ud, a)
+    return st, det
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _contact_accelerations(W, lay, ud, a):
+    """``a`` (k, 3) <- each contact's accelerations ``J ud + b``, the tangential relative
+    to its surface, from the pieces :func:`_solve` left in ``W``."""
     n, k = lay[0], lay[1]
     oJ = n * n + n + k             # J (k, 3, n), b (k, 3), then the static mu
     ob = oJ + 3 * k * n
@@ -196,7 +203,6 @@ def accel(PC, SF, KN, y, t, p, lay, rolls, modes, rho, start, want_det, W, I, ud
             a[c, r] = v
         if lay[3]:
             a[c, 1] -= W[osd + k + c]
-    return OK, det
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -828,13 +834,11 @@ def watch_many(PC, SF, KN, DM, ys, ts, p, lay, one_sided, rolls, modes, rho, non
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _rhs(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, t, y, out):
-    """``out`` <- ``y'`` of the phase; the status of :func:`accel`."""
-    n = lay[0]
-    st, det = accel(PC, SF, KN, y, t, p, lay, rolls, modes, rho, none, False, W, I, ud, N,
-                    F, a)
-    for i in range(n):
-        out[i] = y[n + i]
-        out[n + i] = ud[i]
+    """``out`` <- ``y'`` of the phase, and its contact accelerations ``a``; the status of
+    :func:`accel`."""
+    st = _ydot(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, t, y, out)
+    if st == OK:
+        _contact_accelerations(W, lay, ud, a)
     return st
 
 
@@ -981,7 +985,7 @@ def _at_times(Fd, t_old, h, y_old, t, te, i_eval, out_t, out_y, saved):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _stages(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K, t, y, h, first,
+def _stages(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, K, t, y, h, first,
             last, yt):
     """The stages ``first`` to ``last - 1`` of scipy's DOP853 from ``(t, y)`` over ``h``
     into the rows of ``K``; the worst status of :func:`accel`."""
@@ -998,12 +1002,12 @@ def _stages(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K, t
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _dense(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K, t_old,
+def _dense(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, K, t_old,
            y_old, y, f, h, yt, Fd):
     """The dense output's coefficients ``Fd`` (7, 2n) of the step ``y_old -> y`` (scipy's
     DOP853 ``_dense_output_impl``); the status of the extra stages."""
     ny = y.size
-    st = _stages(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K, t_old,
+    st = _stages(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, K, t_old,
                  y_old, h, 13, 16, yt)
     for i in range(ny):
         dy = y[i] - y_old[i]
@@ -1078,7 +1082,7 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
             ha = abs(h)
             for i in range(ny):
                 K[0, i] = f[i]
-            st = _stages(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K,
+            st = _stages(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, K,
                          t, y, h, 1, 12, yt)
             for i in range(ny):
                 v = 0.0
@@ -1107,7 +1111,7 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
         if quiet:       # (a segment of known length: no events; only the times te saved)
             state[0], state[1], state[2], state[3] = t, h_abs, t_old, h
             if te.size > 0 and i_eval < te.size and te[i_eval] <= t:
-                st = _dense(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a,
+                st = _dense(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F,
                             K, t_old, y_old, y, f, h, yt, Fd)
                 if st != OK:
                     state[4] = i_eval
@@ -1135,7 +1139,7 @@ def advance(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, jam, bounds, n
                 hit = True
         dense = hit or (te.size > 0 and i_eval < te.size and te[i_eval] <= t)
         if dense:
-            st = _dense(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K,
+            st = _dense(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, K,
                         t_old, y_old, y, f, h, yt, Fd)
             if st != OK:
                 state[4] = i_eval
@@ -1193,7 +1197,7 @@ def steps_of(PC, SF, KN, DM, p, lay, one_sided, rolls, modes, rho, bounds, none,
         if st != FINISHED and st != MAX_STEPS:
             return st, count
         if taken == 1:      # the step just taken: its dense output, as advance makes it
-            s2 = _dense(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, a, K,
+            s2 = _dense(PC, SF, KN, p, lay, rolls, modes, rho, none, W, I, ud, N, F, K,
                         state[2], y_old, y, f, state[3], yt, FD[count])
             if s2 != OK:
                 return s2, count
