@@ -50,7 +50,7 @@ def specialize(template, model: Model, kind: str, parallel: bool = False, inline
     helper that allocates no array and returns none (numba refuses an allocation there):
     the counts of its array arguments, raised and lowered around its calls, are atomic
     operations that cost more than a small helper's arithmetic (the integrator's step
-    pieces: a wheel fate cell 37 -> 32 us, the same bits).
+    pieces: a wheel fate cell 37-39 -> 33-34 us, the same bits).
     """
     module = sys.modules[template.__module__]
     digest = source_hash(model, module, *getattr(module, "SOURCES", ()))

@@ -857,9 +857,6 @@ def _curve_template(v, phi0, omega0, lo, hi, max_stages, points, u_ref, rtol, h_
 #: REFINE and ROOT (once per panel or event) are called, which cuts the cold compile
 #: by a sixth (43.7 -> 36.2 s for the 17-row rod on a step, 22.7 -> 17.6 s for the
 #: hinge) for curves 7-11 % slower.
-#: The pieces that allocate arrays (or return one), compiled with numba's reference
-#: counts; the others without (``specialize(counts=False)``).
-COUNTED = ("CURVE", "STORE_PANEL")
 PIECES = (("ROW", _row_template, True),
           ("RATE", _rate_template, True),
           ("VALUE", _value_template, True),
@@ -881,3 +878,6 @@ PIECES = (("ROW", _row_template, True),
           ("CONTACT_END", _contact_end_template, True),
           ("STAGE", _stage_template, "ir"),
           ("CURVE", _curve_template, False))
+#: The pieces that allocate arrays (or return one), compiled with numba's reference
+#: counts; the others without (``specialize(counts=False)``).
+COUNTED = ("CURVE", "STORE_PANEL")
