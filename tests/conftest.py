@@ -350,3 +350,30 @@ def small_filesystem(folder: pathlib.Path, size: str, readonly: bool = False):
         yield folder
     finally:
         subprocess.run(["umount", "-l", str(folder)], check=False)
+
+
+@contextlib.contextmanager
+def numba_arrays():
+    """Counts the arrays numba's runtime allocates and frees inside the block (its
+    statistics switched on for the block): yields a dict whose ``allocated`` and
+    ``freed`` are filled when the block ends.  Garbage is collected on entry (so that
+    arrays dropped before the block are not counted freed in it) and on exit (drop
+    inside the block what holds numba's arrays, such as a Dataset, to count them
+    freed)."""
+    import gc
+
+    from numba.core.runtime import _nrt_python as nrt
+
+    counted = {}
+    was = nrt.memsys_stats_enabled()
+    nrt.memsys_enable_stats()
+    try:
+        gc.collect()
+        before = nrt.memsys_get_stats_mi_alloc(), nrt.memsys_get_stats_mi_free()
+        yield counted
+        gc.collect()
+        counted["allocated"] = nrt.memsys_get_stats_mi_alloc() - before[0]
+        counted["freed"] = nrt.memsys_get_stats_mi_free() - before[1]
+    finally:
+        if not was:
+            nrt.memsys_disable_stats()

@@ -727,9 +727,7 @@ def test_the_integrators_pieces_count_no_references_but_the_driver():
     (``integrate.COUNTED``) is compiled without numba's reference counts, whose atomic
     operations around each call with array arguments cost a tenth of a fate cell; the
     integrator built from them still frees every array it allocates."""
-    import gc
-
-    from numba.core.runtime import _nrt_python as nrt
+    from conftest import numba_arrays
 
     from phasemap.core import tiers
     from phasemap.motion import integrate
@@ -741,19 +739,15 @@ def test_the_integrators_pieces_count_no_references_but_the_driver():
     assert all(consts[name].targetoptions.get("_nrt") is False for name in pieces)
     fn = integrate.integrator(model, "DOPRI5")
     assert fn.targetoptions.get("_nrt") is not False and "INTEGRATE" in integrate.COUNTED
+    method = dict(fn.py_func.__globals__, INTEGRATE=fn)      # (its pieces, by name)
+    for name in ("STEP", "DENSE", *(name for name, _, _ in tp.METHOD_PIECES)):
+        assert (method[name].targetoptions.get("_nrt") is False) == \
+            (name not in integrate.COUNTED), name
     with tiers.forced("eager"):
         ds = phasemap.simulate("wheel", 10.0, phi=0.5, omega=1.0)
-        was = nrt.memsys_stats_enabled()
-        nrt.memsys_enable_stats()
-        try:
-            before = nrt.memsys_get_stats_mi_alloc(), nrt.memsys_get_stats_mi_free()
+        with numba_arrays() as counted:
             again = phasemap.simulate("wheel", 10.0, phi=0.5, omega=1.0)
             same = np.array_equal(ds.phi.values, again.phi.values)
             del again                    # (the Dataset's arrays are numba's)
-            gc.collect()
-            after = nrt.memsys_get_stats_mi_alloc(), nrt.memsys_get_stats_mi_free()
-        finally:
-            if not was:
-                nrt.memsys_disable_stats()
-    assert after[0] - before[0] > 0 and after[0] - before[0] == after[1] - before[1]
+    assert counted["allocated"] > 0 and counted["allocated"] == counted["freed"]
     assert same and ds.sizes["t"] > 10
