@@ -270,6 +270,32 @@ def test_random_simultaneous_impacts_have_a_solution_that_keeps_the_laws():
             assert s.dKE <= 1e-9
 
 
+def test_a_delassus_matrix_made_by_the_motion_skips_only_its_check():
+    """``delassus_made`` (what a landing passes: W = J M^-1 J^T by construction) gives the
+    same solutions, bit for bit, as the checked call, held rows included; only the
+    symmetry check is skipped, and input that is not finite is still refused."""
+    from phasemap.motion.impact import delassus, simultaneous
+
+    rng = np.random.default_rng(11)
+    solved = 0
+    for _ in range(40):
+        A = rng.normal(size=(5, 5))
+        M = A @ A.T + 5 * np.eye(5)
+        W = delassus(M, rng.normal(size=(5, 5)))
+        # (the held row's velocity zero, as a landing leaves it before the normal impact)
+        v = np.array([-rng.uniform(0.1, 2), rng.normal(), -rng.uniform(0, 2), rng.normal(),
+                      0.0])
+        mu, e = rng.uniform(0, 1.5, 2), rng.uniform(0, 1)
+        checked = simultaneous(W, v, mu, e=e, held=[1])
+        made = simultaneous(W, v, mu, e=e, held=[1], delassus_made=True)
+        assert [(s.modes, s.P.tobytes(), s.v.tobytes(), s.dKE) for s in made] == \
+            [(s.modes, s.P.tobytes(), s.v.tobytes(), s.dKE) for s in checked]
+        solved += bool(checked)
+    assert solved >= 30
+    with pytest.raises(ValueError, match="finite"):
+        simultaneous(np.full((2, 2), np.nan), [-1.0, 0.0], [0.5], delassus_made=True)
+
+
 def test_simultaneous_impacts_with_restitution():
     """Moreau's generalised Newton law at several contacts (issue 38: e > 0 was ignored
     where another contact was closed).  A uniform rod (m = 1, half-length 1) lying flat

@@ -84,6 +84,39 @@ def test_a_batch_shares_the_memory_among_its_starts():
     assert resources.available_memory() > 0
 
 
+def test_the_machines_memory_is_read_again_after_a_moment_the_process_limit_at_every_call(
+        monkeypatch):
+    """The kernel's and the cgroup's figures are answered again for FRESH seconds (a map
+    followed through contact changes asks twice a cell); the process's own address-space
+    limit is read at every call, so a limit set a moment after a reading holds at once."""
+    import math
+    import resource
+    import time
+
+    from phasemap.core import resources
+
+    reads = []
+
+    def machine():
+        reads.append(1)
+        return [10 ** 15]
+
+    monkeypatch.setattr(resources, "_machine", machine)
+    monkeypatch.setattr(resources, "_READING", [-math.inf, []])
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    first = resources.available_memory()
+    assert resources.available_memory() == first and len(reads) == 1
+    if soft == resource.RLIM_INFINITY:
+        assert first == 10 ** 15
+    resources._READING[0] = time.monotonic() - resources.FRESH
+    resources.available_memory()
+    assert len(reads) == 2
+    # a limit the process sets after the reading: seen by the next call, not FRESH later
+    monkeypatch.setattr(resource, "getrlimit", lambda which: (resources._status("VmSize:")
+                                                              + 12345, soft))
+    assert 0 < resources.available_memory() <= 12345 + 2 ** 20 and len(reads) == 2
+
+
 CURVE = LIMIT + """
 kw = dict(phi=2.5, omega=0.0, delta=0.0)
 phasemap.phase_curve("hinge_pendulum", max_stages=2, **kw)     # compiled (or loaded) first

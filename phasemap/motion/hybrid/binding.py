@@ -85,6 +85,15 @@ class Phase:
         #: more (the most, 4 ** k, would take 0.5 GB for ten contacts)
         self.rows = 16
         self.none = np.zeros(k, dtype=np.bool_)
+        self._n_pieces = n * n + n + k + 3 * k * n + 3 * k + k
+        #: every contact's friction as a pressing contact's (rho = +1; the kernels read it)
+        self.pressing = np.ones(k)
+        #: no contact's mode preferred (:func:`preferences` of none)
+        self.no_preference = preferences(k, None)
+        #: :meth:`survey`'s candidates (k, 4), their counts, the contacts whose sign of N
+        #: it tries -1 first, the scales, and the kernel's per-contact scratch
+        self._survey_scratch = (np.zeros((k, 4), dtype=np.int64), np.zeros(k, dtype=np.int64),
+                                np.zeros(k, dtype=np.bool_), np.zeros(4), self._scratch())
         self.ud, self.N, self.F = np.zeros(n), np.zeros(k), np.zeros(k)
         self.a = np.zeros((k, 3))
         self.n_watch = 2 * k + 2 * n + mech.n_domain + 1
@@ -145,29 +154,33 @@ class Phase:
         ``flip``: the contacts whose sign of N is tried -1 first; ``prefer``:
         ``{contact: mode}``."""
         n, k = self.n, self.k
-        cand = np.zeros((k, 4), dtype=np.int64)
-        ncand = np.zeros(k, dtype=np.int64)
-        flips = np.zeros(k, dtype=np.bool_)
-        flips[list(flip)] = True
-        sc = np.zeros(4)
+        # (the kernel's inputs and scratch, kept between calls: what it returns is read
+        # out of them below, and the phases' rows are new arrays each call)
+        cand, ncand, flips, sc, scratch = self._survey_scratch
+        flips[:] = False
+        for c in flip:
+            flips[c] = True
         PC, SF, KN, _ = self.fns
         most = self.rows
         while True:     # rows for the state's candidate phases (flow.survey says how many)
             *out, group = _rows.py_func(most, n, k)
             count = self.survey_fn(PC, SF, KN, self.p, self.lay, self.one_sided, self.rolls,
-                                   y, float(t), flips, preferences(k, prefer), bool(plain),
-                                   self.W, self.I, self.S, sc, cand, ncand, self.ud, self.N,
-                                   self.F, self.a, *self._scratch(), *out, group)
+                                   y, float(t), flips,
+                                   preferences(k, prefer) if prefer else self.no_preference,
+                                   bool(plain), self.W, self.I, self.S, sc, cand, ncand,
+                                   self.ud, self.N, self.F, self.a, *scratch, *out, group)
             if count > -2:
                 break
             most = -2 - count
-        candidates = [tuple(int(m) for m in cand[c, :ncand[c]]) for c in range(k)]
+        rows, lengths = cand.tolist(), ncand.tolist()
+        candidates = [tuple(rows[c][:lengths[c]]) for c in range(k)]
+        scales = tuple(sc.tolist())
         if count < 0:
-            return tuple(float(x) for x in sc), candidates, None
+            return scales, candidates, None
         modes, rho, ud, N, F, a = out
-        return (tuple(float(x) for x in sc), candidates,
-                [(tuple(int(m) for m in modes[i]), (ud[i], N[i], F[i], a[i], rho[i]),
-                  int(group[i])) for i in range(count)])
+        return (scales, candidates,
+                [(tuple(m), (ud[i], N[i], F[i], a[i], rho[i]), g) for i, (m, g) in
+                 enumerate(zip(modes[:count].tolist(), group[:count].tolist()))])
 
     def project(self, y, t, closed, moving, held, fixed):
         """:func:`project` of the state ``y`` at ``t`` (the contacts and coordinates as
@@ -219,7 +232,12 @@ class Phase:
     def scales(self, P, y):
         """:func:`flow.scales` of the pieces ``P`` (``(M, h, g, J, b, mu)``) at the state
         ``y``: ``(velocity, force, acceleration, length)``."""
-        flat = np.concatenate([np.ravel(x) for x in P])
+        base = P[0].base
+        if base is not None and base.size == self._n_pieces and all(x.base is base
+                                                                   for x in P):
+            flat = base     # (the views of one array :meth:`Mechanics.pieces` makes)
+        else:
+            flat = np.concatenate([np.ravel(x) for x in P])
         sc = np.zeros(4)
         self.scales_fn(flat, self.lay, y, self.S, self.I, sc)
         return tuple(float(x) for x in sc)

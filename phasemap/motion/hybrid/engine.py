@@ -90,6 +90,7 @@ class Motion:
         self.rests = mech.can_rest
         #: the compiled flow: the phases' accelerations, event functions and steps
         self.flow = binding.Phase(mech, self.p, self.one_sided, self.rolls, (warm, (), {}))
+        self._flag_memo: dict = {}
 
     def surf(self, t):
         """Each contact surface's tangential velocity at ``t``."""
@@ -130,9 +131,9 @@ class Motion:
         compiled flow; in Python where the phase's contacts are redundant."""
         fl = self.flow
         st, det = fl.solve(np.concatenate([q, u]), t, np.asarray(modes, dtype=np.int64),
-                           np.ones(self.k) if rho is None else np.asarray(rho, dtype=float),
-                           np.array([c in start for c in range(self.k)], dtype=np.bool_),
-                           bool(singular))
+                           fl.pressing if rho is None else np.asarray(rho, dtype=float),
+                           np.array([c in start for c in range(self.k)], dtype=np.bool_)
+                           if start else fl.none, bool(singular))
         if st == flow.REDUNDANT:
             return self._solve_redundant(q, u, modes, rho, t, start, singular)
         if st != flow.OK:
@@ -401,13 +402,14 @@ class Motion:
     def _flags(self, closed, moving, held, fixed):
         """The contacts ``closed``, ``moving``, ``held`` and the coordinates ``fixed`` as
         :func:`flow.project` takes them: a boolean row per contact set, and one per
-        coordinate."""
-        flags = np.zeros((3, self.k), dtype=np.bool_)
-        for row, which in enumerate((closed, moving, held)):
-            flags[row, list(which)] = True
-        still = np.zeros(self.n, dtype=np.bool_)
-        still[list(fixed)] = True
-        return flags, still
+        coordinate.  Made once per combination and kept (the kernels only read them)."""
+        key = (tuple(closed), tuple(moving), tuple(held), tuple(fixed))
+        if key not in self._flag_memo:
+            flags = np.zeros((3 + 1, max(self.k, self.n)), dtype=np.bool_)
+            for row, which in enumerate(key):
+                flags[row, list(which)] = True
+            self._flag_memo[key] = (flags[:3, :self.k].copy(), flags[3, :self.n].copy())
+        return self._flag_memo[key]
 
     def _projected(self, q, u, closed, moving, held, fixed, t):
         flags, still = self._flags(closed, moving, held, fixed)

@@ -59,7 +59,7 @@ def closing(self, t, q, u, modes, c):
     # Moreau's generalised Newton law on what the slip's stop left (where that alone
     # turned the landing contact away, it stays open): the landing contact rebounds with
     # e times its approach; the closed ones (v_n = 0 before) take impulses and stay
-    sols = simultaneous(W, v1, mu[K], e=o.restitution, held=rolling)
+    sols = simultaneous(W, v1, mu[K], e=o.restitution, held=rolling, delassus_made=True)
     if len(sols) != 1:
         self._end(t, q, u, modes, ev.INDETERMINATE if sols else ev.NO_SOLUTION, c)
         return None
