@@ -97,6 +97,7 @@ class Phase:
         self.ud, self.N, self.F = np.zeros(n), np.zeros(k), np.zeros(k)
         self.a = np.zeros((k, 3))
         self.n_watch = 2 * k + 2 * n + mech.n_domain + 1
+        self._buffers = None
         self.mech, self.warm = mech, warm
         self.twin = True
         self._tiers()
@@ -137,6 +138,19 @@ class Phase:
         the same bits: a motion may change tiers between its phases)."""
         if self.twin:
             self._tiers()
+
+    def buffers(self, cap: int, n_watch: int):
+        """The arrays :func:`phasemap.motion.hybrid.stepping.phase` steps in (``cap`` saved
+        states at least, ``n_watch`` event functions), made once and kept between phases:
+        ``(out_t, out_y, y_old, w1, yt, K, Fd, gr0, gr1, state, w0)``."""
+        kept = self._buffers
+        if kept is None or kept[0].size < cap or kept[3].size != n_watch:
+            ny = 2 * self.n
+            kept = self._buffers = (np.empty(cap), np.empty((cap, ny)), np.empty(ny),
+                                    np.empty(n_watch), np.empty(ny), np.zeros((16, ny)),
+                                    np.zeros((7, ny)), np.empty(self.k), np.empty(self.k),
+                                    np.empty(5), np.empty(n_watch))
+        return kept
 
     def solve(self, y, t, modes, rho, start, want_det):
         """``(status, det)`` of :func:`accel`; the results in ``ud``, ``N``, ``F``, ``a`` and

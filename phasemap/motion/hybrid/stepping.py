@@ -25,15 +25,15 @@ def phase(self, t, q, u, modes, rho, sc, t_stop, jam_sign, w0, atol):
     f = np.empty(ny)
     if fl.rate(y, t, modes_a, rho_a, f) != flow.OK:
         return scipy_phase(self, t, y, modes, rho, sc, t_stop, jam_sign, w0, atol)
-    gr0, gr1 = np.empty(self.k), np.empty(self.k)
-    fl.rates_fn(fl.W, fl.a, fl.lay, modes_a, y, gr0)
     te = self.t_eval if self.t_eval is not None else np.empty(0)
-    cap = max(binding.BUFFER, te.size - self.i_eval + 2)
-    out_t, out_y = np.empty(cap), np.empty((cap, ny))
-    y_old, w1, yt = np.empty(ny), np.empty(w0.size), np.empty(ny)
-    K, Fd = np.zeros((16, ny)), np.zeros((7, ny))
-    w0 = np.array(w0, dtype=float)
-    state = np.array([t, 0.0, t, 0.0, float(self.i_eval)])
+    # (the stepping's arrays, kept by the flow between phases: none leaves this function,
+    # what is saved or kept is copied out of them)
+    out_t, out_y, y_old, w1, yt, K, Fd, gr0, gr1, state, w0_kept = fl.buffers(
+        max(binding.BUFFER, te.size - self.i_eval + 2), w0.size)
+    fl.rates_fn(fl.W, fl.a, fl.lay, modes_a, y, gr0)
+    w0_kept[:] = w0
+    w0 = w0_kept
+    state[:] = t, 0.0, t, 0.0, float(self.i_eval)
     PC, SF, KN, DM = fl.fns
     while True:
         status, saved, steps = fl.advance_fn(
