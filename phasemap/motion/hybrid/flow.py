@@ -125,7 +125,24 @@ ALLOCATING = ("sizes_of", "survey_cells", "survey_range", "_rows", "dense_many",
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _lu(W, o, I, op, m):
     """LU factors, in place, of the ``m x m`` matrix at ``W[o:]`` (row-major), partial
-    pivoting, the pivots at ``I[op:]``; its determinant."""
+    pivoting, the pivots at ``I[op:]``; its determinant.  The sizes up to 4 run the same
+    operations with the size a constant (:func:`_lu_of`), which LLVM unrolls: a phase's
+    mass matrix and reaction matrix are this small, and their factors with a size known
+    only at run time took most of a flight step's solve (the same bits)."""
+    if m == 1:
+        return _lu_of(W, o, I, op, 1)
+    if m == 2:
+        return _lu_of(W, o, I, op, 2)
+    if m == 3:
+        return _lu_of(W, o, I, op, 3)
+    if m == 4:
+        return _lu_of(W, o, I, op, 4)
+    return _lu_of(W, o, I, op, m)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _lu_of(W, o, I, op, m):
+    """:func:`_lu`'s factors (inlined into its branches, each with its own ``m``)."""
     det = 1.0
     for j in range(m):
         p = j
@@ -153,7 +170,23 @@ def _lu(W, o, I, op, m):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _lu_solve(W, o, I, op, m, x):
-    """``W[x:x+m]`` <- its solution by :func:`_lu`'s factors at ``W[o:]``, ``I[op:]``."""
+    """``W[x:x+m]`` <- its solution by :func:`_lu`'s factors at ``W[o:]``, ``I[op:]`` (the
+    sizes up to 4 unrolled, as :func:`_lu`)."""
+    if m == 1:
+        _lu_solve_of(W, o, I, op, 1, x)
+    elif m == 2:
+        _lu_solve_of(W, o, I, op, 2, x)
+    elif m == 3:
+        _lu_solve_of(W, o, I, op, 3, x)
+    elif m == 4:
+        _lu_solve_of(W, o, I, op, 4, x)
+    else:
+        _lu_solve_of(W, o, I, op, m, x)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _lu_solve_of(W, o, I, op, m, x):
+    """:func:`_lu_solve`'s substitutions (inlined into its branches)."""
     for j in range(m):
         p = I[op + j]
         if p != j:
