@@ -142,14 +142,14 @@ class Phase:
     def buffers(self, cap: int, n_watch: int):
         """The arrays :func:`phasemap.motion.hybrid.stepping.phase` steps in (``cap`` saved
         states at least, ``n_watch`` event functions), made once and kept between phases:
-        ``(out_t, out_y, y_old, w1, yt, K, Fd, gr0, gr1, state, w0)``."""
+        ``(out_t, out_y, y_old, w1, yt, K, Fd, gr0, gr1, state, w0, f)``."""
         kept = self._buffers
         if kept is None or kept[0].size < cap or kept[3].size != n_watch:
             ny = 2 * self.n
             kept = self._buffers = (np.empty(cap), np.empty((cap, ny)), np.empty(ny),
                                     np.empty(n_watch), np.empty(ny), np.zeros((16, ny)),
                                     np.zeros((7, ny)), np.empty(self.k), np.empty(self.k),
-                                    np.empty(5), np.empty(n_watch))
+                                    np.empty(5), np.empty(n_watch), np.empty(ny))
         return kept
 
     def solve(self, y, t, modes, rho, start, want_det):

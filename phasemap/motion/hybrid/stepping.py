@@ -13,23 +13,25 @@ from phasemap.core import events as ev
 from phasemap.motion.hybrid import binding, flow, jam, landing
 
 
+#: No requested times (the flow's ``te`` when every step is saved).
+_NO_TIMES = np.empty(0)
+
+
 def phase(self, t, q, u, modes, rho, sc, t_stop, jam_sign, w0, atol):
     """The phase ``modes`` from ``(t, q, u)`` (``w0``: its event functions there) to its
     first event, on the compiled flow."""
     o, n, rec, fl = self.o, self.n, self.rec, self.flow
     fl.refresh()
-    ny = 2 * n
     y = np.concatenate([q, u])
     modes_a = np.asarray(modes, dtype=np.int64)
-    rho_a = np.ones(self.k) if rho is None else np.asarray(rho, dtype=float)
-    f = np.empty(ny)
-    if fl.rate(y, t, modes_a, rho_a, f) != flow.OK:
-        return scipy_phase(self, t, y, modes, rho, sc, t_stop, jam_sign, w0, atol)
-    te = self.t_eval if self.t_eval is not None else np.empty(0)
+    rho_a = fl.pressing if rho is None else np.asarray(rho, dtype=float)
+    te = self.t_eval if self.t_eval is not None else _NO_TIMES
     # (the stepping's arrays, kept by the flow between phases: none leaves this function,
     # what is saved or kept is copied out of them)
-    out_t, out_y, y_old, w1, yt, K, Fd, gr0, gr1, state, w0_kept = fl.buffers(
+    out_t, out_y, y_old, w1, yt, K, Fd, gr0, gr1, state, w0_kept, f = fl.buffers(
         max(binding.BUFFER, te.size - self.i_eval + 2), w0.size)
+    if fl.rate(y, t, modes_a, rho_a, f) != flow.OK:
+        return scipy_phase(self, t, y, modes, rho, sc, t_stop, jam_sign, w0, atol)
     fl.rates_fn(fl.W, fl.a, fl.lay, modes_a, y, gr0)
     w0_kept[:] = w0
     w0 = w0_kept
