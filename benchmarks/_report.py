@@ -60,17 +60,20 @@ def parser(doc: str) -> argparse.ArgumentParser:
 
 
 def write_section(text: str, heading: str) -> None:
-    """Replace (or append) the section that starts with ``heading`` in BENCHMARKS.md."""
+    """Replace, where it stands, the section that starts with ``heading`` in BENCHMARKS.md
+    (or append it), so that a rerun's diff shows its figures alone."""
     path = ROOT / "BENCHMARKS.md"
     old = path.read_text() if path.exists() else "# Benchmarks\n\n"
     # the heading at the start of a line: "## Grid throughput" must not match the
     # declared systems' "### Grid throughput, 2048^2 maps" (it did, and deleted it)
     found = re.search(rf"(?m)^{re.escape(heading)}", old)
-    if found:
-        start = found.start()
-        nxt = old.find("\n## ", start + len(heading))
-        old = old[:start] + old[nxt + 1:] if nxt >= 0 else old[:start]
-    path.write_text(old.rstrip() + "\n\n" + text.rstrip() + "\n")
+    if not found:
+        path.write_text(old.rstrip() + "\n\n" + text.rstrip() + "\n")
+        return
+    start = found.start()
+    nxt = old.find("\n## ", start + len(heading))
+    rest = old[nxt + 1:] if nxt >= 0 else ""
+    path.write_text(old[:start] + text.rstrip() + "\n" + ("\n" + rest if rest else ""))
 
 
 def publish(lines, heading: str, write: bool = True) -> str:
