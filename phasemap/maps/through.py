@@ -11,9 +11,9 @@ without collision, dynamic jams and Zeno (:mod:`phasemap.motion.hybrid`): its fa
 are that motion's end.  A cell is exactly the motion ``simulate`` gives from its start.
 
 A followed cell costs a ``simulate`` call without its Dataset
-(:func:`phasemap.motion.simulate.motion_end`), some 2 ms (its phases on the compiled
-flow, what follows each event in Python): a map whose cells mostly leave their contacts
-takes about fifty times the reduced one.  The other cells keep the compiled integrator's values, bit for bit.
+(:func:`phasemap.motion.simulate.motion_end`), 1-2 ms (its phases on the compiled flow,
+what follows each event in Python; the wheel's 10^6-cell map, 9 % of it followed, takes
+ten times the reduced one: BENCHMARKS.md).  The other cells keep the compiled integrator's values, bit for bit.
 """
 
 from __future__ import annotations
