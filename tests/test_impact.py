@@ -292,6 +292,12 @@ def test_a_delassus_matrix_made_by_the_motion_skips_only_its_check():
             [(s.modes, s.P.tobytes(), s.v.tobytes(), s.dKE) for s in checked]
         solved += bool(checked)
     assert solved >= 30
+    # contacts that separate already: every one open, no impulse, the velocities kept
+    W = delassus(np.diag([1.0, 2.0, 3.0]), [[1.0, 0.2, 0.0], [0.0, 1.0, 0.5], [0.3, 0.0, 1.0]])
+    sols = simultaneous(W, [0.5, -0.2, 0.0], [0.4], held=[0], delassus_made=True)
+    assert [s.modes for s in sols] == [("open",)]
+    assert sols[0].P.tolist() == [0.0, 0.0, 0.0] and sols[0].v.tolist() == [0.5, -0.2, 0.0]
+    assert sols[0].dKE == 0.0 and not sols[0].continuum
     with pytest.raises(ValueError, match="finite"):
         simultaneous(np.full((2, 2), np.nan), [-1.0, 0.0], [0.5], delassus_made=True)
 
