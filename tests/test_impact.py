@@ -300,6 +300,11 @@ def test_a_delassus_matrix_made_by_the_motion_skips_only_its_check():
     assert sols[0].dKE == 0.0 and not sols[0].continuum
     with pytest.raises(ValueError, match="finite"):
         simultaneous(np.full((2, 2), np.nan), [-1.0, 0.0], [0.5], delassus_made=True)
+    # the check skipped, and only there: a W that is not symmetric
+    lopsided = [[2.0, 0.5], [0.0, 1.0]]
+    with pytest.raises(ValueError, match="symmetric"):
+        simultaneous(lopsided, [-1.0, 0.0], [0.5])
+    assert simultaneous(lopsided, [-1.0, 0.0], [0.5], delassus_made=True)
 
 
 def test_simultaneous_impacts_with_restitution():

@@ -135,9 +135,17 @@ class Mechanics:
         static coefficients: a rolling disc's is its rolling-friction length)."""
         n, k = self.n, len(self.contacts)
         # (Python floats: the generated arithmetic on NumPy scalars took twice as long,
-        # for the same IEEE operations and the same bits)
-        flat = np.array(self._pieces(*_floats(q), *_floats(u), *_floats(p), float(t)),
-                        dtype=float)
+        # for the same IEEE operations and the same bits while every result is finite;
+        # where Python raises instead of giving inf or nan, as a division by zero or a
+        # fractional power of a negative number, NumPy's scalars give what they gave)
+        try:
+            flat = np.array(self._pieces(*_floats(q), *_floats(u), *_floats(p), float(t)),
+                            dtype=float)
+        except (ArithmeticError, TypeError, ValueError):
+            with np.errstate(all="ignore"):
+                flat = np.array(self._pieces(*np.asarray(q, dtype=float),
+                                             *np.asarray(u, dtype=float),
+                                             *np.asarray(p, dtype=float), t), dtype=float)
         i = 0
         M = flat[i:i + n * n].reshape(n, n)
         i += n * n

@@ -246,9 +246,9 @@ class Phase:
     def scales(self, P, y):
         """:func:`flow.scales` of the pieces ``P`` (``(M, h, g, J, b, mu)``) at the state
         ``y``: ``(velocity, force, acceleration, length)``."""
-        base = P[0].base
-        if base is not None and base.size == self._n_pieces and all(x.base is base
-                                                                   for x in P):
+        base = getattr(P[0], "base", None)
+        if base is not None and base.size == self._n_pieces and all(
+                getattr(x, "base", None) is base for x in P):
             flat = base     # (the views of one array :meth:`Mechanics.pieces` makes)
         else:
             flat = np.concatenate([np.ravel(x) for x in P])

@@ -405,10 +405,11 @@ class Motion:
         coordinate.  Made once per combination and kept (the kernels only read them)."""
         key = (tuple(closed), tuple(moving), tuple(held), tuple(fixed))
         if key not in self._flag_memo:
-            flags = np.zeros((3 + 1, max(self.k, self.n)), dtype=np.bool_)
-            for row, which in enumerate(key):
+            flags, still = np.zeros((3, self.k), dtype=np.bool_), np.zeros(self.n, np.bool_)
+            for row, which in enumerate(key[:3]):
                 flags[row, list(which)] = True
-            self._flag_memo[key] = (flags[:3, :self.k].copy(), flags[3, :self.n].copy())
+            still[list(key[3])] = True
+            self._flag_memo[key] = flags, still
         return self._flag_memo[key]
 
     def _projected(self, q, u, closed, moving, held, fixed, t):
