@@ -105,7 +105,10 @@ def big_text(b: dict) -> list[str]:
         f"{b['after']}): {b['followed']} cells followed at {1e3 * per:.2f} ms of one "
         f"thread each. Target (issue 38, 10^6 cells): <= {BIG_TARGET:g} s on 2 threads: "
         + ("not judged (a smaller map)." if cells < 10 ** 6 else
-           "**met**." if met else f"**missed** ({tw / BIG_TARGET:.1f}x)."),
+           "**met**." if met else f"**missed** ({tw / BIG_TARGET:.1f}x).")
+        + " The followed cells that still end no_solution are where the wheel's perfectly "
+        "rough rolling contact leaves no phase to go on in and no impact without "
+        "collision applies (docs/guide/contacts.md, 'What is not built yet').",
         "",
     ]
 
