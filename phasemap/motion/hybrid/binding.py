@@ -15,7 +15,7 @@ from phasemap.motion.hybrid.flow import (FINISHED, FULL, FUNCTION, OK, _dip_rate
                                          _rows, accel, admits, advance, dense_at, dense_many,
                                          groups, jacobian, locate, project, project_many,
                                          project_sizes, reactions, scales, scales_at,
-                                         steps_of, survey, survey_cells, survey_range,
+                                         sizes, steps_of, survey, survey_cells, survey_range,
                                          transition, watch, watch_many, workspace)
 
 _LOCK = threading.Lock()
@@ -85,7 +85,7 @@ class Phase:
         #: more (the most, 4 ** k, would take 0.5 GB for ten contacts)
         self.rows = 16
         self.none = np.zeros(k, dtype=np.bool_)
-        self._n_pieces = n * n + n + k + 3 * k * n + 3 * k + k
+        self._n_pieces = sizes(n, k)[0]
         #: every contact's friction as a pressing contact's (rho = +1; the kernels read it)
         self.pressing = np.ones(k)
         #: no contact's mode preferred (:func:`preferences` of none)
@@ -139,13 +139,13 @@ class Phase:
         if self.twin:
             self._tiers()
 
-    def buffers(self, cap: int, n_watch: int):
+    def buffers(self, cap: int):
         """The arrays :func:`phasemap.motion.hybrid.stepping.phase` steps in (``cap`` saved
-        states at least, ``n_watch`` event functions), made once and kept between phases:
+        states at least), made once and kept between phases:
         ``(out_t, out_y, y_old, w1, yt, K, Fd, gr0, gr1, state, w0, f)``."""
         kept = self._buffers
-        if kept is None or kept[0].size < cap or kept[3].size != n_watch:
-            ny = 2 * self.n
+        if kept is None or kept[0].size < cap:
+            ny, n_watch = 2 * self.n, self.n_watch
             kept = self._buffers = (np.empty(cap), np.empty((cap, ny)), np.empty(ny),
                                     np.empty(n_watch), np.empty(ny), np.zeros((16, ny)),
                                     np.zeros((7, ny)), np.empty(self.k), np.empty(self.k),

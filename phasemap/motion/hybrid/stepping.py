@@ -29,7 +29,7 @@ def phase(self, t, q, u, modes, rho, sc, t_stop, jam_sign, w0, atol):
     # (the stepping's arrays, kept by the flow between phases: none leaves this function,
     # what is saved or kept is copied out of them)
     out_t, out_y, y_old, w1, yt, K, Fd, gr0, gr1, state, w0_kept, f = fl.buffers(
-        max(binding.BUFFER, te.size - self.i_eval + 2), w0.size)
+        max(binding.BUFFER, te.size - self.i_eval + 2))
     if fl.rate(y, t, modes_a, rho_a, f) != flow.OK:
         return scipy_phase(self, t, y, modes, rho, sc, t_stop, jam_sign, w0, atol)
     fl.rates_fn(fl.W, fl.a, fl.lay, modes_a, y, gr0)
