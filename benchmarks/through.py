@@ -27,6 +27,7 @@ from phasemap.motion.simulate import GOES_ON
 
 sys.path.insert(0, __file__.rsplit("/", 1)[0])
 from _report import load, machine, parser, publish  # noqa: E402
+from fate_map import FATE_OPTIONS, OMEGA_MAX  # noqa: E402
 
 CASES = {
     "wheel": (lambda n: {"phi": np.linspace(-np.pi, np.pi, n),
@@ -66,23 +67,23 @@ def run(model: str, side: int, repeat: int) -> dict:
             "before": _counts(out[False]), "after": _counts(out[True]), "t_end": t_end}
 
 
-#: The issue's own map (issue 38): the wheel's fate map of benchmarks/fate_map.py (phi x
-#: omega in +-6, t_end 30 s, rtol 1e-6), with the new fates; its target on 2 threads.
-BIG_OPTIONS = {"t_end": 30.0, "rtol": 1e-6}
+#: The issue's own map (issue 38) is the wheel's fate map of benchmarks/fate_map.py (its
+#: axes and options), with the new fates; its target on 2 threads.
 BIG_TARGET = 20.0
 
 
 def big(side: int) -> dict:
     """The wheel's ``side`` x ``side`` fate map with ``through_contacts``, once (warm
     caches): wall and CPU time, the cells followed, the fates."""
-    axes = {"phi": np.linspace(-np.pi, np.pi, side), "omega": np.linspace(-6.0, 6.0, side)}
+    axes = {"phi": np.linspace(-np.pi, np.pi, side),
+            "omega": np.linspace(-OMEGA_MAX, OMEGA_MAX, side)}
     with tiers.forced("eager"):
         phasemap.Scene("wheel", axes={k: v[:4] for k, v in axes.items()}, layers=["fate"],
-                       options={**BIG_OPTIONS, "through_contacts": True}).compute()
+                       options={**FATE_OPTIONS, "through_contacts": True}).compute()
     out = {}
     for through in (False, True):
         scene = phasemap.Scene("wheel", axes=axes, layers=["fate"],
-                               options={**BIG_OPTIONS, "through_contacts": through})
+                               options={**FATE_OPTIONS, "through_contacts": through})
         w, c = time.perf_counter(), time.process_time()
         fate = scene.compute(progress=False).fate.values
         out[through] = (time.perf_counter() - w, time.process_time() - c, fate)
@@ -98,8 +99,8 @@ def big_text(b: dict) -> list[str]:
     met = tw <= BIG_TARGET
     return [
         f"The issue's map, measured: the wheel's {b['side']} x {b['side']} = {cells:.3g} "
-        f"cells of the section 'Fate map of the wheel' (phi x omega in +-6, "
-        f"options {BIG_OPTIONS}), once each, warm caches, {numba.get_num_threads()} threads "
+        f"cells of the section 'Fate map of the wheel' (phi x omega in +-{OMEGA_MAX:g}, "
+        f"options {FATE_OPTIONS}), once each, warm caches, {numba.get_num_threads()} threads "
         f"for the compiled cells: reduced {rw:.1f} s wall ({rc:.1f} s CPU; fates "
         f"{b['before']}); with `through_contacts` {tw:.1f} s wall ({tc:.1f} s CPU; fates "
         f"{b['after']}): {b['followed']} cells followed at {1e3 * per:.2f} ms of one "
