@@ -86,26 +86,89 @@ def pythagorean(e, angles):
 
 
 def _monomial(e):
-    """The monomial factor common to the terms of ``e`` (such as m**4 l**4)."""
+    """The monomial factor common to the terms of the expanded ``e`` (such as m**4 l**4)."""
     import sympy as sp
 
-    f = sp.factor_terms(sp.expand(e))
+    f = sp.factor_terms(e)
     if not f.is_Mul:
         return sp.Integer(1)
     return sp.Mul(*(a for a in f.args if a.is_Symbol or (a.is_Pow and a.args[0].is_Symbol
                                                          and a.args[1].is_Integer)))
 
 
+def expanded(exprs):
+    """``sympy.expand`` of each of ``exprs``, the same canonical sums, computed in a ring of
+    polynomials where every one is a polynomial with rational coefficients in symbols and
+    sines and cosines: sympy's expansion of a product of large sums (Cramer's numerators,
+    the accelerations' numerators) builds and flattens every partial product as an
+    expression, and took most of a wheelbarrow's derivation.  Any other atom (a division,
+    a float, a square root, whose square sympy rewrites) leaves every expression to
+    ``sympy.expand``."""
+    import sympy as sp
+    from sympy.polys.rings import ring
+
+    exprs = [sp.sympify(e) for e in exprs]
+    atoms = set()
+    for e in exprs:
+        atoms |= e.free_symbols | e.atoms(sp.sin, sp.cos)
+    trig = [a for a in atoms if not a.is_Symbol]
+    if not exprs or any(a.args[0] != sp.expand(a.args[0]) for a in trig):
+        return [sp.expand(e) for e in exprs]
+    gens = sorted(atoms, key=sp.default_sort_key)
+    R, *_ = ring(gens, sp.QQ) if gens else (None,)
+    if R is None:
+        return [sp.expand(e) for e in exprs]
+    index = dict(zip(gens, R.gens))
+    memo = {}
+
+    class NotPolynomial(Exception):
+        pass
+
+    def conv(e):
+        got = memo.get(e)
+        if got is not None:
+            return got
+        if e.is_Rational:
+            r = R(sp.QQ.from_sympy(e))
+        elif e in index:
+            r = index[e]
+        elif e.is_Add:
+            r = R.zero
+            for a in e.args:
+                r = r + conv(a)
+        elif e.is_Mul:
+            r = R.one
+            for a in e.args:
+                r = r * conv(a)
+        elif e.is_Pow and e.exp.is_Integer and e.exp > 0:
+            r = conv(e.base) ** int(e.exp)
+        else:
+            raise NotPolynomial
+        memo[e] = r
+        return r
+
+    try:
+        return [conv(e).as_expr() for e in exprs]
+    except NotPolynomial:
+        return [sp.expand(e) for e in exprs]
+
+
 def reduced(exprs):
     """``exprs`` (a quotient's denominator and numerators) divided by their common
     monomial factor, so that no power of a parameter larger than needed is formed
-    (m**5 overflows for m = 1e62)."""
+    (m**5 overflows for m = 1e62).
+
+    Each is expanded once (:func:`expanded`): its terms give the common factor, and
+    divided by it term by term they are the expansion of the quotient (expanding it again
+    took a third of a wheelbarrow's derivation)."""
     import sympy as sp
 
-    monos = [_monomial(e) for e in exprs if e != 0]
+    full = expanded(exprs)
+    monos = [_monomial(E) for e, E in zip(exprs, full) if e != 0]
     common = monos[0]
     for mo in monos[1:]:
         common = sp.gcd(common, mo)
     if common == 1:
         return list(exprs)
-    return [sp.expand(e / common) for e in exprs]
+    return [sp.Add(*(t / common for t in E.args)) if E.is_Add else sp.expand(E / common)
+            for E in full]

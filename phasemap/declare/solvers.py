@@ -20,7 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from phasemap.declare.algebra import cramer, count_ops, pythagorean, reduced, scale_of
+from phasemap.declare.algebra import (count_ops, cramer, expanded, pythagorean, reduced,
+                                      scale_of)
 from phasemap.declare.law import STICK, LinearProblem, Mode
 from phasemap.declare.validation import fail
 
@@ -137,12 +138,22 @@ def solve_regular(eqs, p: LinearProblem, K, rhs, shared: bool = True):
 def _vanishes(eqs, e) -> bool:
     """Whether ``e`` vanishes identically (relative to its scale, at random samples: a
     nonzero function of the state does not vanish at random points)."""
+    return _vanish(eqs, [e])[0]
+
+
+def _vanish(eqs, exprs) -> list[bool]:
+    """:func:`_vanishes` of each of ``exprs``, evaluated together at the same samples
+    (:meth:`phasemap.declare.equations.Equations.numeric_all`)."""
     import sympy as sp
 
-    e = sp.sympify(e)
-    if e == 0:
-        return True
-    return not np.max(np.abs(eqs.numeric(e / (scale_of(e) + 1e-300), 12))) > 1e-9
+    exprs = [sp.sympify(e) for e in exprs]
+    live = [i for i, e in enumerate(exprs) if e != 0]
+    out = [True] * len(exprs)
+    if live:
+        vals = eqs.numeric_all([exprs[i] / (scale_of(exprs[i]) + 1e-300) for i in live], 12)
+        for i, v in zip(live, vals):
+            out[i] = not np.max(np.abs(v)) > 1e-9
+    return out
 
 
 def one_direction(eqs, p: LinearProblem, D, nums):
@@ -251,6 +262,25 @@ def _proportional(eqs, a, b) -> bool:
     sympy cancels it to a number): two such minors vanish together."""
     import sympy as sp
 
+    # numerically first: a ratio that is far from constant at the samples is not one, and
+    # one constant to rounding is (sympy's cancel of two minors took seconds); a ratio in
+    # between, or not finite at some sample, is decided exactly as before
+    both = (sp.sympify(a).free_symbols | sp.sympify(b).free_symbols)
+    signs = [x for x in both if x.name.startswith(("_k_sig", "_k_rho"))]
+    spreads = []
+    for sign in itertools.product((1, -1), repeat=len(signs)):
+        sub = dict(zip(signs, sign))
+        va, vb = eqs.numeric_all([sp.sympify(a).xreplace(sub), sp.sympify(b).xreplace(sub)], 6)
+        with np.errstate(all="ignore"):
+            r = va / vb
+        if not np.all(np.isfinite(r)) or np.max(np.abs(r)) == 0.0:
+            spreads = None
+            break
+        spreads.append(np.ptp(r) / np.max(np.abs(r)))
+    if spreads is not None and max(spreads) > 1e-3:
+        return False
+    if spreads is not None and max(spreads) <= 1e-12:
+        return True
     ratio = sp.cancel(a / b)
     if not ratio.free_symbols:
         return True
@@ -282,15 +312,18 @@ def _parametrisation(eqs, p, K, rhs, aMW, I, J, sub, Dp):
     # member it may not (then the family exists only where the residual vanishes)
     row_p = sum(K[i0, j] * lam_p[j] for j in range(k)) - rhs[i0] * Dp
     row_d = sum(K[i0, j] * lam_d[j] for j in range(k))
-    if not _vanishes(eqs, row_d):
+    # (the three tests at once: they share the family's Cramer numerators)
+    moved = list(aMW * sp.Matrix(lam_d))
+    direction, holds, *still = _vanish(eqs, [row_d, row_p, *moved])
+    if not direction:
         raise AssertionError(f"{p.fname}: the family's direction leaves the dropped equation")
-    moves = not all(_vanishes(eqs, e) for e in aMW * sp.Matrix(lam_d))
+    moves = not all(still)
     Dp, *pd = reduced([Dp, *P0, *d])
     P, Dd = [sp.Integer(0)] * k, [sp.Integer(0)] * k
     for a, j in enumerate(J):
         P[j], Dd[j] = pd[a], pd[k - 1 + a]
     Dd[j0] = Dp
-    return Family(Dp, P, Dd), moves, _vanishes(eqs, row_p)
+    return Family(Dp, P, Dd), moves, holds
 
 
 def short_determinant(sol: Solution, angles):
@@ -328,8 +361,8 @@ def quotients(sol: Solution, rows, angles):
     n, k = p.n, len(p.unknowns)
     gen = [sol.D * sol.hx[a] + sum((sol.W[a, i] * sol.nums[i] for i in range(k)),
                                    sp.Integer(0)) for a in range(n)]
-    nums = [sp.expand(sum((sol.aM[j, a] * gen[a] for a in range(n)), sp.Integer(0)))
-            for j in rows]
+    nums = expanded([sum((sol.aM[j, a] * gen[a] for a in range(n)), sp.Integer(0))
+                     for j in rows])
     via = count_ops(sol.nums) + sum(count_ops([sol.aM[j, a] * (sol.hx[a] + sum(
         (sol.W[a, i] for i in range(k)), sp.Integer(0))) for a in range(n)]) for j in rows)
     if count_ops(nums) > via:
