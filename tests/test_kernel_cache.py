@@ -158,12 +158,17 @@ def test_a_damaged_numba_file_is_compiled_again_with_one_line(warm, tmp_path, wh
     assert child(load(), root).stderr == ""   # saved again, loads cleanly
 
 
+def _function_files(index: pathlib.Path) -> list[pathlib.Path]:
+    """numba's index and data files of one function, then phasemap's hash file of them (as
+    phasemap.core.cache._numba_files lists them)."""
+    base = index.name[:-len(".nbi")]
+    return [index, *sorted(index.parent.glob(f"{base}.*.nbc")), index.with_suffix(".nbh")]
+
+
 def test_a_damaged_system_module_and_contract_leave_classify_working(tmp_path):
     """The issue's case: classify('ladder') must survive its generated files going bad."""
     import phasemap
-    from phasemap.core import cache
-
-    from phasemap.core import tiers
+    from phasemap.core import cache, tiers
 
     model = phasemap.MODELS["ladder"]
     with tiers.forced("eager"):   # the contract's machine code saved by this phasemap (a
@@ -172,13 +177,29 @@ def test_a_damaged_system_module_and_contract_leave_classify_working(tmp_path):
     contract = pathlib.Path(model.contract.__file__)
     root = tmp_path / "cache"
     (root / "__pycache__").mkdir(parents=True)
-    for f, damage in ((declared, DAMAGE["truncated"]), (contract, DAMAGE["garbage"])):
-        (root / f.name).write_bytes(damage(f.read_bytes()))
-    for f in cache._numba_folder(cache.folder()).glob(f"{contract.stem}.*"):
-        shutil.copy(f, root / "__pycache__")   # the contract's compiled code stays valid
     code = ("import phasemap\n"
             "c = phasemap.classify('ladder', phi=0.5, omega=0.0, f=0.3)\n"
             "print(c.n_solutions, c.stagnation)\n")
+    # the contract's compiled code, copied valid: under each function's lock, as a loading
+    # process reads it (the other test process may be saving it at that moment), and
+    # checked; where it is not what this phasemap saved, a first process of the test's own
+    # fills the cache instead (it compiles)
+    folder = cache._numba_folder(cache.folder())
+    indexes = sorted(folder.glob(f"{contract.stem}.*.nbi"))
+    with contextlib.ExitStack() as locks:
+        for index in indexes:
+            locks.enter_context(cache._locked(index, exclusive=False))
+        for f in folder.glob(f"{contract.stem}.*"):
+            if f.suffix != ".nbl":
+                shutil.copy(f, root / "__pycache__")
+    copied = [root / "__pycache__" / i.name for i in indexes]
+    if not copied or any(cache._unverified(_function_files(i)) for i in copied):
+        shutil.rmtree(root)
+        first = child(code, root, PHASEMAP_JIT="eager")
+        assert first.returncode == 0 and first.stdout.split() == ["1", "True"], first.stderr
+    for f, damage in ((declared, DAMAGE["truncated"]), (contract, DAMAGE["garbage"])):
+        source = root / f.name if (root / f.name).exists() else f
+        (root / f.name).write_bytes(damage(source.read_bytes()))
     r = child(code, root)
     assert r.returncode == 0 and r.stdout.split() == ["1", "True"], r.stderr
     assert len(lines(r)) == 2 and all("damaged" in line for line in lines(r)), r.stderr
