@@ -654,6 +654,38 @@ def test_info_clear_and_the_bound_see_the_numba_files_of_every_subpackage(fake_c
     assert list(numba_sub.iterdir()) == [] and keep.exists()
 
 
+def test_processes_needing_one_function_at_once_compile_it_once(tmp_path):
+    """Three processes call one uncompiled function at the same moment (a clock they all
+    wait for): one compiles it, the others wait for it and load its machine code (numba
+    counts a miss in one process and a hit in each other), and every answer is right.  Two
+    test processes compiled the same kernels side by side (35 of them twice in one run of
+    the suite, 70 s of CPU), and so would the workers of a dask cluster.  Two rounds from
+    a cold folder (the old code failed the first)."""
+    code = ("import sys, time\n"
+            "from phasemap.core.codegen import load_module\n"
+            f"m = load_module({STEM!r}, lambda: {TEXT!r})\n"
+            "time.sleep(max(0.0, float(sys.argv[1]) - time.time()))\n"
+            "print(m.cells(1), sum(m.cells.stats.cache_misses.values()),\n"
+            "      sum(m.cells.stats.cache_hits.values()))\n")
+    for round_ in range(2):
+        root = tmp_path / f"cache{round_}"
+        start = time.time() + 3.0      # (after every process has imported phasemap)
+        procs = [subprocess.Popen([sys.executable, "-c", code, repr(start)],
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                  env={**{k: v for k, v in os.environ.items()
+                                          if k != "NUMBA_CACHE_DIR"},
+                                       "PYTHONPATH": os.pathsep.join(
+                                           [str(ROOT), os.environ.get("PYTHONPATH", "")]),
+                                       "PHASEMAP_CACHE_DIR": str(root)})
+                 for _ in range(3)]
+        answers = []
+        for p in procs:
+            out, err = p.communicate(timeout=300)
+            assert p.returncode == 0 and err == "", err
+            answers.append(out.split())
+        assert sorted(answers) == [["42", "0", "1"]] * 2 + [["42", "1", "0"]], answers
+
+
 def test_processes_compiling_one_function_at_once_say_nothing(tmp_path):
     """Two xdist workers compiling one kernel at once: one read an index whose hash the
     other had not written yet, called it damaged on stderr and removed it.  The numba files

@@ -88,8 +88,9 @@ HASH_PREFIX = "# phasemap-sha256 "
 REWRITER = " rewritten-by "
 
 #: numba's files: ``<stem>.<function>-<line>.pyXY.nbi`` and ``....pyXY.<n>.nbc``, and
-#: phasemap's hashes of them, ``....pyXY.nbh``, and lock, ``....pyXY.nbl``.
-_NUMBA_FILE = re.compile(r"^(?P<stem>[^.]+(?:\.[^.]+?)?)-\d+\.py\d+(?:\.\d+)?\.nb[ichl]$")
+#: phasemap's hashes of them, ``....pyXY.nbh``, and locks, ``....pyXY.nbl`` (its files)
+#: and ``....pyXY.nbk`` (its compilation).
+_NUMBA_FILE = re.compile(r"^(?P<stem>[^.]+(?:\.[^.]+?)?)-\d+\.py\d+(?:\.\d+)?\.nb[ichlk]$")
 #: Python's bytecode of a generated module (earlier versions imported them from files).
 _BYTECODE = re.compile(r"^(?P<stem>[^.]+)\.cpython-\d+\.pyc$")
 
@@ -615,6 +616,11 @@ def _guard_numba() -> None:
 
     cls.load_overload, cls.save_overload = load_overload, save_overload
     cls._phasemap_guarded = True
+
+    # one process compiles a function at a time (phasemap.core.compilelock)
+    from phasemap.core import compilelock
+
+    compilelock.install(_ours)
 
 
 _guard_numba()
