@@ -686,6 +686,25 @@ def test_processes_needing_one_function_at_once_compile_it_once(tmp_path):
         assert sorted(answers) == [["42", "0", "1"]] * 2 + [["42", "1", "0"]], answers
 
 
+def test_a_function_compiled_inside_its_own_compile_does_not_wait_for_itself(tmp_path):
+    """A recursive function meets itself with other argument types while it compiles (a
+    literal count, then the int): its compile lock is this process's already, and the
+    nested compile must not wait for it (it waited the ten minutes of COMPILE_WAIT)."""
+    text = ('from numba import njit\n\n\n@njit(cache=True)\ndef rec(x, n):\n'
+            '    if n <= 0:\n        return x\n    return rec(x, n - 1) + 1\n\n\n'
+            '@njit(cache=True)\ndef cells(x):\n    return rec(x, 3) + rec(1.5, 2)\n\n\n'
+            'SPEC = "probe"\n')
+    code = ("from phasemap.core.codegen import load_module\n"
+            f"m = load_module({STEM!r}, lambda: {text!r})\n"
+            "print(m.cells(1), len(m.rec.signatures))\n")
+    e = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    e.update(PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+             PHASEMAP_CACHE_DIR=str(tmp_path))
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=e,
+                       timeout=120)
+    assert r.returncode == 0 and r.stdout.split() == ["7.5", "4"], r.stderr
+
+
 def test_processes_compiling_one_function_at_once_say_nothing(tmp_path):
     """Two xdist workers compiling one kernel at once: one read an index whose hash the
     other had not written yet, called it damaged on stderr and removed it.  The numba files

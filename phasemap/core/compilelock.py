@@ -25,6 +25,12 @@ import time
 COMPILE_WAIT = 600.0
 
 
+#: The locks this process holds, by file: a compile inside a compile of the same function
+#: (another signature it calls itself with) must not wait for its own lock.  (numba's
+#: compiler lock, which every compile holds, keeps them to one thread at a time.)
+_HELD: set[str] = set()
+
+
 def lock(cache) -> int | None:
     """An exclusive lock on compiling one function (``<name>.nbk`` beside its index), held
     while numba loads or compiles and saves it: a second process that needs the function
@@ -73,13 +79,18 @@ def install(ours) -> None:
         if not ours(cache):
             return compile_(self, sig)
         with global_compiler_lock:
-            if tuple(sigutils.normalize_signature(sig)[0]) in self.overloads:
+            key = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
+            if (tuple(sigutils.normalize_signature(sig)[0]) in self.overloads
+                    or key is None or key in _HELD):
                 return compile_(self, sig)
             fd = lock(cache)
+            if fd is not None:
+                _HELD.add(key)
             try:
                 return compile_(self, sig)
             finally:
                 if fd is not None:
+                    _HELD.discard(key)
                     with contextlib.suppress(OSError):
                         os.close(fd)     # (closing the descriptor releases its lock)
 
