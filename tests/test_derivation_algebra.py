@@ -95,3 +95,17 @@ def test_proportional_minors_are_found_numerically_and_exactly_alike(eqs):
     assert not solvers._proportional(eqs, m_ * l_ - sp.sin(th), a)
     assert not solvers._proportional(eqs, a * (1 + 1e-7 * sp.cos(th)), a)   # nearly: cancel
     assert solvers._proportional(eqs, s * a, a)
+
+
+@pytest.mark.parametrize("e", [
+    m, m ** 2, 2 * m, 3 * m ** 2 * l * sp.sin(phi),
+    m ** 2 * l + m * l ** 3 * sp.cos(phi), sp.Rational(1, 2) * m * f + sp.Rational(1, 3) * m ** 3,
+    sp.sin(phi) * m + sp.sin(phi) * l, (m + l) ** 3 * m * sp.cos(theta) ** 2, f + 1,
+])
+def test_the_common_monomial_read_from_the_ring_is_factor_terms_one(e):
+    """The common factor of an expansion's terms, read from its ring element, is the
+    one factor_terms finds: symbols to their least power, never a sine or a cosine, and 1
+    for a lone symbol or power (not a product), as the derivation always took it."""
+    full, polys = algebra._in_ring([e])
+    assert polys is not None
+    assert algebra._common_symbols(full[0], polys[0]) == algebra._monomial(full[0])

@@ -104,6 +104,12 @@ def expanded(exprs):
     expression, and took most of a wheelbarrow's derivation.  Any other atom (a division,
     a float, a square root, whose square sympy rewrites) leaves every expression to
     ``sympy.expand``."""
+    return _in_ring(exprs)[0]
+
+
+def _in_ring(exprs):
+    """``(expansions, polynomials)``: :func:`expanded` of ``exprs``, and their elements of
+    the ring they were expanded in (None where sympy expanded them)."""
     import sympy as sp
     from sympy.polys.rings import ring
 
@@ -113,11 +119,11 @@ def expanded(exprs):
         atoms |= e.free_symbols | e.atoms(sp.sin, sp.cos)
     trig = [a for a in atoms if not a.is_Symbol]
     if not exprs or any(a.args[0] != sp.expand(a.args[0]) for a in trig):
-        return [sp.expand(e) for e in exprs]
+        return [sp.expand(e) for e in exprs], None
     gens = sorted(atoms, key=sp.default_sort_key)
     R, *_ = ring(gens, sp.QQ) if gens else (None,)
     if R is None:
-        return [sp.expand(e) for e in exprs]
+        return [sp.expand(e) for e in exprs], None
     index = dict(zip(gens, R.gens))
     memo = {}
 
@@ -148,9 +154,23 @@ def expanded(exprs):
         return r
 
     try:
-        return [conv(e).as_expr() for e in exprs]
+        polys = [conv(e) for e in exprs]
     except NotPolynomial:
-        return [sp.expand(e) for e in exprs]
+        return [sp.expand(e) for e in exprs], None
+    return [p.as_expr() for p in polys], polys
+
+
+def _common_symbols(E, P):
+    """:func:`_monomial` of the expansion ``E``, read from its ring element ``P``: each
+    symbol (not a sine or cosine) to its least power over the terms.  The same product:
+    ``factor_terms`` of a sum extracts exactly these, of a product (one term) its own;
+    a lone symbol or power, which is not a product, gives 1 there as here."""
+    import sympy as sp
+
+    if not (E.is_Add or E.is_Mul):
+        return sp.Integer(1)
+    least = [min(k) for k in zip(*P.monoms())]
+    return sp.Mul(*(g ** k for g, k in zip(P.ring.symbols, least) if k and g.is_Symbol))
 
 
 def reduced(exprs):
@@ -163,8 +183,9 @@ def reduced(exprs):
     took a third of a wheelbarrow's derivation)."""
     import sympy as sp
 
-    full = expanded(exprs)
-    monos = [_monomial(E) for e, E in zip(exprs, full) if e != 0]
+    full, polys = _in_ring(exprs)
+    monos = [_monomial(E) if polys is None else _common_symbols(E, polys[i])
+             for i, (e, E) in enumerate(zip(exprs, full)) if e != 0]
     common = monos[0]
     for mo in monos[1:]:
         common = sp.gcd(common, mo)
