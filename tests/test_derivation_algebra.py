@@ -40,6 +40,8 @@ def test_the_ring_expansion_of_determinants_is_sympys_to_the_character(seed):
             sp.Integer(7), m, sp.Integer(0)]
     got = algebra.expanded(dets)
     assert [sp.srepr(g) for g in got] == [sp.srepr(sp.expand(d)) for d in dets]
+    # and up to 3 x 3, sympy's Berkowitz determinant is that expansion, term for term
+    assert sp.srepr(algebra.determinant(A)) == sp.srepr(A.det(method="berkowitz"))
     # reduced: the common monomial divided out term by term is the expansion of the quotient
     common = m ** 2 * l
     exprs = [sp.expand(d * common) for d in dets[:2]] + [common * (m + f)]

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from phasemap.declare.algebra import scale_of
+from phasemap.declare.algebra import determinant, scale_of
 from phasemap.declare.api import Coordinate, numeric_bound, sym
 from phasemap.declare.validation import fail
 
@@ -222,7 +222,7 @@ class Equations:
         coordinate): each mode then solves the whole saddle-point system, and
         fails there if the contacts do not.
         """
-        dM = self.M.det(method="berkowitz")
+        dM = determinant(self.M)
         det = self.numeric(dM / (scale_of(dM) + 1), 16) if dM != 0 else np.zeros(1)
         return bool(np.all(np.abs(det) > 1e-12))
 

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from phasemap.declare.algebra import (count_ops, cramer, expanded, pythagorean, reduced,
-                                      scale_of)
+from phasemap.declare.algebra import (count_ops, cramer, determinant, expanded, pythagorean,
+                                      reduced, scale_of)
 from phasemap.declare.law import STICK, LinearProblem, Mode
 from phasemap.declare.validation import fail
 
@@ -97,7 +97,7 @@ def solve(eqs, p: LinearProblem, edge: bool = False) -> Solution:
     n, k = p.n, len(p.unknowns)
     M = eqs.M
     aM = M.adjugate() if n > 1 else sp.Matrix([[1]])
-    dM = M.det(method="berkowitz") if n > 1 else M[0, 0]
+    dM = determinant(M) if n > 1 else M[0, 0]
     hx = [eqs.h[j].xreplace(p.zero) + p.extra[j] for j in range(n)]
     W = sp.Matrix(n, k, lambda i, j: p.columns[j][i]) if k else sp.zeros(n, 0)
     C = sp.Matrix(k, n, lambda i, j: p.constraints[i][0][j]) if k else sp.zeros(0, n)
@@ -128,7 +128,7 @@ def solve_regular(eqs, p: LinearProblem, K, rhs, shared: bool = True):
     """``(D, numerators)`` of ``K L = rhs`` by Cramer's rule, or None where ``K`` is
     singular on the whole domain (statically indeterminate).  ``shared``: the contacts
     that slip share one direction (:func:`one_direction`)."""
-    D = K.det(method="berkowitz")
+    D = determinant(K)
     if _vanishes(eqs, D):
         return None
     D, *nums = reduced([D] + [cramer(K, rhs, i) for i in range(len(p.unknowns))])
@@ -191,7 +191,7 @@ def solve_saddle(eqs, p: LinearProblem, M, W, C, hv, cb):
         A[:n, n:] = -W
         A[n:, :n] = C
     rhs = sp.Matrix.vstack(hv, -cb) if k else hv
-    D = sp.expand(A.det(method="berkowitz"))
+    D = sp.expand(determinant(A))
     if D == 0 or np.max(np.abs(eqs.numeric(D / scale_of(D), 12))) < 1e-9:
         fail(eqs.S, "bodies", "the mass matrix is singular on the motions the "
              f"contacts allow (modes {', '.join(p.kinds)}): some coordinate has no "
@@ -248,7 +248,7 @@ def _minors(eqs, K, k):
     choices = []
     for I, J in pairs:
         sub = K.extract(list(I), list(J))
-        Dp = sub.det(method="berkowitz")
+        Dp = determinant(sub)
         if _vanishes(eqs, Dp):
             continue
         if any(_proportional(eqs, Dp, other[3]) for other in choices):
