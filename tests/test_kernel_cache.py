@@ -657,10 +657,9 @@ def test_info_clear_and_the_bound_see_the_numba_files_of_every_subpackage(fake_c
 def test_processes_needing_one_function_at_once_compile_it_once(tmp_path):
     """Three processes call one uncompiled function at the same moment (a clock they all
     wait for): one compiles it, the others wait for it and load its machine code (numba
-    counts a miss in one process and a hit in each other), and every answer is right.  Two
-    test processes compiled the same kernels side by side (35 of them twice in one run of
-    the suite, 70 s of CPU), and so would the workers of a dask cluster.  Two rounds from
-    a cold folder (the old code failed the first)."""
+    counts a miss in one process and a hit in each other), and every answer is right.  Each
+    compiled it side by side before, as the workers of a dask cluster sharing one cache
+    would.  Two rounds from a cold folder (the old code failed the first)."""
     code = ("import sys, time\n"
             "from phasemap.core.codegen import load_module\n"
             f"m = load_module({STEM!r}, lambda: {TEXT!r})\n"
@@ -703,6 +702,65 @@ def test_a_function_compiled_inside_its_own_compile_does_not_wait_for_itself(tmp
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=e,
                        timeout=120)
     assert r.returncode == 0 and r.stdout.split() == ["7.5", "4"], r.stderr
+
+
+def test_a_saved_function_loads_while_another_process_holds_its_compile_lock(warm):
+    """Machine code already in the cache is loaded without waiting for the compile lock
+    (another process may be compiling another signature of the function): with the lock
+    held here, a process that needs the saved probe answers at once, not after the
+    ten minutes of COMPILE_WAIT."""
+    import fcntl
+
+    (index,) = (warm / "__pycache__").glob(f"{STEM}.cells-*.nbi")
+    fd = os.open(index.with_suffix(".nbk"), os.O_RDWR | os.O_CREAT, 0o600)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        e = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+        e.update(PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+                 PHASEMAP_CACHE_DIR=str(warm))
+        r = subprocess.run([sys.executable, "-c", load()], capture_output=True, text=True,
+                           env=e, timeout=60)
+        assert loaded(r) and r.stderr == ""
+    finally:
+        os.close(fd)
+
+
+FORK = """
+import fcntl, os, sys, time, types
+from phasemap.core import compilelock as cl
+index = sys.argv[1]
+cache = types.SimpleNamespace(_cache_file=types.SimpleNamespace(_index_path=index))
+fd = cl._HELD[index] = cl.lock(cache)
+ready, told = os.pipe()
+child = os.fork()
+if child == 0:                 # a child forked mid-compile lives on (its fork hooks have run)
+    os.write(told, b"x")
+    time.sleep(30)
+    os._exit(0)
+os.read(ready, 1)
+cl._HELD.pop(index)
+os.close(fd)                   # the compile ends: the lock must be free for others
+other = os.open(index[:-len(".nbi")] + ".nbk", os.O_RDWR)
+try:
+    fcntl.flock(other, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    print("free")
+except BlockingIOError:
+    print("held by the child")
+os.kill(child, 9)
+os.waitpid(child, 0)
+"""
+
+
+def test_a_process_forked_mid_compile_does_not_keep_the_compile_lock(tmp_path):
+    """An flock belongs to the open file, which a fork shares: a child forked while its
+    parent compiled held the lock for its whole life, and every process needing the
+    function waited COMPILE_WAIT.  The child closes its copy at once."""
+    index = tmp_path / "probe.cells-3.py311.nbi"
+    e = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT),
+                                                     os.environ.get("PYTHONPATH", "")]))
+    r = subprocess.run([sys.executable, "-c", FORK, str(index)], capture_output=True,
+                       text=True, env=e, timeout=120)
+    assert r.returncode == 0 and r.stdout.split() == ["free"], (r.stdout, r.stderr)
 
 
 def test_processes_compiling_one_function_at_once_say_nothing(tmp_path):

@@ -620,7 +620,7 @@ def _guard_numba() -> None:
     # one process compiles a function at a time (phasemap.core.compilelock)
     from phasemap.core import compilelock
 
-    compilelock.install(_ours)
+    compilelock.install(_ours, _distrust)
 
 
 _guard_numba()

@@ -59,13 +59,13 @@ def cramer(K, rhs, i):
 
 
 def determinant(M):
-    """``M.det(method="berkowitz")``, the same expression: up to 3 x 3, where sympy's
+    """``M.det(method="berkowitz")``, the same expression: for 2 x 2 and 3 x 3, where sympy's
     Berkowitz determinant of polynomial entries is their expanded determinant (checked
     against it, term for term, on every declaration the tests derive: 310 matrices), it is
-    computed in a ring of polynomials (:func:`expanded`), four times faster; larger ones,
-    whose Berkowitz form sympy leaves partly unexpanded, and entries that are not such
-    polynomials, by sympy."""
-    if M.rows <= 3:
+    computed in a ring of polynomials (:func:`expanded`), four times faster; a 1 x 1 (its
+    entry as it is), larger ones (whose Berkowitz form sympy leaves partly unexpanded) and
+    entries that are not such polynomials, by sympy."""
+    if 2 <= M.rows <= 3:
         got = _det_in_ring(M)
         if got is not None:
             return got
@@ -74,11 +74,8 @@ def determinant(M):
 
 def _det_in_ring(M):
     """The expanded determinant of ``M`` computed in the ring of its entries, or None."""
-    import sympy as sp
     from sympy.polys.matrices import DomainMatrix
 
-    if M.rows == 0:
-        return sp.Integer(1)
     _, polys = _in_ring(list(M))
     if polys is None:
         return None
