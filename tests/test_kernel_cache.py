@@ -317,6 +317,8 @@ def test_one_lru_bound_covers_generated_modules_numba_files_and_integrators(fake
     from phasemap.core import cache
 
     root, generated, compiled, keep = fake_cache
+    # a compile that failed leaves its lock file alone: no function
+    _entry(compiled, "integrate.integrate_dopri5_wheel_00000000000f-352.py311.nbk", 0, 10)
     before = cache.info()
     assert before.counts == {"grid": 6, "declared": 1, "compiled": 3}
     assert before.size == 6 * 3000 + 1000 + 3 * 1000

@@ -782,7 +782,9 @@ def info() -> CacheInfo:
     entries = _entries()
     counts: dict[str, int] = {}
     for e in entries:
-        counts[e.kind] = counts.get(e.kind, 0) + 1
+        # (lock files alone are no function: a compile that failed leaves its .nbk)
+        if not all(f.suffix in (".nbl", ".nbk") for f in e.files):
+            counts[e.kind] = counts.get(e.kind, 0) + 1
     numba = tuple(dict.fromkeys(p for p, _ in _folders()[1:]))
     return CacheInfo(folder(), numba, counts, sum(e.size for e in entries), limit())
 
