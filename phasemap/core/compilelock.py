@@ -88,9 +88,10 @@ if hasattr(os, "register_at_fork"):
     os.register_at_fork(after_in_child=_forget_in_child)
 
 
-def _loaded(dispatcher, sig):
+def loaded(dispatcher, sig):
     """The entry point of ``sig`` loaded from numba's cache, as numba's own compile loads
-    it, or None where it is not there."""
+    it (counted as a hit), or None where it is not there; the caller holds numba's
+    compiler lock.  Also :func:`phasemap.core.tiers._load`'s question."""
     cres = dispatcher._cache.load_overload(sig, dispatcher.targetctx)
     if cres is None:
         return None
@@ -123,7 +124,7 @@ def install(ours, distrust=None) -> None:
                     or key is None or key in _HELD or not self._can_compile):
                 return compile_(self, sig)
             if os.path.exists(key):         # saved already (by another process, perhaps)
-                entry = _loaded(self, sig)
+                entry = loaded(self, sig)
                 if entry is not None:
                     return entry
             fd = None

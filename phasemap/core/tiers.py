@@ -438,6 +438,8 @@ def _load(dispatcher, sig) -> bool:
     ``Dispatcher.compile`` does before it compiles; False where it is not there."""
     from numba.core.compiler_lock import global_compiler_lock
 
+    from phasemap.core.compilelock import loaded
+
     if sig in dispatcher.overloads:
         return True
     cache = getattr(dispatcher, "_cache", None)
@@ -446,14 +448,7 @@ def _load(dispatcher, sig) -> bool:
     with global_compiler_lock:
         if sig in dispatcher.overloads:
             return True
-        cres = cache.load_overload(sig, dispatcher.targetctx)
-        if cres is None:
-            return False
-        if not cres.objectmode:
-            dispatcher.targetctx.insert_user_function(cres.entry_point, cres.fndesc,
-                                                      [cres.library])
-        dispatcher.add_overload(cres)
-    return True
+        return loaded(dispatcher, sig) is not None
 
 
 def _name(dispatcher) -> str:
