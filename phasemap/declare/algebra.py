@@ -144,12 +144,10 @@ def _in_ring(exprs):
     for e in exprs:
         atoms |= e.free_symbols | e.atoms(sp.sin, sp.cos)
     trig = [a for a in atoms if not a.is_Symbol]
-    if not exprs or any(a.args[0] != sp.expand(a.args[0]) for a in trig):
+    if not atoms or any(a.args[0] != sp.expand(a.args[0]) for a in trig):
         return [sp.expand(e) for e in exprs], None
     gens = sorted(atoms, key=sp.default_sort_key)
-    R, *_ = ring(gens, sp.QQ) if gens else (None,)
-    if R is None:
-        return [sp.expand(e) for e in exprs], None
+    R = ring(gens, sp.QQ)[0]
     index = dict(zip(gens, R.gens))
     memo = {}
 

@@ -349,6 +349,8 @@ class Equations:
         import sympy as sp
 
         exprs = [sp.sympify(e) for e in exprs]
+        # (one expression's own set, as numeric always iterated it: the random draws go
+        # to its symbols in the same order as before)
         free = (exprs[0].free_symbols if len(exprs) == 1
                 else set().union(*(e.free_symbols for e in exprs)))
         rows = []

@@ -265,12 +265,13 @@ def _proportional(eqs, a, b) -> bool:
     # numerically first: a ratio that is far from constant at the samples is not one, and
     # one constant to rounding is (sympy's cancel of two minors took seconds); a ratio in
     # between, or not finite at some sample, is decided exactly as before
-    both = (sp.sympify(a).free_symbols | sp.sympify(b).free_symbols)
-    signs = [x for x in both if x.name.startswith(("_k_sig", "_k_rho"))]
+    a, b = sp.sympify(a), sp.sympify(b)
+    signs = [x for x in a.free_symbols | b.free_symbols
+             if x.name.startswith(("_k_sig", "_k_rho"))]
     spreads = []
     for sign in itertools.product((1, -1), repeat=len(signs)):
         sub = dict(zip(signs, sign))
-        va, vb = eqs.numeric_all([sp.sympify(a).xreplace(sub), sp.sympify(b).xreplace(sub)], 6)
+        va, vb = eqs.numeric_all([a.xreplace(sub), b.xreplace(sub)], 6)
         with np.errstate(all="ignore"):
             r = va / vb
         if not np.all(np.isfinite(r)) or np.max(np.abs(r)) == 0.0:
