@@ -40,16 +40,23 @@ SPEC = "probe"
 STEM = "probe_grid_0123456789abcdef"
 
 
-def child(code: str, cache_dir, numba_dir=None, **env) -> subprocess.CompletedProcess:
-    """Run ``code`` in a fresh Python with PHASEMAP_CACHE_DIR=``cache_dir``."""
+def child_env(cache_dir, numba_dir=None, **env) -> dict:
+    """The environment of a fresh Python with PHASEMAP_CACHE_DIR=``cache_dir``."""
     e = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR",
                                                          "PHASEMAP_CACHE_MAX_MB")}
     e.update(PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
              PHASEMAP_CACHE_DIR=str(cache_dir), **env)
     if numba_dir is not None:
         e["NUMBA_CACHE_DIR"] = str(numba_dir)
-    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          env=e, timeout=300)
+    return e
+
+
+def child(code: str, cache_dir, numba_dir=None, *, args=(), timeout=300,
+          **env) -> subprocess.CompletedProcess:
+    """Run ``code`` (with ``args``) in a fresh Python with PHASEMAP_CACHE_DIR=``cache_dir``."""
+    return subprocess.run([sys.executable, "-c", code, *args], capture_output=True,
+                          text=True, env=child_env(cache_dir, numba_dir, **env),
+                          timeout=timeout)
 
 
 def load(stem: str = STEM) -> str:
@@ -673,11 +680,7 @@ def test_processes_needing_one_function_at_once_compile_it_once(tmp_path):
         start = time.time() + 3.0      # (after every process has imported phasemap)
         procs = [subprocess.Popen([sys.executable, "-c", code, repr(start)],
                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                  env={**{k: v for k, v in os.environ.items()
-                                          if k != "NUMBA_CACHE_DIR"},
-                                       "PYTHONPATH": os.pathsep.join(
-                                           [str(ROOT), os.environ.get("PYTHONPATH", "")]),
-                                       "PHASEMAP_CACHE_DIR": str(root)})
+                                  env=child_env(root))
                  for _ in range(3)]
         answers = []
         for p in procs:
@@ -698,11 +701,7 @@ def test_a_function_compiled_inside_its_own_compile_does_not_wait_for_itself(tmp
     code = ("from phasemap.core.codegen import load_module\n"
             f"m = load_module({STEM!r}, lambda: {text!r})\n"
             "print(m.cells(1), len(m.rec.signatures))\n")
-    e = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
-    e.update(PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
-             PHASEMAP_CACHE_DIR=str(tmp_path))
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=e,
-                       timeout=120)
+    r = child(code, tmp_path, timeout=120)
     assert r.returncode == 0 and r.stdout.split() == ["7.5", "4"], r.stderr
 
 
@@ -717,11 +716,7 @@ def test_a_saved_function_loads_while_another_process_holds_its_compile_lock(war
     fd = os.open(index.with_suffix(".nbk"), os.O_RDWR | os.O_CREAT, 0o600)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        e = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
-        e.update(PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
-                 PHASEMAP_CACHE_DIR=str(warm))
-        r = subprocess.run([sys.executable, "-c", load()], capture_output=True, text=True,
-                           env=e, timeout=60)
+        r = child(load(), warm, timeout=60)
         assert loaded(r) and r.stderr == ""
     finally:
         os.close(fd)
@@ -758,10 +753,7 @@ def test_a_process_forked_mid_compile_does_not_keep_the_compile_lock(tmp_path):
     parent compiled held the lock for its whole life, and every process needing the
     function waited COMPILE_WAIT.  The child closes its copy at once."""
     index = tmp_path / "probe.cells-3.py311.nbi"
-    e = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT),
-                                                     os.environ.get("PYTHONPATH", "")]))
-    r = subprocess.run([sys.executable, "-c", FORK, str(index)], capture_output=True,
-                       text=True, env=e, timeout=120)
+    r = child(FORK, tmp_path, args=[str(index)], timeout=120)
     assert r.returncode == 0 and r.stdout.split() == ["free"], (r.stdout, r.stderr)
 
 
@@ -774,12 +766,7 @@ def test_processes_compiling_one_function_at_once_say_nothing(tmp_path):
     for round_ in range(3):
         root = tmp_path / f"cache{round_}"
         procs = [subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
-                                  stderr=subprocess.PIPE, text=True,
-                                  env={**{k: v for k, v in os.environ.items()
-                                          if k != "NUMBA_CACHE_DIR"},
-                                       "PYTHONPATH": os.pathsep.join(
-                                           [str(ROOT), os.environ.get("PYTHONPATH", "")]),
-                                       "PHASEMAP_CACHE_DIR": str(root)})
+                                  stderr=subprocess.PIPE, text=True, env=child_env(root))
                  for _ in range(4)]
         for p in procs:
             out, err = p.communicate(timeout=300)
