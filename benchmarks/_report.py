@@ -8,6 +8,7 @@ folder first on the path, so they import it as ``_report``.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import pathlib
 import platform
@@ -50,6 +51,16 @@ def background_quiet(cache_folder: pathlib.Path, limit: float = 900.0) -> float:
            and time.perf_counter() - start < limit):
         time.sleep(0.25)
     return time.perf_counter() - start
+
+
+def child_result(out, what: str):
+    """What a script's child process printed as JSON on its line ``RESULT ...`` (``out``:
+    its ``subprocess.run`` with the output captured); a RuntimeError with the end of its
+    stderr, naming ``what``, where it printed none."""
+    for line in out.stdout.splitlines():
+        if line.startswith("RESULT "):
+            return json.loads(line[7:])
+    raise RuntimeError(f"{what}: the child failed:\n{out.stderr[-3000:]}")
 
 
 def parser(doc: str) -> argparse.ArgumentParser:

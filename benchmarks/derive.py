@@ -20,7 +20,6 @@ Writes the section "Deriving a new declaration" of ../BENCHMARKS.md.
 
 from __future__ import annotations
 
-import json
 import os
 import pathlib
 import statistics
@@ -28,7 +27,7 @@ import subprocess
 import sys
 import tempfile
 
-from _report import load, machine, parser, publish
+from _report import child_result, load, machine, parser, publish
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -76,10 +75,7 @@ def run(name: str, tree: pathlib.Path) -> dict:
         code = CHILD.format(root=str(tree), make=CASES[name])
         out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                              text=True, cwd=tmp)
-    for line in out.stdout.splitlines():
-        if line.startswith("RESULT "):
-            return json.loads(line[7:])
-    raise RuntimeError(f"{name} ({tree}): the child failed:\n{out.stderr[-3000:]}")
+    return child_result(out, f"{name} ({tree})")
 
 
 def main() -> None:

@@ -33,7 +33,7 @@ import sys
 import tempfile
 import time
 
-from _report import background_quiet, load, machine, parser, publish
+from _report import background_quiet, child_result, load, machine, parser, publish
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 MODELS = ("ladder", "wheel", "elliptic_pendulum", "hinge_pendulum", "painleve_rod",
@@ -77,13 +77,10 @@ def child(model: str, jit: str, env: dict) -> dict:
                          capture_output=True, text=True)
     wall = time.perf_counter() - t
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    for line in out.stdout.splitlines():
-        if line.startswith("RESULT "):
-            got = json.loads(line[7:])
-            got.update(wall=wall, cpu=(after.ru_utime - before.ru_utime)
-                       + (after.ru_stime - before.ru_stime))
-            return got
-    raise RuntimeError(f"{model} ({jit}): the child failed:\n{out.stderr[-3000:]}")
+    got = child_result(out, f"{model} ({jit})")
+    got.update(wall=wall, cpu=(after.ru_utime - before.ru_utime)
+               + (after.ru_stime - before.ru_stime))
+    return got
 
 
 def row(model: str) -> dict:

@@ -33,7 +33,6 @@ calls of a new declaration" of ../BENCHMARKS.md.
 
 from __future__ import annotations
 
-import json
 import os
 import pathlib
 import subprocess
@@ -41,7 +40,7 @@ import sys
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
 
-from _report import background_quiet, load, machine, parser, publish
+from _report import background_quiet, child_result, load, machine, parser, publish
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -139,10 +138,7 @@ def run(name: str) -> list[dict]:
                              text=True, cwd=tmp)
         # the background compiles it started write into the caches until they end
         background_quiet(pathlib.Path(tmp) / "kernels")
-    for line in out.stdout.splitlines():
-        if line.startswith("RESULT "):
-            return json.loads(line[7:])
-    raise RuntimeError(f"{name}: the child failed:\n{out.stderr[-3000:]}")
+    return child_result(out, name)
 
 
 def main() -> None:
